@@ -1,0 +1,494 @@
+// The OPSILA host loop: item buffer (SIMD), primary descriptors, then rounds
+// of scatter (SIMD) + SPMD phase until no descriptor is left.
+#include "renderer.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <string>
+
+#include "opsila_shared.h"
+#include "partition.h"
+
+namespace opsila {
+namespace {
+
+constexpr int kScatterBlock = 256;  // SCATTER_BLOCK in kernels/scatter.cl
+constexpr int kTrafficMaxPes = 64;  // PE x PE traffic matrices are kept up to this many PEs
+
+struct Vec {
+  double x, y, z;
+};
+Vec sub(const Vec3& a, const Vec3& b) { return {double(a[0]) - b[0], double(a[1]) - b[1], double(a[2]) - b[2]}; }
+double dot(const Vec& a, const Vec& b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+Vec cross(const Vec& a, const Vec& b) { return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x}; }
+Vec normalize(const Vec& a) {
+  double l = std::sqrt(dot(a, a));
+  return {a.x / l, a.y / l, a.z / l};
+}
+
+// SPEC camera basis, computed in float exactly as the formula reads.
+FrameParams frame_params(const Scene& scene, const BankedScene& bs, int bank_capacity) {
+  FrameParams fp{};
+  const CameraDesc& cam = scene.camera;
+  float f[3], r[3], u[3];
+  {
+    float d[3] = {cam.look_at[0] - cam.eye[0], cam.look_at[1] - cam.eye[1], cam.look_at[2] - cam.eye[2]};
+    float l = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+    for (int a = 0; a < 3; ++a) f[a] = d[a] / l;
+    float c[3] = {f[1] * cam.up[2] - f[2] * cam.up[1], f[2] * cam.up[0] - f[0] * cam.up[2],
+                  f[0] * cam.up[1] - f[1] * cam.up[0]};
+    float cl = std::sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
+    for (int a = 0; a < 3; ++a) r[a] = c[a] / cl;
+    u[0] = r[1] * f[2] - r[2] * f[1];
+    u[1] = r[2] * f[0] - r[0] * f[2];
+    u[2] = r[0] * f[1] - r[1] * f[0];
+  }
+  for (int a = 0; a < 3; ++a) {
+    fp.eye[a] = cam.eye[a];
+    fp.forward[a] = f[a];
+    fp.right[a] = r[a];
+    fp.up[a] = u[a];
+    fp.ambient[a] = scene.ambient[a];
+    fp.background[a] = scene.background[a];
+  }
+  fp.tan_half_fov = std::tan(cam.fov_deg * 0.5f * static_cast<float>(M_PI) / 180.0f);
+  fp.aspect = static_cast<float>(scene.width) / static_cast<float>(scene.height);
+  fp.epsilon = scene.epsilon();
+  fp.width = scene.width;
+  fp.height = scene.height;
+  fp.max_depth = scene.max_depth;
+  fp.num_lights = static_cast<int>(bs.lights.size());
+  fp.num_pes = bs.num_pes;
+  fp.num_clusters = static_cast<int>(bs.clusters.size());
+  fp.bank_capacity = bank_capacity;
+  fp.spawn_slots = fp.num_lights + 2;
+  return fp;
+}
+
+// "Projected object boxes": each cluster box as a conservative pixel
+// rectangle (x0, y0, x1, y1), the whole screen when a corner is behind the eye.
+std::vector<cl_int4> cluster_rects(const Scene& scene, const BankedScene& bs) {
+  const CameraDesc& cam = scene.camera;
+  Vec f = normalize(sub(cam.look_at, cam.eye));
+  Vec up{cam.up[0], cam.up[1], cam.up[2]};
+  Vec r = normalize(cross(f, up));
+  Vec u = cross(r, f);
+  double s = std::tan(cam.fov_deg * 0.5 * M_PI / 180.0), a = double(scene.width) / scene.height;
+  int W = scene.width, H = scene.height;
+  std::vector<cl_int4> rects(bs.clusters.size());
+  for (std::size_t c = 0; c < bs.clusters.size(); ++c) {
+    const Cluster& cl = bs.clusters[c];
+    double x0 = INFINITY, y0 = INFINITY, x1 = -INFINITY, y1 = -INFINITY;
+    bool behind = false;
+    for (int k = 0; k < 8 && !behind; ++k) {
+      Vec3 corner{(k & 1) ? cl.bmax[0] : cl.bmin[0], (k & 2) ? cl.bmax[1] : cl.bmin[1],
+                  (k & 4) ? cl.bmax[2] : cl.bmin[2]};
+      Vec d = sub(corner, cam.eye);
+      double cz = dot(d, f);
+      if (cz <= 1e-6 * std::sqrt(dot(d, d)) || cz <= 0) {
+        behind = true;
+        break;
+      }
+      double px = ((dot(d, r) / cz) / (s * a) + 1.0) * W * 0.5 - 0.5;
+      double py = (1.0 - (dot(d, u) / cz) / s) * H * 0.5 - 0.5;
+      x0 = std::min(x0, px), x1 = std::max(x1, px), y0 = std::min(y0, py), y1 = std::max(y1, py);
+    }
+    cl_int4 rc;
+    if (behind || !std::isfinite(x0 + x1 + y0 + y1)) {
+      rc.s[0] = 0, rc.s[1] = 0, rc.s[2] = W - 1, rc.s[3] = H - 1;
+    } else {
+      // One pixel of margin: the rectangle only culls, the ray test decides.
+      rc.s[0] = static_cast<int>(std::max(-1.0, std::floor(x0) - 1));
+      rc.s[1] = static_cast<int>(std::max(-1.0, std::floor(y0) - 1));
+      rc.s[2] = static_cast<int>(std::min(double(W), std::ceil(x1) + 1));
+      rc.s[3] = static_cast<int>(std::min(double(H), std::ceil(y1) + 1));
+    }
+    rects[c] = rc;
+  }
+  return rects;
+}
+
+template <typename T>
+cl::Buffer upload(ClRuntime& rt, const std::vector<T>& v, const char* what) {
+  cl_int err = CL_SUCCESS;
+  std::size_t bytes = std::max<std::size_t>(sizeof(T), v.size() * sizeof(T));
+  cl::Buffer b(rt.context(), CL_MEM_READ_ONLY, bytes, nullptr, &err);
+  cl_check(err, (std::string("clCreateBuffer(") + what + ")").c_str());
+  if (!v.empty()) cl_check(rt.queue().enqueueWriteBuffer(b, CL_TRUE, 0, v.size() * sizeof(T), v.data()), what);
+  return b;
+}
+
+cl::Buffer device_buffer(ClRuntime& rt, std::size_t bytes, const char* what) {
+  if (bytes > rt.max_alloc())
+    throw ClError(std::string("buffer ") + what + " needs " + std::to_string(bytes) +
+                  " bytes, more than the device's CL_DEVICE_MAX_MEM_ALLOC_SIZE (" + std::to_string(rt.max_alloc()) +
+                  " bytes): use a smaller --size, --depth or --bank-capacity");
+  cl_int err = CL_SUCCESS;
+  cl::Buffer b(rt.context(), CL_MEM_READ_WRITE, std::max<std::size_t>(bytes, 16), nullptr, &err);
+  cl_check(err, (std::string("clCreateBuffer(") + what + ")").c_str());
+  return b;
+}
+
+// One set of descriptor vectors (structure of arrays).
+struct DescriptorSet {
+  cl::Buffer org, dir, wgt, ids, dest;
+  std::size_t capacity = 0;
+  static constexpr std::size_t kBytes = 3 * sizeof(cl_float4) + sizeof(cl_int4) + sizeof(cl_int);
+  void allocate(ClRuntime& rt, std::size_t n, const char* what) {
+    n = std::max<std::size_t>(n, 1);
+    org = device_buffer(rt, n * sizeof(cl_float4), what);
+    dir = device_buffer(rt, n * sizeof(cl_float4), what);
+    wgt = device_buffer(rt, n * sizeof(cl_float4), what);
+    ids = device_buffer(rt, n * sizeof(cl_int4), what);
+    dest = device_buffer(rt, n * sizeof(cl_int), what);
+    capacity = n;
+  }
+  int set_args(cl::Kernel& k, int at) const {
+    k.setArg(at++, org);
+    k.setArg(at++, dir);
+    k.setArg(at++, wgt);
+    k.setArg(at++, ids);
+    k.setArg(at++, dest);
+    return at;
+  }
+};
+
+std::size_t round_up(std::size_t x, std::size_t m) { return (x + m - 1) / m * m; }
+
+class Launcher {
+ public:
+  Launcher(ClRuntime& rt, RenderStats& stats) : rt_(rt), stats_(stats) {}
+  void run(cl::Kernel& k, const char* name, std::size_t global, std::size_t local, int round) {
+    cl::Event ev;
+    cl_int err = rt_.queue().enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(global),
+                                                  local ? cl::NDRange(local) : cl::NullRange, nullptr, &ev);
+    cl_check(err, (std::string("clEnqueueNDRangeKernel(") + name + ")").c_str());
+    pending_.push_back({name, round, ev});
+  }
+  // Collects profiled times once the queue has drained.
+  void harvest() {
+    for (auto& p : pending_) {
+      cl_ulong t0 = 0, t1 = 0;
+      if (p.ev.getProfilingInfo(CL_PROFILING_COMMAND_START, &t0) == CL_SUCCESS &&
+          p.ev.getProfilingInfo(CL_PROFILING_COMMAND_END, &t1) == CL_SUCCESS) {
+        stats_.launches.push_back({p.name, p.round, (t1 - t0) * 1e-9});
+      }
+    }
+    pending_.clear();
+  }
+
+ private:
+  struct Pending {
+    const char* name;
+    int round;
+    cl::Event ev;
+  };
+  ClRuntime& rt_;
+  RenderStats& stats_;
+  std::vector<Pending> pending_;
+};
+
+std::uint64_t fixed_pair(const std::vector<cl_uint>& v, std::size_t i) {
+  return (std::uint64_t(v[2 * i + 1]) << 32) | v[2 * i];
+}
+
+}  // namespace
+
+RenderResult render(const Scene& scene, const RenderSettings& settings, ClRuntime& rt) {
+  const int P = settings.num_pes;
+  if (P < 1 || P > OPSILA_MAX_PES)
+    throw InputError("--pes " + std::to_string(P) + ": must be 1.." + std::to_string(OPSILA_MAX_PES));
+  if (scene.max_depth < 1 || scene.max_depth > OPSILA_MAX_DEPTH)
+    throw InputError("--depth " + std::to_string(scene.max_depth) + ": must be 1.." +
+                     std::to_string(OPSILA_MAX_DEPTH));
+  if (static_cast<int>(scene.lights.size()) > OPSILA_MAX_LIGHTS)
+    throw InputError("scene has " + std::to_string(scene.lights.size()) + " lights; at most " +
+                     std::to_string(OPSILA_MAX_LIGHTS) + " are supported");
+  if (scene.triangles.empty()) throw InputError("scene has no facets");
+  const std::size_t npix = std::size_t(scene.width) * scene.height;
+
+  BankedScene bs = partition_scene(scene, P);
+  const int S = static_cast<int>(bs.lights.size()) + 2;
+
+  // n, the paper's bank size: enough descriptors in flight to fill the
+  // device, bounded by memory. GPUs want ~2^17 in flight, CPUs far fewer.
+  int n = settings.bank_capacity;
+  if (n <= 0) {
+    std::size_t target = rt.device().is_gpu ? (1u << 17) : (1u << 14);
+    target = std::min<std::size_t>(target, std::max<std::size_t>(npix, 1024));
+    n = static_cast<int>(std::max<std::size_t>(1, target / P));
+  }
+  const std::size_t out_len = std::size_t(P) * n * S;
+  if (out_len > (1u << 30)) throw InputError("--bank-capacity " + std::to_string(n) + " is too large for " +
+                                             std::to_string(P) + " PEs and " + std::to_string(S - 2) + " lights");
+  FrameParams fp = frame_params(scene, bs, n);
+
+  RenderResult result;
+  result.width = scene.width;
+  result.height = scene.height;
+  RenderStats& st = result.stats;
+  st.num_pes = P;
+  st.bank_capacity = n;
+  st.num_clusters = static_cast<int>(bs.clusters.size());
+  st.bank_bytes = bs.bank_bytes;
+  st.global_bytes = bs.global_bytes;
+  st.replicated_bytes = bs.replicated_bytes;
+
+  rt.program();  // compile before timing
+  cl::Kernel k_item = rt.kernel("item_buffer");
+  cl::Kernel k_primary = rt.kernel("build_primary");
+  cl::Kernel k_count = rt.kernel("scatter_count");
+  cl::Kernel k_scan = rt.kernel("scatter_scan");
+  cl::Kernel k_plan = rt.kernel("scatter_plan");
+  cl::Kernel k_move = rt.kernel("scatter_move");
+  cl::Kernel k_spmd = rt.kernel("spmd_phase");
+
+  // Work-group size of a PE: queried, never assumed.
+  std::size_t spmd_wg = k_spmd.getWorkGroupInfo<CL_KERNEL_WORK_GROUP_SIZE>(rt.device().device);
+  std::size_t multiple = k_spmd.getWorkGroupInfo<CL_KERNEL_PREFERRED_WORK_GROUP_SIZE_MULTIPLE>(rt.device().device);
+  spmd_wg = std::min<std::size_t>(spmd_wg, rt.device().is_gpu ? 64 : 16);
+  if (multiple > 0 && spmd_wg >= multiple) spmd_wg = spmd_wg / multiple * multiple;
+  spmd_wg = std::max<std::size_t>(1, std::min<std::size_t>(spmd_wg, std::size_t(n)));
+  st.work_group_size = spmd_wg;
+
+  auto t_start = std::chrono::steady_clock::now();
+  cl::CommandQueue& q = rt.queue();
+
+  // Scene: banks and the global (every-PE) tables.
+  cl::Buffer b_tris = upload(rt, bs.triangles, "bank facets");
+  cl::Buffer b_nodes = upload(rt, bs.nodes, "bank BVH nodes");
+  cl::Buffer b_clusters = upload(rt, bs.clusters, "cluster spheres");
+  cl::Buffer b_pes = upload(rt, bs.pes, "PE table");
+  cl::Buffer b_mats = upload(rt, bs.materials, "materials");
+  std::vector<Light> lights = bs.lights;
+  if (lights.empty()) lights.push_back(Light{});
+  cl::Buffer b_lights = upload(rt, lights, "lights");
+  cl::Buffer b_rects = upload(rt, cluster_rects(scene, bs), "projected cluster boxes");
+
+  // Item buffer and pixel sums.
+  cl::Buffer b_items = device_buffer(rt, npix * sizeof(cl_int2), "item buffer");
+  cl::Buffer b_item_tri = device_buffer(rt, npix * sizeof(cl_int), "item buffer hits");
+  cl::Buffer b_item_t = device_buffer(rt, npix * sizeof(cl_float), "item buffer distances");
+  cl::Buffer b_accum = device_buffer(rt, npix * 6 * sizeof(cl_uint), "pixel sums");
+  cl_check(q.enqueueFillBuffer(b_accum, cl_uint(0), 0, npix * 6 * sizeof(cl_uint)), "clEnqueueFillBuffer(pixel sums)");
+  const std::size_t nstats = std::size_t(OPSILA_MAX_DEPTH) * P * OPSILA_STAT_COUNT * 2;
+  cl::Buffer b_stats = device_buffer(rt, nstats * sizeof(cl_uint), "stats");
+  cl_check(q.enqueueFillBuffer(b_stats, cl_uint(0), 0, nstats * sizeof(cl_uint)), "clEnqueueFillBuffer(stats)");
+  const int traffic_levels = P <= kTrafficMaxPes ? scene.max_depth : 0;
+  const std::size_t ntraffic = std::max<std::size_t>(1, std::size_t(traffic_levels) * P * P);
+  cl::Buffer b_traffic = device_buffer(rt, ntraffic * sizeof(cl_uint), "traffic");
+  cl_check(q.enqueueFillBuffer(b_traffic, cl_uint(0), 0, ntraffic * sizeof(cl_uint)), "clEnqueueFillBuffer(traffic)");
+
+  // Descriptors: banks (P*n), SPMD outputs (P*n*S), waiting queue (ping-pong).
+  DescriptorSet banks, outputs, queue_a, queue_b;
+  banks.allocate(rt, std::size_t(P) * n, "descriptor banks");
+  outputs.allocate(rt, out_len, "SPMD output slots");
+  // Primaries are injected when the queue runs short, at most `inject` at a time.
+  const std::size_t inject = std::max<std::size_t>(std::size_t(P) * n, 1024);
+  std::size_t queue_cap = out_len + 2 * inject;
+  queue_a.allocate(rt, queue_cap, "descriptor queue");
+  queue_b.allocate(rt, queue_cap, "descriptor queue");
+  cl::Buffer b_bank_count = device_buffer(rt, P * sizeof(cl_int), "bank counts");
+  cl::Buffer b_processed = device_buffer(rt, P * sizeof(cl_int), "processed counts");
+  cl::Buffer b_pe_total = device_buffer(rt, P * sizeof(cl_int), "scatter totals");
+  cl::Buffer b_overflow = device_buffer(rt, P * sizeof(cl_int), "scatter overflow bases");
+  cl::Buffer b_counts = device_buffer(rt, 2 * sizeof(cl_int), "scatter counts");
+  cl_check(q.enqueueFillBuffer(b_processed, cl_int(0), 0, P * sizeof(cl_int)), "clEnqueueFillBuffer(processed)");
+  std::size_t rank_cap = 0;
+  cl::Buffer b_rank, b_hist;
+
+  Launcher launch(rt, st);
+
+  // SIMD phase 1: item buffer, in tiles so no launch runs unbounded.
+  const int tile = std::max(1, settings.item_buffer_tile);
+  for (std::size_t begin = 0; begin < npix; begin += tile) {
+    int count = static_cast<int>(std::min<std::size_t>(tile, npix - begin));
+    int a = 0;
+    k_item.setArg(a++, fp);
+    k_item.setArg(a++, b_clusters);
+    k_item.setArg(a++, b_rects);
+    k_item.setArg(a++, b_nodes);
+    k_item.setArg(a++, b_tris);
+    k_item.setArg(a++, static_cast<int>(begin));
+    k_item.setArg(a++, count);
+    k_item.setArg(a++, b_items);
+    k_item.setArg(a++, b_item_tri);
+    k_item.setArg(a++, b_item_t);
+    launch.run(k_item, "item_buffer", round_up(count, 64), 0, -1);
+  }
+
+  // Rounds: scatter (SIMD) then SPMD phase, until nothing is left.
+  std::size_t next_pixel = 0, queue_len = 0;
+  bool outputs_live = false;
+  for (int round = 0;; ++round) {
+    if (next_pixel < npix && queue_len < std::size_t(P) * n) {
+      std::size_t count = std::min(inject, npix - next_pixel);
+      if (queue_len + count > queue_a.capacity) count = queue_a.capacity - queue_len;
+      int a = 0;
+      k_primary.setArg(a++, fp);
+      k_primary.setArg(a++, b_pes);
+      k_primary.setArg(a++, b_item_tri);
+      k_primary.setArg(a++, b_item_t);
+      k_primary.setArg(a++, static_cast<int>(next_pixel));
+      k_primary.setArg(a++, static_cast<int>(count));
+      k_primary.setArg(a++, static_cast<int>(queue_len));
+      a = queue_a.set_args(k_primary, a);
+      k_primary.setArg(a++, b_accum);
+      launch.run(k_primary, "build_primary", round_up(count, 64), 0, round);
+      next_pixel += count;
+      queue_len += count;
+    }
+    const std::size_t src_out = outputs_live ? out_len : 0;
+    const std::size_t total = src_out + queue_len;
+    if (total == 0) break;
+    // The next queue must hold every entry that does not find a bank slot.
+    if (queue_b.capacity < total) {
+      queue_b.allocate(rt, total + total / 2, "descriptor queue");
+    }
+    const std::size_t blocks = (total + kScatterBlock - 1) / kScatterBlock;
+    if (rank_cap < total) {
+      rank_cap = total + total / 2;
+      b_rank = device_buffer(rt, rank_cap * sizeof(cl_int), "scatter ranks");
+      b_hist = device_buffer(rt, ((rank_cap + kScatterBlock - 1) / kScatterBlock) * P * sizeof(cl_int),
+                             "scatter block counts");
+    }
+    int a = 0;
+    k_count.setArg(a++, static_cast<int>(src_out));
+    k_count.setArg(a++, static_cast<int>(queue_len));
+    k_count.setArg(a++, n);
+    k_count.setArg(a++, S);
+    k_count.setArg(a++, P);
+    k_count.setArg(a++, b_processed);
+    k_count.setArg(a++, outputs.dest);
+    k_count.setArg(a++, queue_a.dest);
+    k_count.setArg(a++, b_hist);
+    k_count.setArg(a++, b_rank);
+    launch.run(k_count, "scatter_count", round_up(blocks, 16), 0, round);
+    a = 0;
+    k_scan.setArg(a++, static_cast<int>(blocks));
+    k_scan.setArg(a++, P);
+    k_scan.setArg(a++, b_hist);
+    k_scan.setArg(a++, b_pe_total);
+    launch.run(k_scan, "scatter_scan", round_up(P, 16), 0, round);
+    a = 0;
+    k_plan.setArg(a++, P);
+    k_plan.setArg(a++, n);
+    k_plan.setArg(a++, b_pe_total);
+    k_plan.setArg(a++, b_bank_count);
+    k_plan.setArg(a++, b_overflow);
+    k_plan.setArg(a++, b_counts);
+    launch.run(k_plan, "scatter_plan", 1, 1, round);
+    a = 0;
+    k_move.setArg(a++, static_cast<int>(src_out));
+    k_move.setArg(a++, static_cast<int>(queue_len));
+    k_move.setArg(a++, n);
+    k_move.setArg(a++, S);
+    k_move.setArg(a++, P);
+    a = outputs.set_args(k_move, a);
+    a = queue_a.set_args(k_move, a);
+    k_move.setArg(a++, b_rank);
+    k_move.setArg(a++, b_hist);
+    k_move.setArg(a++, b_overflow);
+    a = banks.set_args(k_move, a);
+    a = queue_b.set_args(k_move, a);
+    k_move.setArg(a++, b_traffic);
+    k_move.setArg(a++, traffic_levels);
+    launch.run(k_move, "scatter_move", round_up(total, 64), 0, round);
+
+    a = 0;
+    k_spmd.setArg(a++, fp);
+    k_spmd.setArg(a++, b_pes);
+    k_spmd.setArg(a++, b_clusters);
+    k_spmd.setArg(a++, b_nodes);
+    k_spmd.setArg(a++, b_tris);
+    k_spmd.setArg(a++, b_mats);
+    k_spmd.setArg(a++, b_lights);
+    a = banks.set_args(k_spmd, a);
+    k_spmd.setArg(a++, b_bank_count);
+    k_spmd.setArg(a++, b_processed);
+    a = outputs.set_args(k_spmd, a);
+    k_spmd.setArg(a++, b_accum);
+    k_spmd.setArg(a++, b_stats);
+    launch.run(k_spmd, "spmd_phase", std::size_t(P) * spmd_wg, spmd_wg, round);
+
+    cl_int counts[2] = {0, 0};
+    cl_check(q.enqueueReadBuffer(b_counts, CL_TRUE, 0, sizeof(counts), counts), "clEnqueueReadBuffer(scatter counts)");
+    st.rounds = round + 1;
+    st.overflow_deferrals += static_cast<std::uint64_t>(counts[0]);
+    std::swap(queue_a, queue_b);
+    queue_len = static_cast<std::size_t>(counts[0]);
+    outputs_live = counts[1] > 0;
+    if (queue_a.capacity < queue_len + inject) {
+      // Grow the live queue (rare): copy into a larger set.
+      DescriptorSet bigger;
+      bigger.allocate(rt, (queue_len + inject) * 2, "descriptor queue");
+      if (queue_len > 0) {
+        cl_check(q.enqueueCopyBuffer(queue_a.org, bigger.org, 0, 0, queue_len * sizeof(cl_float4)), "grow queue");
+        cl_check(q.enqueueCopyBuffer(queue_a.dir, bigger.dir, 0, 0, queue_len * sizeof(cl_float4)), "grow queue");
+        cl_check(q.enqueueCopyBuffer(queue_a.wgt, bigger.wgt, 0, 0, queue_len * sizeof(cl_float4)), "grow queue");
+        cl_check(q.enqueueCopyBuffer(queue_a.ids, bigger.ids, 0, 0, queue_len * sizeof(cl_int4)), "grow queue");
+        cl_check(q.enqueueCopyBuffer(queue_a.dest, bigger.dest, 0, 0, queue_len * sizeof(cl_int)), "grow queue");
+      }
+      queue_a = bigger;
+    }
+    if (round % 16 == 15) launch.harvest();
+  }
+
+  // Read back: pixel sums (fixed point), item buffer, stats.
+  std::vector<cl_uint> accum(npix * 6);
+  cl_check(q.enqueueReadBuffer(b_accum, CL_TRUE, 0, accum.size() * sizeof(cl_uint), accum.data()),
+           "clEnqueueReadBuffer(pixel sums)");
+  result.item_buffer.resize(npix * 2);
+  cl_check(q.enqueueReadBuffer(b_items, CL_TRUE, 0, npix * sizeof(cl_int2), result.item_buffer.data()),
+           "clEnqueueReadBuffer(item buffer)");
+  cl_check(q.finish(), "clFinish");
+  st.render_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
+  launch.harvest();
+
+  result.rgb.resize(npix * 3);
+  for (std::size_t i = 0; i < npix * 3; ++i)
+    result.rgb[i] = static_cast<float>(static_cast<double>(static_cast<std::int64_t>(fixed_pair(accum, i))) /
+                                       OPSILA_FIXED_SCALE);
+
+  std::vector<cl_uint> raw(nstats);
+  cl_check(q.enqueueReadBuffer(b_stats, CL_TRUE, 0, nstats * sizeof(cl_uint), raw.data()), "clEnqueueReadBuffer(stats)");
+  st.counters.assign(scene.max_depth,
+                     std::vector<std::vector<std::uint64_t>>(P, std::vector<std::uint64_t>(OPSILA_STAT_COUNT, 0)));
+  for (int l = 0; l < scene.max_depth; ++l)
+    for (int p = 0; p < P; ++p)
+      for (int s = 0; s < OPSILA_STAT_COUNT; ++s)
+        st.counters[l][p][s] = fixed_pair(raw, (std::size_t(l) * P + p) * OPSILA_STAT_COUNT + s);
+  if (traffic_levels > 0) {
+    std::vector<cl_uint> tr(ntraffic);
+    cl_check(q.enqueueReadBuffer(b_traffic, CL_TRUE, 0, ntraffic * sizeof(cl_uint), tr.data()),
+             "clEnqueueReadBuffer(traffic)");
+    st.traffic.assign(traffic_levels, std::vector<std::uint64_t>(std::size_t(P) * P));
+    for (int l = 0; l < traffic_levels; ++l)
+      for (std::size_t k = 0; k < std::size_t(P) * P; ++k) st.traffic[l][k] = tr[std::size_t(l) * P * P + k];
+  }
+
+  // Totals. Every primary ray is cast by the item buffer; descriptors are
+  // spawned as primary hits, children and shadow rays, and finish as shaded
+  // hits, misses, occluded or lit shadow rays.
+  st.primary_rays = npix;
+  for (std::size_t i = 0; i < npix; ++i)
+    if (result.item_buffer[2 * i] >= 0) ++st.primary_hits;
+  std::uint64_t spawned_children = 0, spawned_shadow = 0, finished = 0, forwards = 0;
+  for (int l = 0; l < scene.max_depth; ++l)
+    for (int p = 0; p < P; ++p) {
+      const auto& c = st.counters[l][p];
+      spawned_children += c[OPSILA_STAT_SPAWN_RADIANCE];
+      spawned_shadow += c[OPSILA_STAT_SPAWN_SHADOW];
+      finished += c[OPSILA_STAT_RESOLVED] + c[OPSILA_STAT_MISS] + c[OPSILA_STAT_OCCLUDED] + c[OPSILA_STAT_LIT];
+      forwards += c[OPSILA_STAT_FORWARD];
+    }
+  st.secondary_rays = spawned_children;
+  st.shadow_rays = spawned_shadow;
+  st.descriptors_spawned = st.primary_hits + spawned_children + spawned_shadow;
+  st.descriptors_finished = finished;
+  st.forwards = forwards;
+  return result;
+}
+
+}  // namespace opsila

@@ -1,0 +1,89 @@
+// The scene as loaded: what SPEC.md talks about (facets, objects, materials,
+// camera, lights), before it is split into banks. Loaders fill it; the
+// partitioner, the OpenCL renderer and the sequential reference read it.
+#pragma once
+
+#include <array>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace opsila {
+
+using Vec3 = std::array<float, 3>;
+
+// Any bad input (file, flag, scene value). what() is the one-line message the
+// user sees: it names the file, the line (and key) and the problem.
+struct InputError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+// SPEC.md "Materials", as read from MTL or a scene file.
+struct MaterialDesc {
+  std::string name;
+  Vec3 ka{0, 0, 0}, kd{0, 0, 0}, ks{0, 0, 0}, tf{0, 0, 0};
+  float ns = 1.0f, ni = 1.0f;
+  int illum = 0;
+  // SPEC: kr = Ks when illum in {3..7}; kt = Tf when illum in {4,6,7}.
+  Vec3 kr() const;
+  Vec3 kt() const;
+  static MaterialDesc default_material();  // the "face with no material" one
+};
+
+// One triangle of a facet (polygons are fan-triangulated; all triangles of a
+// polygon keep the polygon's facet id).
+struct Triangle {
+  Vec3 v0, v1, v2;
+  int facet_id = 0;
+  int object_id = 0;
+  int material = 0;  // index into Scene::materials
+};
+
+struct LightDesc {
+  Vec3 position{0, 0, 0};
+  Vec3 intensity{1, 1, 1};
+};
+
+struct CameraDesc {
+  Vec3 eye{0, 0, 5}, look_at{0, 0, 0}, up{0, 1, 0};
+  float fov_deg = 45.0f;
+};
+
+struct Scene {
+  std::vector<Triangle> triangles;
+  std::vector<MaterialDesc> materials;  // never empty after loading
+  std::vector<LightDesc> lights;
+  CameraDesc camera;
+  int width = 640, height = 480;
+  int max_depth = 5;
+  Vec3 ambient{0.1f, 0.1f, 0.1f};
+  Vec3 background{0.0f, 0.0f, 0.0f};
+  int num_objects = 0;  // object ids are 0 .. num_objects-1
+  int num_facets = 0;   // facet ids are 0 .. num_facets-1
+  // What the loader set explicitly (so a bare .obj can frame itself).
+  bool has_camera = false;
+  bool has_lights = false;
+  std::vector<std::string> warnings;  // printed once each by the CLI
+
+  // Axis-aligned bounds of all triangles.
+  void bounds(Vec3& lo, Vec3& hi) const;
+  // SPEC: epsilon = 1e-4 x the diagonal of the scene's bounding box.
+  float epsilon() const;
+  // Length of the bounding box diagonal (computed in double, so a scene too
+  // big for float shows up as infinity rather than as a wrong number).
+  double diagonal() const;
+};
+
+// A camera that sees the whole box [lo, hi]: looks at the box centre from +z
+// with up = +y, at distance d = r / sin(min(fov_v, fov_h) / 2), where r is
+// half the box diagonal (the bounding sphere touches the narrower side of the
+// view). fov_deg is the vertical field of view; aspect = width / height.
+CameraDesc frame_bounds(const Vec3& lo, const Vec3& hi, float fov_deg = 45.0f,
+                        float aspect = 4.0f / 3.0f);
+
+// Throws InputError("<where>: ...") unless the scene has a facet and its
+// bounding-box diagonal and epsilon are finite and positive in float.
+void check_scene_extent(const Scene& scene, const std::string& where);
+
+}  // namespace opsila

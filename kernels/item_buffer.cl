@@ -1,0 +1,60 @@
+/* SIMD phase 1: the item buffer. One work-item per pixel. Each pixel is
+ * tested against the projected object (cluster) boxes, computed on the host
+ * as pixel rectangles; inside a rectangle, the cluster's facet boxes (its BVH
+ * nodes) and facets are tested with the pixel's primary ray. For a primary
+ * ray, "pixel inside the projected box" and "ray meets the box" select the
+ * same boxes, so the item is exactly the primary ray's nearest hit. In SIMD
+ * mode every bank is reachable through the network, so no PE routing here. */
+#include "common.cl"
+
+__kernel void item_buffer(FrameParams fp, __global const Cluster *clusters, __global const int4 *cluster_rects,
+                          __global const BankNode *nodes, __global const BankTriangle *tris, int pixel_begin,
+                          int pixel_count, __global int2 *items, __global int *item_tri, __global float *item_t) {
+  int k = get_global_id(0);
+  if (k >= pixel_count) return;
+  int pixel = pixel_begin + k;
+  int x = pixel % fp.width, y = pixel / fp.width;
+  RayPre r = make_ray(load3(fp.eye), primary_direction(fp, x, y));
+  float best_t = OPSILA_INF;
+  int best_tri = -1, best_facet = INT_MAX;
+  uint tri_tests = 0, box_tests = 0;
+  for (int c = 0; c < fp.num_clusters; ++c) {
+    int4 rect = cluster_rects[c]; /* x0, y0, x1, y1 inclusive */
+    if (x < rect.x || x > rect.z || y < rect.y || y > rect.w) continue;
+    traverse_nearest(&r, nodes, tris, clusters[c].root, 0.0f, &best_t, &best_tri, &best_facet, &tri_tests,
+                     &box_tests);
+  }
+  if (best_tri >= 0) {
+    items[pixel] = (int2)(tris[best_tri].object_id, tris[best_tri].facet_id);
+  } else {
+    items[pixel] = (int2)(-1, -1);
+  }
+  item_tri[pixel] = best_tri;
+  item_t[pixel] = best_t;
+}
+
+/* From the item buffer, primary ray descriptors are built for the banks of
+ * the PEs that own the items: already RESOLVED (the nearest hit is known),
+ * bound for the owner PE, which shades them. Misses add the background and
+ * leave a NIL hole. Written at queue[offset + k]. */
+__kernel void build_primary(FrameParams fp, __global const PeInfo *pes, __global const int *item_tri,
+                            __global const float *item_t, int pixel_begin, int pixel_count, int offset,
+                            DESC_PARAMS(q), volatile __global uint *accum) {
+  int k = get_global_id(0);
+  if (k >= pixel_count) return;
+  int pixel = pixel_begin + k;
+  int slot = offset + k;
+  int tri = item_tri[pixel];
+  if (tri < 0) {
+    accumulate(accum, pixel, load3(fp.background));
+    q_dest[slot] = -1;
+    return;
+  }
+  int x = pixel % fp.width, y = pixel / fp.width;
+  float3 d = primary_direction(fp, x, y);
+  q_org[slot] = (float4)(load3(fp.eye), item_t[pixel]);
+  q_dir[slot] = (float4)(d, -1.0f);
+  q_wgt[slot] = (float4)(1.0f, 1.0f, 1.0f, 0.0f);
+  q_ids[slot] = (int4)(pixel, OPSILA_META(OPSILA_KIND_RESOLVED, 0), tri, -1);
+  q_dest[slot] = owner_pe(pes, fp.num_pes, tri);
+}

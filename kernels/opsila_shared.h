@@ -1,0 +1,175 @@
+/* opsila: data layouts shared by the host (C++17) and the kernels (OpenCL C 1.2).
+ *
+ * Everything that crosses the host/device boundary is declared here once.
+ * Structs hold only 4-byte scalars and arrays of them (never float3/float4),
+ * so that their layout is the same on both sides; the host checks sizes and
+ * offsets with static_assert (see the bottom of this file).
+ *
+ * Paper terms: a PE (processing element) is one OpenCL work-group; its bank is
+ * its slice of every per-bank buffer. A ray descriptor is stored as
+ * structure-of-arrays (one array per field), as in the paper's six vectors.
+ */
+#ifndef OPSILA_SHARED_H
+#define OPSILA_SHARED_H
+
+#ifdef __OPENCL_C_VERSION__
+typedef int opsila_i32;
+typedef uint opsila_u32;
+#else
+#include <cstddef>
+#include <cstdint>
+typedef std::int32_t opsila_i32;
+typedef std::uint32_t opsila_u32;
+#endif
+
+/* Largest supported PE count (bounds per-PE scratch arrays). */
+#define OPSILA_MAX_PES 1024
+/* Largest supported --depth (levels are stored in 5 bits of the descriptor). */
+#define OPSILA_MAX_DEPTH 31
+/* Largest supported light count. */
+#define OPSILA_MAX_LIGHTS 64
+/* Stack depth of the bank BVH traversal; the host builder guarantees it. */
+#define OPSILA_BVH_STACK 64
+/* Pixel sums are accumulated as 64-bit fixed point with this many fraction
+ * bits: integer addition is associative, so the image does not depend on the
+ * order in which PEs or work-items finish (bit-identical runs). */
+#define OPSILA_FIXED_SHIFT 24
+#define OPSILA_FIXED_SCALE 16777216.0f
+
+/* Descriptor kinds (low 2 bits of the meta field). */
+#define OPSILA_KIND_NIL 0      /* hole: scatter skips it */
+#define OPSILA_KIND_TRACE 1    /* radiance ray looking for its nearest hit */
+#define OPSILA_KIND_RESOLVED 2 /* nearest hit known; goes to the owner PE to be shaded */
+#define OPSILA_KIND_SHADOW 3   /* shadow ray carrying its light contribution */
+#define OPSILA_META(kind, level) ((opsila_i32)((kind) | ((level) << 2)))
+#define OPSILA_META_KIND(meta) ((meta)&3)
+#define OPSILA_META_LEVEL(meta) (((meta) >> 2) & 31)
+
+/* Stats counters, per (level, PE): see OPSILA_STAT_* indices. */
+#define OPSILA_STAT_TRACED 0        /* descriptors processed by the PE (any kind) */
+#define OPSILA_STAT_RADIANCE 1      /* TRACE descriptors processed */
+#define OPSILA_STAT_RESOLVED 2      /* radiance rays shaded here (hit found) */
+#define OPSILA_STAT_SHADOW 3        /* shadow descriptors processed */
+#define OPSILA_STAT_TRI_TESTS 4     /* ray-facet intersection tests */
+#define OPSILA_STAT_BOX_TESTS 5     /* ray-box tests in the bank BVH */
+#define OPSILA_STAT_SPHERE_TESTS 6  /* ray-bounding-sphere tests (destination choice) */
+#define OPSILA_STAT_SPAWN_RADIANCE 7 /* radiance rays spawned at this level (children) */
+#define OPSILA_STAT_SPAWN_SHADOW 8  /* shadow rays spawned at this level */
+#define OPSILA_STAT_MISS 9          /* radiance rays finished as misses */
+#define OPSILA_STAT_OCCLUDED 10     /* shadow rays finished occluded */
+#define OPSILA_STAT_LIT 11          /* shadow rays finished unoccluded */
+#define OPSILA_STAT_FORWARD 12      /* descriptors sent to another PE (or back to this one) */
+#define OPSILA_STAT_COUNT 13
+
+/* One facet triangle as stored in a bank (48 bytes). Vertices are kept
+ * exactly as loaded so that the watertight test sees shared edges alike. */
+typedef struct {
+  float v0[3];
+  opsila_i32 facet_id; /* SPEC facet id (file order) */
+  float v1[3];
+  opsila_i32 object_id; /* SPEC object id */
+  float v2[3];
+  opsila_i32 material; /* index into the material table */
+} BankTriangle;
+
+/* Bank BVH node (32 bytes). Inner nodes (count == 0) keep their left child
+ * in `first` and the right child at `first + 1`; leaves keep their first
+ * triangle and count > 0. Indices are global (bank offsets applied). */
+typedef struct {
+  float bmin[3];
+  opsila_i32 first;
+  float bmax[3];
+  opsila_i32 count;
+} BankNode;
+
+/* A cluster: the unit of distribution (an object, or a spatially coherent
+ * piece of a large one). Its bounding sphere is known to every PE; its
+ * facets live in one bank only. 48 bytes. */
+typedef struct {
+  float center[3];
+  float radius;
+  float bmin[3];
+  opsila_i32 pe;   /* owning PE */
+  float bmax[3];
+  opsila_i32 root; /* root node of the cluster's BVH, global node index */
+} Cluster;
+
+/* Per-PE summary, global: box around all the PE's bounding spheres and its
+ * range in the (PE-sorted) cluster and triangle tables. 48 bytes. */
+typedef struct {
+  float bmin[3];
+  opsila_i32 cluster_begin;
+  float bmax[3];
+  opsila_i32 cluster_end;
+  opsila_i32 tri_begin;
+  opsila_i32 tri_end;
+  opsila_i32 node_begin;
+  opsila_i32 node_end;
+} PeInfo;
+
+/* Material in SPEC.md terms, with kr/kt already derived from illum. 80 bytes. */
+typedef struct {
+  float ka[3];
+  float ns;
+  float kd[3];
+  float ni;
+  float ks[3];
+  float pad0;
+  float kr[3];
+  float pad1;
+  float kt[3];
+  float pad2;
+} Material;
+
+/* Point light, 32 bytes. */
+typedef struct {
+  float position[3];
+  float pad0;
+  float intensity[3];
+  float pad1;
+} Light;
+
+/* Per-frame constants, passed by value to every kernel. */
+typedef struct {
+  float eye[3];
+  float tan_half_fov; /* s */
+  float forward[3];   /* f */
+  float aspect;       /* a = W/H */
+  float right[3];     /* r */
+  float epsilon;      /* 1e-4 x scene diagonal */
+  float up[3];        /* u */
+  float pad0;
+  float ambient[3];
+  float pad1;
+  float background[3];
+  float pad2;
+  opsila_i32 width;
+  opsila_i32 height;
+  opsila_i32 max_depth;
+  opsila_i32 num_lights;
+  opsila_i32 num_pes;
+  opsila_i32 num_clusters;
+  opsila_i32 bank_capacity; /* n: descriptor slots per bank */
+  opsila_i32 spawn_slots;   /* S = lights + 2: output slots per processed descriptor */
+} FrameParams;
+
+#ifndef __OPENCL_C_VERSION__
+static_assert(sizeof(BankTriangle) == 48, "BankTriangle layout");
+static_assert(offsetof(BankTriangle, facet_id) == 12, "BankTriangle layout");
+static_assert(offsetof(BankTriangle, material) == 44, "BankTriangle layout");
+static_assert(sizeof(BankNode) == 32, "BankNode layout");
+static_assert(offsetof(BankNode, count) == 28, "BankNode layout");
+static_assert(sizeof(Cluster) == 48, "Cluster layout");
+static_assert(offsetof(Cluster, pe) == 28, "Cluster layout");
+static_assert(offsetof(Cluster, root) == 44, "Cluster layout");
+static_assert(sizeof(PeInfo) == 48, "PeInfo layout");
+static_assert(offsetof(PeInfo, tri_begin) == 32, "PeInfo layout");
+static_assert(sizeof(Material) == 80, "Material layout");
+static_assert(offsetof(Material, kt) == 64, "Material layout");
+static_assert(sizeof(Light) == 32, "Light layout");
+static_assert(sizeof(FrameParams) == 128, "FrameParams layout");
+static_assert(offsetof(FrameParams, width) == 96, "FrameParams layout");
+static_assert(offsetof(FrameParams, spawn_slots) == 124, "FrameParams layout");
+#endif
+
+#endif /* OPSILA_SHARED_H */

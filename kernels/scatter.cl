@@ -1,0 +1,116 @@
+/* SIMD scatter: Vd(I'(i)) = Vs(i). The source vector is the SPMD output area
+ * (P*n*S fixed slots, NIL holes included) followed by the waiting queue.
+ * The destination field gives I; I' is made injective by a stable counting
+ * sort on the destination PE: rank(i) = number of earlier valid entries
+ * bound for the same PE. Entry i goes to bank dest(i), slot rank(i), when
+ * rank(i) < n; otherwise it waits in the next queue (no ray is lost).
+ *
+ * Three passes, each a plain data-parallel kernel:
+ *   scatter_count: per block of SCATTER_BLOCK entries, per-PE counts and
+ *                  the rank of each entry inside its block;
+ *   scatter_scan:  per PE, exclusive prefix over blocks, and PE totals;
+ *   scatter_plan:  bank fill counts and the queue layout of the overflow;
+ *   scatter_move:  moves every field of every valid entry to I'(i). */
+#include "common.cl"
+
+#define SCATTER_BLOCK 256
+
+/* Destination of source entry k, or -1 for a hole. */
+inline int source_dest(int k, int out_len, int n, int S, __global const int *processed_count,
+                       __global const int *out_dest, __global const int *q_dest) {
+  if (k < out_len) {
+    int slot = k / S;
+    int pe = slot / n;
+    if (slot - pe * n >= processed_count[pe]) return -1; /* slot not used this phase */
+    return out_dest[k];
+  }
+  return q_dest[k - out_len];
+}
+
+__kernel void scatter_count(int out_len, int queue_len, int n, int S, int num_pes,
+                            __global const int *processed_count, __global const int *out_dest,
+                            __global const int *q_dest, __global int *block_hist, __global int *rank) {
+  int b = get_global_id(0);
+  int total = out_len + queue_len;
+  int begin = b * SCATTER_BLOCK;
+  if (begin >= total) return;
+  int end = min(begin + SCATTER_BLOCK, total);
+  __global int *hist = block_hist + (long)b * num_pes;
+  for (int q = 0; q < num_pes; ++q) hist[q] = 0;
+  for (int k = begin; k < end; ++k) {
+    int d = source_dest(k, out_len, n, S, processed_count, out_dest, q_dest);
+    if (d >= 0 && d < num_pes) {
+      rank[k] = hist[d]++;
+    } else {
+      rank[k] = -1;
+    }
+  }
+}
+
+__kernel void scatter_scan(int num_blocks, int num_pes, __global int *block_hist, __global int *pe_total) {
+  int q = get_global_id(0);
+  if (q >= num_pes) return;
+  int running = 0;
+  for (int b = 0; b < num_blocks; ++b) {
+    long at = (long)b * num_pes + q;
+    int h = block_hist[at];
+    block_hist[at] = running;
+    running += h;
+  }
+  pe_total[q] = running;
+}
+
+/* counts[0] = entries left waiting (next queue length),
+ * counts[1] = entries placed in banks this round. */
+__kernel void scatter_plan(int num_pes, int n, __global const int *pe_total, __global int *bank_count,
+                           __global int *overflow_base, __global int *counts) {
+  if (get_global_id(0) != 0) return;
+  int waiting = 0, placed_all = 0;
+  for (int q = 0; q < num_pes; ++q) {
+    int placed = min(pe_total[q], n);
+    bank_count[q] = placed;
+    overflow_base[q] = waiting;
+    waiting += pe_total[q] - placed;
+    placed_all += placed;
+  }
+  counts[0] = waiting;
+  counts[1] = placed_all;
+}
+
+__kernel void scatter_move(int out_len, int queue_len, int n, int S, int num_pes, DESC_PARAMS(o), DESC_PARAMS(q),
+                           __global const int *rank, __global const int *block_hist,
+                           __global const int *overflow_base, DESC_PARAMS(b), DESC_PARAMS(w),
+                           volatile __global uint *traffic, int traffic_levels) {
+  int k = get_global_id(0);
+  if (k >= out_len + queue_len) return;
+  int rk = rank[k];
+  if (rk < 0) return;
+  bool from_out = k < out_len;
+  int src = from_out ? k : k - out_len;
+  int d = from_out ? o_dest[src] : q_dest[src];
+  int r = block_hist[(long)(k / SCATTER_BLOCK) * num_pes + d] + rk;
+  float4 org = from_out ? o_org[src] : q_org[src];
+  float4 dir = from_out ? o_dir[src] : q_dir[src];
+  float4 wgt = from_out ? o_wgt[src] : q_wgt[src];
+  int4 ids = from_out ? o_ids[src] : q_ids[src];
+  if (from_out && traffic_levels > 0) {
+    int level = OPSILA_META_LEVEL(ids.y);
+    int from_pe = (src / S) / n;
+    if (level < traffic_levels) atomic_inc(&traffic[((long)level * num_pes + from_pe) * num_pes + d]);
+  }
+  if (r < n) {
+    int at = d * n + r;
+    b_org[at] = org;
+    b_dir[at] = dir;
+    b_wgt[at] = wgt;
+    b_ids[at] = ids;
+    b_dest[at] = d;
+  } else {
+    int at = overflow_base[d] + (r - n);
+    w_org[at] = org;
+    w_dir[at] = dir;
+    w_wgt[at] = wgt;
+    w_ids[at] = ids;
+    w_dest[at] = d;
+  }
+}

@@ -7,13 +7,13 @@
 #include <cmath>
 #include <string>
 
+#include "descriptors.h"
 #include "opsila_shared.h"
 #include "partition.h"
 
 namespace opsila {
 namespace {
 
-constexpr int kScatterBlock = 256;  // SCATTER_BLOCK in kernels/scatter.cl
 constexpr int kTrafficMaxPes = 64;  // PE x PE traffic matrices are kept up to this many PEs
 
 struct Vec {
@@ -109,86 +109,6 @@ std::vector<cl_int4> cluster_rects(const Scene& scene, const BankedScene& bs) {
   return rects;
 }
 
-template <typename T>
-cl::Buffer upload(ClRuntime& rt, const std::vector<T>& v, const char* what) {
-  cl_int err = CL_SUCCESS;
-  std::size_t bytes = std::max<std::size_t>(sizeof(T), v.size() * sizeof(T));
-  cl::Buffer b(rt.context(), CL_MEM_READ_ONLY, bytes, nullptr, &err);
-  cl_check(err, (std::string("clCreateBuffer(") + what + ")").c_str());
-  if (!v.empty()) cl_check(rt.queue().enqueueWriteBuffer(b, CL_TRUE, 0, v.size() * sizeof(T), v.data()), what);
-  return b;
-}
-
-cl::Buffer device_buffer(ClRuntime& rt, std::size_t bytes, const char* what) {
-  if (bytes > rt.max_alloc())
-    throw ClError(std::string("buffer ") + what + " needs " + std::to_string(bytes) +
-                  " bytes, more than the device's CL_DEVICE_MAX_MEM_ALLOC_SIZE (" + std::to_string(rt.max_alloc()) +
-                  " bytes): use a smaller --size, --depth or --bank-capacity");
-  cl_int err = CL_SUCCESS;
-  cl::Buffer b(rt.context(), CL_MEM_READ_WRITE, std::max<std::size_t>(bytes, 16), nullptr, &err);
-  cl_check(err, (std::string("clCreateBuffer(") + what + ")").c_str());
-  return b;
-}
-
-// One set of descriptor vectors (structure of arrays).
-struct DescriptorSet {
-  cl::Buffer org, dir, wgt, ids, dest;
-  std::size_t capacity = 0;
-  static constexpr std::size_t kBytes = 3 * sizeof(cl_float4) + sizeof(cl_int4) + sizeof(cl_int);
-  void allocate(ClRuntime& rt, std::size_t n, const char* what) {
-    n = std::max<std::size_t>(n, 1);
-    org = device_buffer(rt, n * sizeof(cl_float4), what);
-    dir = device_buffer(rt, n * sizeof(cl_float4), what);
-    wgt = device_buffer(rt, n * sizeof(cl_float4), what);
-    ids = device_buffer(rt, n * sizeof(cl_int4), what);
-    dest = device_buffer(rt, n * sizeof(cl_int), what);
-    capacity = n;
-  }
-  int set_args(cl::Kernel& k, int at) const {
-    k.setArg(at++, org);
-    k.setArg(at++, dir);
-    k.setArg(at++, wgt);
-    k.setArg(at++, ids);
-    k.setArg(at++, dest);
-    return at;
-  }
-};
-
-std::size_t round_up(std::size_t x, std::size_t m) { return (x + m - 1) / m * m; }
-
-class Launcher {
- public:
-  Launcher(ClRuntime& rt, RenderStats& stats) : rt_(rt), stats_(stats) {}
-  void run(cl::Kernel& k, const char* name, std::size_t global, std::size_t local, int round) {
-    cl::Event ev;
-    cl_int err = rt_.queue().enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(global),
-                                                  local ? cl::NDRange(local) : cl::NullRange, nullptr, &ev);
-    cl_check(err, (std::string("clEnqueueNDRangeKernel(") + name + ")").c_str());
-    pending_.push_back({name, round, ev});
-  }
-  // Collects profiled times once the queue has drained.
-  void harvest() {
-    for (auto& p : pending_) {
-      cl_ulong t0 = 0, t1 = 0;
-      if (p.ev.getProfilingInfo(CL_PROFILING_COMMAND_START, &t0) == CL_SUCCESS &&
-          p.ev.getProfilingInfo(CL_PROFILING_COMMAND_END, &t1) == CL_SUCCESS) {
-        stats_.launches.push_back({p.name, p.round, (t1 - t0) * 1e-9});
-      }
-    }
-    pending_.clear();
-  }
-
- private:
-  struct Pending {
-    const char* name;
-    int round;
-    cl::Event ev;
-  };
-  ClRuntime& rt_;
-  RenderStats& stats_;
-  std::vector<Pending> pending_;
-};
-
 std::uint64_t fixed_pair(const std::vector<cl_uint>& v, std::size_t i) {
   return (std::uint64_t(v[2 * i + 1]) << 32) | v[2 * i];
 }
@@ -238,10 +158,7 @@ RenderResult render(const Scene& scene, const RenderSettings& settings, ClRuntim
   rt.program();  // compile before timing
   cl::Kernel k_item = rt.kernel("item_buffer");
   cl::Kernel k_primary = rt.kernel("build_primary");
-  cl::Kernel k_count = rt.kernel("scatter_count");
-  cl::Kernel k_scan = rt.kernel("scatter_scan");
-  cl::Kernel k_plan = rt.kernel("scatter_plan");
-  cl::Kernel k_move = rt.kernel("scatter_move");
+  ScatterPass scatter(rt, P);
   cl::Kernel k_spmd = rt.kernel("spmd_phase");
 
   // Work-group size of a PE: queried, never assumed.
@@ -289,16 +206,9 @@ RenderResult render(const Scene& scene, const RenderSettings& settings, ClRuntim
   std::size_t queue_cap = out_len + 2 * inject;
   queue_a.allocate(rt, queue_cap, "descriptor queue");
   queue_b.allocate(rt, queue_cap, "descriptor queue");
-  cl::Buffer b_bank_count = device_buffer(rt, P * sizeof(cl_int), "bank counts");
   cl::Buffer b_processed = device_buffer(rt, P * sizeof(cl_int), "processed counts");
-  cl::Buffer b_pe_total = device_buffer(rt, P * sizeof(cl_int), "scatter totals");
-  cl::Buffer b_overflow = device_buffer(rt, P * sizeof(cl_int), "scatter overflow bases");
-  cl::Buffer b_counts = device_buffer(rt, 2 * sizeof(cl_int), "scatter counts");
   cl_check(q.enqueueFillBuffer(b_processed, cl_int(0), 0, P * sizeof(cl_int)), "clEnqueueFillBuffer(processed)");
-  std::size_t rank_cap = 0;
-  cl::Buffer b_rank, b_hist;
-
-  Launcher launch(rt, st);
+  Launcher launch(rt, st.launches);
 
   // SIMD phase 1: item buffer, in tiles so no launch runs unbounded.
   const int tile = std::max(1, settings.item_buffer_tile);
@@ -346,57 +256,21 @@ RenderResult render(const Scene& scene, const RenderSettings& settings, ClRuntim
     if (queue_b.capacity < total) {
       queue_b.allocate(rt, total + total / 2, "descriptor queue");
     }
-    const std::size_t blocks = (total + kScatterBlock - 1) / kScatterBlock;
-    if (rank_cap < total) {
-      rank_cap = total + total / 2;
-      b_rank = device_buffer(rt, rank_cap * sizeof(cl_int), "scatter ranks");
-      b_hist = device_buffer(rt, ((rank_cap + kScatterBlock - 1) / kScatterBlock) * P * sizeof(cl_int),
-                             "scatter block counts");
-    }
-    int a = 0;
-    k_count.setArg(a++, static_cast<int>(src_out));
-    k_count.setArg(a++, static_cast<int>(queue_len));
-    k_count.setArg(a++, n);
-    k_count.setArg(a++, S);
-    k_count.setArg(a++, P);
-    k_count.setArg(a++, b_processed);
-    k_count.setArg(a++, outputs.dest);
-    k_count.setArg(a++, queue_a.dest);
-    k_count.setArg(a++, b_hist);
-    k_count.setArg(a++, b_rank);
-    launch.run(k_count, "scatter_count", round_up(blocks, 16), 0, round);
-    a = 0;
-    k_scan.setArg(a++, static_cast<int>(blocks));
-    k_scan.setArg(a++, P);
-    k_scan.setArg(a++, b_hist);
-    k_scan.setArg(a++, b_pe_total);
-    launch.run(k_scan, "scatter_scan", round_up(P, 16), 0, round);
-    a = 0;
-    k_plan.setArg(a++, P);
-    k_plan.setArg(a++, n);
-    k_plan.setArg(a++, b_pe_total);
-    k_plan.setArg(a++, b_bank_count);
-    k_plan.setArg(a++, b_overflow);
-    k_plan.setArg(a++, b_counts);
-    launch.run(k_plan, "scatter_plan", 1, 1, round);
-    a = 0;
-    k_move.setArg(a++, static_cast<int>(src_out));
-    k_move.setArg(a++, static_cast<int>(queue_len));
-    k_move.setArg(a++, n);
-    k_move.setArg(a++, S);
-    k_move.setArg(a++, P);
-    a = outputs.set_args(k_move, a);
-    a = queue_a.set_args(k_move, a);
-    k_move.setArg(a++, b_rank);
-    k_move.setArg(a++, b_hist);
-    k_move.setArg(a++, b_overflow);
-    a = banks.set_args(k_move, a);
-    a = queue_b.set_args(k_move, a);
-    k_move.setArg(a++, b_traffic);
-    k_move.setArg(a++, traffic_levels);
-    launch.run(k_move, "scatter_move", round_up(total, 64), 0, round);
+    ScatterPass::Args sa;
+    sa.out_len = static_cast<int>(src_out);
+    sa.queue_len = static_cast<int>(queue_len);
+    sa.n = n;
+    sa.spawn_slots = S;
+    sa.processed = &b_processed;
+    sa.outputs = &outputs;
+    sa.queue = &queue_a;
+    sa.banks = &banks;
+    sa.next_queue = &queue_b;
+    sa.traffic = &b_traffic;
+    sa.traffic_levels = traffic_levels;
+    scatter.enqueue(launch, sa, round);
 
-    a = 0;
+    int a = 0;
     k_spmd.setArg(a++, fp);
     k_spmd.setArg(a++, b_pes);
     k_spmd.setArg(a++, b_clusters);
@@ -405,7 +279,7 @@ RenderResult render(const Scene& scene, const RenderSettings& settings, ClRuntim
     k_spmd.setArg(a++, b_mats);
     k_spmd.setArg(a++, b_lights);
     a = banks.set_args(k_spmd, a);
-    k_spmd.setArg(a++, b_bank_count);
+    k_spmd.setArg(a++, scatter.bank_count);
     k_spmd.setArg(a++, b_processed);
     a = outputs.set_args(k_spmd, a);
     k_spmd.setArg(a++, b_accum);
@@ -413,7 +287,7 @@ RenderResult render(const Scene& scene, const RenderSettings& settings, ClRuntim
     launch.run(k_spmd, "spmd_phase", std::size_t(P) * spmd_wg, spmd_wg, round);
 
     cl_int counts[2] = {0, 0};
-    cl_check(q.enqueueReadBuffer(b_counts, CL_TRUE, 0, sizeof(counts), counts), "clEnqueueReadBuffer(scatter counts)");
+    cl_check(q.enqueueReadBuffer(scatter.counts, CL_TRUE, 0, sizeof(counts), counts), "clEnqueueReadBuffer(scatter counts)");
     st.rounds = round + 1;
     st.overflow_deferrals += static_cast<std::uint64_t>(counts[0]);
     std::swap(queue_a, queue_b);
@@ -423,13 +297,7 @@ RenderResult render(const Scene& scene, const RenderSettings& settings, ClRuntim
       // Grow the live queue (rare): copy into a larger set.
       DescriptorSet bigger;
       bigger.allocate(rt, (queue_len + inject) * 2, "descriptor queue");
-      if (queue_len > 0) {
-        cl_check(q.enqueueCopyBuffer(queue_a.org, bigger.org, 0, 0, queue_len * sizeof(cl_float4)), "grow queue");
-        cl_check(q.enqueueCopyBuffer(queue_a.dir, bigger.dir, 0, 0, queue_len * sizeof(cl_float4)), "grow queue");
-        cl_check(q.enqueueCopyBuffer(queue_a.wgt, bigger.wgt, 0, 0, queue_len * sizeof(cl_float4)), "grow queue");
-        cl_check(q.enqueueCopyBuffer(queue_a.ids, bigger.ids, 0, 0, queue_len * sizeof(cl_int4)), "grow queue");
-        cl_check(q.enqueueCopyBuffer(queue_a.dest, bigger.dest, 0, 0, queue_len * sizeof(cl_int)), "grow queue");
-      }
+      queue_a.copy_prefix_to(rt, bigger, queue_len);
       queue_a = bigger;
     }
     if (round % 16 == 15) launch.harvest();

@@ -1,0 +1,107 @@
+// Small scenes built in code for the renderer tests: mirrors, glass and
+// shadows in a few hundred facets, so that PoCL runs them in seconds.
+#pragma once
+
+#include <cmath>
+#include <cstdint>
+#include <map>
+#include <utility>
+
+#include "scene.h"
+
+namespace opsila::test {
+
+inline int add_material(Scene& s, Vec3 ka, Vec3 kd, Vec3 ks, float ns, Vec3 tf, float ni, int illum) {
+  MaterialDesc m;
+  m.ka = ka, m.kd = kd, m.ks = ks, m.ns = ns, m.tf = tf, m.ni = ni, m.illum = illum;
+  s.materials.push_back(m);
+  return static_cast<int>(s.materials.size()) - 1;
+}
+
+inline void add_quad(Scene& s, Vec3 a, Vec3 b, Vec3 c, Vec3 d, int object, int material) {
+  int f = s.num_facets++;
+  s.triangles.push_back({a, b, c, f, object, material});
+  s.triangles.push_back({a, c, d, f, object, material});
+}
+
+// Icosphere with outward counter-clockwise faces.
+inline void add_sphere(Scene& s, Vec3 c, float r, int level, int object, int material) {
+  const float t = (1.0f + std::sqrt(5.0f)) / 2.0f;
+  std::vector<Vec3> v = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0}, {0, -1, t}, {0, 1, t},
+                         {0, -1, -t}, {0, 1, -t}, {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
+  std::vector<std::array<int, 3>> f = {{0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11},
+                                       {1, 5, 9},  {5, 11, 4}, {11, 10, 2}, {10, 7, 6}, {7, 1, 8},
+                                       {3, 9, 4},  {3, 4, 2},  {3, 2, 6},   {3, 6, 8},  {3, 8, 9},
+                                       {4, 9, 5},  {2, 4, 11}, {6, 2, 10},  {8, 6, 7},  {9, 8, 1}};
+  auto unit = [](Vec3 p) {
+    float l = std::sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]);
+    return Vec3{p[0] / l, p[1] / l, p[2] / l};
+  };
+  for (auto& p : v) p = unit(p);
+  for (int k = 0; k < level; ++k) {
+    std::map<std::pair<int, int>, int> mid;
+    auto midpoint = [&](int a, int b) {
+      auto key = std::minmax(a, b);
+      auto it = mid.find(key);
+      if (it != mid.end()) return it->second;
+      v.push_back(unit({(v[a][0] + v[b][0]) / 2, (v[a][1] + v[b][1]) / 2, (v[a][2] + v[b][2]) / 2}));
+      return mid[key] = static_cast<int>(v.size()) - 1;
+    };
+    std::vector<std::array<int, 3>> g;
+    for (auto& tri : f) {
+      int a = midpoint(tri[0], tri[1]), b = midpoint(tri[1], tri[2]), cc = midpoint(tri[2], tri[0]);
+      g.push_back({tri[0], a, cc});
+      g.push_back({tri[1], b, a});
+      g.push_back({tri[2], cc, b});
+      g.push_back({a, b, cc});
+    }
+    f = g;
+  }
+  for (auto& tri : f) {
+    Vec3 p[3];
+    for (int k = 0; k < 3; ++k) p[k] = {c[0] + r * v[tri[k]][0], c[1] + r * v[tri[k]][1], c[2] + r * v[tri[k]][2]};
+    s.triangles.push_back({p[0], p[1], p[2], s.num_facets++, object, material});
+  }
+}
+
+// Checkerboard floor, a mirror wall, a glass sphere, a mirror sphere and a
+// row of diffuse blocks casting shadows; two lights.
+inline Scene mirror_glass_scene(int width, int depth = 5) {
+  Scene s;
+  int plain = add_material(s, {0.8f, 0.8f, 0.8f}, {0.8f, 0.8f, 0.8f}, {0, 0, 0}, 1, {0, 0, 0}, 1, 2);
+  int dark = add_material(s, {0.2f, 0.2f, 0.6f}, {0.2f, 0.2f, 0.7f}, {0, 0, 0}, 1, {0, 0, 0}, 1, 2);
+  int mirror = add_material(s, {0.05f, 0.05f, 0.05f}, {0.1f, 0.1f, 0.1f}, {0.8f, 0.8f, 0.8f}, 60, {0, 0, 0}, 1, 3);
+  int glass = add_material(s, {0, 0, 0}, {0.02f, 0.02f, 0.02f}, {0.15f, 0.15f, 0.15f}, 90, {0.85f, 0.85f, 0.85f},
+                           1.5f, 7);
+  int red = add_material(s, {0.5f, 0.1f, 0.1f}, {0.7f, 0.1f, 0.1f}, {0.3f, 0.3f, 0.3f}, 20, {0, 0, 0}, 1, 2);
+  int obj = 0;
+  for (int i = 0; i < 8; ++i)
+    for (int j = 0; j < 8; ++j) {
+      float x0 = -6 + 1.5f * i, z0 = -6 + 1.5f * j;
+      add_quad(s, {x0, 0, z0}, {x0, 0, z0 + 1.5f}, {x0 + 1.5f, 0, z0 + 1.5f}, {x0 + 1.5f, 0, z0}, obj,
+               (i + j) % 2 ? plain : dark);
+    }
+  ++obj;
+  add_quad(s, {-5, 0, -4}, {5, 0, -4}, {5, 4, -4}, {-5, 4, -4}, obj++, mirror);
+  add_sphere(s, {-1.2f, 1.2f, 0.5f}, 1.1f, 2, obj++, glass);
+  add_sphere(s, {1.8f, 1.0f, -1.0f}, 0.9f, 2, obj++, mirror);
+  for (int i = 0; i < 5; ++i) {
+    float x = -4 + 2.0f * i, z = 2.5f;
+    add_quad(s, {x, 0.0f, z}, {x + 0.6f, 0.0f, z}, {x + 0.6f, 1.2f, z}, {x, 1.2f, z}, obj++, red);
+  }
+  s.num_objects = obj;
+  s.lights.push_back({{3, 7, 5}, {0.7f, 0.7f, 0.7f}});
+  s.lights.push_back({{-4, 5, 3}, {0.35f, 0.35f, 0.45f}});
+  s.camera.eye = {0, 3, 8};
+  s.camera.look_at = {0, 1, 0};
+  s.camera.fov_deg = 55;
+  s.width = width;
+  s.height = width * 3 / 4;
+  s.max_depth = depth;
+  s.ambient = {0.1f, 0.1f, 0.1f};
+  s.background = {0.25f, 0.35f, 0.55f};
+  s.has_camera = s.has_lights = true;
+  return s;
+}
+
+}  // namespace opsila::test

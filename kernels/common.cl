@@ -178,6 +178,9 @@ inline int next_destination(const RayPre *r, __global const PeInfo *pes, __globa
     if (pe->cluster_begin == pe->cluster_end) continue;
     float te;
     if (!ray_box(r, load3g(pe->bmin), load3g(pe->bmax), tmin, tmax, &te)) continue;
+    /* The box holds every sphere of the PE, so its entry bounds theirs from
+     * below: a PE that cannot beat the current candidate is not opened. */
+    if (te > tmin && te > best_entry) continue;
     float entry = OPSILA_INF;
     for (int c = pe->cluster_begin; c < pe->cluster_end; ++c) {
       ++*sphere_tests;
@@ -185,7 +188,7 @@ inline int next_destination(const RayPre *r, __global const PeInfo *pes, __globa
     }
     if (!(entry < tmax)) continue;
     bool after_cursor = entry > cursor_t || (entry == cursor_t && q > cursor_pe);
-    if (after_cursor && (entry < best_entry)) {
+    if (after_cursor && (entry < best_entry || (entry == best_entry && q < best_pe))) {
       best_entry = entry;
       best_pe = q;
     }

@@ -45,9 +45,19 @@ void DescriptorSet::copy_prefix_to(ClRuntime& rt, DescriptorSet& to, std::size_t
 }
 
 void Launcher::run(cl::Kernel& k, const char* name, std::size_t global, std::size_t local, int round) {
+  if (local == 0) {
+    // A fixed work-group size per kernel, from what the kernel allows: drivers
+    // that compile per work-group size (PoCL) then compile each kernel once.
+    std::size_t allowed = 0;
+    cl_check(k.getWorkGroupInfo(rt_.device().device, CL_KERNEL_WORK_GROUP_SIZE, &allowed),
+             "clGetKernelWorkGroupInfo(CL_KERNEL_WORK_GROUP_SIZE)");
+    local = 64;
+    while (local > 1 && local > allowed) local /= 2;
+  }
+  global = round_up(std::max<std::size_t>(global, 1), local);
   cl::Event ev;
-  cl_int err = rt_.queue().enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(global),
-                                                local ? cl::NDRange(local) : cl::NullRange, nullptr, &ev);
+  cl_int err = rt_.queue().enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(global), cl::NDRange(local), nullptr,
+                                                &ev);
   cl_check(err, (std::string("clEnqueueNDRangeKernel(") + name + ")").c_str());
   pending_.push_back({name, round, ev});
 }

@@ -135,7 +135,7 @@ RenderResult render(const Scene& scene, const RenderSettings& settings, ClRuntim
   // device, bounded by memory. GPUs want ~2^17 in flight, CPUs far fewer.
   int n = settings.bank_capacity;
   if (n <= 0) {
-    std::size_t target = rt.device().is_gpu ? (1u << 17) : (1u << 14);
+    std::size_t target = rt.device().is_gpu ? (1u << 17) : (1u << 16);
     target = std::min<std::size_t>(target, std::max<std::size_t>(npix, 1024));
     n = static_cast<int>(std::max<std::size_t>(1, target / P));
   }

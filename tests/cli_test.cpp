@@ -1,0 +1,239 @@
+// The real opsila binary: bad input fails cleanly (one error line naming the
+// flag or file, no output file), good input renders.
+#include <gtest/gtest.h>
+
+#include <nlohmann/json.hpp>
+
+#include "image_io.h"
+#include "test_util.h"
+
+namespace opsila {
+namespace {
+
+using test::RunResult;
+using test::TempDir;
+using test::run_opsila;
+
+// A 2x2 square facing +z, one face: a bare .obj (no camera, no lights).
+const char* kSquareObj =
+    "o square\n"
+    "v -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\n"
+    "f 1 2 3 4\n";
+
+struct CliFixture : ::testing::Test {
+  TempDir dir;
+  std::string scene;
+  std::vector<std::string> before;
+  void SetUp() override {
+    scene = dir.write("tiny.obj", kSquareObj);
+    before = dir.entries();
+  }
+  // Runs `opsila render <args>` and checks the failure contract.
+  void expect_rejected(std::vector<std::string> args, const std::string& named, int code = 2) {
+    args.insert(args.begin(), "render");
+    const RunResult r = run_opsila(args);
+    SCOPED_TRACE("stderr: " + r.err);
+    if (code < 0)
+      EXPECT_NE(r.exit_code, 0);
+    else
+      EXPECT_EQ(r.exit_code, code);
+    const std::vector<std::string> errors = r.error_lines();
+    ASSERT_EQ(errors.size(), 1u);
+    EXPECT_EQ(errors[0].rfind("opsila: error: ", 0), 0u) << errors[0];
+    EXPECT_NE(errors[0].find(named), std::string::npos) << "error does not name '" << named << "'";
+    EXPECT_EQ(dir.entries(), before) << "an output file was left behind";
+  }
+  std::string out(const std::string& name) const { return dir.file(name); }
+};
+
+TEST_F(CliFixture, SizeZeroIsRejected) { expect_rejected({scene, "-o", out("x.png"), "--size", "0x0"}, "--size"); }
+
+TEST_F(CliFixture, SizeTooLargeIsRejected) {
+  expect_rejected({scene, "-o", out("x.png"), "--size", "100000x100000"}, "--size");
+  expect_rejected({scene, "-o", out("x.png"), "--size=16384x16384"}, "2^26");
+  expect_rejected({scene, "-o", out("x.png"), "--size", "12x"}, "--size");
+}
+
+TEST_F(CliFixture, FovOutOfRangeIsRejected) {
+  expect_rejected({scene, "-o", out("x.png"), "--fov", "0"}, "--fov");
+  expect_rejected({scene, "-o", out("x.png"), "--fov", "180"}, "--fov");
+  expect_rejected({scene, "-o", out("x.png"), "--fov=nan"}, "--fov");
+}
+
+TEST_F(CliFixture, DepthAndPesOutOfRangeAreRejected) {
+  expect_rejected({scene, "-o", out("x.png"), "--depth", "0"}, "--depth");
+  expect_rejected({scene, "-o", out("x.png"), "--depth", "32"}, "--depth");
+  expect_rejected({scene, "-o", out("x.png"), "--pes", "0"}, "--pes");
+  expect_rejected({scene, "-o", out("x.png"), "--pes", "1025"}, "--pes");
+  expect_rejected({scene, "-o", out("x.png"), "--bank-capacity", "-1"}, "--bank-capacity");
+}
+
+TEST_F(CliFixture, UnknownDeviceIsRejected) {
+  // 2 when the platform is there but nothing matches; 3 without any platform.
+  const RunResult r = run_opsila({"render", scene, "-o", out("x.png"), "--device", "nosuchdevice"});
+  EXPECT_TRUE(r.exit_code == 2 || r.exit_code == 3) << r.exit_code;
+  ASSERT_EQ(r.error_lines().size(), 1u) << r.err;
+  if (r.exit_code == 2) EXPECT_NE(r.err.find("nosuchdevice"), std::string::npos) << r.err;
+  EXPECT_EQ(dir.entries(), before);
+}
+
+TEST_F(CliFixture, MalformedVectorsAreRejected) {
+  expect_rejected({scene, "-o", out("x.png"), "--light", "1,2"}, "--light");
+  expect_rejected({scene, "-o", out("x.png"), "--light", "1,2,3,4"}, "--light");
+  expect_rejected({scene, "-o", out("x.png"), "--eye", "1,2,inf"}, "--eye");
+  expect_rejected({scene, "-o", out("x.png"), "--ambient", "a,b,c"}, "--ambient");
+}
+
+TEST_F(CliFixture, DegenerateCameraIsRejected) {
+  expect_rejected({scene, "-o", out("x.png"), "--eye", "0,0,5", "--look-at", "0,0,5"}, "--eye");
+  expect_rejected({scene, "-o", out("x.png"), "--reference", "--eye", "0,0,5", "--look-at", "0,0,0", "--up", "0,0,2"},
+                  "--up");
+  // Only --up given: checked against the framed camera after loading.
+  expect_rejected({scene, "-o", out("x.png"), "--reference", "-q", "--up", "0,0,-1"}, "--up");
+}
+
+TEST_F(CliFixture, UnknownFlagAndMissingValueAreRejected) {
+  expect_rejected({scene, "-o", out("x.png"), "--frobnicate"}, "--frobnicate");
+  expect_rejected({scene, "-o", out("x.png"), "--size"}, "--size");
+  expect_rejected({scene, "-o", out("x.png"), "--depth", "--pes", "2"}, "--depth");
+  expect_rejected({scene}, "-o");
+  expect_rejected({scene, "-o", out("x.png"), "--depth", "2", "--depth", "3"}, "--depth");
+}
+
+TEST_F(CliFixture, MissingOrFolderSceneIsRejected) {
+  expect_rejected({dir.file("absent.obj"), "-o", out("x.png"), "--reference"}, "absent.obj");
+  expect_rejected({dir.path(), "-o", out("x.png"), "--reference"}, dir.path());
+}
+
+TEST_F(CliFixture, BadOutputIsRejected) {
+  expect_rejected({scene, "-o", dir.file("missing/x.png"), "--reference"}, "missing/x.png");
+  expect_rejected({scene, "-o", out("x.bmp"), "--reference"}, "x.bmp");
+  expect_rejected({scene, "-o", out("x.png"), "--item-buffer", dir.file("missing/i.npy"), "--reference"},
+                  "missing/i.npy");
+  expect_rejected({scene, "-o", out("x.png"), "--stats", out("s.txt"), "--reference"}, "--stats");
+}
+
+TEST(Cli, HelpAndVersionExitZero) {
+  RunResult r = run_opsila({"--help"});
+  EXPECT_EQ(r.exit_code, 0);
+  EXPECT_NE(r.out.find("opsila render"), std::string::npos);
+  r = run_opsila({"render", "--help"});
+  EXPECT_EQ(r.exit_code, 0);
+  EXPECT_NE(r.out.find("--item-buffer"), std::string::npos);
+  r = run_opsila({"--version"});
+  EXPECT_EQ(r.exit_code, 0);
+  EXPECT_NE(r.out.find(OPSILA_VERSION), std::string::npos);
+}
+
+TEST(Cli, NoOrUnknownCommandIsAUsageError) {
+  RunResult r = run_opsila({});
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_EQ(r.error_lines().size(), 1u);
+  r = run_opsila({"paint"});
+  EXPECT_EQ(r.exit_code, 2);
+  ASSERT_EQ(r.error_lines().size(), 1u);
+  EXPECT_NE(r.error_lines()[0].find("paint"), std::string::npos);
+}
+
+TEST(Cli, DevicesListsOrExplains) {
+  const RunResult r = run_opsila({"devices"});
+  EXPECT_TRUE(r.exit_code == 0 || r.exit_code == 3) << r.exit_code << " " << r.err;
+  if (r.exit_code == 0) {
+    EXPECT_NE(r.out.find("0:0"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("(default)"), std::string::npos) << r.out;
+  } else {
+    EXPECT_EQ(r.error_lines().size(), 1u) << r.err;
+  }
+}
+
+TEST_F(CliFixture, ReferenceRenderWritesAllOutputs) {
+  const RunResult r = run_opsila({"render", scene, "-o", out("x.png"), "--reference", "--size", "32x24",
+                                  "--item-buffer", out("items.npy"), "--stats=" + out("stats.json")});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(r.error_lines().empty()) << r.err;
+  EXPECT_NE(r.err.find("opsila: device: "), std::string::npos) << r.err;
+
+  const std::string png = test::read_file(out("x.png"));
+  ASSERT_GT(png.size(), 24u);
+  EXPECT_EQ(png.substr(1, 3), "PNG");
+
+  const ItemBufferFile items = read_npy_item_buffer(out("items.npy"));
+  EXPECT_EQ(items.width, 32);
+  EXPECT_EQ(items.height, 24);
+  // The camera frames the square: the centre pixel sees it (object 0, facet 0).
+  const std::size_t centre = 2 * (12 * 32 + 16);
+  EXPECT_EQ(items.items[centre], 0);
+  EXPECT_EQ(items.items[centre + 1], 0);
+
+  const nlohmann::json stats = nlohmann::json::parse(test::read_file(out("stats.json")));
+  EXPECT_EQ(stats["width"], 32);
+  EXPECT_EQ(stats["rays"]["primary"], 32 * 24);
+  EXPECT_TRUE(stats["balanced"].get<bool>());
+  EXPECT_EQ(stats["version"], OPSILA_VERSION);
+}
+
+TEST_F(CliFixture, FlagsOverrideAndEqualsFormWorks) {
+  // Looking away from the square: every pixel is the background.
+  const RunResult r = run_opsila({"render", scene, "-o=" + out("x.pfm"), "--reference", "-q", "--size=4x3",
+                                  "--eye=0,0,5", "--look-at=0,0,10", "--background=0.25,0.5,0.75"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(r.err.empty()) << r.err;  // --quiet
+  const FloatImage img = read_pfm(out("x.pfm"));
+  ASSERT_EQ(img.width, 4);
+  ASSERT_EQ(img.height, 3);
+  for (std::size_t i = 0; i < img.rgb.size(); i += 3) {
+    EXPECT_NEAR(img.rgb[i], 0.25f, 1e-6f);
+    EXPECT_NEAR(img.rgb[i + 1], 0.5f, 1e-6f);
+    EXPECT_NEAR(img.rgb[i + 2], 0.75f, 1e-6f);
+  }
+}
+
+TEST_F(CliFixture, DefaultLightSitsAtTheEye) {
+  // Eye straight above the square's centre: n.Lv = 1 at the centre pixel, so
+  // L = Ia*Ka + Kd = 0.1*0.8 + 0.8 with the default material and ambient.
+  const RunResult r = run_opsila({"render", scene, "-o", out("x.pfm"), "--reference", "--size", "5x5",
+                                  "--eye", "0,0,3", "--look-at", "0,0,0", "--ambient", "0.1,0.1,0.1"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const FloatImage img = read_pfm(out("x.pfm"));
+  const std::size_t centre = 3 * (2 * 5 + 2);
+  EXPECT_NEAR(img.rgb[centre], 0.88f, 1e-5f);
+}
+
+TEST_F(CliFixture, SkippedFaceWarnsOnceUnlessQuiet) {
+  const std::string bad = dir.write("bad.obj", std::string(kSquareObj) + "f 1 2\nf 2 3\n");
+  RunResult r = run_opsila({"render", bad, "-o", out("x.png"), "--reference", "--size", "8x8"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("opsila: warning: "), std::string::npos) << r.err;
+  r = run_opsila({"render", bad, "-o", out("y.png"), "--reference", "--size", "8x8", "-q"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r.err.find("warning"), std::string::npos) << r.err;
+}
+
+// The OpenCL path on the default device, compared with the reference. Fails
+// until the OpenCL renderer is complete.
+TEST_F(CliFixture, OpenClRenderMatchesReference) {
+  const std::string obj = dir.write("two.obj",
+                                    "o a\nv -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\nf 1 2 3 4\n"
+                                    "o b\nv -0.5 -0.5 0.5\nv 0.5 -0.5 0.5\nv 0 0.5 0.5\nf 5 6 7\n");
+  const RunResult cl = run_opsila({"render", obj, "-o", out("cl.pfm"), "--size", "40x30", "--pes", "2",
+                                   "--item-buffer", out("cl.npy"), "--stats", out("cl.json")});
+  ASSERT_EQ(cl.exit_code, 0) << cl.err;
+  const nlohmann::json stats = nlohmann::json::parse(test::read_file(out("cl.json")));
+  EXPECT_TRUE(stats["balanced"].get<bool>()) << stats["descriptors"].dump();
+  EXPECT_EQ(stats["pes"], 2);
+  EXPECT_EQ(stats["levels"][0]["pes"].size(), 2u);
+  const RunResult ref = run_opsila({"render", obj, "-o", out("ref.pfm"), "--size", "40x30", "--reference",
+                                    "--item-buffer", out("ref.npy")});
+  ASSERT_EQ(ref.exit_code, 0) << ref.err;
+  const FloatImage a = read_pfm(out("cl.pfm")), b = read_pfm(out("ref.pfm"));
+  ASSERT_EQ(a.rgb.size(), b.rgb.size());
+  EXPECT_LT(test::fraction_off(a.rgb, b.rgb, 2), 0.01);
+  EXPECT_GT(test::clamped_psnr(a.rgb, b.rgb), 40.0);
+  const ItemBufferFile ia = read_npy_item_buffer(out("cl.npy")), ib = read_npy_item_buffer(out("ref.npy"));
+  std::size_t differ = 0;
+  for (std::size_t i = 0; i < ia.items.size() && i < ib.items.size(); ++i) differ += ia.items[i] != ib.items[i];
+  EXPECT_LE(differ, ia.items.size() / 100);
+}
+
+}  // namespace
+}  // namespace opsila

@@ -1,0 +1,166 @@
+// Helpers shared by the tests: image comparison, temporary folders, running
+// the opsila binary and capturing what it says.
+#pragma once
+
+#include <dirent.h>
+#include <fcntl.h>
+#include <spawn.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <limits>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "image_io.h"
+
+extern char** environ;
+
+namespace opsila::test {
+
+// PSNR of two linear RGB buffers (values clamped to [0,1] first, peak 1).
+inline double clamped_psnr(const std::vector<float>& a, const std::vector<float>& b) {
+  auto clamp = [](std::vector<float> v) {
+    for (float& x : v) x = std::min(1.0f, std::max(0.0f, std::isnan(x) ? 0.0f : x));
+    return v;
+  };
+  return psnr(clamp(a), clamp(b), 1.0);
+}
+
+// Fraction of pixels where some channel differs by more than k/255 after the
+// PNG's sRGB 8-bit conversion.
+inline double fraction_off(const std::vector<float>& a, const std::vector<float>& b, int k) {
+  if (a.size() != b.size() || a.size() % 3 != 0) throw std::invalid_argument("fraction_off: size mismatch");
+  if (a.empty()) return 0.0;
+  std::size_t off = 0;
+  for (std::size_t p = 0; p < a.size(); p += 3) {
+    for (int c = 0; c < 3; ++c) {
+      if (std::abs(int(to_srgb8(a[p + c])) - int(to_srgb8(b[p + c]))) > k) {
+        ++off;
+        break;
+      }
+    }
+  }
+  return double(off) / double(a.size() / 3);
+}
+
+// A fresh folder under $TMPDIR (or /tmp), removed with its contents.
+class TempDir {
+ public:
+  TempDir() {
+    const char* base = std::getenv("TMPDIR");
+    std::string pattern = std::string(base && *base ? base : "/tmp") + "/opsila-test-XXXXXX";
+    std::vector<char> buffer(pattern.begin(), pattern.end());
+    buffer.push_back('\0');
+    if (!::mkdtemp(buffer.data())) throw std::runtime_error("mkdtemp failed");
+    path_ = buffer.data();
+  }
+  ~TempDir() { remove_tree(path_); }
+  TempDir(const TempDir&) = delete;
+  TempDir& operator=(const TempDir&) = delete;
+
+  const std::string& path() const { return path_; }
+  std::string file(const std::string& name) const { return path_ + "/" + name; }
+  std::string write(const std::string& name, const std::string& text) const {
+    const std::string p = file(name);
+    std::ofstream(p, std::ios::binary) << text;
+    return p;
+  }
+  // Names in the folder (hidden ones included), sorted.
+  std::vector<std::string> entries() const { return list(path_); }
+
+  static std::vector<std::string> list(const std::string& folder) {
+    std::vector<std::string> names;
+    if (DIR* dir = ::opendir(folder.c_str())) {
+      while (dirent* e = ::readdir(dir)) {
+        const std::string name = e->d_name;
+        if (name != "." && name != "..") names.push_back(name);
+      }
+      ::closedir(dir);
+    }
+    std::sort(names.begin(), names.end());
+    return names;
+  }
+
+ private:
+  static void remove_tree(const std::string& p) {
+    struct stat st;
+    if (::lstat(p.c_str(), &st) != 0) return;
+    if (S_ISDIR(st.st_mode)) {
+      for (const std::string& name : list(p)) remove_tree(p + "/" + name);
+      ::rmdir(p.c_str());
+    } else {
+      ::unlink(p.c_str());
+    }
+  }
+  std::string path_;
+};
+
+inline bool file_exists(const std::string& path) {
+  struct stat st;
+  return ::stat(path.c_str(), &st) == 0;
+}
+
+inline std::string read_file(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+struct RunResult {
+  int exit_code = -1;  // 128 + signal when killed by one
+  std::string out, err;
+  // Lines of stderr that contain "error:".
+  std::vector<std::string> error_lines() const {
+    std::vector<std::string> lines;
+    std::istringstream s(err);
+    std::string line;
+    while (std::getline(s, line))
+      if (line.find("error:") != std::string::npos) lines.push_back(line);
+    return lines;
+  }
+};
+
+// Runs `program args...` (no shell), stdout and stderr captured via files.
+inline RunResult run_program(const std::string& program, const std::vector<std::string>& args) {
+  TempDir capture;
+  const std::string out_path = capture.file("stdout"), err_path = capture.file("stderr");
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_addopen(&actions, 1, out_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  posix_spawn_file_actions_addopen(&actions, 2, err_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  std::vector<char*> argv;
+  argv.push_back(const_cast<char*>(program.c_str()));
+  for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+  argv.push_back(nullptr);
+  pid_t pid;
+  RunResult result;
+  const int spawned = posix_spawn(&pid, program.c_str(), &actions, nullptr, argv.data(), environ);
+  posix_spawn_file_actions_destroy(&actions);
+  if (spawned != 0) {
+    result.err = "spawn failed";
+    return result;
+  }
+  int status = 0;
+  while (::waitpid(pid, &status, 0) < 0) {
+  }
+  result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+  result.out = read_file(out_path);
+  result.err = read_file(err_path);
+  return result;
+}
+
+#ifdef OPSILA_BINARY
+inline RunResult run_opsila(const std::vector<std::string>& args) { return run_program(OPSILA_BINARY, args); }
+#endif
+
+}  // namespace opsila::test

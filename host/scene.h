@@ -82,8 +82,13 @@ struct Scene {
 CameraDesc frame_bounds(const Vec3& lo, const Vec3& hi, float fov_deg = 45.0f,
                         float aspect = 4.0f / 3.0f);
 
+// Largest accepted bounding-box diagonal: far beyond any real scene, yet small
+// enough that eye positions, distances and epsilon all stay finite in float.
+constexpr double kMaxSceneExtent = 1e30;
+
 // Throws InputError("<where>: ...") unless the scene has a facet and its
-// bounding-box diagonal and epsilon are finite and positive in float.
+// bounding-box diagonal is positive, at most kMaxSceneExtent, and gives a
+// positive epsilon in float.
 void check_scene_extent(const Scene& scene, const std::string& where);
 
 }  // namespace opsila

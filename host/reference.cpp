@@ -3,6 +3,8 @@
 // shading. Arithmetic is single precision, like the OpenCL kernels.
 #include "reference.h"
 
+#include "opsila_shared.h"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -127,6 +129,16 @@ Bvh build_bvh(const std::vector<Tri>& tris, const std::vector<Triangle>& source,
 }
 
 // Slab test: does the ray meet the box for some t in [t_min, t_max]?
+// Nearer first; distances equal within OPSILA_TIE_TOLERANCE (relative) are a
+// tie, won by the lower triangle index (file order): coplanar facets and
+// shared edges get the answer of exact arithmetic, not rounding noise.
+bool closer(float t, int index, float best_t, int best_index) {
+  if (best_index < 0) return true;
+  const float tol = OPSILA_TIE_TOLERANCE * best_t;
+  if (t < best_t - tol) return true;
+  return t <= best_t + tol && index < best_index;
+}
+
 bool hits_box(const Node& node, const vec3& origin, const vec3& dir, float t_min, float t_max) {
   for (int a = 0; a < 3; ++a) {
     if (dir[a] == 0.0f) {
@@ -138,7 +150,8 @@ bool hits_box(const Node& node, const vec3& origin, const vec3& dir, float t_min
     float t1 = (node.hi[a] - origin[a]) * inv;
     if (t0 > t1) std::swap(t0, t1);
     t_min = std::max(t_min, t0);
-    t_max = std::min(t_max, t1);
+    // Slack above the tie tolerance, so rounding never culls a possible tie.
+    t_max = std::min(t_max, t1 + std::fabs(t1) * (4 * OPSILA_TIE_TOLERANCE));
     if (t_min > t_max) return false;
   }
   return true;
@@ -205,7 +218,7 @@ struct ReferenceTracer::Impl {
     stack[top++] = 0;
     while (top > 0) {
       const Node& node = bvh.nodes[stack[--top]];
-      if (!hits_box(node, origin, dir, t_min, hit.t)) continue;
+      if (!hits_box(node, origin, dir, t_min, hit.t + hit.t * (2 * OPSILA_TIE_TOLERANCE))) continue;
       if (node.count == 0) {
         stack[top++] = node.first;
         stack[top++] = node.first + 1;
@@ -215,7 +228,7 @@ struct ReferenceTracer::Impl {
         const int index = bvh.order[i];
         float t;
         if (!intersect(tris[index], origin, dir, t) || !(t > t_min)) continue;
-        if (t < hit.t || (t == hit.t && index < hit.tri)) {
+        if (closer(t, index, hit.t, hit.tri)) {
           hit.t = t;
           hit.tri = index;
         }

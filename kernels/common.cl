@@ -82,8 +82,9 @@ inline bool ray_box(const RayPre *r, float3 bmin, float3 bmax, float tmin, float
   float3 lo = fmin(t0, t1), hi = fmax(t0, t1);
   float enter = fmax(fmax(lo.x, lo.y), fmax(lo.z, tmin));
   float leave = fmin(fmin(hi.x, hi.y), fmin(hi.z, tmax));
-  /* Tiny relative slack so that a box hit at the boundary is never culled. */
-  leave = leave * 1.0000004f + 1e-30f;
+  /* Relative slack above the tie tolerance: a box is never culled by rounding
+   * when a facet on its face could still win a tie. */
+  leave = leave + fabs(leave) * (4.0f * OPSILA_TIE_TOLERANCE) + 1e-30f;
   *t_enter = enter;
   return enter <= leave;
 }
@@ -102,11 +103,18 @@ inline float sphere_entry(const RayPre *r, __global const Cluster *cl, float tmi
   return fmax(t_near, 0.0f);
 }
 
-/* Hit ordering: nearer first; equal distances go to the lower facet id, so
- * the answer does not depend on which PE or BVH leaf saw a facet first. */
+/* Hit ordering: nearer first; distances equal within OPSILA_TIE_TOLERANCE go
+ * to the lower facet id, so the answer does not depend on which PE or BVH
+ * leaf saw a facet first, nor on rounding between coplanar facets. */
 inline bool closer(float t, int facet, float best_t, int best_facet) {
-  return t < best_t || (t == best_t && facet < best_facet);
+  if (best_t == OPSILA_INF) return t < OPSILA_INF;
+  float tol = OPSILA_TIE_TOLERANCE * best_t;
+  if (t < best_t - tol) return true;
+  return t <= best_t + tol && facet < best_facet;
 }
+
+/* Farthest distance at which a hit could still win against best_t. */
+inline float tie_limit(float best_t) { return best_t + best_t * (2.0f * OPSILA_TIE_TOLERANCE); }
 
 /* Nearest hit in one BVH subtree (a bank, or one cluster of it). */
 inline void traverse_nearest(const RayPre *r, __global const BankNode *nodes, __global const BankTriangle *tris,
@@ -119,7 +127,7 @@ inline void traverse_nearest(const RayPre *r, __global const BankNode *nodes, __
     __global const BankNode *nd = &nodes[stack[--sp]];
     float te;
     ++*box_tests;
-    if (!ray_box(r, load3g(nd->bmin), load3g(nd->bmax), tmin, *best_t, &te)) continue;
+    if (!ray_box(r, load3g(nd->bmin), load3g(nd->bmax), tmin, tie_limit(*best_t), &te)) continue;
     if (nd->count > 0) {
       for (int i = nd->first; i < nd->first + nd->count; ++i) {
         ++*tri_tests;

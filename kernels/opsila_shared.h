@@ -36,6 +36,11 @@ typedef std::uint32_t opsila_u32;
 #define OPSILA_FIXED_SHIFT 24
 #define OPSILA_FIXED_SCALE 16777216.0f
 
+/* Hits whose distances differ by at most this fraction are a tie, won by
+ * the lower facet id: coplanar facets and shared edges then give the answer
+ * of exact arithmetic with file-order tie-breaking, not float noise. */
+#define OPSILA_TIE_TOLERANCE 1e-6f
+
 /* Descriptor kinds (low 2 bits of the meta field). */
 #define OPSILA_KIND_NIL 0      /* hole: scatter skips it */
 #define OPSILA_KIND_TRACE 1    /* radiance ray looking for its nearest hit */

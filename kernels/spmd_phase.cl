@@ -171,9 +171,9 @@ __kernel void spmd_phase(FrameParams fp, __global const PeInfo *pes, __global co
           traverse_nearest(&r, nodes, tris, root, eps, &t_best, &hit, &best_facet, &st.v[OPSILA_STAT_TRI_TESTS],
                            &st.v[OPSILA_STAT_BOX_TESTS]);
         float entry;
-        int dest = next_destination(&r, pes, clusters, fp.num_pes, eps, t_best, dir4.w, pe, &entry,
+        int dest = next_destination(&r, pes, clusters, fp.num_pes, eps, tie_limit(t_best), dir4.w, pe, &entry,
                                     &st.v[OPSILA_STAT_SPHERE_TESTS]);
-        if (dest >= 0) { /* a nearer hit may wait in another bank */
+        if (dest >= 0) { /* a nearer hit (or a tie with a lower facet id) may wait in another bank */
           ++st.v[OPSILA_STAT_FORWARD];
           emit(o_org, o_dir, o_wgt, o_ids, o_dest, out_base, (float4)(org, t_best), (float4)(d, entry), wgt4,
                (int4)(ids.x, ids.y, hit, dest), dest);

@@ -76,7 +76,14 @@ inline float intersect_triangle(const RayPre *r, __global const BankTriangle *tr
 }
 
 /* Slab test; fmin/fmax drop the NaN of 0 * inf for axis-parallel rays. */
+inline bool ray_box_span(const RayPre *r, float3 bmin, float3 bmax, float tmin, float tmax, float *t_enter,
+                         float *t_leave);
 inline bool ray_box(const RayPre *r, float3 bmin, float3 bmax, float tmin, float tmax, float *t_enter) {
+  float leave;
+  return ray_box_span(r, bmin, bmax, tmin, tmax, t_enter, &leave);
+}
+inline bool ray_box_span(const RayPre *r, float3 bmin, float3 bmax, float tmin, float tmax, float *t_enter,
+                         float *t_leave) {
   float3 t0 = (bmin - r->org) * r->inv_dir;
   float3 t1 = (bmax - r->org) * r->inv_dir;
   float3 lo = fmin(t0, t1), hi = fmax(t0, t1);
@@ -86,6 +93,7 @@ inline bool ray_box(const RayPre *r, float3 bmin, float3 bmax, float tmin, float
    * when a facet on its face could still win a tie. */
   leave = leave + fabs(leave) * (4.0f * OPSILA_TIE_TOLERANCE) + 1e-30f;
   *t_enter = enter;
+  *t_leave = leave;
   return enter <= leave;
 }
 
@@ -184,11 +192,14 @@ inline int next_destination(const RayPre *r, __global const PeInfo *pes, __globa
   for (int q = 0; q < num_pes; ++q) {
     __global const PeInfo *pe = &pes[q];
     if (pe->cluster_begin == pe->cluster_end) continue;
-    float te;
-    if (!ray_box(r, load3g(pe->bmin), load3g(pe->bmax), tmin, tmax, &te)) continue;
+    if (q == cursor_pe) continue; /* (entry, q) == cursor: visited */
+    float te, tl;
+    if (!ray_box_span(r, load3g(pe->bmin), load3g(pe->bmax), tmin, tmax, &te, &tl)) continue;
     /* The box holds every sphere of the PE, so its entry bounds theirs from
-     * below: a PE that cannot beat the current candidate is not opened. */
+     * below and its exit from above: a PE that cannot beat the current
+     * candidate, or that the ray left before the cursor, is not opened. */
     if (te > tmin && te > best_entry) continue;
+    if (tl < cursor_t) continue;
     float entry = OPSILA_INF;
     for (int c = pe->cluster_begin; c < pe->cluster_end; ++c) {
       ++*sphere_tests;
@@ -203,6 +214,24 @@ inline int next_destination(const RayPre *r, __global const PeInfo *pes, __globa
   }
   *entry_out = best_entry;
   return best_pe;
+}
+
+/* Shadow rays need no order (any occluder ends them): they visit the PEs
+ * whose spheres meet the segment (tmin, tmax) in PE order. Returns the first
+ * such PE after `after_pe`, or -1. */
+inline int next_shadow_destination(const RayPre *r, __global const PeInfo *pes, __global const Cluster *clusters,
+                                   int num_pes, float tmin, float tmax, int after_pe, uint *sphere_tests) {
+  for (int q = after_pe + 1; q < num_pes; ++q) {
+    __global const PeInfo *pe = &pes[q];
+    if (pe->cluster_begin == pe->cluster_end) continue;
+    float te;
+    if (!ray_box(r, load3g(pe->bmin), load3g(pe->bmax), tmin, tmax, &te)) continue;
+    for (int c = pe->cluster_begin; c < pe->cluster_end; ++c) {
+      ++*sphere_tests;
+      if (sphere_entry(r, &clusters[c], tmin, tmax) < OPSILA_INF) return q;
+    }
+  }
+  return -1;
 }
 
 /* Owner PE of a global triangle index (banks are contiguous). */

@@ -61,8 +61,9 @@ inline void shade(FrameParams fp, __global const PeInfo *pes, __global const Clu
     if (all(contrib == (float3)(0.0f))) continue;
     ++st->v[OPSILA_STAT_SPAWN_SHADOW];
     RayPre sr = make_ray(p, lv);
-    float entry;
-    int dest = first_destination(&sr, pes, clusters, fp.num_pes, eps, dist, &entry, st);
+    float entry = 0.0f;
+    int dest = next_shadow_destination(&sr, pes, clusters, fp.num_pes, eps, dist, -1,
+                                       &st->v[OPSILA_STAT_SPHERE_TESTS]);
     if (dest < 0) { /* no sphere on the way: lit without leaving this PE */
       ++st->v[OPSILA_STAT_LIT];
       accumulate(accum, pixel, contrib);
@@ -149,16 +150,14 @@ __kernel void spmd_phase(FrameParams fp, __global const PeInfo *pes, __global co
       if (blocked) {
         ++st.v[OPSILA_STAT_OCCLUDED];
       } else {
-        float entry;
-        int dest = next_destination(&r, pes, clusters, fp.num_pes, eps, tmax, dir4.w, pe, &entry,
-                                    &st.v[OPSILA_STAT_SPHERE_TESTS]);
+        int dest = next_shadow_destination(&r, pes, clusters, fp.num_pes, eps, tmax, pe,
+                                           &st.v[OPSILA_STAT_SPHERE_TESTS]);
         if (dest < 0) {
           ++st.v[OPSILA_STAT_LIT];
           accumulate(accum, ids.x, w);
         } else {
           ++st.v[OPSILA_STAT_FORWARD];
-          emit(o_org, o_dir, o_wgt, o_ids, o_dest, out_base, org4, (float4)(d, entry), wgt4,
-               (int4)(ids.x, ids.y, -1, dest), dest);
+          emit(o_org, o_dir, o_wgt, o_ids, o_dest, out_base, org4, dir4, wgt4, (int4)(ids.x, ids.y, -1, dest), dest);
         }
       }
     } else {

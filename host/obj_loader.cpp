@@ -435,7 +435,7 @@ class ObjParser {
       fail(name_, line_, "vertex index 0 in 'f' line (OBJ indices start at 1)");
     const long long have = static_cast<long long>(verts_.size() / 3);
     if (vi < 0) {
-      if (-vi > have)
+      if (vi < -have)
         fail(name_, line_, "vertex index " + std::to_string(vi) + " out of range (only " +
                                std::to_string(have) + " vertices defined before this line)");
       return static_cast<std::uint32_t>(have + vi);

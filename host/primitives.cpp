@@ -3,6 +3,7 @@
 // are bit-identical and the surfaces are watertight.
 #include "primitives.h"
 
+#include <algorithm>
 #include <cmath>
 
 namespace opsila {
@@ -138,6 +139,11 @@ void transform_triangles(std::vector<Triangle>& tris, std::size_t first, const T
   }
 }
 
+void reserve_more(std::vector<Triangle>& tris, std::size_t more) {
+  const std::size_t need = tris.size() + more;
+  if (need > tris.capacity()) tris.reserve(std::max(need, tris.capacity() * 2));
+}
+
 std::size_t icosphere_triangles(int subdivisions) {
   return std::size_t(20) << (2 * subdivisions);
 }
@@ -161,7 +167,7 @@ int add_icosphere(std::vector<Triangle>& out, const Vec3& center, float radius,
                                    {1, 5, 9},  {5, 11, 4}, {11, 10, 2}, {10, 7, 6}, {7, 1, 8},
                                    {3, 9, 4},  {3, 4, 2},  {3, 2, 6},   {3, 6, 8},  {3, 8, 9},
                                    {4, 9, 5},  {2, 4, 11}, {6, 2, 10},  {8, 6, 7},  {9, 8, 1}};
-  out.reserve(out.size() + icosphere_triangles(subdivisions));
+  reserve_more(out, icosphere_triangles(subdivisions));
   SphereEmitter e{out, center[0], center[1], center[2], radius, tag, facet};
   for (const auto& f : faces) e.emit(v[f[0]], v[f[1]], v[f[2]], subdivisions);
   return e.facet;
@@ -199,7 +205,7 @@ int add_checkerboard(std::vector<Triangle>& out, const Vec3& center, float size_
   const float y = center[1];
   const auto gx = [&](int i) { return static_cast<float>(x0 + double(size_x) * i / nx); };
   const auto gz = [&](int j) { return static_cast<float>(z0 + double(size_z) * j / nz); };
-  out.reserve(out.size() + std::size_t(2) * nx * nz);
+  reserve_more(out, std::size_t(2) * nx * nz);
   for (int j = 0; j < nz; ++j) {
     for (int i = 0; i < nx; ++i) {
       const FacetTag tag{object_id, (i + j) % 2 == 0 ? material_a : material_b};
@@ -247,7 +253,7 @@ int add_terrain(std::vector<Triangle>& out, const TerrainDesc& desc, int object_
                          static_cast<float>(z0 + double(desc.size_z) * j / nz)};
     }
   }
-  out.reserve(out.size() + std::size_t(2) * nx * nz);
+  reserve_more(out, std::size_t(2) * nx * nz);
   for (int j = 0; j < nz; ++j) {
     for (int i = 0; i < nx; ++i) {
       const FacetTag tag{object_id, (i + j) % 2 == 0 ? material_a : material_b};

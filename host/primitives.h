@@ -31,6 +31,10 @@ struct Transform {
 // Applies `t` to the vertices of triangles [first, end).
 void transform_triangles(std::vector<Triangle>& tris, std::size_t first, const Transform& t);
 
+// Makes room for `more` triangles, growing geometrically: many small shapes
+// appended one by one must not reallocate (and copy) every time.
+void reserve_more(std::vector<Triangle>& tris, std::size_t more);
+
 // Triangles an icosphere with `subdivisions` levels has: 20 * 4^subdivisions.
 std::size_t icosphere_triangles(int subdivisions);
 

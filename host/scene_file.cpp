@@ -74,6 +74,7 @@ class LineMap {
  public:
   LineMap(const std::string& text, const std::string& name, std::vector<std::string>& warnings)
       : s_(text), name_(name), warnings_(warnings) {
+    if (s_.compare(0, 3, "\xEF\xBB\xBF") == 0) i_ = 3;  // UTF-8 BOM, as nlohmann skips it
     value("");
   }
 
@@ -883,7 +884,7 @@ class SceneReader {
     if (override_mat < 0)
       for (std::size_t k = 1; k < sub.materials.size(); ++k) scene_.materials.push_back(sub.materials[k]);
     if (sub.num_objects > INT_MAX - next_object_) fail(path, "too many objects");
-    scene_.triangles.reserve(scene_.triangles.size() + sub.triangles.size());
+    reserve_more(scene_.triangles, sub.triangles.size());
     for (Triangle t : sub.triangles) {
       t.object_id += next_object_;
       t.facet_id += next_facet_;

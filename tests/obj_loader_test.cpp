@@ -330,6 +330,7 @@ TEST(ObjErrors, EveryBrokenFileGivesOnePreciseMessage) {
       {"zero_texture_index.obj", "zero_texture_index.obj:5:", "'1/0'"},
       {"too_many_values.obj", "too_many_values.obj:1:", "8 values"},
       {"extent_overflow.obj", "extent_overflow.obj", "extent overflows float"},
+      {"extent_too_large.obj", "extent_too_large.obj", "extent too large"},
       {"facet_overflow.obj", "facet_overflow.obj:4:", "overflow"},
       {"utf16.obj", "utf16.obj:1:", "UTF-16"},
       {"crlf_line5.obj", "crlf_line5.obj:5:", "bad vertex reference 'x'"},
@@ -352,6 +353,14 @@ TEST(ObjErrors, EveryBrokenFileGivesOnePreciseMessage) {
   }
 }
 
+TEST(ObjMaterials, ManyUnknownMaterialNamesAreSummedUp) {
+  std::string text = kTriVerts;
+  for (int k = 0; k < 20; ++k) text += "usemtl m" + std::to_string(k) + "\nf 1 2 3\n";
+  const Scene s = from_text(text);
+  EXPECT_EQ(s.warnings.size(), 9u);  // eight named, then one summary
+  EXPECT_TRUE(has_warning(s, "t.obj:", "12 more unknown material names"));
+}
+
 TEST(ObjErrors, StringInputErrorsNameTheGivenName) {
   expect_error([] { load_obj_from_string("v 1 2 3\nf 1 1 1 junk\n", "model.obj", ""); },
                {"model.obj:2:", "'junk'"});
@@ -359,6 +368,10 @@ TEST(ObjErrors, StringInputErrorsNameTheGivenName) {
                {"model.obj:1:", "truncated"});
   expect_error([] { load_obj_from_string(std::string("v 1 2 3\0", 8), "model.obj", ""); },
                {"model.obj:1:", "NUL"});
+  expect_error([] { load_obj_from_string("v 1 2 3\nf 1 1 -9223372036854775808\n", "model.obj", ""); },
+               {"model.obj:2:", "out of range"});
+  expect_error([] { load_obj_from_string("v 1 2 3\nf 1 1 99999999999999999999\n", "model.obj", ""); },
+               {"model.obj:2:", "99999999999999999999"});
 }
 
 TEST(ObjErrors, PathProblems) {

@@ -400,6 +400,17 @@ TEST(SceneFormat, GeneratorsAreDeterministicAndEachItemIsAnObject) {
   EXPECT_NE(json(other).triangles[0].v0, s1.triangles[0].v0);
 }
 
+TEST(SceneFormat, ManySmallObjectsLoadInLinearTime) {
+  // Appending thousands of shapes must not copy the triangle list each time.
+  const auto t0 = std::chrono::steady_clock::now();
+  const Scene s = json(R"({"objects": [{"type": "scatter", "count": 3000, "min": [0,0,0],
+      "max": [100,100,100], "radius": 0.5, "subdivisions": 2}]})");
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  EXPECT_EQ(s.num_objects, 3000);
+  EXPECT_EQ(s.triangles.size(), 3000u * 320u);
+  EXPECT_LT(seconds, 5.0);  // about 0.1 s; quadratic copying took minutes
+}
+
 TEST(SceneFormat, WarningsForUnknownAndDuplicateKeys) {
   const Scene s = json("{\n\"objects\": [\n{\"type\": \"sphere\", \"center\": [0,0,0],\n"
                        "\"radius\": 1, \"radus\": 2}\n],\n\"depth\": 2,\n\"depth\": 3,\n"
@@ -468,6 +479,8 @@ TEST(SceneFormat, ErrorsNameFileLineAndKeyPath) {
       {"{\"objects\": [{\"type\": \"sphere\", \"center\": [0,0,0], \"radius\": 1e30, "
        "\"subdivisions\": 0}]}",
        {"objects[0]", "overflows float"}},
+      {"{\"objects\": [{\"type\": \"box\", \"min\": [-1e36,0,0], \"max\": [1e36,1,1]}]}",
+       {"s.json", "extent too large"}},
       {"{\"objects\": [{\"type\": \"sphere\", \"center\": [0,0,0], \"radius\": 1, \"subdivisions\": 11}]}",
        {"objects[0].subdivisions", "0..10"}},
       {"{\"objects\": [{\"type\": \"grid\", \"counts\": 2, \"min\": [0,0,0], \"max\": [1,1,1], "
@@ -481,6 +494,11 @@ TEST(SceneFormat, ErrorsNameFileLineAndKeyPath) {
     SCOPED_TRACE(c.text);
     expect_error([&] { json(c.text); }, c.fragments);
   }
+}
+
+TEST(SceneFormat, ByteOrderMarkKeepsLineNumbers) {
+  expect_error([] { json("\xEF\xBB\xBF{\n\"objects\": [\n{\"type\": \"sphere\", \"radius\": 1}]}"); },
+               {"s.json:3:", "objects[0]", "missing key 'center'"});
 }
 
 TEST(SceneFormat, DeepNestingAndBinaryAreRefused) {

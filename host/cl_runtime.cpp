@@ -3,8 +3,12 @@
 #include <algorithm>
 #include <cctype>
 #include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
 #include <sstream>
 
+#include "opsila_shared.h"
 #include "scene.h"
 
 namespace opsila {
@@ -173,17 +177,114 @@ DeviceEntry choose_device(const std::string& spec) {
   throw InputError("--device " + spec + ": no OpenCL device matches '" + spec + "' (see 'opsila devices')");
 }
 
-ClRuntime::ClRuntime(const DeviceEntry& device) : device_(device) {
+namespace {
+
+// "OpenCL 1.2 ..." / "OpenCL C 1.2 ...": major * 10 + minor, or -1.
+int parse_version(const std::string& text, const char* prefix) {
+  int major = 0, minor = 0;
+  const std::string format = std::string(prefix) + " %d.%d";
+  if (std::sscanf(text.c_str(), format.c_str(), &major, &minor) != 2) return -1;
+  return major * 10 + minor;
+}
+
+bool has_word(const std::string& list, const std::string& word) {
+  std::istringstream in(list);
+  std::string w;
+  while (in >> w)
+    if (w == word) return true;
+  return false;
+}
+
+}  // namespace
+
+DeviceCapabilities query_capabilities(const cl::Device& d) {
+  DeviceCapabilities c;
+  c.name = trim(d.getInfo<CL_DEVICE_NAME>());
+  c.version = trim(d.getInfo<CL_DEVICE_VERSION>());
+  c.opencl_c_version = trim(d.getInfo<CL_DEVICE_OPENCL_C_VERSION>());
+  c.profile = trim(d.getInfo<CL_DEVICE_PROFILE>());
+  c.extensions = trim(d.getInfo<CL_DEVICE_EXTENSIONS>());
+  c.available = d.getInfo<CL_DEVICE_AVAILABLE>() != CL_FALSE;
+  c.compiler_available = d.getInfo<CL_DEVICE_COMPILER_AVAILABLE>() != CL_FALSE;
+  c.local_mem_size = d.getInfo<CL_DEVICE_LOCAL_MEM_SIZE>();
+  c.max_work_group_size = d.getInfo<CL_DEVICE_MAX_WORK_GROUP_SIZE>();
+  return c;
+}
+
+std::size_t required_local_mem() { return std::size_t(OPSILA_MAX_DEPTH) * OPSILA_STAT_COUNT * sizeof(cl_uint); }
+
+std::vector<std::string> missing_capabilities(const DeviceCapabilities& c) {
+  std::vector<std::string> missing;
+  if (!c.available) missing.push_back("it is not available (CL_DEVICE_AVAILABLE is false)");
+  const int version = parse_version(c.version, "OpenCL");
+  if (version < 12) missing.push_back("OpenCL 1.2 (it reports '" + c.version + "')");
+  const int c_version = parse_version(c.opencl_c_version, "OpenCL C");
+  if (c_version < 12) missing.push_back("OpenCL C 1.2 (it reports '" + c.opencl_c_version + "')");
+  if (!c.compiler_available) missing.push_back("an OpenCL C compiler (CL_DEVICE_COMPILER_AVAILABLE is false)");
+  if (c.local_mem_size < required_local_mem())
+    missing.push_back(std::to_string(required_local_mem()) + " bytes of local memory (CL_DEVICE_LOCAL_MEM_SIZE is " +
+                      std::to_string(c.local_mem_size) + ")");
+  if (c.max_work_group_size < 1)
+    missing.push_back("work-groups of at least 1 work-item (CL_DEVICE_MAX_WORK_GROUP_SIZE is 0)");
+  // Pixel sums are 64-bit fixed point: embedded-profile devices have 64-bit
+  // integers only with cles_khr_int64.
+  if (c.profile == "EMBEDDED_PROFILE" && !has_word(c.extensions, "cles_khr_int64"))
+    missing.push_back("64-bit integers (EMBEDDED_PROFILE without cles_khr_int64)");
+  return missing;
+}
+
+ClRuntime::ClRuntime(const DeviceEntry& device, const ClRuntimeOptions& options) : device_(device) {
+  const DeviceCapabilities caps = query_capabilities(device_.device);
+  const std::vector<std::string> missing = missing_capabilities(caps);
+  if (!missing.empty()) {
+    std::string message =
+        "device " + device_.device_name + " (" + device_.platform_name + ") cannot run opsila: it lacks ";
+    for (std::size_t i = 0; i < missing.size(); ++i) message += (i ? "; " : "") + missing[i];
+    throw ClError(message);
+  }
+
+  source_ = options.kernel_source;
+  source_origin_ = source_.empty() ? "embedded kernels"
+                                   : (options.kernel_source_origin.empty() ? "kernel source given by the caller"
+                                                                           : options.kernel_source_origin);
+  cl_ulong limit = options.memory_limit;
+  if (options.read_environment) {
+    // OPSILA_KERNEL_SOURCE=path: build this file instead of the embedded
+    // kernels (to try a kernel change without rebuilding, or to test faults).
+    const char* path = std::getenv("OPSILA_KERNEL_SOURCE");
+    if (path && *path && source_.empty()) {
+      std::ifstream in(path, std::ios::binary);
+      std::ostringstream text;
+      text << in.rdbuf();
+      if (!in || text.str().empty())
+        throw InputError(std::string("OPSILA_KERNEL_SOURCE=") + path + ": cannot read the file (or it is empty)");
+      source_ = text.str();
+      source_origin_ = std::string("OPSILA_KERNEL_SOURCE=") + path;
+    }
+    // OPSILA_DEVICE_MEMORY_LIMIT=bytes: plan as if the device had no more.
+    const char* mem = std::getenv("OPSILA_DEVICE_MEMORY_LIMIT");
+    if (mem && *mem && limit == 0) {
+      const std::string text = mem;
+      if (!std::all_of(text.begin(), text.end(), [](unsigned char c) { return std::isdigit(c); }) ||
+          text.size() > 19 || std::stoull(text) == 0)
+        throw InputError("OPSILA_DEVICE_MEMORY_LIMIT=" + text + ": expected a positive number of bytes");
+      limit = std::stoull(text);
+    }
+  }
+
   cl_int err = CL_SUCCESS;
   context_ = cl::Context(device_.device, nullptr, nullptr, nullptr, &err);
   cl_check(err, "clCreateContext");
   queue_ = cl::CommandQueue(context_, device_.device, CL_QUEUE_PROFILING_ENABLE, &err);
   cl_check(err, "clCreateCommandQueue");
-  max_wg_ = device_.device.getInfo<CL_DEVICE_MAX_WORK_GROUP_SIZE>();
+  max_wg_ = caps.max_work_group_size;
   max_alloc_ = device_.device.getInfo<CL_DEVICE_MAX_MEM_ALLOC_SIZE>();
   global_mem_ = device_.device.getInfo<CL_DEVICE_GLOBAL_MEM_SIZE>();
-  if (device_.device.getInfo<CL_DEVICE_COMPILER_AVAILABLE>() == CL_FALSE)
-    throw ClError("device " + device_.device_name + " has no OpenCL C compiler (CL_DEVICE_COMPILER_AVAILABLE)");
+  limit_ = limit;
+  if (limit > 0) {
+    max_alloc_ = std::min(max_alloc_, limit);
+    global_mem_ = std::min(global_mem_, limit);
+  }
 }
 
 std::string ClRuntime::description() const {
@@ -195,15 +296,17 @@ cl::Program& ClRuntime::program() {
   if (built_) return program_;
   auto t0 = std::chrono::steady_clock::now();
   cl_int err = CL_SUCCESS;
-  program_ = cl::Program(context_, kernel_source(), false, &err);
+  program_ = cl::Program(context_, source_.empty() ? kernel_source() : source_, false, &err);
   cl_check(err, "clCreateProgramWithSource");
   // No fast-math: every device must reproduce the reference's arithmetic.
   err = program_.build({device_.device}, "-cl-std=CL1.2");
   if (err != CL_SUCCESS) {
     std::string log;
     program_.getBuildInfo(device_.device, CL_PROGRAM_BUILD_LOG, &log);
+    log = trim(log);
     throw ClError(std::string("clBuildProgram: ") + cl_error_name(err) + " (" + std::to_string(err) + ") on " +
-                  device_.device_name + "; build log:\n" + trim(log));
+                  device_.device_name + " (kernel source: " + source_origin_ + "); build log:\n" +
+                  (log.empty() ? "(the driver gave no build log)" : log));
   }
   build_seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   built_ = true;

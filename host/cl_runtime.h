@@ -31,9 +31,37 @@ std::vector<DeviceEntry> list_devices();  // throws ClError when there is no pla
 // platform/device/vendor name ("pocl", "nvidia"). Throws InputError if none.
 DeviceEntry choose_device(const std::string& spec);
 
+// What opsila needs from a device, as the device reports it.
+struct DeviceCapabilities {
+  std::string name, version, opencl_c_version, profile, extensions;
+  bool available = true, compiler_available = true;
+  cl_ulong local_mem_size = 0;
+  std::size_t max_work_group_size = 0;
+};
+DeviceCapabilities query_capabilities(const cl::Device& device);
+// Local memory the SPMD kernel needs per work-group (its per-level stats).
+std::size_t required_local_mem();
+// What the device lacks for opsila, one phrase each; empty when it can run it.
+std::vector<std::string> missing_capabilities(const DeviceCapabilities& caps);
+
+// How a runtime is set up. The defaults are what the command line uses.
+struct ClRuntimeOptions {
+  // Non-empty: OpenCL C source to build instead of the embedded kernels
+  // (tests use it); `kernel_source_origin` names it in messages.
+  std::string kernel_source, kernel_source_origin;
+  // Non-zero: believe the device has at most this many bytes of global
+  // memory and of single allocation (tests use it to provoke refusals).
+  cl_ulong memory_limit = 0;
+  // Honour OPSILA_KERNEL_SOURCE=path (a file replacing the embedded kernels)
+  // and OPSILA_DEVICE_MEMORY_LIMIT=bytes, read when the runtime is created.
+  bool read_environment = true;
+};
+
 class ClRuntime {
  public:
-  explicit ClRuntime(const DeviceEntry& device);
+  // Checks the device (missing_capabilities) and throws ClError naming the
+  // device and what it lacks; throws InputError for a bad OPSILA_* variable.
+  explicit ClRuntime(const DeviceEntry& device, const ClRuntimeOptions& options = {});
   const DeviceEntry& device() const { return device_; }
   cl::Context& context() { return context_; }
   cl::CommandQueue& queue() { return queue_; }
@@ -43,8 +71,11 @@ class ClRuntime {
   std::size_t max_work_group_size() const { return max_wg_; }
   cl_ulong max_alloc() const { return max_alloc_; }
   cl_ulong global_mem() const { return global_mem_; }
+  cl_ulong memory_limit() const { return limit_; }  // 0, or the limit that lowered the two above
   std::string description() const;  // "device (platform, driver)"
   double last_build_seconds() const { return build_seconds_; }
+  // "embedded kernels", or where the replacement source came from.
+  const std::string& kernel_source_origin() const { return source_origin_; }
 
  private:
   DeviceEntry device_;
@@ -53,8 +84,9 @@ class ClRuntime {
   cl::Program program_;
   bool built_ = false;
   std::size_t max_wg_ = 1;
-  cl_ulong max_alloc_ = 0, global_mem_ = 0;
+  cl_ulong max_alloc_ = 0, global_mem_ = 0, limit_ = 0;
   double build_seconds_ = 0;
+  std::string source_, source_origin_;  // source_ empty: the embedded kernels
 };
 
 // Throws ClError("<what>: <ERROR_NAME> (<code>)") when code != CL_SUCCESS.

@@ -8,11 +8,22 @@ cl::Buffer device_buffer(ClRuntime& rt, std::size_t bytes, const char* what) {
   if (bytes > rt.max_alloc())
     throw ClError(std::string("buffer '") + what + "' needs " + std::to_string(bytes) +
                   " bytes, more than the device's CL_DEVICE_MAX_MEM_ALLOC_SIZE (" + std::to_string(rt.max_alloc()) +
-                  " bytes): use a smaller --size, --depth or --bank-capacity");
+                  " bytes" + (rt.memory_limit() ? ", as lowered by OPSILA_DEVICE_MEMORY_LIMIT" : "") +
+                  "): use a smaller --size, --depth or --bank-capacity");
   cl_int err = CL_SUCCESS;
   cl::Buffer b(rt.context(), CL_MEM_READ_WRITE, std::max<std::size_t>(bytes, 16), nullptr, &err);
   cl_check(err, (std::string("clCreateBuffer(") + what + ", " + std::to_string(bytes) + " bytes)").c_str());
   return b;
+}
+
+void zero_buffer(ClRuntime& rt, const cl::Buffer& b, std::size_t bytes, const char* what) {
+  // Static and never written: non-blocking writes may read it at any time.
+  static const unsigned char zeros[1 << 16] = {};
+  for (std::size_t at = 0; at < bytes; at += sizeof zeros) {
+    const std::size_t chunk = std::min(sizeof zeros, bytes - at);
+    cl_check(rt.queue().enqueueWriteBuffer(b, CL_FALSE, at, chunk, zeros),
+             (std::string("clEnqueueWriteBuffer(") + what + ", zeros)").c_str());
+  }
 }
 
 void DescriptorSet::allocate(ClRuntime& rt, std::size_t n, const char* what) {
@@ -44,7 +55,8 @@ void DescriptorSet::copy_prefix_to(ClRuntime& rt, DescriptorSet& to, std::size_t
   cl_check(q.enqueueCopyBuffer(dest, to.dest, 0, 0, count * sizeof(cl_int)), "clEnqueueCopyBuffer(queue dest)");
 }
 
-void Launcher::run(cl::Kernel& k, const char* name, std::size_t global, std::size_t local, int round) {
+void Launcher::run(cl::Kernel& k, const char* name, std::size_t global, std::size_t local, int round,
+                   const std::vector<cl::Event>* wait) {
   if (local == 0) {
     // A fixed work-group size per kernel, from what the kernel allows: drivers
     // that compile per work-group size (PoCL) then compile each kernel once.
@@ -56,13 +68,32 @@ void Launcher::run(cl::Kernel& k, const char* name, std::size_t global, std::siz
   }
   global = round_up(std::max<std::size_t>(global, 1), local);
   cl::Event ev;
-  cl_int err = rt_.queue().enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(global), cl::NDRange(local), nullptr,
+  cl_int err = rt_.queue().enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(global), cl::NDRange(local), wait,
                                                 &ev);
   cl_check(err, (std::string("clEnqueueNDRangeKernel(") + name + ")").c_str());
   pending_.push_back({name, round, ev});
 }
 
+void Launcher::check(cl_int err, const char* what) {
+  auto describe = [](const Pending& p) {
+    return std::string(p.name) + (p.round >= 0 ? " (round " + std::to_string(p.round) + ")" : std::string());
+  };
+  for (std::size_t i = checked_; i < pending_.size(); ++i) {
+    cl_int status = CL_COMPLETE;
+    if (pending_[i].ev.getInfo(CL_EVENT_COMMAND_EXECUTION_STATUS, &status) != CL_SUCCESS) break;
+    if (status < 0)
+      throw ClError("kernel " + describe(pending_[i]) + " failed on the device: " + cl_error_name(status) + " (" +
+                    std::to_string(status) + "), seen at " + what);
+    if (status != CL_COMPLETE) break;  // in-order queue: nothing later has finished either
+    checked_ = i + 1;
+  }
+  if (err != CL_SUCCESS)
+    throw ClError(std::string(what) + ": " + cl_error_name(err) + " (" + std::to_string(err) + ")" +
+                  (pending_.empty() ? std::string() : " after kernel " + describe(pending_.back())));
+}
+
 void Launcher::harvest() {
+  check(CL_SUCCESS, "collecting kernel timings");
   for (auto& p : pending_) {
     cl_ulong t0 = 0, t1 = 0;
     if (p.ev.getProfilingInfo(CL_PROFILING_COMMAND_START, &t0) == CL_SUCCESS &&
@@ -70,6 +101,7 @@ void Launcher::harvest() {
       sink_.push_back({p.name, p.round, (t1 - t0) * 1e-9});
   }
   pending_.clear();
+  checked_ = 0;
 }
 
 ScatterPass::ScatterPass(ClRuntime& rt, int num_pes) : rt_(rt), num_pes_(num_pes) {

@@ -14,6 +14,12 @@ struct LaunchRecord;
 // Checked buffer creation: refuses (with the numbers) what the device cannot hold.
 cl::Buffer device_buffer(ClRuntime& rt, std::size_t bytes, const char* what);
 
+// Sets the first `bytes` of a buffer to zero with plain writes (enqueued, not
+// waited for). Not clEnqueueFillBuffer: Oclgrind's uninitialized-value check
+// does not count a fill as a write, and the kernels must stay checkable
+// (docs/RELIABILITY.md).
+void zero_buffer(ClRuntime& rt, const cl::Buffer& b, std::size_t bytes, const char* what);
+
 template <typename T>
 cl::Buffer upload(ClRuntime& rt, const std::vector<T>& v, const char* what) {
   cl::Buffer b = device_buffer(rt, std::max<std::size_t>(1, v.size()) * sizeof(T), what);
@@ -39,8 +45,17 @@ struct DescriptorSet {
 class Launcher {
  public:
   Launcher(ClRuntime& rt, std::vector<LaunchRecord>& sink) : rt_(rt), sink_(sink) {}
-  void run(cl::Kernel& k, const char* name, std::size_t global, std::size_t local, int round);
-  void harvest();
+  // Enqueues `k`, after the events in `wait` when given.
+  void run(cl::Kernel& k, const char* name, std::size_t global, std::size_t local, int round,
+           const std::vector<cl::Event>* wait = nullptr);
+  // Call with the result of anything that waited for the launches (a blocking
+  // read, clFinish) before trusting what it returned. A kernel can fail on
+  // the device after its enqueue succeeded (CL_OUT_OF_RESOURCES, a GPU
+  // watchdog reset), and some drivers still answer the read with CL_SUCCESS:
+  // throws ClError naming the kernel and round whose command failed, or, when
+  // `err` is an error, naming `what` and the last kernel launched.
+  void check(cl_int err, const char* what);
+  void harvest();  // also checks, as check(CL_SUCCESS, ...)
 
  private:
   struct Pending {
@@ -51,6 +66,7 @@ class Launcher {
   ClRuntime& rt_;
   std::vector<LaunchRecord>& sink_;
   std::vector<Pending> pending_;
+  std::size_t checked_ = 0;  // pending_[0, checked_) are known to have completed
 };
 
 // The scatter Vd(I'(i)) = Vs(i) over source = [SPMD outputs | queue].

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <string>
 
 #include "descriptors.h"
@@ -109,6 +110,43 @@ std::vector<cl_int4> cluster_rects(const Scene& scene, const BankedScene& bs) {
   return rects;
 }
 
+// Device memory that render() allocates before the first launch.
+struct DevicePlan {
+  std::uint64_t scene = 0, image = 0, descriptors = 0, other = 0;
+  std::uint64_t total() const { return scene + image + descriptors + other; }
+};
+
+DevicePlan plan_device_memory(const BankedScene& bs, std::size_t npix, int P, int n, int S, int depth) {
+  using u64 = std::uint64_t;
+  DevicePlan plan;
+  plan.scene = bs.triangles.size() * sizeof(BankTriangle) + bs.nodes.size() * sizeof(BankNode) +
+               bs.clusters.size() * (sizeof(Cluster) + sizeof(cl_int4)) + bs.pes.size() * sizeof(PeInfo) +
+               bs.materials.size() * sizeof(Material) + std::max<std::size_t>(1, bs.lights.size()) * sizeof(Light);
+  // Item buffer (pair, triangle, distance) and 64-bit fixed-point RGB sums.
+  plan.image = u64(npix) * (sizeof(cl_int2) + sizeof(cl_int) + sizeof(cl_float) + 6 * sizeof(cl_uint));
+  // Banks (P*n), SPMD output slots (P*n*S), two queues (as sized below).
+  const u64 out_len = u64(P) * n * S, inject = std::max<u64>(u64(P) * n, 1024);
+  const u64 queue_cap = out_len + 2 * inject;
+  plan.descriptors = (u64(P) * n + out_len + 2 * queue_cap) * DescriptorSet::kBytes;
+  // Stats, traffic, and the scatter's ranks and block counts (1.5x the source).
+  const u64 source = (out_len + queue_cap) * 3 / 2;
+  plan.other = u64(OPSILA_MAX_DEPTH) * P * OPSILA_STAT_COUNT * 2 * sizeof(cl_uint) +
+               (P <= kTrafficMaxPes ? u64(depth) * P * P : 1) * sizeof(cl_uint) +
+               source * sizeof(cl_int) + (source / ScatterPass::kBlock + 1) * P * sizeof(cl_int);
+  return plan;
+}
+
+std::string size_text(std::uint64_t bytes) {
+  char text[48];
+  if (bytes < 10 * 1024)
+    std::snprintf(text, sizeof text, "%llu bytes", static_cast<unsigned long long>(bytes));
+  else if (bytes < 10 * 1024 * 1024)
+    std::snprintf(text, sizeof text, "%.1f KiB", double(bytes) / 1024.0);
+  else
+    std::snprintf(text, sizeof text, "%.1f MiB", double(bytes) / (1024.0 * 1024.0));
+  return text;
+}
+
 std::uint64_t fixed_pair(const std::vector<cl_uint>& v, std::size_t i) {
   return (std::uint64_t(v[2 * i + 1]) << 32) | v[2 * i];
 }
@@ -139,9 +177,22 @@ RenderResult render(const Scene& scene, const RenderSettings& settings, ClRuntim
     target = std::min<std::size_t>(target, std::max<std::size_t>(npix, 1024));
     n = static_cast<int>(std::max<std::size_t>(1, target / P));
   }
+  if (std::size_t(P) * n * S > (1u << 30))
+    throw InputError("--bank-capacity " + std::to_string(n) + " is too large for " + std::to_string(P) + " PEs and " +
+                     std::to_string(S - 2) + " lights");
+  // Everything allocated before the first launch must fit the device's global
+  // memory (device_buffer checks each buffer against the largest single
+  // allocation). An automatic n halves until it fits; an explicit
+  // --bank-capacity, or an image that does not fit even with n = 1, is refused.
+  if (settings.bank_capacity <= 0)
+    while (n > 1 && plan_device_memory(bs, npix, P, n, S, scene.max_depth).total() > rt.global_mem()) n /= 2;
+  if (const DevicePlan plan = plan_device_memory(bs, npix, P, n, S, scene.max_depth); plan.total() > rt.global_mem())
+    throw ClError("the render needs " + size_text(plan.total()) + " of device memory (image " + size_text(plan.image) +
+                  ", descriptors " + size_text(plan.descriptors) + ", scene " + size_text(plan.scene) + ", other " +
+                  size_text(plan.other) + "), more than the device's global memory (" + size_text(rt.global_mem()) +
+                  (rt.memory_limit() ? ", as lowered by OPSILA_DEVICE_MEMORY_LIMIT" : ", CL_DEVICE_GLOBAL_MEM_SIZE") +
+                  "): use a smaller --size, fewer --pes or a smaller --bank-capacity");
   const std::size_t out_len = std::size_t(P) * n * S;
-  if (out_len > (1u << 30)) throw InputError("--bank-capacity " + std::to_string(n) + " is too large for " +
-                                             std::to_string(P) + " PEs and " + std::to_string(S - 2) + " lights");
   FrameParams fp = frame_params(scene, bs, n);
 
   RenderResult result;
@@ -188,14 +239,14 @@ RenderResult render(const Scene& scene, const RenderSettings& settings, ClRuntim
   cl::Buffer b_item_tri = device_buffer(rt, npix * sizeof(cl_int), "item buffer hits");
   cl::Buffer b_item_t = device_buffer(rt, npix * sizeof(cl_float), "item buffer distances");
   cl::Buffer b_accum = device_buffer(rt, npix * 6 * sizeof(cl_uint), "pixel sums");
-  cl_check(q.enqueueFillBuffer(b_accum, cl_uint(0), 0, npix * 6 * sizeof(cl_uint)), "clEnqueueFillBuffer(pixel sums)");
+  zero_buffer(rt, b_accum, npix * 6 * sizeof(cl_uint), "pixel sums");
   const std::size_t nstats = std::size_t(OPSILA_MAX_DEPTH) * P * OPSILA_STAT_COUNT * 2;
   cl::Buffer b_stats = device_buffer(rt, nstats * sizeof(cl_uint), "stats");
-  cl_check(q.enqueueFillBuffer(b_stats, cl_uint(0), 0, nstats * sizeof(cl_uint)), "clEnqueueFillBuffer(stats)");
+  zero_buffer(rt, b_stats, nstats * sizeof(cl_uint), "stats");
   const int traffic_levels = P <= kTrafficMaxPes ? scene.max_depth : 0;
   const std::size_t ntraffic = std::max<std::size_t>(1, std::size_t(traffic_levels) * P * P);
   cl::Buffer b_traffic = device_buffer(rt, ntraffic * sizeof(cl_uint), "traffic");
-  cl_check(q.enqueueFillBuffer(b_traffic, cl_uint(0), 0, ntraffic * sizeof(cl_uint)), "clEnqueueFillBuffer(traffic)");
+  zero_buffer(rt, b_traffic, ntraffic * sizeof(cl_uint), "traffic");
 
   // Descriptors: banks (P*n), SPMD outputs (P*n*S), waiting queue (ping-pong).
   DescriptorSet banks, outputs, queue_a, queue_b;
@@ -207,7 +258,7 @@ RenderResult render(const Scene& scene, const RenderSettings& settings, ClRuntim
   queue_a.allocate(rt, queue_cap, "descriptor queue");
   queue_b.allocate(rt, queue_cap, "descriptor queue");
   cl::Buffer b_processed = device_buffer(rt, P * sizeof(cl_int), "processed counts");
-  cl_check(q.enqueueFillBuffer(b_processed, cl_int(0), 0, P * sizeof(cl_int)), "clEnqueueFillBuffer(processed)");
+  zero_buffer(rt, b_processed, P * sizeof(cl_int), "processed counts");
   Launcher launch(rt, st.launches);
 
   // SIMD phase 1: item buffer, in tiles so no launch runs unbounded.
@@ -287,7 +338,8 @@ RenderResult render(const Scene& scene, const RenderSettings& settings, ClRuntim
     launch.run(k_spmd, "spmd_phase", std::size_t(P) * spmd_wg, spmd_wg, round);
 
     cl_int counts[2] = {0, 0};
-    cl_check(q.enqueueReadBuffer(scatter.counts, CL_TRUE, 0, sizeof(counts), counts), "clEnqueueReadBuffer(scatter counts)");
+    launch.check(q.enqueueReadBuffer(scatter.counts, CL_TRUE, 0, sizeof(counts), counts),
+                 "clEnqueueReadBuffer(scatter counts)");
     st.rounds = round + 1;
     st.overflow_deferrals += static_cast<std::uint64_t>(counts[0]);
     std::swap(queue_a, queue_b);
@@ -305,12 +357,12 @@ RenderResult render(const Scene& scene, const RenderSettings& settings, ClRuntim
 
   // Read back: pixel sums (fixed point), item buffer, stats.
   std::vector<cl_uint> accum(npix * 6);
-  cl_check(q.enqueueReadBuffer(b_accum, CL_TRUE, 0, accum.size() * sizeof(cl_uint), accum.data()),
-           "clEnqueueReadBuffer(pixel sums)");
+  launch.check(q.enqueueReadBuffer(b_accum, CL_TRUE, 0, accum.size() * sizeof(cl_uint), accum.data()),
+               "clEnqueueReadBuffer(pixel sums)");
   result.item_buffer.resize(npix * 2);
-  cl_check(q.enqueueReadBuffer(b_items, CL_TRUE, 0, npix * sizeof(cl_int2), result.item_buffer.data()),
-           "clEnqueueReadBuffer(item buffer)");
-  cl_check(q.finish(), "clFinish");
+  launch.check(q.enqueueReadBuffer(b_items, CL_TRUE, 0, npix * sizeof(cl_int2), result.item_buffer.data()),
+               "clEnqueueReadBuffer(item buffer)");
+  launch.check(q.finish(), "clFinish");
   st.render_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
   launch.harvest();
 

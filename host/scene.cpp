@@ -1,4 +1,4 @@
-// Scene model helpers: SPEC material rules, bounds, epsilon, auto-framing.
+// The scene model: SPEC material rules, bounds, epsilon, auto-framing.
 #include "scene.h"
 
 #include <algorithm>

@@ -71,11 +71,14 @@ inline float intersect_triangle(const RayPre *r, __global const BankTriangle *tr
   if ((u < 0.0f || v < 0.0f || w < 0.0f) && (u > 0.0f || v > 0.0f || w > 0.0f)) return OPSILA_INF;
   float det = u + v + w;
   if (det == 0.0f) return OPSILA_INF;
-  float t = (u * (r->sz * az) + v * (r->sz * bz) + w * (r->sz * cz)) / det;
+  /* Barycentrics first: u*az is of the order of the scene size cubed and
+   * overflows float beyond ~1e12 units; u/det is at most 1. */
+  float inv_det = 1.0f / det;
+  float t = (u * inv_det) * (r->sz * az) + (v * inv_det) * (r->sz * bz) + (w * inv_det) * (r->sz * cz);
   return (t > tmin && t < tmax) ? t : OPSILA_INF;
 }
 
-/* Slab test; fmin/fmax drop the NaN of 0 * inf for axis-parallel rays. */
+/* Slab test, closed boxes (a ray along a face is inside). */
 inline bool ray_box_span(const RayPre *r, float3 bmin, float3 bmax, float tmin, float tmax, float *t_enter,
                          float *t_leave);
 inline bool ray_box(const RayPre *r, float3 bmin, float3 bmax, float tmin, float tmax, float *t_enter) {
@@ -86,7 +89,12 @@ inline bool ray_box_span(const RayPre *r, float3 bmin, float3 bmax, float tmin, 
                          float *t_leave) {
   float3 t0 = (bmin - r->org) * r->inv_dir;
   float3 t1 = (bmax - r->org) * r->inv_dir;
-  float3 lo = fmin(t0, t1), hi = fmax(t0, t1);
+  /* 0 * inf = NaN where the ray runs in a slab's boundary plane (a zero
+   * direction component, the origin on the plane): the ray is inside that
+   * slab, so a NaN counts as -inf for the entry and +inf for the exit. */
+  const float3 ninf = (float3)(-INFINITY), pinf = (float3)(INFINITY);
+  float3 lo = fmin(select(t0, ninf, isnan(t0)), select(t1, ninf, isnan(t1)));
+  float3 hi = fmax(select(t0, pinf, isnan(t0)), select(t1, pinf, isnan(t1)));
   float enter = fmax(fmax(lo.x, lo.y), fmax(lo.z, tmin));
   float leave = fmin(fmin(hi.x, hi.y), fmin(hi.z, tmax));
   /* Relative slack above the tie tolerance: a box is never culled by rounding

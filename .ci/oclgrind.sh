@@ -1,0 +1,117 @@
+#!/usr/bin/env bash
+# Runs the OpenCL kernels under Oclgrind (an OpenCL device simulator that
+# checks every memory access) and fails on ANY finding: out-of-bounds or
+# invalid accesses, data races, uses of uninitialized values, API misuse.
+#
+#   .ci/oclgrind.sh BUILD_DIR
+#
+# BUILD_DIR is a normal build (not OPSILA_SANITIZE) holding `opsila` and
+# `opsila_tests`. Needs Debian's `oclgrind` package. Takes well under a
+# minute: Oclgrind is about 1000x slower than a real device, so the scenes are
+# tiny. What runs, and why the flags differ, is in docs/RELIABILITY.md.
+set -uo pipefail
+
+if [ $# -ne 1 ]; then
+  echo "usage: $0 BUILD_DIR" >&2
+  exit 2
+fi
+root=$(cd "$(dirname "$0")/.." && pwd)
+build=$(cd "$1" 2>/dev/null && pwd) || { echo "oclgrind.sh: no build folder '$1'" >&2; exit 2; }
+for tool in oclgrind; do
+  command -v "$tool" >/dev/null || { echo "oclgrind.sh: '$tool' not found (apt-get install oclgrind)" >&2; exit 2; }
+done
+for bin in opsila opsila_tests; do
+  [ -x "$build/$bin" ] || { echo "oclgrind.sh: $build/$bin not built" >&2; exit 2; }
+done
+
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+scene="$root/tests/oclgrind/tiny.obj"
+view=(--light 2,5,4 --light -3,4,1,0.4,0.4,0.5 --eye 1.5,2.2,5 --look-at 0,0.8,0)
+# Every check Oclgrind has. --uninitialized needs unoptimised code: Oclgrind
+# 21.10's uninitialized-value plugin stops at LLVM's `freeze` instruction,
+# which optimised builds contain; the other checks also run on optimised code.
+all_checks=(--data-races --uninitialized --check-api --build-options -cl-opt-disable)
+optimised_checks=(--data-races --check-api)
+failed=0
+start_all=$(date +%s)
+
+# check NAME OCLGRIND_OPTIONS... -- COMMAND...
+check() {
+  local name=$1
+  shift
+  local options=()
+  while [ "$1" != "--" ]; do
+    options+=("$1")
+    shift
+  done
+  shift
+  local log="$work/$name.oclgrind.log" out="$work/$name.out" start=$(date +%s) rc=0
+  # Oclgrind's findings go to --log; the program's own output to $out.
+  POCL_CACHE_DIR="$work/pocl-cache" oclgrind "${options[@]}" --log "$log" "$@" >"$out" 2>&1 || rc=$?
+  local seconds=$(($(date +%s) - start)) problems=""
+  [ "$rc" -eq 0 ] || problems+=" exit status $rc;"
+  [ ! -s "$log" ] || problems+=" Oclgrind findings;"
+  # Backstop, should Oclgrind print anything past its log.
+  if grep -Eiq 'oclgrind|invalid (read|write)|data race|uninitiali[sz]ed|out of bounds|fatal' "$out"; then
+    problems+=" Oclgrind messages in the output;"
+  fi
+  if [ -n "$problems" ]; then
+    echo "FAIL  $name (${seconds}s):$problems"
+    [ ! -s "$log" ] || head -n 60 "$log" | sed 's/^/    /'
+    tail -n 30 "$out" | sed 's/^/    | /'
+    failed=1
+  else
+    echo "ok    $name (${seconds}s)"
+  fi
+}
+
+# 1. A render with every check: 8x6 pixels, depth 3, 4 PEs, a mirror, a
+#    closed glass box, two lights (shadow rays cross PEs).
+check render-all-checks "${all_checks[@]}" -- \
+  "$build/opsila" render "$scene" -o "$work/render.pfm" --size 8x6 --depth 3 --pes 4 --device oclgrind -q "${view[@]}"
+
+# 2. The same scene on optimised kernels (what drivers run), depth 4, one
+#    descriptor slot per bank: every overflow, queue and regrowth path.
+check render-optimised-tiny-banks "${optimised_checks[@]}" -- \
+  "$build/opsila" render "$scene" -o "$work/banks.pfm" --size 8x6 --depth 4 --pes 4 --bank-capacity 1 \
+  --device oclgrind -q "${view[@]}"
+
+# 3. The scatter on its own: SPMD output slots with holes and unused slots,
+#    a waiting queue, banks that overflow (tests/reliability_test.cpp).
+check scatter-all-checks "${all_checks[@]}" -- \
+  env OPSILA_TEST_DEVICE=oclgrind "$build/opsila_tests" --gtest_filter='SmallScatter.*'
+check scatter-optimised "${optimised_checks[@]}" -- \
+  env OPSILA_TEST_DEVICE=oclgrind "$build/opsila_tests" --gtest_filter='SmallScatter.*'
+
+# 4. Sanity: the simulated render is the image a real device makes (when
+#    there is one besides Oclgrind): same scene, 40 dB or better.
+if [ -s "$work/render.pfm" ] && command -v python3 >/dev/null &&
+  POCL_CACHE_DIR="$work/pocl-cache" "$build/opsila" render "$scene" -o "$work/native.pfm" --size 8x6 --depth 3 \
+    --pes 4 -q "${view[@]}" >"$work/native.out" 2>&1; then
+  if python3 - "$work/render.pfm" "$work/native.pfm" <<'EOF'; then
+import math, struct, sys
+def read(path):
+    data = open(path, "rb").read()
+    parts = data.split(b"\n", 3)
+    w, h = map(int, parts[1].split())
+    little = float(parts[2]) < 0
+    return struct.unpack(("<" if little else ">") + "%df" % (3 * w * h), parts[3][: 12 * w * h])
+a, b = read(sys.argv[1]), read(sys.argv[2])
+clamp = lambda v: min(1.0, max(0.0, v))
+mse = sum((clamp(x) - clamp(y)) ** 2 for x, y in zip(a, b)) / len(a)
+psnr = float("inf") if mse == 0 else 10 * math.log10(1 / mse)
+print("      Oclgrind vs native device: %.1f dB" % psnr)
+sys.exit(0 if psnr >= 40 else 1)
+EOF
+    echo "ok    image-matches-native"
+  else
+    echo "FAIL  image-matches-native: the Oclgrind render differs from the native one"
+    failed=1
+  fi
+else
+  echo "skip  image-matches-native (no native device or no python3)"
+fi
+
+echo "oclgrind.sh: $([ $failed -eq 0 ] && echo clean || echo FINDINGS) in $(($(date +%s) - start_all)) s"
+exit $failed

@@ -1,0 +1,37 @@
+#!/usr/bin/env bash
+# Builds everything with AddressSanitizer + UndefinedBehaviorSanitizer
+# (-DOPSILA_SANITIZE=ON) in a separate build folder and runs the unit tests
+# (ctest) under them. Any finding fails the run: UBSan and ASan stop the
+# test that hits one, LeakSanitizer fails it at exit.
+#
+#   .ci/sanitize.sh [BUILD_DIR [CTEST_ARGS...]]   (default BUILD_DIR: build-asan in the sources)
+#
+# Every test runs; none needs leaving out (docs/RELIABILITY.md has the times).
+# CTEST_ARGS are passed on, e.g. -R Renderer to run a subset.
+#
+# Leak suppressions (.ci/lsan.supp) name third-party libraries only (PoCL and
+# its LLVM), never project code; docs/RELIABILITY.md says why.
+set -euo pipefail
+
+root=$(cd "$(dirname "$0")/.." && pwd)
+build=${1:-$root/build-asan}
+if [ $# -gt 0 ]; then shift; fi
+jobs=$(nproc 2>/dev/null || echo 2)
+generator=()
+if command -v ninja >/dev/null && [ ! -f "$build/CMakeCache.txt" ]; then generator=(-G Ninja); fi
+
+start=$(date +%s)
+cmake -S "$root" -B "$build" "${generator[@]}" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DOPSILA_SANITIZE=ON >/dev/null
+cmake --build "$build" -j "$jobs"
+built=$(date +%s)
+
+export ASAN_OPTIONS=detect_leaks=1:halt_on_error=1:abort_on_error=0:strict_string_checks=1:detect_stack_use_after_return=1:check_initialization_order=1:strict_init_order=1
+export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
+export LSAN_OPTIONS=suppressions=$root/.ci/lsan.supp:print_suppressions=0
+export POCL_CACHE_DIR=$build/pocl-cache
+
+status=0
+ctest --test-dir "$build" -j "$jobs" --output-on-failure "$@" || status=$?
+end=$(date +%s)
+echo "sanitize.sh: build $((built - start)) s, tests $((end - built)) s: $([ $status -eq 0 ] && echo clean || echo FINDINGS OR FAILURES)"
+exit $status

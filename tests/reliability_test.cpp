@@ -1,0 +1,662 @@
+// Reliability (docs/RELIABILITY.md): device and driver faults each give one
+// clear message and a non-zero exit, never a hang or a garbage image; the
+// same inputs give the same bytes run after run; the kernel source hook and
+// the driver's compile cache; the scatter on its own, small enough to run
+// under Oclgrind (.ci/oclgrind.sh).
+//
+// End-to-end checks run the opsila binary (OPSILA_BINARY) on
+// tests/oclgrind/tiny.obj; in-process checks build their own ClRuntime and
+// release it before the test ends.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cstdlib>
+#include <cstring>
+#include <map>
+#include <optional>
+#include <random>
+#include <sstream>
+#include <string>
+#include <tuple>
+#include <vector>
+
+#include "descriptors.h"
+#include "image_io.h"
+#include "opsila_shared.h"
+#include "renderer.h"
+#include "test_scenes.h"
+#include "test_util.h"
+
+namespace opsila {
+
+const std::string& kernel_source();  // the embedded kernels (generated from kernels/*.cl)
+
+namespace {
+
+using test::RunResult;
+using test::TempDir;
+
+const char* test_device_spec() {
+  const char* spec = std::getenv("OPSILA_TEST_DEVICE");
+  return spec ? spec : "";
+}
+
+DeviceEntry test_device() { return choose_device(test_device_spec()); }
+
+// A runtime that ignores OPSILA_* variables of the environment.
+ClRuntimeOptions plain_options() {
+  ClRuntimeOptions o;
+  o.read_environment = false;
+  return o;
+}
+
+bool contains(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
+
+// ------------------------------------------------------------ running opsila
+
+// Runs `program args...` with this process's environment, changed by `env`:
+// a value sets the variable, std::nullopt removes it.
+RunResult run_with_env(const std::string& program, const std::vector<std::string>& args,
+                       const std::map<std::string, std::optional<std::string>>& env) {
+  std::vector<std::string> entries;
+  for (char** e = environ; *e; ++e) {
+    const std::string entry = *e;
+    const std::string name = entry.substr(0, entry.find('='));
+    if (!env.count(name)) entries.push_back(entry);
+  }
+  for (const auto& [name, value] : env)
+    if (value) entries.push_back(name + "=" + *value);
+  std::vector<char*> envp;
+  for (std::string& e : entries) envp.push_back(e.data());
+  envp.push_back(nullptr);
+
+  TempDir capture;
+  const std::string out_path = capture.file("stdout"), err_path = capture.file("stderr");
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_addopen(&actions, 1, out_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  posix_spawn_file_actions_addopen(&actions, 2, err_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  std::vector<char*> argv;
+  argv.push_back(const_cast<char*>(program.c_str()));
+  for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+  argv.push_back(nullptr);
+  RunResult result;
+  pid_t pid;
+  const int spawned = posix_spawn(&pid, program.c_str(), &actions, nullptr, argv.data(), envp.data());
+  posix_spawn_file_actions_destroy(&actions);
+  if (spawned != 0) {
+    result.err = "spawn failed";
+    return result;
+  }
+  int status = 0;
+  while (::waitpid(pid, &status, 0) < 0) {
+  }
+  result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+  result.out = test::read_file(out_path);
+  result.err = test::read_file(err_path);
+  return result;
+}
+
+RunResult opsila(const std::vector<std::string>& args,
+                 const std::map<std::string, std::optional<std::string>>& env = {}) {
+  return run_with_env(OPSILA_BINARY, args, env);
+}
+
+// `opsila render` of the small mirror-and-glass OBJ scene into `out`.
+std::vector<std::string> render_args(const std::string& out, const std::vector<std::string>& extra = {}) {
+  std::vector<std::string> args = {"render", std::string(OPSILA_SOURCE_DIR) + "/tests/oclgrind/tiny.obj",
+                                   "-o",     out,
+                                   "--size", "40x30",
+                                   "--depth", "5",
+                                   "--pes",  "4",
+                                   "--light", "2,5,4",
+                                   "--light", "-3,4,1,0.4,0.4,0.5",
+                                   "--eye",  "1.5,2.2,5",
+                                   "--look-at", "0,0.8,0",
+                                   "-q"};
+  if (*test_device_spec()) args.insert(args.end(), {"--device", test_device_spec()});
+  args.insert(args.end(), extra.begin(), extra.end());
+  return args;
+}
+
+std::string first_line(const std::string& text) { return text.substr(0, text.find('\n')); }
+
+// Exactly one "opsila: error: ..." line, naming the problem; whatever follows
+// it (a build log) is indented under it. A driver may print its own lines
+// before it (PoCL's compiler says "1 error generated.").
+void expect_one_error(const RunResult& r, int exit_code, const std::string& must_contain) {
+  EXPECT_EQ(r.exit_code, exit_code) << r.err;
+  std::vector<std::string> lines;
+  std::istringstream in(r.err);
+  for (std::string line; std::getline(in, line);) lines.push_back(line);
+  std::size_t errors = 0, at = lines.size();
+  for (std::size_t i = 0; i < lines.size(); ++i)
+    if (lines[i].rfind("opsila: error: ", 0) == 0) ++errors, at = std::min(at, i);
+  ASSERT_EQ(errors, 1u) << r.err;
+  EXPECT_TRUE(contains(lines[at], must_contain)) << "expected '" << must_contain << "' in: " << lines[at];
+  for (std::size_t i = at + 1; i < lines.size(); ++i)
+    EXPECT_EQ(lines[i].rfind("    ", 0), 0u) << "unindented line after the error: " << lines[i];
+}
+
+// The "opsila: error:" line itself.
+std::string error_line(const RunResult& r) {
+  std::istringstream in(r.err);
+  for (std::string line; std::getline(in, line);)
+    if (line.rfind("opsila: error: ", 0) == 0) return line;
+  return "";
+}
+
+// -------------------------------------------------------------- no platform
+
+TEST(DeviceFaults, NoOpenClPlatformIsOneClearError) {
+  TempDir dir, empty_vendors;
+  const std::map<std::string, std::optional<std::string>> env = {{"OCL_ICD_VENDORS", empty_vendors.path()}};
+  std::vector<std::string> args = render_args(dir.file("out.pfm"));
+  RunResult r = opsila(args, env);
+  expect_one_error(r, 3, "no OpenCL platform");
+  EXPECT_EQ(r.err, error_line(r) + "\n") << "nothing but the error line";
+  EXPECT_FALSE(test::file_exists(dir.file("out.pfm")));
+  EXPECT_TRUE(dir.entries().empty()) << "no partial output";
+
+  RunResult devices = opsila({"devices"}, env);
+  expect_one_error(devices, 3, "no OpenCL platform");
+
+  // The sequential reference needs no OpenCL at all.
+  args.insert(args.end(), "--reference");
+  RunResult reference = opsila(args, env);
+  EXPECT_EQ(reference.exit_code, 0) << reference.err;
+  EXPECT_TRUE(test::file_exists(dir.file("out.pfm")));
+}
+
+// ------------------------------------------------------- device capabilities
+
+DeviceCapabilities capable() {
+  DeviceCapabilities c;
+  c.name = "test device";
+  c.version = "OpenCL 1.2 test";
+  c.opencl_c_version = "OpenCL C 1.2 test";
+  c.profile = "FULL_PROFILE";
+  c.local_mem_size = 32768;
+  c.max_work_group_size = 256;
+  return c;
+}
+
+TEST(DeviceChecks, TheTestDeviceHasWhatOpsilaNeeds) {
+  const DeviceEntry d = test_device();
+  const std::vector<std::string> missing = missing_capabilities(query_capabilities(d.device));
+  EXPECT_TRUE(missing.empty()) << d.device_name << " lacks " << (missing.empty() ? "" : missing.front());
+}
+
+TEST(DeviceChecks, EachMissingCapabilityIsNamed) {
+  EXPECT_TRUE(missing_capabilities(capable()).empty());
+  for (const char* v : {"OpenCL 2.0 x", "OpenCL 3.0", "OpenCL 1.2"}) {
+    DeviceCapabilities c = capable();
+    c.version = v;
+    EXPECT_TRUE(missing_capabilities(c).empty()) << v;
+  }
+  struct Case {
+    void (*change)(DeviceCapabilities&);
+    const char* named;
+  } cases[] = {
+      {[](DeviceCapabilities& c) { c.version = "OpenCL 1.1 old"; }, "OpenCL 1.2 (it reports 'OpenCL 1.1 old')"},
+      {[](DeviceCapabilities& c) { c.version = "garbage"; }, "OpenCL 1.2"},
+      {[](DeviceCapabilities& c) { c.opencl_c_version = "OpenCL C 1.1"; }, "OpenCL C 1.2"},
+      {[](DeviceCapabilities& c) { c.compiler_available = false; }, "compiler"},
+      {[](DeviceCapabilities& c) { c.local_mem_size = 1024; }, "local memory"},
+      {[](DeviceCapabilities& c) { c.max_work_group_size = 0; }, "CL_DEVICE_MAX_WORK_GROUP_SIZE"},
+      {[](DeviceCapabilities& c) { c.available = false; }, "not available"},
+      {[](DeviceCapabilities& c) { c.profile = "EMBEDDED_PROFILE"; }, "64-bit integers"},
+  };
+  for (const Case& k : cases) {
+    DeviceCapabilities c = capable();
+    k.change(c);
+    const std::vector<std::string> missing = missing_capabilities(c);
+    ASSERT_EQ(missing.size(), 1u) << k.named;
+    EXPECT_TRUE(contains(missing[0], k.named)) << missing[0];
+  }
+  DeviceCapabilities embedded = capable();
+  embedded.profile = "EMBEDDED_PROFILE";
+  embedded.extensions = "cl_khr_byte_addressable_store cles_khr_int64";
+  EXPECT_TRUE(missing_capabilities(embedded).empty());
+  // The SPMD kernel's per-level stats live in local memory.
+  EXPECT_EQ(required_local_mem(), std::size_t(OPSILA_MAX_DEPTH) * OPSILA_STAT_COUNT * 4);
+  DeviceCapabilities all_wrong = capable();
+  all_wrong.version = "OpenCL 1.0";
+  all_wrong.compiler_available = false;
+  all_wrong.local_mem_size = 0;
+  EXPECT_EQ(missing_capabilities(all_wrong).size(), 3u);
+}
+
+// --------------------------------------------------- kernel source and cache
+
+TEST(KernelSource, BrokenSourceFailsWithTheBuildLog) {
+  ClRuntimeOptions o = plain_options();
+  o.kernel_source = "__kernel void item_buffer(__global int *p) { p[0] = this_is_not_declared; }\n";
+  o.kernel_source_origin = "broken test source";
+  ClRuntime rt(test_device(), o);
+  EXPECT_EQ(rt.kernel_source_origin(), "broken test source");
+  try {
+    rt.program();
+    FAIL() << "a broken kernel source built";
+  } catch (const ClError& e) {
+    const std::string m = e.what();
+    EXPECT_TRUE(contains(first_line(m), "clBuildProgram: CL_BUILD_PROGRAM_FAILURE")) << m;
+    EXPECT_TRUE(contains(first_line(m), "broken test source")) << m;
+    EXPECT_TRUE(contains(first_line(m), "build log:")) << m;
+    EXPECT_TRUE(contains(m, "this_is_not_declared")) << "the compiler's message is shown:\n" << m;
+  }
+  // Asking again fails again (nothing half-built is kept).
+  EXPECT_THROW(rt.kernel("item_buffer"), ClError);
+}
+
+// A kernel writing `value`: two sources that differ only there.
+int run_probe(int value) {
+  ClRuntimeOptions o = plain_options();
+  o.kernel_source = "__kernel void probe(__global int *out) { out[0] = " + std::to_string(value) + "; }\n";
+  ClRuntime rt(test_device(), o);
+  cl::Kernel k = rt.kernel("probe");
+  cl::Buffer out = upload(rt, std::vector<cl_int>{-1}, "probe output");
+  k.setArg(0, out);
+  cl_check(rt.queue().enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(1), cl::NDRange(1)), "probe");
+  cl_int result = 0;
+  cl_check(rt.queue().enqueueReadBuffer(out, CL_TRUE, 0, sizeof result, &result), "probe read");
+  return result;
+}
+
+// The driver's compile cache (POCL_CACHE_DIR under ctest) is keyed by the
+// source text: a changed source is compiled again, never served stale.
+TEST(KernelSource, TheCompileCacheFollowsTheSource) {
+  EXPECT_EQ(run_probe(1), 1);
+  EXPECT_EQ(run_probe(2), 2);
+  EXPECT_EQ(run_probe(1), 1);
+  EXPECT_EQ(run_probe(2), 2);
+}
+
+// The renderer really runs a replacement source: doubling the fixed-point
+// scale in the kernels (the host divides by its own, unchanged constant)
+// doubles every pixel.
+TEST(KernelSource, TheRendererRunsTheReplacementSource) {
+  const std::string from = "#define OPSILA_FIXED_SCALE 16777216.0f";
+  std::string source = kernel_source();
+  const std::size_t at = source.find(from);
+  ASSERT_NE(at, std::string::npos) << "the shared header no longer defines the scale as expected";
+  source.replace(at, from.size(), "#define OPSILA_FIXED_SCALE 33554432.0f");
+
+  Scene s = test::mirror_glass_scene(32, 3);
+  RenderSettings settings;
+  settings.num_pes = 4;
+  RenderResult base, doubled;
+  {
+    ClRuntime rt(test_device(), plain_options());
+    base = render(s, settings, rt);
+  }
+  {
+    ClRuntimeOptions o = plain_options();
+    o.kernel_source = source;
+    o.kernel_source_origin = "doubled scale";
+    ClRuntime rt(test_device(), o);
+    doubled = render(s, settings, rt);
+  }
+  ASSERT_EQ(base.rgb.size(), doubled.rgb.size());
+  double brightest = 0;
+  for (std::size_t i = 0; i < base.rgb.size(); ++i) {
+    brightest = std::max(brightest, double(base.rgb[i]));
+    ASSERT_NEAR(doubled.rgb[i], 2.0f * base.rgb[i], 1e-5) << "value " << i;
+  }
+  EXPECT_GT(brightest, 0.1);
+}
+
+TEST(KernelSource, EnvironmentHookEndToEnd) {
+  TempDir dir;
+  // A good render first, so that the driver's cache holds the real kernels.
+  RunResult good = opsila(render_args(dir.file("good.pfm")), {{"OPSILA_KERNEL_SOURCE", std::nullopt}});
+  ASSERT_EQ(good.exit_code, 0) << good.err;
+
+  const std::string broken = dir.write("broken.cl", "__kernel void item_buffer(__global int *p) { p[0] = 1 }\n");
+  RunResult r = opsila(render_args(dir.file("broken.pfm")), {{"OPSILA_KERNEL_SOURCE", broken}});
+  expect_one_error(r, 3, "clBuildProgram: CL_BUILD_PROGRAM_FAILURE");
+  EXPECT_TRUE(contains(error_line(r), "OPSILA_KERNEL_SOURCE=" + broken)) << r.err;
+  EXPECT_TRUE(contains(r.err, "build log")) << r.err;
+  EXPECT_TRUE(contains(r.err, "\n    ")) << "the build log follows the error line:\n" << r.err;
+  EXPECT_FALSE(test::file_exists(dir.file("broken.pfm")));
+
+  RunResult missing = opsila(render_args(dir.file("missing.pfm")),
+                             {{"OPSILA_KERNEL_SOURCE", dir.file("no-such-file.cl")}});
+  expect_one_error(missing, 2, "OPSILA_KERNEL_SOURCE=");
+  EXPECT_FALSE(test::file_exists(dir.file("missing.pfm")));
+
+  // The real kernels again: the same bytes as before.
+  RunResult again = opsila(render_args(dir.file("again.pfm")), {{"OPSILA_KERNEL_SOURCE", std::nullopt}});
+  ASSERT_EQ(again.exit_code, 0) << again.err;
+  EXPECT_EQ(test::read_file(dir.file("good.pfm")), test::read_file(dir.file("again.pfm")));
+}
+
+// ------------------------------------------------------------ device memory
+
+TEST(DeviceMemory, OneBufferBeyondTheLargestAllocationIsRefused) {
+  ClRuntimeOptions o = plain_options();
+  o.memory_limit = 1 << 20;
+  ClRuntime rt(test_device(), o);
+  EXPECT_EQ(rt.max_alloc(), cl_ulong(1) << 20);
+  EXPECT_EQ(rt.global_mem(), cl_ulong(1) << 20);
+  try {
+    device_buffer(rt, 3u << 20, "huge test buffer");
+    FAIL() << "a buffer beyond the limit was created";
+  } catch (const ClError& e) {
+    const std::string m = e.what();
+    EXPECT_TRUE(contains(m, "huge test buffer") && contains(m, "3145728") && contains(m, "1048576") &&
+                contains(m, "CL_DEVICE_MAX_MEM_ALLOC_SIZE"))
+        << m;
+  }
+  EXPECT_NO_THROW(device_buffer(rt, 1 << 20, "buffer at the limit"));
+}
+
+TEST(DeviceMemory, TheWholeRenderIsCheckedBeforeAllocating) {
+  Scene s = test::mirror_glass_scene(64, 3);  // 64x48
+  RenderSettings settings;
+  settings.num_pes = 4;
+  RenderResult unlimited;
+  int default_capacity = 0;
+  {
+    ClRuntime rt(test_device(), plain_options());
+    unlimited = render(s, settings, rt);
+    default_capacity = unlimited.stats.bank_capacity;
+  }
+  ASSERT_GT(default_capacity, 64);
+  ClRuntimeOptions o = plain_options();
+  o.memory_limit = 1 << 20;  // below what the automatic bank size plans, above what n = 1 needs
+  {
+    ClRuntime rt(test_device(), o);
+    // An automatic bank size shrinks until the render fits; the image does not change.
+    RenderResult fitted = render(s, settings, rt);
+    EXPECT_LT(fitted.stats.bank_capacity, default_capacity);
+    EXPECT_GE(fitted.stats.bank_capacity, 1);
+    EXPECT_GE(test::clamped_psnr(fitted.rgb, unlimited.rgb), 60.0);
+    EXPECT_EQ(fitted.item_buffer, unlimited.item_buffer);
+    // An explicit one is refused with the numbers, before any allocation.
+    RenderSettings explicit_capacity = settings;
+    explicit_capacity.bank_capacity = default_capacity;
+    try {
+      render(s, explicit_capacity, rt);
+      FAIL() << "a render beyond the device's memory started";
+    } catch (const ClError& e) {
+      const std::string m = e.what();
+      EXPECT_TRUE(contains(m, "device memory") && contains(m, "1024.0 KiB") && contains(m, "OPSILA_DEVICE_MEMORY_LIMIT") &&
+                  contains(m, "--bank-capacity"))
+          << m;
+    }
+  }
+  // An image that cannot fit even with one slot per bank.
+  o.memory_limit = 64 << 10;
+  ClRuntime tiny(test_device(), o);
+  EXPECT_THROW(render(s, settings, tiny), ClError);
+}
+
+TEST(DeviceMemory, EnvironmentLimitEndToEnd) {
+  TempDir dir;
+  RunResult r = opsila(render_args(dir.file("out.pfm")), {{"OPSILA_DEVICE_MEMORY_LIMIT", "20000"}});
+  expect_one_error(r, 3, "device memory");
+  EXPECT_TRUE(contains(r.err, "OPSILA_DEVICE_MEMORY_LIMIT")) << r.err;
+  EXPECT_FALSE(test::file_exists(dir.file("out.pfm")));
+
+  RunResult bad = opsila(render_args(dir.file("out.pfm")), {{"OPSILA_DEVICE_MEMORY_LIMIT", "lots"}});
+  expect_one_error(bad, 2, "OPSILA_DEVICE_MEMORY_LIMIT=lots");
+  EXPECT_FALSE(test::file_exists(dir.file("out.pfm")));
+}
+
+// ------------------------------------------------------------- launch faults
+
+// scatter_plan with tiny buffers: a kernel to launch, and its counts to read.
+struct PlanKernel {
+  cl::Kernel kernel;
+  cl::Buffer totals, bank_count, overflow_base, counts;
+  explicit PlanKernel(ClRuntime& rt) {
+    kernel = rt.kernel("scatter_plan");
+    totals = upload(rt, std::vector<cl_int>{3}, "totals");
+    bank_count = upload(rt, std::vector<cl_int>{0}, "bank count");
+    overflow_base = upload(rt, std::vector<cl_int>{0}, "overflow base");
+    counts = upload(rt, std::vector<cl_int>{-1, -1}, "counts");
+    int a = 0;
+    kernel.setArg(a++, 1);  // PEs
+    kernel.setArg(a++, 2);  // n
+    kernel.setArg(a++, totals);
+    kernel.setArg(a++, bank_count);
+    kernel.setArg(a++, overflow_base);
+    kernel.setArg(a++, counts);
+  }
+};
+
+TEST(LaunchFaults, CleanLaunchesPassAndErrorsNameTheLastKernel) {
+  ClRuntime rt(test_device(), plain_options());
+  PlanKernel plan(rt);
+  std::vector<LaunchRecord> records;
+  Launcher launch(rt, records);
+  launch.run(plan.kernel, "scatter_plan", 1, 1, 4);
+  cl_int counts[2] = {0, 0};
+  EXPECT_NO_THROW(
+      launch.check(rt.queue().enqueueReadBuffer(plan.counts, CL_TRUE, 0, sizeof counts, counts), "read"));
+  EXPECT_EQ(counts[0], 1);  // 3 entries for one PE of 2 slots: one waits
+  EXPECT_EQ(counts[1], 2);
+  try {
+    launch.check(CL_OUT_OF_RESOURCES, "clFinish");
+    FAIL() << "an error code passed";
+  } catch (const ClError& e) {
+    EXPECT_STREQ(e.what(), "clFinish: CL_OUT_OF_RESOURCES (-5) after kernel scatter_plan (round 4)");
+  }
+  launch.harvest();
+  ASSERT_EQ(records.size(), 1u);
+  EXPECT_EQ(records[0].name, "scatter_plan");
+}
+
+TEST(LaunchFaults, AnEnqueueThatFailsNamesTheKernel) {
+  ClRuntime rt(test_device(), plain_options());
+  cl::Kernel k = rt.kernel("scatter_plan");  // no arguments set
+  std::vector<LaunchRecord> records;
+  Launcher launch(rt, records);
+  try {
+    launch.run(k, "scatter_plan", 1, 1, 0);
+    FAIL() << "a kernel without arguments was enqueued";
+  } catch (const ClError& e) {
+    EXPECT_TRUE(contains(e.what(), "clEnqueueNDRangeKernel(scatter_plan)")) << e.what();
+  }
+}
+
+// A command can fail on the device after its enqueue succeeded (what a GPU
+// reports as CL_OUT_OF_RESOURCES, or a watchdog reset). A user event set to
+// an error stands in for the fault: the kernel waiting on it fails. Some
+// drivers then answer a blocking read with CL_SUCCESS, so check() must look
+// at the launches' own status.
+TEST(LaunchFaults, AKernelThatFailsOnTheDeviceIsNamed) {
+  ClRuntime rt(test_device(), plain_options());
+  PlanKernel plan(rt);
+  std::vector<LaunchRecord> records;
+  Launcher launch(rt, records);
+  cl_int err = CL_SUCCESS;
+  cl::UserEvent fault(rt.context(), &err);
+  cl_check(err, "clCreateUserEvent");
+  const std::vector<cl::Event> wait = {fault};
+  launch.run(plan.kernel, "scatter_plan", 1, 1, 7, &wait);
+  cl_check(fault.setStatus(CL_OUT_OF_RESOURCES), "clSetUserEventStatus");
+  cl_int counts[2] = {0, 0};
+  const cl_int read = rt.queue().enqueueReadBuffer(plan.counts, CL_TRUE, 0, sizeof counts, counts);
+  if (read == CL_SUCCESS && counts[0] == 1 && counts[1] == 2)
+    GTEST_SKIP() << rt.device().device_name << " ran a command whose wait list failed";
+  try {
+    launch.check(read, "clEnqueueReadBuffer(counts)");
+    FAIL() << "a failed launch went unnoticed (the read returned " << read << ")";
+  } catch (const ClError& e) {
+    const std::string m = e.what();
+    EXPECT_TRUE(contains(m, "scatter_plan (round 7)")) << m;
+  }
+}
+
+// ---------------------------------------------------------------- determinism
+
+TEST(Determinism, SameInputsGiveTheSameBytesRunToRun) {
+  TempDir dir;
+  RunResult a = opsila(render_args(dir.file("a.pfm"), {"--item-buffer", dir.file("a.npy")}));
+  RunResult b = opsila(render_args(dir.file("b.pfm"), {"--item-buffer", dir.file("b.npy")}));
+  ASSERT_EQ(a.exit_code, 0) << a.err;
+  ASSERT_EQ(b.exit_code, 0) << b.err;
+  const std::string pa = test::read_file(dir.file("a.pfm")), pb = test::read_file(dir.file("b.pfm"));
+  ASSERT_GT(pa.size(), 40u * 30u * 12u);
+  EXPECT_TRUE(pa == pb) << "two runs of the same render differ";
+  EXPECT_TRUE(test::read_file(dir.file("a.npy")) == test::read_file(dir.file("b.npy")));
+}
+
+TEST(Determinism, BankCapacityDownToOneGivesTheSameImage) {
+  TempDir dir;
+  RunResult base = opsila(render_args(dir.file("auto.pfm")));
+  ASSERT_EQ(base.exit_code, 0) << base.err;
+  const FloatImage reference = read_pfm(dir.file("auto.pfm"));
+  for (const char* capacity : {"1", "2", "5", "64"}) {
+    const std::string out = dir.file(std::string("n") + capacity + ".pfm");
+    RunResult r = opsila(render_args(out, {"--bank-capacity", capacity}));
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const FloatImage img = read_pfm(out);
+    EXPECT_GE(test::clamped_psnr(img.rgb, reference.rgb), 60.0) << "--bank-capacity " << capacity;
+  }
+}
+
+// The item buffer is launched in tiles (bounded work per launch): the tile
+// size changes the launches, never the image.
+TEST(Determinism, ItemBufferTilesDoNotChangeTheImage) {
+  ClRuntime rt(test_device(), plain_options());
+  Scene s = test::mirror_glass_scene(40, 3);  // 40x30
+  RenderSettings settings;
+  settings.num_pes = 4;
+  RenderResult whole = render(s, settings, rt);
+  settings.item_buffer_tile = 97;
+  RenderResult tiled = render(s, settings, rt);
+  ASSERT_EQ(whole.rgb.size(), tiled.rgb.size());
+  EXPECT_EQ(0, std::memcmp(whole.rgb.data(), tiled.rgb.data(), whole.rgb.size() * sizeof(float)));
+  EXPECT_EQ(whole.item_buffer, tiled.item_buffer);
+  const auto item_launches = std::count_if(tiled.stats.launches.begin(), tiled.stats.launches.end(),
+                                           [](const LaunchRecord& l) { return l.name == "item_buffer"; });
+  EXPECT_EQ(item_launches, (40 * 30 + 96) / 97);
+}
+
+// -------------------------------------------- the scatter on its own (small)
+
+// Source = SPMD output area (P*n*S fixed slots: used ones with NIL holes,
+// unused ones holding stale destinations that must be ignored) followed by
+// a waiting queue. Checks Vd(I'(i)) = Vs(i): every valid entry arrives once,
+// in source order within its destination PE; the first n fill the bank, the
+// rest wait in the next queue, grouped by PE. Small enough for Oclgrind.
+void small_scatter(int pes, int n, int S, int queue_len, unsigned seed) {
+  ClRuntime rt(test_device(), plain_options());
+  std::mt19937 rng(seed);
+  const int out_len = pes * n * S, total = out_len + queue_len;
+  std::vector<cl_int> processed(pes);
+  for (int& p : processed) p = static_cast<int>(rng() % (n + 1));
+  std::vector<cl_int> dest(total);
+  std::vector<bool> valid(total, false);
+  for (int k = 0; k < total; ++k) {
+    const bool used = k >= out_len || (k / S) % n < processed[(k / S) / n];
+    const bool hole = rng() % 4 == 0;
+    dest[k] = (used && hole) ? -1 : static_cast<int>(rng() % pes);
+    valid[k] = used && !hole;
+  }
+  auto fill = [&](int begin, int count, DescriptorSet& set) {
+    std::vector<cl_float4> org(count), dir(count), wgt(count);
+    std::vector<cl_int4> ids(count);
+    std::vector<cl_int> d(count);
+    for (int i = 0; i < count; ++i) {
+      const int k = begin + i;
+      org[i] = {{float(k), 1.5f * k, -2.0f, 0.25f * k}};
+      dir[i] = {{0.5f, float(-k), 3.0f, 1.0f}};
+      wgt[i] = {{0.125f * k, 0.5f, 0.75f, 0.0f}};
+      ids[i] = {{k, OPSILA_META(OPSILA_KIND_TRACE, k % 5), k % 7 - 1, 0}};
+      d[i] = dest[k];
+    }
+    for (auto [buffer, bytes, data] : {std::tuple{&set.org, sizeof(cl_float4), (const void*)org.data()},
+                                       std::tuple{&set.dir, sizeof(cl_float4), (const void*)dir.data()},
+                                       std::tuple{&set.wgt, sizeof(cl_float4), (const void*)wgt.data()},
+                                       std::tuple{&set.ids, sizeof(cl_int4), (const void*)ids.data()},
+                                       std::tuple{&set.dest, sizeof(cl_int), (const void*)d.data()}})
+      cl_check(rt.queue().enqueueWriteBuffer(*buffer, CL_TRUE, 0, count * bytes, data), "write");
+  };
+  DescriptorSet outputs, queue, banks, next;
+  outputs.allocate(rt, out_len, "outputs");
+  queue.allocate(rt, queue_len, "queue");
+  banks.allocate(rt, std::size_t(pes) * n, "banks");
+  next.allocate(rt, total, "next queue");
+  fill(0, out_len, outputs);
+  fill(out_len, queue_len, queue);
+  cl::Buffer processed_buffer = upload(rt, processed, "processed");
+
+  std::vector<LaunchRecord> records;
+  Launcher launch(rt, records);
+  ScatterPass scatter(rt, pes);
+  ScatterPass::Args a;
+  a.out_len = out_len;
+  a.queue_len = queue_len;
+  a.n = n;
+  a.spawn_slots = S;
+  a.processed = &processed_buffer;
+  a.outputs = &outputs;
+  a.queue = &queue;
+  a.banks = &banks;
+  a.next_queue = &next;
+  scatter.enqueue(launch, a, 0);
+  cl_int counts[2];
+  launch.check(rt.queue().enqueueReadBuffer(scatter.counts, CL_TRUE, 0, sizeof counts, counts), "read counts");
+  launch.harvest();
+
+  std::vector<std::vector<int>> expected(pes);
+  for (int k = 0; k < total; ++k)
+    if (valid[k]) expected[dest[k]].push_back(k);
+  auto read_ids = [&](const cl::Buffer& b, int count) {
+    std::vector<cl_int4> v(std::max(count, 1));
+    if (count > 0) cl_check(rt.queue().enqueueReadBuffer(b, CL_TRUE, 0, count * sizeof(cl_int4), v.data()), "read");
+    return v;
+  };
+  auto read_f4 = [&](const cl::Buffer& b, int count) {
+    std::vector<cl_float4> v(std::max(count, 1));
+    if (count > 0) cl_check(rt.queue().enqueueReadBuffer(b, CL_TRUE, 0, count * sizeof(cl_float4), v.data()), "read");
+    return v;
+  };
+  std::vector<cl_int> bank_count(pes);
+  cl_check(rt.queue().enqueueReadBuffer(scatter.bank_count, CL_TRUE, 0, pes * sizeof(cl_int), bank_count.data()),
+           "read");
+  const auto bank_ids = read_ids(banks.ids, pes * n);
+  const auto bank_wgt = read_f4(banks.wgt, pes * n);
+  const auto next_ids = read_ids(next.ids, counts[0]);
+  const auto next_dir = read_f4(next.dir, counts[0]);
+
+  int placed = 0, waiting = 0;
+  std::vector<int> seen(total, 0);
+  for (int q = 0; q < pes; ++q) {
+    const int fits = std::min<int>(n, expected[q].size());
+    ASSERT_EQ(bank_count[q], fits) << "PE " << q;
+    for (int r = 0; r < fits; ++r) {
+      const int k = bank_ids[q * n + r].s[0];
+      ASSERT_EQ(k, expected[q][r]) << "bank " << q << " slot " << r;
+      EXPECT_EQ(bank_ids[q * n + r].s[1], OPSILA_META(OPSILA_KIND_TRACE, k % 5));
+      EXPECT_EQ(bank_wgt[q * n + r].s[0], 0.125f * k);
+      ++seen[k];
+      ++placed;
+    }
+  }
+  for (int q = 0, at = 0; q < pes; ++q)
+    for (std::size_t r = n; r < expected[q].size(); ++r, ++at) {
+      ASSERT_LT(at, counts[0]);
+      const int k = next_ids[at].s[0];
+      ASSERT_EQ(k, expected[q][r]) << "waiting entry " << at;
+      EXPECT_EQ(next_dir[at].s[1], float(-k));
+      ++seen[k];
+      ++waiting;
+    }
+  EXPECT_EQ(counts[0], waiting);
+  EXPECT_EQ(counts[1], placed);
+  for (int k = 0; k < total; ++k) ASSERT_EQ(seen[k], valid[k] ? 1 : 0) << "entry " << k;
+}
+
+TEST(SmallScatter, OutputSlotsAndQueueWithOverflow) {
+  small_scatter(3, 2, 3, 7, 11);   // most entries wait
+  small_scatter(4, 6, 4, 5, 12);   // most entries fit
+  small_scatter(1, 1, 2, 3, 13);   // one PE, one slot
+}
+
+}  // namespace
+}  // namespace opsila

@@ -1,0 +1,145 @@
+// The replicated-scene megakernel baseline: host side of kernels/megakernel.cl.
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <string>
+
+#include "bench.h"
+#include "opsila_shared.h"
+#include "partition.h"
+#include "renderer.h"
+
+namespace opsila {
+namespace {
+
+// The SPEC camera basis and frame constants, computed in float exactly as
+// the renderer computes them (host/renderer.cpp), so that both see the same
+// rays bit for bit. The megakernel test compares the images.
+FrameParams megakernel_frame(const Scene& scene, const BankedScene& bs) {
+  FrameParams fp{};
+  const CameraDesc& cam = scene.camera;
+  float f[3], r[3], u[3];
+  {
+    float d[3] = {cam.look_at[0] - cam.eye[0], cam.look_at[1] - cam.eye[1], cam.look_at[2] - cam.eye[2]};
+    float l = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+    for (int a = 0; a < 3; ++a) f[a] = d[a] / l;
+    float c[3] = {f[1] * cam.up[2] - f[2] * cam.up[1], f[2] * cam.up[0] - f[0] * cam.up[2],
+                  f[0] * cam.up[1] - f[1] * cam.up[0]};
+    float cl = std::sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
+    for (int a = 0; a < 3; ++a) r[a] = c[a] / cl;
+    u[0] = r[1] * f[2] - r[2] * f[1];
+    u[1] = r[2] * f[0] - r[0] * f[2];
+    u[2] = r[0] * f[1] - r[1] * f[0];
+  }
+  for (int a = 0; a < 3; ++a) {
+    fp.eye[a] = cam.eye[a];
+    fp.forward[a] = f[a];
+    fp.right[a] = r[a];
+    fp.up[a] = u[a];
+    fp.ambient[a] = scene.ambient[a];
+    fp.background[a] = scene.background[a];
+  }
+  fp.tan_half_fov = std::tan(cam.fov_deg * 0.5f * static_cast<float>(M_PI) / 180.0f);
+  fp.aspect = static_cast<float>(scene.width) / static_cast<float>(scene.height);
+  fp.epsilon = scene.epsilon();
+  fp.width = scene.width;
+  fp.height = scene.height;
+  fp.max_depth = scene.max_depth;
+  fp.num_lights = static_cast<int>(bs.lights.size());
+  fp.num_pes = 1;
+  fp.num_clusters = static_cast<int>(bs.clusters.size());
+  fp.bank_capacity = 0;
+  fp.spawn_slots = fp.num_lights + 2;
+  return fp;
+}
+
+}  // namespace
+
+BaselineImage render_megakernel(const Scene& scene, ClRuntime& rt, int tile) {
+  if (scene.triangles.empty()) throw InputError("scene has no facets");
+  if (scene.max_depth < 1 || scene.max_depth > OPSILA_MAX_DEPTH)
+    throw InputError("--depth " + std::to_string(scene.max_depth) + ": must be 1.." +
+                     std::to_string(OPSILA_MAX_DEPTH));
+  if (static_cast<int>(scene.lights.size()) > OPSILA_MAX_LIGHTS)
+    throw InputError("scene has " + std::to_string(scene.lights.size()) + " lights; at most " +
+                     std::to_string(OPSILA_MAX_LIGHTS) + " are supported");
+  const std::size_t npix = std::size_t(scene.width) * scene.height;
+  BaselineImage out;
+  out.width = scene.width;
+  out.height = scene.height;
+
+  // One PE: bank 0 is the whole scene under one BVH (clusters on top).
+  auto t_build = std::chrono::steady_clock::now();
+  BankedScene bs = partition_scene(scene, 1);
+  FrameParams fp = megakernel_frame(scene, bs);
+  out.build_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_build).count();
+
+  rt.program();  // compile before timing
+  cl::Kernel k = rt.kernel("megakernel");
+  cl::CommandQueue& q = rt.queue();
+
+  auto t0 = std::chrono::steady_clock::now();
+  cl::Buffer b_tris = upload(rt, bs.triangles, "facets");
+  cl::Buffer b_nodes = upload(rt, bs.nodes, "BVH nodes");
+  cl::Buffer b_mats = upload(rt, bs.materials, "materials");
+  std::vector<Light> lights = bs.lights;
+  if (lights.empty()) lights.push_back(Light{});
+  cl::Buffer b_lights = upload(rt, lights, "lights");
+  cl::Buffer b_accum = device_buffer(rt, npix * 3 * sizeof(cl_long), "pixel sums");
+  cl::Buffer b_counts = device_buffer(rt, npix * sizeof(cl_uint4), "ray counts");
+  cl::Buffer b_items = device_buffer(rt, npix * sizeof(cl_int2), "item buffer");
+
+  std::vector<LaunchRecord> launches;
+  Launcher launch(rt, launches);
+  // One fixed work-group size, so a driver that specialises kernels per size
+  // (PoCL) compiles this one once.
+  std::size_t local = k.getWorkGroupInfo<CL_KERNEL_WORK_GROUP_SIZE>(rt.device().device);
+  local = std::min<std::size_t>(local, 64);
+  while (local & (local - 1)) local &= local - 1;  // a power of two, dividing the rounded global size
+  local = std::max<std::size_t>(local, 1);
+  tile = std::max(1, tile);
+  for (std::size_t begin = 0; begin < npix; begin += tile) {
+    int count = static_cast<int>(std::min<std::size_t>(tile, npix - begin));
+    int a = 0;
+    k.setArg(a++, fp);
+    k.setArg(a++, b_nodes);
+    k.setArg(a++, b_tris);
+    k.setArg(a++, b_mats);
+    k.setArg(a++, b_lights);
+    k.setArg(a++, bs.pes[0].node_begin);
+    k.setArg(a++, static_cast<int>(begin));
+    k.setArg(a++, count);
+    k.setArg(a++, b_accum);
+    k.setArg(a++, b_counts);
+    k.setArg(a++, b_items);
+    launch.run(k, "megakernel", round_up(count, 64), local, -1);
+  }
+  std::vector<cl_long> accum(npix * 3);
+  std::vector<cl_uint4> counts(npix);
+  out.item_buffer.resize(npix * 2);
+  launch.check(q.enqueueReadBuffer(b_accum, CL_TRUE, 0, accum.size() * sizeof(cl_long), accum.data()),
+               "clEnqueueReadBuffer(megakernel pixel sums)");
+  launch.check(q.enqueueReadBuffer(b_counts, CL_TRUE, 0, counts.size() * sizeof(cl_uint4), counts.data()),
+               "clEnqueueReadBuffer(megakernel ray counts)");
+  launch.check(q.enqueueReadBuffer(b_items, CL_TRUE, 0, npix * sizeof(cl_int2), out.item_buffer.data()),
+               "clEnqueueReadBuffer(megakernel item buffer)");
+  launch.check(q.finish(), "clFinish");
+  out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  launch.harvest();
+  for (const LaunchRecord& r : launches) out.kernel_seconds += r.seconds;
+
+  // Pixel sums -> floats exactly as the renderer converts its fixed point.
+  out.rgb.resize(npix * 3);
+  for (std::size_t i = 0; i < npix * 3; ++i)
+    out.rgb[i] = static_cast<float>(static_cast<double>(static_cast<std::int64_t>(accum[i])) / OPSILA_FIXED_SCALE);
+  out.rays.primary = npix;
+  for (const cl_uint4& c : counts) {
+    out.rays.secondary += c.s[0];
+    out.rays.shadow += c.s[1];
+    out.triangle_tests += c.s[2];
+    out.box_tests += c.s[3];
+  }
+  return out;
+}
+
+}  // namespace opsila

@@ -1,0 +1,302 @@
+// The benchmark's baselines and outputs: the replicated megakernel renders
+// the OPSILA image, every implementation counts the same rays, the host
+// scatter places descriptors exactly as the scatter kernels do, and
+// `opsila bench --quick` writes the JSON that scripts rely on.
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <memory>
+#include <thread>
+
+#include <nlohmann/json.hpp>
+
+#include "bench.h"
+#include "reference.h"
+#include "renderer.h"
+#include "scene.h"
+#include "test_scenes.h"
+#include "test_util.h"
+
+namespace opsila {
+namespace {
+
+ClRuntime& runtime() {
+  static std::unique_ptr<ClRuntime> rt;
+  if (!rt) {
+    const char* spec = std::getenv("OPSILA_TEST_DEVICE");
+    rt = std::make_unique<ClRuntime>(choose_device(spec ? spec : ""));
+  }
+  return *rt;
+}
+
+RenderResult render_opsila(const Scene& s, int pes) {
+  RenderSettings rs;
+  rs.num_pes = pes;
+  return render(s, rs, runtime());
+}
+
+double item_agreement(const std::vector<std::int32_t>& a, const std::vector<std::int32_t>& b) {
+  EXPECT_EQ(a.size(), b.size());
+  std::size_t same = 0;
+  for (std::size_t i = 0; i + 1 < a.size(); i += 2) same += (a[i] == b[i] && a[i + 1] == b[i + 1]);
+  return double(same) / double(a.size() / 2);
+}
+
+TEST(Bench, MegakernelImageEqualsOpsilaImage) {
+  const Scene s = test::mirror_glass_scene(96, 5);
+  const RenderResult opsila = render_opsila(s, 16);
+  const BaselineImage mega = render_megakernel(s, runtime());
+  ASSERT_EQ(mega.rgb.size(), opsila.rgb.size());
+  EXPECT_GE(test::clamped_psnr(mega.rgb, opsila.rgb), 50.0);
+  EXPECT_GE(item_agreement(mega.item_buffer, opsila.item_buffer), 0.999);
+  // Same shading and the same fixed-point sums: nearly every pixel is identical.
+  std::size_t same = 0;
+  for (std::size_t i = 0; i < mega.rgb.size(); i += 3)
+    same +=
+        mega.rgb[i] == opsila.rgb[i] && mega.rgb[i + 1] == opsila.rgb[i + 1] && mega.rgb[i + 2] == opsila.rgb[i + 2];
+  EXPECT_GE(double(same) / double(mega.rgb.size() / 3), 0.99);
+}
+
+TEST(Bench, MegakernelTilesDoNotChangeTheImage) {
+  const Scene s = test::mirror_glass_scene(48, 4);
+  const BaselineImage whole = render_megakernel(s, runtime());
+  const BaselineImage tiled = render_megakernel(s, runtime(), 500);
+  EXPECT_EQ(whole.rgb, tiled.rgb);
+  EXPECT_EQ(whole.rays.total(), tiled.rays.total());
+}
+
+TEST(Bench, RayCountsAgreeAcrossImplementations) {
+  const Scene s = test::mirror_glass_scene(80, 5);
+  const RenderStats st = render_opsila(s, 8).stats;
+  const BaselineImage mega = render_megakernel(s, runtime());
+  const ReferenceImage host = render_reference(s, 2);
+  ASSERT_GT(st.secondary_rays, 0u);
+  ASSERT_GT(st.shadow_rays, 0u);
+  EXPECT_EQ(mega.rays.primary, st.primary_rays);
+  EXPECT_EQ(mega.rays.secondary, st.secondary_rays);
+  EXPECT_EQ(mega.rays.shadow, st.shadow_rays);
+  EXPECT_EQ(host.counts.primary, st.primary_rays);
+  EXPECT_EQ(host.counts.secondary, st.secondary_rays);
+  EXPECT_EQ(host.counts.shadow, st.shadow_rays);
+  if (embree_available()) {
+    // Embree finds its own hit distances (not the watertight test's), so a
+    // ray grazing an edge may take another path: counts agree to 0.5%.
+    const BaselineImage e = render_embree(s, 2);
+    EXPECT_EQ(e.rays.primary, st.primary_rays);
+    EXPECT_NEAR(double(e.rays.secondary), double(st.secondary_rays), 0.005 * st.secondary_rays + 2);
+    EXPECT_NEAR(double(e.rays.shadow), double(st.shadow_rays), 0.005 * st.shadow_rays + 2);
+    EXPECT_GE(test::clamped_psnr(e.rgb, render_opsila(s, 8).rgb), 35.0);
+  }
+}
+
+// Host scatter and ScatterPass on the same input, with holes and overflow:
+// every field of every bank slot and of the next queue is the same.
+void expect_same_placement(std::size_t length, int pes, int n, double holes, unsigned seed) {
+  ClRuntime& rt = runtime();
+  const HostDescriptors src = random_descriptors(length, pes, holes, seed);
+  HostDescriptors hb, hn;
+  hb.resize(std::size_t(pes) * n);
+  hn.resize(length);
+  std::vector<std::size_t> scratch;
+  const HostScatterResult hr = host_scatter(src, pes, n, hb, hn, scratch);
+
+  DescriptorSet queue, banks, next, outputs;
+  queue.allocate(rt, length, "test queue");
+  banks.allocate(rt, std::size_t(pes) * n, "test banks");
+  next.allocate(rt, length, "test next");
+  outputs.allocate(rt, 1, "test outputs");
+  auto put = [&](const cl::Buffer& b, const auto& v) {
+    cl_check(rt.queue().enqueueWriteBuffer(b, CL_TRUE, 0, v.size() * sizeof(v[0]), v.data()), "write");
+  };
+  put(queue.org, src.org);
+  put(queue.dir, src.dir);
+  put(queue.wgt, src.wgt);
+  put(queue.ids, src.ids);
+  put(queue.dest, src.dest);
+  cl::Buffer processed = upload(rt, std::vector<cl_int>(pes, 0), "processed");
+  std::vector<LaunchRecord> records;
+  Launcher launch(rt, records);
+  ScatterPass scatter(rt, pes);
+  ScatterPass::Args a;
+  a.queue_len = static_cast<int>(length);
+  a.n = n;
+  a.processed = &processed;
+  a.outputs = &outputs;
+  a.queue = &queue;
+  a.banks = &banks;
+  a.next_queue = &next;
+  scatter.enqueue(launch, a, 0);
+  cl_check(rt.queue().finish(), "finish");
+
+  std::vector<cl_int> bank_count(pes), counts(2);
+  cl_check(rt.queue().enqueueReadBuffer(scatter.bank_count, CL_TRUE, 0, pes * sizeof(cl_int), bank_count.data()),
+           "read");
+  cl_check(rt.queue().enqueueReadBuffer(scatter.counts, CL_TRUE, 0, 2 * sizeof(cl_int), counts.data()), "read");
+  ASSERT_EQ(bank_count, hr.bank_count);
+  ASSERT_EQ(std::size_t(counts[0]), hr.waiting);
+  ASSERT_EQ(std::size_t(counts[1]), hr.placed);
+  ASSERT_GT(hr.placed, 0u);
+
+  auto get4 = [&](const cl::Buffer& b, std::size_t count) {
+    std::vector<cl_float4> v(count);
+    if (count) cl_check(rt.queue().enqueueReadBuffer(b, CL_TRUE, 0, count * sizeof(cl_float4), v.data()), "read");
+    return v;
+  };
+  auto geti4 = [&](const cl::Buffer& b, std::size_t count) {
+    std::vector<cl_int4> v(count);
+    if (count) cl_check(rt.queue().enqueueReadBuffer(b, CL_TRUE, 0, count * sizeof(cl_int4), v.data()), "read");
+    return v;
+  };
+  auto geti = [&](const cl::Buffer& b, std::size_t count) {
+    std::vector<cl_int> v(count);
+    if (count) cl_check(rt.queue().enqueueReadBuffer(b, CL_TRUE, 0, count * sizeof(cl_int), v.data()), "read");
+    return v;
+  };
+  auto same4 = [](const cl_float4& x, const cl_float4& y) {
+    return x.s[0] == y.s[0] && x.s[1] == y.s[1] && x.s[2] == y.s[2] && x.s[3] == y.s[3];
+  };
+  auto samei4 = [](const cl_int4& x, const cl_int4& y) {
+    return x.s[0] == y.s[0] && x.s[1] == y.s[1] && x.s[2] == y.s[2] && x.s[3] == y.s[3];
+  };
+  const std::size_t slots = std::size_t(pes) * n;
+  const auto b_org = get4(banks.org, slots), b_dir = get4(banks.dir, slots), b_wgt = get4(banks.wgt, slots);
+  const auto b_ids = geti4(banks.ids, slots);
+  const auto b_dest = geti(banks.dest, slots);
+  for (int q = 0; q < pes; ++q)
+    for (int r = 0; r < bank_count[q]; ++r) {
+      const std::size_t at = std::size_t(q) * n + r;
+      ASSERT_TRUE(samei4(b_ids[at], hb.ids[at])) << "bank " << q << " slot " << r;
+      ASSERT_TRUE(same4(b_org[at], hb.org[at]) && same4(b_dir[at], hb.dir[at]) && same4(b_wgt[at], hb.wgt[at]));
+      ASSERT_EQ(b_dest[at], q);
+      ASSERT_EQ(hb.dest[at], q);
+    }
+  const auto n_ids = geti4(next.ids, hr.waiting);
+  const auto n_org = get4(next.org, hr.waiting);
+  const auto n_dest = geti(next.dest, hr.waiting);
+  for (std::size_t k = 0; k < hr.waiting; ++k) {
+    ASSERT_TRUE(samei4(n_ids[k], hn.ids[k])) << "queue slot " << k;
+    ASSERT_TRUE(same4(n_org[k], hn.org[k]));
+    ASSERT_EQ(n_dest[k], hn.dest[k]);
+  }
+}
+
+TEST(Bench, HostScatterPlacesLikeTheScatterKernels) {
+  expect_same_placement(16, 16, 2, 0.0, 1);
+  expect_same_placement(5000, 16, 200, 0.3, 2);    // overflow: ~235 per PE, 200 slots
+  expect_same_placement(32767, 16, 4096, 0.1, 3);  // no overflow
+  expect_same_placement(3000, 1, 100, 0.5, 4);
+  expect_same_placement(4000, 64, 1, 0.2, 5);
+}
+
+TEST(Bench, ScatterPointIsSane) {
+  const ScatterPoint p = measure_scatter(runtime(), 4096, 16, 1, 2);
+  EXPECT_TRUE(p.verified);
+  EXPECT_EQ(p.moved, 4096u);
+  EXPECT_GT(p.host_seconds, 0.0);
+  EXPECT_GT(p.kernel_seconds, 0.0);
+  EXPECT_GT(p.speedup(), 0.0);
+  EXPECT_GT(p.gbytes_per_s(), 0.0);
+  EXPECT_GT(p.copy_kernel_gbytes_per_s(), 0.0);
+  EXPECT_GT(p.copy_buffer_gbytes_per_s(), 0.0);
+}
+
+TEST(Bench, FlagErrorsAreInputErrors) {
+  EXPECT_THROW(run_bench({}), InputError);
+  EXPECT_THROW(run_bench({"scene.json", "-o", "x.png"}), InputError);
+  EXPECT_THROW(run_bench({"scene.json", "--stats", "x.json"}), InputError);
+  EXPECT_THROW(run_bench({"scene.json", "--repeats", "0"}), InputError);
+  EXPECT_THROW(run_bench({"scene.json", "--warmup", "x"}), InputError);
+  EXPECT_THROW(run_bench({"scene.json", "--json", "out.txt"}), InputError);
+  EXPECT_THROW(run_bench({"scene.json", "--json"}), InputError);
+  EXPECT_THROW(run_bench({"scene.json", "--quick=1"}), InputError);
+  EXPECT_THROW(run_bench({"scene.json", "--repeats", "2", "--repeats", "3"}), InputError);
+  EXPECT_THROW(run_bench({"scene.json", "--pes", "0"}), InputError);
+  EXPECT_THROW(run_bench({"scene.json", "--size", "10"}), InputError);
+  EXPECT_THROW(run_bench({"a.json", "b.json"}), InputError);
+  EXPECT_THROW(run_bench({"scene.json", "--frobnicate"}), InputError);
+}
+
+TEST(Bench, CommandLineErrorIsOneLineExitTwo) {
+  const test::RunResult r = test::run_opsila({"bench", "scene.json", "--repeats", "-1"});
+  EXPECT_EQ(r.exit_code, 2);
+  ASSERT_EQ(r.error_lines().size(), 1u) << r.err;
+  EXPECT_NE(r.error_lines()[0].find("opsila: error: --repeats"), std::string::npos) << r.err;
+}
+
+TEST(Bench, QuickRunWritesEveryJsonKey) {
+  test::TempDir dir;
+  const std::string json_path = dir.file("bench.json"), csv = dir.file("csv");
+  const test::RunResult r = test::run_opsila({"bench", std::string(OPSILA_SOURCE_DIR) + "/scenes/whitted.json",
+                                              "--size", "48x36", "--depth", "3", "--pes", "8", "--quick",
+                                              "--scatter-max", "12", "--repeats", "1", "--json", json_path, "--csv",
+                                              csv});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("scatter"), std::string::npos);
+  const nlohmann::json j = nlohmann::json::parse(test::read_file(json_path));
+
+  ASSERT_TRUE(j.contains("device"));
+  EXPECT_FALSE(j["device"].get<std::string>().empty());
+  EXPECT_EQ(j["pes"], 8);
+  EXPECT_EQ(j["depth"], 3);
+  EXPECT_EQ(j["image"]["width"], 48);
+  EXPECT_GT(j["scene"]["facets"].get<int>(), 0);
+  EXPECT_GT(j["scene"]["clusters"].get<int>(), 0);
+
+  const nlohmann::json& rj = j["render"];
+  EXPECT_EQ(rj["rays"].get<std::uint64_t>(), 48u * 36u + rj["rays_by_kind"]["secondary"].get<std::uint64_t>() +
+                                                  rj["rays_by_kind"]["shadow"].get<std::uint64_t>());
+  EXPECT_GT(rj["seconds"].get<double>(), 0.0);
+  EXPECT_GT(rj["mrays_per_s"].get<double>(), 0.0);
+  ASSERT_TRUE(rj["phases"].is_array());
+  EXPECT_FALSE(rj["phases"].empty());
+  bool saw_spmd = false, saw_scatter = false;
+  for (const auto& p : rj["phases"]) {
+    EXPECT_GE(p["seconds"].get<double>(), 0.0);
+    saw_spmd |= p["name"] == "spmd_phase";
+    saw_scatter |= p["name"] == "scatter_move";
+  }
+  EXPECT_TRUE(saw_spmd && saw_scatter);
+  EXPECT_EQ(rj["phase_switches"].get<int>(), 2 * rj["rounds"].get<int>());
+  ASSERT_EQ(rj["pe"].size(), 8u);
+  const double occ = rj["occupancy"].get<double>();
+  EXPECT_GT(occ, 0.0);
+  EXPECT_LE(occ, 1.0);
+  for (const auto& level : rj["levels"])
+    if (!level["occupancy"].is_null()) {
+      EXPECT_GT(level["occupancy"].get<double>(), 0.0);
+      EXPECT_LE(level["occupancy"].get<double>(), 1.0);
+    }
+  EXPECT_EQ(rj["traffic"].size(), 3u);
+  EXPECT_GE(rj["exchange_share"].get<double>(), 0.0);
+  EXPECT_TRUE(rj["deterministic"].get<bool>());
+
+  ASSERT_TRUE(j["scatter"].is_array());
+  ASSERT_FALSE(j["scatter"].empty());
+  for (const auto& p : j["scatter"]) {
+    EXPECT_GT(p["length"].get<std::size_t>(), 0u);
+    EXPECT_GT(p["speedup"].get<double>(), 0.0);
+    EXPECT_GT(p["gbytes_per_s"].get<double>(), 0.0);
+    EXPECT_TRUE(p["verified"].get<bool>());
+  }
+  EXPECT_EQ(j["scatter"].front()["length"], 16);
+  EXPECT_GT(j["copy_gbytes_per_s"].get<double>(), 0.0);
+  EXPECT_GT(j["memory"]["bank_bytes_max"].get<std::uint64_t>(), 0u);
+  EXPECT_GT(j["memory"]["replicated_bytes"].get<std::uint64_t>(), j["memory"]["bank_bytes_max"].get<std::uint64_t>());
+
+  const nlohmann::json& b = j["baselines"];
+  EXPECT_GT(b["replicated_megakernel"]["mrays_per_s"].get<double>(), 0.0);
+  EXPECT_TRUE(b["replicated_megakernel"]["rays_match_opsila"].get<bool>());
+  EXPECT_GT(b["sequential_host"]["mrays_per_s"].get<double>(), 0.0);
+  EXPECT_EQ(b["sequential_host"]["threads"], 1);
+  if (embree_available()) {
+    EXPECT_GT(b["embree"]["mrays_per_s"].get<double>(), 0.0);
+  } else {
+    EXPECT_FALSE(b.contains("embree"));
+  }
+
+  for (const char* name : {"scatter.csv", "phases.csv", "levels.csv", "occupancy.csv", "traffic.csv", "baselines.csv"})
+    EXPECT_TRUE(test::file_exists(csv + "/" + name)) << name;
+}
+
+}  // namespace
+}  // namespace opsila

@@ -125,7 +125,7 @@ DevicePlan plan_device_memory(const BankedScene& bs, std::size_t npix, int P, in
   // Item buffer (pair, triangle, distance) and 64-bit fixed-point RGB sums.
   plan.image = u64(npix) * (sizeof(cl_int2) + sizeof(cl_int) + sizeof(cl_float) + 6 * sizeof(cl_uint));
   // Banks (P*n), SPMD output slots (P*n*S), two queues (as sized below).
-  const u64 out_len = u64(P) * n * S, inject = std::max<u64>(u64(P) * n, 1024);
+  const u64 out_len = u64(P) * n * S, inject = std::max<u64>(u64(P) * n / 4, 1024);
   const u64 queue_cap = out_len + 2 * inject;
   plan.descriptors = (u64(P) * n + out_len + 2 * queue_cap) * DescriptorSet::kBytes;
   // Stats, traffic, and the scatter's ranks and block counts (1.5x the source).
@@ -252,8 +252,10 @@ RenderResult render(const Scene& scene, const RenderSettings& settings, ClRuntim
   DescriptorSet banks, outputs, queue_a, queue_b;
   banks.allocate(rt, std::size_t(P) * n, "descriptor banks");
   outputs.allocate(rt, out_len, "SPMD output slots");
-  // Primaries are injected when the queue runs short, at most `inject` at a time.
-  const std::size_t inject = std::max<std::size_t>(std::size_t(P) * n, 1024);
+  // Primaries are injected when the queue runs short, a quarter of the banks'
+  // capacity at a time: descriptors waiting for a busy PE are moved again by
+  // every scatter, so fewer of them wait when the work arrives in smaller steps.
+  const std::size_t inject = std::max<std::size_t>(std::size_t(P) * n / 4, 1024);
   std::size_t queue_cap = out_len + 2 * inject;
   queue_a.allocate(rt, queue_cap, "descriptor queue");
   queue_b.allocate(rt, queue_cap, "descriptor queue");
@@ -261,29 +263,41 @@ RenderResult render(const Scene& scene, const RenderSettings& settings, ClRuntim
   zero_buffer(rt, b_processed, P * sizeof(cl_int), "processed counts");
   Launcher launch(rt, st.launches);
 
-  // SIMD phase 1: item buffer, in tiles so no launch runs unbounded.
-  const int tile = std::max(1, settings.item_buffer_tile);
-  for (std::size_t begin = 0; begin < npix; begin += tile) {
-    int count = static_cast<int>(std::min<std::size_t>(tile, npix - begin));
-    int a = 0;
-    k_item.setArg(a++, fp);
-    k_item.setArg(a++, b_clusters);
-    k_item.setArg(a++, b_rects);
-    k_item.setArg(a++, b_nodes);
-    k_item.setArg(a++, b_tris);
-    k_item.setArg(a++, static_cast<int>(begin));
-    k_item.setArg(a++, count);
-    k_item.setArg(a++, b_items);
-    k_item.setArg(a++, b_item_tri);
-    k_item.setArg(a++, b_item_t);
-    launch.run(k_item, "item_buffer", round_up(count, 64), 0, -1);
+  // SIMD phase 1: item buffer. A work-group is a square tile of pixels, as
+  // large as the kernel allows up to 8x8; launches are bounded to about
+  // `item_buffer_tile` pixels each so no launch runs unbounded.
+  {
+    std::size_t allowed = 0;
+    cl_check(k_item.getWorkGroupInfo(rt.device().device, CL_KERNEL_WORK_GROUP_SIZE, &allowed),
+             "clGetKernelWorkGroupInfo(item_buffer)");
+    int tile_w = 8;
+    while (tile_w > 1 && std::size_t(tile_w) * tile_w > allowed) tile_w /= 2;
+    const int tiles_x = (scene.width + tile_w - 1) / tile_w, tiles_y = (scene.height + tile_w - 1) / tile_w;
+    const int tiles = tiles_x * tiles_y;
+    const int per_launch = std::max(1, settings.item_buffer_tile / (tile_w * tile_w));
+    for (int begin = 0; begin < tiles; begin += per_launch) {
+      int count = std::min(per_launch, tiles - begin);
+      int a = 0;
+      k_item.setArg(a++, fp);
+      k_item.setArg(a++, b_clusters);
+      k_item.setArg(a++, b_rects);
+      k_item.setArg(a++, b_nodes);
+      k_item.setArg(a++, b_tris);
+      k_item.setArg(a++, tile_w);
+      k_item.setArg(a++, tiles_x);
+      k_item.setArg(a++, begin);
+      k_item.setArg(a++, b_items);
+      k_item.setArg(a++, b_item_tri);
+      k_item.setArg(a++, b_item_t);
+      launch.run(k_item, "item_buffer", std::size_t(count) * tile_w * tile_w, std::size_t(tile_w) * tile_w, -1);
+    }
   }
 
   // Rounds: scatter (SIMD) then SPMD phase, until nothing is left.
   std::size_t next_pixel = 0, queue_len = 0;
   bool outputs_live = false;
   for (int round = 0;; ++round) {
-    if (next_pixel < npix && queue_len < std::size_t(P) * n) {
+    if (next_pixel < npix && queue_len < inject) {
       std::size_t count = std::min(inject, npix - next_pixel);
       if (queue_len + count > queue_a.capacity) count = queue_a.capacity - queue_len;
       int a = 0;

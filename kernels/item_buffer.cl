@@ -7,23 +7,64 @@
  * mode every bank is reachable through the network, so no PE routing here. */
 #include "common.cl"
 
+#define ITEM_TILE_MAX 64   /* pixels per tile (work-group), at most */
+#define ITEM_LIST_CAP 512  /* clusters listed per tile before they are traced */
+
+/* One work-group = one square tile of tile_w x tile_w pixels. The group
+ * first lists, in cluster order, the clusters whose projected box overlaps
+ * the tile (one rectangle test per cluster per tile instead of per pixel);
+ * each pixel then tests only those rectangles and traces their facets. */
 __kernel void item_buffer(FrameParams fp, __global const Cluster *clusters, __global const int4 *cluster_rects,
-                          __global const BankNode *nodes, __global const BankTriangle *tris, int pixel_begin,
-                          int pixel_count, __global int2 *items, __global int *item_tri, __global float *item_t) {
-  int k = get_global_id(0);
-  if (k >= pixel_count) return;
-  int pixel = pixel_begin + k;
-  int x = pixel % fp.width, y = pixel / fp.width;
-  RayPre r = make_ray(load3(fp.eye), primary_direction(fp, x, y));
+                          __global const BankNode *nodes, __global const BankTriangle *tris, int tile_w,
+                          int tiles_x, int tile_begin, __global int2 *items, __global int *item_tri,
+                          __global float *item_t) {
+  __local int flags[ITEM_TILE_MAX];
+  __local int list[ITEM_LIST_CAP];
+  __local int listed;
+  int lid = get_local_id(0), lsz = get_local_size(0);
+  int tile = tile_begin + get_group_id(0);
+  int x0 = (tile % tiles_x) * tile_w, y0 = (tile / tiles_x) * tile_w;
+  int x1 = x0 + tile_w - 1, y1 = y0 + tile_w - 1;
+  int x = x0 + lid % tile_w, y = y0 + lid / tile_w;
+  bool inside = lid < tile_w * tile_w && x < fp.width && y < fp.height;
+  RayPre r = make_ray(load3(fp.eye), primary_direction(fp, min(x, fp.width - 1), min(y, fp.height - 1)));
   float best_t = OPSILA_INF;
   int best_tri = -1, best_facet = INT_MAX;
   uint tri_tests = 0, box_tests = 0;
-  for (int c = 0; c < fp.num_clusters; ++c) {
-    int4 rect = cluster_rects[c]; /* x0, y0, x1, y1 inclusive */
-    if (x < rect.x || x > rect.z || y < rect.y || y > rect.w) continue;
-    traverse_nearest(&r, nodes, tris, clusters[c].root, 0.0f, &best_t, &best_tri, &best_facet, &tri_tests,
-                     &box_tests);
+  if (lid == 0) listed = 0;
+  barrier(CLK_LOCAL_MEM_FENCE);
+  for (int base = 0; base < fp.num_clusters; base += lsz) {
+    int c = base + lid;
+    if (c < fp.num_clusters) {
+      int4 rect = cluster_rects[c];
+      flags[lid] = !(x1 < rect.x || x0 > rect.z || y1 < rect.y || y0 > rect.w);
+    } else {
+      flags[lid] = 0;
+    }
+    barrier(CLK_LOCAL_MEM_FENCE);
+    if (lid == 0) {
+      int n = listed;
+      for (int k = 0; k < lsz; ++k)
+        if (flags[k]) list[n++] = base + k;
+      listed = n;
+    }
+    barrier(CLK_LOCAL_MEM_FENCE);
+    int n = listed;
+    if (n > ITEM_LIST_CAP - lsz || base + lsz >= fp.num_clusters) {
+      for (int i = 0; i < n && inside; ++i) {
+        int cl = list[i];
+        int4 pr = cluster_rects[cl]; /* x0, y0, x1, y1 inclusive */
+        if (x < pr.x || x > pr.z || y < pr.y || y > pr.w) continue;
+        traverse_nearest(&r, nodes, tris, clusters[cl].root, 0.0f, &best_t, &best_tri, &best_facet, &tri_tests,
+                         &box_tests);
+      }
+      barrier(CLK_LOCAL_MEM_FENCE);
+      if (lid == 0) listed = 0;
+      barrier(CLK_LOCAL_MEM_FENCE);
+    }
   }
+  if (!inside) return;
+  int pixel = y * fp.width + x;
   if (best_tri >= 0) {
     items[pixel] = (int2)(tris[best_tri].object_id, tris[best_tri].facet_id);
   } else {

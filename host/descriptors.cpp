@@ -152,21 +152,29 @@ void ScatterPass::enqueue(Launcher& launch, const Args& a, int round) {
   plan_.setArg(i++, counts);
   launch.run(plan_, "scatter_plan", 1, 1, round);
   i = 0;
-  move_.setArg(i++, a.out_len);
-  move_.setArg(i++, a.queue_len);
-  move_.setArg(i++, a.n);
-  move_.setArg(i++, a.spawn_slots);
-  move_.setArg(i++, P);
-  i = a.outputs->set_args(move_, i);
-  i = a.queue->set_args(move_, i);
-  move_.setArg(i++, rank_);
-  move_.setArg(i++, hist_);
-  move_.setArg(i++, overflow_base);
-  i = a.banks->set_args(move_, i);
-  i = a.next_queue->set_args(move_, i);
-  move_.setArg(i++, traffic);
-  move_.setArg(i++, a.traffic ? a.traffic_levels : 0);
-  launch.run(move_, "scatter_move", round_up(std::max<std::size_t>(total, 1), 64), 0, round);
+  // One move launch per source segment: outputs (entries 0..out_len), then
+  // the queue (entries out_len..total).
+  const DescriptorSet* segment[2] = {a.outputs, a.queue};
+  const int length[2] = {a.out_len, a.queue_len}, offset[2] = {0, a.out_len};
+  for (int s = 0; s < 2; ++s) {
+    if (length[s] == 0) continue;
+    i = 0;
+    move_.setArg(i++, length[s]);
+    move_.setArg(i++, offset[s]);
+    move_.setArg(i++, a.n);
+    move_.setArg(i++, a.spawn_slots);
+    move_.setArg(i++, P);
+    move_.setArg(i++, s == 0 ? 1 : 0);
+    i = segment[s]->set_args(move_, i);
+    move_.setArg(i++, rank_);
+    move_.setArg(i++, hist_);
+    move_.setArg(i++, overflow_base);
+    i = a.banks->set_args(move_, i);
+    i = a.next_queue->set_args(move_, i);
+    move_.setArg(i++, traffic);
+    move_.setArg(i++, a.traffic ? a.traffic_levels : 0);
+    launch.run(move_, "scatter_move", std::size_t(length[s]), 0, round);
+  }
 }
 
 }  // namespace opsila

@@ -77,40 +77,37 @@ __kernel void scatter_plan(int num_pes, int n, __global const int *pe_total, __g
   counts[1] = placed_all;
 }
 
-__kernel void scatter_move(int out_len, int queue_len, int n, int S, int num_pes, DESC_PARAMS(o), DESC_PARAMS(q),
-                           __global const int *rank, __global const int *block_hist,
+/* One launch per source segment (SPMD outputs, then the queue), so that
+ * every work-item of a launch reads the same buffers: straight loads that
+ * vectorising compilers keep as such. Global entry index = rank_offset + k. */
+__kernel void scatter_move(int src_len, int rank_offset, int n, int S, int num_pes, int from_outputs,
+                           DESC_PARAMS(s), __global const int *rank, __global const int *block_hist,
                            __global const int *overflow_base, DESC_PARAMS(b), DESC_PARAMS(w),
                            volatile __global uint *traffic, int traffic_levels) {
   int k = get_global_id(0);
-  if (k >= out_len + queue_len) return;
-  int rk = rank[k];
+  if (k >= src_len) return;
+  int g = rank_offset + k;
+  int rk = rank[g];
   if (rk < 0) return;
-  bool from_out = k < out_len;
-  int src = from_out ? k : k - out_len;
-  int d = from_out ? o_dest[src] : q_dest[src];
-  int r = block_hist[(long)(k / SCATTER_BLOCK) * num_pes + d] + rk;
-  float4 org = from_out ? o_org[src] : q_org[src];
-  float4 dir = from_out ? o_dir[src] : q_dir[src];
-  float4 wgt = from_out ? o_wgt[src] : q_wgt[src];
-  int4 ids = from_out ? o_ids[src] : q_ids[src];
-  if (from_out && traffic_levels > 0) {
+  int d = s_dest[k];
+  int r = block_hist[(long)(g / SCATTER_BLOCK) * num_pes + d] + rk;
+  float4 org = s_org[k], dir = s_dir[k], wgt = s_wgt[k];
+  int4 ids = s_ids[k];
+  if (from_outputs && traffic_levels > 0) {
     int level = OPSILA_META_LEVEL(ids.y);
-    int from_pe = (src / S) / n;
+    int from_pe = (k / S) / n;
     if (level < traffic_levels) atomic_inc(&traffic[((long)level * num_pes + from_pe) * num_pes + d]);
   }
-  if (r < n) {
-    int at = d * n + r;
-    b_org[at] = org;
-    b_dir[at] = dir;
-    b_wgt[at] = wgt;
-    b_ids[at] = ids;
-    b_dest[at] = d;
-  } else {
-    int at = overflow_base[d] + (r - n);
-    w_org[at] = org;
-    w_dir[at] = dir;
-    w_wgt[at] = wgt;
-    w_ids[at] = ids;
-    w_dest[at] = d;
-  }
+  bool in_bank = r < n;
+  int at = in_bank ? d * n + r : overflow_base[d] + (r - n);
+  __global float4 *to_org = in_bank ? b_org : w_org;
+  __global float4 *to_dir = in_bank ? b_dir : w_dir;
+  __global float4 *to_wgt = in_bank ? b_wgt : w_wgt;
+  __global int4 *to_ids = in_bank ? b_ids : w_ids;
+  __global int *to_dest = in_bank ? b_dest : w_dest;
+  to_org[at] = org;
+  to_dir[at] = dir;
+  to_wgt[at] = wgt;
+  to_ids[at] = ids;
+  to_dest[at] = d;
 }

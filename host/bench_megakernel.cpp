@@ -10,50 +10,6 @@
 #include "renderer.h"
 
 namespace opsila {
-namespace {
-
-// The SPEC camera basis and frame constants, computed in float exactly as
-// the renderer computes them (host/renderer.cpp), so that both see the same
-// rays bit for bit. The megakernel test compares the images.
-FrameParams megakernel_frame(const Scene& scene, const BankedScene& bs) {
-  FrameParams fp{};
-  const CameraDesc& cam = scene.camera;
-  float f[3], r[3], u[3];
-  {
-    float d[3] = {cam.look_at[0] - cam.eye[0], cam.look_at[1] - cam.eye[1], cam.look_at[2] - cam.eye[2]};
-    float l = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
-    for (int a = 0; a < 3; ++a) f[a] = d[a] / l;
-    float c[3] = {f[1] * cam.up[2] - f[2] * cam.up[1], f[2] * cam.up[0] - f[0] * cam.up[2],
-                  f[0] * cam.up[1] - f[1] * cam.up[0]};
-    float cl = std::sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
-    for (int a = 0; a < 3; ++a) r[a] = c[a] / cl;
-    u[0] = r[1] * f[2] - r[2] * f[1];
-    u[1] = r[2] * f[0] - r[0] * f[2];
-    u[2] = r[0] * f[1] - r[1] * f[0];
-  }
-  for (int a = 0; a < 3; ++a) {
-    fp.eye[a] = cam.eye[a];
-    fp.forward[a] = f[a];
-    fp.right[a] = r[a];
-    fp.up[a] = u[a];
-    fp.ambient[a] = scene.ambient[a];
-    fp.background[a] = scene.background[a];
-  }
-  fp.tan_half_fov = std::tan(cam.fov_deg * 0.5f * static_cast<float>(M_PI) / 180.0f);
-  fp.aspect = static_cast<float>(scene.width) / static_cast<float>(scene.height);
-  fp.epsilon = scene.epsilon();
-  fp.width = scene.width;
-  fp.height = scene.height;
-  fp.max_depth = scene.max_depth;
-  fp.num_lights = static_cast<int>(bs.lights.size());
-  fp.num_pes = 1;
-  fp.num_clusters = static_cast<int>(bs.clusters.size());
-  fp.bank_capacity = 0;
-  fp.spawn_slots = fp.num_lights + 2;
-  return fp;
-}
-
-}  // namespace
 
 BaselineImage render_megakernel(const Scene& scene, ClRuntime& rt, int tile) {
   if (scene.triangles.empty()) throw InputError("scene has no facets");
@@ -71,7 +27,7 @@ BaselineImage render_megakernel(const Scene& scene, ClRuntime& rt, int tile) {
   // One PE: bank 0 is the whole scene under one BVH (clusters on top).
   auto t_build = std::chrono::steady_clock::now();
   BankedScene bs = partition_scene(scene, 1);
-  FrameParams fp = megakernel_frame(scene, bs);
+  FrameParams fp = frame_params(scene, bs, 0);
   out.build_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_build).count();
 
   rt.program();  // compile before timing

@@ -34,4 +34,9 @@ struct BankedScene {
 
 BankedScene partition_scene(const Scene& scene, int num_pes);
 
+// Per-frame constants for the kernels: the SPEC camera basis computed in
+// float exactly as the formula reads, so that every renderer built on a
+// banked scene casts the same primary rays bit for bit.
+FrameParams frame_params(const Scene& scene, const BankedScene& bs, int bank_capacity);
+
 }  // namespace opsila

@@ -63,25 +63,16 @@ __kernel void megakernel(FrameParams fp, __global const BankNode *nodes, __globa
     if (level == 0) item = (int2)(tri->object_id, tri->facet_id);
 
     /* shade() of spmd_phase.cl, with the shadow ray traced here. */
-    float3 v0 = load3g(tri->v0), v1 = load3g(tri->v1), v2 = load3g(tri->v2);
-    float3 ng = normalize(cross(v1 - v0, v2 - v0));
-    float3 p = org + t * d;
-    bool entering = dot(ng, d) < 0.0f;
-    float3 n = entering ? ng : -ng;
+    SurfacePoint surf = surface_point(tri, org, d, t);
+    float3 p = surf.p;
     __global const Material *m = &materials[tri->material];
 
     sum += fixed3(weight * load3(fp.ambient) * load3g(m->ka));
 
     for (int l = 0; l < fp.num_lights; ++l) {
-      float3 to_light = load3g(lights[l].position) - p;
-      float dist = length(to_light);
-      float3 lv = to_light / dist;
-      float ndl = dot(n, lv);
-      if (!(ndl > 0.0f)) continue;
-      float3 rl = 2.0f * ndl * n - lv;
-      float spec = fmax(0.0f, dot(rl, -d));
-      float3 term = load3g(m->kd) * ndl + load3g(m->ks) * pow(spec, m->ns);
-      float3 contrib = weight * load3g(lights[l].intensity) * term;
+      float3 lv;
+      float dist;
+      float3 contrib = light_term(m, &lights[l], surf, d, weight, &lv, &dist);
       if (all(contrib == (float3)(0.0f))) continue;
       ++shadow;
       RayPre sr = make_ray(p, lv);
@@ -90,23 +81,20 @@ __kernel void megakernel(FrameParams fp, __global const BankNode *nodes, __globa
 
     if (level + 1 >= fp.max_depth) continue;
     float3 kr = load3g(m->kr), kt = load3g(m->kt);
-    if (any(kt != (float3)(0.0f))) {
-      float eta = entering ? 1.0f / m->ni : m->ni;
-      float c = -dot(n, d);
-      float kk = 1.0f - eta * eta * (1.0f - c * c);
-      if (kk >= 0.0f && sp < MEGA_STACK) { /* else total internal reflection */
-        ++secondary;
-        s_org[sp] = p;
-        s_dir[sp] = normalize(eta * d + (eta * c - sqrt(kk)) * n);
-        s_w[sp] = weight * kt;
-        s_level[sp] = level + 1;
-        ++sp;
-      }
+    float3 t_dir;
+    /* Total internal reflection: no transmitted ray. */
+    if (any(kt != (float3)(0.0f)) && transmitted_direction(m, surf, d, &t_dir) && sp < MEGA_STACK) {
+      ++secondary;
+      s_org[sp] = p;
+      s_dir[sp] = t_dir;
+      s_w[sp] = weight * kt;
+      s_level[sp] = level + 1;
+      ++sp;
     }
     if (any(kr != (float3)(0.0f)) && sp < MEGA_STACK) {
       ++secondary;
       s_org[sp] = p;
-      s_dir[sp] = normalize(d - 2.0f * dot(d, n) * n);
+      s_dir[sp] = reflected_direction(surf, d);
       s_w[sp] = weight * kr;
       s_level[sp] = level + 1;
       ++sp;

@@ -38,26 +38,17 @@ inline void shade(FrameParams fp, __global const PeInfo *pes, __global const Clu
                   __global const Light *lights, float3 org, float3 d, float t, int tri_index, float3 weight,
                   int pixel, int level, int out_base, DESC_PARAMS(o), volatile __global uint *accum, PrivStats *st) {
   __global const BankTriangle *tri = &tris[tri_index];
-  float3 v0 = load3g(tri->v0), v1 = load3g(tri->v1), v2 = load3g(tri->v2);
-  float3 ng = normalize(cross(v1 - v0, v2 - v0));
-  float3 p = org + t * d;
-  bool entering = dot(ng, d) < 0.0f;
-  float3 n = entering ? ng : -ng;
+  SurfacePoint sp = surface_point(tri, org, d, t);
+  float3 p = sp.p;
   __global const Material *m = &materials[tri->material];
   float eps = fp.epsilon;
 
   accumulate(accum, pixel, weight * load3(fp.ambient) * load3g(m->ka));
 
   for (int l = 0; l < fp.num_lights; ++l) {
-    float3 to_light = load3g(lights[l].position) - p;
-    float dist = length(to_light);
-    float3 lv = to_light / dist;
-    float ndl = dot(n, lv);
-    if (!(ndl > 0.0f)) continue;
-    float3 rl = 2.0f * ndl * n - lv;
-    float spec = fmax(0.0f, dot(rl, -d));
-    float3 term = load3g(m->kd) * ndl + load3g(m->ks) * pow(spec, m->ns);
-    float3 contrib = weight * load3g(lights[l].intensity) * term;
+    float3 lv;
+    float dist;
+    float3 contrib = light_term(m, &lights[l], sp, d, weight, &lv, &dist);
     if (all(contrib == (float3)(0.0f))) continue;
     ++st->v[OPSILA_STAT_SPAWN_SHADOW];
     RayPre sr = make_ray(p, lv);
@@ -79,19 +70,14 @@ inline void shade(FrameParams fp, __global const PeInfo *pes, __global const Clu
   float3 child_w[2];
   bool child_ok[2] = {false, false};
   if (any(kr != (float3)(0.0f))) {
-    child_d[0] = normalize(d - 2.0f * dot(d, n) * n);
+    child_d[0] = reflected_direction(sp, d);
     child_w[0] = weight * kr;
     child_ok[0] = true;
   }
-  if (any(kt != (float3)(0.0f))) {
-    float eta = entering ? 1.0f / m->ni : m->ni;
-    float c = -dot(n, d);
-    float k = 1.0f - eta * eta * (1.0f - c * c);
-    if (k >= 0.0f) { /* else total internal reflection: no transmitted ray */
-      child_d[1] = normalize(eta * d + (eta * c - sqrt(k)) * n);
-      child_w[1] = weight * kt;
-      child_ok[1] = true;
-    }
+  /* Total internal reflection: no transmitted ray. */
+  if (any(kt != (float3)(0.0f)) && transmitted_direction(m, sp, d, &child_d[1])) {
+    child_w[1] = weight * kt;
+    child_ok[1] = true;
   }
   for (int j = 0; j < 2; ++j) {
     if (!child_ok[j]) continue;

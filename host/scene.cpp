@@ -83,7 +83,10 @@ CameraDesc frame_bounds(const Vec3& lo, const Vec3& hi, float fov_deg, float asp
   const double fov_h = 2.0 * std::atan(std::tan(fov_v / 2.0) * double(aspect));
   const double d = r / std::sin(std::min(fov_v, fov_h) / 2.0);
   cam.look_at = {float(centre[0]), float(centre[1]), float(centre[2])};
-  cam.eye = {float(centre[0]), float(centre[1]), float(centre[2] + d)};
+  // Seen from the front, right and above: no axis-aligned plane (a flat
+  // model, a floor, a wall) is ever seen edge-on.
+  const double k = d / std::sqrt(6.0);  // d * normalize(1, 1, 2)
+  cam.eye = {float(centre[0] + k), float(centre[1] + k), float(centre[2] + 2.0 * k)};
   cam.up = {0, 1, 0};
   cam.fov_deg = fov_deg;
   return cam;

@@ -88,8 +88,8 @@ TEST_F(CliFixture, DegenerateCameraIsRejected) {
   expect_rejected({scene, "-o", out("x.png"), "--eye", "0,0,5", "--look-at", "0,0,5"}, "--eye");
   expect_rejected({scene, "-o", out("x.png"), "--reference", "--eye", "0,0,5", "--look-at", "0,0,0", "--up", "0,0,2"},
                   "--up");
-  // Only --up given: checked against the framed camera after loading.
-  expect_rejected({scene, "-o", out("x.png"), "--reference", "-q", "--up", "0,0,-1"}, "--up");
+  // Only --up given: checked against the framed camera (looking along -(1,1,2)) after loading.
+  expect_rejected({scene, "-o", out("x.png"), "--reference", "-q", "--up", "1,1,2"}, "--up");
 }
 
 TEST_F(CliFixture, UnknownFlagAndMissingValueAreRejected) {

@@ -113,14 +113,22 @@ TEST(SceneModel, FrameBoundsFitsTheBoundingSphere) {
   CameraDesc c = frame_bounds(lo, hi, 45.0f, 16.0f / 9.0f);
   EXPECT_EQ(c.look_at, (Vec3{1, 0, -1}));
   EXPECT_EQ(c.up, (Vec3{0, 1, 0}));
-  EXPECT_NEAR(c.eye[0], 1.0, 1e-6);
-  EXPECT_NEAR(c.eye[1], 0.0, 1e-6);
-  EXPECT_NEAR(c.eye[2] - (-1.0), r / std::sin(22.5 * pi / 180), 1e-4);
+  // The eye sits at distance d along normalize(1, 1, 2) from the centre.
+  auto distance = [&](const CameraDesc& cam) {
+    double s2 = 0;
+    for (int a = 0; a < 3; ++a) s2 += double(cam.eye[a] - cam.look_at[a]) * (cam.eye[a] - cam.look_at[a]);
+    return std::sqrt(s2);
+  };
+  const double d = r / std::sin(22.5 * pi / 180);
+  EXPECT_NEAR(c.eye[0] - 1.0, d / std::sqrt(6.0), 1e-4);
+  EXPECT_NEAR(c.eye[1] - 0.0, d / std::sqrt(6.0), 1e-4);
+  EXPECT_NEAR(c.eye[2] - (-1.0), 2 * d / std::sqrt(6.0), 1e-4);
+  EXPECT_NEAR(distance(c), d, 1e-4);
   EXPECT_FLOAT_EQ(c.fov_deg, 45.0f);
   // Portrait (aspect 0.5): the horizontal one is narrower, so farther away.
   c = frame_bounds(lo, hi, 45.0f, 0.5f);
   const double fov_h = 2 * std::atan(std::tan(22.5 * pi / 180) * 0.5);
-  EXPECT_NEAR(c.eye[2] - (-1.0), r / std::sin(fov_h / 2), 1e-4);
+  EXPECT_NEAR(distance(c), r / std::sin(fov_h / 2), 1e-4);
   // A point still gets a finite camera.
   c = frame_bounds({1, 1, 1}, {1, 1, 1});
   EXPECT_TRUE(std::isfinite(c.eye[2]));

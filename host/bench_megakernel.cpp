@@ -12,13 +12,7 @@
 namespace opsila {
 
 BaselineImage render_megakernel(const Scene& scene, ClRuntime& rt, int tile) {
-  if (scene.triangles.empty()) throw InputError("scene has no facets");
-  if (scene.max_depth < 1 || scene.max_depth > OPSILA_MAX_DEPTH)
-    throw InputError("--depth " + std::to_string(scene.max_depth) + ": must be 1.." +
-                     std::to_string(OPSILA_MAX_DEPTH));
-  if (static_cast<int>(scene.lights.size()) > OPSILA_MAX_LIGHTS)
-    throw InputError("scene has " + std::to_string(scene.lights.size()) + " lights; at most " +
-                     std::to_string(OPSILA_MAX_LIGHTS) + " are supported");
+  check_kernel_limits(scene);
   const std::size_t npix = std::size_t(scene.width) * scene.height;
   BaselineImage out;
   out.width = scene.width;

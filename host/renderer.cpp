@@ -115,10 +115,7 @@ std::uint64_t fixed_pair(const std::vector<cl_uint>& v, std::size_t i) {
 
 }  // namespace
 
-RenderResult render(const Scene& scene, const RenderSettings& settings, ClRuntime& rt) {
-  const int P = settings.num_pes;
-  if (P < 1 || P > OPSILA_MAX_PES)
-    throw InputError("--pes " + std::to_string(P) + ": must be 1.." + std::to_string(OPSILA_MAX_PES));
+void check_kernel_limits(const Scene& scene) {
   if (scene.max_depth < 1 || scene.max_depth > OPSILA_MAX_DEPTH)
     throw InputError("--depth " + std::to_string(scene.max_depth) + ": must be 1.." +
                      std::to_string(OPSILA_MAX_DEPTH));
@@ -126,6 +123,13 @@ RenderResult render(const Scene& scene, const RenderSettings& settings, ClRuntim
     throw InputError("scene has " + std::to_string(scene.lights.size()) + " lights; at most " +
                      std::to_string(OPSILA_MAX_LIGHTS) + " are supported");
   if (scene.triangles.empty()) throw InputError("scene has no facets");
+}
+
+RenderResult render(const Scene& scene, const RenderSettings& settings, ClRuntime& rt) {
+  const int P = settings.num_pes;
+  if (P < 1 || P > OPSILA_MAX_PES)
+    throw InputError("--pes " + std::to_string(P) + ": must be 1.." + std::to_string(OPSILA_MAX_PES));
+  check_kernel_limits(scene);
   const std::size_t npix = std::size_t(scene.width) * scene.height;
 
   BankedScene bs = partition_scene(scene, P);

@@ -56,6 +56,10 @@ struct RenderResult {
   RenderStats stats;
 };
 
+// Throws InputError when the scene exceeds what the kernels support (depth,
+// lights) or has no facet. Shared by every OpenCL renderer.
+void check_kernel_limits(const Scene& scene);
+
 // Renders `scene` (camera, size, depth, lights already final) on `device`.
 // Throws InputError for impossible requests (sizes beyond the device) and
 // ClError for driver faults.

@@ -13,6 +13,7 @@
 #include "bench.h"
 #include "reference.h"
 #include "renderer.h"
+#include "test_device.h"
 #include "scene.h"
 #include "test_scenes.h"
 #include "test_util.h"
@@ -20,14 +21,7 @@
 namespace opsila {
 namespace {
 
-ClRuntime& runtime() {
-  static std::unique_ptr<ClRuntime> rt;
-  if (!rt) {
-    const char* spec = std::getenv("OPSILA_TEST_DEVICE");
-    rt = std::make_unique<ClRuntime>(choose_device(spec ? spec : ""));
-  }
-  return *rt;
-}
+ClRuntime& runtime() { return test::shared_runtime(); }
 
 RenderResult render_opsila(const Scene& s, int pes) {
   RenderSettings rs;

@@ -13,32 +13,14 @@
 
 #include "reference.h"
 #include "renderer.h"
+#include "test_device.h"
 #include "test_scenes.h"
 #include "test_util.h"
 
 namespace opsila {
 namespace {
 
-// One runtime for the suite, released when the tests end (before exit).
-std::unique_ptr<ClRuntime>& runtime_slot() {
-  static std::unique_ptr<ClRuntime> rt;
-  return rt;
-}
-
-class RuntimeRelease : public ::testing::Environment {
- public:
-  void TearDown() override { runtime_slot().reset(); }
-};
-[[maybe_unused]] ::testing::Environment* const release = ::testing::AddGlobalTestEnvironment(new RuntimeRelease);
-
-ClRuntime& runtime() {
-  std::unique_ptr<ClRuntime>& rt = runtime_slot();
-  if (!rt) {
-    const char* spec = std::getenv("OPSILA_TEST_DEVICE");
-    rt = std::make_unique<ClRuntime>(choose_device(spec ? spec : ""));
-  }
-  return *rt;
-}
+ClRuntime& runtime() { return test::shared_runtime(); }
 
 RenderResult render_cl(const Scene& s, int pes = 4) {
   RenderSettings settings;

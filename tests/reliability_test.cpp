@@ -25,6 +25,7 @@
 #include "opsila_shared.h"
 #include "renderer.h"
 #include "test_scenes.h"
+#include "test_device.h"
 #include "test_util.h"
 
 namespace opsila {
@@ -36,12 +37,8 @@ namespace {
 using test::RunResult;
 using test::TempDir;
 
-const char* test_device_spec() {
-  const char* spec = std::getenv("OPSILA_TEST_DEVICE");
-  return spec ? spec : "";
-}
-
-DeviceEntry test_device() { return choose_device(test_device_spec()); }
+using test::test_device;
+using test::test_device_spec;
 
 // A runtime that ignores OPSILA_* variables of the environment.
 ClRuntimeOptions plain_options() {

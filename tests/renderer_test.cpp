@@ -9,21 +9,14 @@
 #include "opsila_shared.h"
 #include "reference.h"
 #include "renderer.h"
+#include "test_device.h"
 #include "test_scenes.h"
 #include "test_util.h"
 
 namespace opsila {
 namespace {
 
-// One device for the whole suite: OPSILA_TEST_DEVICE, else the default.
-ClRuntime& runtime() {
-  static std::unique_ptr<ClRuntime> rt;
-  if (!rt) {
-    const char* spec = std::getenv("OPSILA_TEST_DEVICE");
-    rt = std::make_unique<ClRuntime>(choose_device(spec ? spec : ""));
-  }
-  return *rt;
-}
+ClRuntime& runtime() { return test::shared_runtime(); }
 
 RenderResult render_with(const Scene& s, int pes, int capacity = 0) {
   RenderSettings rs;

@@ -9,18 +9,12 @@
 
 #include "descriptors.h"
 #include "renderer.h"
+#include "test_device.h"
 
 namespace opsila {
 namespace {
 
-ClRuntime& runtime() {
-  static std::unique_ptr<ClRuntime> rt;
-  if (!rt) {
-    const char* spec = std::getenv("OPSILA_TEST_DEVICE");
-    rt = std::make_unique<ClRuntime>(choose_device(spec ? spec : ""));
-  }
-  return *rt;
-}
+ClRuntime& runtime() { return test::shared_runtime(); }
 
 template <typename T>
 std::vector<T> read(ClRuntime& rt, const cl::Buffer& b, std::size_t count) {

@@ -91,20 +91,14 @@ BenchOptions parse_bench_options(const std::vector<std::string>& args) {
   BenchOptions o;
   std::set<std::string> seen;
   for (std::size_t i = 0; i < args.size(); ++i) {
-    const std::string& arg = args[i];
-    if (arg.size() < 2 || arg[0] != '-') {
+    const ArgWord word = split_arg(args[i]);
+    if (word.positional) {
       if (!o.scene_path.empty())
-        throw InputError("unexpected argument '" + arg + "' (one SCENE only; see 'opsila bench --help')");
-      o.scene_path = arg;
+        throw InputError("unexpected argument '" + word.value + "' (one SCENE only; see 'opsila bench --help')");
+      o.scene_path = word.value;
       continue;
     }
-    std::string name = arg, value;
-    bool inline_value = false;
-    if (const std::size_t eq = arg.find('='); eq != std::string::npos && arg.compare(0, 2, "--") == 0) {
-      name = arg.substr(0, eq);
-      value = arg.substr(eq + 1);
-      inline_value = true;
-    }
+    const std::string& name = word.name;
     const bool view = in_list(name, std::begin(kViewFlags), std::end(kViewFlags));
     const bool no_value = name == "--quick" || name == "-q" || name == "--quiet" || name == "-h" || name == "--help";
     const bool bench_value = name == "--json" || name == "--csv" || name == "--repeats" || name == "--warmup" ||
@@ -114,12 +108,8 @@ BenchOptions parse_bench_options(const std::vector<std::string>& args) {
         throw InputError(name + ": a render flag, not a bench flag (see 'opsila bench --help')");
       throw InputError("unknown flag '" + name + "' (see 'opsila bench --help')");
     }
-    if (no_value && inline_value) throw InputError(name + ": takes no value");
-    if (!no_value && !inline_value) {
-      // As for `render`: a value never starts with "--", that is the next flag.
-      if (i + 1 >= args.size() || args[i + 1].compare(0, 2, "--") == 0) throw InputError(name + ": missing value");
-      value = args[++i];
-    }
+    if (no_value && word.inline_value) throw InputError(name + ": takes no value");
+    const std::string value = no_value ? std::string() : flag_value(args, i, word);
     if (view) {  // checked by the render parser, which also refuses repeats
       o.view_args.push_back(name);
       o.view_args.push_back(value);

@@ -260,37 +260,48 @@ std::string render_usage() {
 
 // ------------------------------------------------------------------ parsing
 
+ArgWord split_arg(const std::string& arg) {
+  ArgWord w;
+  if (arg.size() < 2 || arg[0] != '-') {
+    w.positional = true;
+    w.value = arg;
+    return w;
+  }
+  w.name = arg;
+  if (const std::size_t eq = arg.find('='); eq != std::string::npos && arg.compare(0, 2, "--") == 0) {
+    w.name = arg.substr(0, eq);
+    w.value = arg.substr(eq + 1);
+    w.inline_value = true;
+  } else if (arg.compare(0, 3, "-o=") == 0) {
+    w.name = "-o";
+    w.value = arg.substr(3);
+    w.inline_value = true;
+  }
+  return w;
+}
+
+std::string flag_value(const std::vector<std::string>& args, std::size_t& i, const ArgWord& word) {
+  if (word.inline_value) return word.value;
+  if (i + 1 >= args.size() || args[i + 1].compare(0, 2, "--") == 0) throw InputError(word.name + ": missing value");
+  return args[++i];
+}
+
 RenderOptions parse_render_options(const std::vector<std::string>& args) {
   RenderOptions o;
   std::set<std::string> seen;
   for (std::size_t i = 0; i < args.size(); ++i) {
-    const std::string& arg = args[i];
-    if (arg.size() < 2 || arg[0] != '-') {
+    const ArgWord word = split_arg(args[i]);
+    if (word.positional) {
       if (!o.scene_path.empty())
-        throw InputError("unexpected argument '" + arg + "' (one SCENE only; see 'opsila render --help')");
-      o.scene_path = arg;
+        throw InputError("unexpected argument '" + word.value + "' (one SCENE only; see 'opsila render --help')");
+      o.scene_path = word.value;
       continue;
     }
-    std::string name = arg, value;
-    bool inline_value = false;
-    if (const std::size_t eq = arg.find('='); eq != std::string::npos && arg.compare(0, 2, "--") == 0) {
-      name = arg.substr(0, eq);
-      value = arg.substr(eq + 1);
-      inline_value = true;
-    } else if (arg.compare(0, 3, "-o=") == 0) {
-      name = "-o";
-      value = arg.substr(3);
-      inline_value = true;
-    }
+    const std::string& name = word.name;
     const FlagInfo* flag = find_flag(name);
     if (!flag) throw InputError("unknown flag '" + name + "' (see 'opsila render --help')");
-    if (!flag->takes_value && inline_value) throw InputError(name + ": takes no value");
-    if (flag->takes_value && !inline_value) {
-      // A value never starts with "--": that is the next flag, so this one has none.
-      if (i + 1 >= args.size() || args[i + 1].compare(0, 2, "--") == 0)
-        throw InputError(name + ": missing value");
-      value = args[++i];
-    }
+    if (!flag->takes_value && word.inline_value) throw InputError(name + ": takes no value");
+    const std::string value = flag->takes_value ? flag_value(args, i, word) : std::string();
     std::string canonical = name == "--output" ? "-o" : name == "--quiet" ? "-q" : name == "-h" ? "--help" : name;
     if (canonical != "--light" && flag->takes_value && !seen.insert(canonical).second)
       throw InputError(name + ": given more than once");

@@ -42,6 +42,18 @@ struct RenderOptions {
 
 // Parses the arguments after "render". Throws InputError with a one-line
 // message naming the flag and the problem.
+// One command-line word: a positional argument, or a flag whose value may be
+// given inline (--flag=value, -o=value).
+struct ArgWord {
+  bool positional = false;
+  std::string name, value;
+  bool inline_value = false;
+};
+ArgWord split_arg(const std::string& arg);
+// The flag's value: inline, else the next word (advancing i). A next word
+// starting with "--" is the next flag, so the value is missing (InputError).
+std::string flag_value(const std::vector<std::string>& args, std::size_t& i, const ArgWord& word);
+
 RenderOptions parse_render_options(const std::vector<std::string>& args);
 
 // Applies the flags to a loaded scene (flags win), frames a scene that has no

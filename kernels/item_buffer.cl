@@ -5,7 +5,9 @@
  * ray, "pixel inside the projected box" and "ray meets the box" select the
  * same boxes, so the item is exactly the primary ray's nearest hit. In SIMD
  * mode every bank is reachable through the network, so no PE routing here. */
-#include "common.cl"
+#include "lib/bvh.cl"
+#include "lib/shading.cl"
+#include "lib/accum.cl"
 
 #define ITEM_TILE_MAX 64   /* pixels per tile (work-group), at most */
 #define ITEM_LIST_CAP 512  /* clusters listed per tile before they are traced */
@@ -72,30 +74,4 @@ __kernel void item_buffer(FrameParams fp, __global const Cluster *clusters, __gl
   }
   item_tri[pixel] = best_tri;
   item_t[pixel] = best_t;
-}
-
-/* From the item buffer, primary ray descriptors are built for the banks of
- * the PEs that own the items: already RESOLVED (the nearest hit is known),
- * bound for the owner PE, which shades them. Misses add the background and
- * leave a NIL hole. Written at queue[offset + k]. */
-__kernel void build_primary(FrameParams fp, __global const PeInfo *pes, __global const int *item_tri,
-                            __global const float *item_t, int pixel_begin, int pixel_count, int offset,
-                            DESC_PARAMS(q), volatile __global uint *accum) {
-  int k = get_global_id(0);
-  if (k >= pixel_count) return;
-  int pixel = pixel_begin + k;
-  int slot = offset + k;
-  int tri = item_tri[pixel];
-  if (tri < 0) {
-    accumulate(accum, pixel, load3(fp.background));
-    q_dest[slot] = -1;
-    return;
-  }
-  int x = pixel % fp.width, y = pixel / fp.width;
-  float3 d = primary_direction(fp, x, y);
-  q_org[slot] = (float4)(load3(fp.eye), item_t[pixel]);
-  q_dir[slot] = (float4)(d, -1.0f);
-  q_wgt[slot] = (float4)(1.0f, 1.0f, 1.0f, 0.0f);
-  q_ids[slot] = (int4)(pixel, OPSILA_META(OPSILA_KIND_RESOLVED, 0), tri, -1);
-  q_dest[slot] = owner_pe(pes, fp.num_pes, tri);
 }

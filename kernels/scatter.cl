@@ -11,7 +11,7 @@
  *   scatter_scan:  per PE, exclusive prefix over blocks, and PE totals;
  *   scatter_plan:  bank fill counts and the queue layout of the overflow;
  *   scatter_move:  moves every field of every valid entry to I'(i). */
-#include "common.cl"
+#include "lib/descriptor.cl"
 
 #define SCATTER_BLOCK 256
 

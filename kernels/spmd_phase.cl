@@ -9,7 +9,10 @@
  *   slot 0: the descriptor sent on (forwarded), or the reflected ray;
  *   slot 1: the transmitted ray;
  *   slot 2 + l: the shadow ray towards light l. */
-#include "common.cl"
+#include "lib/bvh.cl"
+#include "lib/routing.cl"
+#include "lib/shading.cl"
+#include "lib/accum.cl"
 
 typedef struct {
   uint v[OPSILA_STAT_COUNT];

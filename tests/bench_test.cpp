@@ -10,11 +10,11 @@
 
 #include <nlohmann/json.hpp>
 
-#include "bench.h"
-#include "reference.h"
-#include "renderer.h"
+#include "bench/bench.h"
+#include "reference/reference.h"
+#include "machine/renderer.h"
 #include "test_device.h"
-#include "scene.h"
+#include "core/scene.h"
 #include "test_scenes.h"
 #include "test_util.h"
 

@@ -4,7 +4,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "image_io.h"
+#include "core/image_io.h"
 #include "test_util.h"
 
 namespace opsila {

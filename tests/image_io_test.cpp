@@ -1,12 +1,12 @@
 // Output formats: PFM, NPY, PNG, sRGB, atomic writes.
-#include "image_io.h"
+#include "core/image_io.h"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <cstring>
 
-#include "scene.h"
+#include "core/scene.h"
 #include "test_util.h"
 
 namespace opsila {

@@ -2,7 +2,7 @@
 // cracks), rays grazing or parallel to facets, very large and very small
 // coordinates, Ni = 1, Ns = 0, total internal reflection, lights in a facet's
 // plane. Each compares the OpenCL renderer with hand-computed values and/or
-// the sequential reference (host/reference.h).
+// the sequential reference (host/reference/reference.h).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -11,8 +11,8 @@
 #include <string>
 #include <vector>
 
-#include "reference.h"
-#include "renderer.h"
+#include "reference/reference.h"
+#include "machine/renderer.h"
 #include "test_device.h"
 #include "test_scenes.h"
 #include "test_util.h"

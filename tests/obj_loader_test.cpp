@@ -14,8 +14,8 @@
 #include <string>
 #include <vector>
 
-#include "obj_loader.h"
-#include "scene.h"
+#include "input/obj_loader.h"
+#include "core/scene.h"
 
 namespace opsila {
 namespace {

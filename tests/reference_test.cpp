@@ -1,5 +1,5 @@
 // The sequential reference against values worked out by hand from SPEC.md.
-#include "reference.h"
+#include "reference/reference.h"
 
 #include <gtest/gtest.h>
 

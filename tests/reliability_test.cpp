@@ -20,10 +20,10 @@
 #include <tuple>
 #include <vector>
 
-#include "descriptors.h"
-#include "image_io.h"
+#include "machine/descriptors.h"
+#include "core/image_io.h"
 #include "opsila_shared.h"
-#include "renderer.h"
+#include "machine/renderer.h"
 #include "test_scenes.h"
 #include "test_device.h"
 #include "test_util.h"

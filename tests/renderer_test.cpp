@@ -7,8 +7,8 @@
 #include <memory>
 
 #include "opsila_shared.h"
-#include "reference.h"
-#include "renderer.h"
+#include "reference/reference.h"
+#include "machine/renderer.h"
 #include "test_device.h"
 #include "test_scenes.h"
 #include "test_util.h"

@@ -7,8 +7,8 @@
 #include <memory>
 #include <random>
 
-#include "descriptors.h"
-#include "renderer.h"
+#include "machine/descriptors.h"
+#include "machine/renderer.h"
 #include "test_device.h"
 
 namespace opsila {

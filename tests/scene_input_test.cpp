@@ -11,10 +11,10 @@
 #include <string>
 #include <vector>
 
-#include "obj_loader.h"
-#include "primitives.h"
-#include "scene.h"
-#include "scene_file.h"
+#include "input/obj_loader.h"
+#include "input/primitives.h"
+#include "core/scene.h"
+#include "input/scene_file.h"
 
 namespace opsila {
 namespace {

@@ -6,7 +6,7 @@
 #include <cstdlib>
 #include <memory>
 
-#include "cl_runtime.h"
+#include "machine/cl_runtime.h"
 
 namespace opsila::test {
 

@@ -7,7 +7,7 @@
 #include <map>
 #include <utility>
 
-#include "scene.h"
+#include "core/scene.h"
 
 namespace opsila::test {
 

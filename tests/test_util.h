@@ -20,7 +20,7 @@
 #include <string>
 #include <vector>
 
-#include "image_io.h"
+#include "core/image_io.h"
 
 extern char** environ;
 

@@ -7,8 +7,8 @@
 #include <cstdlib>
 #include <string>
 
-#include "obj_loader.h"
-#include "scene.h"
+#include "input/obj_loader.h"
+#include "core/scene.h"
 
 namespace {
 

@@ -8,8 +8,8 @@
 #include <cstdlib>
 #include <string>
 
-#include "scene.h"
-#include "scene_file.h"
+#include "core/scene.h"
+#include "input/scene_file.h"
 
 namespace {
 

@@ -1,0 +1,117 @@
+// `opsila bench`: the paper's measurements (scatter speed-up against vector
+// length, PE occupancy) and more (phase times, exchange share, memory per
+// bank), with baselines on the same rays: a replicated-scene megakernel on
+// the same device, the sequential host reference, and Embree when built in.
+// See docs/BENCHMARKS.md for the JSON schema and how to reproduce.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "machine/cl_runtime.h"
+#include "machine/descriptors.h"
+#include "core/scene.h"
+
+namespace opsila {
+
+// Entry point of `opsila bench ARGS...` (ARGS = everything after "bench").
+// Returns the exit code; throws InputError / ClError like the other commands.
+int run_bench(const std::vector<std::string>& args);
+std::string bench_usage();
+
+// ------------------------------------------------------------ host scatter
+
+// Descriptor vectors on the host, laid out as DescriptorSet's buffers.
+struct HostDescriptors {
+  std::vector<cl_float4> org, dir, wgt;
+  std::vector<cl_int4> ids;
+  std::vector<cl_int> dest;
+  void resize(std::size_t n);
+  std::size_t size() const { return dest.size(); }
+};
+
+// Where the scatter put things: bank PE q holds bank_count[q] entries at
+// slots q*n .. q*n + bank_count[q]; the rest waits in `next` (queue order).
+struct HostScatterResult {
+  std::vector<int> bank_count;
+  std::size_t waiting = 0;  // entries in the next queue
+  std::size_t placed = 0;   // entries placed in banks
+};
+
+// The scatter of kernels/scatter.cl written plainly for one processor, the
+// same stable counting sort on the destination PE: entry i goes to bank
+// dest(i), slot rank(i) (rank = earlier valid entries for the same PE) when
+// rank(i) < n, else to the next queue. Holes (dest < 0) are skipped.
+// `banks` must hold num_pes * n entries and `next` src.size() entries;
+// `scratch` holds per-PE counters and is resized as needed.
+HostScatterResult host_scatter(const HostDescriptors& src, int num_pes, int n, HostDescriptors& banks,
+                               HostDescriptors& next, std::vector<std::size_t>& scratch);
+
+// One point of the scatter curve (the paper's figure 6): the scatter kernels
+// (count + scan + plan + move, OpenCL-profiled) against host_scatter on the
+// same input, and the device's copy bandwidth for the same bytes.
+struct ScatterPoint {
+  std::size_t length = 0;  // source entries (the vector length)
+  std::size_t moved = 0;   // valid entries (placed + waiting)
+  std::size_t waiting = 0; // entries that found no bank slot (next queue)
+  int pes = 0, n = 0;      // PEs and bank capacity used
+  int repeats = 0;
+  double host_seconds = 0;         // median of host_scatter
+  double kernel_seconds = 0;       // median of the sum of the 4 scatter kernels
+  double count_seconds = 0, scan_seconds = 0, plan_seconds = 0, move_seconds = 0;  // of that median run
+  double copy_kernel_seconds = 0;  // median of copy_float4 over moved * kBytes bytes
+  double copy_buffer_seconds = 0;  // median of clEnqueueCopyBuffer, same bytes
+  bool verified = false;           // bank counts and queue length equal host_scatter's
+  // Bytes moved by one scatter: descriptor bytes read + written.
+  double bytes() const { return 2.0 * double(DescriptorSet::kBytes) * double(moved); }
+  double speedup() const { return kernel_seconds > 0 ? host_seconds / kernel_seconds : 0; }
+  double gbytes_per_s() const { return kernel_seconds > 0 ? bytes() / kernel_seconds / 1e9 : 0; }
+  double host_gbytes_per_s() const { return host_seconds > 0 ? bytes() / host_seconds / 1e9 : 0; }
+  double copy_kernel_gbytes_per_s() const { return copy_kernel_seconds > 0 ? bytes() / copy_kernel_seconds / 1e9 : 0; }
+  double copy_buffer_gbytes_per_s() const { return copy_buffer_seconds > 0 ? bytes() / copy_buffer_seconds / 1e9 : 0; }
+};
+
+// Uniformly random destinations over `pes` PEs (a fraction `hole_rate` of
+// NIL holes), fixed seed; the payload fields carry the source index.
+HostDescriptors random_descriptors(std::size_t length, int pes, double hole_rate, unsigned seed);
+
+// Measures one point: `warmup` untimed runs, then the median of `repeats`.
+ScatterPoint measure_scatter(ClRuntime& runtime, std::size_t length, int pes, int warmup, int repeats,
+                             double hole_rate = 0.0);
+
+// ------------------------------------------------------ baseline renderers
+
+// Rays as RenderStats counts them: primary = pixels, secondary = reflected +
+// transmitted spawned, shadow = shadow rays spawned.
+struct BaselineRays {
+  std::uint64_t primary = 0, secondary = 0, shadow = 0;
+  std::uint64_t total() const { return primary + secondary + shadow; }
+};
+
+struct BaselineImage {
+  int width = 0, height = 0;
+  std::vector<float> rgb;                 // linear, 3 per pixel, row 0 = top
+  std::vector<std::int32_t> item_buffer;  // (object, facet) per pixel
+  BaselineRays rays;
+  double seconds = 0;         // wall time of the render (scene build excluded)
+  double kernel_seconds = 0;  // device time (megakernel only)
+  double build_seconds = 0;   // acceleration structure / upload preparation
+  std::uint64_t triangle_tests = 0, box_tests = 0;  // megakernel only: ray-facet and ray-box tests
+};
+
+// The replicated-scene megakernel (kernels/baselines/megakernel.cl): one work-item per
+// pixel, one BVH over the whole scene, the same shading and fixed-point sums
+// as the OPSILA renderer. `tile` bounds the pixels of one launch.
+BaselineImage render_megakernel(const Scene& scene, ClRuntime& runtime, int tile = 1 << 16);
+
+// True when the binary was built with Embree (CMake found it).
+bool embree_available();
+std::string embree_version();
+// The same rays and the same shading as the OPSILA renderer, traced with
+// Embree's rtcIntersect1 / rtcOccluded1 on `threads` host threads. Throws
+// std::runtime_error when Embree is not built in.
+BaselineImage render_embree(const Scene& scene, int threads);
+
+}  // namespace opsila

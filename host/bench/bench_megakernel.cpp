@@ -1,0 +1,95 @@
+// The replicated-scene megakernel baseline: host side of kernels/baselines/megakernel.cl.
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <string>
+
+#include "bench/bench.h"
+#include "opsila_shared.h"
+#include "machine/partition.h"
+#include "machine/renderer.h"
+
+namespace opsila {
+
+BaselineImage render_megakernel(const Scene& scene, ClRuntime& rt, int tile) {
+  check_kernel_limits(scene);
+  const std::size_t npix = std::size_t(scene.width) * scene.height;
+  BaselineImage out;
+  out.width = scene.width;
+  out.height = scene.height;
+
+  // One PE: bank 0 is the whole scene under one BVH (clusters on top).
+  auto t_build = std::chrono::steady_clock::now();
+  BankedScene bs = partition_scene(scene, 1);
+  FrameParams fp = frame_params(scene, bs, 0);
+  out.build_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_build).count();
+
+  rt.program();  // compile before timing
+  cl::Kernel k = rt.kernel("megakernel");
+  cl::CommandQueue& q = rt.queue();
+
+  auto t0 = std::chrono::steady_clock::now();
+  cl::Buffer b_tris = upload(rt, bs.triangles, "facets");
+  cl::Buffer b_nodes = upload(rt, bs.nodes, "BVH nodes");
+  cl::Buffer b_mats = upload(rt, bs.materials, "materials");
+  std::vector<Light> lights = bs.lights;
+  if (lights.empty()) lights.push_back(Light{});
+  cl::Buffer b_lights = upload(rt, lights, "lights");
+  cl::Buffer b_accum = device_buffer(rt, npix * 3 * sizeof(cl_long), "pixel sums");
+  cl::Buffer b_counts = device_buffer(rt, npix * sizeof(cl_uint4), "ray counts");
+  cl::Buffer b_items = device_buffer(rt, npix * sizeof(cl_int2), "item buffer");
+
+  std::vector<LaunchRecord> launches;
+  Launcher launch(rt, launches);
+  // One fixed work-group size, so a driver that specialises kernels per size
+  // (PoCL) compiles this one once.
+  std::size_t local = k.getWorkGroupInfo<CL_KERNEL_WORK_GROUP_SIZE>(rt.device().device);
+  local = std::min<std::size_t>(local, 64);
+  while (local & (local - 1)) local &= local - 1;  // a power of two, dividing the rounded global size
+  local = std::max<std::size_t>(local, 1);
+  tile = std::max(1, tile);
+  for (std::size_t begin = 0; begin < npix; begin += tile) {
+    int count = static_cast<int>(std::min<std::size_t>(tile, npix - begin));
+    int a = 0;
+    k.setArg(a++, fp);
+    k.setArg(a++, b_nodes);
+    k.setArg(a++, b_tris);
+    k.setArg(a++, b_mats);
+    k.setArg(a++, b_lights);
+    k.setArg(a++, bs.pes[0].node_begin);
+    k.setArg(a++, static_cast<int>(begin));
+    k.setArg(a++, count);
+    k.setArg(a++, b_accum);
+    k.setArg(a++, b_counts);
+    k.setArg(a++, b_items);
+    launch.run(k, "megakernel", round_up(count, 64), local, -1);
+  }
+  std::vector<cl_long> accum(npix * 3);
+  std::vector<cl_uint4> counts(npix);
+  out.item_buffer.resize(npix * 2);
+  launch.check(q.enqueueReadBuffer(b_accum, CL_TRUE, 0, accum.size() * sizeof(cl_long), accum.data()),
+               "clEnqueueReadBuffer(megakernel pixel sums)");
+  launch.check(q.enqueueReadBuffer(b_counts, CL_TRUE, 0, counts.size() * sizeof(cl_uint4), counts.data()),
+               "clEnqueueReadBuffer(megakernel ray counts)");
+  launch.check(q.enqueueReadBuffer(b_items, CL_TRUE, 0, npix * sizeof(cl_int2), out.item_buffer.data()),
+               "clEnqueueReadBuffer(megakernel item buffer)");
+  launch.check(q.finish(), "clFinish");
+  out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  launch.harvest();
+  for (const LaunchRecord& r : launches) out.kernel_seconds += r.seconds;
+
+  // Pixel sums -> floats exactly as the renderer converts its fixed point.
+  out.rgb.resize(npix * 3);
+  for (std::size_t i = 0; i < npix * 3; ++i)
+    out.rgb[i] = static_cast<float>(static_cast<double>(static_cast<std::int64_t>(accum[i])) / OPSILA_FIXED_SCALE);
+  out.rays.primary = npix;
+  for (const cl_uint4& c : counts) {
+    out.rays.secondary += c.s[0];
+    out.rays.shadow += c.s[1];
+    out.triangle_tests += c.s[2];
+    out.box_tests += c.s[3];
+  }
+  return out;
+}
+
+}  // namespace opsila

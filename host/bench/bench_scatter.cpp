@@ -1,0 +1,225 @@
+// The scatter benchmark (the paper's figure 6): host scatter against the
+// scatter kernels, beside the device's copy bandwidth for the same bytes.
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <random>
+
+#include "bench/bench.h"
+#include "machine/renderer.h"
+
+namespace opsila {
+
+void HostDescriptors::resize(std::size_t n) {
+  org.resize(n);
+  dir.resize(n);
+  wgt.resize(n);
+  ids.resize(n);
+  dest.resize(n);
+}
+
+HostScatterResult host_scatter(const HostDescriptors& src, int num_pes, int n, HostDescriptors& banks,
+                               HostDescriptors& next, std::vector<std::size_t>& scratch) {
+  const std::size_t len = src.size();
+  const std::size_t P = static_cast<std::size_t>(num_pes);
+  // scratch[0..P): entries bound for each PE so far (the running rank);
+  // scratch[P..2P): first queue slot of each PE's overflow.
+  scratch.assign(2 * P, 0);
+  std::size_t* total = scratch.data();
+  std::size_t* base = scratch.data() + P;
+  for (std::size_t i = 0; i < len; ++i) {
+    const int d = src.dest[i];
+    if (d >= 0 && d < num_pes) ++total[d];
+  }
+  HostScatterResult r;
+  r.bank_count.resize(P);
+  for (std::size_t q = 0; q < P; ++q) {
+    const std::size_t placed = std::min<std::size_t>(total[q], std::size_t(n));
+    r.bank_count[q] = static_cast<int>(placed);
+    base[q] = r.waiting;
+    r.waiting += total[q] - placed;
+    r.placed += placed;
+    total[q] = 0;  // from here on: the rank of the next entry bound for q
+  }
+  for (std::size_t i = 0; i < len; ++i) {
+    const int d = src.dest[i];
+    if (d < 0 || d >= num_pes) continue;
+    const std::size_t rank = total[d]++;
+    const std::size_t at = rank < std::size_t(n) ? std::size_t(d) * n + rank : base[d] + (rank - n);
+    HostDescriptors& to = rank < std::size_t(n) ? banks : next;
+    to.org[at] = src.org[i];
+    to.dir[at] = src.dir[i];
+    to.wgt[at] = src.wgt[i];
+    to.ids[at] = src.ids[i];
+    to.dest[at] = d;
+  }
+  return r;
+}
+
+HostDescriptors random_descriptors(std::size_t length, int pes, double hole_rate, unsigned seed) {
+  HostDescriptors h;
+  h.resize(length);
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> coin(0, 1);
+  std::uniform_int_distribution<int> pe(0, pes - 1);
+  for (std::size_t i = 0; i < length; ++i) {
+    const float f = static_cast<float>(i);
+    h.dest[i] = (hole_rate > 0 && coin(rng) < hole_rate) ? -1 : pe(rng);
+    h.org[i] = {{f, 1.0f, 2.0f, 3.0f}};
+    h.dir[i] = {{0.0f, 0.0f, 1.0f, f}};
+    h.wgt[i] = {{1.0f, 0.5f, 0.25f, 0.0f}};
+    h.ids[i] = {{static_cast<int>(i), 4, -1, h.dest[i]}};
+  }
+  return h;
+}
+
+namespace {
+
+double median(std::vector<double> v) {
+  if (v.empty()) return 0;
+  std::sort(v.begin(), v.end());
+  return v[(v.size() - 1) / 2];  // the lower median: always one of the runs
+}
+
+template <typename T>
+void write_buffer(ClRuntime& rt, const cl::Buffer& b, const std::vector<T>& v, const char* what) {
+  if (!v.empty())
+    cl_check(rt.queue().enqueueWriteBuffer(b, CL_TRUE, 0, v.size() * sizeof(T), v.data()), what);
+}
+
+double event_seconds(const cl::Event& ev) {
+  cl_ulong t0 = 0, t1 = 0;
+  cl_check(ev.getProfilingInfo(CL_PROFILING_COMMAND_START, &t0), "clGetEventProfilingInfo(START)");
+  cl_check(ev.getProfilingInfo(CL_PROFILING_COMMAND_END, &t1), "clGetEventProfilingInfo(END)");
+  return (t1 - t0) * 1e-9;
+}
+
+}  // namespace
+
+ScatterPoint measure_scatter(ClRuntime& rt, std::size_t length, int pes, int warmup, int repeats,
+                             double hole_rate) {
+  ScatterPoint pt;
+  pt.length = length;
+  pt.pes = pes;
+  pt.repeats = std::max(1, repeats);
+  // Banks roomy enough that uniform destinations almost never overflow.
+  const std::size_t per_pe = (length + pes - 1) / pes;
+  pt.n = static_cast<int>(per_pe + per_pe / 10 + 16);
+  const std::size_t bank_slots = std::size_t(pes) * pt.n;
+
+  const HostDescriptors src = random_descriptors(length, pes, hole_rate, 1987u + static_cast<unsigned>(length));
+  cl::CommandQueue& q = rt.queue();
+
+  // Host: the same counting sort, plainly (one thread, steady_clock).
+  HostScatterResult host_result;
+  {
+    HostDescriptors banks, next;
+    banks.resize(bank_slots);
+    next.resize(length);
+    std::vector<std::size_t> scratch;
+    std::vector<double> times;
+    for (int r = 0; r < warmup + pt.repeats; ++r) {
+      auto t0 = std::chrono::steady_clock::now();
+      host_result = host_scatter(src, pes, pt.n, banks, next, scratch);
+      double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      if (r >= warmup) times.push_back(s);
+    }
+    pt.host_seconds = median(times);
+    pt.moved = host_result.placed + host_result.waiting;
+    pt.waiting = host_result.waiting;
+  }
+
+  // Device: the renderer's ScatterPass on the same input (queue segment only).
+  {
+    DescriptorSet queue, banks, next, outputs;
+    queue.allocate(rt, length, "scatter bench source");
+    banks.allocate(rt, bank_slots, "scatter bench banks");
+    next.allocate(rt, length, "scatter bench next queue");
+    outputs.allocate(rt, 1, "scatter bench outputs");
+    write_buffer(rt, queue.org, src.org, "clEnqueueWriteBuffer(scatter bench org)");
+    write_buffer(rt, queue.dir, src.dir, "clEnqueueWriteBuffer(scatter bench dir)");
+    write_buffer(rt, queue.wgt, src.wgt, "clEnqueueWriteBuffer(scatter bench wgt)");
+    write_buffer(rt, queue.ids, src.ids, "clEnqueueWriteBuffer(scatter bench ids)");
+    write_buffer(rt, queue.dest, src.dest, "clEnqueueWriteBuffer(scatter bench dest)");
+    cl::Buffer processed = upload(rt, std::vector<cl_int>(pes, 0), "processed counts");
+    ScatterPass scatter(rt, pes);
+    ScatterPass::Args a;
+    a.out_len = 0;
+    a.queue_len = static_cast<int>(length);
+    a.n = pt.n;
+    a.spawn_slots = 1;
+    a.processed = &processed;
+    a.outputs = &outputs;
+    a.queue = &queue;
+    a.banks = &banks;
+    a.next_queue = &next;
+    std::vector<double> totals;
+    std::vector<std::vector<LaunchRecord>> runs;
+    for (int r = 0; r < warmup + pt.repeats; ++r) {
+      std::vector<LaunchRecord> records;
+      Launcher launch(rt, records);
+      scatter.enqueue(launch, a, 0);
+      launch.check(q.finish(), "clFinish(scatter bench)");
+      launch.harvest();
+      if (r < warmup) continue;
+      double sum = 0;
+      for (const LaunchRecord& rec : records) sum += rec.seconds;
+      totals.push_back(sum);
+      runs.push_back(std::move(records));
+    }
+    pt.kernel_seconds = median(totals);
+    // Per-kernel split of the run closest to the median.
+    std::size_t best = 0;
+    for (std::size_t i = 1; i < totals.size(); ++i)
+      if (std::abs(totals[i] - pt.kernel_seconds) < std::abs(totals[best] - pt.kernel_seconds)) best = i;
+    for (const LaunchRecord& rec : runs[best]) {
+      if (rec.name == "scatter_count") pt.count_seconds += rec.seconds;
+      if (rec.name == "scatter_scan") pt.scan_seconds += rec.seconds;
+      if (rec.name == "scatter_plan") pt.plan_seconds += rec.seconds;
+      if (rec.name == "scatter_move") pt.move_seconds += rec.seconds;
+    }
+    cl_int counts[2] = {0, 0};
+    std::vector<cl_int> bank_count(pes);
+    cl_check(q.enqueueReadBuffer(scatter.counts, CL_TRUE, 0, sizeof(counts), counts), "clEnqueueReadBuffer(counts)");
+    cl_check(q.enqueueReadBuffer(scatter.bank_count, CL_TRUE, 0, pes * sizeof(cl_int), bank_count.data()),
+             "clEnqueueReadBuffer(bank counts)");
+    pt.verified = bank_count == host_result.bank_count && std::size_t(counts[0]) == host_result.waiting &&
+                  std::size_t(counts[1]) == host_result.placed;
+  }
+
+  // The physical ceiling: a plain copy of the same bytes, as a kernel and
+  // as clEnqueueCopyBuffer.
+  {
+    const std::size_t bytes = std::max<std::size_t>(pt.moved, 1) * DescriptorSet::kBytes;
+    const std::size_t n4 = (bytes + sizeof(cl_float4) - 1) / sizeof(cl_float4);
+    cl::Buffer from = device_buffer(rt, n4 * sizeof(cl_float4), "copy bench source");
+    cl::Buffer to = device_buffer(rt, n4 * sizeof(cl_float4), "copy bench destination");
+    zero_buffer(rt, from, n4 * sizeof(cl_float4), "copy bench source");
+    zero_buffer(rt, to, n4 * sizeof(cl_float4), "copy bench destination");
+    cl::Kernel copy = rt.kernel("copy_float4");
+    std::size_t local = copy.getWorkGroupInfo<CL_KERNEL_WORK_GROUP_SIZE>(rt.device().device);
+    local = std::min<std::size_t>(local, 64);
+    while (local & (local - 1)) local &= local - 1;
+    local = std::max<std::size_t>(local, 1);
+    copy.setArg(0, from);
+    copy.setArg(1, to);
+    copy.setArg(2, static_cast<int>(n4));
+    std::vector<double> kt, bt;
+    for (int r = 0; r < warmup + pt.repeats; ++r) {
+      cl::Event ek, eb;
+      cl_check(
+          q.enqueueNDRangeKernel(copy, cl::NullRange, cl::NDRange(round_up(n4, 64)), cl::NDRange(local), nullptr, &ek),
+          "clEnqueueNDRangeKernel(copy_float4)");
+      cl_check(q.enqueueCopyBuffer(from, to, 0, 0, n4 * sizeof(cl_float4), nullptr, &eb), "clEnqueueCopyBuffer");
+      cl_check(q.finish(), "clFinish(copy bench)");
+      if (r < warmup) continue;
+      kt.push_back(event_seconds(ek));
+      bt.push_back(event_seconds(eb));
+    }
+    pt.copy_kernel_seconds = median(kt);
+    pt.copy_buffer_seconds = median(bt);
+  }
+  return pt;
+}
+
+}  // namespace opsila

@@ -1,0 +1,22 @@
+// opsila: command-line entry point. Every failure ends here as one
+// "opsila: error: ..." line and an exit code (see cli.h); nothing escapes.
+#include <cstdio>
+#include <exception>
+#include <string>
+#include <vector>
+
+#include "cli/cli.h"
+
+#include "bench/bench.h"
+
+int main(int argc, char** argv) {
+  try {
+    const std::vector<std::string> args(argv + 1, argv + argc);
+    if (!args.empty() && args[0] == "bench") {
+      return opsila::run_bench(std::vector<std::string>(args.begin() + 1, args.end()));
+    }
+    return opsila::run_cli(args);
+  } catch (...) {
+    return opsila::report_exception(std::current_exception());
+  }
+}

@@ -1,0 +1,112 @@
+// The scene model: SPEC material rules, bounds, epsilon, auto-framing.
+#include "core/scene.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+
+namespace opsila {
+
+namespace {
+bool illum_reflects(int illum) { return illum >= 3 && illum <= 7; }
+bool illum_transmits(int illum) { return illum == 4 || illum == 6 || illum == 7; }
+
+std::string short_number(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.6g", v);
+  return buf;
+}
+}  // namespace
+
+Vec3 MaterialDesc::kr() const { return illum_reflects(illum) ? ks : Vec3{0, 0, 0}; }
+
+Vec3 MaterialDesc::kt() const { return illum_transmits(illum) ? tf : Vec3{0, 0, 0}; }
+
+MaterialDesc MaterialDesc::default_material() {
+  MaterialDesc m;
+  m.name = "default";
+  m.ka = {0.8f, 0.8f, 0.8f};
+  m.kd = {0.8f, 0.8f, 0.8f};
+  m.ks = {0, 0, 0};
+  m.tf = {0, 0, 0};
+  m.ns = 1.0f;
+  m.ni = 1.0f;
+  m.illum = 2;
+  return m;
+}
+
+void Scene::bounds(Vec3& lo, Vec3& hi) const {
+  if (triangles.empty()) {
+    lo = hi = Vec3{0, 0, 0};
+    return;
+  }
+  const float inf = std::numeric_limits<float>::infinity();
+  lo = {inf, inf, inf};
+  hi = {-inf, -inf, -inf};
+  for (const Triangle& t : triangles) {
+    for (const Vec3* v : {&t.v0, &t.v1, &t.v2}) {
+      for (int a = 0; a < 3; ++a) {
+        lo[a] = std::min(lo[a], (*v)[a]);
+        hi[a] = std::max(hi[a], (*v)[a]);
+      }
+    }
+  }
+}
+
+double Scene::diagonal() const {
+  Vec3 lo, hi;
+  bounds(lo, hi);
+  double sum = 0;
+  for (int a = 0; a < 3; ++a) {
+    const double d = double(hi[a]) - double(lo[a]);
+    sum += d * d;
+  }
+  return std::sqrt(sum);
+}
+
+float Scene::epsilon() const { return static_cast<float>(1e-4 * diagonal()); }
+
+CameraDesc frame_bounds(const Vec3& lo, const Vec3& hi, float fov_deg, float aspect) {
+  CameraDesc cam;
+  double centre[3], r2 = 0;
+  for (int a = 0; a < 3; ++a) {
+    centre[a] = 0.5 * (double(lo[a]) + double(hi[a]));
+    const double half = 0.5 * (double(hi[a]) - double(lo[a]));
+    r2 += half * half;
+  }
+  double r = std::sqrt(r2);
+  // A point-sized (or broken) box still gets a usable camera.
+  if (!(r > 0) || !std::isfinite(r)) r = 1.0;
+  const double pi = 3.14159265358979323846;
+  const double fov_v = double(fov_deg) * pi / 180.0;
+  const double fov_h = 2.0 * std::atan(std::tan(fov_v / 2.0) * double(aspect));
+  const double d = r / std::sin(std::min(fov_v, fov_h) / 2.0);
+  cam.look_at = {float(centre[0]), float(centre[1]), float(centre[2])};
+  // Seen from the front, right and above: no axis-aligned plane (a flat
+  // model, a floor, a wall) is ever seen edge-on.
+  const double k = d / std::sqrt(6.0);  // d * normalize(1, 1, 2)
+  cam.eye = {float(centre[0] + k), float(centre[1] + k), float(centre[2] + 2.0 * k)};
+  cam.up = {0, 1, 0};
+  cam.fov_deg = fov_deg;
+  return cam;
+}
+
+void check_scene_extent(const Scene& scene, const std::string& where) {
+  if (scene.triangles.empty()) throw InputError(where + ": no facets");
+  const double diag = scene.diagonal();
+  const float diag_f = static_cast<float>(diag);
+  if (!std::isfinite(diag_f))
+    throw InputError(where + ": scene extent overflows float (bounding-box diagonal " +
+                     short_number(diag) + ")");
+  if (diag > kMaxSceneExtent)
+    throw InputError(where + ": scene extent too large (bounding-box diagonal " +
+                     short_number(diag) + ", the limit is " + short_number(kMaxSceneExtent) +
+                     ")");
+  const float eps = scene.epsilon();
+  if (!(diag_f > 0) || !(eps > 0) || !std::isfinite(eps))
+    throw InputError(where + ": scene has no extent (bounding-box diagonal " +
+                     short_number(diag) + ", so epsilon is not positive)");
+}
+
+}  // namespace opsila

@@ -1,0 +1,26 @@
+// Scene input: the project's JSON scene format (scenes/FORMAT.md) or a bare
+// Wavefront OBJ. All bad input is an InputError whose message names the file,
+// the line and, for scene files, the key path (e.g. objects[3].material.Kd).
+#pragma once
+
+#include <cstddef>
+#include <string>
+
+#include "input/obj_loader.h"
+#include "core/scene.h"
+
+namespace opsila {
+
+// ".obj" (any case) goes to load_obj; anything else is read as a JSON scene.
+Scene load_scene(const std::string& path);
+
+// A JSON scene from memory. `name` is the file name used in messages; OBJ
+// files named by the scene are looked up relative to `base_dir`. With an
+// empty base_dir the scene may not name other files (an "obj" object is an
+// error), so fuzzed input never touches the disk. Scenes that would make
+// more than `max_triangles` triangles are refused before they are built.
+Scene load_scene_from_string(const std::string& text, const std::string& name,
+                             const std::string& base_dir,
+                             std::size_t max_triangles = kMaxTriangles);
+
+}  // namespace opsila

@@ -1,0 +1,323 @@
+#include "machine/cl_runtime.h"
+
+#include <algorithm>
+#include <cctype>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <sstream>
+
+#include "opsila_shared.h"
+#include "core/scene.h"
+
+namespace opsila {
+
+const std::string& kernel_source();  // generated from kernels/*.cl
+
+const char* cl_error_name(cl_int code) {
+  switch (code) {
+#define OPSILA_CASE(x) \
+  case x:              \
+    return #x;
+    OPSILA_CASE(CL_SUCCESS)
+    OPSILA_CASE(CL_DEVICE_NOT_FOUND)
+    OPSILA_CASE(CL_DEVICE_NOT_AVAILABLE)
+    OPSILA_CASE(CL_COMPILER_NOT_AVAILABLE)
+    OPSILA_CASE(CL_MEM_OBJECT_ALLOCATION_FAILURE)
+    OPSILA_CASE(CL_OUT_OF_RESOURCES)
+    OPSILA_CASE(CL_OUT_OF_HOST_MEMORY)
+    OPSILA_CASE(CL_PROFILING_INFO_NOT_AVAILABLE)
+    OPSILA_CASE(CL_MEM_COPY_OVERLAP)
+    OPSILA_CASE(CL_IMAGE_FORMAT_MISMATCH)
+    OPSILA_CASE(CL_IMAGE_FORMAT_NOT_SUPPORTED)
+    OPSILA_CASE(CL_BUILD_PROGRAM_FAILURE)
+    OPSILA_CASE(CL_MAP_FAILURE)
+    OPSILA_CASE(CL_MISALIGNED_SUB_BUFFER_OFFSET)
+    OPSILA_CASE(CL_EXEC_STATUS_ERROR_FOR_EVENTS_IN_WAIT_LIST)
+    OPSILA_CASE(CL_COMPILE_PROGRAM_FAILURE)
+    OPSILA_CASE(CL_LINKER_NOT_AVAILABLE)
+    OPSILA_CASE(CL_LINK_PROGRAM_FAILURE)
+    OPSILA_CASE(CL_DEVICE_PARTITION_FAILED)
+    OPSILA_CASE(CL_KERNEL_ARG_INFO_NOT_AVAILABLE)
+    OPSILA_CASE(CL_INVALID_VALUE)
+    OPSILA_CASE(CL_INVALID_DEVICE_TYPE)
+    OPSILA_CASE(CL_INVALID_PLATFORM)
+    OPSILA_CASE(CL_INVALID_DEVICE)
+    OPSILA_CASE(CL_INVALID_CONTEXT)
+    OPSILA_CASE(CL_INVALID_QUEUE_PROPERTIES)
+    OPSILA_CASE(CL_INVALID_COMMAND_QUEUE)
+    OPSILA_CASE(CL_INVALID_HOST_PTR)
+    OPSILA_CASE(CL_INVALID_MEM_OBJECT)
+    OPSILA_CASE(CL_INVALID_IMAGE_FORMAT_DESCRIPTOR)
+    OPSILA_CASE(CL_INVALID_IMAGE_SIZE)
+    OPSILA_CASE(CL_INVALID_SAMPLER)
+    OPSILA_CASE(CL_INVALID_BINARY)
+    OPSILA_CASE(CL_INVALID_BUILD_OPTIONS)
+    OPSILA_CASE(CL_INVALID_PROGRAM)
+    OPSILA_CASE(CL_INVALID_PROGRAM_EXECUTABLE)
+    OPSILA_CASE(CL_INVALID_KERNEL_NAME)
+    OPSILA_CASE(CL_INVALID_KERNEL_DEFINITION)
+    OPSILA_CASE(CL_INVALID_KERNEL)
+    OPSILA_CASE(CL_INVALID_ARG_INDEX)
+    OPSILA_CASE(CL_INVALID_ARG_VALUE)
+    OPSILA_CASE(CL_INVALID_ARG_SIZE)
+    OPSILA_CASE(CL_INVALID_KERNEL_ARGS)
+    OPSILA_CASE(CL_INVALID_WORK_DIMENSION)
+    OPSILA_CASE(CL_INVALID_WORK_GROUP_SIZE)
+    OPSILA_CASE(CL_INVALID_WORK_ITEM_SIZE)
+    OPSILA_CASE(CL_INVALID_GLOBAL_OFFSET)
+    OPSILA_CASE(CL_INVALID_EVENT_WAIT_LIST)
+    OPSILA_CASE(CL_INVALID_EVENT)
+    OPSILA_CASE(CL_INVALID_OPERATION)
+    OPSILA_CASE(CL_INVALID_GL_OBJECT)
+    OPSILA_CASE(CL_INVALID_BUFFER_SIZE)
+    OPSILA_CASE(CL_INVALID_MIP_LEVEL)
+    OPSILA_CASE(CL_INVALID_GLOBAL_WORK_SIZE)
+    OPSILA_CASE(CL_INVALID_PROPERTY)
+    OPSILA_CASE(CL_INVALID_IMAGE_DESCRIPTOR)
+    OPSILA_CASE(CL_INVALID_COMPILER_OPTIONS)
+    OPSILA_CASE(CL_INVALID_LINKER_OPTIONS)
+    OPSILA_CASE(CL_INVALID_DEVICE_PARTITION_COUNT)
+#undef OPSILA_CASE
+    case -1001:
+      return "CL_PLATFORM_NOT_FOUND_KHR (no OpenCL platform: is an ICD installed?)";
+    default:
+      return "unknown OpenCL error";
+  }
+}
+
+void cl_check(cl_int code, const char* what) {
+  if (code != CL_SUCCESS) {
+    std::ostringstream os;
+    os << what << ": " << cl_error_name(code) << " (" << code << ")";
+    throw ClError(os.str());
+  }
+}
+
+namespace {
+
+std::string lower(std::string s) {
+  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return std::tolower(c); });
+  return s;
+}
+
+std::string trim(std::string s) {
+  while (!s.empty() && (s.back() == '\0' || std::isspace(static_cast<unsigned char>(s.back())))) s.pop_back();
+  return s;
+}
+
+bool all_digits(const std::string& s) {
+  return !s.empty() && s.size() < 9 &&
+         std::all_of(s.begin(), s.end(), [](unsigned char c) { return std::isdigit(c); });
+}
+
+}  // namespace
+
+std::vector<DeviceEntry> list_devices() {
+  std::vector<cl::Platform> platforms;
+  cl_int err = cl::Platform::get(&platforms);
+  if (err == -1001 || (err == CL_SUCCESS && platforms.empty()))
+    throw ClError("no OpenCL platform found (clGetPlatformIDs): install an OpenCL driver, e.g. pocl-opencl-icd");
+  cl_check(err, "clGetPlatformIDs");
+  std::vector<DeviceEntry> out;
+  for (std::size_t p = 0; p < platforms.size(); ++p) {
+    std::vector<cl::Device> devices;
+    err = platforms[p].getDevices(CL_DEVICE_TYPE_ALL, &devices);
+    if (err == CL_DEVICE_NOT_FOUND) continue;
+    cl_check(err, "clGetDeviceIDs");
+    for (std::size_t d = 0; d < devices.size(); ++d) {
+      DeviceEntry e;
+      e.platform_index = static_cast<int>(p);
+      e.device_index = static_cast<int>(d);
+      e.flat_index = static_cast<int>(out.size());
+      e.platform = platforms[p];
+      e.device = devices[d];
+      e.platform_name = trim(platforms[p].getInfo<CL_PLATFORM_NAME>());
+      e.device_name = trim(devices[d].getInfo<CL_DEVICE_NAME>());
+      e.vendor = trim(devices[d].getInfo<CL_DEVICE_VENDOR>());
+      e.version = trim(devices[d].getInfo<CL_DEVICE_VERSION>());
+      e.driver_version = trim(devices[d].getInfo<CL_DRIVER_VERSION>());
+      e.is_gpu = (devices[d].getInfo<CL_DEVICE_TYPE>() & CL_DEVICE_TYPE_GPU) != 0;
+      out.push_back(e);
+    }
+  }
+  if (out.empty()) throw ClError("no OpenCL device found on any platform (clGetDeviceIDs)");
+  return out;
+}
+
+DeviceEntry choose_device(const std::string& spec) {
+  std::vector<DeviceEntry> all = list_devices();
+  if (spec.empty()) {
+    for (auto& e : all)
+      if (e.is_gpu) return e;
+    for (auto& e : all)
+      if (e.device.getInfo<CL_DEVICE_TYPE>() & CL_DEVICE_TYPE_CPU) return e;
+    return all.front();
+  }
+  auto colon = spec.find(':');
+  if (colon != std::string::npos && all_digits(spec.substr(0, colon)) && all_digits(spec.substr(colon + 1))) {
+    int p = std::stoi(spec.substr(0, colon)), d = std::stoi(spec.substr(colon + 1));
+    for (auto& e : all)
+      if (e.platform_index == p && e.device_index == d) return e;
+    throw InputError("--device " + spec + ": no device " + spec + " (see 'opsila devices')");
+  }
+  if (all_digits(spec)) {
+    int i = std::stoi(spec);
+    if (i < static_cast<int>(all.size())) return all[i];
+    throw InputError("--device " + spec + ": no device with index " + spec + " (" + std::to_string(all.size()) +
+                     " found; see 'opsila devices')");
+  }
+  std::string needle = lower(spec);
+  for (auto& e : all) {
+    std::string hay = lower(e.platform_name + " " + e.platform.getInfo<CL_PLATFORM_VERSION>() + " " + e.device_name +
+                            " " + e.vendor + " " + e.version);
+    if (hay.find(needle) != std::string::npos) return e;
+  }
+  throw InputError("--device " + spec + ": no OpenCL device matches '" + spec + "' (see 'opsila devices')");
+}
+
+namespace {
+
+// "OpenCL 1.2 ..." / "OpenCL C 1.2 ...": major * 10 + minor, or -1.
+int parse_version(const std::string& text, const char* prefix) {
+  int major = 0, minor = 0;
+  const std::string format = std::string(prefix) + " %d.%d";
+  if (std::sscanf(text.c_str(), format.c_str(), &major, &minor) != 2) return -1;
+  return major * 10 + minor;
+}
+
+bool has_word(const std::string& list, const std::string& word) {
+  std::istringstream in(list);
+  std::string w;
+  while (in >> w)
+    if (w == word) return true;
+  return false;
+}
+
+}  // namespace
+
+DeviceCapabilities query_capabilities(const cl::Device& d) {
+  DeviceCapabilities c;
+  c.name = trim(d.getInfo<CL_DEVICE_NAME>());
+  c.version = trim(d.getInfo<CL_DEVICE_VERSION>());
+  c.opencl_c_version = trim(d.getInfo<CL_DEVICE_OPENCL_C_VERSION>());
+  c.profile = trim(d.getInfo<CL_DEVICE_PROFILE>());
+  c.extensions = trim(d.getInfo<CL_DEVICE_EXTENSIONS>());
+  c.available = d.getInfo<CL_DEVICE_AVAILABLE>() != CL_FALSE;
+  c.compiler_available = d.getInfo<CL_DEVICE_COMPILER_AVAILABLE>() != CL_FALSE;
+  c.local_mem_size = d.getInfo<CL_DEVICE_LOCAL_MEM_SIZE>();
+  c.max_work_group_size = d.getInfo<CL_DEVICE_MAX_WORK_GROUP_SIZE>();
+  return c;
+}
+
+std::size_t required_local_mem() { return std::size_t(OPSILA_MAX_DEPTH) * OPSILA_STAT_COUNT * sizeof(cl_uint); }
+
+std::vector<std::string> missing_capabilities(const DeviceCapabilities& c) {
+  std::vector<std::string> missing;
+  if (!c.available) missing.push_back("it is not available (CL_DEVICE_AVAILABLE is false)");
+  const int version = parse_version(c.version, "OpenCL");
+  if (version < 12) missing.push_back("OpenCL 1.2 (it reports '" + c.version + "')");
+  const int c_version = parse_version(c.opencl_c_version, "OpenCL C");
+  if (c_version < 12) missing.push_back("OpenCL C 1.2 (it reports '" + c.opencl_c_version + "')");
+  if (!c.compiler_available) missing.push_back("an OpenCL C compiler (CL_DEVICE_COMPILER_AVAILABLE is false)");
+  if (c.local_mem_size < required_local_mem())
+    missing.push_back(std::to_string(required_local_mem()) + " bytes of local memory (CL_DEVICE_LOCAL_MEM_SIZE is " +
+                      std::to_string(c.local_mem_size) + ")");
+  if (c.max_work_group_size < 1)
+    missing.push_back("work-groups of at least 1 work-item (CL_DEVICE_MAX_WORK_GROUP_SIZE is 0)");
+  // Pixel sums are 64-bit fixed point: embedded-profile devices have 64-bit
+  // integers only with cles_khr_int64.
+  if (c.profile == "EMBEDDED_PROFILE" && !has_word(c.extensions, "cles_khr_int64"))
+    missing.push_back("64-bit integers (EMBEDDED_PROFILE without cles_khr_int64)");
+  return missing;
+}
+
+ClRuntime::ClRuntime(const DeviceEntry& device, const ClRuntimeOptions& options) : device_(device) {
+  const DeviceCapabilities caps = query_capabilities(device_.device);
+  const std::vector<std::string> missing = missing_capabilities(caps);
+  if (!missing.empty()) {
+    std::string message =
+        "device " + device_.device_name + " (" + device_.platform_name + ") cannot run opsila: it lacks ";
+    for (std::size_t i = 0; i < missing.size(); ++i) message += (i ? "; " : "") + missing[i];
+    throw ClError(message);
+  }
+
+  source_ = options.kernel_source;
+  source_origin_ = source_.empty() ? "embedded kernels"
+                                   : (options.kernel_source_origin.empty() ? "kernel source given by the caller"
+                                                                           : options.kernel_source_origin);
+  cl_ulong limit = options.memory_limit;
+  if (options.read_environment) {
+    // OPSILA_KERNEL_SOURCE=path: build this file instead of the embedded
+    // kernels (to try a kernel change without rebuilding, or to test faults).
+    const char* path = std::getenv("OPSILA_KERNEL_SOURCE");
+    if (path && *path && source_.empty()) {
+      std::ifstream in(path, std::ios::binary);
+      std::ostringstream text;
+      text << in.rdbuf();
+      if (!in || text.str().empty())
+        throw InputError(std::string("OPSILA_KERNEL_SOURCE=") + path + ": cannot read the file (or it is empty)");
+      source_ = text.str();
+      source_origin_ = std::string("OPSILA_KERNEL_SOURCE=") + path;
+    }
+    // OPSILA_DEVICE_MEMORY_LIMIT=bytes: plan as if the device had no more.
+    const char* mem = std::getenv("OPSILA_DEVICE_MEMORY_LIMIT");
+    if (mem && *mem && limit == 0) {
+      const std::string text = mem;
+      if (!std::all_of(text.begin(), text.end(), [](unsigned char c) { return std::isdigit(c); }) ||
+          text.size() > 19 || std::stoull(text) == 0)
+        throw InputError("OPSILA_DEVICE_MEMORY_LIMIT=" + text + ": expected a positive number of bytes");
+      limit = std::stoull(text);
+    }
+  }
+
+  cl_int err = CL_SUCCESS;
+  context_ = cl::Context(device_.device, nullptr, nullptr, nullptr, &err);
+  cl_check(err, "clCreateContext");
+  queue_ = cl::CommandQueue(context_, device_.device, CL_QUEUE_PROFILING_ENABLE, &err);
+  cl_check(err, "clCreateCommandQueue");
+  max_wg_ = caps.max_work_group_size;
+  max_alloc_ = device_.device.getInfo<CL_DEVICE_MAX_MEM_ALLOC_SIZE>();
+  global_mem_ = device_.device.getInfo<CL_DEVICE_GLOBAL_MEM_SIZE>();
+  limit_ = limit;
+  if (limit > 0) {
+    max_alloc_ = std::min(max_alloc_, limit);
+    global_mem_ = std::min(global_mem_, limit);
+  }
+}
+
+std::string ClRuntime::description() const {
+  return device_.device_name + " (" + device_.platform_name + ", " + device_.version + ", driver " +
+         device_.driver_version + ")";
+}
+
+cl::Program& ClRuntime::program() {
+  if (built_) return program_;
+  auto t0 = std::chrono::steady_clock::now();
+  cl_int err = CL_SUCCESS;
+  program_ = cl::Program(context_, source_.empty() ? kernel_source() : source_, false, &err);
+  cl_check(err, "clCreateProgramWithSource");
+  // No fast-math: every device must reproduce the reference's arithmetic.
+  err = program_.build({device_.device}, "-cl-std=CL1.2");
+  if (err != CL_SUCCESS) {
+    std::string log;
+    program_.getBuildInfo(device_.device, CL_PROGRAM_BUILD_LOG, &log);
+    log = trim(log);
+    throw ClError(std::string("clBuildProgram: ") + cl_error_name(err) + " (" + std::to_string(err) + ") on " +
+                  device_.device_name + " (kernel source: " + source_origin_ + "); build log:\n" +
+                  (log.empty() ? "(the driver gave no build log)" : log));
+  }
+  build_seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  built_ = true;
+  return program_;
+}
+
+cl::Kernel ClRuntime::kernel(const char* name) {
+  cl_int err = CL_SUCCESS;
+  cl::Kernel k(program(), name, &err);
+  cl_check(err, (std::string("clCreateKernel(") + name + ")").c_str());
+  return k;
+}
+
+}  // namespace opsila

@@ -1,0 +1,454 @@
+#include "machine/partition.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+
+namespace opsila {
+namespace {
+
+struct Box {
+  float lo[3] = {INFINITY, INFINITY, INFINITY};
+  float hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+  void grow(const float* p) {
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = std::min(lo[a], p[a]);
+      hi[a] = std::max(hi[a], p[a]);
+    }
+  }
+  void grow(const Box& b) {
+    grow(b.lo);
+    grow(b.hi);
+  }
+  float extent(int a) const { return hi[a] - lo[a]; }
+  int longest() const {
+    int a = 0;
+    for (int k = 1; k < 3; ++k)
+      if (extent(k) > extent(a)) a = k;
+    return a;
+  }
+  float diagonal() const {
+    float s = 0;
+    for (int a = 0; a < 3; ++a) s += extent(a) * extent(a);
+    return std::sqrt(s);
+  }
+  float area() const {
+    float x = extent(0), y = extent(1), z = extent(2);
+    return 2 * (x * y + y * z + z * x);
+  }
+};
+
+Box tri_box(const Triangle& t) {
+  Box b;
+  b.grow(t.v0.data());
+  b.grow(t.v1.data());
+  b.grow(t.v2.data());
+  return b;
+}
+
+float centroid(const Triangle& t, int a) { return (t.v0[a] + t.v1[a] + t.v2[a]) * (1.0f / 3.0f); }
+
+struct ClusterBuild {
+  std::vector<int> tris;  // indices into Scene::triangles
+  Box box;
+  float c[3] = {0, 0, 0};  // centre for the spatial subdivision
+  int pe = 0;
+};
+
+// Splits a list of triangles at the median centroid of its longest axis
+// until every piece is small enough (facet count and spatial extent).
+void split_object(const Scene& scene, std::vector<int> tris, std::size_t max_tris, float max_extent,
+                  std::vector<ClusterBuild>& out) {
+  std::vector<std::vector<int>> work;
+  work.push_back(std::move(tris));
+  while (!work.empty()) {
+    std::vector<int> cur = std::move(work.back());
+    work.pop_back();
+    Box box, cbox;
+    for (int i : cur) {
+      box.grow(tri_box(scene.triangles[i]));
+      float c[3] = {centroid(scene.triangles[i], 0), centroid(scene.triangles[i], 1),
+                    centroid(scene.triangles[i], 2)};
+      cbox.grow(c);
+    }
+    bool too_many = cur.size() > max_tris;
+    bool too_big = cur.size() > 1 && box.diagonal() > max_extent;
+    int axis = cbox.longest();
+    if ((too_many || too_big) && cbox.extent(axis) > 0) {
+      std::size_t mid = cur.size() / 2;
+      std::nth_element(cur.begin(), cur.begin() + mid, cur.end(), [&](int a, int b) {
+        float ca = centroid(scene.triangles[a], axis), cb = centroid(scene.triangles[b], axis);
+        return ca < cb || (ca == cb && a < b);
+      });
+      work.emplace_back(cur.begin(), cur.begin() + mid);
+      work.emplace_back(cur.begin() + mid, cur.end());
+      continue;
+    }
+    ClusterBuild cb;
+    std::sort(cur.begin(), cur.end());
+    cb.tris = std::move(cur);
+    cb.box = box;
+    for (int a = 0; a < 3; ++a) cb.c[a] = 0.5f * (box.lo[a] + box.hi[a]);
+    out.push_back(std::move(cb));
+  }
+}
+
+// Recursive bisection of the cluster centres, weighted by facet count, into
+// `count` regions starting at PE `first`.
+void assign_regions(std::vector<ClusterBuild>& cl, std::vector<int> idx, int first, int count) {
+  if (idx.empty()) return;
+  if (count == 1) {
+    for (int i : idx) cl[i].pe = first;
+    return;
+  }
+  Box cbox;
+  for (int i : idx) cbox.grow(cl[i].c);
+  int axis = cbox.longest();
+  std::sort(idx.begin(), idx.end(), [&](int a, int b) {
+    return cl[a].c[axis] < cl[b].c[axis] || (cl[a].c[axis] == cl[b].c[axis] && a < b);
+  });
+  int left = count / 2;
+  double total = 0;
+  for (int i : idx) total += static_cast<double>(cl[i].tris.size());
+  double target = total * left / count, acc = 0;
+  std::size_t cut = 0;
+  while (cut < idx.size() && acc + 0.5 * cl[idx[cut]].tris.size() < target) acc += cl[idx[cut++]].tris.size();
+  // Both halves get at least one cluster when there are enough to go round.
+  if (idx.size() >= 2) cut = std::clamp<std::size_t>(cut, 1, idx.size() - 1);
+  std::vector<int> lo(idx.begin(), idx.begin() + cut), hi(idx.begin() + cut, idx.end());
+  assign_regions(cl, std::move(lo), first, left);
+  assign_regions(cl, std::move(hi), first + left, count - left);
+}
+
+// BVH over one bank: clusters at the top (so that each cluster's subtree has
+// a root the item buffer can start from), facets below (binned SAH).
+class BankBvhBuilder {
+ public:
+  BankBvhBuilder(std::vector<BankNode>& nodes, std::vector<BankTriangle>& tris, std::vector<Box>& tri_boxes)
+      : nodes_(nodes), tris_(tris), boxes_(tri_boxes) {}
+
+  int max_depth = 0;
+
+  // Triangles of cluster c occupy [ranges[c].first, ranges[c].second).
+  void build_bank(std::vector<Cluster>& clusters, int c_begin, int c_end,
+                  const std::vector<std::pair<int, int>>& ranges) {
+    if (c_begin == c_end) return;
+    int root = alloc(1);
+    std::vector<int> ids(c_end - c_begin);
+    std::iota(ids.begin(), ids.end(), c_begin);
+    build_clusters(root, clusters, ids, ranges, 1);
+  }
+
+ private:
+  std::vector<BankNode>& nodes_;
+  std::vector<BankTriangle>& tris_;
+  std::vector<Box>& boxes_;
+
+  int alloc(int k) {
+    int at = static_cast<int>(nodes_.size());
+    nodes_.resize(nodes_.size() + k);
+    return at;
+  }
+  void set_box(int node, const Box& b) {
+    for (int a = 0; a < 3; ++a) {
+      nodes_[node].bmin[a] = b.lo[a];
+      nodes_[node].bmax[a] = b.hi[a];
+    }
+  }
+
+  void build_clusters(int node, std::vector<Cluster>& clusters, std::vector<int> ids,
+                      const std::vector<std::pair<int, int>>& ranges, int depth) {
+    max_depth = std::max(max_depth, depth);
+    if (ids.size() == 1) {
+      clusters[ids[0]].root = node;
+      build_tris(node, ranges[ids[0]].first, ranges[ids[0]].second, depth);
+      return;
+    }
+    Box box, cbox;
+    for (int c : ids) {
+      Box b;
+      b.grow(clusters[c].bmin);
+      b.grow(clusters[c].bmax);
+      box.grow(b);
+      float ctr[3];
+      for (int a = 0; a < 3; ++a) ctr[a] = 0.5f * (b.lo[a] + b.hi[a]);
+      cbox.grow(ctr);
+    }
+    set_box(node, box);
+    int axis = cbox.longest();
+    std::sort(ids.begin(), ids.end(), [&](int a, int b) {
+      float ca = clusters[a].bmin[axis] + clusters[a].bmax[axis], cb = clusters[b].bmin[axis] + clusters[b].bmax[axis];
+      return ca < cb || (ca == cb && a < b);
+    });
+    std::size_t mid = ids.size() / 2;
+    int kids = alloc(2);
+    nodes_[node].first = kids;
+    nodes_[node].count = 0;
+    build_clusters(kids, clusters, std::vector<int>(ids.begin(), ids.begin() + mid), ranges, depth + 1);
+    build_clusters(kids + 1, clusters, std::vector<int>(ids.begin() + mid, ids.end()), ranges, depth + 1);
+  }
+
+  void build_tris(int node, int begin, int end, int depth) {
+    max_depth = std::max(max_depth, depth);
+    Box box, cbox;
+    for (int i = begin; i < end; ++i) {
+      box.grow(boxes_[i]);
+      float c[3];
+      for (int a = 0; a < 3; ++a) c[a] = 0.5f * (boxes_[i].lo[a] + boxes_[i].hi[a]);
+      cbox.grow(c);
+    }
+    set_box(node, box);
+    int count = end - begin;
+    if (count <= 4 || depth >= OPSILA_BVH_STACK - 8) {
+      nodes_[node].first = begin;
+      nodes_[node].count = count;
+      return;
+    }
+    int mid = sah_split(begin, end, box, cbox, depth);
+    int kids = alloc(2);
+    nodes_[node].first = kids;
+    nodes_[node].count = 0;
+    build_tris(kids, begin, mid, depth + 1);
+    build_tris(kids + 1, mid, end, depth + 1);
+  }
+
+  float center(int i, int a) const { return 0.5f * (boxes_[i].lo[a] + boxes_[i].hi[a]); }
+
+  void swap_tris(int i, int j) {
+    std::swap(tris_[i], tris_[j]);
+    std::swap(boxes_[i], boxes_[j]);
+  }
+
+  // Binned SAH; falls back to a median split when SAH finds no useful plane
+  // or the tree grows deep (the traversal stack is bounded).
+  int sah_split(int begin, int end, const Box& box, const Box& cbox, int depth) {
+    constexpr int kBins = 12;
+    int axis = cbox.longest();
+    float lo = cbox.lo[axis], ext = cbox.extent(axis);
+    int count = end - begin;
+    if (ext > 0 && depth < 40) {
+      Box bins[kBins];
+      int counts[kBins] = {0};
+      auto bin_of = [&](int i) {
+        int b = static_cast<int>(kBins * (center(i, axis) - lo) / ext);
+        return std::clamp(b, 0, kBins - 1);
+      };
+      for (int i = begin; i < end; ++i) {
+        int b = bin_of(i);
+        bins[b].grow(boxes_[i]);
+        ++counts[b];
+      }
+      float best_cost = INFINITY;
+      int best = -1;
+      for (int s = 1; s < kBins; ++s) {
+        Box l, r;
+        int nl = 0, nr = 0;
+        for (int b = 0; b < s; ++b)
+          if (counts[b]) l.grow(bins[b]), nl += counts[b];
+        for (int b = s; b < kBins; ++b)
+          if (counts[b]) r.grow(bins[b]), nr += counts[b];
+        if (nl == 0 || nr == 0) continue;
+        float cost = l.area() * nl + r.area() * nr;
+        if (cost < best_cost) best_cost = cost, best = s;
+      }
+      if (best > 0 && best_cost < box.area() * count) {
+        int i = begin, j = end - 1;
+        while (i <= j) {
+          if (bin_of(i) < best) {
+            ++i;
+          } else {
+            swap_tris(i, j--);
+          }
+        }
+        if (i > begin && i < end) return i;
+      }
+    }
+    // Median split (stable by index so the layout is deterministic).
+    int mid = begin + count / 2;
+    std::vector<int> order(count);
+    std::iota(order.begin(), order.end(), begin);
+    std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return center(a, axis) < center(b, axis); });
+    std::vector<BankTriangle> t(count);
+    std::vector<Box> bx(count);
+    for (int k = 0; k < count; ++k) t[k] = tris_[order[k]], bx[k] = boxes_[order[k]];
+    std::copy(t.begin(), t.end(), tris_.begin() + begin);
+    std::copy(bx.begin(), bx.end(), boxes_.begin() + begin);
+    return mid;
+  }
+};
+
+void put3(float* dst, const Vec3& v) {
+  for (int a = 0; a < 3; ++a) dst[a] = v[a];
+}
+
+}  // namespace
+
+BankedScene partition_scene(const Scene& scene, int num_pes) {
+  BankedScene bs;
+  bs.num_pes = num_pes;
+  Vec3 slo, shi;
+  scene.bounds(slo, shi);
+  Box sbox;
+  sbox.grow(slo.data());
+  sbox.grow(shi.data());
+  const std::size_t total = scene.triangles.size();
+
+  // 1. Clusters. Target: several clusters per PE so that bisection can
+  // balance; regions are about diag / cbrt(P) across.
+  std::size_t max_tris = std::max<std::size_t>(64, (total + 8 * num_pes - 1) / (8 * static_cast<std::size_t>(num_pes)));
+  float region = sbox.diagonal() / std::cbrt(static_cast<float>(num_pes));
+  float max_extent = std::max(region, 1e-30f);
+  std::vector<std::vector<int>> by_object(std::max(scene.num_objects, 1));
+  for (std::size_t i = 0; i < total; ++i) {
+    int o = std::clamp(scene.triangles[i].object_id, 0, static_cast<int>(by_object.size()) - 1);
+    by_object[o].push_back(static_cast<int>(i));
+  }
+  std::vector<ClusterBuild> cb;
+  for (auto& tris : by_object)
+    if (!tris.empty()) split_object(scene, std::move(tris), max_tris, max_extent, cb);
+
+  // 2. Regions.
+  std::vector<int> all(cb.size());
+  std::iota(all.begin(), all.end(), 0);
+  assign_regions(cb, all, 0, num_pes);
+  std::stable_sort(cb.begin(), cb.end(), [](const ClusterBuild& a, const ClusterBuild& b) { return a.pe < b.pe; });
+
+  // 3. Banks: triangles of each PE contiguous, cluster by cluster.
+  bs.triangles.reserve(total);
+  std::vector<Box> tri_boxes;
+  tri_boxes.reserve(total);
+  std::vector<std::pair<int, int>> ranges(cb.size());
+  bs.clusters.resize(cb.size());
+  for (std::size_t c = 0; c < cb.size(); ++c) {
+    int begin = static_cast<int>(bs.triangles.size());
+    Vec3 ctr{0.5f * (cb[c].box.lo[0] + cb[c].box.hi[0]), 0.5f * (cb[c].box.lo[1] + cb[c].box.hi[1]),
+             0.5f * (cb[c].box.lo[2] + cb[c].box.hi[2])};
+    double r2 = 0;
+    for (int i : cb[c].tris) {
+      const Triangle& t = scene.triangles[i];
+      BankTriangle bt{};
+      put3(bt.v0, t.v0);
+      put3(bt.v1, t.v1);
+      put3(bt.v2, t.v2);
+      bt.facet_id = t.facet_id;
+      bt.object_id = t.object_id;
+      bt.material = t.material;
+      bs.triangles.push_back(bt);
+      tri_boxes.push_back(tri_box(t));
+      for (const Vec3* v : {&t.v0, &t.v1, &t.v2}) {
+        double d2 = 0;
+        for (int a = 0; a < 3; ++a) d2 += double((*v)[a] - ctr[a]) * double((*v)[a] - ctr[a]);
+        r2 = std::max(r2, d2);
+      }
+    }
+    ranges[c] = {begin, static_cast<int>(bs.triangles.size())};
+    Cluster& cl = bs.clusters[c];
+    put3(cl.center, ctr);
+    // Padded so that float rounding in the sphere test never culls a facet.
+    cl.radius = static_cast<float>(std::sqrt(r2)) * 1.0001f + 1e-5f * sbox.diagonal();
+    for (int a = 0; a < 3; ++a) {
+      cl.bmin[a] = cb[c].box.lo[a];
+      cl.bmax[a] = cb[c].box.hi[a];
+    }
+    cl.pe = cb[c].pe;
+    cl.root = -1;
+  }
+
+  bs.pes.resize(num_pes);
+  BankBvhBuilder builder(bs.nodes, bs.triangles, tri_boxes);
+  std::size_t c = 0;
+  for (int p = 0; p < num_pes; ++p) {
+    PeInfo& pe = bs.pes[p];
+    std::size_t c_begin = c;
+    while (c < cb.size() && cb[c].pe == p) ++c;
+    pe.cluster_begin = static_cast<int>(c_begin);
+    pe.cluster_end = static_cast<int>(c);
+    pe.tri_begin = c_begin < c ? ranges[c_begin].first : (c_begin < ranges.size() ? ranges[c_begin].first
+                                                                                    : static_cast<int>(total));
+    pe.tri_end = c_begin < c ? ranges[c - 1].second : pe.tri_begin;
+    pe.node_begin = static_cast<int>(bs.nodes.size());
+    builder.build_bank(bs.clusters, static_cast<int>(c_begin), static_cast<int>(c), ranges);
+    pe.node_end = static_cast<int>(bs.nodes.size());
+    Box sb;
+    for (std::size_t k = c_begin; k < c; ++k) {
+      const Cluster& cl = bs.clusters[k];
+      float lo[3], hi[3];
+      for (int a = 0; a < 3; ++a) lo[a] = cl.center[a] - cl.radius, hi[a] = cl.center[a] + cl.radius;
+      sb.grow(lo);
+      sb.grow(hi);
+    }
+    for (int a = 0; a < 3; ++a) {
+      pe.bmin[a] = c_begin < c ? sb.lo[a] : 0.0f;
+      pe.bmax[a] = c_begin < c ? sb.hi[a] : 0.0f;
+    }
+    std::uint64_t bytes = std::uint64_t(pe.tri_end - pe.tri_begin) * sizeof(BankTriangle) +
+                          std::uint64_t(pe.node_end - pe.node_begin) * sizeof(BankNode);
+    bs.bank_bytes.push_back(bytes);
+  }
+  bs.max_bvh_depth = builder.max_depth;
+
+  for (const MaterialDesc& m : scene.materials) {
+    Material g{};
+    put3(g.ka, m.ka);
+    put3(g.kd, m.kd);
+    put3(g.ks, m.ks);
+    put3(g.kr, m.kr());
+    put3(g.kt, m.kt());
+    g.ns = m.ns;
+    g.ni = m.ni;
+    bs.materials.push_back(g);
+  }
+  for (const LightDesc& l : scene.lights) {
+    Light g{};
+    put3(g.position, l.position);
+    put3(g.intensity, l.intensity);
+    bs.lights.push_back(g);
+  }
+  bs.global_bytes = bs.clusters.size() * sizeof(Cluster) + bs.pes.size() * sizeof(PeInfo) +
+                    bs.materials.size() * sizeof(Material) + bs.lights.size() * sizeof(Light);
+  std::uint64_t all_banks = 0;
+  for (auto b : bs.bank_bytes) all_banks += b;
+  bs.replicated_bytes = all_banks + bs.global_bytes;
+  return bs;
+}
+
+// SPEC camera basis, computed in float exactly as the formula reads.
+FrameParams frame_params(const Scene& scene, const BankedScene& bs, int bank_capacity) {
+  FrameParams fp{};
+  const CameraDesc& cam = scene.camera;
+  float f[3], r[3], u[3];
+  {
+    float d[3] = {cam.look_at[0] - cam.eye[0], cam.look_at[1] - cam.eye[1], cam.look_at[2] - cam.eye[2]};
+    float l = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+    for (int a = 0; a < 3; ++a) f[a] = d[a] / l;
+    float c[3] = {f[1] * cam.up[2] - f[2] * cam.up[1], f[2] * cam.up[0] - f[0] * cam.up[2],
+                  f[0] * cam.up[1] - f[1] * cam.up[0]};
+    float cl = std::sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
+    for (int a = 0; a < 3; ++a) r[a] = c[a] / cl;
+    u[0] = r[1] * f[2] - r[2] * f[1];
+    u[1] = r[2] * f[0] - r[0] * f[2];
+    u[2] = r[0] * f[1] - r[1] * f[0];
+  }
+  for (int a = 0; a < 3; ++a) {
+    fp.eye[a] = cam.eye[a];
+    fp.forward[a] = f[a];
+    fp.right[a] = r[a];
+    fp.up[a] = u[a];
+    fp.ambient[a] = scene.ambient[a];
+    fp.background[a] = scene.background[a];
+  }
+  fp.tan_half_fov = std::tan(cam.fov_deg * 0.5f * static_cast<float>(M_PI) / 180.0f);
+  fp.aspect = static_cast<float>(scene.width) / static_cast<float>(scene.height);
+  fp.epsilon = scene.epsilon();
+  fp.width = scene.width;
+  fp.height = scene.height;
+  fp.max_depth = scene.max_depth;
+  fp.num_lights = static_cast<int>(bs.lights.size());
+  fp.num_pes = bs.num_pes;
+  fp.num_clusters = static_cast<int>(bs.clusters.size());
+  fp.bank_capacity = bank_capacity;
+  fp.spawn_slots = fp.num_lights + 2;
+  return fp;
+}
+
+}  // namespace opsila

@@ -1,0 +1,42 @@
+// Scene distribution over the PEs' banks (never duplicated):
+//  1. objects are cut into clusters: an object stays whole unless it has too
+//     many facets or is much larger than a PE's region, in which case it is
+//     split into spatially coherent pieces (median splits of its triangles);
+//  2. space is cut into one region per PE by recursive bisection at the
+//     facet-weighted median of the cluster centres (a k-d subdivision: regular
+//     in structure, with equal shares of the scene rather than equal volumes);
+//     each cluster lives in the bank of the region holding its centre;
+//  3. each bank gets its own BVH (clusters at the top, facets below), and
+//     every PE gets the bounding spheres of all clusters.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "opsila_shared.h"
+#include "core/scene.h"
+
+namespace opsila {
+
+struct BankedScene {
+  int num_pes = 0;
+  std::vector<BankTriangle> triangles;  // bank p: [pes[p].tri_begin, tri_end)
+  std::vector<BankNode> nodes;          // bank p: [pes[p].node_begin, node_end), root first
+  std::vector<Cluster> clusters;        // sorted by PE
+  std::vector<PeInfo> pes;
+  std::vector<Material> materials;
+  std::vector<Light> lights;
+  std::vector<std::uint64_t> bank_bytes;  // facets + BVH nodes of each bank
+  std::uint64_t global_bytes = 0;         // what every PE knows: spheres, PE boxes, materials, lights
+  std::uint64_t replicated_bytes = 0;     // one full copy of the scene (what each PE would hold if duplicated)
+  int max_bvh_depth = 0;
+};
+
+BankedScene partition_scene(const Scene& scene, int num_pes);
+
+// Per-frame constants for the kernels: the SPEC camera basis computed in
+// float exactly as the formula reads, so that every renderer built on a
+// banked scene casts the same primary rays bit for bit.
+FrameParams frame_params(const Scene& scene, const BankedScene& bs, int bank_capacity);
+
+}  // namespace opsila

@@ -1,0 +1,394 @@
+// The OPSILA host loop: item buffer (SIMD), primary descriptors, then rounds
+// of scatter (SIMD) + SPMD phase until no descriptor is left.
+#include "machine/renderer.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <string>
+
+#include "machine/descriptors.h"
+#include "opsila_shared.h"
+#include "machine/partition.h"
+
+namespace opsila {
+namespace {
+
+constexpr int kTrafficMaxPes = 64;  // PE x PE traffic matrices are kept up to this many PEs
+
+struct Vec {
+  double x, y, z;
+};
+Vec sub(const Vec3& a, const Vec3& b) { return {double(a[0]) - b[0], double(a[1]) - b[1], double(a[2]) - b[2]}; }
+double dot(const Vec& a, const Vec& b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+Vec cross(const Vec& a, const Vec& b) { return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x}; }
+Vec normalize(const Vec& a) {
+  double l = std::sqrt(dot(a, a));
+  return {a.x / l, a.y / l, a.z / l};
+}
+
+
+// "Projected object boxes": each cluster box as a conservative pixel
+// rectangle (x0, y0, x1, y1), the whole screen when a corner is behind the eye.
+std::vector<cl_int4> cluster_rects(const Scene& scene, const BankedScene& bs) {
+  const CameraDesc& cam = scene.camera;
+  Vec f = normalize(sub(cam.look_at, cam.eye));
+  Vec up{cam.up[0], cam.up[1], cam.up[2]};
+  Vec r = normalize(cross(f, up));
+  Vec u = cross(r, f);
+  double s = std::tan(cam.fov_deg * 0.5 * M_PI / 180.0), a = double(scene.width) / scene.height;
+  int W = scene.width, H = scene.height;
+  std::vector<cl_int4> rects(bs.clusters.size());
+  for (std::size_t c = 0; c < bs.clusters.size(); ++c) {
+    const Cluster& cl = bs.clusters[c];
+    double x0 = INFINITY, y0 = INFINITY, x1 = -INFINITY, y1 = -INFINITY;
+    bool behind = false;
+    for (int k = 0; k < 8 && !behind; ++k) {
+      Vec3 corner{(k & 1) ? cl.bmax[0] : cl.bmin[0], (k & 2) ? cl.bmax[1] : cl.bmin[1],
+                  (k & 4) ? cl.bmax[2] : cl.bmin[2]};
+      Vec d = sub(corner, cam.eye);
+      double cz = dot(d, f);
+      if (cz <= 1e-6 * std::sqrt(dot(d, d)) || cz <= 0) {
+        behind = true;
+        break;
+      }
+      double px = ((dot(d, r) / cz) / (s * a) + 1.0) * W * 0.5 - 0.5;
+      double py = (1.0 - (dot(d, u) / cz) / s) * H * 0.5 - 0.5;
+      x0 = std::min(x0, px), x1 = std::max(x1, px), y0 = std::min(y0, py), y1 = std::max(y1, py);
+    }
+    cl_int4 rc;
+    if (behind || !std::isfinite(x0 + x1 + y0 + y1)) {
+      rc.s[0] = 0, rc.s[1] = 0, rc.s[2] = W - 1, rc.s[3] = H - 1;
+    } else {
+      // One pixel of margin: the rectangle only culls, the ray test decides.
+      rc.s[0] = static_cast<int>(std::max(-1.0, std::floor(x0) - 1));
+      rc.s[1] = static_cast<int>(std::max(-1.0, std::floor(y0) - 1));
+      rc.s[2] = static_cast<int>(std::min(double(W), std::ceil(x1) + 1));
+      rc.s[3] = static_cast<int>(std::min(double(H), std::ceil(y1) + 1));
+    }
+    rects[c] = rc;
+  }
+  return rects;
+}
+
+// Device memory that render() allocates before the first launch.
+struct DevicePlan {
+  std::uint64_t scene = 0, image = 0, descriptors = 0, other = 0;
+  std::uint64_t total() const { return scene + image + descriptors + other; }
+};
+
+DevicePlan plan_device_memory(const BankedScene& bs, std::size_t npix, int P, int n, int S, int depth) {
+  using u64 = std::uint64_t;
+  DevicePlan plan;
+  plan.scene = bs.triangles.size() * sizeof(BankTriangle) + bs.nodes.size() * sizeof(BankNode) +
+               bs.clusters.size() * (sizeof(Cluster) + sizeof(cl_int4)) + bs.pes.size() * sizeof(PeInfo) +
+               bs.materials.size() * sizeof(Material) + std::max<std::size_t>(1, bs.lights.size()) * sizeof(Light);
+  // Item buffer (pair, triangle, distance) and 64-bit fixed-point RGB sums.
+  plan.image = u64(npix) * (sizeof(cl_int2) + sizeof(cl_int) + sizeof(cl_float) + 6 * sizeof(cl_uint));
+  // Banks (P*n), SPMD output slots (P*n*S), two queues (as sized below).
+  const u64 out_len = u64(P) * n * S, inject = std::max<u64>(u64(P) * n / 4, 1024);
+  const u64 queue_cap = out_len + 2 * inject;
+  plan.descriptors = (u64(P) * n + out_len + 2 * queue_cap) * DescriptorSet::kBytes;
+  // Stats, traffic, and the scatter's ranks and block counts (1.5x the source).
+  const u64 source = (out_len + queue_cap) * 3 / 2;
+  plan.other = u64(OPSILA_MAX_DEPTH) * P * OPSILA_STAT_COUNT * 2 * sizeof(cl_uint) +
+               (P <= kTrafficMaxPes ? u64(depth) * P * P : 1) * sizeof(cl_uint) +
+               source * sizeof(cl_int) + (source / ScatterPass::kBlock + 1) * P * sizeof(cl_int);
+  return plan;
+}
+
+std::string size_text(std::uint64_t bytes) {
+  char text[48];
+  if (bytes < 10 * 1024)
+    std::snprintf(text, sizeof text, "%llu bytes", static_cast<unsigned long long>(bytes));
+  else if (bytes < 10 * 1024 * 1024)
+    std::snprintf(text, sizeof text, "%.1f KiB", double(bytes) / 1024.0);
+  else
+    std::snprintf(text, sizeof text, "%.1f MiB", double(bytes) / (1024.0 * 1024.0));
+  return text;
+}
+
+std::uint64_t fixed_pair(const std::vector<cl_uint>& v, std::size_t i) {
+  return (std::uint64_t(v[2 * i + 1]) << 32) | v[2 * i];
+}
+
+}  // namespace
+
+void check_kernel_limits(const Scene& scene) {
+  if (scene.max_depth < 1 || scene.max_depth > OPSILA_MAX_DEPTH)
+    throw InputError("--depth " + std::to_string(scene.max_depth) + ": must be 1.." +
+                     std::to_string(OPSILA_MAX_DEPTH));
+  if (static_cast<int>(scene.lights.size()) > OPSILA_MAX_LIGHTS)
+    throw InputError("scene has " + std::to_string(scene.lights.size()) + " lights; at most " +
+                     std::to_string(OPSILA_MAX_LIGHTS) + " are supported");
+  if (scene.triangles.empty()) throw InputError("scene has no facets");
+}
+
+RenderResult render(const Scene& scene, const RenderSettings& settings, ClRuntime& rt) {
+  const int P = settings.num_pes;
+  if (P < 1 || P > OPSILA_MAX_PES)
+    throw InputError("--pes " + std::to_string(P) + ": must be 1.." + std::to_string(OPSILA_MAX_PES));
+  check_kernel_limits(scene);
+  const std::size_t npix = std::size_t(scene.width) * scene.height;
+
+  BankedScene bs = partition_scene(scene, P);
+  const int S = static_cast<int>(bs.lights.size()) + 2;
+
+  // n, the paper's bank size: enough descriptors in flight to fill the
+  // device, bounded by memory. GPUs want ~2^17 in flight, CPUs far fewer.
+  int n = settings.bank_capacity;
+  if (n <= 0) {
+    std::size_t target = rt.device().is_gpu ? (1u << 17) : (1u << 16);
+    target = std::min<std::size_t>(target, std::max<std::size_t>(npix, 1024));
+    n = static_cast<int>(std::max<std::size_t>(1, target / P));
+  }
+  if (std::size_t(P) * n * S > (1u << 30))
+    throw InputError("--bank-capacity " + std::to_string(n) + " is too large for " + std::to_string(P) + " PEs and " +
+                     std::to_string(S - 2) + " lights");
+  // Everything allocated before the first launch must fit the device's global
+  // memory (device_buffer checks each buffer against the largest single
+  // allocation). An automatic n halves until it fits; an explicit
+  // --bank-capacity, or an image that does not fit even with n = 1, is refused.
+  if (settings.bank_capacity <= 0)
+    while (n > 1 && plan_device_memory(bs, npix, P, n, S, scene.max_depth).total() > rt.global_mem()) n /= 2;
+  if (const DevicePlan plan = plan_device_memory(bs, npix, P, n, S, scene.max_depth); plan.total() > rt.global_mem())
+    throw ClError("the render needs " + size_text(plan.total()) + " of device memory (image " + size_text(plan.image) +
+                  ", descriptors " + size_text(plan.descriptors) + ", scene " + size_text(plan.scene) + ", other " +
+                  size_text(plan.other) + "), more than the device's global memory (" + size_text(rt.global_mem()) +
+                  (rt.memory_limit() ? ", as lowered by OPSILA_DEVICE_MEMORY_LIMIT" : ", CL_DEVICE_GLOBAL_MEM_SIZE") +
+                  "): use a smaller --size, fewer --pes or a smaller --bank-capacity");
+  const std::size_t out_len = std::size_t(P) * n * S;
+  FrameParams fp = frame_params(scene, bs, n);
+
+  RenderResult result;
+  result.width = scene.width;
+  result.height = scene.height;
+  RenderStats& st = result.stats;
+  st.num_pes = P;
+  st.bank_capacity = n;
+  st.num_clusters = static_cast<int>(bs.clusters.size());
+  st.bank_bytes = bs.bank_bytes;
+  st.global_bytes = bs.global_bytes;
+  st.replicated_bytes = bs.replicated_bytes;
+
+  rt.program();  // compile before timing
+  cl::Kernel k_item = rt.kernel("item_buffer");
+  cl::Kernel k_primary = rt.kernel("build_primary");
+  ScatterPass scatter(rt, P);
+  cl::Kernel k_spmd = rt.kernel("spmd_phase");
+
+  // Work-group size of a PE: queried, never assumed.
+  std::size_t spmd_wg = k_spmd.getWorkGroupInfo<CL_KERNEL_WORK_GROUP_SIZE>(rt.device().device);
+  std::size_t multiple = k_spmd.getWorkGroupInfo<CL_KERNEL_PREFERRED_WORK_GROUP_SIZE_MULTIPLE>(rt.device().device);
+  spmd_wg = std::min<std::size_t>(spmd_wg, rt.device().is_gpu ? 64 : 16);
+  if (multiple > 0 && spmd_wg >= multiple) spmd_wg = spmd_wg / multiple * multiple;
+  spmd_wg = std::max<std::size_t>(1, std::min<std::size_t>(spmd_wg, std::size_t(n)));
+  st.work_group_size = spmd_wg;
+
+  auto t_start = std::chrono::steady_clock::now();
+  cl::CommandQueue& q = rt.queue();
+
+  // Scene: banks and the global (every-PE) tables.
+  cl::Buffer b_tris = upload(rt, bs.triangles, "bank facets");
+  cl::Buffer b_nodes = upload(rt, bs.nodes, "bank BVH nodes");
+  cl::Buffer b_clusters = upload(rt, bs.clusters, "cluster spheres");
+  cl::Buffer b_pes = upload(rt, bs.pes, "PE table");
+  cl::Buffer b_mats = upload(rt, bs.materials, "materials");
+  std::vector<Light> lights = bs.lights;
+  if (lights.empty()) lights.push_back(Light{});
+  cl::Buffer b_lights = upload(rt, lights, "lights");
+  cl::Buffer b_rects = upload(rt, cluster_rects(scene, bs), "projected cluster boxes");
+
+  // Item buffer and pixel sums.
+  cl::Buffer b_items = device_buffer(rt, npix * sizeof(cl_int2), "item buffer");
+  cl::Buffer b_item_tri = device_buffer(rt, npix * sizeof(cl_int), "item buffer hits");
+  cl::Buffer b_item_t = device_buffer(rt, npix * sizeof(cl_float), "item buffer distances");
+  cl::Buffer b_accum = device_buffer(rt, npix * 6 * sizeof(cl_uint), "pixel sums");
+  zero_buffer(rt, b_accum, npix * 6 * sizeof(cl_uint), "pixel sums");
+  const std::size_t nstats = std::size_t(OPSILA_MAX_DEPTH) * P * OPSILA_STAT_COUNT * 2;
+  cl::Buffer b_stats = device_buffer(rt, nstats * sizeof(cl_uint), "stats");
+  zero_buffer(rt, b_stats, nstats * sizeof(cl_uint), "stats");
+  const int traffic_levels = P <= kTrafficMaxPes ? scene.max_depth : 0;
+  const std::size_t ntraffic = std::max<std::size_t>(1, std::size_t(traffic_levels) * P * P);
+  cl::Buffer b_traffic = device_buffer(rt, ntraffic * sizeof(cl_uint), "traffic");
+  zero_buffer(rt, b_traffic, ntraffic * sizeof(cl_uint), "traffic");
+
+  // Descriptors: banks (P*n), SPMD outputs (P*n*S), waiting queue (ping-pong).
+  DescriptorSet banks, outputs, queue_a, queue_b;
+  banks.allocate(rt, std::size_t(P) * n, "descriptor banks");
+  outputs.allocate(rt, out_len, "SPMD output slots");
+  // Primaries are injected when the queue runs short, a quarter of the banks'
+  // capacity at a time: descriptors waiting for a busy PE are moved again by
+  // every scatter, so fewer of them wait when the work arrives in smaller steps.
+  const std::size_t inject = std::max<std::size_t>(std::size_t(P) * n / 4, 1024);
+  std::size_t queue_cap = out_len + 2 * inject;
+  queue_a.allocate(rt, queue_cap, "descriptor queue");
+  queue_b.allocate(rt, queue_cap, "descriptor queue");
+  cl::Buffer b_processed = device_buffer(rt, P * sizeof(cl_int), "processed counts");
+  zero_buffer(rt, b_processed, P * sizeof(cl_int), "processed counts");
+  Launcher launch(rt, st.launches);
+
+  // SIMD phase 1: item buffer. A work-group is a square tile of pixels, as
+  // large as the kernel allows up to 8x8; launches are bounded to about
+  // `item_buffer_tile` pixels each so no launch runs unbounded.
+  {
+    std::size_t allowed = 0;
+    cl_check(k_item.getWorkGroupInfo(rt.device().device, CL_KERNEL_WORK_GROUP_SIZE, &allowed),
+             "clGetKernelWorkGroupInfo(item_buffer)");
+    int tile_w = 8;
+    while (tile_w > 1 && std::size_t(tile_w) * tile_w > allowed) tile_w /= 2;
+    const int tiles_x = (scene.width + tile_w - 1) / tile_w, tiles_y = (scene.height + tile_w - 1) / tile_w;
+    const int tiles = tiles_x * tiles_y;
+    const int per_launch = std::max(1, settings.item_buffer_tile / (tile_w * tile_w));
+    for (int begin = 0; begin < tiles; begin += per_launch) {
+      int count = std::min(per_launch, tiles - begin);
+      int a = 0;
+      k_item.setArg(a++, fp);
+      k_item.setArg(a++, b_clusters);
+      k_item.setArg(a++, b_rects);
+      k_item.setArg(a++, b_nodes);
+      k_item.setArg(a++, b_tris);
+      k_item.setArg(a++, tile_w);
+      k_item.setArg(a++, tiles_x);
+      k_item.setArg(a++, begin);
+      k_item.setArg(a++, b_items);
+      k_item.setArg(a++, b_item_tri);
+      k_item.setArg(a++, b_item_t);
+      launch.run(k_item, "item_buffer", std::size_t(count) * tile_w * tile_w, std::size_t(tile_w) * tile_w, -1);
+    }
+  }
+
+  // Rounds: scatter (SIMD) then SPMD phase, until nothing is left.
+  std::size_t next_pixel = 0, queue_len = 0;
+  bool outputs_live = false;
+  for (int round = 0;; ++round) {
+    if (next_pixel < npix && queue_len < inject) {
+      std::size_t count = std::min(inject, npix - next_pixel);
+      if (queue_len + count > queue_a.capacity) count = queue_a.capacity - queue_len;
+      int a = 0;
+      k_primary.setArg(a++, fp);
+      k_primary.setArg(a++, b_pes);
+      k_primary.setArg(a++, b_item_tri);
+      k_primary.setArg(a++, b_item_t);
+      k_primary.setArg(a++, static_cast<int>(next_pixel));
+      k_primary.setArg(a++, static_cast<int>(count));
+      k_primary.setArg(a++, static_cast<int>(queue_len));
+      a = queue_a.set_args(k_primary, a);
+      k_primary.setArg(a++, b_accum);
+      launch.run(k_primary, "build_primary", round_up(count, 64), 0, round);
+      next_pixel += count;
+      queue_len += count;
+    }
+    const std::size_t src_out = outputs_live ? out_len : 0;
+    const std::size_t total = src_out + queue_len;
+    if (total == 0) break;
+    // The next queue must hold every entry that does not find a bank slot.
+    if (queue_b.capacity < total) {
+      queue_b.allocate(rt, total + total / 2, "descriptor queue");
+    }
+    ScatterPass::Args sa;
+    sa.out_len = static_cast<int>(src_out);
+    sa.queue_len = static_cast<int>(queue_len);
+    sa.n = n;
+    sa.spawn_slots = S;
+    sa.processed = &b_processed;
+    sa.outputs = &outputs;
+    sa.queue = &queue_a;
+    sa.banks = &banks;
+    sa.next_queue = &queue_b;
+    sa.traffic = &b_traffic;
+    sa.traffic_levels = traffic_levels;
+    scatter.enqueue(launch, sa, round);
+
+    int a = 0;
+    k_spmd.setArg(a++, fp);
+    k_spmd.setArg(a++, b_pes);
+    k_spmd.setArg(a++, b_clusters);
+    k_spmd.setArg(a++, b_nodes);
+    k_spmd.setArg(a++, b_tris);
+    k_spmd.setArg(a++, b_mats);
+    k_spmd.setArg(a++, b_lights);
+    a = banks.set_args(k_spmd, a);
+    k_spmd.setArg(a++, scatter.bank_count);
+    k_spmd.setArg(a++, b_processed);
+    a = outputs.set_args(k_spmd, a);
+    k_spmd.setArg(a++, b_accum);
+    k_spmd.setArg(a++, b_stats);
+    launch.run(k_spmd, "spmd_phase", std::size_t(P) * spmd_wg, spmd_wg, round);
+
+    cl_int counts[2] = {0, 0};
+    launch.check(q.enqueueReadBuffer(scatter.counts, CL_TRUE, 0, sizeof(counts), counts),
+                 "clEnqueueReadBuffer(scatter counts)");
+    st.rounds = round + 1;
+    st.overflow_deferrals += static_cast<std::uint64_t>(counts[0]);
+    std::swap(queue_a, queue_b);
+    queue_len = static_cast<std::size_t>(counts[0]);
+    outputs_live = counts[1] > 0;
+    if (queue_a.capacity < queue_len + inject) {
+      // Grow the live queue (rare): copy into a larger set.
+      DescriptorSet bigger;
+      bigger.allocate(rt, (queue_len + inject) * 2, "descriptor queue");
+      queue_a.copy_prefix_to(rt, bigger, queue_len);
+      queue_a = bigger;
+    }
+    if (round % 16 == 15) launch.harvest();
+  }
+
+  // Read back: pixel sums (fixed point), item buffer, stats.
+  std::vector<cl_uint> accum(npix * 6);
+  launch.check(q.enqueueReadBuffer(b_accum, CL_TRUE, 0, accum.size() * sizeof(cl_uint), accum.data()),
+               "clEnqueueReadBuffer(pixel sums)");
+  result.item_buffer.resize(npix * 2);
+  launch.check(q.enqueueReadBuffer(b_items, CL_TRUE, 0, npix * sizeof(cl_int2), result.item_buffer.data()),
+               "clEnqueueReadBuffer(item buffer)");
+  launch.check(q.finish(), "clFinish");
+  st.render_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
+  launch.harvest();
+
+  result.rgb.resize(npix * 3);
+  for (std::size_t i = 0; i < npix * 3; ++i)
+    result.rgb[i] = static_cast<float>(static_cast<double>(static_cast<std::int64_t>(fixed_pair(accum, i))) /
+                                       OPSILA_FIXED_SCALE);
+
+  std::vector<cl_uint> raw(nstats);
+  cl_check(q.enqueueReadBuffer(b_stats, CL_TRUE, 0, nstats * sizeof(cl_uint), raw.data()), "clEnqueueReadBuffer(stats)");
+  st.counters.assign(scene.max_depth,
+                     std::vector<std::vector<std::uint64_t>>(P, std::vector<std::uint64_t>(OPSILA_STAT_COUNT, 0)));
+  for (int l = 0; l < scene.max_depth; ++l)
+    for (int p = 0; p < P; ++p)
+      for (int s = 0; s < OPSILA_STAT_COUNT; ++s)
+        st.counters[l][p][s] = fixed_pair(raw, (std::size_t(l) * P + p) * OPSILA_STAT_COUNT + s);
+  if (traffic_levels > 0) {
+    std::vector<cl_uint> tr(ntraffic);
+    cl_check(q.enqueueReadBuffer(b_traffic, CL_TRUE, 0, ntraffic * sizeof(cl_uint), tr.data()),
+             "clEnqueueReadBuffer(traffic)");
+    st.traffic.assign(traffic_levels, std::vector<std::uint64_t>(std::size_t(P) * P));
+    for (int l = 0; l < traffic_levels; ++l)
+      for (std::size_t k = 0; k < std::size_t(P) * P; ++k) st.traffic[l][k] = tr[std::size_t(l) * P * P + k];
+  }
+
+  // Totals. Every primary ray is cast by the item buffer; descriptors are
+  // spawned as primary hits, children and shadow rays, and finish as shaded
+  // hits, misses, occluded or lit shadow rays.
+  st.primary_rays = npix;
+  for (std::size_t i = 0; i < npix; ++i)
+    if (result.item_buffer[2 * i] >= 0) ++st.primary_hits;
+  std::uint64_t spawned_children = 0, spawned_shadow = 0, finished = 0, forwards = 0;
+  for (int l = 0; l < scene.max_depth; ++l)
+    for (int p = 0; p < P; ++p) {
+      const auto& c = st.counters[l][p];
+      spawned_children += c[OPSILA_STAT_SPAWN_RADIANCE];
+      spawned_shadow += c[OPSILA_STAT_SPAWN_SHADOW];
+      finished += c[OPSILA_STAT_RESOLVED] + c[OPSILA_STAT_MISS] + c[OPSILA_STAT_OCCLUDED] + c[OPSILA_STAT_LIT];
+      forwards += c[OPSILA_STAT_FORWARD];
+    }
+  st.secondary_rays = spawned_children;
+  st.shadow_rays = spawned_shadow;
+  st.descriptors_spawned = st.primary_hits + spawned_children + spawned_shadow;
+  st.descriptors_finished = finished;
+  st.forwards = forwards;
+  return result;
+}
+
+}  // namespace opsila

@@ -1,0 +1,68 @@
+// The OPSILA renderer on OpenCL: item buffer (SIMD), then rounds of SPMD phase
+// + scatter (SIMD) until every descriptor has finished.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "machine/cl_runtime.h"
+#include "core/scene.h"
+
+namespace opsila {
+
+struct RenderSettings {
+  int num_pes = 16;
+  int bank_capacity = 0;  // n; 0 = choose from the device's memory
+  int item_buffer_tile = 1 << 16;  // pixels per item-buffer launch (bounded work per launch)
+};
+
+// One kernel launch, named, with its OpenCL-profiled time.
+struct LaunchRecord {
+  std::string name;   // e.g. "item_buffer", "spmd_phase", "scatter_move"
+  int round = -1;     // SPMD/scatter round, -1 for set-up kernels
+  double seconds = 0; // CL_PROFILING_COMMAND_END - START
+};
+
+struct RenderStats {
+  // counters[level][pe][OPSILA_STAT_*]
+  std::vector<std::vector<std::vector<std::uint64_t>>> counters;
+  std::uint64_t primary_rays = 0;    // pixels (every primary ray is cast by the item buffer)
+  std::uint64_t primary_hits = 0;    // primary descriptors built from the item buffer
+  std::uint64_t secondary_rays = 0;  // reflected + transmitted rays spawned
+  std::uint64_t shadow_rays = 0;     // shadow rays spawned
+  std::uint64_t descriptors_spawned = 0;   // descriptors created (primary hits + forwards excluded)
+  std::uint64_t descriptors_finished = 0;  // shaded hits + misses + occluded + lit
+  std::uint64_t forwards = 0;        // extra descriptors for cross-bank nearest hit / shadows
+  std::uint64_t overflow_deferrals = 0;  // descriptors that waited a round for a bank slot
+  int rounds = 0;                    // SPMD + scatter rounds
+  double render_seconds = 0;         // host wall time of the phases
+  std::vector<LaunchRecord> launches;
+  std::vector<std::uint64_t> bank_bytes;  // scene bytes per bank
+  std::uint64_t global_bytes = 0;         // replicated per PE: spheres, PE boxes, materials, lights
+  std::uint64_t replicated_bytes = 0;     // what a replicated scene would cost on each PE
+  // traffic[level][src_pe * P + dst_pe]: descriptors sent (scatter)
+  std::vector<std::vector<std::uint64_t>> traffic;
+  int bank_capacity = 0;
+  int num_pes = 0;
+  int num_clusters = 0;
+  std::size_t work_group_size = 0;
+};
+
+struct RenderResult {
+  int width = 0, height = 0;
+  std::vector<float> rgb;               // linear, row 0 = top, 3 floats per pixel
+  std::vector<std::int32_t> item_buffer; // (object, facet) per pixel, -1,-1 on miss
+  RenderStats stats;
+};
+
+// Throws InputError when the scene exceeds what the kernels support (depth,
+// lights) or has no facet. Shared by every OpenCL renderer.
+void check_kernel_limits(const Scene& scene);
+
+// Renders `scene` (camera, size, depth, lights already final) on `device`.
+// Throws InputError for impossible requests (sizes beyond the device) and
+// ClError for driver faults.
+RenderResult render(const Scene& scene, const RenderSettings& settings, ClRuntime& runtime);
+
+}  // namespace opsila

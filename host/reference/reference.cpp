@@ -1,0 +1,448 @@
+// SPEC.md in code, for one processor. Sections below follow SPEC's order:
+// camera, geometry (intersection + a BVH that only speeds up the search),
+// shading. Arithmetic is single precision, like the OpenCL kernels.
+#include "reference/reference.h"
+
+#include "opsila_shared.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <thread>
+
+#include <glm/glm.hpp>
+
+namespace opsila {
+
+namespace {
+
+using glm::vec3;
+
+vec3 to_glm(const Vec3& v) { return vec3(v[0], v[1], v[2]); }
+Vec3 to_vec3(const vec3& v) { return Vec3{v.x, v.y, v.z}; }
+bool any_nonzero(const vec3& v) { return v.x != 0.0f || v.y != 0.0f || v.z != 0.0f; }
+
+// ---------------------------------------------------------------- geometry
+
+// A triangle as the tracer needs it: the vertices' edges for the
+// intersection test, Ng from the vertices (SPEC "Geometry"), and the ids.
+struct Tri {
+  vec3 v0, e1, e2;
+  vec3 normal;   // Ng = normalize(cross(v1 - v0, v2 - v0))
+  bool degenerate;  // zero area: no well-defined Ng, never hit
+  int material, object_id, facet_id;
+};
+
+// Möller–Trumbore. Edges and vertices count as inside. Returns the ray
+// parameter t (distance along a unit direction), or nothing.
+bool intersect(const Tri& tri, const vec3& origin, const vec3& dir, float& t_out) {
+  const vec3 p = glm::cross(dir, tri.e2);
+  const float det = glm::dot(tri.e1, p);
+  if (det == 0.0f) return false;  // ray parallel to the plane
+  const float inv_det = 1.0f / det;
+  const vec3 s = origin - tri.v0;
+  const float u = glm::dot(s, p) * inv_det;
+  if (!(u >= 0.0f && u <= 1.0f)) return false;
+  const vec3 q = glm::cross(s, tri.e1);
+  const float v = glm::dot(dir, q) * inv_det;
+  if (!(v >= 0.0f && u + v <= 1.0f)) return false;
+  t_out = glm::dot(tri.e2, q) * inv_det;
+  return std::isfinite(t_out);
+}
+
+// A plain BVH (median split on the longest centroid axis). It only decides
+// which triangles get tested; the nearest-hit rule below does not depend on
+// the order in which they are visited.
+struct Node {
+  vec3 lo, hi;
+  int first = 0;  // leaf: first index into `order`; inner: left child
+  int count = 0;  // leaf: number of triangles; inner: 0 (right child = left + 1)
+};
+
+struct Bvh {
+  std::vector<Node> nodes;
+  std::vector<int> order;  // triangle indices, grouped by leaf
+};
+
+constexpr int kLeafSize = 4;
+
+void build_node(Bvh& bvh, int node_index, int begin, int end, const std::vector<vec3>& lo_of,
+                const std::vector<vec3>& hi_of, float pad) {
+  vec3 lo(std::numeric_limits<float>::max()), hi(-std::numeric_limits<float>::max());
+  vec3 clo = lo, chi = hi;
+  for (int i = begin; i < end; ++i) {
+    const int t = bvh.order[i];
+    lo = glm::min(lo, lo_of[t]);
+    hi = glm::max(hi, hi_of[t]);
+    const vec3 c = (lo_of[t] + hi_of[t]) * 0.5f;
+    clo = glm::min(clo, c);
+    chi = glm::max(chi, c);
+  }
+  // Padding keeps boxes conservative against rounding in the slab test.
+  bvh.nodes[node_index].lo = lo - vec3(pad);
+  bvh.nodes[node_index].hi = hi + vec3(pad);
+
+  const vec3 extent = chi - clo;
+  int axis = 0;
+  if (extent.y > extent[axis]) axis = 1;
+  if (extent.z > extent[axis]) axis = 2;
+  if (end - begin <= kLeafSize || !(extent[axis] > 0.0f)) {
+    bvh.nodes[node_index].first = begin;
+    bvh.nodes[node_index].count = end - begin;
+    return;
+  }
+  const int mid = begin + (end - begin) / 2;
+  auto centroid_less = [&](int a, int b) {
+    const float ca = lo_of[a][axis] + hi_of[a][axis], cb = lo_of[b][axis] + hi_of[b][axis];
+    return ca < cb || (ca == cb && a < b);
+  };
+  std::nth_element(bvh.order.begin() + begin, bvh.order.begin() + mid, bvh.order.begin() + end,
+                   centroid_less);
+  const int left = static_cast<int>(bvh.nodes.size());
+  bvh.nodes.emplace_back();
+  bvh.nodes.emplace_back();
+  bvh.nodes[node_index].first = left;
+  bvh.nodes[node_index].count = 0;
+  build_node(bvh, left, begin, mid, lo_of, hi_of, pad);
+  build_node(bvh, left + 1, mid, end, lo_of, hi_of, pad);
+}
+
+Bvh build_bvh(const std::vector<Tri>& tris, const std::vector<Triangle>& source, float pad) {
+  Bvh bvh;
+  std::vector<vec3> lo_of, hi_of;
+  for (std::size_t i = 0; i < tris.size(); ++i) {
+    if (tris[i].degenerate) continue;
+    bvh.order.push_back(static_cast<int>(i));
+  }
+  lo_of.resize(tris.size());
+  hi_of.resize(tris.size());
+  for (std::size_t i = 0; i < tris.size(); ++i) {
+    const vec3 a = to_glm(source[i].v0), b = to_glm(source[i].v1), c = to_glm(source[i].v2);
+    lo_of[i] = glm::min(a, glm::min(b, c));
+    hi_of[i] = glm::max(a, glm::max(b, c));
+  }
+  if (bvh.order.empty()) return bvh;
+  bvh.nodes.reserve(2 * bvh.order.size());
+  bvh.nodes.emplace_back();
+  build_node(bvh, 0, 0, static_cast<int>(bvh.order.size()), lo_of, hi_of, pad);
+  return bvh;
+}
+
+// Slab test: does the ray meet the box for some t in [t_min, t_max]?
+// Nearer first; distances equal within OPSILA_TIE_TOLERANCE (relative) are a
+// tie, won by the lower triangle index (file order): coplanar facets and
+// shared edges get the answer of exact arithmetic, not rounding noise.
+bool closer(float t, int index, float best_t, int best_index) {
+  if (best_index < 0) return true;
+  const float tol = OPSILA_TIE_TOLERANCE * best_t;
+  if (t < best_t - tol) return true;
+  return t <= best_t + tol && index < best_index;
+}
+
+bool hits_box(const Node& node, const vec3& origin, const vec3& dir, float t_min, float t_max) {
+  for (int a = 0; a < 3; ++a) {
+    if (dir[a] == 0.0f) {
+      if (origin[a] < node.lo[a] || origin[a] > node.hi[a]) return false;
+      continue;
+    }
+    const float inv = 1.0f / dir[a];
+    float t0 = (node.lo[a] - origin[a]) * inv;
+    float t1 = (node.hi[a] - origin[a]) * inv;
+    if (t0 > t1) std::swap(t0, t1);
+    t_min = std::max(t_min, t0);
+    // Slack above the tie tolerance, so rounding never culls a possible tie.
+    t_max = std::min(t_max, t1 + std::fabs(t1) * (4 * OPSILA_TIE_TOLERANCE));
+    if (t_min > t_max) return false;
+  }
+  return true;
+}
+
+struct Hit {
+  float t = std::numeric_limits<float>::infinity();
+  int tri = -1;
+};
+
+}  // namespace
+
+ReferenceCounts& ReferenceCounts::operator+=(const ReferenceCounts& o) {
+  primary += o.primary;
+  secondary += o.secondary;
+  shadow += o.shadow;
+  primary_hits += o.primary_hits;
+  return *this;
+}
+
+// ------------------------------------------------------------------ camera
+
+CameraFrame camera_frame(const CameraDesc& camera, int width, int height) {
+  const vec3 eye = to_glm(camera.eye);
+  const vec3 f = glm::normalize(to_glm(camera.look_at) - eye);
+  const vec3 r = glm::normalize(glm::cross(f, to_glm(camera.up)));
+  const vec3 u = glm::cross(r, f);
+  CameraFrame frame;
+  frame.eye = camera.eye;
+  frame.forward = to_vec3(f);
+  frame.right = to_vec3(r);
+  frame.up = to_vec3(u);
+  frame.tan_half_fov = std::tan(camera.fov_deg * 0.5f * 3.14159265358979323846f / 180.0f);
+  frame.aspect = static_cast<float>(width) / static_cast<float>(height);
+  return frame;
+}
+
+Vec3 primary_direction(const CameraFrame& frame, int width, int height, int x, int y) {
+  const float s = frame.tan_half_fov, a = frame.aspect;
+  const float px = 2.0f * (static_cast<float>(x) + 0.5f) / static_cast<float>(width) - 1.0f;
+  const float py = 1.0f - 2.0f * (static_cast<float>(y) + 0.5f) / static_cast<float>(height);
+  const vec3 d = to_glm(frame.forward) + px * s * a * to_glm(frame.right) + py * s * to_glm(frame.up);
+  return to_vec3(glm::normalize(d));
+}
+
+// ------------------------------------------------------------------ tracer
+
+struct ReferenceTracer::Impl {
+  const Scene& scene;
+  std::vector<MaterialDesc> materials;  // the scene's, or SPEC's default if it has none
+  std::vector<Tri> tris;
+  Bvh bvh;
+  CameraFrame frame;
+  float epsilon = 0;
+
+  explicit Impl(const Scene& s) : scene(s) {}
+
+  // Nearest hit with t > t_min. Ties go to the lower triangle index
+  // (Scene::triangles order), whatever order the BVH visits them in.
+  bool nearest(const vec3& origin, const vec3& dir, float t_min, Hit& hit) const {
+    if (bvh.nodes.empty()) return false;
+    int stack[128];
+    int top = 0;
+    stack[top++] = 0;
+    while (top > 0) {
+      const Node& node = bvh.nodes[stack[--top]];
+      if (!hits_box(node, origin, dir, t_min, hit.t + hit.t * (2 * OPSILA_TIE_TOLERANCE))) continue;
+      if (node.count == 0) {
+        stack[top++] = node.first;
+        stack[top++] = node.first + 1;
+        continue;
+      }
+      for (int i = node.first; i < node.first + node.count; ++i) {
+        const int index = bvh.order[i];
+        float t;
+        if (!intersect(tris[index], origin, dir, t) || !(t > t_min)) continue;
+        if (closer(t, index, hit.t, hit.tri)) {
+          hit.t = t;
+          hit.tri = index;
+        }
+      }
+    }
+    return hit.tri >= 0;
+  }
+
+  // Shadow test: is any triangle hit with t in (t_min, t_max)?
+  bool occluded(const vec3& origin, const vec3& dir, float t_min, float t_max) const {
+    if (bvh.nodes.empty()) return false;
+    int stack[128];
+    int top = 0;
+    stack[top++] = 0;
+    while (top > 0) {
+      const Node& node = bvh.nodes[stack[--top]];
+      if (!hits_box(node, origin, dir, t_min, t_max)) continue;
+      if (node.count == 0) {
+        stack[top++] = node.first;
+        stack[top++] = node.first + 1;
+        continue;
+      }
+      for (int i = node.first; i < node.first + node.count; ++i) {
+        float t;
+        if (intersect(tris[bvh.order[i]], origin, dir, t) && t > t_min && t < t_max) return true;
+      }
+    }
+    return false;
+  }
+
+  // SPEC "Shading": local intensity at P with shading normal n, for a ray of
+  // unit direction d. Shadow rays are cast only where the light term can be
+  // non-zero (n.Lv > 0).
+  vec3 local_intensity(const vec3& p, const vec3& n, const vec3& d, const MaterialDesc& m,
+                       ReferenceCounts& counts) const {
+    vec3 result = to_glm(scene.ambient) * to_glm(m.ka);
+    for (const LightDesc& light : scene.lights) {
+      const vec3 to_light = to_glm(light.position) - p;
+      const float distance = glm::length(to_light);
+      if (!(distance > 0.0f)) continue;  // light at P: no direction to it
+      const vec3 lv = to_light / distance;
+      const float n_dot_l = glm::dot(n, lv);
+      if (!(n_dot_l > 0.0f)) continue;  // SPEC: the whole light term is 0
+      ++counts.shadow;
+      if (occluded(p, lv, epsilon, distance)) continue;  // vis = 0
+      const vec3 rl = 2.0f * n_dot_l * n - lv;
+      const float r_dot_v = std::max(0.0f, glm::dot(rl, -d));
+      // C's powf: powf(0, 0) = 1, so Ns = 0 gives the full Ks.
+      const float highlight = std::pow(r_dot_v, m.ns);
+      result += to_glm(light.intensity) * (to_glm(m.kd) * n_dot_l + to_glm(m.ks) * highlight);
+    }
+    return result;
+  }
+
+  // Adds weight x (radiance of the ray tree rooted at this ray) to `pixel`.
+  // Returns the triangle hit (for the item buffer), or -1.
+  int trace(const vec3& origin, const vec3& d, float t_min, int level, const vec3& weight,
+            vec3& pixel, ReferenceCounts& counts) const {
+    Hit hit;
+    if (!nearest(origin, d, t_min, hit)) {
+      pixel += weight * to_glm(scene.background);
+      return -1;
+    }
+    const Tri& tri = tris[hit.tri];
+    const MaterialDesc& m = materials[tri.material];
+    const vec3 p = origin + hit.t * d;
+    const bool entering = glm::dot(tri.normal, d) < 0.0f;
+    const vec3 n = entering ? tri.normal : -tri.normal;
+    pixel += weight * local_intensity(p, n, d, m, counts);
+
+    if (level + 1 >= scene.max_depth) return hit.tri;
+    // SPEC "Materials": kr = Ks for illum 3..7, kt = Tf for illum 4, 6, 7.
+    const bool reflects = m.illum >= 3 && m.illum <= 7;
+    const bool transmits = m.illum == 4 || m.illum == 6 || m.illum == 7;
+    const vec3 kr = reflects ? to_glm(m.ks) : vec3(0.0f);
+    const vec3 kt = transmits ? to_glm(m.tf) : vec3(0.0f);
+    if (any_nonzero(kr)) {
+      ++counts.secondary;
+      // Renormalised: SPEC treats every ray direction as unit, and epsilon
+      // is a distance.
+      const vec3 reflected = glm::normalize(d - 2.0f * glm::dot(d, n) * n);
+      trace(p, reflected, epsilon, level + 1, weight * kr, pixel, counts);
+    }
+    if (any_nonzero(kt)) {
+      const float eta = entering ? 1.0f / m.ni : m.ni;
+      const float c = -glm::dot(n, d);
+      const float k = 1.0f - eta * eta * (1.0f - c * c);
+      if (k >= 0.0f) {  // k < 0: total internal reflection, no transmitted ray
+        ++counts.secondary;
+        const vec3 transmitted = glm::normalize(eta * d + (eta * c - std::sqrt(k)) * n);
+        trace(p, transmitted, epsilon, level + 1, weight * kt, pixel, counts);
+      }
+    }
+    return hit.tri;
+  }
+};
+
+ReferenceTracer::ReferenceTracer(const Scene& scene) : scene_(scene), impl_(new Impl(scene)) {
+  // SPEC: epsilon = 1e-4 x the diagonal of the bounding box of the facets.
+  vec3 lo(std::numeric_limits<float>::max()), hi(-std::numeric_limits<float>::max());
+  for (const Triangle& t : scene.triangles) {
+    for (const Vec3* v : {&t.v0, &t.v1, &t.v2}) {
+      lo = glm::min(lo, to_glm(*v));
+      hi = glm::max(hi, to_glm(*v));
+    }
+  }
+  // The diagonal in double, so a huge scene gives infinity rather than garbage.
+  double diagonal = 0;
+  if (!scene.triangles.empty()) {
+    const glm::dvec3 extent = glm::dvec3(hi) - glm::dvec3(lo);
+    diagonal = std::sqrt(glm::dot(extent, extent));
+  }
+  epsilon_ = static_cast<float>(1e-4 * diagonal);
+  impl_->epsilon = epsilon_;
+
+  impl_->materials = scene.materials;
+  if (impl_->materials.empty()) {
+    // SPEC "a face with no material".
+    MaterialDesc m;
+    m.ka = m.kd = Vec3{0.8f, 0.8f, 0.8f};
+    m.illum = 2;
+    impl_->materials.push_back(m);
+  }
+  impl_->tris.reserve(scene.triangles.size());
+  for (const Triangle& t : scene.triangles) {
+    Tri tri;
+    tri.v0 = to_glm(t.v0);
+    tri.e1 = to_glm(t.v1) - tri.v0;
+    tri.e2 = to_glm(t.v2) - tri.v0;
+    const vec3 c = glm::cross(tri.e1, tri.e2);
+    const float len = glm::length(c);
+    tri.degenerate = !(len > 0.0f) || !std::isfinite(len);
+    tri.normal = tri.degenerate ? vec3(0.0f) : c / len;
+    tri.material = (t.material >= 0 && t.material < static_cast<int>(impl_->materials.size()))
+                       ? t.material
+                       : 0;
+    tri.object_id = t.object_id;
+    tri.facet_id = t.facet_id;
+    impl_->tris.push_back(tri);
+  }
+  const float pad = static_cast<float>(1e-5 * diagonal) + 1e-30f;
+  impl_->bvh = build_bvh(impl_->tris, scene.triangles, pad);
+  impl_->frame = camera_frame(scene.camera, scene.width, scene.height);
+}
+
+ReferenceTracer::~ReferenceTracer() = default;
+
+Vec3 ReferenceTracer::render_pixel(int x, int y, std::int32_t* object_facet,
+                                   ReferenceCounts& counts) const {
+  const Scene& scene = scene_;
+  const vec3 dir = to_glm(primary_direction(impl_->frame, scene.width, scene.height, x, y));
+  ++counts.primary;
+  vec3 pixel(0.0f);
+  // Primary rays accept any t > 0 (only secondary and shadow rays skip t <= epsilon).
+  const int tri = impl_->trace(to_glm(scene.camera.eye), dir, 0.0f, 0, vec3(1.0f), pixel, counts);
+  if (tri >= 0) ++counts.primary_hits;
+  if (object_facet) {
+    object_facet[0] = tri >= 0 ? impl_->tris[tri].object_id : -1;
+    object_facet[1] = tri >= 0 ? impl_->tris[tri].facet_id : -1;
+  }
+  return to_vec3(pixel);
+}
+
+void ReferenceTracer::render_rows(int y0, int y1, ReferenceImage& out, ReferenceCounts& counts) const {
+  const int w = scene_.width;
+  y0 = std::max(y0, 0);
+  y1 = std::min(y1, scene_.height);
+  for (int y = y0; y < y1; ++y) {
+    for (int x = 0; x < w; ++x) {
+      const std::size_t i = static_cast<std::size_t>(y) * w + x;
+      const Vec3 c = render_pixel(x, y, &out.item_buffer[2 * i], counts);
+      out.rgb[3 * i + 0] = c[0];
+      out.rgb[3 * i + 1] = c[1];
+      out.rgb[3 * i + 2] = c[2];
+    }
+  }
+}
+
+ReferenceImage make_reference_image(const Scene& scene) {
+  ReferenceImage image;
+  image.width = scene.width;
+  image.height = scene.height;
+  const std::size_t pixels = static_cast<std::size_t>(scene.width) * scene.height;
+  image.rgb.assign(3 * pixels, 0.0f);
+  image.item_buffer.assign(2 * pixels, -1);
+  return image;
+}
+
+ReferenceImage render_reference(const Scene& scene, int threads) {
+  ReferenceImage image = make_reference_image(scene);
+  const ReferenceTracer tracer(scene);
+  threads = std::max(1, std::min(threads, scene.height));
+  if (threads == 1) {
+    tracer.render_rows(0, scene.height, image, image.counts);
+    return image;
+  }
+  // Interleaved bands of rows balance cheap and expensive parts of the image.
+  constexpr int kBand = 4;
+  std::vector<ReferenceCounts> counts(threads);
+  std::vector<std::thread> workers;
+  for (int w = 0; w < threads; ++w) {
+    workers.emplace_back([&, w] {
+      for (int y = w * kBand; y < scene.height; y += threads * kBand)
+        tracer.render_rows(y, y + kBand, image, counts[w]);
+    });
+  }
+  for (std::thread& t : workers) t.join();
+  for (const ReferenceCounts& c : counts) image.counts += c;
+  return image;
+}
+
+void render_reference_rows(const Scene& scene, int y0, int y1, ReferenceImage& out) {
+  const ReferenceTracer tracer(scene);
+  tracer.render_rows(y0, y1, out, out.counts);
+}
+
+}  // namespace opsila

@@ -1,0 +1,122 @@
+/* Ray-facet and ray-volume tests, and the hit-ordering (tie) rule. */
+#include "descriptor.cl"
+
+/* Every PE must compute bit-identical sphere entry distances for the same ray
+ * (they order the visit of candidate PEs), so no silent fma contraction. */
+#pragma OPENCL FP_CONTRACT OFF
+
+#define OPSILA_INF INFINITY
+
+
+inline float3 load3(const float a[3]) { return (float3)(a[0], a[1], a[2]); }
+inline float3 load3g(__global const float *a) { return (float3)(a[0], a[1], a[2]); }
+
+/* Per-ray constants of the watertight test (Woop, Benthin, Wald 2013). */
+typedef struct {
+  float3 org;
+  float3 dir;
+  float3 inv_dir;
+  int kx, ky, kz;
+  float sx, sy, sz;
+} RayPre;
+
+inline float comp(float3 v, int k) { return k == 0 ? v.x : (k == 1 ? v.y : v.z); }
+
+inline RayPre make_ray(float3 org, float3 dir) {
+  RayPre r;
+  r.org = org;
+  r.dir = dir;
+  r.inv_dir = (float3)(1.0f / dir.x, 1.0f / dir.y, 1.0f / dir.z);
+  float3 a = fabs(dir);
+  r.kz = (a.x > a.y) ? (a.x > a.z ? 0 : 2) : (a.y > a.z ? 1 : 2);
+  r.kx = r.kz + 1 == 3 ? 0 : r.kz + 1;
+  r.ky = r.kx + 1 == 3 ? 0 : r.kx + 1;
+  if (comp(dir, r.kz) < 0.0f) {
+    int t = r.kx;
+    r.kx = r.ky;
+    r.ky = t;
+  }
+  float dz = comp(dir, r.kz);
+  r.sx = comp(dir, r.kx) / dz;
+  r.sy = comp(dir, r.ky) / dz;
+  r.sz = 1.0f / dz;
+  return r;
+}
+
+/* Watertight ray-triangle test: an edge shared by two facets is hit by
+ * exactly one side or both, never by neither (no cracks). Returns the hit
+ * distance if it lies in (tmin, tmax), else INFINITY. */
+inline float intersect_triangle(const RayPre *r, __global const BankTriangle *tri, float tmin, float tmax) {
+  float3 a = load3g(tri->v0) - r->org;
+  float3 b = load3g(tri->v1) - r->org;
+  float3 c = load3g(tri->v2) - r->org;
+  float az = comp(a, r->kz), bz = comp(b, r->kz), cz = comp(c, r->kz);
+  float ax = comp(a, r->kx) - r->sx * az, ay = comp(a, r->ky) - r->sy * az;
+  float bx = comp(b, r->kx) - r->sx * bz, by = comp(b, r->ky) - r->sy * bz;
+  float cx = comp(c, r->kx) - r->sx * cz, cy = comp(c, r->ky) - r->sy * cz;
+  float u = cx * by - cy * bx;
+  float v = ax * cy - ay * cx;
+  float w = bx * ay - by * ax;
+  if ((u < 0.0f || v < 0.0f || w < 0.0f) && (u > 0.0f || v > 0.0f || w > 0.0f)) return OPSILA_INF;
+  float det = u + v + w;
+  if (det == 0.0f) return OPSILA_INF;
+  /* Barycentrics first: u*az is of the order of the scene size cubed and
+   * overflows float beyond ~1e12 units; u/det is at most 1. */
+  float inv_det = 1.0f / det;
+  float t = (u * inv_det) * (r->sz * az) + (v * inv_det) * (r->sz * bz) + (w * inv_det) * (r->sz * cz);
+  return (t > tmin && t < tmax) ? t : OPSILA_INF;
+}
+
+/* Slab test, closed boxes (a ray along a face is inside). */
+inline bool ray_box_span(const RayPre *r, float3 bmin, float3 bmax, float tmin, float tmax, float *t_enter,
+                         float *t_leave);
+inline bool ray_box(const RayPre *r, float3 bmin, float3 bmax, float tmin, float tmax, float *t_enter) {
+  float leave;
+  return ray_box_span(r, bmin, bmax, tmin, tmax, t_enter, &leave);
+}
+inline bool ray_box_span(const RayPre *r, float3 bmin, float3 bmax, float tmin, float tmax, float *t_enter,
+                         float *t_leave) {
+  float3 t0 = (bmin - r->org) * r->inv_dir;
+  float3 t1 = (bmax - r->org) * r->inv_dir;
+  /* 0 * inf = NaN where the ray runs in a slab's boundary plane (a zero
+   * direction component, the origin on the plane): the ray is inside that
+   * slab, so a NaN counts as -inf for the entry and +inf for the exit. */
+  const float3 ninf = (float3)(-INFINITY), pinf = (float3)(INFINITY);
+  float3 lo = fmin(select(t0, ninf, isnan(t0)), select(t1, ninf, isnan(t1)));
+  float3 hi = fmax(select(t0, pinf, isnan(t0)), select(t1, pinf, isnan(t1)));
+  float enter = fmax(fmax(lo.x, lo.y), fmax(lo.z, tmin));
+  float leave = fmin(fmin(hi.x, hi.y), fmin(hi.z, tmax));
+  /* Relative slack above the tie tolerance: a box is never culled by rounding
+   * when a facet on its face could still win a tie. */
+  leave = leave + fabs(leave) * (4.0f * OPSILA_TIE_TOLERANCE) + 1e-30f;
+  *t_enter = enter;
+  *t_leave = leave;
+  return enter <= leave;
+}
+
+/* Entry distance of a ray into a sphere, clamped at 0; INFINITY when the
+ * sphere does not meet (tmin, tmax). */
+inline float sphere_entry(const RayPre *r, __global const Cluster *cl, float tmin, float tmax) {
+  float3 oc = r->org - load3g(cl->center);
+  float b = dot(oc, r->dir);
+  float c = dot(oc, oc) - cl->radius * cl->radius;
+  float disc = b * b - c;
+  if (disc < 0.0f) return OPSILA_INF;
+  float s = sqrt(disc);
+  float t_near = -b - s, t_far = -b + s;
+  if (t_far <= tmin || t_near >= tmax) return OPSILA_INF;
+  return fmax(t_near, 0.0f);
+}
+
+/* Hit ordering: nearer first; distances equal within OPSILA_TIE_TOLERANCE go
+ * to the lower facet id, so the answer does not depend on which PE or BVH
+ * leaf saw a facet first, nor on rounding between coplanar facets. */
+inline bool closer(float t, int facet, float best_t, int best_facet) {
+  if (best_t == OPSILA_INF) return t < OPSILA_INF;
+  float tol = OPSILA_TIE_TOLERANCE * best_t;
+  if (t < best_t - tol) return true;
+  return t <= best_t + tol && facet < best_facet;
+}
+
+/* Farthest distance at which a hit could still win against best_t. */
+inline float tie_limit(float best_t) { return best_t + best_t * (2.0f * OPSILA_TIE_TOLERANCE); }

@@ -125,217 +125,280 @@ void check_kernel_limits(const Scene& scene) {
   if (scene.triangles.empty()) throw InputError("scene has no facets");
 }
 
-RenderResult render(const Scene& scene, const RenderSettings& settings, ClRuntime& rt) {
-  const int P = settings.num_pes;
+// Everything the machine keeps between frames, and the stages of a frame.
+struct Renderer::Machine {
+  ClRuntime& rt;
+  int P = 0, n = 0, S = 0, depth = 0, width = 0, height = 0, traffic_levels = 0;
+  std::size_t npix = 0, out_len = 0, inject = 0, nstats = 0, ntraffic = 0;
+  std::size_t spmd_wg = 1;
+  int tile_w = 1, item_launch_pixels = 1;
+  FrameParams fp{};
+  RenderStats prepared;  // what the prepare step knows: banks, n, work-group size
+
+  cl::Kernel k_item, k_primary, k_spmd;
+  std::unique_ptr<ScatterPass> scatter;
+  cl::Buffer b_tris, b_nodes, b_clusters, b_pes, b_mats, b_lights, b_rects;
+  cl::Buffer b_items, b_item_tri, b_item_t, b_accum, b_stats, b_traffic, b_processed;
+  DescriptorSet banks, outputs, queue_a, queue_b;
+
+  // Where a frame stands between rounds.
+  struct Frame {
+    std::size_t next_pixel = 0;  // first pixel without a primary descriptor yet
+    std::size_t queue_len = 0;   // descriptors waiting in queue_a
+    bool outputs_live = false;   // the SPMD output slots hold descriptors to scatter
+  };
+
+  Machine(const Scene& scene, const RenderSettings& settings, ClRuntime& runtime);
+  int choose_bank_capacity(const BankedScene& bs, const RenderSettings& settings) const;
+  void choose_work_groups();
+  void upload_scene(const Scene& scene, const BankedScene& bs);
+  void allocate_frame_buffers();
+
+  void clear_frame();
+  void item_buffer(Launcher& launch);
+  void primary_descriptors(Launcher& launch, Frame& f, int round);
+  void exchange(Launcher& launch, Frame& f, int round);
+  void spmd_phase(Launcher& launch, int round);
+  void end_round(Launcher& launch, Frame& f, int round, RenderStats& st);
+  void read_image(Launcher& launch, RenderResult& result);
+  void read_stats(RenderResult& result);
+};
+
+Renderer::Machine::Machine(const Scene& scene, const RenderSettings& settings, ClRuntime& runtime) : rt(runtime) {
+  P = settings.num_pes;
   if (P < 1 || P > OPSILA_MAX_PES)
     throw InputError("--pes " + std::to_string(P) + ": must be 1.." + std::to_string(OPSILA_MAX_PES));
   check_kernel_limits(scene);
-  const std::size_t npix = std::size_t(scene.width) * scene.height;
+  width = scene.width;
+  height = scene.height;
+  depth = scene.max_depth;
+  npix = std::size_t(width) * height;
+  item_launch_pixels = settings.item_buffer_tile;
 
   BankedScene bs = partition_scene(scene, P);
-  const int S = static_cast<int>(bs.lights.size()) + 2;
+  S = static_cast<int>(bs.lights.size()) + 2;
+  n = choose_bank_capacity(bs, settings);
+  out_len = std::size_t(P) * n * S;
+  // Primaries are injected when the queue runs short, a quarter of the banks'
+  // capacity at a time: descriptors waiting for a busy PE are moved again by
+  // every scatter, so fewer of them wait when the work arrives in smaller steps.
+  inject = std::max<std::size_t>(std::size_t(P) * n / 4, 1024);
+  fp = frame_params(scene, bs, n);
+  traffic_levels = P <= kTrafficMaxPes ? depth : 0;
 
-  // n, the paper's bank size: enough descriptors in flight to fill the
-  // device, bounded by memory. GPUs want ~2^17 in flight, CPUs far fewer.
-  int n = settings.bank_capacity;
-  if (n <= 0) {
+  prepared.num_pes = P;
+  prepared.bank_capacity = n;
+  prepared.num_clusters = static_cast<int>(bs.clusters.size());
+  prepared.bank_bytes = bs.bank_bytes;
+  prepared.global_bytes = bs.global_bytes;
+  prepared.replicated_bytes = bs.replicated_bytes;
+
+  rt.program();  // compile before anything is timed
+  k_item = rt.kernel("item_buffer");
+  k_primary = rt.kernel("build_primary");
+  k_spmd = rt.kernel("spmd_phase");
+  scatter = std::make_unique<ScatterPass>(rt, P);
+  choose_work_groups();
+  upload_scene(scene, bs);
+  allocate_frame_buffers();
+}
+
+// n, the paper's bank size: enough descriptors in flight to fill the device,
+// bounded by memory. GPUs want ~2^17 in flight, CPUs far fewer. Everything
+// allocated before the first launch must fit the device's global memory
+// (device_buffer checks each buffer against the largest single allocation).
+// An automatic n halves until it fits; an explicit --bank-capacity, or an
+// image that does not fit even with n = 1, is refused.
+int Renderer::Machine::choose_bank_capacity(const BankedScene& bs, const RenderSettings& settings) const {
+  int bank = settings.bank_capacity;
+  if (bank <= 0) {
     std::size_t target = rt.device().is_gpu ? (1u << 17) : (1u << 16);
     target = std::min<std::size_t>(target, std::max<std::size_t>(npix, 1024));
-    n = static_cast<int>(std::max<std::size_t>(1, target / P));
+    bank = static_cast<int>(std::max<std::size_t>(1, target / P));
   }
-  if (std::size_t(P) * n * S > (1u << 30))
-    throw InputError("--bank-capacity " + std::to_string(n) + " is too large for " + std::to_string(P) + " PEs and " +
-                     std::to_string(S - 2) + " lights");
-  // Everything allocated before the first launch must fit the device's global
-  // memory (device_buffer checks each buffer against the largest single
-  // allocation). An automatic n halves until it fits; an explicit
-  // --bank-capacity, or an image that does not fit even with n = 1, is refused.
+  if (std::size_t(P) * bank * S > (1u << 30))
+    throw InputError("--bank-capacity " + std::to_string(bank) + " is too large for " + std::to_string(P) +
+                     " PEs and " + std::to_string(S - 2) + " lights");
   if (settings.bank_capacity <= 0)
-    while (n > 1 && plan_device_memory(bs, npix, P, n, S, scene.max_depth).total() > rt.global_mem()) n /= 2;
-  if (const DevicePlan plan = plan_device_memory(bs, npix, P, n, S, scene.max_depth); plan.total() > rt.global_mem())
+    while (bank > 1 && plan_device_memory(bs, npix, P, bank, S, depth).total() > rt.global_mem()) bank /= 2;
+  if (const DevicePlan plan = plan_device_memory(bs, npix, P, bank, S, depth); plan.total() > rt.global_mem())
     throw ClError("the render needs " + size_text(plan.total()) + " of device memory (image " + size_text(plan.image) +
                   ", descriptors " + size_text(plan.descriptors) + ", scene " + size_text(plan.scene) + ", other " +
                   size_text(plan.other) + "), more than the device's global memory (" + size_text(rt.global_mem()) +
                   (rt.memory_limit() ? ", as lowered by OPSILA_DEVICE_MEMORY_LIMIT" : ", CL_DEVICE_GLOBAL_MEM_SIZE") +
                   "): use a smaller --size, fewer --pes or a smaller --bank-capacity");
-  const std::size_t out_len = std::size_t(P) * n * S;
-  FrameParams fp = frame_params(scene, bs, n);
+  return bank;
+}
 
-  RenderResult result;
-  result.width = scene.width;
-  result.height = scene.height;
-  RenderStats& st = result.stats;
-  st.num_pes = P;
-  st.bank_capacity = n;
-  st.num_clusters = static_cast<int>(bs.clusters.size());
-  st.bank_bytes = bs.bank_bytes;
-  st.global_bytes = bs.global_bytes;
-  st.replicated_bytes = bs.replicated_bytes;
-
-  rt.program();  // compile before timing
-  cl::Kernel k_item = rt.kernel("item_buffer");
-  cl::Kernel k_primary = rt.kernel("build_primary");
-  ScatterPass scatter(rt, P);
-  cl::Kernel k_spmd = rt.kernel("spmd_phase");
-
-  // Work-group size of a PE: queried, never assumed.
-  std::size_t spmd_wg = k_spmd.getWorkGroupInfo<CL_KERNEL_WORK_GROUP_SIZE>(rt.device().device);
-  std::size_t multiple = k_spmd.getWorkGroupInfo<CL_KERNEL_PREFERRED_WORK_GROUP_SIZE_MULTIPLE>(rt.device().device);
-  spmd_wg = std::min<std::size_t>(spmd_wg, rt.device().is_gpu ? 64 : 16);
+// Work-group sizes: queried, never assumed. A PE's work-group, and the item
+// buffer's square tile of pixels (as large as the kernel allows up to 8x8).
+void Renderer::Machine::choose_work_groups() {
+  const cl::Device& dev = rt.device().device;
+  std::size_t allowed = 0, multiple = 0;
+  cl_check(k_spmd.getWorkGroupInfo(dev, CL_KERNEL_WORK_GROUP_SIZE, &allowed),
+           "clGetKernelWorkGroupInfo(spmd_phase)");
+  cl_check(k_spmd.getWorkGroupInfo(dev, CL_KERNEL_PREFERRED_WORK_GROUP_SIZE_MULTIPLE, &multiple),
+           "clGetKernelWorkGroupInfo(spmd_phase)");
+  spmd_wg = std::min<std::size_t>(allowed, rt.device().is_gpu ? 64 : 16);
   if (multiple > 0 && spmd_wg >= multiple) spmd_wg = spmd_wg / multiple * multiple;
   spmd_wg = std::max<std::size_t>(1, std::min<std::size_t>(spmd_wg, std::size_t(n)));
-  st.work_group_size = spmd_wg;
+  prepared.work_group_size = spmd_wg;
 
-  auto t_start = std::chrono::steady_clock::now();
-  cl::CommandQueue& q = rt.queue();
+  cl_check(k_item.getWorkGroupInfo(dev, CL_KERNEL_WORK_GROUP_SIZE, &allowed),
+           "clGetKernelWorkGroupInfo(item_buffer)");
+  tile_w = 8;
+  while (tile_w > 1 && std::size_t(tile_w) * tile_w > allowed) tile_w /= 2;
+}
 
-  // Scene: banks and the global (every-PE) tables.
-  cl::Buffer b_tris = upload(rt, bs.triangles, "bank facets");
-  cl::Buffer b_nodes = upload(rt, bs.nodes, "bank BVH nodes");
-  cl::Buffer b_clusters = upload(rt, bs.clusters, "cluster spheres");
-  cl::Buffer b_pes = upload(rt, bs.pes, "PE table");
-  cl::Buffer b_mats = upload(rt, bs.materials, "materials");
+// Scene: banks and the global (every-PE) tables, uploaded once.
+void Renderer::Machine::upload_scene(const Scene& scene, const BankedScene& bs) {
+  b_tris = upload(rt, bs.triangles, "bank facets");
+  b_nodes = upload(rt, bs.nodes, "bank BVH nodes");
+  b_clusters = upload(rt, bs.clusters, "cluster spheres");
+  b_pes = upload(rt, bs.pes, "PE table");
+  b_mats = upload(rt, bs.materials, "materials");
   std::vector<Light> lights = bs.lights;
   if (lights.empty()) lights.push_back(Light{});
-  cl::Buffer b_lights = upload(rt, lights, "lights");
-  cl::Buffer b_rects = upload(rt, cluster_rects(scene, bs), "projected cluster boxes");
+  b_lights = upload(rt, lights, "lights");
+  b_rects = upload(rt, cluster_rects(scene, bs), "projected cluster boxes");
+}
 
-  // Item buffer and pixel sums.
-  cl::Buffer b_items = device_buffer(rt, npix * sizeof(cl_int2), "item buffer");
-  cl::Buffer b_item_tri = device_buffer(rt, npix * sizeof(cl_int), "item buffer hits");
-  cl::Buffer b_item_t = device_buffer(rt, npix * sizeof(cl_float), "item buffer distances");
-  cl::Buffer b_accum = device_buffer(rt, npix * 6 * sizeof(cl_uint), "pixel sums");
-  zero_buffer(rt, b_accum, npix * 6 * sizeof(cl_uint), "pixel sums");
-  const std::size_t nstats = std::size_t(OPSILA_MAX_DEPTH) * P * OPSILA_STAT_COUNT * 2;
-  cl::Buffer b_stats = device_buffer(rt, nstats * sizeof(cl_uint), "stats");
-  zero_buffer(rt, b_stats, nstats * sizeof(cl_uint), "stats");
-  const int traffic_levels = P <= kTrafficMaxPes ? scene.max_depth : 0;
-  const std::size_t ntraffic = std::max<std::size_t>(1, std::size_t(traffic_levels) * P * P);
-  cl::Buffer b_traffic = device_buffer(rt, ntraffic * sizeof(cl_uint), "traffic");
-  zero_buffer(rt, b_traffic, ntraffic * sizeof(cl_uint), "traffic");
-
-  // Descriptors: banks (P*n), SPMD outputs (P*n*S), waiting queue (ping-pong).
-  DescriptorSet banks, outputs, queue_a, queue_b;
+// Item buffer, pixel sums, statistics and descriptor vectors: banks (P*n),
+// SPMD output slots (P*n*S), and the waiting queue (ping-pong).
+void Renderer::Machine::allocate_frame_buffers() {
+  b_items = device_buffer(rt, npix * sizeof(cl_int2), "item buffer");
+  b_item_tri = device_buffer(rt, npix * sizeof(cl_int), "item buffer hits");
+  b_item_t = device_buffer(rt, npix * sizeof(cl_float), "item buffer distances");
+  b_accum = device_buffer(rt, npix * 6 * sizeof(cl_uint), "pixel sums");
+  nstats = std::size_t(OPSILA_MAX_DEPTH) * P * OPSILA_STAT_COUNT * 2;
+  b_stats = device_buffer(rt, nstats * sizeof(cl_uint), "stats");
+  ntraffic = std::max<std::size_t>(1, std::size_t(traffic_levels) * P * P);
+  b_traffic = device_buffer(rt, ntraffic * sizeof(cl_uint), "traffic");
+  b_processed = device_buffer(rt, P * sizeof(cl_int), "processed counts");
   banks.allocate(rt, std::size_t(P) * n, "descriptor banks");
   outputs.allocate(rt, out_len, "SPMD output slots");
-  // Primaries are injected when the queue runs short, a quarter of the banks'
-  // capacity at a time: descriptors waiting for a busy PE are moved again by
-  // every scatter, so fewer of them wait when the work arrives in smaller steps.
-  const std::size_t inject = std::max<std::size_t>(std::size_t(P) * n / 4, 1024);
-  std::size_t queue_cap = out_len + 2 * inject;
-  queue_a.allocate(rt, queue_cap, "descriptor queue");
-  queue_b.allocate(rt, queue_cap, "descriptor queue");
-  cl::Buffer b_processed = device_buffer(rt, P * sizeof(cl_int), "processed counts");
+  queue_a.allocate(rt, out_len + 2 * inject, "descriptor queue");
+  queue_b.allocate(rt, out_len + 2 * inject, "descriptor queue");
+}
+
+// Every frame starts from zero pixel sums, statistics and traffic.
+void Renderer::Machine::clear_frame() {
+  zero_buffer(rt, b_accum, npix * 6 * sizeof(cl_uint), "pixel sums");
+  zero_buffer(rt, b_stats, nstats * sizeof(cl_uint), "stats");
+  zero_buffer(rt, b_traffic, ntraffic * sizeof(cl_uint), "traffic");
   zero_buffer(rt, b_processed, P * sizeof(cl_int), "processed counts");
-  Launcher launch(rt, st.launches);
+}
 
-  // SIMD phase 1: item buffer. A work-group is a square tile of pixels, as
-  // large as the kernel allows up to 8x8; launches are bounded to about
-  // `item_buffer_tile` pixels each so no launch runs unbounded.
-  {
-    std::size_t allowed = 0;
-    cl_check(k_item.getWorkGroupInfo(rt.device().device, CL_KERNEL_WORK_GROUP_SIZE, &allowed),
-             "clGetKernelWorkGroupInfo(item_buffer)");
-    int tile_w = 8;
-    while (tile_w > 1 && std::size_t(tile_w) * tile_w > allowed) tile_w /= 2;
-    const int tiles_x = (scene.width + tile_w - 1) / tile_w, tiles_y = (scene.height + tile_w - 1) / tile_w;
-    const int tiles = tiles_x * tiles_y;
-    const int per_launch = std::max(1, settings.item_buffer_tile / (tile_w * tile_w));
-    for (int begin = 0; begin < tiles; begin += per_launch) {
-      int count = std::min(per_launch, tiles - begin);
-      int a = 0;
-      k_item.setArg(a++, fp);
-      k_item.setArg(a++, b_clusters);
-      k_item.setArg(a++, b_rects);
-      k_item.setArg(a++, b_nodes);
-      k_item.setArg(a++, b_tris);
-      k_item.setArg(a++, tile_w);
-      k_item.setArg(a++, tiles_x);
-      k_item.setArg(a++, begin);
-      k_item.setArg(a++, b_items);
-      k_item.setArg(a++, b_item_tri);
-      k_item.setArg(a++, b_item_t);
-      launch.run(k_item, "item_buffer", std::size_t(count) * tile_w * tile_w, std::size_t(tile_w) * tile_w, -1);
-    }
-  }
-
-  // Rounds: scatter (SIMD) then SPMD phase, until nothing is left.
-  std::size_t next_pixel = 0, queue_len = 0;
-  bool outputs_live = false;
-  for (int round = 0;; ++round) {
-    if (next_pixel < npix && queue_len < inject) {
-      std::size_t count = std::min(inject, npix - next_pixel);
-      if (queue_len + count > queue_a.capacity) count = queue_a.capacity - queue_len;
-      int a = 0;
-      k_primary.setArg(a++, fp);
-      k_primary.setArg(a++, b_pes);
-      k_primary.setArg(a++, b_item_tri);
-      k_primary.setArg(a++, b_item_t);
-      k_primary.setArg(a++, static_cast<int>(next_pixel));
-      k_primary.setArg(a++, static_cast<int>(count));
-      k_primary.setArg(a++, static_cast<int>(queue_len));
-      a = queue_a.set_args(k_primary, a);
-      k_primary.setArg(a++, b_accum);
-      launch.run(k_primary, "build_primary", round_up(count, 64), 0, round);
-      next_pixel += count;
-      queue_len += count;
-    }
-    const std::size_t src_out = outputs_live ? out_len : 0;
-    const std::size_t total = src_out + queue_len;
-    if (total == 0) break;
-    // The next queue must hold every entry that does not find a bank slot.
-    if (queue_b.capacity < total) {
-      queue_b.allocate(rt, total + total / 2, "descriptor queue");
-    }
-    ScatterPass::Args sa;
-    sa.out_len = static_cast<int>(src_out);
-    sa.queue_len = static_cast<int>(queue_len);
-    sa.n = n;
-    sa.spawn_slots = S;
-    sa.processed = &b_processed;
-    sa.outputs = &outputs;
-    sa.queue = &queue_a;
-    sa.banks = &banks;
-    sa.next_queue = &queue_b;
-    sa.traffic = &b_traffic;
-    sa.traffic_levels = traffic_levels;
-    scatter.enqueue(launch, sa, round);
-
+// SIMD phase 1, the item buffer: one work-group per square tile of pixels;
+// launches are bounded to about `item_buffer_tile` pixels each so that no
+// launch runs unbounded.
+void Renderer::Machine::item_buffer(Launcher& launch) {
+  const int tiles_x = (width + tile_w - 1) / tile_w, tiles_y = (height + tile_w - 1) / tile_w;
+  const int tiles = tiles_x * tiles_y;
+  const int per_launch = std::max(1, item_launch_pixels / (tile_w * tile_w));
+  for (int begin = 0; begin < tiles; begin += per_launch) {
+    const int count = std::min(per_launch, tiles - begin);
     int a = 0;
-    k_spmd.setArg(a++, fp);
-    k_spmd.setArg(a++, b_pes);
-    k_spmd.setArg(a++, b_clusters);
-    k_spmd.setArg(a++, b_nodes);
-    k_spmd.setArg(a++, b_tris);
-    k_spmd.setArg(a++, b_mats);
-    k_spmd.setArg(a++, b_lights);
-    a = banks.set_args(k_spmd, a);
-    k_spmd.setArg(a++, scatter.bank_count);
-    k_spmd.setArg(a++, b_processed);
-    a = outputs.set_args(k_spmd, a);
-    k_spmd.setArg(a++, b_accum);
-    k_spmd.setArg(a++, b_stats);
-    launch.run(k_spmd, "spmd_phase", std::size_t(P) * spmd_wg, spmd_wg, round);
-
-    cl_int counts[2] = {0, 0};
-    launch.check(q.enqueueReadBuffer(scatter.counts, CL_TRUE, 0, sizeof(counts), counts),
-                 "clEnqueueReadBuffer(scatter counts)");
-    st.rounds = round + 1;
-    st.overflow_deferrals += static_cast<std::uint64_t>(counts[0]);
-    std::swap(queue_a, queue_b);
-    queue_len = static_cast<std::size_t>(counts[0]);
-    outputs_live = counts[1] > 0;
-    if (queue_a.capacity < queue_len + inject) {
-      // Grow the live queue (rare): copy into a larger set.
-      DescriptorSet bigger;
-      bigger.allocate(rt, (queue_len + inject) * 2, "descriptor queue");
-      queue_a.copy_prefix_to(rt, bigger, queue_len);
-      queue_a = bigger;
-    }
-    if (round % 16 == 15) launch.harvest();
+    k_item.setArg(a++, fp);
+    k_item.setArg(a++, b_clusters);
+    k_item.setArg(a++, b_rects);
+    k_item.setArg(a++, b_nodes);
+    k_item.setArg(a++, b_tris);
+    k_item.setArg(a++, tile_w);
+    k_item.setArg(a++, tiles_x);
+    k_item.setArg(a++, begin);
+    k_item.setArg(a++, b_items);
+    k_item.setArg(a++, b_item_tri);
+    k_item.setArg(a++, b_item_t);
+    launch.run(k_item, "item_buffer", std::size_t(count) * tile_w * tile_w, std::size_t(tile_w) * tile_w, -1);
   }
+}
 
-  // Read back: pixel sums (fixed point), item buffer, stats.
+// Primary descriptors (SIMD), built from the item buffer into the waiting
+// queue when it runs short, bound for the PEs that own the items.
+void Renderer::Machine::primary_descriptors(Launcher& launch, Frame& f, int round) {
+  if (f.next_pixel >= npix || f.queue_len >= inject) return;
+  std::size_t count = std::min(inject, npix - f.next_pixel);
+  if (f.queue_len + count > queue_a.capacity) count = queue_a.capacity - f.queue_len;
+  int a = 0;
+  k_primary.setArg(a++, fp);
+  k_primary.setArg(a++, b_pes);
+  k_primary.setArg(a++, b_item_tri);
+  k_primary.setArg(a++, b_item_t);
+  k_primary.setArg(a++, static_cast<int>(f.next_pixel));
+  k_primary.setArg(a++, static_cast<int>(count));
+  k_primary.setArg(a++, static_cast<int>(f.queue_len));
+  a = queue_a.set_args(k_primary, a);
+  k_primary.setArg(a++, b_accum);
+  launch.run(k_primary, "build_primary", round_up(count, 64), 0, round);
+  f.next_pixel += count;
+  f.queue_len += count;
+}
+
+// SIMD exchange: scatter [SPMD outputs | queue] into the banks; what finds
+// no bank slot waits in the next queue.
+void Renderer::Machine::exchange(Launcher& launch, Frame& f, int round) {
+  const std::size_t src_out = f.outputs_live ? out_len : 0;
+  const std::size_t total = src_out + f.queue_len;
+  if (queue_b.capacity < total) queue_b.allocate(rt, total + total / 2, "descriptor queue");
+  ScatterPass::Args sa;
+  sa.out_len = static_cast<int>(src_out);
+  sa.queue_len = static_cast<int>(f.queue_len);
+  sa.n = n;
+  sa.spawn_slots = S;
+  sa.processed = &b_processed;
+  sa.outputs = &outputs;
+  sa.queue = &queue_a;
+  sa.banks = &banks;
+  sa.next_queue = &queue_b;
+  sa.traffic = &b_traffic;
+  sa.traffic_levels = traffic_levels;
+  scatter->enqueue(launch, sa, round);
+}
+
+// SPMD phase: one work-group per PE, each on its own bank.
+void Renderer::Machine::spmd_phase(Launcher& launch, int round) {
+  int a = 0;
+  k_spmd.setArg(a++, fp);
+  k_spmd.setArg(a++, b_pes);
+  k_spmd.setArg(a++, b_clusters);
+  k_spmd.setArg(a++, b_nodes);
+  k_spmd.setArg(a++, b_tris);
+  k_spmd.setArg(a++, b_mats);
+  k_spmd.setArg(a++, b_lights);
+  a = banks.set_args(k_spmd, a);
+  k_spmd.setArg(a++, scatter->bank_count);
+  k_spmd.setArg(a++, b_processed);
+  a = outputs.set_args(k_spmd, a);
+  k_spmd.setArg(a++, b_accum);
+  k_spmd.setArg(a++, b_stats);
+  launch.run(k_spmd, "spmd_phase", std::size_t(P) * spmd_wg, spmd_wg, round);
+}
+
+// The control unit reads the scatter's counts: how many descriptors wait,
+// and whether the SPMD phase produced any.
+void Renderer::Machine::end_round(Launcher& launch, Frame& f, int round, RenderStats& st) {
+  cl_int counts[2] = {0, 0};
+  launch.check(rt.queue().enqueueReadBuffer(scatter->counts, CL_TRUE, 0, sizeof(counts), counts),
+               "clEnqueueReadBuffer(scatter counts)");
+  st.rounds = round + 1;
+  st.overflow_deferrals += static_cast<std::uint64_t>(counts[0]);
+  std::swap(queue_a, queue_b);
+  f.queue_len = static_cast<std::size_t>(counts[0]);
+  f.outputs_live = counts[1] > 0;
+  if (queue_a.capacity < f.queue_len + inject) {
+    // Grow the live queue (rare): copy into a larger set.
+    DescriptorSet bigger;
+    bigger.allocate(rt, (f.queue_len + inject) * 2, "descriptor queue");
+    queue_a.copy_prefix_to(rt, bigger, f.queue_len);
+    queue_a = bigger;
+  }
+  if (round % 16 == 15) launch.harvest();
+}
+
+// Read back the pixel sums (fixed point, decoded here) and the item buffer.
+void Renderer::Machine::read_image(Launcher& launch, RenderResult& result) {
+  cl::CommandQueue& q = rt.queue();
   std::vector<cl_uint> accum(npix * 6);
   launch.check(q.enqueueReadBuffer(b_accum, CL_TRUE, 0, accum.size() * sizeof(cl_uint), accum.data()),
                "clEnqueueReadBuffer(pixel sums)");
@@ -343,19 +406,23 @@ RenderResult render(const Scene& scene, const RenderSettings& settings, ClRuntim
   launch.check(q.enqueueReadBuffer(b_items, CL_TRUE, 0, npix * sizeof(cl_int2), result.item_buffer.data()),
                "clEnqueueReadBuffer(item buffer)");
   launch.check(q.finish(), "clFinish");
-  st.render_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
-  launch.harvest();
-
   result.rgb.resize(npix * 3);
   for (std::size_t i = 0; i < npix * 3; ++i)
     result.rgb[i] = static_cast<float>(static_cast<double>(static_cast<std::int64_t>(fixed_pair(accum, i))) /
                                        OPSILA_FIXED_SCALE);
+}
 
+// Per-level, per-PE counters and traffic, then the frame's totals. Every
+// primary ray is cast by the item buffer; descriptors are spawned as primary
+// hits, children and shadow rays, and finish as shaded hits, misses,
+// occluded or lit shadow rays.
+void Renderer::Machine::read_stats(RenderResult& result) {
+  RenderStats& st = result.stats;
+  cl::CommandQueue& q = rt.queue();
   std::vector<cl_uint> raw(nstats);
   cl_check(q.enqueueReadBuffer(b_stats, CL_TRUE, 0, nstats * sizeof(cl_uint), raw.data()), "clEnqueueReadBuffer(stats)");
-  st.counters.assign(scene.max_depth,
-                     std::vector<std::vector<std::uint64_t>>(P, std::vector<std::uint64_t>(OPSILA_STAT_COUNT, 0)));
-  for (int l = 0; l < scene.max_depth; ++l)
+  st.counters.assign(depth, std::vector<std::vector<std::uint64_t>>(P, std::vector<std::uint64_t>(OPSILA_STAT_COUNT, 0)));
+  for (int l = 0; l < depth; ++l)
     for (int p = 0; p < P; ++p)
       for (int s = 0; s < OPSILA_STAT_COUNT; ++s)
         st.counters[l][p][s] = fixed_pair(raw, (std::size_t(l) * P + p) * OPSILA_STAT_COUNT + s);
@@ -367,28 +434,61 @@ RenderResult render(const Scene& scene, const RenderSettings& settings, ClRuntim
     for (int l = 0; l < traffic_levels; ++l)
       for (std::size_t k = 0; k < std::size_t(P) * P; ++k) st.traffic[l][k] = tr[std::size_t(l) * P * P + k];
   }
-
-  // Totals. Every primary ray is cast by the item buffer; descriptors are
-  // spawned as primary hits, children and shadow rays, and finish as shaded
-  // hits, misses, occluded or lit shadow rays.
   st.primary_rays = npix;
   for (std::size_t i = 0; i < npix; ++i)
     if (result.item_buffer[2 * i] >= 0) ++st.primary_hits;
-  std::uint64_t spawned_children = 0, spawned_shadow = 0, finished = 0, forwards = 0;
-  for (int l = 0; l < scene.max_depth; ++l)
+  std::uint64_t children = 0, shadow = 0, finished = 0, forwards = 0;
+  for (int l = 0; l < depth; ++l)
     for (int p = 0; p < P; ++p) {
       const auto& c = st.counters[l][p];
-      spawned_children += c[OPSILA_STAT_SPAWN_RADIANCE];
-      spawned_shadow += c[OPSILA_STAT_SPAWN_SHADOW];
+      children += c[OPSILA_STAT_SPAWN_RADIANCE];
+      shadow += c[OPSILA_STAT_SPAWN_SHADOW];
       finished += c[OPSILA_STAT_RESOLVED] + c[OPSILA_STAT_MISS] + c[OPSILA_STAT_OCCLUDED] + c[OPSILA_STAT_LIT];
       forwards += c[OPSILA_STAT_FORWARD];
     }
-  st.secondary_rays = spawned_children;
-  st.shadow_rays = spawned_shadow;
-  st.descriptors_spawned = st.primary_hits + spawned_children + spawned_shadow;
+  st.secondary_rays = children;
+  st.shadow_rays = shadow;
+  st.descriptors_spawned = st.primary_hits + children + shadow;
   st.descriptors_finished = finished;
   st.forwards = forwards;
+}
+
+Renderer::Renderer(const Scene& scene, const RenderSettings& settings, ClRuntime& runtime)
+    : m_(std::make_unique<Machine>(scene, settings, runtime)) {}
+
+Renderer::~Renderer() = default;
+
+// One frame, as the paper runs it.
+RenderResult Renderer::render() {
+  Machine& m = *m_;
+  RenderResult result;
+  result.width = m.width;
+  result.height = m.height;
+  result.stats = m.prepared;
+  RenderStats& st = result.stats;
+  Launcher launch(m.rt, st.launches);
+  const auto t_start = std::chrono::steady_clock::now();
+
+  m.clear_frame();
+  m.item_buffer(launch);
+  Machine::Frame f;
+  for (int round = 0;; ++round) {
+    m.primary_descriptors(launch, f, round);
+    if ((f.outputs_live ? m.out_len : 0) + f.queue_len == 0) break;
+    m.exchange(launch, f, round);
+    m.spmd_phase(launch, round);
+    m.end_round(launch, f, round, st);
+  }
+  m.read_image(launch, result);
+
+  st.render_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
+  launch.harvest();
+  m.read_stats(result);
   return result;
+}
+
+RenderResult render(const Scene& scene, const RenderSettings& settings, ClRuntime& runtime) {
+  return Renderer(scene, settings, runtime).render();
 }
 
 }  // namespace opsila

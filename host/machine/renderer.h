@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -60,9 +61,28 @@ struct RenderResult {
 // lights) or has no facet. Shared by every OpenCL renderer.
 void check_kernel_limits(const Scene& scene);
 
-// Renders `scene` (camera, size, depth, lights already final) on `device`.
+// The OPSILA machine, prepared once for one scene and one view, then run for
+// as many frames as wanted (the bench's repeats reuse one Renderer).
+//   prepare (the constructor): validation, partition into banks, bank size n
+//     and the memory plan, work-group sizes, scene uploads, buffers;
+//   render(): item buffer, then rounds of primary descriptors, exchange
+//     (scatter) and SPMD phase until no descriptor is left, then the image.
 // Throws InputError for impossible requests (sizes beyond the device) and
-// ClError for driver faults.
+// ClError for driver faults, from either step.
+class Renderer {
+ public:
+  Renderer(const Scene& scene, const RenderSettings& settings, ClRuntime& runtime);
+  ~Renderer();
+  Renderer(const Renderer&) = delete;
+  Renderer& operator=(const Renderer&) = delete;
+  RenderResult render();
+
+ private:
+  struct Machine;
+  std::unique_ptr<Machine> m_;
+};
+
+// One frame with a Renderer prepared for it (the command line's path).
 RenderResult render(const Scene& scene, const RenderSettings& settings, ClRuntime& runtime);
 
 }  // namespace opsila

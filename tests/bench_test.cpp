@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 
 #include "bench/bench.h"
+#include "machine/host_scatter.h"
 #include "reference/reference.h"
 #include "machine/renderer.h"
 #include "test_device.h"

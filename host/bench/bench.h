@@ -19,35 +19,6 @@ namespace opsila {
 // Entry point of `opsila bench ARGS...` (ARGS = everything after "bench").
 // Returns the exit code; throws InputError / ClError like the other commands.
 int run_bench(const std::vector<std::string>& args);
-std::string bench_usage();
-
-// ------------------------------------------------------------ host scatter
-
-// Descriptor vectors on the host, laid out as DescriptorSet's buffers.
-struct HostDescriptors {
-  std::vector<cl_float4> org, dir, wgt;
-  std::vector<cl_int4> ids;
-  std::vector<cl_int> dest;
-  void resize(std::size_t n);
-  std::size_t size() const { return dest.size(); }
-};
-
-// Where the scatter put things: bank PE q holds bank_count[q] entries at
-// slots q*n .. q*n + bank_count[q]; the rest waits in `next` (queue order).
-struct HostScatterResult {
-  std::vector<int> bank_count;
-  std::size_t waiting = 0;  // entries in the next queue
-  std::size_t placed = 0;   // entries placed in banks
-};
-
-// The scatter of kernels/scatter.cl written plainly for one processor, the
-// same stable counting sort on the destination PE: entry i goes to bank
-// dest(i), slot rank(i) (rank = earlier valid entries for the same PE) when
-// rank(i) < n, else to the next queue. Holes (dest < 0) are skipped.
-// `banks` must hold num_pes * n entries and `next` src.size() entries;
-// `scratch` holds per-PE counters and is resized as needed.
-HostScatterResult host_scatter(const HostDescriptors& src, int num_pes, int n, HostDescriptors& banks,
-                               HostDescriptors& next, std::vector<std::size_t>& scratch);
 
 // One point of the scatter curve (the paper's figure 6): the scatter kernels
 // (count + scan + plan + move, OpenCL-profiled) against host_scatter on the
@@ -72,10 +43,6 @@ struct ScatterPoint {
   double copy_kernel_gbytes_per_s() const { return copy_kernel_seconds > 0 ? bytes() / copy_kernel_seconds / 1e9 : 0; }
   double copy_buffer_gbytes_per_s() const { return copy_buffer_seconds > 0 ? bytes() / copy_buffer_seconds / 1e9 : 0; }
 };
-
-// Uniformly random destinations over `pes` PEs (a fraction `hole_rate` of
-// NIL holes), fixed seed; the payload fields carry the source index.
-HostDescriptors random_descriptors(std::size_t length, int pes, double hole_rate, unsigned seed);
 
 // Measures one point: `warmup` untimed runs, then the median of `repeats`.
 ScatterPoint measure_scatter(ClRuntime& runtime, std::size_t length, int pes, int warmup, int repeats,

@@ -1,0 +1,193 @@
+// The bench's measurement stages. Compilation is never timed: the program is
+// built and every kernel has run once (the warm-up) before any measurement
+// is kept.
+#include "bench/measure.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cstdarg>
+#include <cstdio>
+#include <fstream>
+#include <thread>
+
+#include "core/util.h"
+#include "reference/reference.h"
+
+namespace opsila {
+
+namespace {
+
+// The sequential reference (host/reference/reference.h) with its BVH built
+// outside the timing, rows split in interleaved bands as render_reference does.
+BaselineImage run_reference(const Scene& scene, int threads) {
+  BaselineImage out;
+  auto tb = std::chrono::steady_clock::now();
+  const ReferenceTracer tracer(scene);
+  ReferenceImage image = make_reference_image(scene);
+  out.build_seconds = seconds_since(tb);
+  threads = std::max(1, std::min(threads, scene.height));
+  std::vector<ReferenceCounts> counts(threads);
+  constexpr int kBand = 4;
+  auto t0 = std::chrono::steady_clock::now();
+  auto work = [&](int w) {
+    for (int y = w * kBand; y < scene.height; y += threads * kBand) tracer.render_rows(y, y + kBand, image, counts[w]);
+  };
+  std::vector<std::thread> pool;
+  for (int w = 1; w < threads; ++w) pool.emplace_back(work, w);
+  work(0);
+  for (std::thread& t : pool) t.join();
+  out.seconds = seconds_since(t0);
+  ReferenceCounts total;
+  for (const ReferenceCounts& c : counts) total += c;
+  out.width = image.width;
+  out.height = image.height;
+  out.rgb = std::move(image.rgb);
+  out.item_buffer = std::move(image.item_buffer);
+  out.rays.primary = total.primary;
+  out.rays.secondary = total.secondary;
+  out.rays.shadow = total.shadow;
+  return out;
+}
+
+template <typename F>
+BaselineRun measure_baseline(const std::string& name, const std::string& label, int threads, int warmup,
+                             int repeats, F&& run) {
+  BaselineRun b;
+  b.name = name;
+  b.label = label;
+  b.threads = threads;
+  b.repeats = repeats;
+  b.present = true;
+  std::vector<BaselineImage> runs;
+  std::vector<double> kernel;
+  for (int r = 0; r < warmup + repeats; ++r) {
+    BaselineImage img = run();
+    if (r < warmup) continue;
+    b.seconds_all.push_back(img.seconds);
+    kernel.push_back(img.kernel_seconds);
+    runs.push_back(std::move(img));
+  }
+  const std::size_t m = median_index(b.seconds_all);
+  b.seconds = median(b.seconds_all);
+  b.kernel_seconds = median(kernel);
+  b.median_run = std::move(runs[m]);
+  return b;
+}
+
+// The scatter curve's vector lengths: powers of two from 16 and the paper's
+// longest vector (32767); a handful with --quick.
+std::vector<std::size_t> curve_lengths(bool quick, int scatter_max) {
+  std::vector<std::size_t> lengths;
+  if (quick) {
+    for (std::size_t n : {std::size_t(16), std::size_t(256), std::size_t(4096), std::size_t(32767),
+                          std::size_t(1) << 16})
+      if (n <= (std::size_t(1) << scatter_max)) lengths.push_back(n);
+  } else {
+    for (int k = 4; k <= scatter_max; ++k) {
+      if (k == 15) lengths.push_back(32767);
+      lengths.push_back(std::size_t(1) << k);
+    }
+  }
+  return lengths;
+}
+
+}  // namespace
+
+void BenchProgress::operator()(const char* fmt, ...) const {
+  if (quiet) return;
+  char line[512];
+  va_list ap;
+  va_start(ap, fmt);
+  std::vsnprintf(line, sizeof line, fmt, ap);
+  va_end(ap);
+  std::fprintf(stderr, "opsila: bench: %s\n", line);
+}
+
+double load_average() {
+  std::ifstream in("/proc/loadavg");
+  double v = -1;
+  if (!(in >> v)) return -1;
+  return v;
+}
+
+void build_program(BenchReport& report, ClRuntime& rt, const BenchProgress& progress) {
+  auto tc = std::chrono::steady_clock::now();
+  progress("building the OpenCL program");
+  rt.program();
+  report.compile_seconds = seconds_since(tc);
+}
+
+void measure_opsila(BenchReport& report, const Scene& scene, const RenderSettings& settings, ClRuntime& rt,
+                    const BenchProgress& progress) {
+  const int warmup = report.warmup, repeats = report.repeats;
+  progress("OPSILA render %dx%d, depth %d, %d PEs: %d warm-up + %d timed runs", scene.width, scene.height,
+           scene.max_depth, settings.num_pes, warmup, repeats);
+  std::vector<RenderResult> renders;
+  // The machine is prepared once (partition, uploads); every run is one frame.
+  Renderer renderer(scene, settings, rt);
+  for (int r = 0; r < warmup + repeats; ++r) {
+    auto t0 = std::chrono::steady_clock::now();
+    RenderResult res = renderer.render();
+    if (r == 0) report.first_render_seconds = seconds_since(t0);
+    if (r < warmup) continue;
+    report.render_times.push_back(res.stats.render_seconds);
+    renders.push_back(std::move(res));
+  }
+  report.deterministic = true;
+  for (const RenderResult& r : renders) report.deterministic = report.deterministic && r.rgb == renders.front().rgb;
+  report.opsila = std::move(renders[median_index(report.render_times)]);
+  report.render_seconds = median(report.render_times);
+  progress("OPSILA: %.3f s, %.3f Mrays/s", report.render_seconds, mrays(report.rays_total(), report.render_seconds));
+}
+
+void measure_baselines(BenchReport& report, const Scene& scene, ClRuntime& rt, const BenchProgress& progress) {
+  const int warmup = report.warmup, repeats = report.repeats, host_repeats = report.host_repeats;
+  const int host_threads = report.host_threads;
+  progress("replicated megakernel: %d warm-up + %d timed runs", warmup, repeats);
+  report.megakernel = measure_baseline("replicated_megakernel", "replicated megakernel (same device)", 0, warmup,
+                                       repeats, [&] { return render_megakernel(scene, rt); });
+  progress("sequential host reference, 1 thread: %d timed runs", host_repeats);
+  report.sequential = measure_baseline("sequential_host", "host reference, 1 thread", 1, 0, host_repeats,
+                                       [&] { return run_reference(scene, 1); });
+  if (host_threads > 1) {
+    progress("host reference, %d threads: %d timed runs", host_threads, host_repeats);
+    report.threads = measure_baseline("host_threads", "host reference, " + std::to_string(host_threads) + " threads",
+                                      host_threads, 0, host_repeats,
+                                      [&] { return run_reference(scene, host_threads); });
+  }
+  if (embree_available()) {
+    progress("Embree %s, %d threads: %d warm-up + %d timed runs", embree_version().c_str(), host_threads, warmup,
+             host_repeats);
+    report.embree = measure_baseline(
+        "embree", "Embree " + embree_version() + ", " + std::to_string(host_threads) + " threads", host_threads,
+        std::min(warmup, 1), host_repeats, [&] { return render_embree(scene, host_threads); });
+  }
+}
+
+void measure_scatter_curve(BenchReport& report, ClRuntime& rt, const BenchProgress& progress) {
+  const int warmup = report.warmup, repeats = report.repeats, scatter_max = report.scatter_max_log2;
+  const std::vector<std::size_t> lengths = curve_lengths(report.quick, scatter_max);
+  report.scatter_pes = std::max(1, report.pes);
+  progress("scatter curve: %zu lengths, 16 .. %s, %d PEs", lengths.size(), length_label(lengths.back()).c_str(),
+           report.scatter_pes);
+  for (std::size_t len : lengths) {
+    // Short vectors are cheap and noisy: more repeats there; the longest
+    // take seconds each: fewer.
+    const int reps = len >= (std::size_t(1) << 22) ? std::min(repeats, 3)
+                     : len <= (std::size_t(1) << 16) ? 4 * repeats
+                                                      : repeats;
+    if (len >= (std::size_t(1) << 20)) progress("scatter %s", length_label(len).c_str());
+    report.curve.push_back(measure_scatter(rt, len, report.scatter_pes, std::max(warmup, 1), reps));
+  }
+
+  // The same scatter at one length over several PE counts: how the number
+  // of destination streams (PEs x 5 descriptor fields) costs bandwidth.
+  if (!report.quick) {
+    const std::size_t len = std::min<std::size_t>(std::size_t(1) << 20, std::size_t(1) << scatter_max);
+    progress("scatter %s over 1 .. 256 PEs", length_label(len).c_str());
+    for (int pes : {1, 4, 16, 64, 256})
+      report.by_pes.push_back(measure_scatter(rt, len, pes, std::max(warmup, 1), std::min(repeats, 3)));
+  }
+}
+
+}  // namespace opsila

@@ -1,0 +1,108 @@
+#include "bench/options.h"
+
+#include <sys/stat.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cstring>
+#include <thread>
+
+#include "core/image_io.h"
+
+namespace opsila {
+
+namespace {
+
+CommandSyntax bench_syntax() {
+  CommandSyntax syntax;
+  syntax.command = "bench";
+  syntax.flags = {{"--json", "--json", true},       {"--csv", "--csv", true},
+                  {"--repeats", "--repeats", true}, {"--warmup", "--warmup", true},
+                  {"--threads", "--threads", true}, {"--scatter-max", "--scatter-max", true},
+                  {"--quick", "--quick", false},    {"-q", "-q", false},
+                  {"--quiet", "-q", false},         {"-h", "--help", false},
+                  {"--help", "--help", false}};
+  syntax.flags.insert(syntax.flags.end(), view_flags().begin(), view_flags().end());
+  // Render flags that make no sense for a benchmark.
+  syntax.foreign = {"-o", "--output", "--item-buffer", "--stats", "--reference"};
+  syntax.foreign_kind = "a render flag, not a bench flag";
+  return syntax;
+}
+
+}  // namespace
+
+int BenchOptions::host_threads() const {
+  return threads.value_or(static_cast<int>(std::max(1u, std::thread::hardware_concurrency())));
+}
+
+int BenchOptions::host_repeats() const { return std::min(timed_repeats(), 3); }
+
+BenchOptions parse_bench_options(const std::vector<std::string>& args) {
+  BenchOptions o;
+  o.scene_path = walk_args(args, bench_syntax(), [&](const std::string& flag, const std::string& name,
+                                                      const std::string& value) {
+    if (parse_view_flag(flag, value, o)) return;
+    if (flag == "--help") {
+      o.help = true;
+    } else if (flag == "-q") {
+      o.quiet = true;
+    } else if (flag == "--quick") {
+      o.quick = true;
+    } else if (flag == "--json") {
+      if (extension_of(value) != ".json") bad_flag(name, value, "must end in .json");
+      o.json_path = value;
+    } else if (flag == "--csv") {
+      if (value.empty()) bad_flag(name, value, "empty folder name");
+      o.csv_dir = value;
+    } else if (flag == "--repeats") {
+      o.repeats = int_in_range(name, value, 1, 1000);
+    } else if (flag == "--warmup") {
+      o.warmup = int_in_range(name, value, 0, 100);
+    } else if (flag == "--threads") {
+      o.threads = int_in_range(name, value, 1, 1024);
+    } else if (flag == "--scatter-max") {
+      o.scatter_max_log2 = int_in_range(name, value, 4, 24);
+    }
+  });
+  if (o.help) return o;
+  if (o.scene_path.empty()) throw InputError("missing SCENE (see 'opsila bench --help')");
+  check_view_flags(o);
+  return o;
+}
+
+void prepare_csv_dir(const std::string& dir) {
+  struct stat st;
+  if (::stat(dir.c_str(), &st) == 0) {
+    if (!S_ISDIR(st.st_mode)) throw InputError("--csv " + dir + ": exists and is not a folder");
+  } else if (::mkdir(dir.c_str(), 0777) != 0) {
+    throw InputError("--csv " + dir + ": cannot create folder (" + std::strerror(errno) + ")");
+  }
+  check_output_path(dir + "/scatter.csv");
+}
+
+std::string bench_usage() {
+  return "usage: opsila bench SCENE [view flags] [--json FILE] [--csv DIR] [--quick] [options]\n"
+         "\n"
+         "Measures, on one OpenCL device: the OPSILA render (phases, exchange share,\n"
+         "launch overhead, PE occupancy, traffic, memory per bank), baselines on the\n"
+         "same rays (replicated-scene megakernel on the same device, the sequential host\n"
+         "reference on 1 and all threads, Embree when built in), and the scatter curve\n"
+         "(speed-up and bandwidth against vector length, beside the copy bandwidth).\n"
+         "Every figure is the median of repeated runs after a warm-up; compilation is\n"
+         "never timed.\n"
+         "\n"
+         "  --json FILE        write every result as JSON (see docs/BENCHMARKS.md)\n"
+         "  --csv DIR          write CSV tables: scatter, phases, levels, occupancy, traffic, baselines\n"
+         "  --quick            fewer repeats and shorter scatter vectors (CI)\n"
+         "  --repeats N        timed runs per measurement (default 5, --quick 2)\n"
+         "  --warmup N         untimed runs before them (default 1)\n"
+         "  --threads N        host threads for the host baselines (default: all)\n"
+         "  --scatter-max K    longest scatter vector 2^K, 4..24 (default 24, --quick 16)\n"
+         "  -q, --quiet        no progress lines\n"
+         "  -h, --help         this text\n"
+         "\n"
+         "View flags, as for 'opsila render': --size WxH, --eye, --look-at, --up, --fov,\n"
+         "--light, --ambient, --background, --depth, --pes, --device, --bank-capacity.\n";
+}
+
+}  // namespace opsila

@@ -1,0 +1,115 @@
+// Everything one `opsila bench` run measured, in one struct: the stages
+// (bench/measure.cpp) fill it, analyse() derives the shares, occupancy and
+// memory figures, and the writers (report_text.cpp, report_json.cpp,
+// report_csv.cpp) only format it.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <map>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "bench/bench.h"
+#include "machine/renderer.h"
+
+namespace opsila {
+
+// A baseline measured `repeats` times (after a warm-up): median seconds, and
+// the image and counts of the median run.
+struct BaselineRun {
+  std::string name, label;
+  bool present = false;
+  int threads = 0, repeats = 0;
+  std::vector<double> seconds_all;
+  BaselineImage median_run;
+  double seconds = 0, kernel_seconds = 0;
+};
+
+// Image agreement, as the tests measure it (values clamped to [0, 1]).
+struct Agreement {
+  double psnr = 0, max_abs_diff = 0, identical_pixels = 0;
+};
+Agreement compare_images(const std::vector<float>& a, const std::vector<float>& b);
+
+// Per level: each PE's descriptors and intersection tests (ray-facet plus
+// ray-box tests in the bank BVH) -- the work of that PE in that SPMD phase.
+struct LevelWork {
+  std::vector<std::uint64_t> descriptors, tests, tri_tests, box_tests, sphere_tests;  // per PE
+  std::uint64_t total_descriptors = 0, total_tests = 0, max_descriptors = 0, max_tests = 0;
+  std::uint64_t spawned_radiance = 0, spawned_shadow = 0, forwards = 0;  // over PEs
+  std::uint64_t triangle_total = 0, box_total = 0, sphere_total = 0;     // over PEs
+};
+
+// mean / max over PEs; none when no PE worked.
+std::optional<double> occupancy_of(std::uint64_t total, std::uint64_t max, std::size_t pes);
+
+// The device as the report names it.
+struct DeviceFacts {
+  std::string description, name, platform, vendor, version, driver_version;
+  bool is_gpu = false;
+  unsigned compute_units = 0;
+  std::uint64_t global_mem_bytes = 0, max_alloc_bytes = 0;
+};
+
+struct BenchReport {
+  // What was asked.
+  std::string scene_path;
+  bool quick = false;
+  int repeats = 0, warmup = 0, host_repeats = 0, host_threads = 0, scatter_max_log2 = 0;
+  // Where and on what.
+  DeviceFacts device;
+  double load_before = -1, load_after = -1;  // 1-minute load average of the host
+  std::size_t triangles = 0, lights = 0;
+  int facets = 0, objects = 0, width = 0, height = 0, depth = 0, pes = 0;
+
+  // 1. the OPSILA render.
+  double compile_seconds = 0, first_render_seconds = 0;
+  std::vector<double> render_times;  // the timed runs
+  double render_seconds = 0;         // their median
+  RenderResult opsila;               // the median run
+  bool deterministic = true;         // every timed run gave the same image
+
+  // 2. baselines on the same rays.
+  BaselineRun megakernel, sequential, threads, embree;
+
+  // 3. the scatter curve, and one length over several PE counts.
+  int scatter_pes = 0;
+  std::vector<ScatterPoint> curve, by_pes;
+
+  // ---- derived by analyse()
+  struct KernelTime {
+    int launches = 0;
+    double seconds = 0;
+  };
+  std::map<std::string, KernelTime> by_kernel;
+  double kernel_seconds = 0, exchange_seconds = 0, overhead_seconds = 0;
+  double exchange_share = 0, overhead_share = 0;
+  std::vector<LevelWork> work;
+  std::uint64_t all_descriptors = 0, all_triangle_tests = 0, all_box_tests = 0, all_sphere_tests = 0;
+  std::optional<double> occupancy, occupancy_descriptors;
+  std::uint64_t bank_max = 0, bank_sum = 0;
+  double bank_mean = 0;
+
+  void analyse();
+  const RenderStats& stats() const { return opsila.stats; }
+  std::uint64_t rays_total() const;
+  // The baselines that ran, in report order.
+  std::vector<const BaselineRun*> baselines() const;
+  bool all_verified() const;  // every scatter point placed like host_scatter
+  double replicated_over_bank_max() const;
+};
+
+// "launch" mode of a kernel in the paper's terms.
+const char* launch_mode(const std::string& kernel_name);
+double mrays(std::uint64_t rays, double seconds);
+// "2^20" for powers of two from 1024, else the number.
+std::string length_label(std::size_t n);
+
+// The writers.
+std::string bench_text(const BenchReport& report);
+std::string bench_json(const BenchReport& report);  // the --json file's text
+void write_bench_csv(const BenchReport& report, const std::string& dir);
+
+}  // namespace opsila

@@ -1,0 +1,298 @@
+// The bench's --json file (keys in docs/BENCHMARKS.md).
+#include <cmath>
+
+#include <nlohmann/json.hpp>
+
+#include "bench/report.h"
+#include "opsila_shared.h"
+
+namespace opsila {
+
+namespace {
+
+using nlohmann::json;
+
+json psnr_value(double p) { return std::isfinite(p) ? json(p) : json("inf"); }
+
+json optional_value(const std::optional<double>& v) { return v ? json(*v) : json(nullptr); }
+
+double fraction_of_copy(const ScatterPoint& p) {
+  return p.copy_kernel_gbytes_per_s() > 0 ? p.gbytes_per_s() / p.copy_kernel_gbytes_per_s() : 0.0;
+}
+
+json header_json(const BenchReport& r) {
+  const RenderStats& st = r.stats();
+  json j;
+  j["version"] = OPSILA_VERSION;
+  j["device"] = r.device.description;
+  j["device_info"] = {{"name", r.device.name},
+                      {"platform", r.device.platform},
+                      {"vendor", r.device.vendor},
+                      {"version", r.device.version},
+                      {"driver_version", r.device.driver_version},
+                      {"is_gpu", r.device.is_gpu},
+                      {"compute_units", r.device.compute_units},
+                      {"global_mem_bytes", r.device.global_mem_bytes},
+                      {"max_alloc_bytes", r.device.max_alloc_bytes}};
+  j["host_threads"] = r.host_threads;
+  j["host_load_average"] = {{"before", r.load_before}, {"after", r.load_after}};
+  j["scene"] = {{"path", r.scene_path}, {"triangles", r.triangles}, {"facets", r.facets},
+                {"objects", r.objects},  {"clusters", st.num_clusters}, {"lights", r.lights}};
+  j["image"] = {{"width", r.width}, {"height", r.height}, {"pixels", std::size_t(r.width) * r.height}};
+  j["depth"] = r.depth;
+  j["pes"] = r.pes;
+  j["bank_capacity"] = st.bank_capacity;
+  j["work_group_size"] = st.work_group_size;
+  j["settings"] = {{"repeats", r.repeats}, {"warmup", r.warmup}, {"host_repeats", r.host_repeats},
+                   {"quick", r.quick},     {"scatter_max_log2", r.scatter_max_log2}};
+  j["compile_seconds"] = r.compile_seconds;
+  j["first_render_seconds"] = r.first_render_seconds;
+  return j;
+}
+
+json levels_json(const BenchReport& r) {
+  json levels = json::array();
+  for (std::size_t l = 0; l < r.work.size(); ++l) {
+    const LevelWork& w = r.work[l];
+    levels.push_back({{"level", l},
+                      {"descriptors", w.total_descriptors},
+                      {"tests", w.total_tests},
+                      {"triangle_tests", w.triangle_total},
+                      {"box_tests", w.box_total},
+                      {"sphere_tests", w.sphere_total},
+                      {"spawned_radiance", w.spawned_radiance},
+                      {"spawned_shadow", w.spawned_shadow},
+                      {"forwards", w.forwards},
+                      {"max_pe_descriptors", w.max_descriptors},
+                      {"max_pe_tests", w.max_tests},
+                      {"occupancy_descriptors", optional_value(occupancy_of(w.total_descriptors, w.max_descriptors,
+                                                                            std::size_t(r.pes)))},
+                      {"occupancy", optional_value(occupancy_of(w.total_tests, w.max_tests, std::size_t(r.pes)))}});
+  }
+  return levels;
+}
+
+json pe_json(const BenchReport& r) {
+  const RenderStats& st = r.stats();
+  json pe_list = json::array();
+  for (int p = 0; p < r.pes; ++p) {
+    std::uint64_t d = 0, t = 0, tri = 0, box = 0, sph = 0;
+    std::vector<std::uint64_t> d_by, t_by;
+    for (const LevelWork& w : r.work) {
+      d += w.descriptors[p];
+      t += w.tests[p];
+      tri += w.tri_tests[p];
+      box += w.box_tests[p];
+      sph += w.sphere_tests[p];
+      d_by.push_back(w.descriptors[p]);
+      t_by.push_back(w.tests[p]);
+    }
+    pe_list.push_back({{"pe", p},
+                       {"descriptors", d},
+                       {"tests", t},
+                       {"triangle_tests", tri},
+                       {"box_tests", box},
+                       {"sphere_tests", sph},
+                       {"descriptors_by_level", d_by},
+                       {"tests_by_level", t_by},
+                       {"bank_bytes", p < static_cast<int>(st.bank_bytes.size()) ? st.bank_bytes[p] : 0}});
+  }
+  return pe_list;
+}
+
+json render_json(const BenchReport& r) {
+  const RenderStats& st = r.stats();
+  const double rs = st.render_seconds, seconds = r.render_seconds;
+  json j;
+  j["rays"] = r.rays_total();
+  j["rays_by_kind"] = {{"primary", st.primary_rays}, {"secondary", st.secondary_rays}, {"shadow", st.shadow_rays}};
+  j["seconds"] = seconds;
+  j["seconds_all"] = r.render_times;
+  j["mrays_per_s"] = mrays(r.rays_total(), seconds);
+  j["mrays_per_s_by_kind"] = {{"primary", mrays(st.primary_rays, seconds)},
+                              {"secondary", mrays(st.secondary_rays, seconds)},
+                              {"shadow", mrays(st.shadow_rays, seconds)}};
+  j["deterministic"] = r.deterministic;
+  j["rounds"] = st.rounds;
+  j["phase_switches"] = 2 * st.rounds;
+  j["kernel_seconds"] = r.kernel_seconds;
+  j["exchange_seconds"] = r.exchange_seconds;
+  j["exchange_share"] = r.exchange_share;
+  j["overhead_seconds"] = r.overhead_seconds;
+  j["overhead_share"] = r.overhead_share;
+  j["exchange_plus_overhead_share"] = r.exchange_share + r.overhead_share;
+  j["descriptors"] = {{"spawned", st.descriptors_spawned},
+                      {"finished", st.descriptors_finished},
+                      {"forwards", st.forwards},
+                      {"overflow_deferrals", st.overflow_deferrals}};
+  json tk = json::object();
+  for (const auto& [name, e] : r.by_kernel)
+    tk[name] = {{"launches", e.launches}, {"seconds", e.seconds}, {"mode", launch_mode(name)},
+                {"share", rs > 0 ? e.seconds / rs : 0.0}};
+  j["time_by_kernel"] = tk;
+  json phases = json::array();
+  for (const LaunchRecord& l : st.launches)
+    phases.push_back({{"name", l.name}, {"mode", launch_mode(l.name)}, {"round", l.round}, {"seconds", l.seconds}});
+  j["phases"] = std::move(phases);
+  j["levels"] = levels_json(r);
+  j["pe"] = pe_json(r);
+  j["work"] = {{"descriptors", r.all_descriptors},
+               {"triangle_tests", r.all_triangle_tests},
+               {"box_tests", r.all_box_tests},
+               {"sphere_tests", r.all_sphere_tests},
+               {"tests", r.all_triangle_tests + r.all_box_tests}};
+  j["occupancy"] = optional_value(r.occupancy);
+  j["occupancy_descriptors"] = optional_value(r.occupancy_descriptors);
+  json traffic = json::array();
+  const std::size_t P = std::size_t(r.pes);
+  for (const auto& flat : st.traffic) {
+    json m = json::array();
+    for (std::size_t s = 0; s < P; ++s)
+      m.push_back(std::vector<std::uint64_t>(flat.begin() + s * P, flat.begin() + (s + 1) * P));
+    traffic.push_back(std::move(m));
+  }
+  j["traffic"] = std::move(traffic);
+  return j;
+}
+
+json scatter_json(const std::vector<ScatterPoint>& curve) {
+  json scatter = json::array();
+  for (const ScatterPoint& p : curve)
+    scatter.push_back({{"length", p.length},
+                       {"moved", p.moved},
+                       {"waiting", p.waiting},
+                       {"pes", p.pes},
+                       {"bank_capacity", p.n},
+                       {"repeats", p.repeats},
+                       {"bytes", p.bytes()},
+                       {"host_seconds", p.host_seconds},
+                       {"kernel_seconds", p.kernel_seconds},
+                       {"kernels", {{"scatter_count", p.count_seconds},
+                                    {"scatter_scan", p.scan_seconds},
+                                    {"scatter_plan", p.plan_seconds},
+                                    {"scatter_move", p.move_seconds}}},
+                       {"speedup", p.speedup()},
+                       {"gbytes_per_s", p.gbytes_per_s()},
+                       {"host_gbytes_per_s", p.host_gbytes_per_s()},
+                       {"copy_kernel_seconds", p.copy_kernel_seconds},
+                       {"copy_kernel_gbytes_per_s", p.copy_kernel_gbytes_per_s()},
+                       {"copy_buffer_seconds", p.copy_buffer_seconds},
+                       {"copy_buffer_gbytes_per_s", p.copy_buffer_gbytes_per_s()},
+                       {"fraction_of_copy", fraction_of_copy(p)},
+                       {"verified", p.verified}});
+  return scatter;
+}
+
+json scatter_by_pes_json(const std::vector<ScatterPoint>& by_pes) {
+  json sp = json::array();
+  for (const ScatterPoint& p : by_pes)
+    sp.push_back({{"pes", p.pes},
+                  {"length", p.length},
+                  {"kernel_seconds", p.kernel_seconds},
+                  {"host_seconds", p.host_seconds},
+                  {"speedup", p.speedup()},
+                  {"gbytes_per_s", p.gbytes_per_s()},
+                  {"host_gbytes_per_s", p.host_gbytes_per_s()},
+                  {"copy_kernel_gbytes_per_s", p.copy_kernel_gbytes_per_s()},
+                  {"fraction_of_copy", fraction_of_copy(p)},
+                  {"verified", p.verified}});
+  return sp;
+}
+
+json memory_json(const BenchReport& r) {
+  const RenderStats& st = r.stats();
+  return {{"bank_bytes", st.bank_bytes},
+          {"bank_bytes_max", r.bank_max},
+          {"bank_bytes_mean", r.bank_mean},
+          {"global_bytes", st.global_bytes},
+          {"replicated_bytes", st.replicated_bytes},
+          {"per_pe_bytes_max", r.bank_max + st.global_bytes},
+          {"replicated_over_bank_max", r.replicated_over_bank_max()},
+          {"all_pes_distributed_bytes", r.bank_sum + std::uint64_t(r.pes) * st.global_bytes},
+          {"all_pes_replicated_bytes", std::uint64_t(r.pes) * st.replicated_bytes}};
+}
+
+json baselines_json(const BenchReport& r) {
+  const RenderStats& st = r.stats();
+  json baselines = json::object();
+  for (const BaselineRun* b : r.baselines()) {
+    const BaselineImage& img = b->median_run;
+    const Agreement g = compare_images(img.rgb, r.opsila.rgb);
+    const bool same_rays = img.rays.primary == st.primary_rays && img.rays.secondary == st.secondary_rays &&
+                           img.rays.shadow == st.shadow_rays;
+    json e = {{"label", b->label},
+              {"seconds", b->seconds},
+              {"seconds_all", b->seconds_all},
+              {"build_seconds", img.build_seconds},
+              {"rays", img.rays.total()},
+              {"rays_by_kind", {{"primary", img.rays.primary}, {"secondary", img.rays.secondary},
+                                {"shadow", img.rays.shadow}}},
+              {"mrays_per_s", mrays(img.rays.total(), b->seconds)},
+              {"rays_match_opsila", same_rays},
+              {"psnr_vs_opsila", psnr_value(g.psnr)},
+              {"max_abs_diff_vs_opsila", g.max_abs_diff},
+              {"identical_pixels_vs_opsila", g.identical_pixels}};
+    if (b->threads > 0) e["threads"] = b->threads;
+    if (b->name == "replicated_megakernel") {
+      e["kernel_seconds"] = b->kernel_seconds;
+      e["device"] = r.device.description;
+      e["scene_bytes_per_work_item"] = st.replicated_bytes;
+      e["triangle_tests"] = img.triangle_tests;
+      e["box_tests"] = img.box_tests;
+      e["tests"] = img.triangle_tests + img.box_tests;
+    }
+    if (b->name == "embree") e["version"] = embree_version();
+    baselines[b->name] = std::move(e);
+  }
+  return baselines;
+}
+
+// Targets (benchmarks, reported, never enforced).
+json targets_json(const BenchReport& r) {
+  json targets = json::object();
+  const ScatterPoint* p20 = nullptr;
+  for (const ScatterPoint& p : r.curve)
+    if (p.length == (std::size_t(1) << 20)) p20 = &p;
+  if (p20)
+    targets["scatter_2p20_vs_copy"] = {
+        {"gbytes_per_s", p20->gbytes_per_s()},
+        {"copy_gbytes_per_s", p20->copy_kernel_gbytes_per_s()},
+        {"fraction", p20->gbytes_per_s() / std::max(1e-30, p20->copy_kernel_gbytes_per_s())},
+        {"goal", 0.6},
+        {"met", p20->gbytes_per_s() >= 0.6 * p20->copy_kernel_gbytes_per_s()}};
+  else
+    targets["scatter_2p20_vs_copy"] = nullptr;
+  const double share = r.exchange_share + r.overhead_share;
+  targets["exchange_plus_overhead"] = {{"share", share}, {"goal", 0.10}, {"met", share < 0.10}};
+  if (r.embree.present) {
+    const double e = mrays(r.embree.median_run.rays.total(), r.embree.seconds);
+    const double mine = mrays(r.rays_total(), r.render_seconds);
+    targets["opsila_vs_embree"] = {{"opsila_mrays_per_s", mine},
+                                   {"embree_mrays_per_s", e},
+                                   {"ratio", e > 0 ? mine / e : 0.0},
+                                   {"goal", 0.5},
+                                   {"met", e > 0 && mine >= 0.5 * e}};
+  } else {
+    targets["opsila_vs_embree"] = nullptr;
+  }
+  return targets;
+}
+
+}  // namespace
+
+std::string bench_json(const BenchReport& r) {
+  json j = header_json(r);
+  j["render"] = render_json(r);
+  j["scatter"] = scatter_json(r.curve);
+  j["scatter_by_pes"] = scatter_by_pes_json(r.by_pes);
+  // The copy ceiling: the longest vector's copy bandwidth (the asymptote).
+  j["copy_gbytes_per_s"] = r.curve.back().copy_kernel_gbytes_per_s();
+  j["copy_buffer_gbytes_per_s"] = r.curve.back().copy_buffer_gbytes_per_s();
+  j["bytes_per_descriptor"] = DescriptorSet::kBytes;
+  j["memory"] = memory_json(r);
+  j["baselines"] = baselines_json(r);
+  j["targets"] = targets_json(r);
+  return j.dump(1) + "\n";
+}
+
+}  // namespace opsila

@@ -1,0 +1,139 @@
+// The bench's summary on stdout: renders side by side, work, phases,
+// occupancy, memory and the scatter curve.
+#include <cmath>
+#include <cstdarg>
+#include <cstdio>
+#include <string>
+
+#include "bench/report.h"
+#include "core/util.h"
+
+namespace opsila {
+
+namespace {
+
+void appendf(std::string& out, const char* fmt, ...) __attribute__((format(printf, 2, 3)));
+void appendf(std::string& out, const char* fmt, ...) {
+  char line[1024];
+  va_list ap;
+  va_start(ap, fmt);
+  std::vsnprintf(line, sizeof line, fmt, ap);
+  va_end(ap);
+  out += line;
+}
+
+using ull = unsigned long long;
+
+std::string bench_bytes(double bytes) {
+  return bytes < 1024.0 * 1024 ? format_bytes(bytes, 1, 1) : format_bytes(bytes, 2, 1);
+}
+
+double percent_of_copy(const ScatterPoint& p) {
+  return p.copy_kernel_gbytes_per_s() > 0 ? 100.0 * p.gbytes_per_s() / p.copy_kernel_gbytes_per_s() : 0.0;
+}
+
+void header_text(std::string& out, const BenchReport& r) {
+  const RenderStats& st = r.stats();
+  appendf(out, "opsila bench: %s, %dx%d, depth %d, %d PEs (bank capacity %d, work-group %zu)\n",
+          r.scene_path.c_str(), r.width, r.height, r.depth, r.pes, st.bank_capacity, st.work_group_size);
+  appendf(out, "device: %s\n", r.device.description.c_str());
+  appendf(out, "scene: %zu triangles, %d facets, %d objects, %d clusters, %zu lights\n", r.triangles, r.facets,
+          r.objects, st.num_clusters, r.lights);
+  appendf(out,
+          "timing: median of %d runs after %d warm-up (host baselines: median of %d); compile %.2f s, not timed\n\n",
+          r.repeats, r.warmup, r.host_repeats, r.compile_seconds);
+}
+
+void renders_text(std::string& out, const BenchReport& r) {
+  const RenderStats& st = r.stats();
+  appendf(out, "%-40s %10s %10s %12s %10s\n", "render (same rays)", "seconds", "Mrays/s", "rays", "PSNR dB");
+  appendf(out, "%-40s %10.4f %10.3f %12llu %10s\n", ("OPSILA, " + std::to_string(r.pes) + " PEs").c_str(),
+          r.render_seconds, mrays(r.rays_total(), r.render_seconds), ull(r.rays_total()), "-");
+  for (const BaselineRun* b : r.baselines()) {
+    const Agreement g = compare_images(b->median_run.rgb, r.opsila.rgb);
+    char ps[32];
+    if (std::isfinite(g.psnr))
+      std::snprintf(ps, sizeof ps, "%.1f", g.psnr);
+    else
+      std::snprintf(ps, sizeof ps, "inf");
+    appendf(out, "%-40s %10.4f %10.3f %12llu %10s\n", b->label.c_str(), b->seconds,
+            mrays(b->median_run.rays.total(), b->seconds), ull(b->median_run.rays.total()), ps);
+  }
+  appendf(out,
+          "work: OPSILA %llu descriptors, %llu ray-facet + %llu ray-box tests, %llu sphere tests;\n"
+          "      megakernel %llu ray-facet + %llu ray-box tests\n",
+          ull(r.all_descriptors), ull(r.all_triangle_tests), ull(r.all_box_tests), ull(r.all_sphere_tests),
+          ull(r.megakernel.median_run.triangle_tests), ull(r.megakernel.median_run.box_tests));
+  appendf(out, "rays: %llu primary, %llu secondary, %llu shadow\n\n", ull(st.primary_rays), ull(st.secondary_rays),
+          ull(st.shadow_rays));
+}
+
+void phases_text(std::string& out, const BenchReport& r) {
+  const RenderStats& st = r.stats();
+  const double rs = st.render_seconds;
+  appendf(out, "phases: %d rounds (%d phase switches), render %.4f s\n", st.rounds, 2 * st.rounds, rs);
+  appendf(out, "  %-18s %5s %9s %10s %7s\n", "kernel", "mode", "launches", "seconds", "share");
+  for (const auto& [name, e] : r.by_kernel)
+    appendf(out, "  %-18s %5s %9d %10.4f %6.1f%%\n", name.c_str(), launch_mode(name), e.launches, e.seconds,
+            rs > 0 ? 100.0 * e.seconds / rs : 0.0);
+  appendf(out, "  %-18s %5s %9s %10.4f %6.1f%%\n", "launch overhead", "", "", r.overhead_seconds,
+          100.0 * r.overhead_share);
+  appendf(out, "  exchange (scatter) %.1f%% + launch overhead %.1f%% = %.1f%% of the frame\n\n",
+          100.0 * r.exchange_share, 100.0 * r.overhead_share, 100.0 * (r.exchange_share + r.overhead_share));
+}
+
+void occupancy_text(std::string& out, const BenchReport& r) {
+  appendf(out, "occupancy (mean/max per PE; work = ray-facet + ray-box tests):\n");
+  appendf(out, "  %5s %12s %14s %12s %12s\n", "level", "descriptors", "tests", "occ(desc)", "occ(tests)");
+  for (std::size_t l = 0; l < r.work.size(); ++l) {
+    const LevelWork& w = r.work[l];
+    if (w.total_descriptors == 0) continue;
+    appendf(out, "  %5zu %12llu %14llu %12.3f %12.3f\n", l, ull(w.total_descriptors), ull(w.total_tests),
+            occupancy_of(w.total_descriptors, w.max_descriptors, std::size_t(r.pes)).value_or(0.0),
+            occupancy_of(w.total_tests, w.max_tests, std::size_t(r.pes)).value_or(0.0));
+  }
+  appendf(out, "  overall: %.3f (tests), %.3f (descriptors)\n\n", r.occupancy.value_or(0.0),
+          r.occupancy_descriptors.value_or(0.0));
+}
+
+void memory_text(std::string& out, const BenchReport& r) {
+  const RenderStats& st = r.stats();
+  appendf(out, "memory: bank max %s, mean %s, + %s known to every PE; a replicated scene costs %s per PE (%.1fx)\n\n",
+          bench_bytes(double(r.bank_max)).c_str(), bench_bytes(r.bank_mean).c_str(),
+          bench_bytes(double(st.global_bytes)).c_str(), bench_bytes(double(st.replicated_bytes)).c_str(),
+          r.replicated_over_bank_max());
+}
+
+void scatter_text(std::string& out, const BenchReport& r) {
+  appendf(out, "scatter (%d PEs, %zu bytes per descriptor, read + written):\n", r.scatter_pes, DescriptorSet::kBytes);
+  appendf(out, "  %8s %11s %11s %8s %9s %9s %9s %7s\n", "length", "host ms", "kernel ms", "speedup", "GB/s",
+          "copy GB/s", "cpbuf GB/s", "%copy");
+  for (const ScatterPoint& p : r.curve)
+    appendf(out, "  %8s %11.4f %11.4f %8.2f %9.2f %9.2f %9.2f %6.0f%%\n", length_label(p.length).c_str(),
+            1e3 * p.host_seconds, 1e3 * p.kernel_seconds, p.speedup(), p.gbytes_per_s(),
+            p.copy_kernel_gbytes_per_s(), p.copy_buffer_gbytes_per_s(), percent_of_copy(p));
+  if (!r.by_pes.empty()) {
+    appendf(out, "  %s descriptors over PE counts (destination streams = PEs x 5 fields):\n",
+            length_label(r.by_pes.front().length).c_str());
+    appendf(out, "  %8s %11s %8s %9s %9s %7s\n", "PEs", "kernel ms", "speedup", "GB/s", "copy GB/s", "%copy");
+    for (const ScatterPoint& p : r.by_pes)
+      appendf(out, "  %8d %11.4f %8.2f %9.2f %9.2f %6.0f%%\n", p.pes, 1e3 * p.kernel_seconds, p.speedup(),
+              p.gbytes_per_s(), p.copy_kernel_gbytes_per_s(), percent_of_copy(p));
+  }
+  appendf(out, "  placement %s host_scatter at every length\n", r.all_verified() ? "matches" : "DIFFERS from");
+}
+
+}  // namespace
+
+std::string bench_text(const BenchReport& r) {
+  std::string out;
+  header_text(out, r);
+  renders_text(out, r);
+  phases_text(out, r);
+  occupancy_text(out, r);
+  memory_text(out, r);
+  scatter_text(out, r);
+  return out;
+}
+
+}  // namespace opsila

@@ -1,0 +1,41 @@
+#include "core/util.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+namespace opsila {
+
+std::string lower(std::string s) {
+  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return std::tolower(c); });
+  return s;
+}
+
+double median(std::vector<double> v) {
+  if (v.empty()) return 0;
+  std::sort(v.begin(), v.end());
+  return v[(v.size() - 1) / 2];
+}
+
+std::size_t median_index(const std::vector<double>& v) {
+  const double m = median(v);
+  std::size_t best = 0;
+  for (std::size_t i = 1; i < v.size(); ++i)
+    if (std::abs(v[i] - m) < std::abs(v[best] - m)) best = i;
+  return best;
+}
+
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+std::string format_bytes(double bytes, int decimals, int smallest) {
+  static const char* const kUnits[] = {"KiB", "MiB", "GiB"};
+  int power = 3;
+  while (power > smallest && bytes < std::ldexp(1.0, 10 * power)) --power;
+  char text[64];
+  std::snprintf(text, sizeof text, "%.*f %s", decimals, bytes / std::ldexp(1.0, 10 * power), kUnits[power - 1]);
+  return text;
+}
+
+}  // namespace opsila

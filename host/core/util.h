@@ -1,0 +1,26 @@
+// Small utilities every room may use: text case, medians of timings, byte
+// counts for people.
+#pragma once
+
+#include <chrono>
+#include <cstddef>
+#include <string>
+#include <vector>
+
+namespace opsila {
+
+// ASCII lower case.
+std::string lower(std::string s);
+
+// The lower median: always one of the values (0 when empty).
+double median(std::vector<double> v);
+// Index of the value closest to the median (the run whose details are kept).
+std::size_t median_index(const std::vector<double>& v);
+
+double seconds_since(std::chrono::steady_clock::time_point t0);
+
+// "12.3 MiB": the largest binary unit (KiB, MiB, GiB) not above `bytes`,
+// never below `smallest` (1 = KiB, 2 = MiB), with `decimals` digits.
+std::string format_bytes(double bytes, int decimals, int smallest = 1);
+
+}  // namespace opsila

@@ -11,6 +11,7 @@
 #include <thread>
 
 #include "bench/bench.h"
+#include "core/camera.h"
 #include "opsila_shared.h"
 
 #ifdef OPSILA_HAVE_EMBREE
@@ -241,17 +242,15 @@ BaselineImage render_embree(const Scene& s, int threads) {
   if (tr.materials.empty()) tr.materials.push_back({{0.8f, 0.8f, 0.8f}, {0.8f, 0.8f, 0.8f}, {}, {}, {}, 1, 1});
 
   // The camera basis in float, as the renderer computes it.
-  const CameraDesc& cam = s.camera;
-  const F3 f = normalize(f3(cam.look_at) - f3(cam.eye));
-  const F3 r = normalize(cross(f, f3(cam.up)));
+  const CameraFrame cam = camera_frame(s.camera, s.width, s.height);
   tr.eye = f3(cam.eye);
-  tr.forward = f;
-  tr.right = r;
-  tr.up = cross(r, f);
+  tr.forward = f3(cam.forward);
+  tr.right = f3(cam.right);
+  tr.up = f3(cam.up);
   tr.ambient = f3(s.ambient);
   tr.background = f3(s.background);
-  tr.tan_half_fov = std::tan(cam.fov_deg * 0.5f * static_cast<float>(M_PI) / 180.0f);
-  tr.aspect = static_cast<float>(s.width) / static_cast<float>(s.height);
+  tr.tan_half_fov = cam.tan_half_fov;
+  tr.aspect = cam.aspect;
   tr.eps = s.epsilon();
   out.build_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_build).count();
 

@@ -12,6 +12,7 @@
 #include <set>
 #include <sstream>
 
+#include "core/camera.h"
 #include "core/util.h"
 #include "opsila_shared.h"
 
@@ -91,32 +92,6 @@ void parse_size(const std::string& text, int& width, int& height) {
                                  std::to_string(kMaxImagePixels) + " (2^26)");
   width = static_cast<int>(w);
   height = static_cast<int>(h);
-}
-
-std::string format_vec(const Vec3& v) {
-  std::ostringstream out;
-  out << v[0] << "," << v[1] << "," << v[2];
-  return out.str();
-}
-
-// The camera basis exists: eye != look-at, up non-zero and not parallel to
-// the view direction. Sources name the flags or the file for the message.
-void check_camera(const CameraDesc& c, const std::string& eye_source, const std::string& up_source) {
-  double f[3], u[3];
-  for (int i = 0; i < 3; ++i) {
-    f[i] = static_cast<double>(c.look_at[i]) - c.eye[i];
-    u[i] = c.up[i];
-  }
-  const double f_len = std::sqrt(f[0] * f[0] + f[1] * f[1] + f[2] * f[2]);
-  const double u_len = std::sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
-  if (!(f_len > 0) || !std::isfinite(f_len))
-    throw InputError(eye_source + ": eye and look-at are the same point (" + format_vec(c.eye) + ")");
-  if (!(u_len > 0) || !std::isfinite(u_len)) throw InputError(up_source + ": up vector is zero");
-  const double cross[3] = {f[1] * u[2] - f[2] * u[1], f[2] * u[0] - f[0] * u[2], f[0] * u[1] - f[1] * u[0]};
-  const double sine = std::sqrt(cross[0] * cross[0] + cross[1] * cross[1] + cross[2] * cross[2]) / (f_len * u_len);
-  if (sine < 1e-4)  // nearly parallel: the float basis would be noise
-    throw InputError(up_source + " (" + format_vec(c.up) + ") is parallel to the view direction (from eye " +
-                     format_vec(c.eye) + " to look-at " + format_vec(c.look_at) + ")");
 }
 
 }  // namespace

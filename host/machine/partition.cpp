@@ -4,6 +4,8 @@
 #include <cmath>
 #include <numeric>
 
+#include "core/camera.h"
+
 namespace opsila {
 namespace {
 
@@ -412,33 +414,20 @@ BankedScene partition_scene(const Scene& scene, int num_pes) {
   return bs;
 }
 
-// SPEC camera basis, computed in float exactly as the formula reads.
+// The frame's constants; the camera basis from core/camera.h.
 FrameParams frame_params(const Scene& scene, const BankedScene& bs, int bank_capacity) {
   FrameParams fp{};
-  const CameraDesc& cam = scene.camera;
-  float f[3], r[3], u[3];
-  {
-    float d[3] = {cam.look_at[0] - cam.eye[0], cam.look_at[1] - cam.eye[1], cam.look_at[2] - cam.eye[2]};
-    float l = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
-    for (int a = 0; a < 3; ++a) f[a] = d[a] / l;
-    float c[3] = {f[1] * cam.up[2] - f[2] * cam.up[1], f[2] * cam.up[0] - f[0] * cam.up[2],
-                  f[0] * cam.up[1] - f[1] * cam.up[0]};
-    float cl = std::sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
-    for (int a = 0; a < 3; ++a) r[a] = c[a] / cl;
-    u[0] = r[1] * f[2] - r[2] * f[1];
-    u[1] = r[2] * f[0] - r[0] * f[2];
-    u[2] = r[0] * f[1] - r[1] * f[0];
-  }
+  const CameraFrame cam = camera_frame(scene.camera, scene.width, scene.height);
   for (int a = 0; a < 3; ++a) {
     fp.eye[a] = cam.eye[a];
-    fp.forward[a] = f[a];
-    fp.right[a] = r[a];
-    fp.up[a] = u[a];
+    fp.forward[a] = cam.forward[a];
+    fp.right[a] = cam.right[a];
+    fp.up[a] = cam.up[a];
     fp.ambient[a] = scene.ambient[a];
     fp.background[a] = scene.background[a];
   }
-  fp.tan_half_fov = std::tan(cam.fov_deg * 0.5f * static_cast<float>(M_PI) / 180.0f);
-  fp.aspect = static_cast<float>(scene.width) / static_cast<float>(scene.height);
+  fp.tan_half_fov = cam.tan_half_fov;
+  fp.aspect = cam.aspect;
   fp.epsilon = scene.epsilon();
   fp.width = scene.width;
   fp.height = scene.height;

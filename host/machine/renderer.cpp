@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <string>
 
+#include "core/camera.h"
 #include "machine/descriptors.h"
 #include "opsila_shared.h"
 #include "machine/partition.h"
@@ -17,27 +18,10 @@ namespace {
 
 constexpr int kTrafficMaxPes = 64;  // PE x PE traffic matrices are kept up to this many PEs
 
-struct Vec {
-  double x, y, z;
-};
-Vec sub(const Vec3& a, const Vec3& b) { return {double(a[0]) - b[0], double(a[1]) - b[1], double(a[2]) - b[2]}; }
-double dot(const Vec& a, const Vec& b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
-Vec cross(const Vec& a, const Vec& b) { return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x}; }
-Vec normalize(const Vec& a) {
-  double l = std::sqrt(dot(a, a));
-  return {a.x / l, a.y / l, a.z / l};
-}
-
-
 // "Projected object boxes": each cluster box as a conservative pixel
 // rectangle (x0, y0, x1, y1), the whole screen when a corner is behind the eye.
 std::vector<cl_int4> cluster_rects(const Scene& scene, const BankedScene& bs) {
-  const CameraDesc& cam = scene.camera;
-  Vec f = normalize(sub(cam.look_at, cam.eye));
-  Vec up{cam.up[0], cam.up[1], cam.up[2]};
-  Vec r = normalize(cross(f, up));
-  Vec u = cross(r, f);
-  double s = std::tan(cam.fov_deg * 0.5 * M_PI / 180.0), a = double(scene.width) / scene.height;
+  const CameraFrame frame = camera_frame(scene.camera, scene.width, scene.height);
   int W = scene.width, H = scene.height;
   std::vector<cl_int4> rects(bs.clusters.size());
   for (std::size_t c = 0; c < bs.clusters.size(); ++c) {
@@ -47,14 +31,9 @@ std::vector<cl_int4> cluster_rects(const Scene& scene, const BankedScene& bs) {
     for (int k = 0; k < 8 && !behind; ++k) {
       Vec3 corner{(k & 1) ? cl.bmax[0] : cl.bmin[0], (k & 2) ? cl.bmax[1] : cl.bmin[1],
                   (k & 4) ? cl.bmax[2] : cl.bmin[2]};
-      Vec d = sub(corner, cam.eye);
-      double cz = dot(d, f);
-      if (cz <= 1e-6 * std::sqrt(dot(d, d)) || cz <= 0) {
-        behind = true;
-        break;
-      }
-      double px = ((dot(d, r) / cz) / (s * a) + 1.0) * W * 0.5 - 0.5;
-      double py = (1.0 - (dot(d, u) / cz) / s) * H * 0.5 - 0.5;
+      double px, py;
+      behind = !project_to_pixels(frame, W, H, corner, px, py);
+      if (behind) break;
       x0 = std::min(x0, px), x1 = std::max(x1, px), y0 = std::min(y0, py), y1 = std::max(y1, py);
     }
     cl_int4 rc;

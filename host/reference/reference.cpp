@@ -172,31 +172,6 @@ ReferenceCounts& ReferenceCounts::operator+=(const ReferenceCounts& o) {
   return *this;
 }
 
-// ------------------------------------------------------------------ camera
-
-CameraFrame camera_frame(const CameraDesc& camera, int width, int height) {
-  const vec3 eye = to_glm(camera.eye);
-  const vec3 f = glm::normalize(to_glm(camera.look_at) - eye);
-  const vec3 r = glm::normalize(glm::cross(f, to_glm(camera.up)));
-  const vec3 u = glm::cross(r, f);
-  CameraFrame frame;
-  frame.eye = camera.eye;
-  frame.forward = to_vec3(f);
-  frame.right = to_vec3(r);
-  frame.up = to_vec3(u);
-  frame.tan_half_fov = std::tan(camera.fov_deg * 0.5f * 3.14159265358979323846f / 180.0f);
-  frame.aspect = static_cast<float>(width) / static_cast<float>(height);
-  return frame;
-}
-
-Vec3 primary_direction(const CameraFrame& frame, int width, int height, int x, int y) {
-  const float s = frame.tan_half_fov, a = frame.aspect;
-  const float px = 2.0f * (static_cast<float>(x) + 0.5f) / static_cast<float>(width) - 1.0f;
-  const float py = 1.0f - 2.0f * (static_cast<float>(y) + 0.5f) / static_cast<float>(height);
-  const vec3 d = to_glm(frame.forward) + px * s * a * to_glm(frame.right) + py * s * to_glm(frame.up);
-  return to_vec3(glm::normalize(d));
-}
-
 // ------------------------------------------------------------------ tracer
 
 struct ReferenceTracer::Impl {

@@ -8,6 +8,7 @@
 #include <memory>
 #include <vector>
 
+#include "core/camera.h"
 #include "core/scene.h"
 
 namespace opsila {
@@ -28,15 +29,6 @@ struct ReferenceImage {
   std::vector<std::int32_t> item_buffer;  // (object, facet) per pixel, (-1,-1) on miss
   ReferenceCounts counts;
 };
-
-// SPEC "Camera": f, r, u, s = tan(fov/2), a = W/H.
-struct CameraFrame {
-  Vec3 eye, forward, right, up;
-  float tan_half_fov = 1, aspect = 1;
-};
-CameraFrame camera_frame(const CameraDesc& camera, int width, int height);
-// Unit direction of pixel (x, y)'s primary ray.
-Vec3 primary_direction(const CameraFrame& frame, int width, int height, int x, int y);
 
 // Holds the scene (by reference: it must outlive the tracer), its epsilon and
 // a BVH. Const after construction, so several threads may render row ranges

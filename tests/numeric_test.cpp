@@ -194,7 +194,7 @@ TEST(Numeric, NoCracksInATiltedGrid) {
   add_grid(s, {-20, 0, -30}, {0.37f, 0, 0.05f}, {-0.05f, 0, 0.37f}, 110, 110, 0, grey);
   s.num_objects = 1;
   RenderResult r = render_cl(s, 4);
-  ReferenceImage ref = render_reference(s);
+  ImageResult ref = render_reference(s);
   // The horizon shows background; below it, nothing may leak through.
   std::size_t leaks = 0;
   for (int y = 0; y < s.height; ++y)
@@ -229,7 +229,7 @@ TEST(Numeric, RaysGrazingAndParallelToFacets) {
     s.num_objects = 3;
     s.lights.push_back({{3, 4, 4}, {0.8f, 0.8f, 0.8f}});
     const RenderResult r = render_cl(s, 4);
-    const ReferenceImage ref = render_reference(s);
+    const ImageResult ref = render_reference(s);
     EXPECT_EQ(non_finite(r.rgb), 0u);
     EXPECT_EQ(non_finite(ref.rgb), 0u);
     const int mid = s.height / 2, centre = s.width / 2;
@@ -319,7 +319,7 @@ TEST(Numeric, GlassWithIndexOneDoesNotBend) {
   EXPECT_GT(on_pane, 64u * 48u / 8);
   EXPECT_GE(test::clamped_psnr(r_with.rgb, r_without.rgb), 50.0);
   EXPECT_LE(test::fraction_off(r_with.rgb, r_without.rgb, 1), 0.005);
-  const ReferenceImage ref = render_reference(with);
+  const ImageResult ref = render_reference(with);
   EXPECT_GE(test::clamped_psnr(r_with.rgb, ref.rgb), 50.0);
 }
 
@@ -336,7 +336,7 @@ TEST(Numeric, ShininessZeroGivesTheFullSpecularColour) {
   const Vec3 light{-30, 0.5f, -1};
   s.lights.push_back({light, {1, 1, 1}});
   const RenderResult r = render_cl(s);
-  const ReferenceImage ref = render_reference(s);
+  const ImageResult ref = render_reference(s);
 
   // Hand computation (double precision): which floor points see the
   // reflected light direction pointing away from the eye?
@@ -382,7 +382,7 @@ TEST(Numeric, TotalInternalReflection) {
       test::add_quad(s, a, b, c, d, 0, glass);
     s.num_objects = 1;
     const RenderResult r = render_cl(s);
-    const ReferenceImage ref = render_reference(s);
+    const ImageResult ref = render_reference(s);
     const CameraFrame frame = camera_frame(s.camera, s.width, s.height);
     std::size_t tir = 0, checked = 0;
     for (int y = 0; y < s.height; ++y)
@@ -430,7 +430,7 @@ TEST(Numeric, LightInTheFacetPlane) {
     s.num_objects = 3;
     s.lights.push_back({light, {0.9f, 0.9f, 0.9f}});
     const RenderResult r = render_cl(s);
-    const ReferenceImage ref = render_reference(s);
+    const ImageResult ref = render_reference(s);
     EXPECT_EQ(non_finite(r.rgb), 0u);
     std::size_t floor_pixels = 0;
     for (std::size_t i = 0; i < r.item_buffer.size() / 2; ++i) {

@@ -59,7 +59,7 @@ void add_square(Scene& s, float x0, float x1, float y0, float y1, float z, int m
   s.num_objects = std::max(s.num_objects, object + 1);
 }
 
-Vec3 pixel(const ReferenceImage& img, int x, int y) {
+Vec3 pixel(const ImageResult& img, int x, int y) {
   const std::size_t i = 3 * (static_cast<std::size_t>(y) * img.width + x);
   return {img.rgb[i], img.rgb[i + 1], img.rgb[i + 2]};
 }
@@ -108,16 +108,16 @@ TEST(Reference, DiffusePlaneMatchesHandComputedLocalIntensity) {
   const int m = add_material(s, material({0.2f, 0.3f, 0.4f}, {0.5f, 0.6f, 0.7f}));
   add_square(s, -10, 10, -10, 10, 0, m, 0, 0);
   s.lights.push_back({{3, 0, 4}, {1.0f, 0.5f, 0.25f}});  // n.Lv = 4/5
-  const ReferenceImage img = render_reference(s);
+  const ImageResult img = render_reference(s);
   // The centre ray hits (0,0,0), on the quad's diagonal (a tie between its
   // two triangles, both facet 0). L = Ia*Ka + Il*Kd*0.8.
   expect_rgb(pixel(img, 1, 1), 0.1f * 0.2f + 1.0f * 0.5f * 0.8f, 0.2f * 0.3f + 0.5f * 0.6f * 0.8f,
              0.3f * 0.4f + 0.25f * 0.7f * 0.8f);
   EXPECT_EQ(img.item_buffer[2 * 4], 0);
   EXPECT_EQ(img.item_buffer[2 * 4 + 1], 0);
-  EXPECT_EQ(img.counts.primary, 9u);
-  EXPECT_EQ(img.counts.shadow, 9u);
-  EXPECT_EQ(img.counts.secondary, 0u);
+  EXPECT_EQ(img.rays.primary, 9u);
+  EXPECT_EQ(img.rays.shadow, 9u);
+  EXPECT_EQ(img.rays.secondary, 0u);
 }
 
 TEST(Reference, SpecularTermUsesReflectedLightVector) {
@@ -125,7 +125,7 @@ TEST(Reference, SpecularTermUsesReflectedLightVector) {
   const int m = add_material(s, material({0, 0, 0}, {0, 0, 0}, {0.5f, 0.25f, 1.0f}, 10));
   add_square(s, -10, 10, -10, 10, 0, m, 0, 0);
   s.lights.push_back({{3, 0, 4}, {1, 1, 1}});
-  const ReferenceImage img = render_reference(s);
+  const ImageResult img = render_reference(s);
   // Rl = 2(n.Lv)n - Lv = (-0.6, 0, 0.8); Rl.(-D) = 0.8; Ks * 0.8^10.
   const float h = std::pow(0.8f, 10.0f);
   expect_rgb(pixel(img, 1, 1), 0.5f * h, 0.25f * h, 1.0f * h);
@@ -137,7 +137,7 @@ TEST(Reference, ShininessZeroGivesFullSpecular) {
   const int m = add_material(s, material({0, 0, 0}, {0, 0, 0}, {0.3f, 0.3f, 0.3f}, 0));
   add_square(s, -10, 10, -10, 10, 0, m, 0, 0);
   s.lights.push_back({{3, 0, 4}, {2, 2, 2}});
-  const ReferenceImage img = render_reference(s);
+  const ImageResult img = render_reference(s);
   expect_rgb(pixel(img, 1, 1), 0.6f, 0.6f, 0.6f);
 }
 
@@ -147,9 +147,9 @@ TEST(Reference, LightBehindSurfaceGivesAmbientOnly) {
   const int m = add_material(s, material({0.2f, 0.4f, 0.6f}, {1, 1, 1}, {1, 1, 1}, 1));
   add_square(s, -10, 10, -10, 10, 0, m, 0, 0);
   s.lights.push_back({{0, 0, -4}, {1, 1, 1}});
-  const ReferenceImage img = render_reference(s);
+  const ImageResult img = render_reference(s);
   expect_rgb(pixel(img, 1, 1), 0.1f, 0.2f, 0.3f);
-  EXPECT_EQ(img.counts.shadow, 0u);  // n.Lv <= 0: no shadow ray is needed
+  EXPECT_EQ(img.rays.shadow, 0u);  // n.Lv <= 0: no shadow ray is needed
 }
 
 TEST(Reference, BackFacingTriangleIsShadedWithFlippedNormal) {
@@ -180,7 +180,7 @@ TEST(Reference, OccluderBetweenPointAndLightCastsShadow) {
   Scene shadowed = s;
   const int glass = add_material(shadowed, material({0, 0, 0}, {0, 0, 0}, {0, 0, 0}, 1, 4, {1, 1, 1}, 1));
   add_square(shadowed, 1.5f, 2.5f, -0.5f, 0.5f, 2, glass, 1, 1);
-  const ReferenceImage img = render_reference(shadowed);
+  const ImageResult img = render_reference(shadowed);
   expect_rgb(pixel(img, 1, 1), 0.1f, 0.1f, 0.1f);
   EXPECT_EQ(img.item_buffer[2 * 4 + 1], 0);  // the camera still sees the floor
 
@@ -195,11 +195,11 @@ TEST(Reference, MissesGiveBackgroundAndEmptyItems) {
   s.background = {0.25f, 0.5f, 0.75f};
   const int m = add_material(s, material({1, 1, 1}, {1, 1, 1}));
   add_square(s, -1, 1, -1, 1, 10, m, 0, 0);  // behind the camera
-  const ReferenceImage img = render_reference(s);
+  const ImageResult img = render_reference(s);
   for (int y = 0; y < 3; ++y)
     for (int x = 0; x < 4; ++x) expect_rgb(pixel(img, x, y), 0.25f, 0.5f, 0.75f);
   for (std::int32_t id : img.item_buffer) EXPECT_EQ(id, -1);
-  EXPECT_EQ(img.counts.primary_hits, 0u);
+  EXPECT_EQ(img.rays.primary_hits, 0u);
 }
 
 TEST(Reference, MirrorReflectsBackgroundAndDepthOneIsLocalOnly) {
@@ -208,16 +208,16 @@ TEST(Reference, MirrorReflectsBackgroundAndDepthOneIsLocalOnly) {
   const int m = add_material(s, material({0, 0, 0}, {0, 0, 0}, {0.8f, 0.6f, 0.4f}, 1, 3));
   add_square(s, -10, 10, -10, 10, 0, m, 0, 0);
   s.max_depth = 2;
-  ReferenceImage img = render_reference(s);
+  ImageResult img = render_reference(s);
   // No light, no ambient: the mirror's own term is 0; the reflected ray
   // goes back up and misses: kr * background.
   expect_rgb(pixel(img, 1, 1), 0.16f, 0.24f, 0.4f);
-  EXPECT_EQ(img.counts.secondary, 9u);
+  EXPECT_EQ(img.rays.secondary, 9u);
 
   s.max_depth = 1;
   img = render_reference(s);
   expect_rgb(pixel(img, 1, 1), 0, 0, 0);
-  EXPECT_EQ(img.counts.secondary, 0u);
+  EXPECT_EQ(img.rays.secondary, 0u);
 }
 
 TEST(Reference, GlassWithIndexOneTransmitsStraightThroughWeightedByTf) {
@@ -231,7 +231,7 @@ TEST(Reference, GlassWithIndexOneTransmitsStraightThroughWeightedByTf) {
   // through the centre land on red; a bent ray would not need to.
   add_square(s, -10, 0.2f, -10, 10, -2, red, 1, 1);
   add_square(s, 0.2f, 10, -10, 10, -2, blue, 1, 2);
-  const ReferenceImage img = render_reference(s);
+  const ImageResult img = render_reference(s);
   expect_rgb(pixel(img, 1, 1), 0.5f * 0.9f, 0.7f * 0.1f, 0.9f * 0.1f);
   EXPECT_EQ(img.item_buffer[2 * 4 + 1], 0);  // primary hit is the glass
   // Right column: x > 0.2 at z = -2 along a straight ray.
@@ -264,12 +264,12 @@ TEST(Reference, TotalInternalReflectionHasNoTransmittedRay) {
     add_square(s, -10, 10, -10, 10, 0, m, 0, 0, true);
     return s;
   };
-  const ReferenceImage tir = render_reference(make(1.5f));  // k < 0
+  const ImageResult tir = render_reference(make(1.5f));  // k < 0
   expect_rgb(pixel(tir, 0, 0), 0, 0, 0);
-  EXPECT_EQ(tir.counts.secondary, 0u);
-  const ReferenceImage through = render_reference(make(1.1f));  // k = 1 - 1.21*0.75 > 0
+  EXPECT_EQ(tir.rays.secondary, 0u);
+  const ImageResult through = render_reference(make(1.1f));  // k = 1 - 1.21*0.75 > 0
   expect_rgb(pixel(through, 0, 0), 0.5f, 0.5f, 0.5f);
-  EXPECT_EQ(through.counts.secondary, 1u);
+  EXPECT_EQ(through.rays.secondary, 1u);
 }
 
 TEST(Reference, RefractionBendsByEtaFormula) {
@@ -299,7 +299,7 @@ TEST(Reference, ItemBufferNamesObjectAndFacetOfPrimaryHit) {
   const int m = add_material(s, material({1, 1, 1}, {0, 0, 0}));
   add_square(s, -10, 0, -10, 10, 0, m, 3, 7);   // left half
   add_square(s, 0, 10, -10, 10, 0, m, 5, 11);   // right half
-  const ReferenceImage img = render_reference(s);
+  const ImageResult img = render_reference(s);
   ASSERT_EQ(img.item_buffer.size(), 4u);
   EXPECT_EQ(img.item_buffer[0], 3);
   EXPECT_EQ(img.item_buffer[1], 7);
@@ -315,7 +315,7 @@ TEST(Reference, TiesGoToTheLowerTriangleIndex) {
   // Two coincident squares: the one listed first wins everywhere.
   add_square(s, -10, 10, -10, 10, 0, blue, 0, 9);
   add_square(s, -10, 10, -10, 10, 0, red, 1, 2);
-  const ReferenceImage img = render_reference(s);
+  const ImageResult img = render_reference(s);
   for (int i = 0; i < 9; ++i) {
     EXPECT_EQ(img.item_buffer[2 * i + 1], 9);
     expect_rgb(pixel(img, i % 3, i / 3), 0, 0, 1);
@@ -332,7 +332,7 @@ TEST(Reference, PrimaryRaysAcceptHitsCloserThanEpsilon) {
   add_square(s, -0.01f, 0.01f, -0.01f, 0.01f, 4.999f, near_m, 1, 1);  // t = 0.001 < epsilon ~ 0.3
   const ReferenceTracer tracer(s);
   EXPECT_GT(tracer.epsilon(), 0.1f);
-  const ReferenceImage img = render_reference(s);
+  const ImageResult img = render_reference(s);
   expect_rgb(pixel(img, 0, 0), 0, 1, 0);
 }
 
@@ -343,21 +343,21 @@ TEST(Reference, ThreadsAndRowRangesGiveTheSameImage) {
   add_square(s, -3, 3, -3, 3, 0, m, 0, 0);
   add_square(s, -1, 1, -1, 1, 1, m, 1, 1, true);
   s.lights.push_back({{2, 2, 6}, {1, 1, 1}});
-  const ReferenceImage one = render_reference(s, 1);
-  const ReferenceImage two = render_reference(s, 2);
+  const ImageResult one = render_reference(s, 1);
+  const ImageResult two = render_reference(s, 2);
   // Same computation per pixel: bit-identical.
   EXPECT_EQ(one.rgb, two.rgb);
   EXPECT_EQ(one.item_buffer, two.item_buffer);
-  EXPECT_EQ(one.counts.total(), two.counts.total());
+  EXPECT_EQ(one.rays.total(), two.rays.total());
 
-  ReferenceImage rows = make_reference_image(s);
+  ImageResult rows = blank_image(s.width, s.height);
   render_reference_rows(s, 5, 9, rows);
   for (int y = 5; y < 9; ++y)
     for (int x = 0; x < 17; ++x) {
       const Vec3 a = pixel(one, x, y), b = pixel(rows, x, y);
       expect_rgb(b, a[0], a[1], a[2], 0);
     }
-  EXPECT_EQ(rows.counts.primary, 4u * 17u);
+  EXPECT_EQ(rows.rays.primary, 4u * 17u);
 }
 
 // Brute force over all triangles, the same test in the same precision: the
@@ -403,7 +403,7 @@ TEST(Reference, BvhFindsTheSameNearestFacetAsBruteForce) {
   }
   s.num_facets = 3000;
   s.num_objects = 1;
-  const ReferenceImage img = render_reference(s);
+  const ImageResult img = render_reference(s);
   const CameraFrame frame = camera_frame(s.camera, s.width, s.height);
   int hits = 0;
   for (int y = 0; y < s.height; ++y)
@@ -421,12 +421,12 @@ TEST(Reference, RayCountsFollowTheTree) {
   add_square(s, -10, 10, -10, 10, 0, mirror, 0, 0);
   s.lights.push_back({{0, 0, 4}, {1, 1, 1}});
   s.lights.push_back({{0, 0, -4}, {1, 1, 1}});  // behind: never needs a shadow ray
-  const ReferenceImage img = render_reference(s);
-  EXPECT_EQ(img.counts.primary, 4u);
-  EXPECT_EQ(img.counts.primary_hits, 4u);
-  EXPECT_EQ(img.counts.shadow, 4u);     // one per hit, front light only
-  EXPECT_EQ(img.counts.secondary, 4u);  // reflections that then miss
-  EXPECT_EQ(img.counts.total(), 12u);
+  const ImageResult img = render_reference(s);
+  EXPECT_EQ(img.rays.primary, 4u);
+  EXPECT_EQ(img.rays.primary_hits, 4u);
+  EXPECT_EQ(img.rays.shadow, 4u);     // one per hit, front light only
+  EXPECT_EQ(img.rays.secondary, 4u);  // reflections that then miss
+  EXPECT_EQ(img.rays.total(), 12u);
 }
 
 }  // namespace

@@ -40,21 +40,21 @@ void expect_balanced(const RenderStats& st) {
 TEST(Renderer, MatchesReferenceOnMirrorsGlassAndShadows) {
   Scene s = test::mirror_glass_scene(160);
   RenderResult r = render_with(s, 16);
-  ReferenceImage ref = render_reference(s);
+  ImageResult ref = render_reference(s);
   EXPECT_GE(test::clamped_psnr(r.rgb, ref.rgb), 40.0);
   EXPECT_LE(test::fraction_off(r.rgb, ref.rgb, 2), 0.005);
   EXPECT_GE(item_agreement(r.item_buffer, ref.item_buffer), 0.999);
   expect_balanced(r.stats);
-  EXPECT_GT(r.stats.secondary_rays, 0u);
-  EXPECT_GT(r.stats.shadow_rays, 0u);
+  EXPECT_GT(r.rays.secondary, 0u);
+  EXPECT_GT(r.rays.shadow, 0u);
 }
 
 TEST(Renderer, DepthOneIsLocalShadingOnly) {
   Scene s = test::mirror_glass_scene(64, 1);
   RenderResult r = render_with(s, 4);
-  ReferenceImage ref = render_reference(s);
+  ImageResult ref = render_reference(s);
   EXPECT_GE(test::clamped_psnr(r.rgb, ref.rgb), 40.0);
-  EXPECT_EQ(r.stats.secondary_rays, 0u);
+  EXPECT_EQ(r.rays.secondary, 0u);
   expect_balanced(r.stats);
 }
 
@@ -158,7 +158,7 @@ TEST(Renderer, StatsCountPerLevelAndPe) {
     level0 += st.counters[0][p][OPSILA_STAT_TRACED];
     level1 += st.counters[1][p][OPSILA_STAT_TRACED];
   }
-  EXPECT_GE(level0, st.primary_hits);  // every primary hit is shaded once, forwards on top
+  EXPECT_GE(level0, r.rays.primary_hits);  // every primary hit is shaded once, forwards on top
   EXPECT_GT(level1, 0u);
   EXPECT_EQ(st.bank_bytes.size(), 16u);
   EXPECT_GT(st.replicated_bytes, *std::max_element(st.bank_bytes.begin(), st.bank_bytes.end()));

@@ -12,6 +12,7 @@
 
 #include "machine/cl_runtime.h"
 #include "machine/descriptors.h"
+#include "core/image.h"
 #include "core/scene.h"
 
 namespace opsila {
@@ -50,18 +51,8 @@ ScatterPoint measure_scatter(ClRuntime& runtime, std::size_t length, int pes, in
 
 // ------------------------------------------------------ baseline renderers
 
-// Rays as RenderStats counts them: primary = pixels, secondary = reflected +
-// transmitted spawned, shadow = shadow rays spawned.
-struct BaselineRays {
-  std::uint64_t primary = 0, secondary = 0, shadow = 0;
-  std::uint64_t total() const { return primary + secondary + shadow; }
-};
-
-struct BaselineImage {
-  int width = 0, height = 0;
-  std::vector<float> rgb;                 // linear, 3 per pixel, row 0 = top
-  std::vector<std::int32_t> item_buffer;  // (object, facet) per pixel
-  BaselineRays rays;
+// A baseline's image and rays, with its timings.
+struct BaselineImage : ImageResult {
   double seconds = 0;         // wall time of the render (scene build excluded)
   double kernel_seconds = 0;  // device time (megakernel only)
   double build_seconds = 0;   // acceleration structure / upload preparation

@@ -134,7 +134,7 @@ struct Tracer {
   }
 
   // One pixel's Whitted tree, shaded as kernels/spmd_phase.cl shades it.
-  void pixel(int x, int y, std::int64_t sum[3], std::int32_t item[2], BaselineRays& rays) const {
+  void pixel(int x, int y, std::int64_t sum[3], std::int32_t item[2], RayCounts& rays) const {
     struct Pending {
       F3 org, dir, w;
       int level;
@@ -237,9 +237,10 @@ BaselineImage render_embree(const Scene& s, int threads) {
   rtcReleaseGeometry(geom);
   rtcCommitScene(es.scene);
   tr.scene = es.scene;
-  for (const MaterialDesc& m : s.materials)
+  std::vector<MaterialDesc> materials = s.materials;
+  if (materials.empty()) materials.push_back(MaterialDesc::default_material());
+  for (const MaterialDesc& m : materials)
     tr.materials.push_back({f3(m.ka), f3(m.kd), f3(m.ks), f3(m.kr()), f3(m.kt()), m.ns, m.ni});
-  if (tr.materials.empty()) tr.materials.push_back({{0.8f, 0.8f, 0.8f}, {0.8f, 0.8f, 0.8f}, {}, {}, {}, 1, 1});
 
   // The camera basis in float, as the renderer computes it.
   const CameraFrame cam = camera_frame(s.camera, s.width, s.height);
@@ -257,7 +258,7 @@ BaselineImage render_embree(const Scene& s, int threads) {
   std::vector<std::int64_t> sums(npix * 3, 0);
   out.item_buffer.assign(npix * 2, -1);
   threads = std::max(1, std::min(threads, s.height));
-  std::vector<BaselineRays> counts(threads);
+  std::vector<RayCounts> counts(threads);
   auto t0 = std::chrono::steady_clock::now();
   constexpr int kBand = 4;  // interleaved bands of rows, as the host reference does
   auto work = [&](int w) {
@@ -277,7 +278,7 @@ BaselineImage render_embree(const Scene& s, int threads) {
   out.rgb.resize(npix * 3);
   for (std::size_t i = 0; i < npix * 3; ++i)
     out.rgb[i] = static_cast<float>(static_cast<double>(sums[i]) / OPSILA_FIXED_SCALE);
-  for (const BaselineRays& c : counts) {
+  for (const RayCounts& c : counts) {
     out.rays.primary += c.primary;
     out.rays.secondary += c.secondary;
     out.rays.shadow += c.shadow;

@@ -23,10 +23,10 @@ BaselineImage run_reference(const Scene& scene, int threads) {
   BaselineImage out;
   auto tb = std::chrono::steady_clock::now();
   const ReferenceTracer tracer(scene);
-  ReferenceImage image = make_reference_image(scene);
+  ImageResult image = blank_image(scene.width, scene.height);
   out.build_seconds = seconds_since(tb);
   threads = std::max(1, std::min(threads, scene.height));
-  std::vector<ReferenceCounts> counts(threads);
+  std::vector<RayCounts> counts(threads);
   constexpr int kBand = 4;
   auto t0 = std::chrono::steady_clock::now();
   auto work = [&](int w) {
@@ -37,15 +37,10 @@ BaselineImage run_reference(const Scene& scene, int threads) {
   work(0);
   for (std::thread& t : pool) t.join();
   out.seconds = seconds_since(t0);
-  ReferenceCounts total;
-  for (const ReferenceCounts& c : counts) total += c;
-  out.width = image.width;
-  out.height = image.height;
-  out.rgb = std::move(image.rgb);
-  out.item_buffer = std::move(image.item_buffer);
-  out.rays.primary = total.primary;
-  out.rays.secondary = total.secondary;
-  out.rays.shadow = total.shadow;
+  RayCounts total;
+  for (const RayCounts& c : counts) total += c;
+  static_cast<ImageResult&>(out) = std::move(image);
+  out.rays = total;
   return out;
 }
 

@@ -83,8 +83,7 @@ std::string length_label(std::size_t n) {
 }
 
 std::uint64_t BenchReport::rays_total() const {
-  const RenderStats& st = stats();
-  return st.primary_rays + st.secondary_rays + st.shadow_rays;
+  return opsila.rays.total();
 }
 
 std::vector<const BaselineRun*> BenchReport::baselines() const {

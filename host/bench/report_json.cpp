@@ -105,13 +105,13 @@ json render_json(const BenchReport& r) {
   const double rs = st.render_seconds, seconds = r.render_seconds;
   json j;
   j["rays"] = r.rays_total();
-  j["rays_by_kind"] = {{"primary", st.primary_rays}, {"secondary", st.secondary_rays}, {"shadow", st.shadow_rays}};
+  j["rays_by_kind"] = {{"primary", r.opsila.rays.primary}, {"secondary", r.opsila.rays.secondary}, {"shadow", r.opsila.rays.shadow}};
   j["seconds"] = seconds;
   j["seconds_all"] = r.render_times;
   j["mrays_per_s"] = mrays(r.rays_total(), seconds);
-  j["mrays_per_s_by_kind"] = {{"primary", mrays(st.primary_rays, seconds)},
-                              {"secondary", mrays(st.secondary_rays, seconds)},
-                              {"shadow", mrays(st.shadow_rays, seconds)}};
+  j["mrays_per_s_by_kind"] = {{"primary", mrays(r.opsila.rays.primary, seconds)},
+                              {"secondary", mrays(r.opsila.rays.secondary, seconds)},
+                              {"shadow", mrays(r.opsila.rays.shadow, seconds)}};
   j["deterministic"] = r.deterministic;
   j["rounds"] = st.rounds;
   j["phase_switches"] = 2 * st.rounds;
@@ -218,8 +218,7 @@ json baselines_json(const BenchReport& r) {
   for (const BaselineRun* b : r.baselines()) {
     const BaselineImage& img = b->median_run;
     const Agreement g = compare_images(img.rgb, r.opsila.rgb);
-    const bool same_rays = img.rays.primary == st.primary_rays && img.rays.secondary == st.secondary_rays &&
-                           img.rays.shadow == st.shadow_rays;
+    const bool same_rays = img.rays.same_rays(r.opsila.rays);
     json e = {{"label", b->label},
               {"seconds", b->seconds},
               {"seconds_all", b->seconds_all},

@@ -64,8 +64,8 @@ void renders_text(std::string& out, const BenchReport& r) {
           "      megakernel %llu ray-facet + %llu ray-box tests\n",
           ull(r.all_descriptors), ull(r.all_triangle_tests), ull(r.all_box_tests), ull(r.all_sphere_tests),
           ull(r.megakernel.median_run.triangle_tests), ull(r.megakernel.median_run.box_tests));
-  appendf(out, "rays: %llu primary, %llu secondary, %llu shadow\n\n", ull(st.primary_rays), ull(st.secondary_rays),
-          ull(st.shadow_rays));
+  appendf(out, "rays: %llu primary, %llu secondary, %llu shadow\n\n", ull(r.opsila.rays.primary), ull(r.opsila.rays.secondary),
+          ull(r.opsila.rays.shadow));
 }
 
 void phases_text(std::string& out, const BenchReport& r) {

@@ -173,21 +173,13 @@ int run_render(const std::vector<std::string>& args) {
     device = "host reference (" + std::to_string(threads) + " threads)";
     if (!o.quiet) print_line("device", device);
     const auto start = std::chrono::steady_clock::now();
-    ReferenceImage image = render_reference(scene, threads);
+    static_cast<ImageResult&>(result) = render_reference(scene, threads);
     result.stats.render_seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    result.width = image.width;
-    result.height = image.height;
-    result.rgb = std::move(image.rgb);
-    result.item_buffer = std::move(image.item_buffer);
     RenderStats& s = result.stats;
-    s.primary_rays = image.counts.primary;
-    s.primary_hits = image.counts.primary_hits;
-    s.secondary_rays = image.counts.secondary;
-    s.shadow_rays = image.counts.shadow;
     // One processor: every primary hit and spawned ray is a "descriptor"
     // that finishes at once, as RenderStats counts them.
-    s.descriptors_spawned = s.primary_hits + s.secondary_rays + s.shadow_rays;
+    s.descriptors_spawned = result.rays.primary_hits + result.rays.secondary + result.rays.shadow;
     s.descriptors_finished = s.descriptors_spawned;
     s.num_pes = 1;
     settings.num_pes = 1;
@@ -211,7 +203,7 @@ int run_render(const std::vector<std::string>& args) {
     char line[256];
     std::snprintf(line, sizeof line, "%s (%dx%d, depth %d, %llu rays in %.3f s)", o.output_path.c_str(),
                   result.width, result.height, scene.max_depth,
-                  static_cast<unsigned long long>(s.primary_rays + s.secondary_rays + s.shadow_rays),
+                  static_cast<unsigned long long>(result.rays.total()),
                   s.render_seconds);
     std::fprintf(stderr, "opsila: wrote %s\n", line);
   }

@@ -8,9 +8,10 @@
 
 namespace opsila {
 
-namespace {
 bool illum_reflects(int illum) { return illum >= 3 && illum <= 7; }
 bool illum_transmits(int illum) { return illum == 4 || illum == 6 || illum == 7; }
+
+namespace {
 
 std::string short_number(double v) {
   char buf[32];

@@ -19,6 +19,11 @@ struct InputError : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+// SPEC "Materials": an illumination model reflects (kr = Ks) for illum
+// 3..7 and transmits (kt = Tf) for illum 4, 6 and 7.
+bool illum_reflects(int illum);
+bool illum_transmits(int illum);
+
 // SPEC.md "Materials", as read from MTL or a scene file.
 struct MaterialDesc {
   std::string name;

@@ -294,7 +294,7 @@ std::vector<MaterialDesc> parse_mtl(const std::string& text, const std::string& 
     warnings.push_back(at(name, orphan_line) + std::to_string(orphan_keys) +
                        " material keys before the first 'newmtl' were ignored");
   for (const MaterialDesc& m : out) {
-    if ((m.illum == 4 || m.illum == 6 || m.illum == 7) && !(m.ni > 0))
+    if (illum_transmits(m.illum) && !(m.ni > 0))
       warnings.push_back(name + ": material '" + m.name +
                          "' transmits light but has Ni <= 0 (refraction is undefined)");
   }

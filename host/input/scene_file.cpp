@@ -195,9 +195,6 @@ const char* kind(const Json& v) {
   }
 }
 
-bool reflects(int illum) { return illum >= 3 && illum <= 7; }
-bool transmits(int illum) { return illum == 4 || illum == 6 || illum == 7; }
-
 class SceneReader {
  public:
   SceneReader(const std::string& text, const std::string& name, const std::string& base_dir,
@@ -481,10 +478,10 @@ class SceneReader {
     }
     if (const Json* x = find(v, "illum")) {
       m.illum = integer(*x, key("illum"), 0, 10);
-      if (kr && !reflects(m.illum))
+      if (kr && !illum_reflects(m.illum))
         fail(key("kr"), "has no effect with illum " + std::to_string(m.illum) +
                             " (reflection needs illum 3..7)");
-      if (kt && !transmits(m.illum))
+      if (kt && !illum_transmits(m.illum))
         fail(key("kt"), "has no effect with illum " + std::to_string(m.illum) +
                             " (transmission needs illum 4, 6 or 7)");
     } else {

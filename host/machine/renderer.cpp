@@ -413,9 +413,9 @@ void Renderer::Machine::read_stats(RenderResult& result) {
     for (int l = 0; l < traffic_levels; ++l)
       for (std::size_t k = 0; k < std::size_t(P) * P; ++k) st.traffic[l][k] = tr[std::size_t(l) * P * P + k];
   }
-  st.primary_rays = npix;
+  result.rays.primary = npix;
   for (std::size_t i = 0; i < npix; ++i)
-    if (result.item_buffer[2 * i] >= 0) ++st.primary_hits;
+    if (result.item_buffer[2 * i] >= 0) ++result.rays.primary_hits;
   std::uint64_t children = 0, shadow = 0, finished = 0, forwards = 0;
   for (int l = 0; l < depth; ++l)
     for (int p = 0; p < P; ++p) {
@@ -425,9 +425,9 @@ void Renderer::Machine::read_stats(RenderResult& result) {
       finished += c[OPSILA_STAT_RESOLVED] + c[OPSILA_STAT_MISS] + c[OPSILA_STAT_OCCLUDED] + c[OPSILA_STAT_LIT];
       forwards += c[OPSILA_STAT_FORWARD];
     }
-  st.secondary_rays = children;
-  st.shadow_rays = shadow;
-  st.descriptors_spawned = st.primary_hits + children + shadow;
+  result.rays.secondary = children;
+  result.rays.shadow = shadow;
+  st.descriptors_spawned = result.rays.primary_hits + children + shadow;
   st.descriptors_finished = finished;
   st.forwards = forwards;
 }

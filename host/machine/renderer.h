@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "machine/cl_runtime.h"
+#include "core/image.h"
 #include "core/scene.h"
 
 namespace opsila {
@@ -28,10 +29,6 @@ struct LaunchRecord {
 struct RenderStats {
   // counters[level][pe][OPSILA_STAT_*]
   std::vector<std::vector<std::vector<std::uint64_t>>> counters;
-  std::uint64_t primary_rays = 0;    // pixels (every primary ray is cast by the item buffer)
-  std::uint64_t primary_hits = 0;    // primary descriptors built from the item buffer
-  std::uint64_t secondary_rays = 0;  // reflected + transmitted rays spawned
-  std::uint64_t shadow_rays = 0;     // shadow rays spawned
   std::uint64_t descriptors_spawned = 0;   // descriptors created (primary hits + forwards excluded)
   std::uint64_t descriptors_finished = 0;  // shaded hits + misses + occluded + lit
   std::uint64_t forwards = 0;        // extra descriptors for cross-bank nearest hit / shadows
@@ -50,10 +47,9 @@ struct RenderStats {
   std::size_t work_group_size = 0;
 };
 
-struct RenderResult {
-  int width = 0, height = 0;
-  std::vector<float> rgb;               // linear, row 0 = top, 3 floats per pixel
-  std::vector<std::int32_t> item_buffer; // (object, facet) per pixel, -1,-1 on miss
+// The image, its rays (every primary ray is cast by the item buffer; primary
+// hits are the primary descriptors built from it) and how the machine ran.
+struct RenderResult : ImageResult {
   RenderStats stats;
 };
 

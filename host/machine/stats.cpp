@@ -61,11 +61,12 @@ nlohmann::json stats_json(const RenderResult& result, const Scene& scene,
                 {"objects", scene.num_objects},
                 {"lights", scene.lights.size()}};
 
-  const std::uint64_t total_rays = s.primary_rays + s.secondary_rays + s.shadow_rays;
-  j["rays"] = {{"primary", s.primary_rays},
-               {"primary_hits", s.primary_hits},
-               {"secondary", s.secondary_rays},
-               {"shadow", s.shadow_rays},
+  const RayCounts& rays = result.rays;
+  const std::uint64_t total_rays = rays.total();
+  j["rays"] = {{"primary", rays.primary},
+               {"primary_hits", rays.primary_hits},
+               {"secondary", rays.secondary},
+               {"shadow", rays.shadow},
                {"total", total_rays}};
   j["render_seconds"] = s.render_seconds;
   j["mrays_per_s"] = s.render_seconds > 0 ? static_cast<double>(total_rays) / s.render_seconds / 1e6 : 0.0;

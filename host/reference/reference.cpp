@@ -164,14 +164,6 @@ struct Hit {
 
 }  // namespace
 
-ReferenceCounts& ReferenceCounts::operator+=(const ReferenceCounts& o) {
-  primary += o.primary;
-  secondary += o.secondary;
-  shadow += o.shadow;
-  primary_hits += o.primary_hits;
-  return *this;
-}
-
 // ------------------------------------------------------------------ tracer
 
 struct ReferenceTracer::Impl {
@@ -238,7 +230,7 @@ struct ReferenceTracer::Impl {
   // unit direction d. Shadow rays are cast only where the light term can be
   // non-zero (n.Lv > 0).
   vec3 local_intensity(const vec3& p, const vec3& n, const vec3& d, const MaterialDesc& m,
-                       ReferenceCounts& counts) const {
+                       RayCounts& counts) const {
     vec3 result = to_glm(scene.ambient) * to_glm(m.ka);
     for (const LightDesc& light : scene.lights) {
       const vec3 to_light = to_glm(light.position) - p;
@@ -261,7 +253,7 @@ struct ReferenceTracer::Impl {
   // Adds weight x (radiance of the ray tree rooted at this ray) to `pixel`.
   // Returns the triangle hit (for the item buffer), or -1.
   int trace(const vec3& origin, const vec3& d, float t_min, int level, const vec3& weight,
-            vec3& pixel, ReferenceCounts& counts) const {
+            vec3& pixel, RayCounts& counts) const {
     Hit hit;
     if (!nearest(origin, d, t_min, hit)) {
       pixel += weight * to_glm(scene.background);
@@ -276,10 +268,8 @@ struct ReferenceTracer::Impl {
 
     if (level + 1 >= scene.max_depth) return hit.tri;
     // SPEC "Materials": kr = Ks for illum 3..7, kt = Tf for illum 4, 6, 7.
-    const bool reflects = m.illum >= 3 && m.illum <= 7;
-    const bool transmits = m.illum == 4 || m.illum == 6 || m.illum == 7;
-    const vec3 kr = reflects ? to_glm(m.ks) : vec3(0.0f);
-    const vec3 kt = transmits ? to_glm(m.tf) : vec3(0.0f);
+    const vec3 kr = to_glm(m.kr());
+    const vec3 kt = to_glm(m.kt());
     if (any_nonzero(kr)) {
       ++counts.secondary;
       // Renormalised: SPEC treats every ray direction as unit, and epsilon
@@ -303,29 +293,12 @@ struct ReferenceTracer::Impl {
 
 ReferenceTracer::ReferenceTracer(const Scene& scene) : scene_(scene), impl_(new Impl(scene)) {
   // SPEC: epsilon = 1e-4 x the diagonal of the bounding box of the facets.
-  vec3 lo(std::numeric_limits<float>::max()), hi(-std::numeric_limits<float>::max());
-  for (const Triangle& t : scene.triangles) {
-    for (const Vec3* v : {&t.v0, &t.v1, &t.v2}) {
-      lo = glm::min(lo, to_glm(*v));
-      hi = glm::max(hi, to_glm(*v));
-    }
-  }
-  // The diagonal in double, so a huge scene gives infinity rather than garbage.
-  double diagonal = 0;
-  if (!scene.triangles.empty()) {
-    const glm::dvec3 extent = glm::dvec3(hi) - glm::dvec3(lo);
-    diagonal = std::sqrt(glm::dot(extent, extent));
-  }
-  epsilon_ = static_cast<float>(1e-4 * diagonal);
+  epsilon_ = scene.epsilon();
   impl_->epsilon = epsilon_;
 
   impl_->materials = scene.materials;
   if (impl_->materials.empty()) {
-    // SPEC "a face with no material".
-    MaterialDesc m;
-    m.ka = m.kd = Vec3{0.8f, 0.8f, 0.8f};
-    m.illum = 2;
-    impl_->materials.push_back(m);
+    impl_->materials.push_back(MaterialDesc::default_material());  // SPEC "a face with no material"
   }
   impl_->tris.reserve(scene.triangles.size());
   for (const Triangle& t : scene.triangles) {
@@ -344,7 +317,7 @@ ReferenceTracer::ReferenceTracer(const Scene& scene) : scene_(scene), impl_(new 
     tri.facet_id = t.facet_id;
     impl_->tris.push_back(tri);
   }
-  const float pad = static_cast<float>(1e-5 * diagonal) + 1e-30f;
+  const float pad = static_cast<float>(1e-5 * scene.diagonal()) + 1e-30f;
   impl_->bvh = build_bvh(impl_->tris, scene.triangles, pad);
   impl_->frame = camera_frame(scene.camera, scene.width, scene.height);
 }
@@ -352,7 +325,7 @@ ReferenceTracer::ReferenceTracer(const Scene& scene) : scene_(scene), impl_(new 
 ReferenceTracer::~ReferenceTracer() = default;
 
 Vec3 ReferenceTracer::render_pixel(int x, int y, std::int32_t* object_facet,
-                                   ReferenceCounts& counts) const {
+                                   RayCounts& counts) const {
   const Scene& scene = scene_;
   const vec3 dir = to_glm(primary_direction(impl_->frame, scene.width, scene.height, x, y));
   ++counts.primary;
@@ -367,7 +340,7 @@ Vec3 ReferenceTracer::render_pixel(int x, int y, std::int32_t* object_facet,
   return to_vec3(pixel);
 }
 
-void ReferenceTracer::render_rows(int y0, int y1, ReferenceImage& out, ReferenceCounts& counts) const {
+void ReferenceTracer::render_rows(int y0, int y1, ImageResult& out, RayCounts& counts) const {
   const int w = scene_.width;
   y0 = std::max(y0, 0);
   y1 = std::min(y1, scene_.height);
@@ -382,27 +355,17 @@ void ReferenceTracer::render_rows(int y0, int y1, ReferenceImage& out, Reference
   }
 }
 
-ReferenceImage make_reference_image(const Scene& scene) {
-  ReferenceImage image;
-  image.width = scene.width;
-  image.height = scene.height;
-  const std::size_t pixels = static_cast<std::size_t>(scene.width) * scene.height;
-  image.rgb.assign(3 * pixels, 0.0f);
-  image.item_buffer.assign(2 * pixels, -1);
-  return image;
-}
-
-ReferenceImage render_reference(const Scene& scene, int threads) {
-  ReferenceImage image = make_reference_image(scene);
+ImageResult render_reference(const Scene& scene, int threads) {
+  ImageResult image = blank_image(scene.width, scene.height);
   const ReferenceTracer tracer(scene);
   threads = std::max(1, std::min(threads, scene.height));
   if (threads == 1) {
-    tracer.render_rows(0, scene.height, image, image.counts);
+    tracer.render_rows(0, scene.height, image, image.rays);
     return image;
   }
   // Interleaved bands of rows balance cheap and expensive parts of the image.
   constexpr int kBand = 4;
-  std::vector<ReferenceCounts> counts(threads);
+  std::vector<RayCounts> counts(threads);
   std::vector<std::thread> workers;
   for (int w = 0; w < threads; ++w) {
     workers.emplace_back([&, w] {
@@ -411,13 +374,13 @@ ReferenceImage render_reference(const Scene& scene, int threads) {
     });
   }
   for (std::thread& t : workers) t.join();
-  for (const ReferenceCounts& c : counts) image.counts += c;
+  for (const RayCounts& c : counts) image.rays += c;
   return image;
 }
 
-void render_reference_rows(const Scene& scene, int y0, int y1, ReferenceImage& out) {
+void render_reference_rows(const Scene& scene, int y0, int y1, ImageResult& out) {
   const ReferenceTracer tracer(scene);
-  tracer.render_rows(y0, y1, out, out.counts);
+  tracer.render_rows(y0, y1, out, out.rays);
 }
 
 }  // namespace opsila

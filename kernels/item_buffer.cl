@@ -9,7 +9,7 @@
 #include "lib/shading.cl"
 #include "lib/accum.cl"
 
-#define ITEM_TILE_MAX 64   /* pixels per tile (work-group), at most */
+#define ITEM_TILE_MAX (OPSILA_ITEM_TILE_SIDE * OPSILA_ITEM_TILE_SIDE) /* pixels per tile, at most */
 #define ITEM_LIST_CAP 512  /* clusters listed per tile before they are traced */
 
 /* One work-group = one square tile of tile_w x tile_w pixels. The group

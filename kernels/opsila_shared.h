@@ -24,8 +24,10 @@ typedef std::uint32_t opsila_u32;
 
 /* Largest supported PE count (bounds per-PE scratch arrays). */
 #define OPSILA_MAX_PES 1024
-/* Largest supported --depth (levels are stored in 5 bits of the descriptor). */
-#define OPSILA_MAX_DEPTH 31
+/* Largest supported --depth: levels are stored in OPSILA_LEVEL_BITS bits of
+ * the descriptor's meta field, above the 2 kind bits. */
+#define OPSILA_LEVEL_BITS 5
+#define OPSILA_MAX_DEPTH ((1 << OPSILA_LEVEL_BITS) - 1)
 /* Largest supported light count. */
 #define OPSILA_MAX_LIGHTS 64
 /* Stack depth of the bank BVH traversal; the host builder guarantees it. */
@@ -34,7 +36,25 @@ typedef std::uint32_t opsila_u32;
  * bits: integer addition is associative, so the image does not depend on the
  * order in which PEs or work-items finish (bit-identical runs). */
 #define OPSILA_FIXED_SHIFT 24
-#define OPSILA_FIXED_SCALE 16777216.0f
+#define OPSILA_FIXED_SCALE ((float)(1 << OPSILA_FIXED_SHIFT))
+/* Pixel sums: 3 channels x (low, high) 32-bit words per pixel. */
+#define OPSILA_ACCUM_WORDS 6
+
+/* Scatter: entries per block of the count/plan/move kernels. */
+#define OPSILA_SCATTER_BLOCK 256
+/* Item buffer: square tiles of at most this many pixels a side (one
+ * work-group per tile; smaller when the device allows fewer work-items). */
+#define OPSILA_ITEM_TILE_SIDE 8
+
+/* SPMD output: each processed descriptor owns OPSILA_SPAWN_SLOTS(lights)
+ * fixed slots, so the output order is deterministic:
+ *   OPSILA_SLOT_FORWARD: the descriptor sent on, or the reflected ray;
+ *   OPSILA_SLOT_TRANSMITTED: the transmitted ray;
+ *   OPSILA_SLOT_SHADOW(l): the shadow ray towards light l. */
+#define OPSILA_SLOT_FORWARD 0
+#define OPSILA_SLOT_TRANSMITTED 1
+#define OPSILA_SLOT_SHADOW(l) (2 + (l))
+#define OPSILA_SPAWN_SLOTS(lights) (2 + (lights))
 
 /* Hits whose distances differ by at most this fraction are a tie, won by
  * the lower facet id: coplanar facets and shared edges then give the answer
@@ -48,7 +68,7 @@ typedef std::uint32_t opsila_u32;
 #define OPSILA_KIND_SHADOW 3   /* shadow ray carrying its light contribution */
 #define OPSILA_META(kind, level) ((opsila_i32)((kind) | ((level) << 2)))
 #define OPSILA_META_KIND(meta) ((meta)&3)
-#define OPSILA_META_LEVEL(meta) (((meta) >> 2) & 31)
+#define OPSILA_META_LEVEL(meta) (((meta) >> 2) & OPSILA_MAX_DEPTH)
 
 /* Stats counters, per (level, PE): see OPSILA_STAT_* indices. */
 #define OPSILA_STAT_TRACED 0        /* descriptors processed by the PE (any kind) */
@@ -175,6 +195,13 @@ static_assert(sizeof(Light) == 32, "Light layout");
 static_assert(sizeof(FrameParams) == 128, "FrameParams layout");
 static_assert(offsetof(FrameParams, width) == 96, "FrameParams layout");
 static_assert(offsetof(FrameParams, spawn_slots) == 124, "FrameParams layout");
+static_assert(OPSILA_FIXED_SCALE == 16777216.0f, "24 fraction bits");
+static_assert(OPSILA_ACCUM_WORDS == 3 * 2, "3 channels of 64 bits in 32-bit words");
+static_assert(OPSILA_LEVEL_BITS + 2 < 31, "kind and level fit in the meta field");
+static_assert(OPSILA_META_LEVEL(OPSILA_META(OPSILA_KIND_SHADOW, OPSILA_MAX_DEPTH)) == OPSILA_MAX_DEPTH,
+              "the deepest level survives the meta field");
+static_assert((OPSILA_SCATTER_BLOCK & (OPSILA_SCATTER_BLOCK - 1)) == 0, "scatter block is a power of two");
+static_assert(OPSILA_SPAWN_SLOTS(0) == OPSILA_SLOT_SHADOW(0), "shadow slots follow the two ray slots");
 #endif
 
 #endif /* OPSILA_SHARED_H */

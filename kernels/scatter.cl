@@ -13,7 +13,7 @@
  *   scatter_move:  moves every field of every valid entry to I'(i). */
 #include "lib/descriptor.cl"
 
-#define SCATTER_BLOCK 256
+#define SCATTER_BLOCK OPSILA_SCATTER_BLOCK
 
 /* Destination of source entry k, or -1 for a hole. */
 inline int source_dest(int k, int out_len, int n, int S, __global const int *processed_count,

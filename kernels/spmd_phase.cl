@@ -3,12 +3,9 @@
  * the bounding spheres of all clusters (small, global), which name the
  * destination PEs of the rays it sends on.
  *
- * Each processed descriptor owns S = lights + 2 output slots (fixed places,
- * so the output is deterministic); unused slots are NIL holes that the
- * scatter skips:
- *   slot 0: the descriptor sent on (forwarded), or the reflected ray;
- *   slot 1: the transmitted ray;
- *   slot 2 + l: the shadow ray towards light l. */
+ * Each processed descriptor owns S = OPSILA_SPAWN_SLOTS(lights) output
+ * slots (fixed places, so the output is deterministic; see opsila_shared.h);
+ * unused slots are NIL holes that the scatter skips. */
 #include "lib/bvh.cl"
 #include "lib/routing.cl"
 #include "lib/shading.cl"
@@ -62,8 +59,9 @@ inline void shade(FrameParams fp, __global const PeInfo *pes, __global const Clu
       ++st->v[OPSILA_STAT_LIT];
       accumulate(accum, pixel, contrib);
     } else {
-      emit(o_org, o_dir, o_wgt, o_ids, o_dest, out_base + 2 + l, (float4)(p, dist), (float4)(lv, entry),
-           (float4)(contrib, 0.0f), (int4)(pixel, OPSILA_META(OPSILA_KIND_SHADOW, level), -1, dest), dest);
+      emit(o_org, o_dir, o_wgt, o_ids, o_dest, out_base + OPSILA_SLOT_SHADOW(l), (float4)(p, dist),
+           (float4)(lv, entry), (float4)(contrib, 0.0f),
+           (int4)(pixel, OPSILA_META(OPSILA_KIND_SHADOW, level), -1, dest), dest);
     }
   }
 
@@ -92,7 +90,8 @@ inline void shade(FrameParams fp, __global const PeInfo *pes, __global const Clu
       accumulate(accum, pixel, child_w[j] * load3(fp.background));
       ++st->v[OPSILA_STAT_MISS + 0]; /* attributed below to level + 1 */
     } else {
-      emit(o_org, o_dir, o_wgt, o_ids, o_dest, out_base + j, (float4)(p, OPSILA_INF), (float4)(child_d[j], entry),
+      const int slot = j == 0 ? OPSILA_SLOT_FORWARD : OPSILA_SLOT_TRANSMITTED; /* reflected, transmitted */
+      emit(o_org, o_dir, o_wgt, o_ids, o_dest, out_base + slot, (float4)(p, OPSILA_INF), (float4)(child_d[j], entry),
            (float4)(child_w[j], 0.0f), (int4)(pixel, OPSILA_META(OPSILA_KIND_TRACE, level + 1), -1, dest), dest);
     }
   }
@@ -146,7 +145,8 @@ __kernel void spmd_phase(FrameParams fp, __global const PeInfo *pes, __global co
           accumulate(accum, ids.x, w);
         } else {
           ++st.v[OPSILA_STAT_FORWARD];
-          emit(o_org, o_dir, o_wgt, o_ids, o_dest, out_base, org4, dir4, wgt4, (int4)(ids.x, ids.y, -1, dest), dest);
+          emit(o_org, o_dir, o_wgt, o_ids, o_dest, out_base + OPSILA_SLOT_FORWARD, org4, dir4, wgt4,
+               (int4)(ids.x, ids.y, -1, dest), dest);
         }
       }
     } else {
@@ -163,8 +163,8 @@ __kernel void spmd_phase(FrameParams fp, __global const PeInfo *pes, __global co
                                     &st.v[OPSILA_STAT_SPHERE_TESTS]);
         if (dest >= 0) { /* a nearer hit (or a tie with a lower facet id) may wait in another bank */
           ++st.v[OPSILA_STAT_FORWARD];
-          emit(o_org, o_dir, o_wgt, o_ids, o_dest, out_base, (float4)(org, t_best), (float4)(d, entry), wgt4,
-               (int4)(ids.x, ids.y, hit, dest), dest);
+          emit(o_org, o_dir, o_wgt, o_ids, o_dest, out_base + OPSILA_SLOT_FORWARD, (float4)(org, t_best),
+               (float4)(d, entry), wgt4, (int4)(ids.x, ids.y, hit, dest), dest);
           kind = OPSILA_KIND_NIL;
         } else if (hit < 0) {
           ++st.v[OPSILA_STAT_MISS];
@@ -174,8 +174,8 @@ __kernel void spmd_phase(FrameParams fp, __global const PeInfo *pes, __global co
           int owner = owner_pe(pes, fp.num_pes, hit);
           if (owner != pe) { /* nearest hit known; its facet lives in another bank */
             ++st.v[OPSILA_STAT_FORWARD];
-            emit(o_org, o_dir, o_wgt, o_ids, o_dest, out_base, (float4)(org, t_best), (float4)(d, 0.0f), wgt4,
-                 (int4)(ids.x, OPSILA_META(OPSILA_KIND_RESOLVED, level), hit, owner), owner);
+            emit(o_org, o_dir, o_wgt, o_ids, o_dest, out_base + OPSILA_SLOT_FORWARD, (float4)(org, t_best),
+                 (float4)(d, 0.0f), wgt4, (int4)(ids.x, OPSILA_META(OPSILA_KIND_RESOLVED, level), hit, owner), owner);
             kind = OPSILA_KIND_NIL;
           } else {
             kind = OPSILA_KIND_RESOLVED;

@@ -273,11 +273,11 @@ TEST(KernelSource, TheCompileCacheFollowsTheSource) {
 // scale in the kernels (the host divides by its own, unchanged constant)
 // doubles every pixel.
 TEST(KernelSource, TheRendererRunsTheReplacementSource) {
-  const std::string from = "#define OPSILA_FIXED_SCALE 16777216.0f";
+  const std::string from = "#define OPSILA_FIXED_SHIFT 24";
   std::string source = kernel_source();
   const std::size_t at = source.find(from);
-  ASSERT_NE(at, std::string::npos) << "the shared header no longer defines the scale as expected";
-  source.replace(at, from.size(), "#define OPSILA_FIXED_SCALE 33554432.0f");
+  ASSERT_NE(at, std::string::npos) << "the shared header no longer defines the shift as expected";
+  source.replace(at, from.size(), "#define OPSILA_FIXED_SHIFT 25");
 
   Scene s = test::mirror_glass_scene(32, 3);
   RenderSettings settings;

@@ -12,6 +12,7 @@
 
 #include "bench/bench.h"
 #include "core/camera.h"
+#include "core/fixed_point.h"
 #include "opsila_shared.h"
 
 #ifdef OPSILA_HAVE_EMBREE
@@ -55,16 +56,6 @@ inline float length(F3 a) { return std::sqrt(dot(a, a)); }
 inline F3 normalize(F3 a) { return a / length(a); }
 inline bool nonzero(F3 a) { return a.x != 0.0f || a.y != 0.0f || a.z != 0.0f; }
 inline F3 f3(const Vec3& v) { return {v[0], v[1], v[2]}; }
-
-// Same quantisation as accumulate() in kernels/lib/accum.cl (round to nearest
-// even, saturating), summed per pixel in 64-bit fixed point.
-inline std::int64_t fixed(float v) {
-  const float s = v * OPSILA_FIXED_SCALE;
-  if (std::isnan(s)) return 0;
-  if (s >= 9.2233720368547758e18f) return std::numeric_limits<std::int64_t>::max();
-  if (s <= -9.2233720368547758e18f) return std::numeric_limits<std::int64_t>::min();
-  return static_cast<std::int64_t>(std::nearbyint(s));
-}
 
 struct Shading {
   F3 ka, kd, ks, kr, kt;
@@ -147,9 +138,9 @@ struct Tracer {
     stack[sp++] = {eye, normalize(forward + sx * right + sy * up), {1.0f, 1.0f, 1.0f}, 0};
     ++rays.primary;
     auto add = [&](F3 v) {
-      sum[0] += fixed(v.x);
-      sum[1] += fixed(v.y);
-      sum[2] += fixed(v.z);
+      sum[0] += to_fixed(v.x);
+      sum[1] += to_fixed(v.y);
+      sum[2] += to_fixed(v.z);
     };
     while (sp > 0) {
       const Pending r = stack[--sp];
@@ -277,7 +268,7 @@ BaselineImage render_embree(const Scene& s, int threads) {
 
   out.rgb.resize(npix * 3);
   for (std::size_t i = 0; i < npix * 3; ++i)
-    out.rgb[i] = static_cast<float>(static_cast<double>(sums[i]) / OPSILA_FIXED_SCALE);
+    out.rgb[i] = from_fixed(sums[i]);
   for (const RayCounts& c : counts) {
     out.rays.primary += c.primary;
     out.rays.secondary += c.secondary;

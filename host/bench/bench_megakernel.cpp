@@ -5,6 +5,7 @@
 #include <string>
 
 #include "bench/bench.h"
+#include "core/fixed_point.h"
 #include "opsila_shared.h"
 #include "machine/partition.h"
 #include "machine/renderer.h"
@@ -81,7 +82,7 @@ BaselineImage render_megakernel(const Scene& scene, ClRuntime& rt, int tile) {
   // Pixel sums -> floats exactly as the renderer converts its fixed point.
   out.rgb.resize(npix * 3);
   for (std::size_t i = 0; i < npix * 3; ++i)
-    out.rgb[i] = static_cast<float>(static_cast<double>(static_cast<std::int64_t>(accum[i])) / OPSILA_FIXED_SCALE);
+    out.rgb[i] = from_fixed(static_cast<std::int64_t>(accum[i]));
   out.rays.primary = npix;
   for (const cl_uint4& c : counts) {
     out.rays.secondary += c.s[0];

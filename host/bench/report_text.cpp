@@ -45,7 +45,6 @@ void header_text(std::string& out, const BenchReport& r) {
 }
 
 void renders_text(std::string& out, const BenchReport& r) {
-  const RenderStats& st = r.stats();
   appendf(out, "%-40s %10s %10s %12s %10s\n", "render (same rays)", "seconds", "Mrays/s", "rays", "PSNR dB");
   appendf(out, "%-40s %10.4f %10.3f %12llu %10s\n", ("OPSILA, " + std::to_string(r.pes) + " PEs").c_str(),
           r.render_seconds, mrays(r.rays_total(), r.render_seconds), ull(r.rays_total()), "-");

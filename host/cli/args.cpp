@@ -247,7 +247,7 @@ void apply_view_options(Scene& scene, const ViewOptions& o) {
     throw InputError(file + ": image size " + std::to_string(scene.width) + "x" + std::to_string(scene.height) +
                      " is outside 1..16384 per side and 2^26 pixels");
   if (scene.max_depth < 1 || scene.max_depth > OPSILA_MAX_DEPTH)
-    throw InputError(file + ": depth " + std::to_string(scene.max_depth) + " is outside 1..31");
+    throw InputError(file + ": depth " + std::to_string(scene.max_depth) + " is outside 1.." + std::to_string(OPSILA_MAX_DEPTH));
   if (!(scene.camera.fov_deg > 0 && scene.camera.fov_deg < 180))
     throw InputError(file + ": field of view " + std::to_string(scene.camera.fov_deg) +
                      " is not strictly between 0 and 180 degrees");

@@ -38,4 +38,14 @@ std::string format_bytes(double bytes, int decimals, int smallest) {
   return text;
 }
 
+std::string format_size(std::uint64_t bytes) {
+  if (bytes < 10 * 1024) return std::to_string(bytes) + " bytes";
+  char text[48];
+  if (bytes < 10 * 1024 * 1024)
+    std::snprintf(text, sizeof text, "%.1f KiB", double(bytes) / 1024.0);
+  else
+    std::snprintf(text, sizeof text, "%.1f MiB", double(bytes) / (1024.0 * 1024.0));
+  return text;
+}
+
 }  // namespace opsila

@@ -4,6 +4,7 @@
 
 #include <chrono>
 #include <cstddef>
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -22,5 +23,7 @@ double seconds_since(std::chrono::steady_clock::time_point t0);
 // "12.3 MiB": the largest binary unit (KiB, MiB, GiB) not above `bytes`,
 // never below `smallest` (1 = KiB, 2 = MiB), with `decimals` digits.
 std::string format_bytes(double bytes, int decimals, int smallest = 1);
+// "812 bytes", "35.2 KiB", "12.0 MiB": exact below 10 KiB (for limits in messages).
+std::string format_size(std::uint64_t bytes);
 
 }  // namespace opsila

@@ -20,6 +20,7 @@
 #include <nlohmann/json.hpp>
 
 #include "opsila_shared.h"
+#include "core/util.h"
 #include "input/primitives.h"
 
 namespace opsila {
@@ -904,11 +905,6 @@ class SceneReader {
   int next_object_ = 0;
   int next_facet_ = 0;
 };
-
-std::string lower(std::string s) {
-  for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return s;
-}
 
 }  // namespace
 

@@ -10,6 +10,7 @@
 
 #include "opsila_shared.h"
 #include "core/scene.h"
+#include "core/util.h"
 
 namespace opsila {
 
@@ -96,11 +97,6 @@ void cl_check(cl_int code, const char* what) {
 }
 
 namespace {
-
-std::string lower(std::string s) {
-  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return std::tolower(c); });
-  return s;
-}
 
 std::string trim(std::string s) {
   while (!s.empty() && (s.back() == '\0' || std::isspace(static_cast<unsigned char>(s.back())))) s.pop_back();

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "machine/cl_runtime.h"
+#include "opsila_shared.h"
 
 namespace opsila {
 
@@ -72,7 +73,7 @@ class Launcher {
 // The scatter Vd(I'(i)) = Vs(i) over source = [SPMD outputs | queue].
 class ScatterPass {
  public:
-  static constexpr int kBlock = 256;  // SCATTER_BLOCK in kernels/scatter.cl
+  static constexpr int kBlock = OPSILA_SCATTER_BLOCK;
   ScatterPass(ClRuntime& rt, int num_pes);
   struct Args {
     int out_len = 0, queue_len = 0, n = 1, spawn_slots = 1;

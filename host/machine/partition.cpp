@@ -436,7 +436,7 @@ FrameParams frame_params(const Scene& scene, const BankedScene& bs, int bank_cap
   fp.num_pes = bs.num_pes;
   fp.num_clusters = static_cast<int>(bs.clusters.size());
   fp.bank_capacity = bank_capacity;
-  fp.spawn_slots = fp.num_lights + 2;
+  fp.spawn_slots = OPSILA_SPAWN_SLOTS(fp.num_lights);
   return fp;
 }
 

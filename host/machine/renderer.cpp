@@ -9,6 +9,8 @@
 #include <string>
 
 #include "core/camera.h"
+#include "core/fixed_point.h"
+#include "core/util.h"
 #include "machine/descriptors.h"
 #include "opsila_shared.h"
 #include "machine/partition.h"
@@ -64,7 +66,7 @@ DevicePlan plan_device_memory(const BankedScene& bs, std::size_t npix, int P, in
                bs.clusters.size() * (sizeof(Cluster) + sizeof(cl_int4)) + bs.pes.size() * sizeof(PeInfo) +
                bs.materials.size() * sizeof(Material) + std::max<std::size_t>(1, bs.lights.size()) * sizeof(Light);
   // Item buffer (pair, triangle, distance) and 64-bit fixed-point RGB sums.
-  plan.image = u64(npix) * (sizeof(cl_int2) + sizeof(cl_int) + sizeof(cl_float) + 6 * sizeof(cl_uint));
+  plan.image = u64(npix) * (sizeof(cl_int2) + sizeof(cl_int) + sizeof(cl_float) + OPSILA_ACCUM_WORDS * sizeof(cl_uint));
   // Banks (P*n), SPMD output slots (P*n*S), two queues (as sized below).
   const u64 out_len = u64(P) * n * S, inject = std::max<u64>(u64(P) * n / 4, 1024);
   const u64 queue_cap = out_len + 2 * inject;
@@ -77,19 +79,8 @@ DevicePlan plan_device_memory(const BankedScene& bs, std::size_t npix, int P, in
   return plan;
 }
 
-std::string size_text(std::uint64_t bytes) {
-  char text[48];
-  if (bytes < 10 * 1024)
-    std::snprintf(text, sizeof text, "%llu bytes", static_cast<unsigned long long>(bytes));
-  else if (bytes < 10 * 1024 * 1024)
-    std::snprintf(text, sizeof text, "%.1f KiB", double(bytes) / 1024.0);
-  else
-    std::snprintf(text, sizeof text, "%.1f MiB", double(bytes) / (1024.0 * 1024.0));
-  return text;
-}
-
 std::uint64_t fixed_pair(const std::vector<cl_uint>& v, std::size_t i) {
-  return (std::uint64_t(v[2 * i + 1]) << 32) | v[2 * i];
+  return join_words(v[2 * i], v[2 * i + 1]);
 }
 
 }  // namespace
@@ -201,9 +192,9 @@ int Renderer::Machine::choose_bank_capacity(const BankedScene& bs, const RenderS
   if (settings.bank_capacity <= 0)
     while (bank > 1 && plan_device_memory(bs, npix, P, bank, S, depth).total() > rt.global_mem()) bank /= 2;
   if (const DevicePlan plan = plan_device_memory(bs, npix, P, bank, S, depth); plan.total() > rt.global_mem())
-    throw ClError("the render needs " + size_text(plan.total()) + " of device memory (image " + size_text(plan.image) +
-                  ", descriptors " + size_text(plan.descriptors) + ", scene " + size_text(plan.scene) + ", other " +
-                  size_text(plan.other) + "), more than the device's global memory (" + size_text(rt.global_mem()) +
+    throw ClError("the render needs " + format_size(plan.total()) + " of device memory (image " + format_size(plan.image) +
+                  ", descriptors " + format_size(plan.descriptors) + ", scene " + format_size(plan.scene) + ", other " +
+                  format_size(plan.other) + "), more than the device's global memory (" + format_size(rt.global_mem()) +
                   (rt.memory_limit() ? ", as lowered by OPSILA_DEVICE_MEMORY_LIMIT" : ", CL_DEVICE_GLOBAL_MEM_SIZE") +
                   "): use a smaller --size, fewer --pes or a smaller --bank-capacity");
   return bank;
@@ -225,7 +216,7 @@ void Renderer::Machine::choose_work_groups() {
 
   cl_check(k_item.getWorkGroupInfo(dev, CL_KERNEL_WORK_GROUP_SIZE, &allowed),
            "clGetKernelWorkGroupInfo(item_buffer)");
-  tile_w = 8;
+  tile_w = OPSILA_ITEM_TILE_SIDE;
   while (tile_w > 1 && std::size_t(tile_w) * tile_w > allowed) tile_w /= 2;
 }
 
@@ -248,7 +239,7 @@ void Renderer::Machine::allocate_frame_buffers() {
   b_items = device_buffer(rt, npix * sizeof(cl_int2), "item buffer");
   b_item_tri = device_buffer(rt, npix * sizeof(cl_int), "item buffer hits");
   b_item_t = device_buffer(rt, npix * sizeof(cl_float), "item buffer distances");
-  b_accum = device_buffer(rt, npix * 6 * sizeof(cl_uint), "pixel sums");
+  b_accum = device_buffer(rt, npix * OPSILA_ACCUM_WORDS * sizeof(cl_uint), "pixel sums");
   nstats = std::size_t(OPSILA_MAX_DEPTH) * P * OPSILA_STAT_COUNT * 2;
   b_stats = device_buffer(rt, nstats * sizeof(cl_uint), "stats");
   ntraffic = std::max<std::size_t>(1, std::size_t(traffic_levels) * P * P);
@@ -262,7 +253,7 @@ void Renderer::Machine::allocate_frame_buffers() {
 
 // Every frame starts from zero pixel sums, statistics and traffic.
 void Renderer::Machine::clear_frame() {
-  zero_buffer(rt, b_accum, npix * 6 * sizeof(cl_uint), "pixel sums");
+  zero_buffer(rt, b_accum, npix * OPSILA_ACCUM_WORDS * sizeof(cl_uint), "pixel sums");
   zero_buffer(rt, b_stats, nstats * sizeof(cl_uint), "stats");
   zero_buffer(rt, b_traffic, ntraffic * sizeof(cl_uint), "traffic");
   zero_buffer(rt, b_processed, P * sizeof(cl_int), "processed counts");
@@ -378,7 +369,7 @@ void Renderer::Machine::end_round(Launcher& launch, Frame& f, int round, RenderS
 // Read back the pixel sums (fixed point, decoded here) and the item buffer.
 void Renderer::Machine::read_image(Launcher& launch, RenderResult& result) {
   cl::CommandQueue& q = rt.queue();
-  std::vector<cl_uint> accum(npix * 6);
+  std::vector<cl_uint> accum(npix * OPSILA_ACCUM_WORDS);
   launch.check(q.enqueueReadBuffer(b_accum, CL_TRUE, 0, accum.size() * sizeof(cl_uint), accum.data()),
                "clEnqueueReadBuffer(pixel sums)");
   result.item_buffer.resize(npix * 2);
@@ -387,8 +378,7 @@ void Renderer::Machine::read_image(Launcher& launch, RenderResult& result) {
   launch.check(q.finish(), "clFinish");
   result.rgb.resize(npix * 3);
   for (std::size_t i = 0; i < npix * 3; ++i)
-    result.rgb[i] = static_cast<float>(static_cast<double>(static_cast<std::int64_t>(fixed_pair(accum, i))) /
-                                       OPSILA_FIXED_SCALE);
+    result.rgb[i] = from_fixed(static_cast<std::int64_t>(fixed_pair(accum, i)));
 }
 
 // Per-level, per-PE counters and traffic, then the frame's totals. Every

@@ -14,9 +14,9 @@ inline void add_fixed(volatile __global uint *cell, long value) {
 
 inline void accumulate(volatile __global uint *accum, int pixel, float3 value) {
   long3 q = convert_long3_sat_rte(value * OPSILA_FIXED_SCALE);
-  if (q.x != 0) add_fixed(&accum[pixel * 6 + 0], q.x);
-  if (q.y != 0) add_fixed(&accum[pixel * 6 + 2], q.y);
-  if (q.z != 0) add_fixed(&accum[pixel * 6 + 4], q.z);
+  if (q.x != 0) add_fixed(&accum[pixel * OPSILA_ACCUM_WORDS + 0], q.x);
+  if (q.y != 0) add_fixed(&accum[pixel * OPSILA_ACCUM_WORDS + 2], q.y);
+  if (q.z != 0) add_fixed(&accum[pixel * OPSILA_ACCUM_WORDS + 4], q.z);
 }
 
 inline void count_stat(volatile __global uint *stats, int num_pes, int level, int pe, int which, uint amount) {

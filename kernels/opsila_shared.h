@@ -30,7 +30,8 @@ typedef std::uint32_t opsila_u32;
 #define OPSILA_MAX_DEPTH ((1 << OPSILA_LEVEL_BITS) - 1)
 /* Largest supported light count. */
 #define OPSILA_MAX_LIGHTS 64
-/* Stack depth of the bank BVH traversal; the host builder guarantees it. */
+/* Stack depth of the BVH traversals: the host builder bounds every
+ * root-to-leaf path so that 1 + sum(children - 1) never exceeds it. */
 #define OPSILA_BVH_STACK 64
 /* Pixel sums are accumulated as 64-bit fixed point with this many fraction
  * bits: integer addition is associative, so the image does not depend on the
@@ -84,7 +85,8 @@ typedef std::uint32_t opsila_u32;
 #define OPSILA_STAT_OCCLUDED 10     /* shadow rays finished occluded */
 #define OPSILA_STAT_LIT 11          /* shadow rays finished unoccluded */
 #define OPSILA_STAT_FORWARD 12      /* descriptors sent to another PE (or back to this one) */
-#define OPSILA_STAT_COUNT 13
+#define OPSILA_STAT_ROUTE_TESTS 13  /* PE-box and routing-BVH node tests (destination choice) */
+#define OPSILA_STAT_COUNT 14
 
 /* One facet triangle as stored in a bank (48 bytes). Vertices are kept
  * exactly as loaded so that the watertight test sees shared edges alike. */
@@ -97,15 +99,33 @@ typedef struct {
   opsila_i32 material; /* index into the material table */
 } BankTriangle;
 
-/* Bank BVH node (32 bytes). Inner nodes (count == 0) keep their left child
- * in `first` and the right child at `first + 1`; leaves keep their first
- * triangle and count > 0. Indices are global (bank offsets applied). */
+/* Bank BVH: wide nodes, OPSILA_BVH_WIDTH children each, child boxes stored
+ * structure-of-arrays so that one work-item tests them all with one vector
+ * slab test (kernels/lib/bvh.cl documents the traversal that reads them).
+ * Child k of a node:
+ *   count[k] == 0: inner node, child[k] is its node index;
+ *   count[k] >  0: leaf, facets child[k] .. child[k] + count[k] - 1;
+ *   count[k] <  0: empty slot (its box is never tested).
+ * Indices are global (bank offsets applied). The routing BVH (one per PE,
+ * over its cluster boxes, see kernels/lib/routing.cl) uses the same node with
+ * leaves of one cluster: child[k] is then a cluster index.
+ * 8 children (256 bytes) measured faster than 4 on PoCL (docs/BENCHMARKS.md). */
+#define OPSILA_BVH_WIDTH 8
 typedef struct {
-  float bmin[3];
-  opsila_i32 first;
-  float bmax[3];
-  opsila_i32 count;
+  float lo_x[OPSILA_BVH_WIDTH];
+  float hi_x[OPSILA_BVH_WIDTH];
+  float lo_y[OPSILA_BVH_WIDTH];
+  float hi_y[OPSILA_BVH_WIDTH];
+  float lo_z[OPSILA_BVH_WIDTH];
+  float hi_z[OPSILA_BVH_WIDTH];
+  opsila_i32 child[OPSILA_BVH_WIDTH];
+  opsila_i32 count[OPSILA_BVH_WIDTH];
 } BankNode;
+
+/* Destination choice: bounding spheres (the paper's scheme) or cluster boxes
+ * through each PE's routing BVH. Same destinations rule, same image. */
+#define OPSILA_ROUTING_SPHERES 0
+#define OPSILA_ROUTING_BOXES 1
 
 /* A cluster: the unit of distribution (an object, or a spatially coherent
  * piece of a large one). Its bounding sphere is known to every PE; its
@@ -182,8 +202,12 @@ typedef struct {
 static_assert(sizeof(BankTriangle) == 48, "BankTriangle layout");
 static_assert(offsetof(BankTriangle, facet_id) == 12, "BankTriangle layout");
 static_assert(offsetof(BankTriangle, material) == 44, "BankTriangle layout");
-static_assert(sizeof(BankNode) == 32, "BankNode layout");
-static_assert(offsetof(BankNode, count) == 28, "BankNode layout");
+static_assert(OPSILA_BVH_WIDTH == 4 || OPSILA_BVH_WIDTH == 8, "vector width of the node tests");
+static_assert(sizeof(BankNode) == 32 * OPSILA_BVH_WIDTH, "BankNode layout");
+static_assert(offsetof(BankNode, hi_x) == 4 * OPSILA_BVH_WIDTH, "BankNode layout");
+static_assert(offsetof(BankNode, lo_z) == 16 * OPSILA_BVH_WIDTH, "BankNode layout");
+static_assert(offsetof(BankNode, child) == 24 * OPSILA_BVH_WIDTH, "BankNode layout");
+static_assert(offsetof(BankNode, count) == 28 * OPSILA_BVH_WIDTH, "BankNode layout");
 static_assert(sizeof(Cluster) == 48, "Cluster layout");
 static_assert(offsetof(Cluster, pe) == 28, "Cluster layout");
 static_assert(offsetof(Cluster, root) == 44, "Cluster layout");

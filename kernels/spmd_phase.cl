@@ -1,6 +1,6 @@
 /* SPMD phase: one work-group = one PE, working only on its own bank: its
  * descriptors (slots p*n .. p*n + count) and its facets. Every PE also knows
- * the bounding spheres of all clusters (small, global), which name the
+ * the bounding volumes of all clusters (small, global), which name the
  * destination PEs of the rays it sends on.
  *
  * Each processed descriptor owns S = OPSILA_SPAWN_SLOTS(lights) output
@@ -25,16 +25,15 @@ inline void emit(DESC_PARAMS(o), int slot, float4 org, float4 dir, float4 wgt, i
 
 /* A new ray leaving a surface (or going to a light): first destination in
  * entry order, or none. */
-inline int first_destination(const RayPre *r, __global const PeInfo *pes, __global const Cluster *clusters, int num_pes,
-                             float eps, float tmax, float *entry, PrivStats *st) {
-  return next_destination(r, pes, clusters, num_pes, eps, tmax, -1.0f, -1, entry, &st->v[OPSILA_STAT_SPHERE_TESTS]);
+inline int first_destination(const Routing *rt, const RayPre *r, float eps, float tmax, float *entry, PrivStats *st) {
+  return next_destination(rt, r, eps, tmax, -1.0f, -1, entry, &st->v[OPSILA_STAT_SPHERE_TESTS],
+                          &st->v[OPSILA_STAT_ROUTE_TESTS]);
 }
 
 /* Whitted shading of a resolved hit at its owner PE: ambient now, one shadow
  * descriptor per light that can contribute, reflected and transmitted
  * descriptors for the next level. */
-inline void shade(FrameParams fp, __global const PeInfo *pes, __global const Cluster *clusters,
-                  __global const BankTriangle *tris, __global const Material *materials,
+inline void shade(FrameParams fp, const Routing *rt, __global const BankTriangle *tris, __global const Material *materials,
                   __global const Light *lights, float3 org, float3 d, float t, int tri_index, float3 weight,
                   int pixel, int level, int out_base, DESC_PARAMS(o), volatile __global uint *accum, PrivStats *st) {
   __global const BankTriangle *tri = &tris[tri_index];
@@ -53,8 +52,8 @@ inline void shade(FrameParams fp, __global const PeInfo *pes, __global const Clu
     ++st->v[OPSILA_STAT_SPAWN_SHADOW];
     RayPre sr = make_ray(p, lv);
     float entry = 0.0f;
-    int dest = next_shadow_destination(&sr, pes, clusters, fp.num_pes, eps, dist, -1,
-                                       &st->v[OPSILA_STAT_SPHERE_TESTS]);
+    int dest = next_shadow_destination(rt, &sr, eps, dist, -1, &st->v[OPSILA_STAT_SPHERE_TESTS],
+                                       &st->v[OPSILA_STAT_ROUTE_TESTS]);
     if (dest < 0) { /* no sphere on the way: lit without leaving this PE */
       ++st->v[OPSILA_STAT_LIT];
       accumulate(accum, pixel, contrib);
@@ -85,7 +84,7 @@ inline void shade(FrameParams fp, __global const PeInfo *pes, __global const Clu
     ++st->v[OPSILA_STAT_SPAWN_RADIANCE];
     RayPre cr = make_ray(p, child_d[j]);
     float entry;
-    int dest = first_destination(&cr, pes, clusters, fp.num_pes, eps, OPSILA_INF, &entry, st);
+    int dest = first_destination(rt, &cr, eps, OPSILA_INF, &entry, st);
     if (dest < 0) { /* meets no sphere: a miss, finished here (counted at its own level) */
       accumulate(accum, pixel, child_w[j] * load3(fp.background));
       ++st->v[OPSILA_STAT_MISS + 0]; /* attributed below to level + 1 */
@@ -98,7 +97,7 @@ inline void shade(FrameParams fp, __global const PeInfo *pes, __global const Clu
 }
 
 __kernel void spmd_phase(FrameParams fp, __global const PeInfo *pes, __global const Cluster *clusters,
-                         __global const BankNode *nodes, __global const BankTriangle *tris,
+                         __global const BankNode *route, int routing, __global const BankNode *nodes, __global const BankTriangle *tris,
                          __global const Material *materials, __global const Light *lights, DESC_PARAMS(b),
                          __global const int *bank_count, __global int *processed_count, DESC_PARAMS(o),
                          volatile __global uint *accum, volatile __global uint *stats) {
@@ -115,6 +114,12 @@ __kernel void spmd_phase(FrameParams fp, __global const PeInfo *pes, __global co
   int root = me->node_begin;
   bool bank_empty = me->node_begin == me->node_end;
   float eps = fp.epsilon;
+  Routing rt;
+  rt.pes = pes;
+  rt.clusters = clusters;
+  rt.route = route;
+  rt.num_pes = fp.num_pes;
+  rt.mode = routing;
 
   for (int i = lid; i < count; i += lsz) {
     int slot = pe * n + i;
@@ -138,8 +143,8 @@ __kernel void spmd_phase(FrameParams fp, __global const PeInfo *pes, __global co
       if (blocked) {
         ++st.v[OPSILA_STAT_OCCLUDED];
       } else {
-        int dest = next_shadow_destination(&r, pes, clusters, fp.num_pes, eps, tmax, pe,
-                                           &st.v[OPSILA_STAT_SPHERE_TESTS]);
+        int dest = next_shadow_destination(&rt, &r, eps, tmax, pe, &st.v[OPSILA_STAT_SPHERE_TESTS],
+                                           &st.v[OPSILA_STAT_ROUTE_TESTS]);
         if (dest < 0) {
           ++st.v[OPSILA_STAT_LIT];
           accumulate(accum, ids.x, w);
@@ -159,8 +164,8 @@ __kernel void spmd_phase(FrameParams fp, __global const PeInfo *pes, __global co
           traverse_nearest(&r, nodes, tris, root, eps, &t_best, &hit, &best_facet, &st.v[OPSILA_STAT_TRI_TESTS],
                            &st.v[OPSILA_STAT_BOX_TESTS]);
         float entry;
-        int dest = next_destination(&r, pes, clusters, fp.num_pes, eps, tie_limit(t_best), dir4.w, pe, &entry,
-                                    &st.v[OPSILA_STAT_SPHERE_TESTS]);
+        int dest = next_destination(&rt, &r, eps, tie_limit(t_best), dir4.w, pe, &entry,
+                                    &st.v[OPSILA_STAT_SPHERE_TESTS], &st.v[OPSILA_STAT_ROUTE_TESTS]);
         if (dest >= 0) { /* a nearer hit (or a tie with a lower facet id) may wait in another bank */
           ++st.v[OPSILA_STAT_FORWARD];
           emit(o_org, o_dir, o_wgt, o_ids, o_dest, out_base + OPSILA_SLOT_FORWARD, (float4)(org, t_best),
@@ -185,7 +190,7 @@ __kernel void spmd_phase(FrameParams fp, __global const PeInfo *pes, __global co
       if (kind == OPSILA_KIND_RESOLVED) {
         ++st.v[OPSILA_STAT_RESOLVED];
         uint misses_before = st.v[OPSILA_STAT_MISS];
-        shade(fp, pes, clusters, tris, materials, lights, org, d, t_best, hit, w, ids.x, level, out_base, o_org,
+        shade(fp, &rt, tris, materials, lights, org, d, t_best, hit, w, ids.x, level, out_base, o_org,
               o_dir, o_wgt, o_ids, o_dest, accum, &st);
         child_misses = st.v[OPSILA_STAT_MISS] - misses_before;
         st.v[OPSILA_STAT_MISS] = misses_before;

@@ -169,6 +169,7 @@ const std::vector<FlagSpec>& view_flags() {
       {"--ambient", "--ambient", true}, {"--background", "--background", true},
       {"--depth", "--depth", true},   {"--pes", "--pes", true},
       {"--device", "--device", true}, {"--bank-capacity", "--bank-capacity", true},
+      {"--routing", "--routing", true},
   };
   return flags;
 }
@@ -213,6 +214,13 @@ bool parse_view_flag(const std::string& name, const std::string& value, ViewOpti
     o.pes = int_in_range(name, value, 1, OPSILA_MAX_PES);
   } else if (name == "--bank-capacity") {
     o.bank_capacity = int_in_range(name, value, 0, kMaxBankCapacity);
+  } else if (name == "--routing") {
+    if (value == "boxes")
+      o.routing = OPSILA_ROUTING_BOXES;
+    else if (value == "spheres")
+      o.routing = OPSILA_ROUTING_SPHERES;
+    else
+      bad_flag(name, value, "must be boxes or spheres");
   } else if (name == "--device") {
     if (value.empty()) bad_flag(name, value, "empty device name");
     o.device_spec = value;

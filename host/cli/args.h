@@ -76,6 +76,7 @@ struct ViewOptions {
   std::optional<float> fov;
   std::vector<LightDesc> lights;  // --light, in order; replace the scene's lights
   int bank_capacity = 0;          // 0 = automatic
+  std::optional<int> routing;     // --routing: OPSILA_ROUTING_*
 };
 
 // The view group's flags (all take a value; --light repeats).

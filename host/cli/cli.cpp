@@ -79,6 +79,8 @@ std::string render_usage() {
          "  --depth N              ray tree levels, 1..31 (1 = local shading only)\n"
          "  --pes N                processing elements (OpenCL work-groups), 1..1024\n"
          "  --bank-capacity N      descriptor slots per bank (0 = from the device's memory)\n"
+         "  --routing MODE         destination choice: boxes (cluster boxes under a BVH, default)\n"
+         "                         or spheres (the paper's bounding spheres); same image\n"
          "  --device SPEC          device index, platform:device, or name substring (see 'opsila devices')\n"
          "  --item-buffer OUT.npy  (object, facet) of each pixel's primary hit, int32 (H, W, 2)\n"
          "  --stats OUT.json       ray counts, per-PE work, kernel times, memory, traffic\n"
@@ -165,6 +167,7 @@ int run_render(const std::vector<std::string>& args) {
   RenderSettings settings;
   if (o.pes) settings.num_pes = *o.pes;
   settings.bank_capacity = o.bank_capacity;
+  if (o.routing) settings.routing = *o.routing;
 
   RenderResult result;
   std::string device;

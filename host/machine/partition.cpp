@@ -1,5 +1,7 @@
 #include "machine/partition.h"
 
+#include "machine/bank_bvh.h"
+
 #include <algorithm>
 #include <cmath>
 #include <numeric>
@@ -8,37 +10,6 @@
 
 namespace opsila {
 namespace {
-
-struct Box {
-  float lo[3] = {INFINITY, INFINITY, INFINITY};
-  float hi[3] = {-INFINITY, -INFINITY, -INFINITY};
-  void grow(const float* p) {
-    for (int a = 0; a < 3; ++a) {
-      lo[a] = std::min(lo[a], p[a]);
-      hi[a] = std::max(hi[a], p[a]);
-    }
-  }
-  void grow(const Box& b) {
-    grow(b.lo);
-    grow(b.hi);
-  }
-  float extent(int a) const { return hi[a] - lo[a]; }
-  int longest() const {
-    int a = 0;
-    for (int k = 1; k < 3; ++k)
-      if (extent(k) > extent(a)) a = k;
-    return a;
-  }
-  float diagonal() const {
-    float s = 0;
-    for (int a = 0; a < 3; ++a) s += extent(a) * extent(a);
-    return std::sqrt(s);
-  }
-  float area() const {
-    float x = extent(0), y = extent(1), z = extent(2);
-    return 2 * (x * y + y * z + z * x);
-  }
-};
 
 Box tri_box(const Triangle& t) {
   Box b;
@@ -122,165 +93,32 @@ void assign_regions(std::vector<ClusterBuild>& cl, std::vector<int> idx, int fir
   assign_regions(cl, std::move(hi), first + left, count - left);
 }
 
-// BVH over one bank: clusters at the top (so that each cluster's subtree has
-// a root the item buffer can start from), facets below (binned SAH).
-class BankBvhBuilder {
- public:
-  BankBvhBuilder(std::vector<BankNode>& nodes, std::vector<BankTriangle>& tris, std::vector<Box>& tri_boxes)
-      : nodes_(nodes), tris_(tris), boxes_(tri_boxes) {}
-
-  int max_depth = 0;
-
-  // Triangles of cluster c occupy [ranges[c].first, ranges[c].second).
-  void build_bank(std::vector<Cluster>& clusters, int c_begin, int c_end,
-                  const std::vector<std::pair<int, int>>& ranges) {
-    if (c_begin == c_end) return;
-    int root = alloc(1);
-    std::vector<int> ids(c_end - c_begin);
-    std::iota(ids.begin(), ids.end(), c_begin);
-    build_clusters(root, clusters, ids, ranges, 1);
-  }
-
- private:
-  std::vector<BankNode>& nodes_;
-  std::vector<BankTriangle>& tris_;
-  std::vector<Box>& boxes_;
-
-  int alloc(int k) {
-    int at = static_cast<int>(nodes_.size());
-    nodes_.resize(nodes_.size() + k);
-    return at;
-  }
-  void set_box(int node, const Box& b) {
-    for (int a = 0; a < 3; ++a) {
-      nodes_[node].bmin[a] = b.lo[a];
-      nodes_[node].bmax[a] = b.hi[a];
-    }
-  }
-
-  void build_clusters(int node, std::vector<Cluster>& clusters, std::vector<int> ids,
-                      const std::vector<std::pair<int, int>>& ranges, int depth) {
-    max_depth = std::max(max_depth, depth);
-    if (ids.size() == 1) {
-      clusters[ids[0]].root = node;
-      build_tris(node, ranges[ids[0]].first, ranges[ids[0]].second, depth);
-      return;
-    }
-    Box box, cbox;
-    for (int c : ids) {
-      Box b;
-      b.grow(clusters[c].bmin);
-      b.grow(clusters[c].bmax);
-      box.grow(b);
-      float ctr[3];
-      for (int a = 0; a < 3; ++a) ctr[a] = 0.5f * (b.lo[a] + b.hi[a]);
-      cbox.grow(ctr);
-    }
-    set_box(node, box);
-    int axis = cbox.longest();
-    std::sort(ids.begin(), ids.end(), [&](int a, int b) {
-      float ca = clusters[a].bmin[axis] + clusters[a].bmax[axis], cb = clusters[b].bmin[axis] + clusters[b].bmax[axis];
-      return ca < cb || (ca == cb && a < b);
-    });
-    std::size_t mid = ids.size() / 2;
-    int kids = alloc(2);
-    nodes_[node].first = kids;
-    nodes_[node].count = 0;
-    build_clusters(kids, clusters, std::vector<int>(ids.begin(), ids.begin() + mid), ranges, depth + 1);
-    build_clusters(kids + 1, clusters, std::vector<int>(ids.begin() + mid, ids.end()), ranges, depth + 1);
-  }
-
-  void build_tris(int node, int begin, int end, int depth) {
-    max_depth = std::max(max_depth, depth);
-    Box box, cbox;
-    for (int i = begin; i < end; ++i) {
-      box.grow(boxes_[i]);
-      float c[3];
-      for (int a = 0; a < 3; ++a) c[a] = 0.5f * (boxes_[i].lo[a] + boxes_[i].hi[a]);
-      cbox.grow(c);
-    }
-    set_box(node, box);
-    int count = end - begin;
-    if (count <= 4 || depth >= OPSILA_BVH_STACK - 8) {
-      nodes_[node].first = begin;
-      nodes_[node].count = count;
-      return;
-    }
-    int mid = sah_split(begin, end, box, cbox, depth);
-    int kids = alloc(2);
-    nodes_[node].first = kids;
-    nodes_[node].count = 0;
-    build_tris(kids, begin, mid, depth + 1);
-    build_tris(kids + 1, mid, end, depth + 1);
-  }
-
-  float center(int i, int a) const { return 0.5f * (boxes_[i].lo[a] + boxes_[i].hi[a]); }
-
-  void swap_tris(int i, int j) {
-    std::swap(tris_[i], tris_[j]);
-    std::swap(boxes_[i], boxes_[j]);
-  }
-
-  // Binned SAH; falls back to a median split when SAH finds no useful plane
-  // or the tree grows deep (the traversal stack is bounded).
-  int sah_split(int begin, int end, const Box& box, const Box& cbox, int depth) {
-    constexpr int kBins = 12;
-    int axis = cbox.longest();
-    float lo = cbox.lo[axis], ext = cbox.extent(axis);
-    int count = end - begin;
-    if (ext > 0 && depth < 40) {
-      Box bins[kBins];
-      int counts[kBins] = {0};
-      auto bin_of = [&](int i) {
-        int b = static_cast<int>(kBins * (center(i, axis) - lo) / ext);
-        return std::clamp(b, 0, kBins - 1);
-      };
-      for (int i = begin; i < end; ++i) {
-        int b = bin_of(i);
-        bins[b].grow(boxes_[i]);
-        ++counts[b];
-      }
-      float best_cost = INFINITY;
-      int best = -1;
-      for (int s = 1; s < kBins; ++s) {
-        Box l, r;
-        int nl = 0, nr = 0;
-        for (int b = 0; b < s; ++b)
-          if (counts[b]) l.grow(bins[b]), nl += counts[b];
-        for (int b = s; b < kBins; ++b)
-          if (counts[b]) r.grow(bins[b]), nr += counts[b];
-        if (nl == 0 || nr == 0) continue;
-        float cost = l.area() * nl + r.area() * nr;
-        if (cost < best_cost) best_cost = cost, best = s;
-      }
-      if (best > 0 && best_cost < box.area() * count) {
-        int i = begin, j = end - 1;
-        while (i <= j) {
-          if (bin_of(i) < best) {
-            ++i;
-          } else {
-            swap_tris(i, j--);
-          }
-        }
-        if (i > begin && i < end) return i;
-      }
-    }
-    // Median split (stable by index so the layout is deterministic).
-    int mid = begin + count / 2;
-    std::vector<int> order(count);
-    std::iota(order.begin(), order.end(), begin);
-    std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return center(a, axis) < center(b, axis); });
-    std::vector<BankTriangle> t(count);
-    std::vector<Box> bx(count);
-    for (int k = 0; k < count; ++k) t[k] = tris_[order[k]], bx[k] = boxes_[order[k]];
-    std::copy(t.begin(), t.end(), tris_.begin() + begin);
-    std::copy(bx.begin(), bx.end(), boxes_.begin() + begin);
-    return mid;
-  }
-};
-
 void put3(float* dst, const Vec3& v) {
   for (int a = 0; a < 3; ++a) dst[a] = v[a];
+}
+
+// The routing tables every PE knows: for each PE, a BVH over its clusters'
+// boxes, padded (like the spheres' radii) so that float rounding in the slab
+// test never leaves a facet's hit point outside its cluster's box.
+void build_routing(BankedScene& bs, const Box& sbox) {
+  const float pad = 1e-5f * sbox.diagonal();
+  bs.route_nodes.resize(bs.num_pes);
+  for (int p = 0; p < bs.num_pes; ++p) {
+    std::vector<Box> boxes;
+    std::vector<int> ids;
+    for (int c = bs.pes[p].cluster_begin; c < bs.pes[p].cluster_end; ++c) {
+      const Cluster& cl = bs.clusters[c];
+      Box b;
+      for (int a = 0; a < 3; ++a) {
+        float slack = pad + 1e-5f * std::max(std::fabs(cl.bmin[a]), std::fabs(cl.bmax[a]));
+        b.lo[a] = cl.bmin[a] - slack;
+        b.hi[a] = cl.bmax[a] + slack;
+      }
+      boxes.push_back(b);
+      ids.push_back(c);
+    }
+    build_route_bvh(bs.route_nodes, p, boxes, ids);
+  }
 }
 
 }  // namespace
@@ -357,7 +195,6 @@ BankedScene partition_scene(const Scene& scene, int num_pes) {
   }
 
   bs.pes.resize(num_pes);
-  BankBvhBuilder builder(bs.nodes, bs.triangles, tri_boxes);
   std::size_t c = 0;
   for (int p = 0; p < num_pes; ++p) {
     PeInfo& pe = bs.pes[p];
@@ -369,7 +206,9 @@ BankedScene partition_scene(const Scene& scene, int num_pes) {
                                                                                     : static_cast<int>(total));
     pe.tri_end = c_begin < c ? ranges[c - 1].second : pe.tri_begin;
     pe.node_begin = static_cast<int>(bs.nodes.size());
-    builder.build_bank(bs.clusters, static_cast<int>(c_begin), static_cast<int>(c), ranges);
+    int depth = build_bank_bvh(bs.nodes, bs.triangles, tri_boxes, bs.clusters, static_cast<int>(c_begin),
+                               static_cast<int>(c), ranges);
+    bs.max_bvh_depth = std::max(bs.max_bvh_depth, depth);
     pe.node_end = static_cast<int>(bs.nodes.size());
     Box sb;
     for (std::size_t k = c_begin; k < c; ++k) {
@@ -387,7 +226,8 @@ BankedScene partition_scene(const Scene& scene, int num_pes) {
                           std::uint64_t(pe.node_end - pe.node_begin) * sizeof(BankNode);
     bs.bank_bytes.push_back(bytes);
   }
-  bs.max_bvh_depth = builder.max_depth;
+
+  build_routing(bs, sbox);
 
   for (const MaterialDesc& m : scene.materials) {
     Material g{};
@@ -406,7 +246,8 @@ BankedScene partition_scene(const Scene& scene, int num_pes) {
     put3(g.intensity, l.intensity);
     bs.lights.push_back(g);
   }
-  bs.global_bytes = bs.clusters.size() * sizeof(Cluster) + bs.pes.size() * sizeof(PeInfo) +
+  bs.global_bytes = bs.clusters.size() * sizeof(Cluster) + bs.route_nodes.size() * sizeof(BankNode) +
+                    bs.pes.size() * sizeof(PeInfo) +
                     bs.materials.size() * sizeof(Material) + bs.lights.size() * sizeof(Light);
   std::uint64_t all_banks = 0;
   for (auto b : bs.bank_bytes) all_banks += b;

@@ -6,8 +6,9 @@
 //     facet-weighted median of the cluster centres (a k-d subdivision: regular
 //     in structure, with equal shares of the scene rather than equal volumes);
 //     each cluster lives in the bank of the region holding its centre;
-//  3. each bank gets its own BVH (clusters at the top, facets below), and
-//     every PE gets the bounding spheres of all clusters.
+//  3. each bank gets its own BVH (clusters at the top, facets below,
+//     host/machine/bank_bvh.h), and every PE gets the bounding spheres and
+//     the boxes (under one small BVH per PE) of all clusters.
 #pragma once
 
 #include <cstdint>
@@ -23,11 +24,12 @@ struct BankedScene {
   std::vector<BankTriangle> triangles;  // bank p: [pes[p].tri_begin, tri_end)
   std::vector<BankNode> nodes;          // bank p: [pes[p].node_begin, node_end), root first
   std::vector<Cluster> clusters;        // sorted by PE
+  std::vector<BankNode> route_nodes;    // routing BVH over padded cluster boxes; PE p's root is node p
   std::vector<PeInfo> pes;
   std::vector<Material> materials;
   std::vector<Light> lights;
   std::vector<std::uint64_t> bank_bytes;  // facets + BVH nodes of each bank
-  std::uint64_t global_bytes = 0;         // what every PE knows: spheres, PE boxes, materials, lights
+  std::uint64_t global_bytes = 0;         // what every PE knows: spheres, routing boxes, PE boxes, materials, lights
   std::uint64_t replicated_bytes = 0;     // one full copy of the scene (what each PE would hold if duplicated)
   int max_bvh_depth = 0;
 };

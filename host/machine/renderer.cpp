@@ -63,7 +63,8 @@ DevicePlan plan_device_memory(const BankedScene& bs, std::size_t npix, int P, in
   using u64 = std::uint64_t;
   DevicePlan plan;
   plan.scene = bs.triangles.size() * sizeof(BankTriangle) + bs.nodes.size() * sizeof(BankNode) +
-               bs.clusters.size() * (sizeof(Cluster) + sizeof(cl_int4)) + bs.pes.size() * sizeof(PeInfo) +
+               bs.clusters.size() * (sizeof(Cluster) + sizeof(cl_int4)) +
+               bs.route_nodes.size() * sizeof(BankNode) + bs.pes.size() * sizeof(PeInfo) +
                bs.materials.size() * sizeof(Material) + std::max<std::size_t>(1, bs.lights.size()) * sizeof(Light);
   // Item buffer (pair, triangle, distance) and 64-bit fixed-point RGB sums.
   plan.image = u64(npix) * (sizeof(cl_int2) + sizeof(cl_int) + sizeof(cl_float) + OPSILA_ACCUM_WORDS * sizeof(cl_uint));
@@ -98,7 +99,7 @@ void check_kernel_limits(const Scene& scene) {
 // Everything the machine keeps between frames, and the stages of a frame.
 struct Renderer::Machine {
   ClRuntime& rt;
-  int P = 0, n = 0, S = 0, depth = 0, width = 0, height = 0, traffic_levels = 0;
+  int P = 0, n = 0, S = 0, depth = 0, width = 0, height = 0, traffic_levels = 0, routing = OPSILA_ROUTING_BOXES;
   std::size_t npix = 0, out_len = 0, inject = 0, nstats = 0, ntraffic = 0;
   std::size_t spmd_wg = 1;
   int tile_w = 1, item_launch_pixels = 1;
@@ -107,7 +108,7 @@ struct Renderer::Machine {
 
   cl::Kernel k_item, k_primary, k_spmd;
   std::unique_ptr<ScatterPass> scatter;
-  cl::Buffer b_tris, b_nodes, b_clusters, b_pes, b_mats, b_lights, b_rects;
+  cl::Buffer b_tris, b_nodes, b_clusters, b_route, b_pes, b_mats, b_lights, b_rects;
   cl::Buffer b_items, b_item_tri, b_item_t, b_accum, b_stats, b_traffic, b_processed;
   DescriptorSet banks, outputs, queue_a, queue_b;
 
@@ -144,6 +145,7 @@ Renderer::Machine::Machine(const Scene& scene, const RenderSettings& settings, C
   depth = scene.max_depth;
   npix = std::size_t(width) * height;
   item_launch_pixels = settings.item_buffer_tile;
+  routing = settings.routing;
 
   BankedScene bs = partition_scene(scene, P);
   S = static_cast<int>(bs.lights.size()) + 2;
@@ -159,6 +161,7 @@ Renderer::Machine::Machine(const Scene& scene, const RenderSettings& settings, C
   prepared.num_pes = P;
   prepared.bank_capacity = n;
   prepared.num_clusters = static_cast<int>(bs.clusters.size());
+  prepared.routing = routing;
   prepared.bank_bytes = bs.bank_bytes;
   prepared.global_bytes = bs.global_bytes;
   prepared.replicated_bytes = bs.replicated_bytes;
@@ -225,6 +228,7 @@ void Renderer::Machine::upload_scene(const Scene& scene, const BankedScene& bs) 
   b_tris = upload(rt, bs.triangles, "bank facets");
   b_nodes = upload(rt, bs.nodes, "bank BVH nodes");
   b_clusters = upload(rt, bs.clusters, "cluster spheres");
+  b_route = upload(rt, bs.route_nodes, "routing boxes");
   b_pes = upload(rt, bs.pes, "PE table");
   b_mats = upload(rt, bs.materials, "materials");
   std::vector<Light> lights = bs.lights;
@@ -332,6 +336,8 @@ void Renderer::Machine::spmd_phase(Launcher& launch, int round) {
   k_spmd.setArg(a++, fp);
   k_spmd.setArg(a++, b_pes);
   k_spmd.setArg(a++, b_clusters);
+  k_spmd.setArg(a++, b_route);
+  k_spmd.setArg(a++, routing);
   k_spmd.setArg(a++, b_nodes);
   k_spmd.setArg(a++, b_tris);
   k_spmd.setArg(a++, b_mats);

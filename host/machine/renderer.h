@@ -9,6 +9,7 @@
 
 #include "machine/cl_runtime.h"
 #include "core/image.h"
+#include "opsila_shared.h"
 #include "core/scene.h"
 
 namespace opsila {
@@ -17,6 +18,7 @@ struct RenderSettings {
   int num_pes = 16;
   int bank_capacity = 0;  // n; 0 = choose from the device's memory
   int item_buffer_tile = 1 << 16;  // pixels per item-buffer launch (bounded work per launch)
+  int routing = OPSILA_ROUTING_BOXES;  // destination choice: cluster boxes, or the paper's spheres
 };
 
 // One kernel launch, named, with its OpenCL-profiled time.
@@ -44,6 +46,7 @@ struct RenderStats {
   int bank_capacity = 0;
   int num_pes = 0;
   int num_clusters = 0;
+  int routing = OPSILA_ROUTING_BOXES;
   std::size_t work_group_size = 0;
 };
 

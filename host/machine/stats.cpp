@@ -25,8 +25,9 @@ const char* const kCounterNames[OPSILA_STAT_COUNT] = {
     "occluded",        // OPSILA_STAT_OCCLUDED
     "lit",             // OPSILA_STAT_LIT
     "forwards",        // OPSILA_STAT_FORWARD
+    "route_tests",     // OPSILA_STAT_ROUTE_TESTS
 };
-static_assert(OPSILA_STAT_COUNT == 13, "update kCounterNames with the OPSILA_STAT_* list");
+static_assert(OPSILA_STAT_COUNT == 14, "update kCounterNames with the OPSILA_STAT_* list");
 
 nlohmann::json counters_object(const std::vector<std::uint64_t>& values) {
   nlohmann::json out = nlohmann::json::object();
@@ -54,6 +55,7 @@ nlohmann::json stats_json(const RenderResult& result, const Scene& scene,
   j["pes"] = s.num_pes > 0 ? s.num_pes : settings.num_pes;
   j["bank_capacity"] = s.bank_capacity > 0 ? s.bank_capacity : settings.bank_capacity;
   j["clusters"] = s.num_clusters;
+  j["routing"] = s.routing == OPSILA_ROUTING_SPHERES ? "spheres" : "boxes";
   j["work_group_size"] = s.work_group_size;
   j["rounds"] = s.rounds;
   j["scene"] = {{"triangles", scene.triangles.size()},

@@ -7,6 +7,11 @@
 
 #define OPSILA_INF INFINITY
 
+/* PoCL leaves the hot functions (the facet test, the traversals) out of line
+ * when their cost passes its inlining threshold; they are called per ray and
+ * per facet, so inlining is forced. */
+#define OPSILA_INLINE inline __attribute__((always_inline))
+
 
 inline float3 load3(const float a[3]) { return (float3)(a[0], a[1], a[2]); }
 inline float3 load3g(__global const float *a) { return (float3)(a[0], a[1], a[2]); }
@@ -16,6 +21,7 @@ typedef struct {
   float3 org;
   float3 dir;
   float3 inv_dir;
+  int3 neg; /* sign bits of the direction (-0 included): far planes first */
   int kx, ky, kz;
   float sx, sy, sz;
 } RayPre;
@@ -27,6 +33,7 @@ inline RayPre make_ray(float3 org, float3 dir) {
   r.org = org;
   r.dir = dir;
   r.inv_dir = (float3)(1.0f / dir.x, 1.0f / dir.y, 1.0f / dir.z);
+  r.neg = (int3)(signbit(r.inv_dir.x) != 0, signbit(r.inv_dir.y) != 0, signbit(r.inv_dir.z) != 0);
   float3 a = fabs(dir);
   r.kz = (a.x > a.y) ? (a.x > a.z ? 0 : 2) : (a.y > a.z ? 1 : 2);
   r.kx = r.kz + 1 == 3 ? 0 : r.kz + 1;
@@ -46,7 +53,7 @@ inline RayPre make_ray(float3 org, float3 dir) {
 /* Watertight ray-triangle test: an edge shared by two facets is hit by
  * exactly one side or both, never by neither (no cracks). Returns the hit
  * distance if it lies in (tmin, tmax), else INFINITY. */
-inline float intersect_triangle(const RayPre *r, __global const BankTriangle *tri, float tmin, float tmax) {
+OPSILA_INLINE float intersect_triangle(const RayPre *r, __global const BankTriangle *tri, float tmin, float tmax) {
   float3 a = load3g(tri->v0) - r->org;
   float3 b = load3g(tri->v1) - r->org;
   float3 c = load3g(tri->v2) - r->org;

@@ -1,5 +1,22 @@
-/* Routing: which PE a descriptor goes to next (destination choice). */
-#include "geometry.cl"
+/* Routing: which PE a descriptor goes to next (destination choice).
+ *
+ * Every PE knows, for every cluster, a bounding volume: its sphere (the
+ * paper's scheme, OPSILA_ROUTING_SPHERES: a linear scan of each PE's
+ * spheres, behind the box around them) or its box (OPSILA_ROUTING_BOXES: the
+ * cluster boxes of each PE under a small wide BVH, BankNode with one cluster
+ * per leaf, built by host/machine/bank_bvh.cpp; PE q's root is route[q]).
+ * The boxes are padded on the host so that rounding never puts a facet's
+ * hit point outside its cluster's box. Both volumes give the same
+ * destinations rule below, hence the same image. */
+#include "bvh.cl"
+
+typedef struct {
+  __global const PeInfo *pes;
+  __global const Cluster *clusters;
+  __global const BankNode *route; /* routing BVH roots first, one per PE */
+  int num_pes;
+  int mode; /* OPSILA_ROUTING_* */
+} Routing;
 
 /* Destination choice (ordered forwarding). A ray visits the PEs whose
  * bounding spheres it meets in increasing order of (entry distance, PE id),
@@ -8,9 +25,9 @@
  * at distance t lies inside its cluster's sphere, so a PE whose spheres are
  * all entered at or beyond t_max cannot hold a nearer hit: when no PE is
  * left, the nearest hit over all banks is known. Returns -1 then. */
-inline int next_destination(const RayPre *r, __global const PeInfo *pes, __global const Cluster *clusters, int num_pes,
-                            float tmin, float tmax, float cursor_t, int cursor_pe, float *entry_out,
-                            uint *sphere_tests) {
+inline int next_destination_spheres(const RayPre *r, __global const PeInfo *pes, __global const Cluster *clusters,
+                                    int num_pes, float tmin, float tmax, float cursor_t, int cursor_pe,
+                                    float *entry_out, uint *sphere_tests, uint *route_tests) {
   int best_pe = -1;
   float best_entry = OPSILA_INF;
   for (int q = 0; q < num_pes; ++q) {
@@ -18,6 +35,7 @@ inline int next_destination(const RayPre *r, __global const PeInfo *pes, __globa
     if (pe->cluster_begin == pe->cluster_end) continue;
     if (q == cursor_pe) continue; /* (entry, q) == cursor: visited */
     float te, tl;
+    ++*route_tests;
     if (!ray_box_span(r, load3g(pe->bmin), load3g(pe->bmax), tmin, tmax, &te, &tl)) continue;
     /* The box holds every sphere of the PE, so its entry bounds theirs from
      * below and its exit from above: a PE that cannot beat the current
@@ -43,12 +61,14 @@ inline int next_destination(const RayPre *r, __global const PeInfo *pes, __globa
 /* Shadow rays need no order (any occluder ends them): they visit the PEs
  * whose spheres meet the segment (tmin, tmax) in PE order. Returns the first
  * such PE after `after_pe`, or -1. */
-inline int next_shadow_destination(const RayPre *r, __global const PeInfo *pes, __global const Cluster *clusters,
-                                   int num_pes, float tmin, float tmax, int after_pe, uint *sphere_tests) {
+inline int next_shadow_destination_spheres(const RayPre *r, __global const PeInfo *pes,
+                                           __global const Cluster *clusters, int num_pes, float tmin, float tmax,
+                                           int after_pe, uint *sphere_tests, uint *route_tests) {
   for (int q = after_pe + 1; q < num_pes; ++q) {
     __global const PeInfo *pe = &pes[q];
     if (pe->cluster_begin == pe->cluster_end) continue;
     float te;
+    ++*route_tests;
     if (!ray_box(r, load3g(pe->bmin), load3g(pe->bmax), tmin, tmax, &te)) continue;
     for (int c = pe->cluster_begin; c < pe->cluster_end; ++c) {
       ++*sphere_tests;
@@ -56,6 +76,110 @@ inline int next_shadow_destination(const RayPre *r, __global const PeInfo *pes, 
     }
   }
   return -1;
+}
+
+/* Cluster boxes of a routing node met by the ray: the line meets the box,
+ * and the box meets (tmin, tmax). *entry gets the entry clamped at 0, as
+ * sphere_entry clamps it. Node boxes contain their clusters' boxes, and the
+ * rounded slab distances are monotonic in the planes, so a node's entry is
+ * never above its clusters' and its exit never below. */
+OPSILA_INLINE intW route_hits(const RayPre *r, __global const BankNode *nd, float tmin, float tmax, floatW *entry) {
+  floatW lo, hi;
+  node_spans(r, nd, &lo, &hi);
+  *entry = fmax(lo, (floatW)(0.0f));
+  return (lo <= hi) & (hi > (floatW)(tmin)) & (lo < (floatW)(tmax)) & (vloadW(0, nd->count) >= (intW)(0));
+}
+
+/* next_destination_spheres with cluster boxes: the entry of PE q is the
+ * smallest entry over its boxes that meet (tmin, tmax). Only an entry below
+ * the current candidate's can change the answer, so subtrees entered at or
+ * beyond it are skipped; a box entered at or before the cursor means the PE
+ * was already visited, which ends its walk. */
+inline int next_destination_boxes(const RayPre *r, __global const BankNode *route, int num_pes, float tmin,
+                                  float tmax, float cursor_t, int cursor_pe, float *entry_out, uint *route_tests) {
+  int best_pe = -1;
+  float best_entry = OPSILA_INF;
+  for (int q = 0; q < num_pes; ++q) {
+    if (q == cursor_pe) continue; /* (entry, q) == cursor: visited */
+    float entry = OPSILA_INF;
+    bool visited = false;
+    int stack[OPSILA_BVH_STACK];
+    int sp = 1;
+    stack[0] = q;
+    while (sp > 0 && !visited) {
+      __global const BankNode *nd = &route[stack[--sp]];
+      ++*route_tests;
+      floatW ent;
+      intW met = route_hits(r, nd, tmin, tmax, &ent);
+      float te[OPSILA_BVH_WIDTH];
+      int hm[OPSILA_BVH_WIDTH];
+      vstoreW(ent, 0, te);
+      vstoreW(met, 0, hm);
+      for (int k = 0; k < OPSILA_BVH_WIDTH; ++k) {
+        if (!hm[k]) continue;
+        float e = te[k];
+        if (!(e < fmin(best_entry, entry))) continue;
+        if (nd->count[k] == 0) {
+          if (sp < OPSILA_BVH_STACK) stack[sp++] = nd->child[k];
+          continue;
+        }
+        if (e < cursor_t || (e == cursor_t && q < cursor_pe)) {
+          visited = true;
+          break;
+        }
+        entry = e;
+      }
+    }
+    if (visited || !(entry < tmax)) continue;
+    bool after_cursor = entry > cursor_t || (entry == cursor_t && q > cursor_pe);
+    if (after_cursor && entry < best_entry) {
+      best_entry = entry;
+      best_pe = q;
+    }
+  }
+  *entry_out = best_entry;
+  return best_pe;
+}
+
+/* next_shadow_destination_spheres with cluster boxes. */
+inline int next_shadow_destination_boxes(const RayPre *r, __global const BankNode *route, int num_pes, float tmin,
+                                         float tmax, int after_pe, uint *route_tests) {
+  for (int q = after_pe + 1; q < num_pes; ++q) {
+    int stack[OPSILA_BVH_STACK];
+    int sp = 1;
+    stack[0] = q;
+    while (sp > 0) {
+      __global const BankNode *nd = &route[stack[--sp]];
+      ++*route_tests;
+      floatW ent;
+      intW met = route_hits(r, nd, tmin, tmax, &ent);
+      int hm[OPSILA_BVH_WIDTH];
+      vstoreW(met, 0, hm);
+      for (int k = 0; k < OPSILA_BVH_WIDTH; ++k) {
+        if (!hm[k]) continue;
+        if (nd->count[k] > 0) return q;
+        if (sp < OPSILA_BVH_STACK) stack[sp++] = nd->child[k];
+      }
+    }
+  }
+  return -1;
+}
+
+inline int next_destination(const Routing *rt, const RayPre *r, float tmin, float tmax, float cursor_t,
+                            int cursor_pe, float *entry_out, uint *sphere_tests, uint *route_tests) {
+  if (rt->mode == OPSILA_ROUTING_BOXES)
+    return next_destination_boxes(r, rt->route, rt->num_pes, tmin, tmax, cursor_t, cursor_pe, entry_out,
+                                  route_tests);
+  return next_destination_spheres(r, rt->pes, rt->clusters, rt->num_pes, tmin, tmax, cursor_t, cursor_pe, entry_out,
+                                  sphere_tests, route_tests);
+}
+
+inline int next_shadow_destination(const Routing *rt, const RayPre *r, float tmin, float tmax, int after_pe,
+                                   uint *sphere_tests, uint *route_tests) {
+  if (rt->mode == OPSILA_ROUTING_BOXES)
+    return next_shadow_destination_boxes(r, rt->route, rt->num_pes, tmin, tmax, after_pe, route_tests);
+  return next_shadow_destination_spheres(r, rt->pes, rt->clusters, rt->num_pes, tmin, tmax, after_pe, sphere_tests,
+                                         route_tests);
 }
 
 /* Owner PE of a global triangle index (banks are contiguous). */

@@ -1,0 +1,301 @@
+#include "machine/bank_bvh.h"
+
+#include <algorithm>
+#include <numeric>
+#include <string>
+
+#include "core/scene.h"
+
+namespace opsila {
+
+void Box::grow(const float* p) {
+  for (int a = 0; a < 3; ++a) {
+    lo[a] = std::min(lo[a], p[a]);
+    hi[a] = std::max(hi[a], p[a]);
+  }
+}
+void Box::grow(const Box& b) {
+  grow(b.lo);
+  grow(b.hi);
+}
+int Box::longest() const {
+  int a = 0;
+  for (int k = 1; k < 3; ++k)
+    if (extent(k) > extent(a)) a = k;
+  return a;
+}
+float Box::diagonal() const {
+  float s = 0;
+  for (int a = 0; a < 3; ++a) s += extent(a) * extent(a);
+  return std::sqrt(s);
+}
+float Box::area() const {
+  if (empty()) return 0.0f;
+  float x = extent(0), y = extent(1), z = extent(2);
+  return 2 * (x * y + y * z + z * x);
+}
+
+namespace {
+
+constexpr int kWidth = OPSILA_BVH_WIDTH;
+constexpr int kFacetsPerLeaf = 2;                    // measured against 4 on hundreds (docs/BENCHMARKS.md)
+constexpr int kSahDepth = 40;                        // deeper than this, median splits keep the tree shallow
+constexpr int kMaxBinaryDepth = OPSILA_BVH_STACK - 8;  // a leaf takes the rest beyond this depth
+
+// Binary tree first; the wide tree is collapsed from it.
+struct BinNode {
+  Box box;
+  int kid[2] = {-1, -1};  // inner: both >= 0
+  int first = 0, count = 0;  // leaf: positions [first, first + count) of the item order
+  int height = 0;            // 0 for a leaf
+  bool keep = false;         // a cluster root: stays a wide node of its own
+};
+
+class Builder {
+ public:
+  std::vector<BinNode> bin;
+
+  // Binned SAH over items order[begin, end) (boxes and weights by item id),
+  // reordering them; leaves of at most leaf_size items. `single` (when not
+  // null) turns a one-item leaf into an existing binary node (a cluster's
+  // facet tree). Returns the node.
+  int build(std::vector<int>& order, int begin, int end, const std::vector<Box>& boxes,
+            const std::vector<float>& weight, int leaf_size, int depth, const std::vector<int>* single) {
+    if (end - begin == 1 && single) return (*single)[order[begin]];
+    int node = static_cast<int>(bin.size());
+    bin.emplace_back();
+    Box box;
+    for (int i = begin; i < end; ++i) box.grow(boxes[order[i]]);
+    bin[node].box = box;
+    if ((end - begin <= leaf_size && !single) || (depth >= kMaxBinaryDepth && !single)) {
+      bin[node].first = begin;
+      bin[node].count = end - begin;
+      return node;
+    }
+    int mid = split(order, begin, end, boxes, weight, depth);
+    int l = build(order, begin, mid, boxes, weight, leaf_size, depth + 1, single);
+    int r = build(order, mid, end, boxes, weight, leaf_size, depth + 1, single);
+    bin[node].kid[0] = l;
+    bin[node].kid[1] = r;
+    bin[node].height = 1 + std::max(bin[l].height, bin[r].height);
+    return node;
+  }
+
+ private:
+  static float center(const Box& b, int a) { return 0.5f * (b.lo[a] + b.hi[a]); }
+
+  // Best binned-SAH plane over the three axes; the median of the longest
+  // centroid axis when SAH finds none (equal centres) or the tree is deep.
+  int split(std::vector<int>& order, int begin, int end, const std::vector<Box>& boxes,
+            const std::vector<float>& weight, int depth) {
+    constexpr int kBins = 16;
+    Box cbox;
+    for (int i = begin; i < end; ++i) {
+      float c[3] = {center(boxes[order[i]], 0), center(boxes[order[i]], 1), center(boxes[order[i]], 2)};
+      cbox.grow(c);
+    }
+    float best_cost = INFINITY;
+    int best_axis = -1, best_bin = -1;
+    for (int axis = 0; axis < 3 && depth < kSahDepth; ++axis) {
+      float lo = cbox.lo[axis], ext = cbox.extent(axis);
+      if (!(ext > 0)) continue;
+      Box bins[kBins];
+      double w[kBins] = {0};
+      for (int i = begin; i < end; ++i) {
+        int b = std::clamp(static_cast<int>(kBins * (center(boxes[order[i]], axis) - lo) / ext), 0, kBins - 1);
+        bins[b].grow(boxes[order[i]]);
+        w[b] += weight[order[i]];
+      }
+      Box right[kBins];
+      double wr[kBins] = {0};
+      for (int b = kBins - 1; b > 0; --b) {
+        right[b] = bins[b];
+        wr[b] = w[b];
+        if (b + 1 < kBins) right[b].grow(right[b + 1]), wr[b] += wr[b + 1];
+      }
+      Box left;
+      double wl = 0;
+      for (int s = 1; s < kBins; ++s) {
+        left.grow(bins[s - 1]);
+        wl += w[s - 1];
+        if (wl == 0 || wr[s] == 0) continue;
+        float cost = static_cast<float>(left.area() * wl + right[s].area() * wr[s]);
+        if (cost < best_cost) best_cost = cost, best_axis = axis, best_bin = s;
+      }
+    }
+    if (best_axis >= 0) {
+      float lo = cbox.lo[best_axis], ext = cbox.extent(best_axis);
+      auto side = [&](int id) {
+        return std::clamp(static_cast<int>(kBins * (center(boxes[id], best_axis) - lo) / ext), 0, kBins - 1) <
+               best_bin;
+      };
+      // Stable, so the layout does not depend on the sort implementation.
+      auto mid = std::stable_partition(order.begin() + begin, order.begin() + end, side);
+      int m = static_cast<int>(mid - order.begin());
+      if (m > begin && m < end) return m;
+    }
+    int axis = cbox.longest();
+    std::stable_sort(order.begin() + begin, order.begin() + end, [&](int a, int b) {
+      return center(boxes[a], axis) < center(boxes[b], axis);
+    });
+    return begin + (end - begin) / 2;
+  }
+};
+
+// Collapses binary node b into the wide node nodes[slot] (wide_of[b] =
+// slot). `budget` bounds the private stack this subtree may need: a node
+// with k children needs k entries, plus what its deepest inner child needs
+// beyond the slot it was popped from. A binary chain of height h needs h + 1,
+// so a child is opened only while budget - k still covers every remaining
+// child's height. Kept nodes (cluster roots) always get a wide node of their
+// own, even when they are a single leaf. leaf_child maps a leaf's first
+// position to the value stored in BankNode::child. Returns the wide depth.
+int collapse(const std::vector<BinNode>& bin, int b, int budget, std::vector<BankNode>& nodes, int slot,
+             const std::vector<int>& leaf_child, std::vector<int>& wide_of) {
+  wide_of[b] = slot;
+  std::vector<int> kids;
+  if (bin[b].kid[0] < 0) {
+    kids.push_back(b);
+  } else {
+    kids = {bin[b].kid[0], bin[b].kid[1]};
+  }
+  auto own_node = [&](int k) { return k != b && (bin[k].kid[0] >= 0 || bin[k].keep); };
+  auto fits = [&](const std::vector<int>& set) {
+    int h = 0;
+    for (int k : set) h = std::max(h, bin[k].height);
+    return static_cast<int>(set.size()) <= budget - h;
+  };
+  while (static_cast<int>(kids.size()) < kWidth) {
+    int pick = -1;
+    for (int i = 0; i < static_cast<int>(kids.size()); ++i) {
+      const BinNode& n = bin[kids[i]];
+      if (n.kid[0] < 0 || n.keep || kids[i] == b) continue;
+      if (pick < 0 || n.box.area() > bin[kids[pick]].box.area()) pick = i;
+    }
+    if (pick < 0) break;
+    std::vector<int> trial = kids;
+    int opened = trial[pick];
+    trial[pick] = bin[opened].kid[0];
+    trial.insert(trial.begin() + pick + 1, bin[opened].kid[1]);
+    if (!fits(trial)) break;
+    kids = std::move(trial);
+  }
+  const int k = static_cast<int>(kids.size());
+  BankNode wide;
+  for (int i = 0; i < kWidth; ++i) {
+    wide.lo_x[i] = wide.lo_y[i] = wide.lo_z[i] = 0.0f;
+    wide.hi_x[i] = wide.hi_y[i] = wide.hi_z[i] = 0.0f;
+    wide.child[i] = 0;
+    wide.count[i] = -1;
+  }
+  for (int i = 0; i < k; ++i) {
+    const BinNode& n = bin[kids[i]];
+    wide.lo_x[i] = n.box.lo[0], wide.lo_y[i] = n.box.lo[1], wide.lo_z[i] = n.box.lo[2];
+    wide.hi_x[i] = n.box.hi[0], wide.hi_y[i] = n.box.hi[1], wide.hi_z[i] = n.box.hi[2];
+    if (!own_node(kids[i])) {
+      wide.child[i] = leaf_child[n.first];
+      wide.count[i] = n.count;
+    }
+  }
+  nodes[slot] = wide;
+  int depth = 1;
+  for (int i = 0; i < k; ++i) {
+    if (!own_node(kids[i])) continue;
+    int child = static_cast<int>(nodes.size());
+    nodes.emplace_back();
+    nodes[slot].child[i] = child;
+    nodes[slot].count[i] = 0;
+    depth = std::max(depth, 1 + collapse(bin, kids[i], budget - k + 1, nodes, child, leaf_child, wide_of));
+  }
+  return depth;
+}
+
+// Private-stack entries the traversal of nodes[n] can need at most.
+int stack_need(const std::vector<BankNode>& nodes, int n) {
+  int k = 0, deeper = 0;
+  for (int i = 0; i < kWidth; ++i) {
+    if (nodes[n].count[i] < 0) continue;
+    ++k;
+    if (nodes[n].count[i] == 0) deeper = std::max(deeper, stack_need(nodes, nodes[n].child[i]));
+  }
+  return std::max(k, k - 1 + deeper);
+}
+
+void check_stack(const std::vector<BankNode>& nodes, int root) {
+  if (stack_need(nodes, root) > OPSILA_BVH_STACK)
+    throw InputError("the scene's bounding-volume hierarchy is deeper than the kernels' traversal stack (" +
+                     std::to_string(OPSILA_BVH_STACK) + " entries)");
+}
+
+}  // namespace
+
+int build_bank_bvh(std::vector<BankNode>& nodes, std::vector<BankTriangle>& tris, std::vector<Box>& tri_boxes,
+                   std::vector<Cluster>& clusters, int c_begin, int c_end,
+                   const std::vector<std::pair<int, int>>& ranges) {
+  if (c_begin == c_end) return 0;
+  const int t_begin = ranges[c_begin].first, t_end = ranges[c_end - 1].second;
+  Builder b;
+  // Facets: one binary tree per cluster, over positions of the bank's order.
+  std::vector<int> order(tri_boxes.size());
+  std::iota(order.begin(), order.end(), 0);
+  std::vector<float> unit(tri_boxes.size(), 1.0f);
+  std::vector<int> cluster_root(clusters.size(), -1);
+  for (int c = c_begin; c < c_end; ++c) {
+    cluster_root[c] = b.build(order, ranges[c].first, ranges[c].second, tri_boxes, unit, kFacetsPerLeaf, 1, nullptr);
+    b.bin[cluster_root[c]].keep = true;
+  }
+  // Clusters above them, weighted by their facet counts.
+  std::vector<Box> cboxes(clusters.size());
+  std::vector<float> cweight(clusters.size(), 0.0f);
+  std::vector<int> corder;
+  for (int c = c_begin; c < c_end; ++c) {
+    cboxes[c].grow(clusters[c].bmin);
+    cboxes[c].grow(clusters[c].bmax);
+    cweight[c] = static_cast<float>(ranges[c].second - ranges[c].first);
+    corder.push_back(c);
+  }
+  int root = b.build(corder, 0, static_cast<int>(corder.size()), cboxes, cweight, 1, 1, &cluster_root);
+
+  // Facets in their new order; leaves name global facet indices.
+  std::vector<BankTriangle> t(tris.begin() + t_begin, tris.begin() + t_end);
+  std::vector<Box> tb(tri_boxes.begin() + t_begin, tri_boxes.begin() + t_end);
+  for (int i = t_begin; i < t_end; ++i) {
+    tris[i] = t[order[i] - t_begin];
+    tri_boxes[i] = tb[order[i] - t_begin];
+  }
+  std::vector<int> leaf_child(tri_boxes.size());
+  std::iota(leaf_child.begin(), leaf_child.end(), 0);
+
+  int slot = static_cast<int>(nodes.size());
+  nodes.emplace_back();
+  std::vector<int> wide_of(b.bin.size(), -1);
+  int depth = collapse(b.bin, root, OPSILA_BVH_STACK, nodes, slot, leaf_child, wide_of);
+  for (int c = c_begin; c < c_end; ++c) clusters[c].root = wide_of[cluster_root[c]];
+  check_stack(nodes, slot);
+  return depth;
+}
+
+void build_route_bvh(std::vector<BankNode>& nodes, int root, const std::vector<Box>& boxes,
+                     const std::vector<int>& cluster_ids) {
+  BankNode empty;
+  for (int i = 0; i < kWidth; ++i) {
+    empty.lo_x[i] = empty.lo_y[i] = empty.lo_z[i] = 0.0f;
+    empty.hi_x[i] = empty.hi_y[i] = empty.hi_z[i] = 0.0f;
+    empty.child[i] = 0;
+    empty.count[i] = -1;
+  }
+  nodes[root] = empty;
+  if (boxes.empty()) return;
+  Builder b;
+  std::vector<int> order(boxes.size());
+  std::iota(order.begin(), order.end(), 0);
+  std::vector<float> unit(boxes.size(), 1.0f);
+  int top = b.build(order, 0, static_cast<int>(boxes.size()), boxes, unit, 1, 1, nullptr);
+  std::vector<int> leaf_child(boxes.size());
+  for (std::size_t i = 0; i < boxes.size(); ++i) leaf_child[i] = cluster_ids[order[i]];
+  std::vector<int> wide_of(b.bin.size(), -1);
+  collapse(b.bin, top, OPSILA_BVH_STACK, nodes, root, leaf_child, wide_of);
+  check_stack(nodes, root);
+}
+
+}  // namespace opsila

@@ -1,0 +1,46 @@
+// Wide bounding-volume hierarchies (BankNode, kernels/opsila_shared.h):
+//  - the bank BVH of each PE: its clusters at the top (each cluster keeps a
+//    node of its own, where the item buffer starts), its facets below;
+//  - the routing BVH of each PE: its cluster boxes, one cluster per leaf,
+//    which every PE knows and traverses to choose destinations.
+// Both are binned-SAH binary trees collapsed into OPSILA_BVH_WIDTH-wide
+// nodes, with every root-to-leaf path bounded so that the kernels' private
+// stack of OPSILA_BVH_STACK entries never overflows.
+#pragma once
+
+#include <cmath>
+#include <utility>
+#include <vector>
+
+#include "opsila_shared.h"
+
+namespace opsila {
+
+struct Box {
+  float lo[3] = {INFINITY, INFINITY, INFINITY};
+  float hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+  void grow(const float* p);
+  void grow(const Box& b);
+  float extent(int a) const { return hi[a] - lo[a]; }
+  int longest() const;
+  float diagonal() const;
+  float area() const;
+  bool empty() const { return !(lo[0] <= hi[0]); }
+};
+
+// Builds the BVH of one bank whose clusters [c_begin, c_end) own the facets
+// tris[ranges[c].first, ranges[c].second). Facets are reordered inside each
+// cluster's range (with their boxes); clusters[c].root is set. The bank's
+// root is appended first, so it is the first node added. Returns the depth
+// of the wide tree (0 when the bank is empty).
+int build_bank_bvh(std::vector<BankNode>& nodes, std::vector<BankTriangle>& tris, std::vector<Box>& tri_boxes,
+                   std::vector<Cluster>& clusters, int c_begin, int c_end,
+                   const std::vector<std::pair<int, int>>& ranges);
+
+// Builds the routing BVH of one PE over `boxes` (one per cluster, ids in
+// `cluster_ids`) into nodes[root] (already allocated; an empty PE keeps a
+// root with only empty slots). Children are appended to `nodes`.
+void build_route_bvh(std::vector<BankNode>& nodes, int root, const std::vector<Box>& boxes,
+                     const std::vector<int>& cluster_ids);
+
+}  // namespace opsila

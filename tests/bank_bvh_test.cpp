@@ -1,0 +1,102 @@
+// The wide bank and routing BVHs (host/machine/bank_bvh.cpp) as the kernels
+// read them: every facet under exactly one leaf, every child box around what
+// it holds, cluster roots over their own facets, paths within the stack.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <vector>
+
+#include "machine/bank_bvh.h"
+#include "machine/partition.h"
+#include "opsila_shared.h"
+#include "test_scenes.h"
+
+namespace opsila {
+namespace {
+
+bool inside(const BankNode& n, int k, const float* p) {
+  return p[0] >= n.lo_x[k] && p[0] <= n.hi_x[k] && p[1] >= n.lo_y[k] && p[1] <= n.hi_y[k] && p[2] >= n.lo_z[k] &&
+         p[2] <= n.hi_z[k];
+}
+
+// Walks nodes[root]; counts facet visits, checks boxes; returns the stack need.
+int walk(const BankedScene& bs, int node, std::vector<int>& seen) {
+  const BankNode& n = bs.nodes[node];
+  int k_used = 0, deeper = 0;
+  for (int k = 0; k < OPSILA_BVH_WIDTH; ++k) {
+    if (n.count[k] < 0) continue;
+    ++k_used;
+    if (n.count[k] > 0) {
+      for (int i = n.child[k]; i < n.child[k] + n.count[k]; ++i) {
+        ++seen[i];
+        const BankTriangle& t = bs.triangles[i];
+        EXPECT_TRUE(inside(n, k, t.v0) && inside(n, k, t.v1) && inside(n, k, t.v2)) << "facet " << i;
+      }
+    } else {
+      const BankNode& c = bs.nodes[n.child[k]];
+      for (int j = 0; j < OPSILA_BVH_WIDTH; ++j) {
+        if (c.count[j] < 0) continue;
+        float lo[3] = {c.lo_x[j], c.lo_y[j], c.lo_z[j]}, hi[3] = {c.hi_x[j], c.hi_y[j], c.hi_z[j]};
+        EXPECT_TRUE(inside(n, k, lo) && inside(n, k, hi)) << "child box outside its parent's";
+      }
+      deeper = std::max(deeper, walk(bs, n.child[k], seen));
+    }
+  }
+  EXPECT_GT(k_used, 0) << "node " << node << " has no child";
+  return std::max(k_used, k_used - 1 + deeper);
+}
+
+TEST(BankBvh, EveryFacetOnceInsideItsBoxesWithinTheStack) {
+  Scene s = test::mirror_glass_scene(32);
+  for (int pes : {1, 4, 16}) {
+    BankedScene bs = partition_scene(s, pes);
+    std::vector<int> seen(bs.triangles.size(), 0);
+    for (int p = 0; p < pes; ++p) {
+      if (bs.pes[p].node_begin == bs.pes[p].node_end) continue;
+      EXPECT_LE(walk(bs, bs.pes[p].node_begin, seen), OPSILA_BVH_STACK) << "PE " << p;
+    }
+    for (std::size_t i = 0; i < seen.size(); ++i) EXPECT_EQ(seen[i], 1) << "facet " << i << ", " << pes << " PEs";
+    // A cluster's root reaches exactly its own facets (the item buffer starts there).
+    for (std::size_t c = 0; c < bs.clusters.size(); ++c) {
+      std::vector<int> mine(bs.triangles.size(), 0);
+      walk(bs, bs.clusters[c].root, mine);
+      const int begin = static_cast<int>(std::find(mine.begin(), mine.end(), 1) - mine.begin());
+      int count = 0;
+      for (int v : mine) count += v;
+      for (int i = begin; i < begin + count; ++i) EXPECT_EQ(mine[i], 1) << "cluster " << c;
+      EXPECT_GT(count, 0) << "cluster " << c;
+    }
+  }
+}
+
+TEST(BankBvh, RoutingTreesHoldEachClusterOfTheirPeOnceAroundItsBox) {
+  Scene s = test::mirror_glass_scene(32);
+  BankedScene bs = partition_scene(s, 16);
+  ASSERT_GE(bs.route_nodes.size(), 16u);
+  std::vector<int> seen(bs.clusters.size(), 0);
+  for (int p = 0; p < 16; ++p) {
+    std::vector<int> stack = {p};
+    while (!stack.empty()) {
+      const BankNode& n = bs.route_nodes[stack.back()];
+      stack.pop_back();
+      for (int k = 0; k < OPSILA_BVH_WIDTH; ++k) {
+        if (n.count[k] < 0) continue;
+        if (n.count[k] == 0) {
+          stack.push_back(n.child[k]);
+          continue;
+        }
+        ASSERT_EQ(n.count[k], 1);
+        const Cluster& c = bs.clusters[n.child[k]];
+        EXPECT_EQ(c.pe, p);
+        ++seen[n.child[k]];
+        // Padded: strictly around the cluster's box.
+        EXPECT_TRUE(n.lo_x[k] < c.bmin[0] && n.lo_y[k] < c.bmin[1] && n.lo_z[k] < c.bmin[2]);
+        EXPECT_TRUE(n.hi_x[k] > c.bmax[0] && n.hi_y[k] > c.bmax[1] && n.hi_z[k] > c.bmax[2]);
+      }
+    }
+  }
+  for (std::size_t c = 0; c < seen.size(); ++c) EXPECT_EQ(seen[c], 1) << "cluster " << c;
+}
+
+}  // namespace
+}  // namespace opsila

@@ -1,6 +1,7 @@
 # Inline the shared header and the kernel files (in the given order) into one
-# C++ source defining opsila::kernel_source(). Local #include lines are dropped:
-# the files are concatenated in dependency order instead.
+# C++ source defining opsila::NAME() (one OpenCL program's source). Local
+# #include lines are dropped: the files are concatenated in dependency order
+# instead.
 string(REPLACE "|" ";" FILES "${FILES}")
 set(text "")
 foreach(f ${FILES})
@@ -10,7 +11,7 @@ foreach(f ${FILES})
   string(APPEND text "\n#line 1 \"${name}\"\n${body}")
 endforeach()
 # Raw string literals have a length limit in some compilers: split in chunks.
-set(out "// Generated from kernels/*.cl by kernels/embed.cmake. Do not edit.\n#include <string>\nnamespace opsila {\nconst std::string& kernel_source() {\n  static const std::string s = std::string()")
+set(out "// Generated from kernels/*.cl by kernels/embed.cmake. Do not edit.\n#include <string>\nnamespace opsila {\nconst std::string& ${NAME}() {\n  static const std::string s = std::string()")
 string(LENGTH "${text}" len)
 set(pos 0)
 while(pos LESS len)

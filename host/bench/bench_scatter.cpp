@@ -129,7 +129,7 @@ ScatterPoint measure_scatter(ClRuntime& rt, std::size_t length, int pes, int war
     cl::Buffer to = device_buffer(rt, n4 * sizeof(cl_float4), "copy bench destination");
     zero_buffer(rt, from, n4 * sizeof(cl_float4), "copy bench source");
     zero_buffer(rt, to, n4 * sizeof(cl_float4), "copy bench destination");
-    cl::Kernel copy = rt.kernel("copy_float4");
+    cl::Kernel copy = rt.kernel("copy_float4", KernelProgram::baselines);
     std::size_t local = copy.getWorkGroupInfo<CL_KERNEL_WORK_GROUP_SIZE>(rt.device().device);
     local = std::min<std::size_t>(local, 64);
     while (local & (local - 1)) local &= local - 1;

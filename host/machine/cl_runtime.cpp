@@ -14,7 +14,8 @@
 
 namespace opsila {
 
-const std::string& kernel_source();  // generated from kernels/*.cl
+const std::string& kernel_source();           // generated from kernels/*.cl
+const std::string& baseline_kernel_source();  // generated from kernels/baselines/*.cl
 
 const char* cl_error_name(cl_int code) {
   switch (code) {
@@ -288,30 +289,35 @@ std::string ClRuntime::description() const {
          device_.driver_version + ")";
 }
 
-cl::Program& ClRuntime::program() {
-  if (built_) return program_;
+cl::Program& ClRuntime::program(KernelProgram which) {
+  const int index = which == KernelProgram::render ? 0 : 1;
+  cl::Program& program = programs_[index];
+  if (built_[index]) return program;
+  const bool render = which == KernelProgram::render;
+  const std::string& source = !render ? baseline_kernel_source() : source_.empty() ? kernel_source() : source_;
+  const std::string origin = render ? source_origin_ : "embedded baseline kernels";
   auto t0 = std::chrono::steady_clock::now();
   cl_int err = CL_SUCCESS;
-  program_ = cl::Program(context_, source_.empty() ? kernel_source() : source_, false, &err);
+  program = cl::Program(context_, source, false, &err);
   cl_check(err, "clCreateProgramWithSource");
   // No fast-math: every device must reproduce the reference's arithmetic.
-  err = program_.build({device_.device}, "-cl-std=CL1.2");
+  err = program.build({device_.device}, "-cl-std=CL1.2");
   if (err != CL_SUCCESS) {
     std::string log;
-    program_.getBuildInfo(device_.device, CL_PROGRAM_BUILD_LOG, &log);
+    program.getBuildInfo(device_.device, CL_PROGRAM_BUILD_LOG, &log);
     log = trim(log);
     throw ClError(std::string("clBuildProgram: ") + cl_error_name(err) + " (" + std::to_string(err) + ") on " +
-                  device_.device_name + " (kernel source: " + source_origin_ + "); build log:\n" +
+                  device_.device_name + " (kernel source: " + origin + "); build log:\n" +
                   (log.empty() ? "(the driver gave no build log)" : log));
   }
   build_seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  built_ = true;
-  return program_;
+  built_[index] = true;
+  return program;
 }
 
-cl::Kernel ClRuntime::kernel(const char* name) {
+cl::Kernel ClRuntime::kernel(const char* name, KernelProgram which) {
   cl_int err = CL_SUCCESS;
-  cl::Kernel k(program(), name, &err);
+  cl::Kernel k(program(which), name, &err);
   cl_check(err, (std::string("clCreateKernel(") + name + ")").c_str());
   return k;
 }

@@ -57,6 +57,10 @@ struct ClRuntimeOptions {
   bool read_environment = true;
 };
 
+// The OpenCL programs: the renderer's stages, and the bench's baselines
+// (megakernel, copy), built only when a baseline runs.
+enum class KernelProgram { render, baselines };
+
 class ClRuntime {
  public:
   // Checks the device (missing_capabilities) and throws ClError naming the
@@ -65,8 +69,9 @@ class ClRuntime {
   const DeviceEntry& device() const { return device_; }
   cl::Context& context() { return context_; }
   cl::CommandQueue& queue() { return queue_; }
-  cl::Program& program();  // built on first use; throws ClError with the build log
-  cl::Kernel kernel(const char* name);
+  // Built on first use; throws ClError with the build log.
+  cl::Program& program(KernelProgram which = KernelProgram::render);
+  cl::Kernel kernel(const char* name, KernelProgram which = KernelProgram::render);
   // Limits read from the device (never assumed).
   std::size_t max_work_group_size() const { return max_wg_; }
   cl_ulong max_alloc() const { return max_alloc_; }
@@ -74,15 +79,16 @@ class ClRuntime {
   cl_ulong memory_limit() const { return limit_; }  // 0, or the limit that lowered the two above
   std::string description() const;  // "device (platform, driver)"
   double last_build_seconds() const { return build_seconds_; }
-  // "embedded kernels", or where the replacement source came from.
+  // "embedded kernels", or where the replacement source of the render
+  // program came from (the baselines are always the embedded ones).
   const std::string& kernel_source_origin() const { return source_origin_; }
 
  private:
   DeviceEntry device_;
   cl::Context context_;
   cl::CommandQueue queue_;
-  cl::Program program_;
-  bool built_ = false;
+  cl::Program programs_[2];
+  bool built_[2] = {false, false};
   std::size_t max_wg_ = 1;
   cl_ulong max_alloc_ = 0, global_mem_ = 0, limit_ = 0;
   double build_seconds_ = 0;

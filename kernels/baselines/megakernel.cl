@@ -16,9 +16,6 @@
  * at most max_depth + 1 rays ever wait. */
 #define MEGA_STACK (OPSILA_MAX_DEPTH + 2)
 
-/* Same quantisation as accumulate() in common.cl. */
-inline long3 fixed3(float3 value) { return convert_long3_sat_rte(value * OPSILA_FIXED_SCALE); }
-
 /* accum: 3 x 64-bit fixed-point sums per pixel (the renderer's pixel sums).
  * ray_counts: per pixel (secondary rays spawned, shadow rays spawned, as
  * RenderStats counts them; ray-facet tests, ray-box tests).

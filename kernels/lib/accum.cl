@@ -12,8 +12,12 @@ inline void add_fixed(volatile __global uint *cell, long value) {
   if (hi != 0u) atomic_add(&cell[1], hi);
 }
 
+/* A contribution in fixed point: round to nearest even, saturating (the host
+ * mirror is to_fixed in host/core/fixed_point.h). */
+inline long3 fixed3(float3 value) { return convert_long3_sat_rte(value * OPSILA_FIXED_SCALE); }
+
 inline void accumulate(volatile __global uint *accum, int pixel, float3 value) {
-  long3 q = convert_long3_sat_rte(value * OPSILA_FIXED_SCALE);
+  long3 q = fixed3(value);
   if (q.x != 0) add_fixed(&accum[pixel * OPSILA_ACCUM_WORDS + 0], q.x);
   if (q.y != 0) add_fixed(&accum[pixel * OPSILA_ACCUM_WORDS + 2], q.y);
   if (q.z != 0) add_fixed(&accum[pixel * OPSILA_ACCUM_WORDS + 4], q.z);

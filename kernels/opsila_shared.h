@@ -5,9 +5,9 @@
  * so that their layout is the same on both sides; the host checks sizes and
  * offsets with static_assert (see the bottom of this file).
  *
- * Paper terms: a PE (processing element) is one OpenCL work-group; its bank is
- * its slice of every per-bank buffer. A ray descriptor is stored as
- * structure-of-arrays (one array per field), as in the paper's six vectors.
+ * Paper terms: a PE (processing element) owns a memory bank, its slice of the
+ * bank buffer; the work-groups that serve it each round work only on that
+ * bank. A ray descriptor is one 64-byte record (OPSILA_DESCRIPTOR_LANES).
  */
 #ifndef OPSILA_SHARED_H
 #define OPSILA_SHARED_H
@@ -41,26 +41,48 @@ typedef std::uint32_t opsila_u32;
 /* Pixel sums: 3 channels x (low, high) 32-bit words per pixel. */
 #define OPSILA_ACCUM_WORDS 6
 
-/* Scatter: entries per block of the count/plan/move kernels. */
+/* Scatter: pool entries per block of the count kernel (one work-item ranks
+ * a block in order, which keeps the sort stable). */
 #define OPSILA_SCATTER_BLOCK 256
 /* Item buffer: square tiles of at most this many pixels a side (one
  * work-group per tile; smaller when the device allows fewer work-items). */
 #define OPSILA_ITEM_TILE_SIDE 8
 
-/* SPMD output: each processed descriptor owns OPSILA_SPAWN_SLOTS(lights)
- * fixed slots, so the output order is deterministic:
- *   OPSILA_SLOT_FORWARD: the descriptor sent on, or the reflected ray;
- *   OPSILA_SLOT_TRANSMITTED: the transmitted ray;
- *   OPSILA_SLOT_SHADOW(l): the shadow ray towards light l. */
-#define OPSILA_SLOT_FORWARD 0
-#define OPSILA_SLOT_TRANSMITTED 1
-#define OPSILA_SLOT_SHADOW(l) (2 + (l))
+/* SPMD output: each work-item owns OPSILA_SPAWN_SLOTS(lights) output
+ * places (fixed, so the output order is deterministic), enough for its most:
+ * the descriptor sent on or the reflected ray, the transmitted ray, and one
+ * shadow ray per light. It fills them from the front and says how many. */
 #define OPSILA_SPAWN_SLOTS(lights) (2 + (lights))
 
 /* Hits whose distances differ by at most this fraction are a tie, won by
  * the lower facet id: coplanar facets and shared edges then give the answer
  * of exact arithmetic with file-order tie-breaking, not float noise. */
 #define OPSILA_TIE_TOLERANCE 1e-6f
+
+/* PE x PE traffic matrices (per level) are counted up to this many PEs. */
+#define OPSILA_TRAFFIC_MAX_PES 64
+
+/* The ray descriptor, declared once: one 64-byte record of four 16-byte
+ * lanes, X(lane, name, OpenCL type, host type). The paper keeps six vectors
+ * (pixel and PE, level, direct intensity, direction, coefficient,
+ * destination); a record moves as one contiguous 64-byte copy, one write
+ * stream per destination bank instead of one per field (docs/BENCHMARKS.md).
+ * The spare .w slots carry more than one meaning; kernels/lib/descriptor.cl
+ * names each one (DESC_T_BEST, DESC_T_MAX, DESC_CURSOR_ENTRY, DESC_DEST...):
+ *   org: xyz origin;    w: best hit distance so far (radiance) or the
+ *                          distance to the light (shadow)
+ *   dir: xyz direction; w: entry distance of the cursor PE (ordered forwarding)
+ *   wgt: xyz weight product (radiance) or light contribution (shadow); w: 0
+ *   ids: x pixel; y meta (kind | level << 2); z best hit (global triangle,
+ *        -1 none); w destination PE, which is also the cursor PE of ordered
+ *        forwarding (-1: a NIL hole that the exchange skips) */
+#define OPSILA_DESCRIPTOR_LANES(X) \
+  X(0, org, float4, cl_float4)     \
+  X(1, dir, float4, cl_float4)     \
+  X(2, wgt, float4, cl_float4)     \
+  X(3, ids, int4, cl_int4)
+#define OPSILA_DESCRIPTOR_LANE_COUNT 4
+#define OPSILA_DESCRIPTOR_BYTES 64
 
 /* Descriptor kinds (low 2 bits of the meta field). */
 #define OPSILA_KIND_NIL 0      /* hole: scatter skips it */
@@ -225,7 +247,6 @@ static_assert(OPSILA_LEVEL_BITS + 2 < 31, "kind and level fit in the meta field"
 static_assert(OPSILA_META_LEVEL(OPSILA_META(OPSILA_KIND_SHADOW, OPSILA_MAX_DEPTH)) == OPSILA_MAX_DEPTH,
               "the deepest level survives the meta field");
 static_assert((OPSILA_SCATTER_BLOCK & (OPSILA_SCATTER_BLOCK - 1)) == 0, "scatter block is a power of two");
-static_assert(OPSILA_SPAWN_SLOTS(0) == OPSILA_SLOT_SHADOW(0), "shadow slots follow the two ray slots");
 #endif
 
 #endif /* OPSILA_SHARED_H */

@@ -7,7 +7,7 @@
 /* From the item buffer, primary ray descriptors are built for the banks of
  * the PEs that own the items: already RESOLVED (the nearest hit is known),
  * bound for the owner PE, which shades them. Misses add the background and
- * leave a NIL hole. Written at queue[offset + k]. */
+ * leave a NIL hole (destination -1). Written at queue[offset + k]. */
 __kernel void build_primary(FrameParams fp, __global const PeInfo *pes, __global const int *item_tri,
                             __global const float *item_t, int pixel_begin, int pixel_count, int offset,
                             DESC_PARAMS(q), volatile __global uint *accum) {
@@ -18,14 +18,12 @@ __kernel void build_primary(FrameParams fp, __global const PeInfo *pes, __global
   int tri = item_tri[pixel];
   if (tri < 0) {
     accumulate(accum, pixel, load3(fp.background));
-    q_dest[slot] = -1;
+    desc_store(q, slot, make_descriptor((float3)(0.0f), 0.0f, (float3)(0.0f), 0.0f, (float3)(0.0f), pixel,
+                                        OPSILA_META(OPSILA_KIND_NIL, 0), -1, -1));
     return;
   }
   int x = pixel % fp.width, y = pixel / fp.width;
   float3 d = primary_direction(fp, x, y);
-  q_org[slot] = (float4)(load3(fp.eye), item_t[pixel]);
-  q_dir[slot] = (float4)(d, -1.0f);
-  q_wgt[slot] = (float4)(1.0f, 1.0f, 1.0f, 0.0f);
-  q_ids[slot] = (int4)(pixel, OPSILA_META(OPSILA_KIND_RESOLVED, 0), tri, -1);
-  q_dest[slot] = owner_pe(pes, fp.num_pes, tri);
+  desc_store(q, slot, make_descriptor(load3(fp.eye), item_t[pixel], d, -1.0f, (float3)(1.0f), pixel,
+                                      OPSILA_META(OPSILA_KIND_RESOLVED, 0), tri, owner_pe(pes, fp.num_pes, tri)));
 }

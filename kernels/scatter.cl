@@ -1,113 +1,184 @@
-/* SIMD scatter: Vd(I'(i)) = Vs(i). The source vector is the SPMD output area
- * (P*n*S fixed slots, NIL holes included) followed by the waiting queue.
- * The destination field gives I; I' is made injective by a stable counting
- * sort on the destination PE: rank(i) = number of earlier valid entries
- * bound for the same PE. Entry i goes to bank dest(i), slot rank(i), when
- * rank(i) < n; otherwise it waits in the next queue (no ray is lost).
+/* SIMD exchange: Vd(I'(i)) = Vs(i). The source vector is the waiting pool
+ * (pool_len records, NIL holes allowed) followed by the SPMD outputs (one
+ * run of out_item_count[t] records per SPMD work-item t, at t*S). The
+ * destination field gives I; I' is made injective by a stable counting sort
+ * on the destination PE: rank(i) = number of earlier valid entries bound for
+ * the same PE. Entry i goes to bank slot bank_begin[d] + rank(i) when
+ * rank(i) < bank_count[d], otherwise it waits in the next pool (no ray is
+ * lost). Only the records that exist are read: empty output places never are.
  *
- * Three passes, each a plain data-parallel kernel:
- *   scatter_count: per block of SCATTER_BLOCK entries, per-PE counts and
- *                  the rank of each entry inside its block;
- *   scatter_scan:  per PE, exclusive prefix over blocks, and PE totals;
- *   scatter_plan:  bank fill counts and the queue layout of the overflow;
- *   scatter_move:  moves every field of every valid entry to I'(i). */
+ * Blocks: the pool is cut into blocks of OPSILA_SCATTER_BLOCK entries, then
+ * each SPMD work-group's outputs are one block (num_blocks in all).
+ *   scatter_count: per block, per-PE counts and each entry's rank inside it;
+ *   scatter_scan:  per PE, a work-group's exclusive scan over the blocks;
+ *   scatter_plan:  bank capacities that follow each PE's demand, bank
+ *                  offsets, the SPMD work-groups of the next phase, and the
+ *                  layout of what waits;
+ *   scatter_move_pool, scatter_move_outputs: each record to I'(i). */
 #include "lib/descriptor.cl"
 
-#define SCATTER_BLOCK OPSILA_SCATTER_BLOCK
-
-/* Destination of source entry k, or -1 for a hole. */
-inline int source_dest(int k, int out_len, int n, int S, __global const int *processed_count,
-                       __global const int *out_dest, __global const int *q_dest) {
-  if (k < out_len) {
-    int slot = k / S;
-    int pe = slot / n;
-    if (slot - pe * n >= processed_count[pe]) return -1; /* slot not used this phase */
-    return out_dest[k];
-  }
-  return q_dest[k - out_len];
-}
-
-__kernel void scatter_count(int out_len, int queue_len, int n, int S, int num_pes,
-                            __global const int *processed_count, __global const int *out_dest,
-                            __global const int *q_dest, __global int *block_hist, __global int *rank) {
+/* Counts of block b; hist[b * P + q] = entries bound for PE q. */
+__kernel void scatter_count(int pool_len, int pool_blocks, int num_blocks, int items_per_group, int S, int num_pes,
+                            DESC_PARAMS(pool), DESC_PARAMS(out), __global const int *out_item_count,
+                            __global int *hist, __global int *rank) {
   int b = get_global_id(0);
-  int total = out_len + queue_len;
-  int begin = b * SCATTER_BLOCK;
-  if (begin >= total) return;
-  int end = min(begin + SCATTER_BLOCK, total);
-  __global int *hist = block_hist + (long)b * num_pes;
-  for (int q = 0; q < num_pes; ++q) hist[q] = 0;
-  for (int k = begin; k < end; ++k) {
-    int d = source_dest(k, out_len, n, S, processed_count, out_dest, q_dest);
-    if (d >= 0 && d < num_pes) {
-      rank[k] = hist[d]++;
-    } else {
-      rank[k] = -1;
+  if (b >= num_blocks) return;
+  __global int *h = hist + (long)b * num_pes;
+  for (int q = 0; q < num_pes; ++q) h[q] = 0;
+  if (b < pool_blocks) {
+    int end = min((b + 1) * OPSILA_SCATTER_BLOCK, pool_len);
+    for (int k = b * OPSILA_SCATTER_BLOCK; k < end; ++k) {
+      int d = desc_dest_at(pool, k);
+      rank[k] = (d >= 0 && d < num_pes) ? h[d]++ : -1;
+    }
+    return;
+  }
+  int first_item = (b - pool_blocks) * items_per_group;
+  for (int t = first_item; t < first_item + items_per_group; ++t) {
+    int c = out_item_count[t];
+    for (int j = 0; j < c; ++j) {
+      int at = t * S + j;
+      int d = desc_dest_at(out, at);
+      rank[pool_len + at] = (d >= 0 && d < num_pes) ? h[d]++ : -1;
     }
   }
 }
 
-__kernel void scatter_scan(int num_blocks, int num_pes, __global int *block_hist, __global int *pe_total) {
-  int q = get_global_id(0);
-  if (q >= num_pes) return;
-  int running = 0;
-  for (int b = 0; b < num_blocks; ++b) {
+/* One work-group per PE q: hist[b * P + q] becomes the exclusive prefix over
+ * blocks, pe_total[q] the total. Each work-item sums a run of blocks, the
+ * runs' sums are scanned, then each work-item writes its run's prefixes. */
+__kernel void scatter_scan(int num_blocks, int num_pes, __global int *hist, __global int *pe_total) {
+  __local int sums[256];
+  int q = get_group_id(0), lid = get_local_id(0), lsz = get_local_size(0);
+  int run = (num_blocks + lsz - 1) / lsz;
+  int begin = min(lid * run, num_blocks), end = min(begin + run, num_blocks);
+  int s = 0;
+  for (int b = begin; b < end; ++b) s += hist[(long)b * num_pes + q];
+  sums[lid] = s;
+  barrier(CLK_LOCAL_MEM_FENCE);
+  if (lid == 0) {
+    int acc = 0;
+    for (int i = 0; i < lsz; ++i) {
+      int v = sums[i];
+      sums[i] = acc;
+      acc += v;
+    }
+    pe_total[q] = acc;
+  }
+  barrier(CLK_LOCAL_MEM_FENCE);
+  int acc = sums[lid];
+  for (int b = begin; b < end; ++b) {
     long at = (long)b * num_pes + q;
-    int h = block_hist[at];
-    block_hist[at] = running;
-    running += h;
+    int v = hist[at];
+    hist[at] = acc;
+    acc += v;
   }
-  pe_total[q] = running;
 }
 
-/* counts[0] = entries left waiting (next queue length),
- * counts[1] = entries placed in banks this round. */
-__kernel void scatter_plan(int num_pes, int n, __global const int *pe_total, __global int *bank_count,
-                           __global int *overflow_base, __global int *counts) {
-  if (get_global_id(0) != 0) return;
-  int waiting = 0, placed_all = 0;
-  for (int q = 0; q < num_pes; ++q) {
-    int placed = min(pe_total[q], n);
-    bank_count[q] = placed;
-    overflow_base[q] = waiting;
-    waiting += pe_total[q] - placed;
-    placed_all += placed;
+/* Bank capacity that follows demand: `slots` bank slots this round, split
+ * by water-filling. Every PE gets min(demand, level, cap); the level is the
+ * largest that fits; slots left over go one each to the PEs still waiting,
+ * in PE order. So one hot PE no longer holds every other bank to its share,
+ * and a round is full whenever enough descriptors wait. Each bank starts at
+ * a multiple of the SPMD work-group size, so no work-group mixes banks.
+ * counts = {waiting, placed, SPMD work-groups}. One work-group. */
+__kernel void scatter_plan(int num_pes, int slots, int cap, int group_size, __global const int *pe_total,
+                           __global int *bank_begin, __global int *bank_count, __global int *overflow_base,
+                           __global int *group_pe, __global int *group_first, __global int *counts) {
+  __local int partial[256];
+  __local int level_found;
+  __local int group_base[OPSILA_MAX_PES];
+  int lid = get_local_id(0), lsz = get_local_size(0);
+  /* Binary search for the level (the sum is monotonic in it). */
+  int lo = 0, hi = slots;
+  while (lo < hi) {
+    int mid = lo + (hi - lo + 1) / 2;
+    long s = 0;
+    for (int q = lid; q < num_pes; q += lsz) s += min(min(pe_total[q], mid), cap);
+    partial[lid] = (int)min(s, (long)slots + 1);
+    barrier(CLK_LOCAL_MEM_FENCE);
+    if (lid == 0) {
+      long t = 0;
+      for (int i = 0; i < lsz; ++i) t += partial[i];
+      level_found = t <= slots ? 1 : 0;
+    }
+    barrier(CLK_LOCAL_MEM_FENCE);
+    if (level_found) lo = mid; else hi = mid - 1;
+    barrier(CLK_LOCAL_MEM_FENCE);
   }
-  counts[0] = waiting;
-  counts[1] = placed_all;
+  if (lid == 0) {
+    int used = 0;
+    for (int q = 0; q < num_pes; ++q) used += min(min(pe_total[q], lo), cap);
+    int spare = slots - used, waiting = 0, placed = 0, begin = 0, groups = 0;
+    for (int q = 0; q < num_pes; ++q) {
+      int c = min(min(pe_total[q], lo), cap);
+      if (spare > 0 && c < pe_total[q] && c < cap) {
+        ++c;
+        --spare;
+      }
+      bank_count[q] = c;
+      bank_begin[q] = begin;
+      overflow_base[q] = waiting;
+      group_base[q] = groups;
+      int g = (c + group_size - 1) / group_size;
+      begin += g * group_size;
+      groups += g;
+      waiting += pe_total[q] - c;
+      placed += c;
+    }
+    counts[0] = waiting;
+    counts[1] = placed;
+    counts[2] = groups;
+  }
+  barrier(CLK_LOCAL_MEM_FENCE);
+  for (int q = lid; q < num_pes; q += lsz) {
+    int g = (bank_count[q] + group_size - 1) / group_size;
+    for (int j = 0; j < g; ++j) {
+      group_pe[group_base[q] + j] = q;
+      group_first[group_base[q] + j] = bank_begin[q] + j * group_size;
+    }
+  }
 }
 
-/* One launch per source segment (SPMD outputs, then the queue), so that
- * every work-item of a launch reads the same buffers: straight loads that
- * vectorising compilers keep as such. Global entry index = rank_offset + k. */
-__kernel void scatter_move(int src_len, int rank_offset, int n, int S, int num_pes, int from_outputs,
-                           DESC_PARAMS(s), __global const int *rank, __global const int *block_hist,
-                           __global const int *overflow_base, DESC_PARAMS(b), DESC_PARAMS(w),
-                           volatile __global uint *traffic, int traffic_levels) {
+/* Entry of global rank r for PE d: its bank slot, or its place in the next pool. */
+inline void place(__global const float4 *from, int k, int d, int r, __global const int *bank_begin,
+                  __global const int *bank_count, __global const int *overflow_base, DESC_PARAMS(banks),
+                  DESC_PARAMS(next)) {
+  int c = bank_count[d];
+  if (r < c)
+    desc_move(banks, bank_begin[d] + r, from, k);
+  else
+    desc_move(next, overflow_base[d] + (r - c), from, k);
+}
+
+__kernel void scatter_move_pool(int pool_len, int num_pes, DESC_PARAMS(pool), __global const int *rank,
+                                __global const int *hist, __global const int *bank_begin,
+                                __global const int *bank_count, __global const int *overflow_base,
+                                DESC_PARAMS(banks), DESC_PARAMS(next)) {
   int k = get_global_id(0);
-  if (k >= src_len) return;
-  int g = rank_offset + k;
-  int rk = rank[g];
+  if (k >= pool_len) return;
+  int rk = rank[k];
   if (rk < 0) return;
-  int d = s_dest[k];
-  int r = block_hist[(long)(g / SCATTER_BLOCK) * num_pes + d] + rk;
-  float4 org = s_org[k], dir = s_dir[k], wgt = s_wgt[k];
-  int4 ids = s_ids[k];
-  if (from_outputs && traffic_levels > 0) {
-    int level = OPSILA_META_LEVEL(ids.y);
-    int from_pe = (k / S) / n;
-    if (level < traffic_levels) atomic_inc(&traffic[((long)level * num_pes + from_pe) * num_pes + d]);
+  int d = desc_dest_at(pool, k);
+  int r = hist[(long)(k / OPSILA_SCATTER_BLOCK) * num_pes + d] + rk;
+  place(pool, k, d, r, bank_begin, bank_count, overflow_base, banks, next);
+}
+
+/* One work-item per SPMD work-item t: its out_item_count[t] records. */
+__kernel void scatter_move_outputs(int out_items, int items_per_group, int S, int pool_len, int pool_blocks,
+                                   int num_pes, DESC_PARAMS(out), __global const int *out_item_count,
+                                   __global const int *rank, __global const int *hist,
+                                   __global const int *bank_begin, __global const int *bank_count,
+                                   __global const int *overflow_base, DESC_PARAMS(banks), DESC_PARAMS(next)) {
+  int t = get_global_id(0);
+  if (t >= out_items) return;
+  int c = out_item_count[t];
+  __global const int *h = hist + (long)(pool_blocks + t / items_per_group) * num_pes;
+  for (int j = 0; j < c; ++j) {
+    int at = t * S + j;
+    int rk = rank[pool_len + at];
+    if (rk < 0) continue;
+    int d = desc_dest_at(out, at);
+    place(out, at, d, h[d] + rk, bank_begin, bank_count, overflow_base, banks, next);
   }
-  bool in_bank = r < n;
-  int at = in_bank ? d * n + r : overflow_base[d] + (r - n);
-  __global float4 *to_org = in_bank ? b_org : w_org;
-  __global float4 *to_dir = in_bank ? b_dir : w_dir;
-  __global float4 *to_wgt = in_bank ? b_wgt : w_wgt;
-  __global int4 *to_ids = in_bank ? b_ids : w_ids;
-  __global int *to_dest = in_bank ? b_dest : w_dest;
-  to_org[at] = org;
-  to_dir[at] = dir;
-  to_wgt[at] = wgt;
-  to_ids[at] = ids;
-  to_dest[at] = d;
 }

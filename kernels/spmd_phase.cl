@@ -1,11 +1,18 @@
-/* SPMD phase: one work-group = one PE, working only on its own bank: its
- * descriptors (slots p*n .. p*n + count) and its facets. Every PE also knows
- * the bounding volumes of all clusters (small, global), which name the
- * destination PEs of the rays it sends on.
+/* SPMD phase: each PE works only on its own bank: its descriptors and its
+ * facets. Every PE also knows the bounding volumes of all clusters (small,
+ * global), which name the destination PEs of the rays it sends on.
  *
- * Each processed descriptor owns S = OPSILA_SPAWN_SLOTS(lights) output
- * slots (fixed places, so the output is deterministic; see opsila_shared.h);
- * unused slots are NIL holes that the scatter skips. */
+ * Work-items follow descriptors: one descriptor per work-item. A PE's bank
+ * is served by as many work-groups as its count needs this round; the
+ * exchange's plan (kernels/scatter.cl) lists them: work-group g serves PE
+ * group_pe[g], bank slots group_first[g] .. + local size (up to the bank's
+ * end). No work-group mixes two banks.
+ *
+ * Each work-item owns S = lights + 2 output records (fixed places, so the
+ * output is deterministic) and fills them from the front: the reflected or
+ * forwarded ray, the transmitted ray, then one shadow ray per light that
+ * needs one. out_item_count says how many, so the exchange never reads an
+ * empty slot. */
 #include "lib/bvh.cl"
 #include "lib/routing.cl"
 #include "lib/shading.cl"
@@ -15,12 +22,20 @@ typedef struct {
   uint v[OPSILA_STAT_COUNT];
 } PrivStats;
 
-inline void emit(DESC_PARAMS(o), int slot, float4 org, float4 dir, float4 wgt, int4 ids, int dest) {
-  o_org[slot] = org;
-  o_dir[slot] = dir;
-  o_wgt[slot] = wgt;
-  o_ids[slot] = ids;
-  o_dest[slot] = dest;
+/* Output records of one work-item: its S places, filled from the front,
+ * and the PE x PE traffic of its work-group (local, flushed once). */
+typedef struct {
+  DESC_PARAMS(v);
+  int base, count;
+  int num_pes, traffic_levels; /* traffic_levels = 0: not counted */
+  __local uint *traffic;       /* [level][destination PE] from this work-group's PE */
+} Outputs;
+
+inline void emit(Outputs *o, Descriptor d) {
+  desc_store(o->v, o->base + o->count, d);
+  ++o->count;
+  int level = OPSILA_META_LEVEL(DESC_META(d));
+  if (level < o->traffic_levels) atomic_inc(&o->traffic[level * o->num_pes + DESC_DEST(d)]);
 }
 
 /* A new ray leaving a surface (or going to a light): first destination in
@@ -33,9 +48,9 @@ inline int first_destination(const Routing *rt, const RayPre *r, float eps, floa
 /* Whitted shading of a resolved hit at its owner PE: ambient now, one shadow
  * descriptor per light that can contribute, reflected and transmitted
  * descriptors for the next level. */
-inline void shade(FrameParams fp, const Routing *rt, __global const BankTriangle *tris, __global const Material *materials,
-                  __global const Light *lights, float3 org, float3 d, float t, int tri_index, float3 weight,
-                  int pixel, int level, int out_base, DESC_PARAMS(o), volatile __global uint *accum, PrivStats *st) {
+inline void shade(FrameParams fp, const Routing *rt, __global const BankTriangle *tris,
+                  __global const Material *materials, __global const Light *lights, float3 org, float3 d, float t, int tri_index, float3 weight,
+                  int pixel, int level, Outputs *out, volatile __global uint *accum, PrivStats *st) {
   __global const BankTriangle *tri = &tris[tri_index];
   SurfacePoint sp = surface_point(tri, org, d, t);
   float3 p = sp.p;
@@ -51,16 +66,13 @@ inline void shade(FrameParams fp, const Routing *rt, __global const BankTriangle
     if (all(contrib == (float3)(0.0f))) continue;
     ++st->v[OPSILA_STAT_SPAWN_SHADOW];
     RayPre sr = make_ray(p, lv);
-    float entry = 0.0f;
     int dest = next_shadow_destination(rt, &sr, eps, dist, -1, &st->v[OPSILA_STAT_SPHERE_TESTS],
                                        &st->v[OPSILA_STAT_ROUTE_TESTS]);
     if (dest < 0) { /* no sphere on the way: lit without leaving this PE */
       ++st->v[OPSILA_STAT_LIT];
       accumulate(accum, pixel, contrib);
     } else {
-      emit(o_org, o_dir, o_wgt, o_ids, o_dest, out_base + OPSILA_SLOT_SHADOW(l), (float4)(p, dist),
-           (float4)(lv, entry), (float4)(contrib, 0.0f),
-           (int4)(pixel, OPSILA_META(OPSILA_KIND_SHADOW, level), -1, dest), dest);
+      emit(out, make_descriptor(p, dist, lv, 0.0f, contrib, pixel, OPSILA_META(OPSILA_KIND_SHADOW, level), -1, dest));
     }
   }
 
@@ -89,121 +101,140 @@ inline void shade(FrameParams fp, const Routing *rt, __global const BankTriangle
       accumulate(accum, pixel, child_w[j] * load3(fp.background));
       ++st->v[OPSILA_STAT_MISS + 0]; /* attributed below to level + 1 */
     } else {
-      const int slot = j == 0 ? OPSILA_SLOT_FORWARD : OPSILA_SLOT_TRANSMITTED; /* reflected, transmitted */
-      emit(o_org, o_dir, o_wgt, o_ids, o_dest, out_base + slot, (float4)(p, OPSILA_INF), (float4)(child_d[j], entry),
-           (float4)(child_w[j], 0.0f), (int4)(pixel, OPSILA_META(OPSILA_KIND_TRACE, level + 1), -1, dest), dest);
+      emit(out, make_descriptor(p, OPSILA_INF, child_d[j], entry, child_w[j], pixel,
+                                OPSILA_META(OPSILA_KIND_TRACE, level + 1), -1, dest));
     }
   }
+}
+
+/* One descriptor at its PE: a shadow ray tests its segment in the bank; a
+ * radiance ray looks for its nearest hit here and is sent on, finished as a
+ * miss, or (its nearest hit known) shaded by the PE that owns the facet. */
+inline void process(FrameParams fp, int pe, const Routing *rt, __global const BankNode *nodes, __global const BankTriangle *tris,
+                    __global const Material *materials, __global const Light *lights, Descriptor ds, Outputs *out,
+                    volatile __global uint *accum, PrivStats *st) {
+  __global const PeInfo *me = &rt->pes[pe];
+  int root = me->node_begin;
+  bool bank_empty = me->node_begin == me->node_end;
+  float eps = fp.epsilon;
+  int kind = OPSILA_META_KIND(DESC_META(ds)), level = OPSILA_META_LEVEL(DESC_META(ds));
+  int pixel = DESC_PIXEL(ds);
+  float3 org = DESC_ORIGIN(ds), d = DESC_DIRECTION(ds), w = DESC_WEIGHT(ds);
+  ++st->v[OPSILA_STAT_TRACED];
+  RayPre r = make_ray(org, d);
+
+  if (kind == OPSILA_KIND_SHADOW) {
+    ++st->v[OPSILA_STAT_SHADOW];
+    float tmax = DESC_T_MAX(ds);
+    bool blocked = !bank_empty && traverse_any(&r, nodes, tris, root, eps, tmax, &st->v[OPSILA_STAT_TRI_TESTS],
+                                               &st->v[OPSILA_STAT_BOX_TESTS]);
+    if (blocked) {
+      ++st->v[OPSILA_STAT_OCCLUDED];
+      return;
+    }
+    int dest = next_shadow_destination(rt, &r, eps, tmax, pe, &st->v[OPSILA_STAT_SPHERE_TESTS],
+                                       &st->v[OPSILA_STAT_ROUTE_TESTS]);
+    if (dest < 0) {
+      ++st->v[OPSILA_STAT_LIT];
+      accumulate(accum, pixel, w);
+    } else {
+      ++st->v[OPSILA_STAT_FORWARD];
+      DESC_HIT(ds) = -1;
+      DESC_DEST(ds) = dest;
+      emit(out, ds);
+    }
+    return;
+  }
+  float t_best = DESC_T_BEST(ds);
+  int hit = DESC_HIT(ds);
+  if (kind == OPSILA_KIND_TRACE) {
+    ++st->v[OPSILA_STAT_RADIANCE];
+    int best_facet = hit >= 0 ? tris[hit].facet_id : INT_MAX;
+    if (!bank_empty)
+      traverse_nearest(&r, nodes, tris, root, eps, &t_best, &hit, &best_facet, &st->v[OPSILA_STAT_TRI_TESTS],
+                       &st->v[OPSILA_STAT_BOX_TESTS]);
+    float entry;
+    int dest = next_destination(rt, &r, eps, tie_limit(t_best), DESC_CURSOR_ENTRY(ds), pe, &entry,
+                                &st->v[OPSILA_STAT_SPHERE_TESTS], &st->v[OPSILA_STAT_ROUTE_TESTS]);
+    if (dest >= 0) { /* a nearer hit (or a tie with a lower facet id) may wait in another bank */
+      ++st->v[OPSILA_STAT_FORWARD];
+      emit(out, make_descriptor(org, t_best, d, entry, w, pixel, DESC_META(ds), hit, dest));
+      return;
+    }
+    if (hit < 0) {
+      ++st->v[OPSILA_STAT_MISS];
+      accumulate(accum, pixel, w * load3(fp.background));
+      return;
+    }
+    int owner = owner_pe(rt->pes, fp.num_pes, hit);
+    if (owner != pe) { /* nearest hit known; its facet lives in another bank */
+      ++st->v[OPSILA_STAT_FORWARD];
+      emit(out, make_descriptor(org, t_best, d, 0.0f, w, pixel, OPSILA_META(OPSILA_KIND_RESOLVED, level), hit, owner));
+      return;
+    }
+  }
+  ++st->v[OPSILA_STAT_RESOLVED];
+  shade(fp, rt, tris, materials, lights, org, d, t_best, hit, w, pixel, level, out, accum, st);
 }
 
 __kernel void spmd_phase(FrameParams fp, __global const PeInfo *pes, __global const Cluster *clusters,
                          __global const BankNode *route, int routing, __global const BankNode *nodes, __global const BankTriangle *tris,
                          __global const Material *materials, __global const Light *lights, DESC_PARAMS(b),
-                         __global const int *bank_count, __global int *processed_count, DESC_PARAMS(o),
-                         volatile __global uint *accum, volatile __global uint *stats) {
+                         __global const int *group_pe, __global const int *group_first,
+                         __global const int *bank_begin, __global const int *bank_count, DESC_PARAMS(o),
+                         __global int *out_item_count, volatile __global uint *accum, volatile __global uint *stats,
+                         volatile __global uint *traffic, int traffic_levels) {
   __local uint lstats[OPSILA_MAX_DEPTH * OPSILA_STAT_COUNT];
-  int pe = get_group_id(0);
-  int lid = get_local_id(0), lsz = get_local_size(0);
-  for (int i = lid; i < OPSILA_MAX_DEPTH * OPSILA_STAT_COUNT; i += lsz) lstats[i] = 0u;
+  __local uint ltraffic[OPSILA_MAX_DEPTH * OPSILA_TRAFFIC_MAX_PES];
+  int g = get_group_id(0), lid = get_local_id(0), lsz = get_local_size(0);
+  int P = fp.num_pes, depth = fp.max_depth;
+  int ntraffic = traffic_levels * P;
+  for (int i = lid; i < depth * OPSILA_STAT_COUNT; i += lsz) lstats[i] = 0u;
+  for (int i = lid; i < ntraffic; i += lsz) ltraffic[i] = 0u;
   barrier(CLK_LOCAL_MEM_FENCE);
 
-  int n = fp.bank_capacity, S = fp.spawn_slots;
-  int count = bank_count[pe];
-  if (lid == 0) processed_count[pe] = count;
-  __global const PeInfo *me = &pes[pe];
-  int root = me->node_begin;
-  bool bank_empty = me->node_begin == me->node_end;
-  float eps = fp.epsilon;
+  int pe = group_pe[g];
+  int slot = group_first[g] + lid;
+  int item = g * lsz + lid;
+  Outputs out;
+  out.v = o;
+  out.base = item * fp.spawn_slots;
+  out.count = 0;
+  out.num_pes = P;
+  out.traffic_levels = traffic_levels;
+  out.traffic = ltraffic;
   Routing rt;
   rt.pes = pes;
   rt.clusters = clusters;
   rt.route = route;
-  rt.num_pes = fp.num_pes;
+  rt.num_pes = P;
   rt.mode = routing;
-
-  for (int i = lid; i < count; i += lsz) {
-    int slot = pe * n + i;
-    int out_base = slot * S;
-    for (int j = 0; j < S; ++j) o_dest[out_base + j] = -1;
-    float4 org4 = b_org[slot], dir4 = b_dir[slot], wgt4 = b_wgt[slot];
-    int4 ids = b_ids[slot];
-    int kind = OPSILA_META_KIND(ids.y), level = OPSILA_META_LEVEL(ids.y);
-    float3 org = org4.xyz, d = dir4.xyz, w = wgt4.xyz;
+  if (slot < bank_begin[pe] + bank_count[pe]) {
+    Descriptor ds = desc_load(b, slot);
+    int level = OPSILA_META_LEVEL(DESC_META(ds));
     PrivStats st;
     for (int s = 0; s < OPSILA_STAT_COUNT; ++s) st.v[s] = 0u;
+    process(fp, pe, &rt, nodes, tris, materials, lights, ds, &out, accum, &st);
+    /* Children that miss every sphere finish here but count at their level. */
     uint child_misses = 0u;
-    ++st.v[OPSILA_STAT_TRACED];
-    RayPre r = make_ray(org, d);
-
-    if (kind == OPSILA_KIND_SHADOW) {
-      ++st.v[OPSILA_STAT_SHADOW];
-      float tmax = org4.w;
-      bool blocked = !bank_empty && traverse_any(&r, nodes, tris, root, eps, tmax, &st.v[OPSILA_STAT_TRI_TESTS],
-                                                 &st.v[OPSILA_STAT_BOX_TESTS]);
-      if (blocked) {
-        ++st.v[OPSILA_STAT_OCCLUDED];
-      } else {
-        int dest = next_shadow_destination(&rt, &r, eps, tmax, pe, &st.v[OPSILA_STAT_SPHERE_TESTS],
-                                           &st.v[OPSILA_STAT_ROUTE_TESTS]);
-        if (dest < 0) {
-          ++st.v[OPSILA_STAT_LIT];
-          accumulate(accum, ids.x, w);
-        } else {
-          ++st.v[OPSILA_STAT_FORWARD];
-          emit(o_org, o_dir, o_wgt, o_ids, o_dest, out_base + OPSILA_SLOT_FORWARD, org4, dir4, wgt4,
-               (int4)(ids.x, ids.y, -1, dest), dest);
-        }
-      }
-    } else {
-      float t_best = org4.w;
-      int hit = ids.z;
-      if (kind == OPSILA_KIND_TRACE) {
-        ++st.v[OPSILA_STAT_RADIANCE];
-        int best_facet = hit >= 0 ? tris[hit].facet_id : INT_MAX;
-        if (!bank_empty)
-          traverse_nearest(&r, nodes, tris, root, eps, &t_best, &hit, &best_facet, &st.v[OPSILA_STAT_TRI_TESTS],
-                           &st.v[OPSILA_STAT_BOX_TESTS]);
-        float entry;
-        int dest = next_destination(&rt, &r, eps, tie_limit(t_best), dir4.w, pe, &entry,
-                                    &st.v[OPSILA_STAT_SPHERE_TESTS], &st.v[OPSILA_STAT_ROUTE_TESTS]);
-        if (dest >= 0) { /* a nearer hit (or a tie with a lower facet id) may wait in another bank */
-          ++st.v[OPSILA_STAT_FORWARD];
-          emit(o_org, o_dir, o_wgt, o_ids, o_dest, out_base + OPSILA_SLOT_FORWARD, (float4)(org, t_best),
-               (float4)(d, entry), wgt4, (int4)(ids.x, ids.y, hit, dest), dest);
-          kind = OPSILA_KIND_NIL;
-        } else if (hit < 0) {
-          ++st.v[OPSILA_STAT_MISS];
-          accumulate(accum, ids.x, w * load3(fp.background));
-          kind = OPSILA_KIND_NIL;
-        } else {
-          int owner = owner_pe(pes, fp.num_pes, hit);
-          if (owner != pe) { /* nearest hit known; its facet lives in another bank */
-            ++st.v[OPSILA_STAT_FORWARD];
-            emit(o_org, o_dir, o_wgt, o_ids, o_dest, out_base + OPSILA_SLOT_FORWARD, (float4)(org, t_best),
-                 (float4)(d, 0.0f), wgt4, (int4)(ids.x, OPSILA_META(OPSILA_KIND_RESOLVED, level), hit, owner), owner);
-            kind = OPSILA_KIND_NIL;
-          } else {
-            kind = OPSILA_KIND_RESOLVED;
-          }
-        }
-      }
-      if (kind == OPSILA_KIND_RESOLVED) {
-        ++st.v[OPSILA_STAT_RESOLVED];
-        uint misses_before = st.v[OPSILA_STAT_MISS];
-        shade(fp, &rt, tris, materials, lights, org, d, t_best, hit, w, ids.x, level, out_base, o_org,
-              o_dir, o_wgt, o_ids, o_dest, accum, &st);
-        child_misses = st.v[OPSILA_STAT_MISS] - misses_before;
-        st.v[OPSILA_STAT_MISS] = misses_before;
-      }
+    if (OPSILA_META_KIND(DESC_META(ds)) != OPSILA_KIND_SHADOW && st.v[OPSILA_STAT_RESOLVED] != 0u) {
+      child_misses = st.v[OPSILA_STAT_MISS];
+      st.v[OPSILA_STAT_MISS] = 0u;
     }
     for (int s = 0; s < OPSILA_STAT_COUNT; ++s)
       if (st.v[s] != 0u) atomic_add(&lstats[level * OPSILA_STAT_COUNT + s], st.v[s]);
     if (child_misses != 0u && level + 1 < OPSILA_MAX_DEPTH)
       atomic_add(&lstats[(level + 1) * OPSILA_STAT_COUNT + OPSILA_STAT_MISS], child_misses);
   }
+  out_item_count[item] = out.count;
+  /* Statistics and traffic leave the work-group once, not per descriptor. */
   barrier(CLK_LOCAL_MEM_FENCE);
-  for (int i = lid; i < fp.max_depth * OPSILA_STAT_COUNT; i += lsz) {
+  for (int i = lid; i < depth * OPSILA_STAT_COUNT; i += lsz) {
     uint v = lstats[i];
-    if (v != 0u) count_stat(stats, fp.num_pes, i / OPSILA_STAT_COUNT, pe, i % OPSILA_STAT_COUNT, v);
+    if (v != 0u) count_stat(stats, P, i / OPSILA_STAT_COUNT, pe, i % OPSILA_STAT_COUNT, v);
+  }
+  for (int i = lid; i < ntraffic; i += lsz) {
+    uint v = ltraffic[i];
+    if (v != 0u) atomic_add(&traffic[((long)(i / P) * P + pe) * P + i % P], v);
   }
 }

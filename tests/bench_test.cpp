@@ -14,6 +14,7 @@
 #include "machine/host_scatter.h"
 #include "reference/reference.h"
 #include "machine/renderer.h"
+#include "exchange_check.h"
 #include "test_device.h"
 #include "core/scene.h"
 #include "test_scenes.h"
@@ -85,102 +86,66 @@ TEST(Bench, RayCountsAgreeAcrossImplementations) {
 }
 
 // Host scatter and ScatterPass on the same input, with holes and overflow:
-// every field of every bank slot and of the next queue is the same.
-void expect_same_placement(std::size_t length, int pes, int n, double holes, unsigned seed) {
+// the same plan, and every lane of every bank slot and waiting entry.
+void expect_same_placement(std::size_t length, int pes, int slots, int cap, int group_size, double holes,
+                           unsigned seed) {
   ClRuntime& rt = runtime();
   const HostDescriptors src = random_descriptors(length, pes, holes, seed);
-  HostDescriptors hb, hn;
-  hb.resize(std::size_t(pes) * n);
-  hn.resize(length);
+  const std::size_t bank_slots = std::size_t(slots) + std::size_t(pes) * group_size;
+  HostDescriptors hb(bank_slots), hn(length);
   std::vector<std::size_t> scratch;
-  const HostScatterResult hr = host_scatter(src, pes, n, hb, hn, scratch);
+  const HostScatterResult hr = host_scatter(src, pes, slots, cap, group_size, hb, hn, scratch);
 
-  DescriptorSet queue, banks, next, outputs;
-  queue.allocate(rt, length, "test queue");
-  banks.allocate(rt, std::size_t(pes) * n, "test banks");
+  DescriptorSet pool, banks, next;
+  pool.allocate(rt, length, "test pool");
+  banks.allocate(rt, bank_slots, "test banks");
   next.allocate(rt, length, "test next");
-  outputs.allocate(rt, 1, "test outputs");
-  auto put = [&](const cl::Buffer& b, const auto& v) {
-    cl_check(rt.queue().enqueueWriteBuffer(b, CL_TRUE, 0, v.size() * sizeof(v[0]), v.data()), "write");
-  };
-  put(queue.org, src.org);
-  put(queue.dir, src.dir);
-  put(queue.wgt, src.wgt);
-  put(queue.ids, src.ids);
-  put(queue.dest, src.dest);
-  cl::Buffer processed = upload(rt, std::vector<cl_int>(pes, 0), "processed");
+  pool.write(rt, src);
   std::vector<LaunchRecord> records;
   Launcher launch(rt, records);
   ScatterPass scatter(rt, pes);
   ScatterPass::Args a;
-  a.queue_len = static_cast<int>(length);
-  a.n = n;
-  a.processed = &processed;
-  a.outputs = &outputs;
-  a.queue = &queue;
+  a.pool_len = static_cast<int>(length);
+  a.pool = &pool;
+  a.slots = slots;
+  a.cap = cap;
+  a.group_size = group_size;
   a.banks = &banks;
-  a.next_queue = &next;
-  scatter.enqueue(launch, a, 0);
-  cl_check(rt.queue().finish(), "finish");
+  a.next_pool = &next;
+  scatter.plan(launch, a, 0);
+  scatter.move(launch, a, 0);
+  launch.check(rt.queue().finish(), "finish");
+  launch.harvest();
 
-  std::vector<cl_int> bank_count(pes), counts(2);
+  std::vector<cl_int> bank_begin(pes), bank_count(pes), counts(3);
+  cl_check(rt.queue().enqueueReadBuffer(scatter.bank_begin, CL_TRUE, 0, pes * sizeof(cl_int), bank_begin.data()),
+           "read");
   cl_check(rt.queue().enqueueReadBuffer(scatter.bank_count, CL_TRUE, 0, pes * sizeof(cl_int), bank_count.data()),
            "read");
-  cl_check(rt.queue().enqueueReadBuffer(scatter.counts, CL_TRUE, 0, 2 * sizeof(cl_int), counts.data()), "read");
+  cl_check(rt.queue().enqueueReadBuffer(scatter.counts, CL_TRUE, 0, 3 * sizeof(cl_int), counts.data()), "read");
+  ASSERT_EQ(bank_begin, hr.bank_begin);
   ASSERT_EQ(bank_count, hr.bank_count);
   ASSERT_EQ(std::size_t(counts[0]), hr.waiting);
   ASSERT_EQ(std::size_t(counts[1]), hr.placed);
+  ASSERT_EQ(counts[2], hr.groups);
   ASSERT_GT(hr.placed, 0u);
-
-  auto get4 = [&](const cl::Buffer& b, std::size_t count) {
-    std::vector<cl_float4> v(count);
-    if (count) cl_check(rt.queue().enqueueReadBuffer(b, CL_TRUE, 0, count * sizeof(cl_float4), v.data()), "read");
-    return v;
-  };
-  auto geti4 = [&](const cl::Buffer& b, std::size_t count) {
-    std::vector<cl_int4> v(count);
-    if (count) cl_check(rt.queue().enqueueReadBuffer(b, CL_TRUE, 0, count * sizeof(cl_int4), v.data()), "read");
-    return v;
-  };
-  auto geti = [&](const cl::Buffer& b, std::size_t count) {
-    std::vector<cl_int> v(count);
-    if (count) cl_check(rt.queue().enqueueReadBuffer(b, CL_TRUE, 0, count * sizeof(cl_int), v.data()), "read");
-    return v;
-  };
-  auto same4 = [](const cl_float4& x, const cl_float4& y) {
-    return x.s[0] == y.s[0] && x.s[1] == y.s[1] && x.s[2] == y.s[2] && x.s[3] == y.s[3];
-  };
-  auto samei4 = [](const cl_int4& x, const cl_int4& y) {
-    return x.s[0] == y.s[0] && x.s[1] == y.s[1] && x.s[2] == y.s[2] && x.s[3] == y.s[3];
-  };
-  const std::size_t slots = std::size_t(pes) * n;
-  const auto b_org = get4(banks.org, slots), b_dir = get4(banks.dir, slots), b_wgt = get4(banks.wgt, slots);
-  const auto b_ids = geti4(banks.ids, slots);
-  const auto b_dest = geti(banks.dest, slots);
+  const HostDescriptors db = banks.read(rt, bank_slots), dn = next.read(rt, hr.waiting);
   for (int q = 0; q < pes; ++q)
     for (int r = 0; r < bank_count[q]; ++r) {
-      const std::size_t at = std::size_t(q) * n + r;
-      ASSERT_TRUE(samei4(b_ids[at], hb.ids[at])) << "bank " << q << " slot " << r;
-      ASSERT_TRUE(same4(b_org[at], hb.org[at]) && same4(b_dir[at], hb.dir[at]) && same4(b_wgt[at], hb.wgt[at]));
-      ASSERT_EQ(b_dest[at], q);
-      ASSERT_EQ(hb.dest[at], q);
+      const std::size_t at = std::size_t(bank_begin[q]) + r;
+      ASSERT_TRUE(test::same_record(db[at], hb[at])) << "bank " << q << " slot " << r;
+      ASSERT_EQ(desc_dest(db[at]), q);
     }
-  const auto n_ids = geti4(next.ids, hr.waiting);
-  const auto n_org = get4(next.org, hr.waiting);
-  const auto n_dest = geti(next.dest, hr.waiting);
-  for (std::size_t k = 0; k < hr.waiting; ++k) {
-    ASSERT_TRUE(samei4(n_ids[k], hn.ids[k])) << "queue slot " << k;
-    ASSERT_TRUE(same4(n_org[k], hn.org[k]));
-    ASSERT_EQ(n_dest[k], hn.dest[k]);
-  }
+  for (std::size_t k = 0; k < hr.waiting; ++k) ASSERT_TRUE(test::same_record(dn[k], hn[k])) << "pool slot " << k;
 }
 
 TEST(Bench, HostScatterPlacesLikeTheScatterKernels) {
-  expect_same_placement(16, 16, 2, 0.0, 1);
-  expect_same_placement(5000, 16, 200, 0.3, 2);    // overflow: ~235 per PE, 200 slots
-  expect_same_placement(32767, 16, 4096, 0.1, 3);  // no overflow
-  expect_same_placement(3000, 1, 100, 0.5, 4);
-  expect_same_placement(4000, 64, 1, 0.2, 5);
+  expect_same_placement(16, 16, 32, 0, 1, 0.0, 1);
+  expect_same_placement(5000, 16, 3200, 0, 16, 0.3, 2);     // overflow: ~3500 valid, 3200 slots
+  expect_same_placement(32767, 16, 65536, 0, 64, 0.1, 3);   // no overflow
+  expect_same_placement(3000, 1, 100, 0, 64, 0.5, 4);
+  expect_same_placement(4000, 64, 64, 0, 1, 0.2, 5);
+  expect_same_placement(4000, 16, 4000, 32, 16, 0.2, 6);    // two work-groups per PE at most
 }
 
 TEST(Bench, ScatterPointIsSane) {

@@ -24,6 +24,7 @@
 #include "core/image_io.h"
 #include "opsila_shared.h"
 #include "machine/renderer.h"
+#include "exchange_check.h"
 #include "test_scenes.h"
 #include "test_device.h"
 #include "test_util.h"
@@ -215,8 +216,8 @@ TEST(DeviceChecks, EachMissingCapabilityIsNamed) {
   embedded.profile = "EMBEDDED_PROFILE";
   embedded.extensions = "cl_khr_byte_addressable_store cles_khr_int64";
   EXPECT_TRUE(missing_capabilities(embedded).empty());
-  // The SPMD kernel's per-level stats live in local memory.
-  EXPECT_EQ(required_local_mem(), std::size_t(OPSILA_MAX_DEPTH) * OPSILA_STAT_COUNT * 4);
+  // The SPMD kernel's per-level stats and traffic live in local memory.
+  EXPECT_EQ(required_local_mem(), std::size_t(OPSILA_MAX_DEPTH) * (OPSILA_STAT_COUNT + OPSILA_TRAFFIC_MAX_PES) * 4);
   DeviceCapabilities all_wrong = capable();
   all_wrong.version = "OpenCL 1.0";
   all_wrong.compiler_available = false;
@@ -406,19 +407,27 @@ TEST(DeviceMemory, EnvironmentLimitEndToEnd) {
 // scatter_plan with tiny buffers: a kernel to launch, and its counts to read.
 struct PlanKernel {
   cl::Kernel kernel;
-  cl::Buffer totals, bank_count, overflow_base, counts;
+  cl::Buffer totals, bank_begin, bank_count, overflow_base, group_pe, group_first, counts;
   explicit PlanKernel(ClRuntime& rt) {
     kernel = rt.kernel("scatter_plan");
     totals = upload(rt, std::vector<cl_int>{3}, "totals");
+    bank_begin = upload(rt, std::vector<cl_int>{0}, "bank begin");
     bank_count = upload(rt, std::vector<cl_int>{0}, "bank count");
     overflow_base = upload(rt, std::vector<cl_int>{0}, "overflow base");
-    counts = upload(rt, std::vector<cl_int>{-1, -1}, "counts");
+    group_pe = upload(rt, std::vector<cl_int>{0, 0}, "group PEs");
+    group_first = upload(rt, std::vector<cl_int>{0, 0}, "group slots");
+    counts = upload(rt, std::vector<cl_int>{-1, -1, -1}, "counts");
     int a = 0;
     kernel.setArg(a++, 1);  // PEs
-    kernel.setArg(a++, 2);  // n
+    kernel.setArg(a++, 2);  // slots
+    kernel.setArg(a++, 2);  // cap
+    kernel.setArg(a++, 1);  // work-group size
     kernel.setArg(a++, totals);
+    kernel.setArg(a++, bank_begin);
     kernel.setArg(a++, bank_count);
     kernel.setArg(a++, overflow_base);
+    kernel.setArg(a++, group_pe);
+    kernel.setArg(a++, group_first);
     kernel.setArg(a++, counts);
   }
 };
@@ -429,7 +438,7 @@ TEST(LaunchFaults, CleanLaunchesPassAndErrorsNameTheLastKernel) {
   std::vector<LaunchRecord> records;
   Launcher launch(rt, records);
   launch.run(plan.kernel, "scatter_plan", 1, 1, 4);
-  cl_int counts[2] = {0, 0};
+  cl_int counts[3] = {0, 0, 0};
   EXPECT_NO_THROW(
       launch.check(rt.queue().enqueueReadBuffer(plan.counts, CL_TRUE, 0, sizeof counts, counts), "read"));
   EXPECT_EQ(counts[0], 1);  // 3 entries for one PE of 2 slots: one waits
@@ -474,7 +483,7 @@ TEST(LaunchFaults, AKernelThatFailsOnTheDeviceIsNamed) {
   const std::vector<cl::Event> wait = {fault};
   launch.run(plan.kernel, "scatter_plan", 1, 1, 7, &wait);
   cl_check(fault.setStatus(CL_OUT_OF_RESOURCES), "clSetUserEventStatus");
-  cl_int counts[2] = {0, 0};
+  cl_int counts[3] = {0, 0, 0};
   const cl_int read = rt.queue().enqueueReadBuffer(plan.counts, CL_TRUE, 0, sizeof counts, counts);
   if (read == CL_SUCCESS && counts[0] == 1 && counts[1] == 2)
     GTEST_SKIP() << rt.device().device_name << " ran a command whose wait list failed";
@@ -536,124 +545,26 @@ TEST(Determinism, ItemBufferTilesDoNotChangeTheImage) {
 
 // -------------------------------------------- the scatter on its own (small)
 
-// Source = SPMD output area (P*n*S fixed slots: used ones with NIL holes,
-// unused ones holding stale destinations that must be ignored) followed by
-// a waiting queue. Checks Vd(I'(i)) = Vs(i): every valid entry arrives once,
-// in source order within its destination PE; the first n fill the bank, the
-// rest wait in the next queue, grouped by PE. Small enough for Oclgrind.
-void small_scatter(int pes, int n, int S, int queue_len, unsigned seed) {
+// The exchange on its own, small enough for Oclgrind: a pool with holes,
+// SPMD output places (used and stale), banks that overflow
+// (tests/exchange_check.h checks every lane of every record).
+void small_scatter(int pes, int slots, int S, int pool_len, unsigned seed) {
   ClRuntime rt(test_device(), plain_options());
-  std::mt19937 rng(seed);
-  const int out_len = pes * n * S, total = out_len + queue_len;
-  std::vector<cl_int> processed(pes);
-  for (int& p : processed) p = static_cast<int>(rng() % (n + 1));
-  std::vector<cl_int> dest(total);
-  std::vector<bool> valid(total, false);
-  for (int k = 0; k < total; ++k) {
-    const bool used = k >= out_len || (k / S) % n < processed[(k / S) / n];
-    const bool hole = rng() % 4 == 0;
-    dest[k] = (used && hole) ? -1 : static_cast<int>(rng() % pes);
-    valid[k] = used && !hole;
-  }
-  auto fill = [&](int begin, int count, DescriptorSet& set) {
-    std::vector<cl_float4> org(count), dir(count), wgt(count);
-    std::vector<cl_int4> ids(count);
-    std::vector<cl_int> d(count);
-    for (int i = 0; i < count; ++i) {
-      const int k = begin + i;
-      org[i] = {{float(k), 1.5f * k, -2.0f, 0.25f * k}};
-      dir[i] = {{0.5f, float(-k), 3.0f, 1.0f}};
-      wgt[i] = {{0.125f * k, 0.5f, 0.75f, 0.0f}};
-      ids[i] = {{k, OPSILA_META(OPSILA_KIND_TRACE, k % 5), k % 7 - 1, 0}};
-      d[i] = dest[k];
-    }
-    for (auto [buffer, bytes, data] : {std::tuple{&set.org, sizeof(cl_float4), (const void*)org.data()},
-                                       std::tuple{&set.dir, sizeof(cl_float4), (const void*)dir.data()},
-                                       std::tuple{&set.wgt, sizeof(cl_float4), (const void*)wgt.data()},
-                                       std::tuple{&set.ids, sizeof(cl_int4), (const void*)ids.data()},
-                                       std::tuple{&set.dest, sizeof(cl_int), (const void*)d.data()}})
-      cl_check(rt.queue().enqueueWriteBuffer(*buffer, CL_TRUE, 0, count * bytes, data), "write");
-  };
-  DescriptorSet outputs, queue, banks, next;
-  outputs.allocate(rt, out_len, "outputs");
-  queue.allocate(rt, queue_len, "queue");
-  banks.allocate(rt, std::size_t(pes) * n, "banks");
-  next.allocate(rt, total, "next queue");
-  fill(0, out_len, outputs);
-  fill(out_len, queue_len, queue);
-  cl::Buffer processed_buffer = upload(rt, processed, "processed");
-
-  std::vector<LaunchRecord> records;
-  Launcher launch(rt, records);
-  ScatterPass scatter(rt, pes);
-  ScatterPass::Args a;
-  a.out_len = out_len;
-  a.queue_len = queue_len;
-  a.n = n;
-  a.spawn_slots = S;
-  a.processed = &processed_buffer;
-  a.outputs = &outputs;
-  a.queue = &queue;
-  a.banks = &banks;
-  a.next_queue = &next;
-  scatter.enqueue(launch, a, 0);
-  cl_int counts[2];
-  launch.check(rt.queue().enqueueReadBuffer(scatter.counts, CL_TRUE, 0, sizeof counts, counts), "read counts");
-  launch.harvest();
-
-  std::vector<std::vector<int>> expected(pes);
-  for (int k = 0; k < total; ++k)
-    if (valid[k]) expected[dest[k]].push_back(k);
-  auto read_ids = [&](const cl::Buffer& b, int count) {
-    std::vector<cl_int4> v(std::max(count, 1));
-    if (count > 0) cl_check(rt.queue().enqueueReadBuffer(b, CL_TRUE, 0, count * sizeof(cl_int4), v.data()), "read");
-    return v;
-  };
-  auto read_f4 = [&](const cl::Buffer& b, int count) {
-    std::vector<cl_float4> v(std::max(count, 1));
-    if (count > 0) cl_check(rt.queue().enqueueReadBuffer(b, CL_TRUE, 0, count * sizeof(cl_float4), v.data()), "read");
-    return v;
-  };
-  std::vector<cl_int> bank_count(pes);
-  cl_check(rt.queue().enqueueReadBuffer(scatter.bank_count, CL_TRUE, 0, pes * sizeof(cl_int), bank_count.data()),
-           "read");
-  const auto bank_ids = read_ids(banks.ids, pes * n);
-  const auto bank_wgt = read_f4(banks.wgt, pes * n);
-  const auto next_ids = read_ids(next.ids, counts[0]);
-  const auto next_dir = read_f4(next.dir, counts[0]);
-
-  int placed = 0, waiting = 0;
-  std::vector<int> seen(total, 0);
-  for (int q = 0; q < pes; ++q) {
-    const int fits = std::min<int>(n, expected[q].size());
-    ASSERT_EQ(bank_count[q], fits) << "PE " << q;
-    for (int r = 0; r < fits; ++r) {
-      const int k = bank_ids[q * n + r].s[0];
-      ASSERT_EQ(k, expected[q][r]) << "bank " << q << " slot " << r;
-      EXPECT_EQ(bank_ids[q * n + r].s[1], OPSILA_META(OPSILA_KIND_TRACE, k % 5));
-      EXPECT_EQ(bank_wgt[q * n + r].s[0], 0.125f * k);
-      ++seen[k];
-      ++placed;
-    }
-  }
-  for (int q = 0, at = 0; q < pes; ++q)
-    for (std::size_t r = n; r < expected[q].size(); ++r, ++at) {
-      ASSERT_LT(at, counts[0]);
-      const int k = next_ids[at].s[0];
-      ASSERT_EQ(k, expected[q][r]) << "waiting entry " << at;
-      EXPECT_EQ(next_dir[at].s[1], float(-k));
-      ++seen[k];
-      ++waiting;
-    }
-  EXPECT_EQ(counts[0], waiting);
-  EXPECT_EQ(counts[1], placed);
-  for (int k = 0; k < total; ++k) ASSERT_EQ(seen[k], valid[k] ? 1 : 0) << "entry " << k;
+  test::ExchangeCase c;
+  c.pes = pes;
+  c.slots = slots;
+  c.spawn_slots = S;
+  c.pool_len = pool_len;
+  c.out_groups = 2;
+  c.group_size = 2;
+  c.seed = seed;
+  test::check_exchange(rt, c);
 }
 
 TEST(SmallScatter, OutputSlotsAndQueueWithOverflow) {
-  small_scatter(3, 2, 3, 7, 11);   // most entries wait
-  small_scatter(4, 6, 4, 5, 12);   // most entries fit
-  small_scatter(1, 1, 2, 3, 13);   // one PE, one slot
+  small_scatter(3, 2, 3, 7, 11);    // most entries wait
+  small_scatter(4, 24, 4, 5, 12);   // most entries fit
+  small_scatter(1, 1, 2, 3, 13);    // one PE, one slot
 }
 
 }  // namespace

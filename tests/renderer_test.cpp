@@ -101,6 +101,30 @@ TEST(Renderer, NoRayLostWithTinyBanks) {
   }
 }
 
+// How many work-groups serve a bank, how large the banks are, and how the
+// slots are shared out change the rounds, never the bytes of the image.
+TEST(Renderer, ByteIdenticalAcrossLaunchGeometry) {
+  Scene s = test::mirror_glass_scene(48);
+  const RenderResult base = render_with(s, 16);
+  struct Geometry {
+    int pes, capacity, groups_per_pe;
+  };
+  for (const Geometry g : {Geometry{16, 0, 1}, Geometry{16, 0, 2}, Geometry{16, 3, 0}, Geometry{16, 1, 1},
+                           Geometry{16, 40, 3}, Geometry{4, 0, 0}, Geometry{1, 0, 0}, Geometry{64, 2, 1}}) {
+    RenderSettings rs;
+    rs.num_pes = g.pes;
+    rs.bank_capacity = g.capacity;
+    rs.work_groups_per_pe = g.groups_per_pe;
+    const RenderResult r = render(s, rs, runtime());
+    SCOPED_TRACE(std::to_string(g.pes) + " PEs, capacity " + std::to_string(g.capacity) + ", " +
+                 std::to_string(g.groups_per_pe) + " work-groups per PE");
+    ASSERT_EQ(r.rgb.size(), base.rgb.size());
+    EXPECT_EQ(0, std::memcmp(r.rgb.data(), base.rgb.data(), r.rgb.size() * sizeof(float)));
+    EXPECT_EQ(r.item_buffer, base.item_buffer);
+    expect_balanced(r.stats);
+  }
+}
+
 TEST(Renderer, BitIdenticalRunToRun) {
   Scene s = test::mirror_glass_scene(80);
   RenderResult a = render_with(s, 16);

@@ -80,6 +80,7 @@ int run_bench(const std::vector<std::string>& args) {
   RenderSettings settings;
   settings.num_pes = o.pes.value_or(settings.num_pes);
   settings.bank_capacity = o.bank_capacity;
+  settings.work_groups_per_pe = o.work_groups_per_pe;
   if (o.routing) settings.routing = *o.routing;
 
   BenchReport report = start_report(o, scene, settings.num_pes);

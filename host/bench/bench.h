@@ -28,10 +28,10 @@ struct ScatterPoint {
   std::size_t length = 0;  // source entries (the vector length)
   std::size_t moved = 0;   // valid entries (placed + waiting)
   std::size_t waiting = 0; // entries that found no bank slot (next queue)
-  int pes = 0, n = 0;      // PEs and bank capacity used
+  int pes = 0, n = 0;      // PEs and bank slots per PE (P * n slots in all)
   int repeats = 0;
   double host_seconds = 0;         // median of host_scatter
-  double kernel_seconds = 0;       // median of the sum of the 4 scatter kernels
+  double kernel_seconds = 0;       // median of the sum of the scatter kernels
   double count_seconds = 0, scan_seconds = 0, plan_seconds = 0, move_seconds = 0;  // of that median run
   double copy_kernel_seconds = 0;  // median of copy_float4 over moved * kBytes bytes
   double copy_buffer_seconds = 0;  // median of clEnqueueCopyBuffer, same bytes

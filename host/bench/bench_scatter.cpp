@@ -35,10 +35,11 @@ ScatterPoint measure_scatter(ClRuntime& rt, std::size_t length, int pes, int war
   pt.length = length;
   pt.pes = pes;
   pt.repeats = std::max(1, repeats);
-  // Banks roomy enough that uniform destinations almost never overflow.
+  // Bank slots roomy enough that uniform destinations almost never overflow.
   const std::size_t per_pe = (length + pes - 1) / pes;
   pt.n = static_cast<int>(per_pe + per_pe / 10 + 16);
-  const std::size_t bank_slots = std::size_t(pes) * pt.n;
+  const int slots = pes * pt.n, group_size = 16;  // the SPMD work-group size on a CPU
+  const std::size_t bank_slots = std::size_t(slots) + std::size_t(pes) * group_size;
 
   const HostDescriptors src = random_descriptors(length, pes, hole_rate, 1987u + static_cast<unsigned>(length));
   cl::CommandQueue& q = rt.queue();
@@ -46,14 +47,12 @@ ScatterPoint measure_scatter(ClRuntime& rt, std::size_t length, int pes, int war
   // Host: the same counting sort, plainly (one thread, steady_clock).
   HostScatterResult host_result;
   {
-    HostDescriptors banks, next;
-    banks.resize(bank_slots);
-    next.resize(length);
+    HostDescriptors banks(bank_slots), next(length);
     std::vector<std::size_t> scratch;
     std::vector<double> times;
     for (int r = 0; r < warmup + pt.repeats; ++r) {
       auto t0 = std::chrono::steady_clock::now();
-      host_result = host_scatter(src, pes, pt.n, banks, next, scratch);
+      host_result = host_scatter(src, pes, slots, 0, group_size, banks, next, scratch);
       double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
       if (r >= warmup) times.push_back(s);
     }
@@ -62,36 +61,28 @@ ScatterPoint measure_scatter(ClRuntime& rt, std::size_t length, int pes, int war
     pt.waiting = host_result.waiting;
   }
 
-  // Device: the renderer's ScatterPass on the same input (queue segment only).
+  // Device: the renderer's ScatterPass on the same input (pool only).
   {
-    DescriptorSet queue, banks, next, outputs;
-    queue.allocate(rt, length, "scatter bench source");
+    DescriptorSet pool, banks, next;
+    pool.allocate(rt, length, "scatter bench source");
     banks.allocate(rt, bank_slots, "scatter bench banks");
-    next.allocate(rt, length, "scatter bench next queue");
-    outputs.allocate(rt, 1, "scatter bench outputs");
-    write_buffer(rt, queue.org, src.org, "clEnqueueWriteBuffer(scatter bench org)");
-    write_buffer(rt, queue.dir, src.dir, "clEnqueueWriteBuffer(scatter bench dir)");
-    write_buffer(rt, queue.wgt, src.wgt, "clEnqueueWriteBuffer(scatter bench wgt)");
-    write_buffer(rt, queue.ids, src.ids, "clEnqueueWriteBuffer(scatter bench ids)");
-    write_buffer(rt, queue.dest, src.dest, "clEnqueueWriteBuffer(scatter bench dest)");
-    cl::Buffer processed = upload(rt, std::vector<cl_int>(pes, 0), "processed counts");
+    next.allocate(rt, length, "scatter bench next pool");
+    pool.write(rt, src);
     ScatterPass scatter(rt, pes);
     ScatterPass::Args a;
-    a.out_len = 0;
-    a.queue_len = static_cast<int>(length);
-    a.n = pt.n;
-    a.spawn_slots = 1;
-    a.processed = &processed;
-    a.outputs = &outputs;
-    a.queue = &queue;
+    a.pool_len = static_cast<int>(length);
+    a.pool = &pool;
+    a.slots = slots;
+    a.group_size = group_size;
     a.banks = &banks;
-    a.next_queue = &next;
+    a.next_pool = &next;
     std::vector<double> totals;
     std::vector<std::vector<LaunchRecord>> runs;
     for (int r = 0; r < warmup + pt.repeats; ++r) {
       std::vector<LaunchRecord> records;
       Launcher launch(rt, records);
-      scatter.enqueue(launch, a, 0);
+      scatter.plan(launch, a, 0);
+      scatter.move(launch, a, 0);
       launch.check(q.finish(), "clFinish(scatter bench)");
       launch.harvest();
       if (r < warmup) continue;
@@ -111,13 +102,13 @@ ScatterPoint measure_scatter(ClRuntime& rt, std::size_t length, int pes, int war
       if (rec.name == "scatter_plan") pt.plan_seconds += rec.seconds;
       if (rec.name == "scatter_move") pt.move_seconds += rec.seconds;
     }
-    cl_int counts[2] = {0, 0};
+    cl_int counts[3] = {0, 0, 0};
     std::vector<cl_int> bank_count(pes);
     cl_check(q.enqueueReadBuffer(scatter.counts, CL_TRUE, 0, sizeof(counts), counts), "clEnqueueReadBuffer(counts)");
     cl_check(q.enqueueReadBuffer(scatter.bank_count, CL_TRUE, 0, pes * sizeof(cl_int), bank_count.data()),
              "clEnqueueReadBuffer(bank counts)");
     pt.verified = bank_count == host_result.bank_count && std::size_t(counts[0]) == host_result.waiting &&
-                  std::size_t(counts[1]) == host_result.placed;
+                  std::size_t(counts[1]) == host_result.placed && counts[2] == host_result.groups;
   }
 
   // The physical ceiling: a plain copy of the same bytes, as a kernel and

@@ -103,7 +103,7 @@ std::string bench_usage() {
          "\n"
          "View flags, as for 'opsila render': --size WxH, --eye, --look-at, --up, --fov,\n"
          "--light, --ambient, --background, --depth, --pes, --device, --bank-capacity,\n"
-         "--routing boxes|spheres.\n";
+         "--routing boxes|spheres, --work-groups-per-pe.\n";
 }
 
 }  // namespace opsila

@@ -169,7 +169,7 @@ const std::vector<FlagSpec>& view_flags() {
       {"--ambient", "--ambient", true}, {"--background", "--background", true},
       {"--depth", "--depth", true},   {"--pes", "--pes", true},
       {"--device", "--device", true}, {"--bank-capacity", "--bank-capacity", true},
-      {"--routing", "--routing", true},
+      {"--routing", "--routing", true}, {"--work-groups-per-pe", "--work-groups-per-pe", true},
   };
   return flags;
 }
@@ -214,6 +214,8 @@ bool parse_view_flag(const std::string& name, const std::string& value, ViewOpti
     o.pes = int_in_range(name, value, 1, OPSILA_MAX_PES);
   } else if (name == "--bank-capacity") {
     o.bank_capacity = int_in_range(name, value, 0, kMaxBankCapacity);
+  } else if (name == "--work-groups-per-pe") {
+    o.work_groups_per_pe = int_in_range(name, value, 0, kMaxBankCapacity);
   } else if (name == "--routing") {
     if (value == "boxes")
       o.routing = OPSILA_ROUTING_BOXES;

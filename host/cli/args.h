@@ -76,6 +76,7 @@ struct ViewOptions {
   std::optional<float> fov;
   std::vector<LightDesc> lights;  // --light, in order; replace the scene's lights
   int bank_capacity = 0;          // 0 = automatic
+  int work_groups_per_pe = 0;     // 0 = as many as each bank's descriptors need
   std::optional<int> routing;     // --routing: OPSILA_ROUTING_*
 };
 

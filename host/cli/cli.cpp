@@ -78,7 +78,10 @@ std::string render_usage() {
          "  --background R,G,B     colour of rays that hit nothing\n"
          "  --depth N              ray tree levels, 1..31 (1 = local shading only)\n"
          "  --pes N                processing elements (OpenCL work-groups), 1..1024\n"
-         "  --bank-capacity N      descriptor slots per bank (0 = from the device's memory)\n"
+         "  --bank-capacity N      descriptor slots per bank on average: P*N in flight, shared by demand\n"
+         "                         (0 = from the device)\n"
+         "  --work-groups-per-pe K at most K work-groups serve one PE's bank per round (0 = as many\n"
+         "                         as its descriptors need; 1 = the paper's one processor per PE)\n"
          "  --routing MODE         destination choice: boxes (cluster boxes under a BVH, default)\n"
          "                         or spheres (the paper's bounding spheres); same image\n"
          "  --device SPEC          device index, platform:device, or name substring (see 'opsila devices')\n"
@@ -167,6 +170,7 @@ int run_render(const std::vector<std::string>& args) {
   RenderSettings settings;
   if (o.pes) settings.num_pes = *o.pes;
   settings.bank_capacity = o.bank_capacity;
+  settings.work_groups_per_pe = o.work_groups_per_pe;
   if (o.routing) settings.routing = *o.routing;
 
   RenderResult result;

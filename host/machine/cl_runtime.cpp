@@ -208,7 +208,12 @@ DeviceCapabilities query_capabilities(const cl::Device& d) {
   return c;
 }
 
-std::size_t required_local_mem() { return std::size_t(OPSILA_MAX_DEPTH) * OPSILA_STAT_COUNT * sizeof(cl_uint); }
+// The SPMD phase's per-level statistics and traffic, or the exchange plan's
+// per-PE work-group bases, whichever is larger.
+std::size_t required_local_mem() {
+  return std::max(std::size_t(OPSILA_MAX_DEPTH) * (OPSILA_STAT_COUNT + OPSILA_TRAFFIC_MAX_PES) * sizeof(cl_uint),
+                  (std::size_t(OPSILA_MAX_PES) + 258) * sizeof(cl_int));
+}
 
 std::vector<std::string> missing_capabilities(const DeviceCapabilities& c) {
   std::vector<std::string> missing;

@@ -28,31 +28,32 @@ void zero_buffer(ClRuntime& rt, const cl::Buffer& b, std::size_t bytes, const ch
 
 void DescriptorSet::allocate(ClRuntime& rt, std::size_t n, const char* what) {
   n = std::max<std::size_t>(n, 1);
-  org = device_buffer(rt, n * sizeof(cl_float4), what);
-  dir = device_buffer(rt, n * sizeof(cl_float4), what);
-  wgt = device_buffer(rt, n * sizeof(cl_float4), what);
-  ids = device_buffer(rt, n * sizeof(cl_int4), what);
-  dest = device_buffer(rt, n * sizeof(cl_int), what);
+  records = device_buffer(rt, n * kBytes, what);
   capacity = n;
 }
 
 int DescriptorSet::set_args(cl::Kernel& k, int at) const {
-  cl_check(k.setArg(at++, org), "clSetKernelArg(org)");
-  cl_check(k.setArg(at++, dir), "clSetKernelArg(dir)");
-  cl_check(k.setArg(at++, wgt), "clSetKernelArg(wgt)");
-  cl_check(k.setArg(at++, ids), "clSetKernelArg(ids)");
-  cl_check(k.setArg(at++, dest), "clSetKernelArg(dest)");
+  cl_check(k.setArg(at++, records), "clSetKernelArg(descriptors)");
   return at;
 }
 
 void DescriptorSet::copy_prefix_to(ClRuntime& rt, DescriptorSet& to, std::size_t count) const {
   if (count == 0) return;
-  auto& q = rt.queue();
-  cl_check(q.enqueueCopyBuffer(org, to.org, 0, 0, count * sizeof(cl_float4)), "clEnqueueCopyBuffer(queue org)");
-  cl_check(q.enqueueCopyBuffer(dir, to.dir, 0, 0, count * sizeof(cl_float4)), "clEnqueueCopyBuffer(queue dir)");
-  cl_check(q.enqueueCopyBuffer(wgt, to.wgt, 0, 0, count * sizeof(cl_float4)), "clEnqueueCopyBuffer(queue wgt)");
-  cl_check(q.enqueueCopyBuffer(ids, to.ids, 0, 0, count * sizeof(cl_int4)), "clEnqueueCopyBuffer(queue ids)");
-  cl_check(q.enqueueCopyBuffer(dest, to.dest, 0, 0, count * sizeof(cl_int)), "clEnqueueCopyBuffer(queue dest)");
+  cl_check(rt.queue().enqueueCopyBuffer(records, to.records, 0, 0, count * kBytes), "clEnqueueCopyBuffer(descriptors)");
+}
+
+void DescriptorSet::write(ClRuntime& rt, const std::vector<HostDescriptor>& v, std::size_t at) const {
+  if (!v.empty())
+    cl_check(rt.queue().enqueueWriteBuffer(records, CL_TRUE, at * kBytes, v.size() * kBytes, v.data()),
+             "clEnqueueWriteBuffer(descriptors)");
+}
+
+std::vector<HostDescriptor> DescriptorSet::read(ClRuntime& rt, std::size_t count, std::size_t at) const {
+  std::vector<HostDescriptor> v(count);
+  if (count)
+    cl_check(rt.queue().enqueueReadBuffer(records, CL_TRUE, at * kBytes, count * kBytes, v.data()),
+             "clEnqueueReadBuffer(descriptors)");
+  return v;
 }
 
 void Launcher::run(cl::Kernel& k, const char* name, std::size_t global, std::size_t local, int round,
@@ -94,86 +95,109 @@ void Launcher::check(cl_int err, const char* what) {
 
 void Launcher::harvest() {
   check(CL_SUCCESS, "collecting kernel timings");
-  for (auto& p : pending_) {
+  // Launches still running (and, in an in-order queue, all after them) stay
+  // pending for a later harvest.
+  std::size_t done = 0;
+  for (; done < pending_.size(); ++done) {
+    const Pending& p = pending_[done];
+    cl_int status = CL_COMPLETE;
+    cl_check(p.ev.getInfo(CL_EVENT_COMMAND_EXECUTION_STATUS, &status), "clGetEventInfo(execution status)");
+    if (status != CL_COMPLETE) break;
     cl_ulong t0 = 0, t1 = 0;
     if (p.ev.getProfilingInfo(CL_PROFILING_COMMAND_START, &t0) == CL_SUCCESS &&
         p.ev.getProfilingInfo(CL_PROFILING_COMMAND_END, &t1) == CL_SUCCESS)
       sink_.push_back({p.name, p.round, (t1 - t0) * 1e-9});
   }
-  pending_.clear();
+  std::vector<Pending> running(pending_.begin() + done, pending_.end());
+  pending_ = std::move(running);
   checked_ = 0;
 }
+
+namespace {
+
+// A kernel's work-group size: what it allows, at most `cap`, a power of two.
+std::size_t queried_group_size(ClRuntime& rt, cl::Kernel& k, std::size_t cap) {
+  std::size_t allowed = 0;
+  cl_check(k.getWorkGroupInfo(rt.device().device, CL_KERNEL_WORK_GROUP_SIZE, &allowed),
+           "clGetKernelWorkGroupInfo(CL_KERNEL_WORK_GROUP_SIZE)");
+  std::size_t local = 1;
+  while (local * 2 <= std::min(allowed, cap)) local *= 2;
+  return local;
+}
+
+template <typename... T>
+void set_args(cl::Kernel& k, const char* name, const T&... values) {
+  int at = 0;
+  (cl_check(k.setArg(at++, values), name), ...);
+}
+
+}  // namespace
 
 ScatterPass::ScatterPass(ClRuntime& rt, int num_pes) : rt_(rt), num_pes_(num_pes) {
   count_ = rt.kernel("scatter_count");
   scan_ = rt.kernel("scatter_scan");
   plan_ = rt.kernel("scatter_plan");
-  move_ = rt.kernel("scatter_move");
+  move_pool_ = rt.kernel("scatter_move_pool");
+  move_out_ = rt.kernel("scatter_move_outputs");
+  wg_scan_ = queried_group_size(rt, scan_, 64);
+  wg_plan_ = queried_group_size(rt, plan_, 64);
+  bank_begin = device_buffer(rt, num_pes * sizeof(cl_int), "bank offsets");
   bank_count = device_buffer(rt, num_pes * sizeof(cl_int), "bank counts");
   pe_total = device_buffer(rt, num_pes * sizeof(cl_int), "scatter totals");
   overflow_base = device_buffer(rt, num_pes * sizeof(cl_int), "scatter overflow bases");
-  counts = device_buffer(rt, 2 * sizeof(cl_int), "scatter counts");
+  counts = device_buffer(rt, 3 * sizeof(cl_int), "scatter counts");
+  dummy_ = device_buffer(rt, sizeof(cl_int), "no SPMD outputs");
 }
 
-void ScatterPass::enqueue(Launcher& launch, const Args& a, int round) {
-  const std::size_t total = std::size_t(a.out_len) + a.queue_len;
+int ScatterPass::blocks(const Args& a) const {
+  return (a.pool_len + kBlock - 1) / kBlock + a.out_groups;
+}
+
+void ScatterPass::plan(Launcher& launch, const Args& a, int round) {
   const int P = num_pes_;
-  if (rank_cap_ < total) {
-    rank_cap_ = total + total / 2;
+  const int pool_blocks = (a.pool_len + kBlock - 1) / kBlock, nblocks = blocks(a);
+  const std::size_t sources = std::size_t(a.pool_len) + std::size_t(a.out_groups) * a.group_size * a.spawn_slots;
+  if (rank_cap_ < sources) {
+    rank_cap_ = sources + sources / 2;
     rank_ = device_buffer(rt_, rank_cap_ * sizeof(cl_int), "scatter ranks");
-    hist_ = device_buffer(rt_, ((rank_cap_ + kBlock - 1) / kBlock) * P * sizeof(cl_int), "scatter block counts");
   }
-  const std::size_t blocks = (total + kBlock - 1) / kBlock;
-  const cl::Buffer& traffic = a.traffic ? *a.traffic : counts;
-  int i = 0;
-  count_.setArg(i++, a.out_len);
-  count_.setArg(i++, a.queue_len);
-  count_.setArg(i++, a.n);
-  count_.setArg(i++, a.spawn_slots);
-  count_.setArg(i++, P);
-  count_.setArg(i++, *a.processed);
-  count_.setArg(i++, a.outputs->dest);
-  count_.setArg(i++, a.queue->dest);
-  count_.setArg(i++, hist_);
-  count_.setArg(i++, rank_);
-  launch.run(count_, "scatter_count", round_up(std::max<std::size_t>(blocks, 1), 16), 0, round);
-  i = 0;
-  scan_.setArg(i++, static_cast<int>(blocks));
-  scan_.setArg(i++, P);
-  scan_.setArg(i++, hist_);
-  scan_.setArg(i++, pe_total);
-  launch.run(scan_, "scatter_scan", round_up(P, 16), 0, round);
-  i = 0;
-  plan_.setArg(i++, P);
-  plan_.setArg(i++, a.n);
-  plan_.setArg(i++, pe_total);
-  plan_.setArg(i++, bank_count);
-  plan_.setArg(i++, overflow_base);
-  plan_.setArg(i++, counts);
-  launch.run(plan_, "scatter_plan", 1, 1, round);
-  i = 0;
-  // One move launch per source segment: outputs (entries 0..out_len), then
-  // the queue (entries out_len..total).
-  const DescriptorSet* segment[2] = {a.outputs, a.queue};
-  const int length[2] = {a.out_len, a.queue_len}, offset[2] = {0, a.out_len};
-  for (int s = 0; s < 2; ++s) {
-    if (length[s] == 0) continue;
-    i = 0;
-    move_.setArg(i++, length[s]);
-    move_.setArg(i++, offset[s]);
-    move_.setArg(i++, a.n);
-    move_.setArg(i++, a.spawn_slots);
-    move_.setArg(i++, P);
-    move_.setArg(i++, s == 0 ? 1 : 0);
-    i = segment[s]->set_args(move_, i);
-    move_.setArg(i++, rank_);
-    move_.setArg(i++, hist_);
-    move_.setArg(i++, overflow_base);
-    i = a.banks->set_args(move_, i);
-    i = a.next_queue->set_args(move_, i);
-    move_.setArg(i++, traffic);
-    move_.setArg(i++, a.traffic ? a.traffic_levels : 0);
-    launch.run(move_, "scatter_move", std::size_t(length[s]), 0, round);
+  if (hist_cap_ < std::size_t(nblocks) + 1) {
+    hist_cap_ = nblocks + nblocks / 2 + 1;
+    hist_ = device_buffer(rt_, hist_cap_ * P * sizeof(cl_int), "scatter block counts");
+  }
+  const std::size_t groups = std::size_t(a.slots) / a.group_size + P + 1;
+  if (group_cap_ < groups) {
+    group_cap_ = groups;
+    group_pe = device_buffer(rt_, groups * sizeof(cl_int), "SPMD work-group PEs");
+    group_first = device_buffer(rt_, groups * sizeof(cl_int), "SPMD work-group slots");
+  }
+  const cl::Buffer& out = a.outputs ? a.outputs->records : dummy_;
+  const cl::Buffer& out_count = a.out_item_count ? *a.out_item_count : dummy_;
+  set_args(count_, "clSetKernelArg(scatter_count)", a.pool_len, pool_blocks, nblocks, a.group_size, a.spawn_slots, P,
+           a.pool->records, out, out_count, hist_, rank_);
+  launch.run(count_, "scatter_count", std::max(nblocks, 1), 0, round);
+  set_args(scan_, "clSetKernelArg(scatter_scan)", nblocks, P, hist_, pe_total);
+  launch.run(scan_, "scatter_scan", std::size_t(P) * wg_scan_, wg_scan_, round);
+  const int cap = a.cap > 0 ? a.cap : a.slots;
+  set_args(plan_, "clSetKernelArg(scatter_plan)", P, a.slots, cap, a.group_size, pe_total, bank_begin, bank_count,
+           overflow_base, group_pe, group_first, counts);
+  launch.run(plan_, "scatter_plan", wg_plan_, wg_plan_, round);
+}
+
+void ScatterPass::move(Launcher& launch, const Args& a, int round) {
+  const int P = num_pes_;
+  const int pool_blocks = (a.pool_len + kBlock - 1) / kBlock;
+  if (a.pool_len > 0) {
+    set_args(move_pool_, "clSetKernelArg(scatter_move_pool)", a.pool_len, P, a.pool->records, rank_, hist_,
+             bank_begin, bank_count, overflow_base, a.banks->records, a.next_pool->records);
+    launch.run(move_pool_, "scatter_move", std::size_t(a.pool_len), 0, round);
+  }
+  if (a.out_groups > 0) {
+    const int items = a.out_groups * a.group_size;
+    set_args(move_out_, "clSetKernelArg(scatter_move_outputs)", items, a.group_size, a.spawn_slots, a.pool_len,
+             pool_blocks, P, a.outputs->records, *a.out_item_count, rank_, hist_, bank_begin, bank_count,
+             overflow_base, a.banks->records, a.next_pool->records);
+    launch.run(move_out_, "scatter_move", std::size_t(items), 0, round);
   }
 }
 

@@ -2,6 +2,7 @@
 // between banks. Shared by the renderer, the tests and the benchmarks.
 #pragma once
 
+#include <cstddef>
 #include <string>
 #include <vector>
 
@@ -30,15 +31,35 @@ cl::Buffer upload(ClRuntime& rt, const std::vector<T>& v, const char* what) {
   return b;
 }
 
-// One set of descriptor vectors, structure of arrays (see kernels/lib/descriptor.cl):
-// org (float4), dir (float4), wgt (float4), ids (int4), dest (int).
+// One descriptor as the host sees it, generated from the same field table as
+// the kernels' (OPSILA_DESCRIPTOR_LANES in kernels/opsila_shared.h).
+#define OPSILA_HOST_MEMBER(lane, name, type, host_type) host_type name;
+struct HostDescriptor {
+  OPSILA_DESCRIPTOR_LANES(OPSILA_HOST_MEMBER)
+};
+#undef OPSILA_HOST_MEMBER
+#define OPSILA_HOST_LANE_CHECK(lane, name, type, host_type)                   \
+  static_assert(offsetof(HostDescriptor, name) == (lane) * sizeof(cl_float4), \
+                "HostDescriptor lane " #name " follows the field table");
+OPSILA_DESCRIPTOR_LANES(OPSILA_HOST_LANE_CHECK)
+#undef OPSILA_HOST_LANE_CHECK
+static_assert(sizeof(HostDescriptor) == OPSILA_DESCRIPTOR_BYTES, "HostDescriptor is one 64-byte record");
+
+// Named slots, as kernels/lib/descriptor.cl names them.
+inline int desc_dest(const HostDescriptor& d) { return d.ids.s[3]; }  // destination PE, -1 NIL
+inline int desc_pixel(const HostDescriptor& d) { return d.ids.s[0]; }
+inline int desc_meta(const HostDescriptor& d) { return d.ids.s[1]; }
+
+// One descriptor vector on the device: `capacity` records of kBytes.
 struct DescriptorSet {
-  cl::Buffer org, dir, wgt, ids, dest;
+  cl::Buffer records;
   std::size_t capacity = 0;
-  static constexpr std::size_t kBytes = 3 * sizeof(cl_float4) + sizeof(cl_int4) + sizeof(cl_int);
+  static constexpr std::size_t kBytes = OPSILA_DESCRIPTOR_BYTES;
   void allocate(ClRuntime& rt, std::size_t n, const char* what);
   int set_args(cl::Kernel& k, int at) const;
   void copy_prefix_to(ClRuntime& rt, DescriptorSet& to, std::size_t count) const;
+  void write(ClRuntime& rt, const std::vector<HostDescriptor>& v, std::size_t at = 0) const;
+  std::vector<HostDescriptor> read(ClRuntime& rt, std::size_t count, std::size_t at = 0) const;
 };
 
 // Enqueues kernels, keeps their events, and turns them into named,
@@ -70,30 +91,42 @@ class Launcher {
   std::size_t checked_ = 0;  // pending_[0, checked_) are known to have completed
 };
 
-// The scatter Vd(I'(i)) = Vs(i) over source = [SPMD outputs | queue].
+// The exchange Vd(I'(i)) = Vs(i) over source = [waiting pool | SPMD outputs]
+// (kernels/scatter.cl). plan() ranks every entry and decides the banks of
+// the next SPMD phase; move() puts each record in place. Between the two,
+// `counts` = {waiting, placed, SPMD work-groups} may be read.
 class ScatterPass {
  public:
   static constexpr int kBlock = OPSILA_SCATTER_BLOCK;
   ScatterPass(ClRuntime& rt, int num_pes);
   struct Args {
-    int out_len = 0, queue_len = 0, n = 1, spawn_slots = 1;
-    const cl::Buffer* processed = nullptr;  // per-PE count of slots used in the output area
+    int pool_len = 0;                       // waiting records (NIL holes allowed)
+    const DescriptorSet* pool = nullptr;
+    // SPMD outputs: out_groups work-groups of group_size work-items, each with
+    // spawn_slots places and out_item_count[t] records at t * spawn_slots.
+    int out_groups = 0, group_size = 1, spawn_slots = 1;
     const DescriptorSet* outputs = nullptr;
-    const DescriptorSet* queue = nullptr;
+    const cl::Buffer* out_item_count = nullptr;
+    // Bank slots to fill (descriptors in flight), at most `cap` per PE
+    // (0: no cap); banks start at multiples of group_size.
+    int slots = 1, cap = 0;
     const DescriptorSet* banks = nullptr;
-    const DescriptorSet* next_queue = nullptr;  // overflow: entries that found no bank slot
-    const cl::Buffer* traffic = nullptr;
-    int traffic_levels = 0;
+    const DescriptorSet* next_pool = nullptr;  // what finds no bank slot
   };
-  void enqueue(Launcher& launch, const Args& a, int round);
-  cl::Buffer bank_count, pe_total, overflow_base, counts;  // counts = {waiting, placed}
+  void plan(Launcher& launch, const Args& a, int round);
+  void move(Launcher& launch, const Args& a, int round);
+  // Results of plan(): per PE, and the SPMD work-group table.
+  cl::Buffer bank_begin, bank_count, overflow_base, pe_total, counts;  // counts = {waiting, placed, groups}
+  cl::Buffer group_pe, group_first;
 
  private:
   ClRuntime& rt_;
   int num_pes_;
-  cl::Kernel count_, scan_, plan_, move_;
-  cl::Buffer rank_, hist_;
-  std::size_t rank_cap_ = 0;
+  std::size_t wg_scan_ = 1, wg_plan_ = 1;
+  cl::Kernel count_, scan_, plan_, move_pool_, move_out_;
+  cl::Buffer rank_, hist_, dummy_;
+  std::size_t rank_cap_ = 0, hist_cap_ = 0, group_cap_ = 0;
+  int blocks(const Args& a) const;
 };
 
 inline std::size_t round_up(std::size_t x, std::size_t m) { return (x + m - 1) / m * m; }

@@ -5,37 +5,36 @@
 #include <cstddef>
 #include <vector>
 
-#include "machine/cl_runtime.h"
+#include "machine/descriptors.h"
 
 namespace opsila {
 
-// Descriptor vectors on the host, laid out as DescriptorSet's buffers.
-struct HostDescriptors {
-  std::vector<cl_float4> org, dir, wgt;
-  std::vector<cl_int4> ids;
-  std::vector<cl_int> dest;
-  void resize(std::size_t n);
-  std::size_t size() const { return dest.size(); }
-};
+// Descriptor vectors on the host, laid out as DescriptorSet's records.
+using HostDescriptors = std::vector<HostDescriptor>;
 
-// Where the scatter put things: bank PE q holds bank_count[q] entries at
-// slots q*n .. q*n + bank_count[q]; the rest waits in `next` (queue order).
+// Where the exchange put things: PE q's bank holds bank_count[q] entries at
+// slots bank_begin[q] ..; the rest waits in `next`, grouped by PE.
 struct HostScatterResult {
-  std::vector<int> bank_count;
-  std::size_t waiting = 0;  // entries in the next queue
+  std::vector<int> bank_begin, bank_count;
+  std::size_t waiting = 0;  // entries in the next pool
   std::size_t placed = 0;   // entries placed in banks
+  int groups = 0;           // SPMD work-groups that serve the banks
 };
 
-// The same stable counting sort on the destination PE as the kernels: entry
-// i goes to bank dest(i), slot rank(i) (rank = earlier valid entries for the
-// same PE) when rank(i) < n, else to the next queue. Holes (dest < 0) are
-// skipped. `banks` must hold num_pes * n entries and `next` src.size()
-// entries; `scratch` holds per-PE counters and is resized as needed.
-HostScatterResult host_scatter(const HostDescriptors& src, int num_pes, int n, HostDescriptors& banks,
-                               HostDescriptors& next, std::vector<std::size_t>& scratch);
+// The exchange of kernels/scatter.cl written plainly for one processor, on a
+// source without SPMD outputs: the same stable counting sort on the
+// destination PE, and the same plan (each PE's bank is min(demand, level,
+// cap) slots, the level the largest that fits `slots`, spare slots one each
+// to the PEs still waiting in PE order; banks start at multiples of
+// group_size). Entry i goes to bank dest(i), slot rank(i) (rank = earlier
+// valid entries for the same PE) when it fits, else to the next pool. Holes
+// (dest < 0) are skipped. `banks` must hold slots + num_pes * group_size
+// entries and `next` src.size(); `scratch` is resized as needed.
+HostScatterResult host_scatter(const HostDescriptors& src, int num_pes, int slots, int cap, int group_size,
+                               HostDescriptors& banks, HostDescriptors& next, std::vector<std::size_t>& scratch);
 
 // Uniformly random destinations over `pes` PEs (a fraction `hole_rate` of
-// NIL holes), fixed seed; the payload fields carry the source index.
+// NIL holes), fixed seed; the payload lanes carry the source index.
 HostDescriptors random_descriptors(std::size_t length, int pes, double hole_rate, unsigned seed);
 
 }  // namespace opsila

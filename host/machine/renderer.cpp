@@ -18,7 +18,13 @@
 namespace opsila {
 namespace {
 
-constexpr int kTrafficMaxPes = 64;  // PE x PE traffic matrices are kept up to this many PEs
+// Largest SPMD work-group (one descriptor per work-item). On PoCL, 64
+// measured faster than 16 and 256 on hundreds (docs/BENCHMARKS.md); on a
+// GPU it is two warps or one wavefront.
+#ifndef OPSILA_SPMD_GROUP_SIZE
+#define OPSILA_SPMD_GROUP_SIZE 64
+#endif
+
 
 // "Projected object boxes": each cluster box as a conservative pixel
 // rectangle (x0, y0, x1, y1), the whole screen when a corner is behind the eye.
@@ -59,7 +65,24 @@ struct DevicePlan {
   std::uint64_t total() const { return scene + image + descriptors + other; }
 };
 
-DevicePlan plan_device_memory(const BankedScene& bs, std::size_t npix, int P, int n, int S, int depth) {
+// The descriptors of one frame: F = P * n bank slots in flight, G SPMD
+// work-groups at most, each work-item with S output places, and two pools.
+struct FlightPlan {
+  std::size_t slots = 0, group_size = 1, groups = 0, outputs = 0, inject = 0, pool = 0;
+  FlightPlan(int P, int n, std::size_t wg, int S) {
+    slots = std::size_t(P) * n;
+    group_size = wg;
+    groups = slots / wg + P + 1;
+    outputs = groups * wg * S;
+    // Primaries are injected when the pool runs short, a quarter of the
+    // slots at a time: waiting descriptors are moved again by every
+    // exchange, so fewer of them wait when the work arrives in smaller steps.
+    inject = std::max<std::size_t>(slots / 4, 1024);
+    pool = outputs + 2 * inject;
+  }
+};
+
+DevicePlan plan_device_memory(const BankedScene& bs, std::size_t npix, int P, const FlightPlan& f, int depth) {
   using u64 = std::uint64_t;
   DevicePlan plan;
   plan.scene = bs.triangles.size() * sizeof(BankTriangle) + bs.nodes.size() * sizeof(BankNode) +
@@ -68,15 +91,15 @@ DevicePlan plan_device_memory(const BankedScene& bs, std::size_t npix, int P, in
                bs.materials.size() * sizeof(Material) + std::max<std::size_t>(1, bs.lights.size()) * sizeof(Light);
   // Item buffer (pair, triangle, distance) and 64-bit fixed-point RGB sums.
   plan.image = u64(npix) * (sizeof(cl_int2) + sizeof(cl_int) + sizeof(cl_float) + OPSILA_ACCUM_WORDS * sizeof(cl_uint));
-  // Banks (P*n), SPMD output slots (P*n*S), two queues (as sized below).
-  const u64 out_len = u64(P) * n * S, inject = std::max<u64>(u64(P) * n / 4, 1024);
-  const u64 queue_cap = out_len + 2 * inject;
-  plan.descriptors = (u64(P) * n + out_len + 2 * queue_cap) * DescriptorSet::kBytes;
-  // Stats, traffic, and the scatter's ranks and block counts (1.5x the source).
-  const u64 source = (out_len + queue_cap) * 3 / 2;
+  // Banks (slots, each bank padded to a work-group), SPMD outputs, two pools.
+  plan.descriptors = (u64(f.slots) + u64(P) * f.group_size + f.outputs + 2 * u64(f.pool)) * DescriptorSet::kBytes;
+  // Stats, traffic, output counts, work-group table, and the exchange's
+  // ranks and block counts (1.5x the source).
+  const u64 source = (u64(f.outputs) + f.pool) * 3 / 2;
   plan.other = u64(OPSILA_MAX_DEPTH) * P * OPSILA_STAT_COUNT * 2 * sizeof(cl_uint) +
-               (P <= kTrafficMaxPes ? u64(depth) * P * P : 1) * sizeof(cl_uint) +
-               source * sizeof(cl_int) + (source / ScatterPass::kBlock + 1) * P * sizeof(cl_int);
+               (P <= OPSILA_TRAFFIC_MAX_PES ? u64(depth) * P * P : 1) * sizeof(cl_uint) +
+               u64(f.groups) * (f.group_size + 2) * sizeof(cl_int) + source * sizeof(cl_int) +
+               (source / ScatterPass::kBlock + f.groups + 1) * 3 / 2 * P * sizeof(cl_int);
   return plan;
 }
 
@@ -99,24 +122,27 @@ void check_kernel_limits(const Scene& scene) {
 // Everything the machine keeps between frames, and the stages of a frame.
 struct Renderer::Machine {
   ClRuntime& rt;
-  int P = 0, n = 0, S = 0, depth = 0, width = 0, height = 0, traffic_levels = 0, routing = OPSILA_ROUTING_BOXES;
-  std::size_t npix = 0, out_len = 0, inject = 0, nstats = 0, ntraffic = 0;
+  int P = 0, n = 0, S = 0, depth = 0, width = 0, height = 0, traffic_levels = 0, cap = 0;
+  int routing = OPSILA_ROUTING_BOXES;
+  std::size_t npix = 0, nstats = 0, ntraffic = 0;
   std::size_t spmd_wg = 1;
   int tile_w = 1, item_launch_pixels = 1;
+  FlightPlan flight{1, 1, 1, 1};
   FrameParams fp{};
   RenderStats prepared;  // what the prepare step knows: banks, n, work-group size
 
   cl::Kernel k_item, k_primary, k_spmd;
   std::unique_ptr<ScatterPass> scatter;
   cl::Buffer b_tris, b_nodes, b_clusters, b_route, b_pes, b_mats, b_lights, b_rects;
-  cl::Buffer b_items, b_item_tri, b_item_t, b_accum, b_stats, b_traffic, b_processed;
-  DescriptorSet banks, outputs, queue_a, queue_b;
+  cl::Buffer b_items, b_item_tri, b_item_t, b_accum, b_stats, b_traffic, b_out_count;
+  DescriptorSet banks, outputs, pool, next_pool;
 
   // Where a frame stands between rounds.
   struct Frame {
     std::size_t next_pixel = 0;  // first pixel without a primary descriptor yet
-    std::size_t queue_len = 0;   // descriptors waiting in queue_a
-    bool outputs_live = false;   // the SPMD output slots hold descriptors to scatter
+    std::size_t pool_len = 0;    // descriptors waiting in `pool`
+    int out_groups = 0;          // SPMD work-groups whose outputs the next exchange reads
+    int groups = 0;              // SPMD work-groups of this round (from the exchange's plan)
   };
 
   Machine(const Scene& scene, const RenderSettings& settings, ClRuntime& runtime);
@@ -128,9 +154,9 @@ struct Renderer::Machine {
   void clear_frame();
   void item_buffer(Launcher& launch);
   void primary_descriptors(Launcher& launch, Frame& f, int round);
-  void exchange(Launcher& launch, Frame& f, int round);
-  void spmd_phase(Launcher& launch, int round);
-  void end_round(Launcher& launch, Frame& f, int round, RenderStats& st);
+  ScatterPass::Args exchange_args(const Frame& f) const;
+  void exchange(Launcher& launch, Frame& f, int round, RenderStats& st);
+  void spmd_phase(Launcher& launch, Frame& f, int round);
   void read_image(Launcher& launch, RenderResult& result);
   void read_stats(RenderResult& result);
 };
@@ -147,16 +173,20 @@ Renderer::Machine::Machine(const Scene& scene, const RenderSettings& settings, C
   item_launch_pixels = settings.item_buffer_tile;
   routing = settings.routing;
 
+  rt.program();  // compile before anything is timed
+  k_item = rt.kernel("item_buffer");
+  k_primary = rt.kernel("build_primary");
+  k_spmd = rt.kernel("spmd_phase");
+  scatter = std::make_unique<ScatterPass>(rt, P);
+  choose_work_groups();
+  cap = settings.work_groups_per_pe > 0 ? settings.work_groups_per_pe * static_cast<int>(spmd_wg) : 0;
+
   BankedScene bs = partition_scene(scene, P);
-  S = static_cast<int>(bs.lights.size()) + 2;
+  S = OPSILA_SPAWN_SLOTS(static_cast<int>(bs.lights.size()));
   n = choose_bank_capacity(bs, settings);
-  out_len = std::size_t(P) * n * S;
-  // Primaries are injected when the queue runs short, a quarter of the banks'
-  // capacity at a time: descriptors waiting for a busy PE are moved again by
-  // every scatter, so fewer of them wait when the work arrives in smaller steps.
-  inject = std::max<std::size_t>(std::size_t(P) * n / 4, 1024);
+  flight = FlightPlan(P, n, spmd_wg, S);
   fp = frame_params(scene, bs, n);
-  traffic_levels = P <= kTrafficMaxPes ? depth : 0;
+  traffic_levels = P <= OPSILA_TRAFFIC_MAX_PES ? depth : 0;
 
   prepared.num_pes = P;
   prepared.bank_capacity = n;
@@ -165,46 +195,41 @@ Renderer::Machine::Machine(const Scene& scene, const RenderSettings& settings, C
   prepared.bank_bytes = bs.bank_bytes;
   prepared.global_bytes = bs.global_bytes;
   prepared.replicated_bytes = bs.replicated_bytes;
-
-  rt.program();  // compile before anything is timed
-  k_item = rt.kernel("item_buffer");
-  k_primary = rt.kernel("build_primary");
-  k_spmd = rt.kernel("spmd_phase");
-  scatter = std::make_unique<ScatterPass>(rt, P);
-  choose_work_groups();
   upload_scene(scene, bs);
   allocate_frame_buffers();
 }
 
-// n, the paper's bank size: enough descriptors in flight to fill the device,
-// bounded by memory. GPUs want ~2^17 in flight, CPUs far fewer. Everything
-// allocated before the first launch must fit the device's global memory
-// (device_buffer checks each buffer against the largest single allocation).
-// An automatic n halves until it fits; an explicit --bank-capacity, or an
-// image that does not fit even with n = 1, is refused.
+// n, the paper's bank size: P * n descriptors in flight fill the device
+// (2^18 on a GPU, 2^16 on a CPU), bounded by memory. Everything allocated
+// before the first launch must fit the device's global memory (device_buffer
+// checks each buffer against the largest single allocation). An automatic n
+// halves until it fits; an explicit --bank-capacity, or an image that does
+// not fit even with n = 1, is refused.
 int Renderer::Machine::choose_bank_capacity(const BankedScene& bs, const RenderSettings& settings) const {
   int bank = settings.bank_capacity;
   if (bank <= 0) {
-    std::size_t target = rt.device().is_gpu ? (1u << 17) : (1u << 16);
+    std::size_t target = rt.device().is_gpu ? (1u << 18) : (1u << 16);
     target = std::min<std::size_t>(target, std::max<std::size_t>(npix, 1024));
     bank = static_cast<int>(std::max<std::size_t>(1, target / P));
   }
   if (std::size_t(P) * bank * S > (1u << 30))
     throw InputError("--bank-capacity " + std::to_string(bank) + " is too large for " + std::to_string(P) +
                      " PEs and " + std::to_string(S - 2) + " lights");
+  auto plan = [&](int b) { return plan_device_memory(bs, npix, P, FlightPlan(P, b, spmd_wg, S), depth); };
   if (settings.bank_capacity <= 0)
-    while (bank > 1 && plan_device_memory(bs, npix, P, bank, S, depth).total() > rt.global_mem()) bank /= 2;
-  if (const DevicePlan plan = plan_device_memory(bs, npix, P, bank, S, depth); plan.total() > rt.global_mem())
-    throw ClError("the render needs " + format_size(plan.total()) + " of device memory (image " + format_size(plan.image) +
-                  ", descriptors " + format_size(plan.descriptors) + ", scene " + format_size(plan.scene) + ", other " +
-                  format_size(plan.other) + "), more than the device's global memory (" + format_size(rt.global_mem()) +
+    while (bank > 1 && plan(bank).total() > rt.global_mem()) bank /= 2;
+  if (const DevicePlan need = plan(bank); need.total() > rt.global_mem())
+    throw ClError("the render needs " + format_size(need.total()) + " of device memory (image " + format_size(need.image) +
+                  ", descriptors " + format_size(need.descriptors) + ", scene " + format_size(need.scene) + ", other " +
+                  format_size(need.other) + "), more than the device's global memory (" + format_size(rt.global_mem()) +
                   (rt.memory_limit() ? ", as lowered by OPSILA_DEVICE_MEMORY_LIMIT" : ", CL_DEVICE_GLOBAL_MEM_SIZE") +
                   "): use a smaller --size, fewer --pes or a smaller --bank-capacity");
   return bank;
 }
 
-// Work-group sizes: queried, never assumed. A PE's work-group, and the item
-// buffer's square tile of pixels (as large as the kernel allows up to 8x8).
+// Work-group sizes: queried, never assumed. The SPMD phase's (one
+// descriptor per work-item), and the item buffer's square tile of pixels (as
+// large as the kernel allows up to 8x8).
 void Renderer::Machine::choose_work_groups() {
   const cl::Device& dev = rt.device().device;
   std::size_t allowed = 0, multiple = 0;
@@ -212,9 +237,9 @@ void Renderer::Machine::choose_work_groups() {
            "clGetKernelWorkGroupInfo(spmd_phase)");
   cl_check(k_spmd.getWorkGroupInfo(dev, CL_KERNEL_PREFERRED_WORK_GROUP_SIZE_MULTIPLE, &multiple),
            "clGetKernelWorkGroupInfo(spmd_phase)");
-  spmd_wg = std::min<std::size_t>(allowed, rt.device().is_gpu ? 64 : 16);
+  spmd_wg = std::min<std::size_t>(allowed, OPSILA_SPMD_GROUP_SIZE);
   if (multiple > 0 && spmd_wg >= multiple) spmd_wg = spmd_wg / multiple * multiple;
-  spmd_wg = std::max<std::size_t>(1, std::min<std::size_t>(spmd_wg, std::size_t(n)));
+  spmd_wg = std::max<std::size_t>(1, spmd_wg);
   prepared.work_group_size = spmd_wg;
 
   cl_check(k_item.getWorkGroupInfo(dev, CL_KERNEL_WORK_GROUP_SIZE, &allowed),
@@ -237,8 +262,9 @@ void Renderer::Machine::upload_scene(const Scene& scene, const BankedScene& bs) 
   b_rects = upload(rt, cluster_rects(scene, bs), "projected cluster boxes");
 }
 
-// Item buffer, pixel sums, statistics and descriptor vectors: banks (P*n),
-// SPMD output slots (P*n*S), and the waiting queue (ping-pong).
+// Item buffer, pixel sums, statistics and descriptor vectors: banks (the
+// slots in flight, each bank padded to whole work-groups), SPMD output
+// places, and the waiting pool (ping-pong).
 void Renderer::Machine::allocate_frame_buffers() {
   b_items = device_buffer(rt, npix * sizeof(cl_int2), "item buffer");
   b_item_tri = device_buffer(rt, npix * sizeof(cl_int), "item buffer hits");
@@ -248,11 +274,11 @@ void Renderer::Machine::allocate_frame_buffers() {
   b_stats = device_buffer(rt, nstats * sizeof(cl_uint), "stats");
   ntraffic = std::max<std::size_t>(1, std::size_t(traffic_levels) * P * P);
   b_traffic = device_buffer(rt, ntraffic * sizeof(cl_uint), "traffic");
-  b_processed = device_buffer(rt, P * sizeof(cl_int), "processed counts");
-  banks.allocate(rt, std::size_t(P) * n, "descriptor banks");
-  outputs.allocate(rt, out_len, "SPMD output slots");
-  queue_a.allocate(rt, out_len + 2 * inject, "descriptor queue");
-  queue_b.allocate(rt, out_len + 2 * inject, "descriptor queue");
+  b_out_count = device_buffer(rt, flight.groups * flight.group_size * sizeof(cl_int), "SPMD output counts");
+  banks.allocate(rt, flight.slots + std::size_t(P) * flight.group_size, "descriptor banks");
+  outputs.allocate(rt, flight.outputs, "SPMD output places");
+  pool.allocate(rt, flight.pool, "descriptor pool");
+  next_pool.allocate(rt, flight.pool, "descriptor pool");
 }
 
 // Every frame starts from zero pixel sums, statistics and traffic.
@@ -260,7 +286,6 @@ void Renderer::Machine::clear_frame() {
   zero_buffer(rt, b_accum, npix * OPSILA_ACCUM_WORDS * sizeof(cl_uint), "pixel sums");
   zero_buffer(rt, b_stats, nstats * sizeof(cl_uint), "stats");
   zero_buffer(rt, b_traffic, ntraffic * sizeof(cl_uint), "traffic");
-  zero_buffer(rt, b_processed, P * sizeof(cl_int), "processed counts");
 }
 
 // SIMD phase 1, the item buffer: one work-group per square tile of pixels;
@@ -289,11 +314,11 @@ void Renderer::Machine::item_buffer(Launcher& launch) {
 }
 
 // Primary descriptors (SIMD), built from the item buffer into the waiting
-// queue when it runs short, bound for the PEs that own the items.
+// pool when it runs short, bound for the PEs that own the items.
 void Renderer::Machine::primary_descriptors(Launcher& launch, Frame& f, int round) {
-  if (f.next_pixel >= npix || f.queue_len >= inject) return;
-  std::size_t count = std::min(inject, npix - f.next_pixel);
-  if (f.queue_len + count > queue_a.capacity) count = queue_a.capacity - f.queue_len;
+  if (f.next_pixel >= npix || f.pool_len >= flight.inject) return;
+  std::size_t count = std::min(flight.inject, npix - f.next_pixel);
+  if (f.pool_len + count > pool.capacity) count = pool.capacity - f.pool_len;
   int a = 0;
   k_primary.setArg(a++, fp);
   k_primary.setArg(a++, b_pes);
@@ -301,37 +326,54 @@ void Renderer::Machine::primary_descriptors(Launcher& launch, Frame& f, int roun
   k_primary.setArg(a++, b_item_t);
   k_primary.setArg(a++, static_cast<int>(f.next_pixel));
   k_primary.setArg(a++, static_cast<int>(count));
-  k_primary.setArg(a++, static_cast<int>(f.queue_len));
-  a = queue_a.set_args(k_primary, a);
+  k_primary.setArg(a++, static_cast<int>(f.pool_len));
+  a = pool.set_args(k_primary, a);
   k_primary.setArg(a++, b_accum);
   launch.run(k_primary, "build_primary", round_up(count, 64), 0, round);
   f.next_pixel += count;
-  f.queue_len += count;
+  f.pool_len += count;
 }
 
-// SIMD exchange: scatter [SPMD outputs | queue] into the banks; what finds
-// no bank slot waits in the next queue.
-void Renderer::Machine::exchange(Launcher& launch, Frame& f, int round) {
-  const std::size_t src_out = f.outputs_live ? out_len : 0;
-  const std::size_t total = src_out + f.queue_len;
-  if (queue_b.capacity < total) queue_b.allocate(rt, total + total / 2, "descriptor queue");
+ScatterPass::Args Renderer::Machine::exchange_args(const Frame& f) const {
   ScatterPass::Args sa;
-  sa.out_len = static_cast<int>(src_out);
-  sa.queue_len = static_cast<int>(f.queue_len);
-  sa.n = n;
+  sa.pool_len = static_cast<int>(f.pool_len);
+  sa.pool = &pool;
+  sa.out_groups = f.out_groups;
+  sa.group_size = static_cast<int>(spmd_wg);
   sa.spawn_slots = S;
-  sa.processed = &b_processed;
   sa.outputs = &outputs;
-  sa.queue = &queue_a;
+  sa.out_item_count = &b_out_count;
+  sa.slots = static_cast<int>(flight.slots);
+  sa.cap = cap;
   sa.banks = &banks;
-  sa.next_queue = &queue_b;
-  sa.traffic = &b_traffic;
-  sa.traffic_levels = traffic_levels;
-  scatter->enqueue(launch, sa, round);
+  sa.next_pool = &next_pool;
+  return sa;
 }
 
-// SPMD phase: one work-group per PE, each on its own bank.
-void Renderer::Machine::spmd_phase(Launcher& launch, int round) {
+// SIMD exchange: scatter [pool | SPMD outputs] into the banks of the next
+// SPMD phase, each bank as large as its PE's demand allows; what finds no
+// slot waits in the next pool. The control unit reads three counts (how many
+// wait, how many were placed, how many work-groups serve them) while the
+// records move.
+void Renderer::Machine::exchange(Launcher& launch, Frame& f, int round, RenderStats& st) {
+  const std::size_t bound = f.pool_len + std::size_t(f.out_groups) * spmd_wg * S + flight.inject;
+  if (next_pool.capacity < bound) next_pool.allocate(rt, bound + bound / 2, "descriptor pool");
+  const ScatterPass::Args sa = exchange_args(f);
+  scatter->plan(launch, sa, round);
+  cl_int counts[3] = {0, 0, 0};
+  cl::Event read;
+  launch.check(rt.queue().enqueueReadBuffer(scatter->counts, CL_FALSE, 0, sizeof(counts), counts, nullptr, &read),
+               "clEnqueueReadBuffer(scatter counts)");
+  scatter->move(launch, sa, round);
+  launch.check(read.wait(), "clWaitForEvents(scatter counts)");
+  std::swap(pool, next_pool);
+  f.pool_len = static_cast<std::size_t>(counts[0]);
+  f.groups = counts[2];
+  st.overflow_deferrals += static_cast<std::uint64_t>(counts[0]);
+}
+
+// SPMD phase: the plan's work-groups, each on one PE's bank.
+void Renderer::Machine::spmd_phase(Launcher& launch, Frame& f, int round) {
   int a = 0;
   k_spmd.setArg(a++, fp);
   k_spmd.setArg(a++, b_pes);
@@ -343,32 +385,18 @@ void Renderer::Machine::spmd_phase(Launcher& launch, int round) {
   k_spmd.setArg(a++, b_mats);
   k_spmd.setArg(a++, b_lights);
   a = banks.set_args(k_spmd, a);
+  k_spmd.setArg(a++, scatter->group_pe);
+  k_spmd.setArg(a++, scatter->group_first);
+  k_spmd.setArg(a++, scatter->bank_begin);
   k_spmd.setArg(a++, scatter->bank_count);
-  k_spmd.setArg(a++, b_processed);
   a = outputs.set_args(k_spmd, a);
+  k_spmd.setArg(a++, b_out_count);
   k_spmd.setArg(a++, b_accum);
   k_spmd.setArg(a++, b_stats);
-  launch.run(k_spmd, "spmd_phase", std::size_t(P) * spmd_wg, spmd_wg, round);
-}
-
-// The control unit reads the scatter's counts: how many descriptors wait,
-// and whether the SPMD phase produced any.
-void Renderer::Machine::end_round(Launcher& launch, Frame& f, int round, RenderStats& st) {
-  cl_int counts[2] = {0, 0};
-  launch.check(rt.queue().enqueueReadBuffer(scatter->counts, CL_TRUE, 0, sizeof(counts), counts),
-               "clEnqueueReadBuffer(scatter counts)");
-  st.rounds = round + 1;
-  st.overflow_deferrals += static_cast<std::uint64_t>(counts[0]);
-  std::swap(queue_a, queue_b);
-  f.queue_len = static_cast<std::size_t>(counts[0]);
-  f.outputs_live = counts[1] > 0;
-  if (queue_a.capacity < f.queue_len + inject) {
-    // Grow the live queue (rare): copy into a larger set.
-    DescriptorSet bigger;
-    bigger.allocate(rt, (f.queue_len + inject) * 2, "descriptor queue");
-    queue_a.copy_prefix_to(rt, bigger, f.queue_len);
-    queue_a = bigger;
-  }
+  k_spmd.setArg(a++, b_traffic);
+  k_spmd.setArg(a++, traffic_levels);
+  launch.run(k_spmd, "spmd_phase", std::size_t(f.groups) * spmd_wg, spmd_wg, round);
+  f.out_groups = f.groups;
   if (round % 16 == 15) launch.harvest();
 }
 
@@ -449,10 +477,14 @@ RenderResult Renderer::render() {
   Machine::Frame f;
   for (int round = 0;; ++round) {
     m.primary_descriptors(launch, f, round);
-    if ((f.outputs_live ? m.out_len : 0) + f.queue_len == 0) break;
-    m.exchange(launch, f, round);
-    m.spmd_phase(launch, round);
-    m.end_round(launch, f, round, st);
+    if (f.pool_len == 0 && f.out_groups == 0) break;
+    m.exchange(launch, f, round, st);
+    if (f.groups == 0) {  // only NIL holes were left: nothing placed, nothing waits
+      f.out_groups = 0;
+      continue;
+    }
+    m.spmd_phase(launch, f, round);
+    ++st.rounds;
   }
   m.read_image(launch, result);
 

@@ -1,5 +1,5 @@
-// The OPSILA renderer on OpenCL: item buffer (SIMD), then rounds of SPMD phase
-// + scatter (SIMD) until every descriptor has finished.
+// The OPSILA renderer on OpenCL: item buffer (SIMD), then rounds of exchange
+// (SIMD scatter) + SPMD phase until every descriptor has finished.
 #pragma once
 
 #include <cstdint>
@@ -16,7 +16,12 @@ namespace opsila {
 
 struct RenderSettings {
   int num_pes = 16;
-  int bank_capacity = 0;  // n; 0 = choose from the device's memory
+  // n: bank slots per PE on average; P * n descriptors are in flight in each
+  // SPMD phase, shared out by demand. 0 = choose from the device.
+  int bank_capacity = 0;
+  // At most this many work-groups serve one PE's bank per round (0 = as
+  // many as its count needs). 1 is the paper's one PE, one processor.
+  int work_groups_per_pe = 0;
   int item_buffer_tile = 1 << 16;  // pixels per item-buffer launch (bounded work per launch)
   int routing = OPSILA_ROUTING_BOXES;  // destination choice: cluster boxes, or the paper's spheres
 };

@@ -130,7 +130,7 @@ __kernel void scatter_plan(int num_pes, int slots, int cap, int group_size, __gl
     counts[1] = placed;
     counts[2] = groups;
   }
-  barrier(CLK_LOCAL_MEM_FENCE);
+  barrier(CLK_LOCAL_MEM_FENCE | CLK_GLOBAL_MEM_FENCE); /* bank_count and bank_begin are read below */
   for (int q = lid; q < num_pes; q += lsz) {
     int g = (bank_count[q] + group_size - 1) / group_size;
     for (int j = 0; j < g; ++j) {

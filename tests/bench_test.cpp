@@ -229,6 +229,11 @@ TEST(Bench, QuickRunWritesEveryJsonKey) {
   EXPECT_EQ(rj["traffic"].size(), 3u);
   EXPECT_GE(rj["exchange_share"].get<double>(), 0.0);
   EXPECT_TRUE(rj["deterministic"].get<bool>());
+  // Destination choice is counted: the default routes on cluster boxes.
+  EXPECT_EQ(j["routing"], "boxes");
+  EXPECT_GT(rj["work"]["route_tests"].get<std::uint64_t>(), 0u);
+  EXPECT_EQ(rj["work"]["routing_tests"].get<std::uint64_t>(),
+            rj["work"]["route_tests"].get<std::uint64_t>() + rj["work"]["sphere_tests"].get<std::uint64_t>());
 
   ASSERT_TRUE(j["scatter"].is_array());
   ASSERT_FALSE(j["scatter"].empty());

@@ -36,6 +36,7 @@ std::vector<LevelWork> level_work(const RenderStats& st) {
       w.triangle_total += c[OPSILA_STAT_TRI_TESTS];
       w.box_total += c[OPSILA_STAT_BOX_TESTS];
       w.sphere_total += c[OPSILA_STAT_SPHERE_TESTS];
+      w.route_total += c[OPSILA_STAT_ROUTE_TESTS];
     }
     out.push_back(std::move(w));
   }
@@ -93,6 +94,13 @@ std::vector<const BaselineRun*> BenchReport::baselines() const {
   return out;
 }
 
+std::optional<double> BenchReport::vs_embree(double mrays_per_s) const {
+  if (!embree.present) return std::nullopt;
+  const double e = mrays(embree.median_run.rays.total(), embree.seconds);
+  if (!(e > 0)) return std::nullopt;
+  return mrays_per_s / e;
+}
+
 bool BenchReport::all_verified() const {
   bool ok = true;
   for (const ScatterPoint& p : curve) ok = ok && p.verified;
@@ -123,7 +131,7 @@ void BenchReport::analyse() {
 
   work = level_work(st);
   std::uint64_t all_tests = 0, all_max_tests = 0, all_max_desc = 0;
-  all_descriptors = all_triangle_tests = all_box_tests = all_sphere_tests = 0;
+  all_descriptors = all_triangle_tests = all_box_tests = all_sphere_tests = all_route_tests = 0;
   for (const LevelWork& w : work) {
     all_tests += w.total_tests;
     all_max_tests += w.max_tests;
@@ -132,6 +140,7 @@ void BenchReport::analyse() {
     all_triangle_tests += w.triangle_total;
     all_box_tests += w.box_total;
     all_sphere_tests += w.sphere_total;
+    all_route_tests += w.route_total;
   }
   // The render's occupancy: work done over the work the phases would have
   // allowed if every PE had been as busy as the busiest one, level by level.

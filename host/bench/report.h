@@ -40,6 +40,7 @@ struct LevelWork {
   std::uint64_t total_descriptors = 0, total_tests = 0, max_descriptors = 0, max_tests = 0;
   std::uint64_t spawned_radiance = 0, spawned_shadow = 0, forwards = 0;  // over PEs
   std::uint64_t triangle_total = 0, box_total = 0, sphere_total = 0;     // over PEs
+  std::uint64_t route_total = 0;  // PE-box and routing-node tests (destination choice), over PEs
 };
 
 // mean / max over PEs; none when no PE worked.
@@ -88,6 +89,7 @@ struct BenchReport {
   double exchange_share = 0, overhead_share = 0;
   std::vector<LevelWork> work;
   std::uint64_t all_descriptors = 0, all_triangle_tests = 0, all_box_tests = 0, all_sphere_tests = 0;
+  std::uint64_t all_route_tests = 0;  // destination choice: all_sphere_tests + all_route_tests in all
   std::optional<double> occupancy, occupancy_descriptors;
   std::uint64_t bank_max = 0, bank_sum = 0;
   double bank_mean = 0;
@@ -98,6 +100,8 @@ struct BenchReport {
   // The baselines that ran, in report order.
   std::vector<const BaselineRun*> baselines() const;
   bool all_verified() const;  // every scatter point placed like host_scatter
+  // Mrays/s of the OPSILA frame or a baseline over Embree's (none without Embree).
+  std::optional<double> vs_embree(double mrays_per_s) const;
   double replicated_over_bank_max() const;
 };
 

@@ -41,6 +41,7 @@ json header_json(const BenchReport& r) {
   j["image"] = {{"width", r.width}, {"height", r.height}, {"pixels", std::size_t(r.width) * r.height}};
   j["depth"] = r.depth;
   j["pes"] = r.pes;
+  j["routing"] = r.stats().routing == OPSILA_ROUTING_SPHERES ? "spheres" : "boxes";
   j["bank_capacity"] = st.bank_capacity;
   j["work_group_size"] = st.work_group_size;
   j["settings"] = {{"repeats", r.repeats}, {"warmup", r.warmup}, {"host_repeats", r.host_repeats},
@@ -140,6 +141,8 @@ json render_json(const BenchReport& r) {
                {"triangle_tests", r.all_triangle_tests},
                {"box_tests", r.all_box_tests},
                {"sphere_tests", r.all_sphere_tests},
+               {"route_tests", r.all_route_tests},
+               {"routing_tests", r.all_sphere_tests + r.all_route_tests},
                {"tests", r.all_triangle_tests + r.all_box_tests}};
   j["occupancy"] = optional_value(r.occupancy);
   j["occupancy_descriptors"] = optional_value(r.occupancy_descriptors);
@@ -271,8 +274,15 @@ json targets_json(const BenchReport& r) {
                                    {"ratio", e > 0 ? mine / e : 0.0},
                                    {"goal", 0.5},
                                    {"met", e > 0 && mine >= 0.5 * e}};
+    const double mk = mrays(r.megakernel.median_run.rays.total(), r.megakernel.seconds);
+    targets["megakernel_vs_embree"] = {{"megakernel_mrays_per_s", mk},
+                                       {"embree_mrays_per_s", e},
+                                       {"ratio", e > 0 ? mk / e : 0.0},
+                                       {"goal", 0.45},
+                                       {"met", e > 0 && mk >= 0.45 * e}};
   } else {
     targets["opsila_vs_embree"] = nullptr;
+    targets["megakernel_vs_embree"] = nullptr;
   }
   return targets;
 }

@@ -45,9 +45,16 @@ void header_text(std::string& out, const BenchReport& r) {
 }
 
 void renders_text(std::string& out, const BenchReport& r) {
-  appendf(out, "%-40s %10s %10s %12s %10s\n", "render (same rays)", "seconds", "Mrays/s", "rays", "PSNR dB");
-  appendf(out, "%-40s %10.4f %10.3f %12llu %10s\n", ("OPSILA, " + std::to_string(r.pes) + " PEs").c_str(),
-          r.render_seconds, mrays(r.rays_total(), r.render_seconds), ull(r.rays_total()), "-");
+  auto ratio = [&](double m) {
+    char text[32] = "-";
+    if (const auto v = r.vs_embree(m)) std::snprintf(text, sizeof text, "%.2fx", *v);
+    return std::string(text);
+  };
+  appendf(out, "%-40s %10s %10s %12s %10s %10s\n", "render (same rays)", "seconds", "Mrays/s", "rays", "PSNR dB",
+          "vs Embree");
+  const double own = mrays(r.rays_total(), r.render_seconds);
+  appendf(out, "%-40s %10.4f %10.3f %12llu %10s %10s\n", ("OPSILA, " + std::to_string(r.pes) + " PEs").c_str(),
+          r.render_seconds, own, ull(r.rays_total()), "-", ratio(own).c_str());
   for (const BaselineRun* b : r.baselines()) {
     const Agreement g = compare_images(b->median_run.rgb, r.opsila.rgb);
     char ps[32];
@@ -55,14 +62,19 @@ void renders_text(std::string& out, const BenchReport& r) {
       std::snprintf(ps, sizeof ps, "%.1f", g.psnr);
     else
       std::snprintf(ps, sizeof ps, "inf");
-    appendf(out, "%-40s %10.4f %10.3f %12llu %10s\n", b->label.c_str(), b->seconds,
-            mrays(b->median_run.rays.total(), b->seconds), ull(b->median_run.rays.total()), ps);
+    const double m = mrays(b->median_run.rays.total(), b->seconds);
+    appendf(out, "%-40s %10.4f %10.3f %12llu %10s %10s\n", b->label.c_str(), b->seconds, m,
+            ull(b->median_run.rays.total()), ps, ratio(m).c_str());
   }
   appendf(out,
           "work: OPSILA %llu descriptors, %llu ray-facet + %llu ray-box tests, %llu sphere tests;\n"
           "      megakernel %llu ray-facet + %llu ray-box tests\n",
           ull(r.all_descriptors), ull(r.all_triangle_tests), ull(r.all_box_tests), ull(r.all_sphere_tests),
           ull(r.megakernel.median_run.triangle_tests), ull(r.megakernel.median_run.box_tests));
+  appendf(out, "routing (%s): %llu destination tests (%llu sphere + %llu PE-box/routing-node), %llu descriptors\n",
+          r.stats().routing == OPSILA_ROUTING_SPHERES ? "spheres" : "boxes",
+          ull(r.all_sphere_tests + r.all_route_tests), ull(r.all_sphere_tests), ull(r.all_route_tests),
+          ull(r.all_descriptors));
   appendf(out, "rays: %llu primary, %llu secondary, %llu shadow\n\n", ull(r.opsila.rays.primary), ull(r.opsila.rays.secondary),
           ull(r.opsila.rays.shadow));
 }

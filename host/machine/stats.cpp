@@ -97,6 +97,17 @@ nlohmann::json stats_json(const RenderResult& result, const Scene& scene,
                       {"forwards", s.forwards},
                       {"overflow_deferrals", s.overflow_deferrals}};
   j["balanced"] = s.descriptors_spawned == s.descriptors_finished;
+  // Destination choice over the frame: sphere tests plus PE-box and
+  // routing-node tests, and the descriptors the PEs processed.
+  std::uint64_t sphere = 0, route = 0, traced = 0;
+  for (const auto& level : s.counters)
+    for (const auto& c : level) {
+      sphere += c[OPSILA_STAT_SPHERE_TESTS];
+      route += c[OPSILA_STAT_ROUTE_TESTS];
+      traced += c[OPSILA_STAT_TRACED];
+    }
+  j["routing_tests"] = {{"sphere", sphere}, {"route", route}, {"total", sphere + route}};
+  j["descriptors"]["processed"] = traced;
 
   nlohmann::json launches = nlohmann::json::array();
   std::map<std::string, std::pair<std::uint64_t, double>> by_name;

@@ -1,10 +1,16 @@
-/* SIMD phase 1: the item buffer. One work-item per pixel. Each pixel is
- * tested against the projected object (cluster) boxes, computed on the host
+/* SIMD phase 1: the item buffer. One work-item per pixel (per sample pass).
+ * Each pixel is tested against the projected object (cluster) boxes, computed on the host
  * as pixel rectangles; inside a rectangle, the cluster's facet boxes (its BVH
  * nodes) and facets are tested with the pixel's primary ray. For a primary
  * ray, "pixel inside the projected box" and "ray meets the box" select the
  * same boxes, so the item is exactly the primary ray's nearest hit. In SIMD
- * mode every bank is reachable through the network, so no PE routing here. */
+ * mode every bank is reachable through the network, so no PE routing here.
+ *
+ * With N = k*k samples per pixel the pass runs once per sample (i, j), its
+ * rays through (x + ox, y + oy), ox = (i+0.5)/k, oy = (j+0.5)/k: the nearest
+ * hits (item_tri, item_t) become that sample's primary descriptors. The
+ * (object, facet) output is the centre ray's, (0.5, 0.5): written by the
+ * centre sample for odd k, by a pass of its own (no hits) for even k. */
 #include "lib/bvh.cl"
 #include "lib/shading.cl"
 #include "lib/accum.cl"
@@ -18,8 +24,8 @@
  * each pixel then tests only those rectangles and traces their facets. */
 __kernel void item_buffer(FrameParams fp, __global const Cluster *clusters, __global const int4 *cluster_rects,
                           __global const BankNode *nodes, __global const BankTriangle *tris, int tile_w,
-                          int tiles_x, int tile_begin, __global int2 *items, __global int *item_tri,
-                          __global float *item_t) {
+                          int tiles_x, int tile_begin, float ox, float oy, int mode, __global int2 *items,
+                          __global int *item_tri, __global float *item_t) {
   __local int flags[ITEM_TILE_MAX];
   __local int list[ITEM_LIST_CAP];
   __local int listed;
@@ -29,7 +35,8 @@ __kernel void item_buffer(FrameParams fp, __global const Cluster *clusters, __gl
   int x1 = x0 + tile_w - 1, y1 = y0 + tile_w - 1;
   int x = x0 + lid % tile_w, y = y0 + lid / tile_w;
   bool inside = lid < tile_w * tile_w && x < fp.width && y < fp.height;
-  RayPre r = make_ray(load3(fp.eye), primary_direction(fp, min(x, fp.width - 1), min(y, fp.height - 1)));
+  RayPre r = make_ray(load3(fp.eye), primary_direction_at(fp, (float)min(x, fp.width - 1) + ox,
+                                                          (float)min(y, fp.height - 1) + oy));
   float best_t = OPSILA_INF;
   int best_tri = -1, best_facet = INT_MAX;
   uint tri_tests = 0, box_tests = 0;
@@ -67,11 +74,10 @@ __kernel void item_buffer(FrameParams fp, __global const Cluster *clusters, __gl
   }
   if (!inside) return;
   int pixel = y * fp.width + x;
-  if (best_tri >= 0) {
-    items[pixel] = (int2)(tris[best_tri].object_id, tris[best_tri].facet_id);
-  } else {
-    items[pixel] = (int2)(-1, -1);
+  if (mode & OPSILA_ITEM_WRITE_ITEMS)
+    items[pixel] = best_tri >= 0 ? (int2)(tris[best_tri].object_id, tris[best_tri].facet_id) : (int2)(-1, -1);
+  if (mode & OPSILA_ITEM_WRITE_HITS) {
+    item_tri[pixel] = best_tri;
+    item_t[pixel] = best_t;
   }
-  item_tri[pixel] = best_tri;
-  item_t[pixel] = best_t;
 }

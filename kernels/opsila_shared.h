@@ -84,6 +84,12 @@ typedef std::uint32_t opsila_u32;
 #define OPSILA_DESCRIPTOR_LANE_COUNT 4
 #define OPSILA_DESCRIPTOR_BYTES 64
 
+/* Item buffer pass modes (flags): write the (object, facet) output (the
+ * centre ray's pass), and/or the nearest hits that a sample pass hands to
+ * its primary descriptors. */
+#define OPSILA_ITEM_WRITE_ITEMS 1
+#define OPSILA_ITEM_WRITE_HITS 2
+
 /* Descriptor kinds (low 2 bits of the meta field). */
 #define OPSILA_KIND_NIL 0      /* hole: scatter skips it */
 #define OPSILA_KIND_TRACE 1    /* radiance ray looking for its nearest hit */

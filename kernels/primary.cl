@@ -7,23 +7,35 @@
 /* From the item buffer, primary ray descriptors are built for the banks of
  * the PEs that own the items: already RESOLVED (the nearest hit is known),
  * bound for the owner PE, which shades them. Misses add the background and
- * leave a NIL hole (destination -1). Written at queue[offset + k]. */
+ * leave a NIL hole (destination -1). Written at queue[offset + k]. With
+ * several samples per pixel, the item buffer holds one sample pass's hits,
+ * (ox, oy) is that sample's place in the pixel, and the descriptor carries
+ * the pixel index: every sample adds into the same pixel sums (divided by N
+ * when read). hit_count (64-bit fixed pair) counts the descriptors built. */
 __kernel void build_primary(FrameParams fp, __global const PeInfo *pes, __global const int *item_tri,
-                            __global const float *item_t, int pixel_begin, int pixel_count, int offset,
-                            DESC_PARAMS(q), volatile __global uint *accum) {
+                            __global const float *item_t, int pixel_begin, int pixel_count, float ox, float oy,
+                            int offset, DESC_PARAMS(q), volatile __global uint *accum,
+                            volatile __global uint *hit_count) {
+  __local uint hits;
+  if (get_local_id(0) == 0) hits = 0u;
+  barrier(CLK_LOCAL_MEM_FENCE);
   int k = get_global_id(0);
-  if (k >= pixel_count) return;
-  int pixel = pixel_begin + k;
-  int slot = offset + k;
-  int tri = item_tri[pixel];
-  if (tri < 0) {
-    accumulate(accum, pixel, load3(fp.background));
-    desc_store(q, slot, make_descriptor((float3)(0.0f), 0.0f, (float3)(0.0f), 0.0f, (float3)(0.0f), pixel,
-                                        OPSILA_META(OPSILA_KIND_NIL, 0), -1, -1));
-    return;
+  if (k < pixel_count) {
+    int pixel = pixel_begin + k;
+    int slot = offset + k;
+    int tri = item_tri[pixel];
+    if (tri < 0) {
+      accumulate(accum, pixel, load3(fp.background));
+      desc_store(q, slot, make_descriptor((float3)(0.0f), 0.0f, (float3)(0.0f), 0.0f, (float3)(0.0f), pixel,
+                                          OPSILA_META(OPSILA_KIND_NIL, 0), -1, -1));
+    } else {
+      int x = pixel % fp.width, y = pixel / fp.width;
+      float3 d = primary_direction_at(fp, (float)x + ox, (float)y + oy);
+      desc_store(q, slot, make_descriptor(load3(fp.eye), item_t[pixel], d, -1.0f, (float3)(1.0f), pixel,
+                                          OPSILA_META(OPSILA_KIND_RESOLVED, 0), tri, owner_pe(pes, fp.num_pes, tri)));
+      atomic_inc(&hits);
+    }
   }
-  int x = pixel % fp.width, y = pixel / fp.width;
-  float3 d = primary_direction(fp, x, y);
-  desc_store(q, slot, make_descriptor(load3(fp.eye), item_t[pixel], d, -1.0f, (float3)(1.0f), pixel,
-                                      OPSILA_META(OPSILA_KIND_RESOLVED, 0), tri, owner_pe(pes, fp.num_pes, tri)));
+  barrier(CLK_LOCAL_MEM_FENCE);
+  if (get_local_id(0) == 0 && hits != 0u) add_fixed(hit_count, (long)hits);
 }

@@ -15,6 +15,7 @@
 #include "bench/measure.h"
 #include "bench/options.h"
 #include "bench/report.h"
+#include "core/progress.h"
 #include "core/image_io.h"
 #include "input/scene_file.h"
 
@@ -56,6 +57,7 @@ BenchReport start_report(const BenchOptions& o, const Scene& scene, int pes) {
   r.width = scene.width;
   r.height = scene.height;
   r.depth = scene.max_depth;
+  r.spp = scene.spp;
   r.pes = pes;
   return r;
 }
@@ -77,6 +79,7 @@ int run_bench(const std::vector<std::string>& args) {
   Scene scene = load_scene(o.scene_path);
   print_warnings(scene, o.quiet);
   apply_view_options(scene, o);
+  if (const std::string note = large_work_note(scene); !note.empty()) progress("note: %s", note.c_str());
   RenderSettings settings;
   settings.num_pes = o.pes.value_or(settings.num_pes);
   settings.bank_capacity = o.bank_capacity;

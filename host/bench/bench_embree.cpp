@@ -124,18 +124,31 @@ struct Tracer {
     return ray.tfar < 0.0f;  // -inf when something was hit
   }
 
-  // One pixel's Whitted tree, shaded as kernels/spmd_phase.cl shades it.
-  void pixel(int x, int y, std::int64_t sum[3], std::int32_t item[2], RayCounts& rays) const {
+  // The camera ray through image point (px, py); pixel x's centre is x + 0.5.
+  F3 camera_ray(float px, float py) const {
+    const float sx = (2.0f * px / static_cast<float>(s.width) - 1.0f) * tan_half_fov * aspect;
+    const float sy = (1.0f - 2.0f * py / static_cast<float>(s.height)) * tan_half_fov;
+    return normalize(forward + sx * right + sy * up);
+  }
+
+  // (object, facet) of the centre ray's hit, for even k where no sample is it.
+  void centre_item(int x, int y, std::int32_t item[2]) const {
+    float t;
+    unsigned prim;
+    if (nearest(eye, camera_ray(static_cast<float>(x) + 0.5f, static_cast<float>(y) + 0.5f), 0.0f, t, prim))
+      item[0] = s.triangles[prim].object_id, item[1] = s.triangles[prim].facet_id;
+  }
+
+  // One sample's Whitted tree, shaded as kernels/spmd_phase.cl shades it;
+  // `item` (the centre ray's sample only) gets the primary hit.
+  void sample(float px, float py, std::int64_t sum[3], std::int32_t* item, RayCounts& rays) const {
     struct Pending {
       F3 org, dir, w;
       int level;
     };
     Pending stack[OPSILA_MAX_DEPTH + 2];
     int sp = 0;
-    const float sx =
-        (2.0f * (static_cast<float>(x) + 0.5f) / static_cast<float>(s.width) - 1.0f) * tan_half_fov * aspect;
-    const float sy = (1.0f - 2.0f * (static_cast<float>(y) + 0.5f) / static_cast<float>(s.height)) * tan_half_fov;
-    stack[sp++] = {eye, normalize(forward + sx * right + sy * up), {1.0f, 1.0f, 1.0f}, 0};
+    stack[sp++] = {eye, camera_ray(px, py), {1.0f, 1.0f, 1.0f}, 0};
     ++rays.primary;
     auto add = [&](F3 v) {
       sum[0] += to_fixed(v.x);
@@ -152,7 +165,7 @@ struct Tracer {
         continue;
       }
       const Triangle& tri = s.triangles[prim];
-      if (r.level == 0) item[0] = tri.object_id, item[1] = tri.facet_id;
+      if (r.level == 0 && item) item[0] = tri.object_id, item[1] = tri.facet_id;
       const F3 ng = normals[prim];
       const F3 p = r.org + t * d;
       const bool entering = dot(ng, d) < 0.0f;
@@ -252,12 +265,20 @@ BaselineImage render_embree(const Scene& s, int threads) {
   std::vector<RayCounts> counts(threads);
   auto t0 = std::chrono::steady_clock::now();
   constexpr int kBand = 4;  // interleaved bands of rows, as the host reference does
+  const int k = spp_side(s.spp);  // SPEC's k x k samples; the item is the centre ray's
+  const std::vector<float> offsets = sample_offsets(s.spp);
   auto work = [&](int w) {
     for (int y0 = w * kBand; y0 < s.height; y0 += threads * kBand)
       for (int y = y0; y < std::min(y0 + kBand, s.height); ++y)
         for (int x = 0; x < s.width; ++x) {
           const std::size_t i = std::size_t(y) * s.width + x;
-          tr.pixel(x, y, &sums[3 * i], &out.item_buffer[2 * i], counts[w]);
+          for (int j = 0; j < k; ++j)
+            for (int c = 0; c < k; ++c) {
+              std::int32_t* item = 2 * c + 1 == k && 2 * j + 1 == k ? &out.item_buffer[2 * i] : nullptr;
+              tr.sample(static_cast<float>(x) + offsets[c], static_cast<float>(y) + offsets[j], &sums[3 * i], item,
+                        counts[w]);
+            }
+          if (k % 2 == 0) tr.centre_item(x, y, &out.item_buffer[2 * i]);
         }
   };
   std::vector<std::thread> pool;
@@ -268,7 +289,7 @@ BaselineImage render_embree(const Scene& s, int threads) {
 
   out.rgb.resize(npix * 3);
   for (std::size_t i = 0; i < npix * 3; ++i)
-    out.rgb[i] = from_fixed(sums[i]);
+    out.rgb[i] = from_fixed(sums[i], s.spp);
   for (const RayCounts& c : counts) {
     out.rays.primary += c.primary;
     out.rays.secondary += c.secondary;

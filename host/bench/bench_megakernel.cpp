@@ -5,6 +5,7 @@
 #include <string>
 
 #include "bench/bench.h"
+#include "core/camera.h"
 #include "core/fixed_point.h"
 #include "opsila_shared.h"
 #include "machine/partition.h"
@@ -39,6 +40,7 @@ BaselineImage render_megakernel(const Scene& scene, ClRuntime& rt, int tile) {
   cl::Buffer b_accum = device_buffer(rt, npix * 3 * sizeof(cl_long), "pixel sums");
   cl::Buffer b_counts = device_buffer(rt, npix * sizeof(cl_uint4), "ray counts");
   cl::Buffer b_items = device_buffer(rt, npix * sizeof(cl_int2), "item buffer");
+  cl::Buffer b_offsets = upload(rt, sample_offsets(scene.spp), "sample offsets");
 
   std::vector<LaunchRecord> launches;
   Launcher launch(rt, launches);
@@ -58,6 +60,8 @@ BaselineImage render_megakernel(const Scene& scene, ClRuntime& rt, int tile) {
     k.setArg(a++, b_mats);
     k.setArg(a++, b_lights);
     k.setArg(a++, bs.pes[0].node_begin);
+    k.setArg(a++, spp_side(scene.spp));
+    k.setArg(a++, b_offsets);
     k.setArg(a++, static_cast<int>(begin));
     k.setArg(a++, count);
     k.setArg(a++, b_accum);
@@ -81,9 +85,8 @@ BaselineImage render_megakernel(const Scene& scene, ClRuntime& rt, int tile) {
 
   // Pixel sums -> floats exactly as the renderer converts its fixed point.
   out.rgb.resize(npix * 3);
-  for (std::size_t i = 0; i < npix * 3; ++i)
-    out.rgb[i] = from_fixed(static_cast<std::int64_t>(accum[i]));
-  out.rays.primary = npix;
+  for (std::size_t i = 0; i < npix * 3; ++i) out.rgb[i] = from_fixed(static_cast<std::int64_t>(accum[i]), scene.spp);
+  out.rays.primary = npix * static_cast<std::size_t>(scene.spp);
   for (const cl_uint4& c : counts) {
     out.rays.secondary += c.s[0];
     out.rays.shadow += c.s[1];

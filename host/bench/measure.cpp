@@ -10,6 +10,7 @@
 #include <fstream>
 #include <thread>
 
+#include "core/progress.h"
 #include "core/util.h"
 #include "reference/reference.h"
 
@@ -19,28 +20,17 @@ namespace {
 
 // The sequential reference (host/reference/reference.h) with its BVH built
 // outside the timing, rows split in interleaved bands as render_reference does.
-BaselineImage run_reference(const Scene& scene, int threads) {
+BaselineImage run_reference(const Scene& scene, int threads, Progress& live) {
   BaselineImage out;
   auto tb = std::chrono::steady_clock::now();
   const ReferenceTracer tracer(scene);
   ImageResult image = blank_image(scene.width, scene.height);
   out.build_seconds = seconds_since(tb);
-  threads = std::max(1, std::min(threads, scene.height));
-  std::vector<RayCounts> counts(threads);
-  constexpr int kBand = 4;
   auto t0 = std::chrono::steady_clock::now();
-  auto work = [&](int w) {
-    for (int y = w * kBand; y < scene.height; y += threads * kBand) tracer.render_rows(y, y + kBand, image, counts[w]);
-  };
-  std::vector<std::thread> pool;
-  for (int w = 1; w < threads; ++w) pool.emplace_back(work, w);
-  work(0);
-  for (std::thread& t : pool) t.join();
+  tracer.render_image(image, threads, &live);
   out.seconds = seconds_since(t0);
-  RayCounts total;
-  for (const RayCounts& c : counts) total += c;
+  live.finish();
   static_cast<ImageResult&>(out) = std::move(image);
-  out.rays = total;
   return out;
 }
 
@@ -120,10 +110,15 @@ void measure_opsila(BenchReport& report, const Scene& scene, const RenderSetting
            scene.max_depth, settings.num_pes, warmup, repeats);
   std::vector<RenderResult> renders;
   // The machine is prepared once (partition, uploads); every run is one frame.
-  Renderer renderer(scene, settings, rt);
+  Progress live("bench", !progress.quiet);
+  RenderSettings with_progress = settings;
+  with_progress.progress = &live;
+  Renderer renderer(scene, with_progress, rt);
   for (int r = 0; r < warmup + repeats; ++r) {
     auto t0 = std::chrono::steady_clock::now();
+    live.restart("bench: OPSILA run " + std::to_string(r + 1) + "/" + std::to_string(warmup + repeats));
     RenderResult res = renderer.render();
+    live.finish();
     if (r == 0) report.first_render_seconds = seconds_since(t0);
     if (r < warmup) continue;
     report.render_times.push_back(res.stats.render_seconds);
@@ -139,17 +134,25 @@ void measure_opsila(BenchReport& report, const Scene& scene, const RenderSetting
 void measure_baselines(BenchReport& report, const Scene& scene, ClRuntime& rt, const BenchProgress& progress) {
   const int warmup = report.warmup, repeats = report.repeats, host_repeats = report.host_repeats;
   const int host_threads = report.host_threads;
+  Progress live("bench", !progress.quiet);
   progress("replicated megakernel: %d warm-up + %d timed runs", warmup, repeats);
   report.megakernel = measure_baseline("replicated_megakernel", "replicated megakernel (same device)", 0, warmup,
                                        repeats, [&] { return render_megakernel(scene, rt); });
   progress("sequential host reference, 1 thread: %d timed runs", host_repeats);
   report.sequential = measure_baseline("sequential_host", "host reference, 1 thread", 1, 0, host_repeats,
-                                       [&] { return run_reference(scene, 1); });
+                                       [&] {
+                                         live.restart("bench: host reference, 1 thread");
+                                         return run_reference(scene, 1, live);
+                                       });
   if (host_threads > 1) {
     progress("host reference, %d threads: %d timed runs", host_threads, host_repeats);
     report.threads = measure_baseline("host_threads", "host reference, " + std::to_string(host_threads) + " threads",
                                       host_threads, 0, host_repeats,
-                                      [&] { return run_reference(scene, host_threads); });
+                                      [&] {
+                                        live.restart("bench: host reference, " + std::to_string(host_threads) +
+                                                     " threads");
+                                        return run_reference(scene, host_threads, live);
+                                      });
   }
   if (embree_available()) {
     progress("Embree %s, %d threads: %d warm-up + %d timed runs", embree_version().c_str(), host_threads, warmup,

@@ -63,7 +63,7 @@ struct BenchReport {
   DeviceFacts device;
   double load_before = -1, load_after = -1;  // 1-minute load average of the host
   std::size_t triangles = 0, lights = 0;
-  int facets = 0, objects = 0, width = 0, height = 0, depth = 0, pes = 0;
+  int facets = 0, objects = 0, width = 0, height = 0, depth = 0, pes = 0, spp = 1;
 
   // 1. the OPSILA render.
   double compile_seconds = 0, first_render_seconds = 0;

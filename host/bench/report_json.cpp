@@ -40,6 +40,7 @@ json header_json(const BenchReport& r) {
                 {"objects", r.objects},  {"clusters", st.num_clusters}, {"lights", r.lights}};
   j["image"] = {{"width", r.width}, {"height", r.height}, {"pixels", std::size_t(r.width) * r.height}};
   j["depth"] = r.depth;
+  j["spp"] = r.spp;
   j["pes"] = r.pes;
   j["routing"] = r.stats().routing == OPSILA_ROUTING_SPHERES ? "spheres" : "boxes";
   j["bank_capacity"] = st.bank_capacity;

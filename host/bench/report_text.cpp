@@ -34,8 +34,8 @@ double percent_of_copy(const ScatterPoint& p) {
 
 void header_text(std::string& out, const BenchReport& r) {
   const RenderStats& st = r.stats();
-  appendf(out, "opsila bench: %s, %dx%d, depth %d, %d PEs (bank capacity %d, work-group %zu)\n",
-          r.scene_path.c_str(), r.width, r.height, r.depth, r.pes, st.bank_capacity, st.work_group_size);
+  appendf(out, "opsila bench: %s, %dx%d, %d spp, depth %d, %d PEs (bank capacity %d, work-group %zu)\n",
+          r.scene_path.c_str(), r.width, r.height, r.spp, r.depth, r.pes, st.bank_capacity, st.work_group_size);
   appendf(out, "device: %s\n", r.device.description.c_str());
   appendf(out, "scene: %zu triangles, %d facets, %d objects, %d clusters, %zu lights\n", r.triangles, r.facets,
           r.objects, st.num_clusters, r.lights);

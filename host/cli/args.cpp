@@ -170,6 +170,7 @@ const std::vector<FlagSpec>& view_flags() {
       {"--depth", "--depth", true},   {"--pes", "--pes", true},
       {"--device", "--device", true}, {"--bank-capacity", "--bank-capacity", true},
       {"--routing", "--routing", true}, {"--work-groups-per-pe", "--work-groups-per-pe", true},
+      {"--spp", "--spp", true},
   };
   return flags;
 }
@@ -210,6 +211,11 @@ bool parse_view_flag(const std::string& name, const std::string& value, ViewOpti
     o.background = parse_colour(name, value);
   } else if (name == "--depth") {
     o.depth = int_in_range(name, value, 1, OPSILA_MAX_DEPTH);
+  } else if (name == "--spp") {
+    long long n;
+    if (!parse_int(value, n)) bad_flag(name, value, "not an integer");
+    if (const std::string problem = spp_problem(n); !problem.empty()) bad_flag(name, value, problem);
+    o.spp = static_cast<int>(n);
   } else if (name == "--pes") {
     o.pes = int_in_range(name, value, 1, OPSILA_MAX_PES);
   } else if (name == "--bank-capacity") {
@@ -246,6 +252,7 @@ void apply_view_options(Scene& scene, const ViewOptions& o) {
   if (o.width) scene.width = *o.width;
   if (o.height) scene.height = *o.height;
   if (o.depth) scene.max_depth = *o.depth;
+  if (o.spp) scene.spp = *o.spp;
   if (o.ambient) scene.ambient = *o.ambient;
   if (o.background) scene.background = *o.background;
   if (o.fov) scene.camera.fov_deg = *o.fov;
@@ -258,6 +265,8 @@ void apply_view_options(Scene& scene, const ViewOptions& o) {
                      " is outside 1..16384 per side and 2^26 pixels");
   if (scene.max_depth < 1 || scene.max_depth > OPSILA_MAX_DEPTH)
     throw InputError(file + ": depth " + std::to_string(scene.max_depth) + " is outside 1.." + std::to_string(OPSILA_MAX_DEPTH));
+  if (const std::string problem = spp_problem(scene.spp); !problem.empty())
+    throw InputError(file + ": spp " + std::to_string(scene.spp) + ": " + problem);
   if (!(scene.camera.fov_deg > 0 && scene.camera.fov_deg < 180))
     throw InputError(file + ": field of view " + std::to_string(scene.camera.fov_deg) +
                      " is not strictly between 0 and 180 degrees");

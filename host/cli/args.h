@@ -71,7 +71,7 @@ std::string walk_args(const std::vector<std::string>& args, const CommandSyntax&
 struct ViewOptions {
   std::string scene_path;
   std::string device_spec;  // --device
-  std::optional<int> width, height, depth, pes;
+  std::optional<int> width, height, depth, pes, spp;
   std::optional<Vec3> eye, look_at, up, ambient, background;
   std::optional<float> fov;
   std::vector<LightDesc> lights;  // --light, in order; replace the scene's lights

@@ -17,6 +17,7 @@
 
 #include "machine/cl_runtime.h"
 #include "core/image_io.h"
+#include "core/progress.h"
 #include "core/util.h"
 #include "opsila_shared.h"
 #include "reference/reference.h"
@@ -77,6 +78,7 @@ std::string render_usage() {
          "  --ambient R,G,B        ambient intensity\n"
          "  --background R,G,B     colour of rays that hit nothing\n"
          "  --depth N              ray tree levels, 1..31 (1 = local shading only)\n"
+         "  --spp N                samples per pixel on a k x k grid: 1, 4, 9, 16, ..., 1024\n"
          "  --pes N                processing elements (OpenCL work-groups), 1..1024\n"
          "  --bank-capacity N      descriptor slots per bank on average: P*N in flight, shared by demand\n"
          "                         (0 = from the device)\n"
@@ -88,11 +90,12 @@ std::string render_usage() {
          "  --item-buffer OUT.npy  (object, facet) of each pixel's primary hit, int32 (H, W, 2)\n"
          "  --stats OUT.json       ray counts, per-PE work, kernel times, memory, traffic\n"
          "  --reference            render with the sequential host reference instead of OpenCL\n"
-         "  -q, --quiet            no device line, warnings or summary\n"
+         "  -q, --quiet            no device line, warnings, progress or summary (errors still show)\n"
          "  -h, --help             this text\n"
          "\n"
          "A scene without a camera (a bare .obj) is framed to its bounding box; with no\n"
-         "light at all, one white light sits at the eye.\n";
+         "light at all, one white light sits at the eye. A render that takes more than\n"
+         "about two seconds shows its progress on stderr.\n";
 }
 
 // ------------------------------------------------------------------ parsing
@@ -173,6 +176,11 @@ int run_render(const std::vector<std::string>& args) {
   settings.work_groups_per_pe = o.work_groups_per_pe;
   if (o.routing) settings.routing = *o.routing;
 
+  if (!o.quiet)
+    if (const std::string note = large_work_note(scene); !note.empty()) print_line("note", note);
+  Progress progress("render", !o.quiet);
+  settings.progress = &progress;
+
   RenderResult result;
   std::string device;
   if (o.reference) {
@@ -180,7 +188,7 @@ int run_render(const std::vector<std::string>& args) {
     device = "host reference (" + std::to_string(threads) + " threads)";
     if (!o.quiet) print_line("device", device);
     const auto start = std::chrono::steady_clock::now();
-    static_cast<ImageResult&>(result) = render_reference(scene, threads);
+    static_cast<ImageResult&>(result) = render_reference(scene, threads, &progress);
     result.stats.render_seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     RenderStats& s = result.stats;
@@ -195,6 +203,7 @@ int run_render(const std::vector<std::string>& args) {
     if (!o.quiet) print_line("device", device);
     result = render(scene, settings, *runtime);
   }
+  progress.finish();
 
   if (extension_of(o.output_path) == ".png")
     write_png(o.output_path, result.width, result.height, result.rgb);

@@ -42,13 +42,26 @@ CameraFrame camera_frame(const CameraDesc& camera, int width, int height) {
   return frame;
 }
 
-Vec3 primary_direction(const CameraFrame& frame, int width, int height, int x, int y) {
+float spp_offset(int i, int k) { return (static_cast<float>(i) + 0.5f) / static_cast<float>(k); }
+
+std::vector<float> sample_offsets(int spp) {
+  const int k = spp_side(spp);
+  std::vector<float> offsets(static_cast<std::size_t>(k));
+  for (int i = 0; i < k; ++i) offsets[static_cast<std::size_t>(i)] = spp_offset(i, k);
+  return offsets;
+}
+
+Vec3 primary_direction_at(const CameraFrame& frame, int width, int height, float px, float py) {
   const auto g = [](const Vec3& v) { return glm::vec3(v[0], v[1], v[2]); };
   const float s = frame.tan_half_fov, a = frame.aspect;
-  const float px = 2.0f * (static_cast<float>(x) + 0.5f) / static_cast<float>(width) - 1.0f;
-  const float py = 1.0f - 2.0f * (static_cast<float>(y) + 0.5f) / static_cast<float>(height);
-  const glm::vec3 d = glm::normalize(g(frame.forward) + px * s * a * g(frame.right) + py * s * g(frame.up));
+  const float sx = 2.0f * px / static_cast<float>(width) - 1.0f;
+  const float sy = 1.0f - 2.0f * py / static_cast<float>(height);
+  const glm::vec3 d = glm::normalize(g(frame.forward) + sx * s * a * g(frame.right) + sy * s * g(frame.up));
   return Vec3{d.x, d.y, d.z};
+}
+
+Vec3 primary_direction(const CameraFrame& frame, int width, int height, int x, int y) {
+  return primary_direction_at(frame, width, height, static_cast<float>(x) + 0.5f, static_cast<float>(y) + 0.5f);
 }
 
 bool project_to_pixels(const CameraFrame& frame, int width, int height, const Vec3& point, double& px, double& py) {

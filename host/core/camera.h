@@ -5,6 +5,7 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 #include "core/scene.h"
 
@@ -22,6 +23,16 @@ CameraFrame camera_frame(const CameraDesc& camera, int width, int height);
 
 // Unit direction of pixel (x, y)'s primary ray (through the pixel centre).
 Vec3 primary_direction(const CameraFrame& frame, int width, int height, int x, int y);
+// Samples per pixel (SPEC "Camera"), N = k*k: sample i (0..k-1) sits at
+// (i + 0.5) / k inside its pixel along each axis, computed once here in float
+// so that every device and the reference use the same bits (k = 1 gives
+// exactly 0.5, the centre ray). sample_offsets(N) lists them for i = 0..k-1.
+float spp_offset(int i, int k);
+std::vector<float> sample_offsets(int spp);
+
+// Unit direction of the ray through image point (px, py): px = x + 0.5 is
+// pixel x's centre, px = x + spp_offset(i, k) its sample i (SPEC's k x k grid).
+Vec3 primary_direction_at(const CameraFrame& frame, int width, int height, float px, float py);
 
 // Where `point` lands on the screen, in continuous pixel coordinates (pixel
 // centres at integers). False when the point is behind the eye (or on its

@@ -20,6 +20,16 @@ std::string short_number(double v) {
 }
 }  // namespace
 
+std::string spp_problem(long long n) {
+  const std::string squares = "1, 4, 9, 16, ..., " + std::to_string(kMaxSpp);
+  if (n < 1 || n > kMaxSpp) return "samples per pixel must be a square in " + squares;
+  const long long k = std::llround(std::sqrt(double(n)));
+  if (k * k != n) return "samples per pixel must be a square (k x k grid): " + squares;
+  return "";
+}
+
+int spp_side(int n) { return static_cast<int>(std::llround(std::sqrt(double(n)))); }
+
 Vec3 MaterialDesc::kr() const { return illum_reflects(illum) ? ks : Vec3{0, 0, 0}; }
 
 Vec3 MaterialDesc::kt() const { return illum_transmits(illum) ? tf : Vec3{0, 0, 0}; }

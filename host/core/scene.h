@@ -62,6 +62,7 @@ struct Scene {
   CameraDesc camera;
   int width = 640, height = 480;
   int max_depth = 5;
+  int spp = 1;  // samples per pixel, N = k*k (SPEC "Camera"); see spp_problem
   Vec3 ambient{0.1f, 0.1f, 0.1f};
   Vec3 background{0.0f, 0.0f, 0.0f};
   int num_objects = 0;  // object ids are 0 .. num_objects-1
@@ -79,6 +80,16 @@ struct Scene {
   // big for float shows up as infinity rather than as a wrong number).
   double diagonal() const;
 };
+
+// Samples per pixel (SPEC "Camera"): N = k*k with 1 <= N <= kMaxSpp. The
+// bound (k <= 32) keeps every pixel's 64-bit fixed-point sum of N samples far
+// from overflow and a render's cost (N times the rays of N = 1) sane.
+constexpr int kMaxSpp = 1024;
+// Empty when n is an accepted sample count, else the problem, for a message
+// that names the flag or key ("must be a square: 1, 4, 9, ..., 1024").
+std::string spp_problem(long long n);
+// k for N = k*k (N accepted by spp_problem). The grid: core/camera.h.
+int spp_side(int n);
 
 // A camera that sees the whole box [lo, hi]: looks at the box centre from +z
 // with up = +y, at distance d = r / sin(min(fov_v, fov_h) / 2), where r is

@@ -214,7 +214,7 @@ class SceneReader {
     }
     lines_ = std::make_unique<LineMap>(text_, name_, scene_.warnings);
     if (!root.is_object()) fail("", std::string("the scene must be a JSON object, not ") + kind(root));
-    check_keys(root, "", {"description", "camera", "image", "depth", "ambient", "background",
+    check_keys(root, "", {"description", "camera", "image", "depth", "spp", "ambient", "background",
                           "lights", "materials", "objects"});
     if (const Json* d = find(root, "description"); d && !d->is_string())
       fail("description", std::string("expected a string, not ") + kind(*d));
@@ -224,6 +224,10 @@ class SceneReader {
     if (const Json* im = find(root, "image")) image(*im, "image");
     if (const Json* d = find(root, "depth"))
       scene_.max_depth = integer(*d, "depth", 1, OPSILA_MAX_DEPTH);
+    if (const Json* n = find(root, "spp")) {
+      scene_.spp = integer(*n, "spp", 1, kMaxSpp);
+      if (const std::string problem = spp_problem(scene_.spp); !problem.empty()) fail("spp", problem);
+    }
     if (const Json* a = find(root, "ambient")) scene_.ambient = colour(*a, "ambient");
     if (const Json* b = find(root, "background")) scene_.background = colour(*b, "background");
     if (const Json* l = find(root, "lights")) lights(*l, "lights");

@@ -14,6 +14,7 @@
 #include "machine/descriptors.h"
 #include "opsila_shared.h"
 #include "machine/partition.h"
+#include "core/progress.h"
 
 namespace opsila {
 namespace {
@@ -117,6 +118,8 @@ void check_kernel_limits(const Scene& scene) {
     throw InputError("scene has " + std::to_string(scene.lights.size()) + " lights; at most " +
                      std::to_string(OPSILA_MAX_LIGHTS) + " are supported");
   if (scene.triangles.empty()) throw InputError("scene has no facets");
+  if (const std::string problem = spp_problem(scene.spp); !problem.empty())
+    throw InputError("--spp " + std::to_string(scene.spp) + ": " + problem);
 }
 
 // Everything the machine keeps between frames, and the stages of a frame.
@@ -127,6 +130,9 @@ struct Renderer::Machine {
   std::size_t npix = 0, nstats = 0, ntraffic = 0;
   std::size_t spmd_wg = 1;
   int tile_w = 1, item_launch_pixels = 1;
+  int spp = 1, spp_k = 1;         // samples per pixel, N = k*k
+  std::vector<float> offsets;     // (i + 0.5) / k, i = 0..k-1
+  Progress* progress = nullptr;
   FlightPlan flight{1, 1, 1, 1};
   FrameParams fp{};
   RenderStats prepared;  // what the prepare step knows: banks, n, work-group size
@@ -134,12 +140,13 @@ struct Renderer::Machine {
   cl::Kernel k_item, k_primary, k_spmd;
   std::unique_ptr<ScatterPass> scatter;
   cl::Buffer b_tris, b_nodes, b_clusters, b_route, b_pes, b_mats, b_lights, b_rects;
-  cl::Buffer b_items, b_item_tri, b_item_t, b_accum, b_stats, b_traffic, b_out_count;
+  cl::Buffer b_items, b_item_tri, b_item_t, b_accum, b_stats, b_traffic, b_out_count, b_hits;
   DescriptorSet banks, outputs, pool, next_pool;
 
   // Where a frame stands between rounds.
   struct Frame {
-    std::size_t next_pixel = 0;  // first pixel without a primary descriptor yet
+    int sample = 0;              // the sample pass whose hits the item buffer holds
+    std::size_t next_pixel = 0;  // first pixel without a primary descriptor yet, in this pass
     std::size_t pool_len = 0;    // descriptors waiting in `pool`
     int out_groups = 0;          // SPMD work-groups whose outputs the next exchange reads
     int groups = 0;              // SPMD work-groups of this round (from the exchange's plan)
@@ -152,11 +159,12 @@ struct Renderer::Machine {
   void allocate_frame_buffers();
 
   void clear_frame();
-  void item_buffer(Launcher& launch);
+  void item_buffer(Launcher& launch, int sample);
   void primary_descriptors(Launcher& launch, Frame& f, int round);
   ScatterPass::Args exchange_args(const Frame& f) const;
   void exchange(Launcher& launch, Frame& f, int round, RenderStats& st);
   void spmd_phase(Launcher& launch, Frame& f, int round);
+  void report_progress(const Frame& f);
   void read_image(Launcher& launch, RenderResult& result);
   void read_stats(RenderResult& result);
 };
@@ -172,6 +180,10 @@ Renderer::Machine::Machine(const Scene& scene, const RenderSettings& settings, C
   npix = std::size_t(width) * height;
   item_launch_pixels = settings.item_buffer_tile;
   routing = settings.routing;
+  spp = scene.spp;
+  spp_k = spp_side(spp);
+  offsets = sample_offsets(spp);
+  progress = settings.progress;
 
   rt.program();  // compile before anything is timed
   k_item = rt.kernel("item_buffer");
@@ -274,6 +286,7 @@ void Renderer::Machine::allocate_frame_buffers() {
   b_stats = device_buffer(rt, nstats * sizeof(cl_uint), "stats");
   ntraffic = std::max<std::size_t>(1, std::size_t(traffic_levels) * P * P);
   b_traffic = device_buffer(rt, ntraffic * sizeof(cl_uint), "traffic");
+  b_hits = device_buffer(rt, 2 * sizeof(cl_uint), "primary hit count");
   b_out_count = device_buffer(rt, flight.groups * flight.group_size * sizeof(cl_int), "SPMD output counts");
   banks.allocate(rt, flight.slots + std::size_t(P) * flight.group_size, "descriptor banks");
   outputs.allocate(rt, flight.outputs, "SPMD output places");
@@ -286,12 +299,23 @@ void Renderer::Machine::clear_frame() {
   zero_buffer(rt, b_accum, npix * OPSILA_ACCUM_WORDS * sizeof(cl_uint), "pixel sums");
   zero_buffer(rt, b_stats, nstats * sizeof(cl_uint), "stats");
   zero_buffer(rt, b_traffic, ntraffic * sizeof(cl_uint), "traffic");
+  zero_buffer(rt, b_hits, 2 * sizeof(cl_uint), "primary hit count");
 }
 
 // SIMD phase 1, the item buffer: one work-group per square tile of pixels;
 // launches are bounded to about `item_buffer_tile` pixels each so that no
 // launch runs unbounded.
-void Renderer::Machine::item_buffer(Launcher& launch) {
+//
+// One pass per sample (0 .. N-1, i rightwards, j downwards) keeps the
+// nearest hits for that sample's primary descriptors; the (object, facet)
+// output is the centre ray's: the centre sample's pass writes it for odd k,
+// a pass of its own (sample -1, no hits kept) for even k.
+void Renderer::Machine::item_buffer(Launcher& launch, int sample) {
+  const bool centre_only = sample < 0;
+  const int i = centre_only ? 0 : sample % spp_k, j = centre_only ? 0 : sample / spp_k;
+  const bool centre = centre_only || (2 * i + 1 == spp_k && 2 * j + 1 == spp_k);
+  const int mode = (centre ? OPSILA_ITEM_WRITE_ITEMS : 0) | (centre_only ? 0 : OPSILA_ITEM_WRITE_HITS);
+  const float ox = centre_only ? 0.5f : offsets[std::size_t(i)], oy = centre_only ? 0.5f : offsets[std::size_t(j)];
   const int tiles_x = (width + tile_w - 1) / tile_w, tiles_y = (height + tile_w - 1) / tile_w;
   const int tiles = tiles_x * tiles_y;
   const int per_launch = std::max(1, item_launch_pixels / (tile_w * tile_w));
@@ -306,6 +330,9 @@ void Renderer::Machine::item_buffer(Launcher& launch) {
     k_item.setArg(a++, tile_w);
     k_item.setArg(a++, tiles_x);
     k_item.setArg(a++, begin);
+    k_item.setArg(a++, ox);
+    k_item.setArg(a++, oy);
+    k_item.setArg(a++, mode);
     k_item.setArg(a++, b_items);
     k_item.setArg(a++, b_item_tri);
     k_item.setArg(a++, b_item_t);
@@ -314,9 +341,17 @@ void Renderer::Machine::item_buffer(Launcher& launch) {
 }
 
 // Primary descriptors (SIMD), built from the item buffer into the waiting
-// pool when it runs short, bound for the PEs that own the items.
+// pool when it runs short, bound for the PEs that own the items. When a
+// sample pass is used up, the next sample's item buffer pass runs first (the
+// in-order queue runs it after the builds that read the previous one), so
+// the descriptors in flight stay bounded by the injection whatever N is.
 void Renderer::Machine::primary_descriptors(Launcher& launch, Frame& f, int round) {
-  if (f.next_pixel >= npix || f.pool_len >= flight.inject) return;
+  if (f.pool_len >= flight.inject) return;
+  if (f.next_pixel >= npix && f.sample + 1 < spp) {
+    item_buffer(launch, ++f.sample);
+    f.next_pixel = 0;
+  }
+  if (f.next_pixel >= npix) return;
   std::size_t count = std::min(flight.inject, npix - f.next_pixel);
   if (f.pool_len + count > pool.capacity) count = pool.capacity - f.pool_len;
   int a = 0;
@@ -326,9 +361,12 @@ void Renderer::Machine::primary_descriptors(Launcher& launch, Frame& f, int roun
   k_primary.setArg(a++, b_item_t);
   k_primary.setArg(a++, static_cast<int>(f.next_pixel));
   k_primary.setArg(a++, static_cast<int>(count));
+  k_primary.setArg(a++, offsets[std::size_t(f.sample % spp_k)]);
+  k_primary.setArg(a++, offsets[std::size_t(f.sample / spp_k)]);
   k_primary.setArg(a++, static_cast<int>(f.pool_len));
   a = pool.set_args(k_primary, a);
   k_primary.setArg(a++, b_accum);
+  k_primary.setArg(a++, b_hits);
   launch.run(k_primary, "build_primary", round_up(count, 64), 0, round);
   f.next_pixel += count;
   f.pool_len += count;
@@ -400,7 +438,8 @@ void Renderer::Machine::spmd_phase(Launcher& launch, Frame& f, int round) {
   if (round % 16 == 15) launch.harvest();
 }
 
-// Read back the pixel sums (fixed point, decoded here) and the item buffer.
+// Read back the pixel sums (fixed point: the sum of the N samples, decoded
+// here into their mean) and the item buffer.
 void Renderer::Machine::read_image(Launcher& launch, RenderResult& result) {
   cl::CommandQueue& q = rt.queue();
   std::vector<cl_uint> accum(npix * OPSILA_ACCUM_WORDS);
@@ -412,7 +451,7 @@ void Renderer::Machine::read_image(Launcher& launch, RenderResult& result) {
   launch.check(q.finish(), "clFinish");
   result.rgb.resize(npix * 3);
   for (std::size_t i = 0; i < npix * 3; ++i)
-    result.rgb[i] = from_fixed(static_cast<std::int64_t>(fixed_pair(accum, i)));
+    result.rgb[i] = from_fixed(static_cast<std::int64_t>(fixed_pair(accum, i)), spp);
 }
 
 // Per-level, per-PE counters and traffic, then the frame's totals. Every
@@ -437,9 +476,11 @@ void Renderer::Machine::read_stats(RenderResult& result) {
     for (int l = 0; l < traffic_levels; ++l)
       for (std::size_t k = 0; k < std::size_t(P) * P; ++k) st.traffic[l][k] = tr[std::size_t(l) * P * P + k];
   }
-  result.rays.primary = npix;
-  for (std::size_t i = 0; i < npix; ++i)
-    if (result.item_buffer[2 * i] >= 0) ++result.rays.primary_hits;
+  result.rays.primary = npix * std::size_t(spp);
+  std::vector<cl_uint> hits(2);
+  cl_check(q.enqueueReadBuffer(b_hits, CL_TRUE, 0, 2 * sizeof(cl_uint), hits.data()),
+           "clEnqueueReadBuffer(primary hit count)");
+  result.rays.primary_hits = fixed_pair(hits, 0);
   std::uint64_t children = 0, shadow = 0, finished = 0, forwards = 0;
   for (int l = 0; l < depth; ++l)
     for (int p = 0; p < P; ++p) {
@@ -454,6 +495,30 @@ void Renderer::Machine::read_stats(RenderResult& result) {
   st.descriptors_spawned = result.rays.primary_hits + children + shadow;
   st.descriptors_finished = finished;
   st.forwards = forwards;
+}
+
+// Progress (only when a line is due): a lower bound of the samples whose ray
+// trees are finished, out of all samples: samples injected, less one per
+// descriptor still in flight (spawned - finished, from the counters).
+void Renderer::Machine::report_progress(const Frame& f) {
+  std::vector<cl_uint> raw(nstats), hits(2);
+  cl::CommandQueue& q = rt.queue();
+  cl_check(q.enqueueReadBuffer(b_stats, CL_TRUE, 0, nstats * sizeof(cl_uint), raw.data()), "clEnqueueReadBuffer(stats)");
+  cl_check(q.enqueueReadBuffer(b_hits, CL_TRUE, 0, 2 * sizeof(cl_uint), hits.data()),
+           "clEnqueueReadBuffer(primary hit count)");
+  std::uint64_t spawned = fixed_pair(hits, 0), finished = 0;
+  for (int l = 0; l < depth; ++l)
+    for (int p = 0; p < P; ++p) {
+      const std::size_t at = (std::size_t(l) * P + p) * OPSILA_STAT_COUNT;
+      spawned += fixed_pair(raw, at + OPSILA_STAT_SPAWN_RADIANCE) + fixed_pair(raw, at + OPSILA_STAT_SPAWN_SHADOW);
+      finished += fixed_pair(raw, at + OPSILA_STAT_RESOLVED) + fixed_pair(raw, at + OPSILA_STAT_MISS) +
+                  fixed_pair(raw, at + OPSILA_STAT_OCCLUDED) + fixed_pair(raw, at + OPSILA_STAT_LIT);
+    }
+  const std::uint64_t injected = std::uint64_t(f.sample) * npix + f.next_pixel;
+  const std::uint64_t in_flight = spawned > finished ? spawned - finished : 0;
+  const double done = injected > in_flight ? double(injected - in_flight) : 0.0;
+  const std::uint64_t rays = injected + (spawned - fixed_pair(hits, 0));
+  progress->report(done / (double(npix) * spp), rays);
 }
 
 Renderer::Renderer(const Scene& scene, const RenderSettings& settings, ClRuntime& runtime)
@@ -472,8 +537,10 @@ RenderResult Renderer::render() {
   Launcher launch(m.rt, st.launches);
   const auto t_start = std::chrono::steady_clock::now();
 
+  if (m.progress) m.progress->start();
   m.clear_frame();
-  m.item_buffer(launch);
+  if (m.spp_k % 2 == 0) m.item_buffer(launch, -1);  // even k: the centre ray is no sample
+  m.item_buffer(launch, 0);
   Machine::Frame f;
   for (int round = 0;; ++round) {
     m.primary_descriptors(launch, f, round);
@@ -485,12 +552,14 @@ RenderResult Renderer::render() {
     }
     m.spmd_phase(launch, f, round);
     ++st.rounds;
+    if (m.progress && m.progress->due()) m.report_progress(f);
   }
   m.read_image(launch, result);
 
   st.render_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
   launch.harvest();
   m.read_stats(result);
+  if (m.progress && m.progress->due()) m.progress->report(1.0, result.rays.total());
   return result;
 }
 

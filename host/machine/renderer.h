@@ -14,6 +14,8 @@
 
 namespace opsila {
 
+class Progress;
+
 struct RenderSettings {
   int num_pes = 16;
   // n: bank slots per PE on average; P * n descriptors are in flight in each
@@ -24,6 +26,7 @@ struct RenderSettings {
   int work_groups_per_pe = 0;
   int item_buffer_tile = 1 << 16;  // pixels per item-buffer launch (bounded work per launch)
   int routing = OPSILA_ROUTING_BOXES;  // destination choice: cluster boxes, or the paper's spheres
+  Progress* progress = nullptr;    // told at round boundaries when set (core/progress.h)
 };
 
 // One kernel launch, named, with its OpenCL-profiled time.
@@ -55,8 +58,9 @@ struct RenderStats {
   std::size_t work_group_size = 0;
 };
 
-// The image, its rays (every primary ray is cast by the item buffer; primary
-// hits are the primary descriptors built from it) and how the machine ran.
+// The image, its rays (every primary ray, N per pixel, is cast by the item
+// buffer; primary hits are the primary descriptors built from it) and how
+// the machine ran.
 struct RenderResult : ImageResult {
   RenderStats stats;
 };

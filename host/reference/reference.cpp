@@ -3,9 +3,12 @@
 // shading. Arithmetic is single precision, like the OpenCL kernels.
 #include "reference/reference.h"
 
+#include "core/progress.h"
 #include "opsila_shared.h"
 
 #include <algorithm>
+#include <atomic>
+#include <chrono>
 #include <cmath>
 #include <limits>
 #include <thread>
@@ -19,7 +22,6 @@ namespace {
 using glm::vec3;
 
 vec3 to_glm(const Vec3& v) { return vec3(v[0], v[1], v[2]); }
-Vec3 to_vec3(const vec3& v) { return Vec3{v.x, v.y, v.z}; }
 bool any_nonzero(const vec3& v) { return v.x != 0.0f || v.y != 0.0f || v.z != 0.0f; }
 
 // ---------------------------------------------------------------- geometry
@@ -327,17 +329,35 @@ ReferenceTracer::~ReferenceTracer() = default;
 Vec3 ReferenceTracer::render_pixel(int x, int y, std::int32_t* object_facet,
                                    RayCounts& counts) const {
   const Scene& scene = scene_;
-  const vec3 dir = to_glm(primary_direction(impl_->frame, scene.width, scene.height, x, y));
-  ++counts.primary;
-  vec3 pixel(0.0f);
-  // Primary rays accept any t > 0 (only secondary and shadow rays skip t <= epsilon).
-  const int tri = impl_->trace(to_glm(scene.camera.eye), dir, 0.0f, 0, vec3(1.0f), pixel, counts);
-  if (tri >= 0) ++counts.primary_hits;
-  if (object_facet) {
-    object_facet[0] = tri >= 0 ? impl_->tris[tri].object_id : -1;
-    object_facet[1] = tri >= 0 ? impl_->tris[tri].facet_id : -1;
+  const vec3 eye = to_glm(scene.camera.eye);
+  // SPEC "Camera": a k x k grid of samples; the pixel is their mean.
+  const int k = spp_side(scene.spp);
+  glm::dvec3 sum(0.0);
+  int centre_tri = -1;
+  for (int j = 0; j < k; ++j) {
+    for (int i = 0; i < k; ++i) {
+      const float px = static_cast<float>(x) + spp_offset(i, k), py = static_cast<float>(y) + spp_offset(j, k);
+      const vec3 dir = to_glm(primary_direction_at(impl_->frame, scene.width, scene.height, px, py));
+      ++counts.primary;
+      vec3 sample(0.0f);
+      // Primary rays accept any t > 0 (only secondary and shadow rays skip t <= epsilon).
+      const int tri = impl_->trace(eye, dir, 0.0f, 0, vec3(1.0f), sample, counts);
+      if (tri >= 0) ++counts.primary_hits;
+      if (2 * i + 1 == k && 2 * j + 1 == k) centre_tri = tri;  // odd k: this sample is the centre ray
+      sum += glm::dvec3(sample);
+    }
   }
-  return to_vec3(pixel);
+  if (object_facet) {
+    if (k % 2 == 0) {  // even k: the centre ray is not a sample; find its hit alone
+      Hit hit;
+      const vec3 dir = to_glm(primary_direction(impl_->frame, scene.width, scene.height, x, y));
+      centre_tri = impl_->nearest(eye, dir, 0.0f, hit) ? hit.tri : -1;
+    }
+    object_facet[0] = centre_tri >= 0 ? impl_->tris[centre_tri].object_id : -1;
+    object_facet[1] = centre_tri >= 0 ? impl_->tris[centre_tri].facet_id : -1;
+  }
+  const glm::dvec3 mean = sum / static_cast<double>(scene.spp);
+  return Vec3{static_cast<float>(mean.x), static_cast<float>(mean.y), static_cast<float>(mean.z)};
 }
 
 void ReferenceTracer::render_rows(int y0, int y1, ImageResult& out, RayCounts& counts) const {
@@ -355,26 +375,44 @@ void ReferenceTracer::render_rows(int y0, int y1, ImageResult& out, RayCounts& c
   }
 }
 
-ImageResult render_reference(const Scene& scene, int threads) {
-  ImageResult image = blank_image(scene.width, scene.height);
-  const ReferenceTracer tracer(scene);
+void ReferenceTracer::render_image(ImageResult& image, int threads, Progress* progress) const {
+  const Scene& scene = scene_;
   threads = std::max(1, std::min(threads, scene.height));
-  if (threads == 1) {
-    tracer.render_rows(0, scene.height, image, image.rays);
-    return image;
+  if (threads == 1 && !progress) {
+    render_rows(0, scene.height, image, image.rays);
+    return;
   }
   // Interleaved bands of rows balance cheap and expensive parts of the image.
   constexpr int kBand = 4;
   std::vector<RayCounts> counts(threads);
+  std::atomic<int> rows_done{0};
+  std::atomic<std::uint64_t> rays_done{0};
+  if (progress) progress->start();
   std::vector<std::thread> workers;
   for (int w = 0; w < threads; ++w) {
     workers.emplace_back([&, w] {
-      for (int y = w * kBand; y < scene.height; y += threads * kBand)
-        tracer.render_rows(y, y + kBand, image, counts[w]);
+      for (int y = w * kBand; y < scene.height; y += threads * kBand) {
+        const std::uint64_t before = counts[w].total();
+        render_rows(y, y + kBand, image, counts[w]);
+        rays_done += counts[w].total() - before;
+        rows_done += std::min(kBand, scene.height - y);
+      }
     });
+  }
+  // The calling thread only watches: rows finished out of all rows.
+  while (progress && rows_done.load() < scene.height) {
+    if (progress->due()) progress->report(double(rows_done.load()) / scene.height, rays_done.load());
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
   }
   for (std::thread& t : workers) t.join();
   for (const RayCounts& c : counts) image.rays += c;
+  if (progress && progress->due()) progress->report(1.0, image.rays.total());
+}
+
+ImageResult render_reference(const Scene& scene, int threads, Progress* progress) {
+  ImageResult image = blank_image(scene.width, scene.height);
+  const ReferenceTracer tracer(scene);
+  tracer.render_image(image, threads, progress);
   return image;
 }
 

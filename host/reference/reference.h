@@ -14,6 +14,8 @@
 
 namespace opsila {
 
+class Progress;
+
 // Holds the scene (by reference: it must outlive the tracer), its epsilon and
 // a BVH. Const after construction, so several threads may render row ranges
 // of one tracer at once.
@@ -27,7 +29,12 @@ class ReferenceTracer {
   // Renders rows [y0, y1) into `out`, which must already be sized for the
   // whole image (see blank_image); adds the rays cast to `counts`.
   void render_rows(int y0, int y1, ImageResult& out, RayCounts& counts) const;
-  // Radiance of the ray tree rooted at one pixel; also reports the primary hit.
+  // The whole image into `out` (sized by blank_image), rows split among
+  // `threads`; adds the rays to out.rays. With a `progress`, the fraction
+  // shown is the rows finished.
+  void render_image(ImageResult& out, int threads, Progress* progress = nullptr) const;
+  // Pixel value: the mean of the radiance of its scene.spp sample ray trees;
+  // also reports the centre ray's primary hit (SPEC "Item buffer").
   Vec3 render_pixel(int x, int y, std::int32_t* object_facet, RayCounts& counts) const;
   float epsilon() const { return epsilon_; }
 
@@ -39,8 +46,9 @@ class ReferenceTracer {
 };
 
 // The whole image. `threads` > 1 splits rows among threads; the result is the
-// same for any thread count (each pixel is computed the same way).
-ImageResult render_reference(const Scene& scene, int threads = 1);
+// same for any thread count (each pixel is computed the same way). With a
+// `progress`, the fraction shown is the rows finished.
+ImageResult render_reference(const Scene& scene, int threads = 1, Progress* progress = nullptr);
 
 // Rows [y0, y1) only (builds its own tracer): for timing and tests.
 void render_reference_rows(const Scene& scene, int y0, int y1, ImageResult& out);

@@ -16,14 +16,16 @@
  * at most max_depth + 1 rays ever wait. */
 #define MEGA_STACK (OPSILA_MAX_DEPTH + 2)
 
-/* accum: 3 x 64-bit fixed-point sums per pixel (the renderer's pixel sums).
+/* accum: 3 x 64-bit fixed-point sums per pixel, over its spp_k x spp_k
+ * samples (the renderer's pixel sums; the host divides by the sample count).
+ * offsets[i] = (i + 0.5) / spp_k, from the host.
  * ray_counts: per pixel (secondary rays spawned, shadow rays spawned, as
  * RenderStats counts them; ray-facet tests, ray-box tests).
- * items: (object, facet) of the primary hit. */
+ * items: (object, facet) of the centre ray's primary hit. */
 __kernel void megakernel(FrameParams fp, __global const BankNode *nodes, __global const BankTriangle *tris,
                          __global const Material *materials, __global const Light *lights, int root,
-                         int pixel_begin, int pixel_count, __global long *accum, __global uint4 *ray_counts,
-                         __global int2 *items) {
+                         int spp_k, __global const float *offsets, int pixel_begin, int pixel_count,
+                         __global long *accum, __global uint4 *ray_counts, __global int2 *items) {
   int k = get_global_id(0);
   if (k >= pixel_count) return;
   int pixel = pixel_begin + k;
@@ -33,72 +35,85 @@ __kernel void megakernel(FrameParams fp, __global const BankNode *nodes, __globa
   float3 s_org[MEGA_STACK], s_dir[MEGA_STACK], s_w[MEGA_STACK];
   int s_level[MEGA_STACK];
   int sp = 0;
-  s_org[0] = load3(fp.eye);
-  s_dir[0] = primary_direction(fp, x, y);
-  s_w[0] = (float3)(1.0f, 1.0f, 1.0f);
-  s_level[0] = 0;
-  sp = 1;
 
   long3 sum = (long3)(0);
   uint secondary = 0u, shadow = 0u;
   uint tri_tests = 0u, box_tests = 0u;
   int2 item = (int2)(-1, -1);
-
-  while (sp > 0) {
-    --sp;
-    float3 org = s_org[sp], d = s_dir[sp], weight = s_w[sp];
-    int level = s_level[sp];
-    /* Primary rays accept any t > 0 (the item buffer's rule); others t > eps. */
-    float tmin = level == 0 ? 0.0f : eps;
-    RayPre r = make_ray(org, d);
+  /* Even k: the centre ray is not a sample; its hit is looked up alone. */
+  if (spp_k % 2 == 0) {
+    RayPre cr = make_ray(load3(fp.eye), primary_direction(fp, x, y));
     float t = OPSILA_INF;
     int hit = -1, facet = INT_MAX;
-    traverse_nearest(&r, nodes, tris, root, tmin, &t, &hit, &facet, &tri_tests, &box_tests);
-    if (hit < 0) {
-      sum += fixed3(weight * load3(fp.background));
-      continue;
-    }
-    __global const BankTriangle *tri = &tris[hit];
-    if (level == 0) item = (int2)(tri->object_id, tri->facet_id);
-
-    /* shade() of spmd_phase.cl, with the shadow ray traced here. */
-    SurfacePoint surf = surface_point(tri, org, d, t);
-    float3 p = surf.p;
-    __global const Material *m = &materials[tri->material];
-
-    sum += fixed3(weight * load3(fp.ambient) * load3g(m->ka));
-
-    for (int l = 0; l < fp.num_lights; ++l) {
-      float3 lv;
-      float dist;
-      float3 contrib = light_term(m, &lights[l], surf, d, weight, &lv, &dist);
-      if (all(contrib == (float3)(0.0f))) continue;
-      ++shadow;
-      RayPre sr = make_ray(p, lv);
-      if (!traverse_any(&sr, nodes, tris, root, eps, dist, &tri_tests, &box_tests)) sum += fixed3(contrib);
-    }
-
-    if (level + 1 >= fp.max_depth) continue;
-    float3 kr = load3g(m->kr), kt = load3g(m->kt);
-    float3 t_dir;
-    /* Total internal reflection: no transmitted ray. */
-    if (any(kt != (float3)(0.0f)) && transmitted_direction(m, surf, d, &t_dir) && sp < MEGA_STACK) {
-      ++secondary;
-      s_org[sp] = p;
-      s_dir[sp] = t_dir;
-      s_w[sp] = weight * kt;
-      s_level[sp] = level + 1;
-      ++sp;
-    }
-    if (any(kr != (float3)(0.0f)) && sp < MEGA_STACK) {
-      ++secondary;
-      s_org[sp] = p;
-      s_dir[sp] = reflected_direction(surf, d);
-      s_w[sp] = weight * kr;
-      s_level[sp] = level + 1;
-      ++sp;
-    }
+    traverse_nearest(&cr, nodes, tris, root, 0.0f, &t, &hit, &facet, &tri_tests, &box_tests);
+    if (hit >= 0) item = (int2)(tris[hit].object_id, tris[hit].facet_id);
   }
+
+  for (int sample = 0; sample < spp_k * spp_k; ++sample) {
+    int si = sample % spp_k, sj = sample / spp_k;
+    bool centre = 2 * si + 1 == spp_k && 2 * sj + 1 == spp_k;
+    s_org[0] = load3(fp.eye);
+    s_dir[0] = primary_direction_at(fp, (float)x + offsets[si], (float)y + offsets[sj]);
+    s_w[0] = (float3)(1.0f, 1.0f, 1.0f);
+    s_level[0] = 0;
+    sp = 1;
+
+    while (sp > 0) {
+      --sp;
+      float3 org = s_org[sp], d = s_dir[sp], weight = s_w[sp];
+      int level = s_level[sp];
+      /* Primary rays accept any t > 0 (the item buffer's rule); others t > eps. */
+      float tmin = level == 0 ? 0.0f : eps;
+      RayPre r = make_ray(org, d);
+      float t = OPSILA_INF;
+      int hit = -1, facet = INT_MAX;
+      traverse_nearest(&r, nodes, tris, root, tmin, &t, &hit, &facet, &tri_tests, &box_tests);
+      if (hit < 0) {
+        sum += fixed3(weight * load3(fp.background));
+        continue;
+      }
+      __global const BankTriangle *tri = &tris[hit];
+      if (level == 0 && centre) item = (int2)(tri->object_id, tri->facet_id);
+
+      /* shade() of spmd_phase.cl, with the shadow ray traced here. */
+      SurfacePoint surf = surface_point(tri, org, d, t);
+      float3 p = surf.p;
+      __global const Material *m = &materials[tri->material];
+
+      sum += fixed3(weight * load3(fp.ambient) * load3g(m->ka));
+
+      for (int l = 0; l < fp.num_lights; ++l) {
+        float3 lv;
+        float dist;
+        float3 contrib = light_term(m, &lights[l], surf, d, weight, &lv, &dist);
+        if (all(contrib == (float3)(0.0f))) continue;
+        ++shadow;
+        RayPre sr = make_ray(p, lv);
+        if (!traverse_any(&sr, nodes, tris, root, eps, dist, &tri_tests, &box_tests)) sum += fixed3(contrib);
+      }
+
+      if (level + 1 >= fp.max_depth) continue;
+      float3 kr = load3g(m->kr), kt = load3g(m->kt);
+      float3 t_dir;
+      /* Total internal reflection: no transmitted ray. */
+      if (any(kt != (float3)(0.0f)) && transmitted_direction(m, surf, d, &t_dir) && sp < MEGA_STACK) {
+        ++secondary;
+        s_org[sp] = p;
+        s_dir[sp] = t_dir;
+        s_w[sp] = weight * kt;
+        s_level[sp] = level + 1;
+        ++sp;
+      }
+      if (any(kr != (float3)(0.0f)) && sp < MEGA_STACK) {
+        ++secondary;
+        s_org[sp] = p;
+        s_dir[sp] = reflected_direction(surf, d);
+        s_w[sp] = weight * kr;
+        s_level[sp] = level + 1;
+        ++sp;
+      }
+    }
+  } /* samples */
   accum[pixel * 3 + 0] = sum.x;
   accum[pixel * 3 + 1] = sum.y;
   accum[pixel * 3 + 2] = sum.z;

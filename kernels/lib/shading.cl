@@ -47,9 +47,16 @@ inline bool transmitted_direction(__global const Material *m, SurfacePoint sp, f
   return true;
 }
 
-/* SPEC camera: primary ray direction of pixel (x, y). */
-inline float3 primary_direction(FrameParams fp, int x, int y) {
-  float sx = (2.0f * ((float)x + 0.5f) / (float)fp.width - 1.0f) * fp.tan_half_fov * fp.aspect;
-  float sy = (1.0f - 2.0f * ((float)y + 0.5f) / (float)fp.height) * fp.tan_half_fov;
+/* SPEC camera: direction of the ray through image point (px, py); pixel
+ * (x, y)'s centre is (x + 0.5, y + 0.5), its sample (i, j) is
+ * (x + (i+0.5)/k, y + (j+0.5)/k) with the offsets computed on the host. */
+inline float3 primary_direction_at(FrameParams fp, float px, float py) {
+  float sx = (2.0f * px / (float)fp.width - 1.0f) * fp.tan_half_fov * fp.aspect;
+  float sy = (1.0f - 2.0f * py / (float)fp.height) * fp.tan_half_fov;
   return normalize(load3(fp.forward) + sx * load3(fp.right) + sy * load3(fp.up));
+}
+
+/* Primary (centre) ray direction of pixel (x, y). */
+inline float3 primary_direction(FrameParams fp, int x, int y) {
+  return primary_direction_at(fp, (float)x + 0.5f, (float)y + 0.5f);
 }

@@ -1,0 +1,131 @@
+#include "core/progress.h"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <vector>
+
+namespace opsila {
+
+namespace {
+
+double seconds_between(std::chrono::steady_clock::time_point a, std::chrono::steady_clock::time_point b) {
+  return std::chrono::duration<double>(b - a).count();
+}
+
+std::string duration_text(double s) {
+  char text[32];
+  if (s < 60)
+    std::snprintf(text, sizeof text, "%.1f s", s);
+  else if (s < 3600)
+    std::snprintf(text, sizeof text, "%dm%02ds", int(s / 60), int(s) % 60);
+  else if (s < 1e7)
+    std::snprintf(text, sizeof text, "%dh%02dm", int(s / 3600), int(s / 60) % 60);
+  else
+    std::snprintf(text, sizeof text, "%.0f days", s / 86400);
+  return text;
+}
+
+std::string count_text(double n) {
+  char text[32];
+  if (n >= 1e12)
+    std::snprintf(text, sizeof text, "%.3g T", n / 1e12);
+  else if (n >= 1e9)
+    std::snprintf(text, sizeof text, "%.3g G", n / 1e9);
+  else if (n >= 1e6)
+    std::snprintf(text, sizeof text, "%.3g M", n / 1e6);
+  else
+    std::snprintf(text, sizeof text, "%.0f", n);
+  return text;
+}
+
+}  // namespace
+
+Progress::Progress(std::string label, bool enabled) : label_(std::move(label)), enabled_(enabled) {
+  tty_ = ::isatty(STDERR_FILENO) == 1;
+  every_ = tty_ ? 0.25 : 5.0;
+  if (const char* env = std::getenv("OPSILA_PROGRESS_AFTER")) {
+    char* end = nullptr;
+    const double v = std::strtod(env, &end);
+    if (end != env && *end == '\0' && v >= 0 && std::isfinite(v)) after_ = v;
+  }
+  start_ = Clock::now();
+  next_ = start_ + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(after_));
+}
+
+Progress::~Progress() { finish(); }
+
+void Progress::restart(std::string label) {
+  label_ = std::move(label);
+  start();
+}
+
+void Progress::start() {
+  finish();
+  shown_fraction_ = 0;
+  start_ = Clock::now();
+  next_ = start_ + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(after_));
+}
+
+bool Progress::due() { return enabled_ && Clock::now() >= next_; }
+
+void Progress::report(double fraction, std::uint64_t rays) {
+  if (!enabled_) return;
+  const Clock::time_point now = Clock::now();
+  next_ = now + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(every_));
+  shown_fraction_ = std::max(shown_fraction_, std::clamp(fraction, 0.0, 1.0));
+  const double elapsed = seconds_between(start_, now);
+  std::string left = "time left unknown";
+  if (shown_fraction_ > 0) left = "about " + duration_text(elapsed * (1 - shown_fraction_) / shown_fraction_) + " left";
+  const double rate = elapsed > 0 ? double(rays) / elapsed : 0;
+  std::fprintf(stderr, "%sopsila: %s: %5.1f%% done, %s rays/s, %s elapsed, %s%s", tty_ ? "\r" : "", label_.c_str(),
+               100 * shown_fraction_, count_text(rate).c_str(), duration_text(elapsed).c_str(), left.c_str(),
+               tty_ ? "\033[K" : "\n");
+  std::fflush(stderr);
+  drawn_ = tty_;
+}
+
+void Progress::finish() {
+  if (drawn_) std::fputc('\n', stderr);
+  drawn_ = false;
+}
+
+WorkBound work_bound(const Scene& scene) {
+  std::vector<char> used(scene.materials.size() + 1, 0);
+  for (const Triangle& t : scene.triangles)
+    if (t.material >= 0 && std::size_t(t.material) < scene.materials.size()) used[std::size_t(t.material)] = 1;
+  bool reflects = false, transmits = false;
+  for (std::size_t m = 0; m < scene.materials.size(); ++m) {
+    if (!used[m]) continue;
+    const Vec3 kr = scene.materials[m].kr(), kt = scene.materials[m].kt();
+    reflects = reflects || kr[0] != 0 || kr[1] != 0 || kr[2] != 0;
+    transmits = transmits || kt[0] != 0 || kt[1] != 0 || kt[2] != 0;
+  }
+  WorkBound b;
+  b.branches = int(reflects) + int(transmits);
+  double nodes = 0, level = 1;
+  for (int l = 0; l < std::max(1, scene.max_depth); ++l, level *= b.branches) nodes += level;
+  b.rays_per_sample = nodes * (1.0 + double(scene.lights.size()));
+  b.rays = double(scene.width) * double(scene.height) * double(std::max(1, scene.spp)) * b.rays_per_sample;
+  return b;
+}
+
+std::string large_work_note(const Scene& scene) {
+  const WorkBound b = work_bound(scene);
+  if (b.rays < kLargeWork) return "";
+  const char* why = b.branches == 2 ? "reflective and transmissive materials"
+                    : b.branches == 1 ? "reflective or transmissive materials"
+                                      : "no reflection or transmission";
+  char text[400];
+  std::snprintf(text, sizeof text,
+                "expected work: up to %s rays (%dx%d pixels x %d samples x up to %s rays each: depth %d, %zu "
+                "lights, %s)",
+                count_text(b.rays).c_str(), scene.width, scene.height, scene.spp, count_text(b.rays_per_sample).c_str(),
+                scene.max_depth, scene.lights.size(), why);
+  return text;
+}
+
+}  // namespace opsila

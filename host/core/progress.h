@@ -1,0 +1,68 @@
+// Progress of a long render or bench stage on stderr: fraction done, rays/s,
+// elapsed and estimated time left. Silent for the first couple of seconds (a
+// short run prints nothing), then redrawn in place on a terminal, or one
+// plain line every few seconds when stderr is a file or a pipe.
+//
+// The loop that owns the work calls due() at its natural boundaries (a round,
+// a band of rows): a clock read, nothing more. Only when it returns true does
+// the caller gather its counts and call report(). Nothing here touches the
+// work itself, so an image never depends on whether progress is shown.
+//
+// OPSILA_PROGRESS_AFTER=SECONDS (environment) replaces the two-second delay,
+// e.g. 0 to see (or test) progress on a small scene.
+#pragma once
+
+#include <chrono>
+#include <cstdint>
+#include <string>
+
+#include "core/scene.h"
+
+namespace opsila {
+
+class Progress {
+ public:
+  // `label` names the stage ("render", "bench: OPSILA run 3/5"). A disabled
+  // reporter (-q) never prints.
+  Progress(std::string label, bool enabled);
+  ~Progress();
+  Progress(const Progress&) = delete;
+  Progress& operator=(const Progress&) = delete;
+
+  // Starts the clock again for a new stage with a new label.
+  void restart(std::string label);
+  // Starts the clock again, same label: the work itself begins now (after
+  // loading, partitioning and kernel builds).
+  void start();
+  // True when a line is due now.
+  bool due();
+  // fraction in [0, 1], a lower bound of the work done (the caller says what
+  // it counts); rays cast so far. Monotone: a smaller fraction than the last
+  // one shown is shown as the last one.
+  void report(double fraction, std::uint64_t rays);
+  // Ends the stage: a line redrawn in place gets its newline.
+  void finish();
+
+ private:
+  using Clock = std::chrono::steady_clock;
+  std::string label_;
+  bool enabled_ = false, tty_ = false, drawn_ = false;
+  double after_ = 2.0, every_ = 5.0;
+  double shown_fraction_ = 0;
+  Clock::time_point start_, next_;
+};
+
+// Upper bound of the rays a render can cast: pixels x spp x the largest ray
+// tree (a radiance ray per level per reflective/transmissive branch, each
+// with a shadow ray per light). Worth saying up front when it is large.
+struct WorkBound {
+  double rays = 0;           // the bound (double: 2^31-node trees overflow 64 bits)
+  double rays_per_sample = 0;
+  int branches = 0;          // 0, 1 or 2: reflected and/or transmitted children possible
+};
+WorkBound work_bound(const Scene& scene);
+// One line for stderr when the bound is at least kLargeWork rays, else "".
+constexpr double kLargeWork = 1e9;
+std::string large_work_note(const Scene& scene);
+
+}  // namespace opsila

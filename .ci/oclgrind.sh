@@ -77,6 +77,12 @@ check render-optimised-tiny-banks "${optimised_checks[@]}" -- \
   "$build/opsila" render "$scene" -o "$work/banks.pfm" --size 8x6 --depth 4 --pes 4 --bank-capacity 1 \
   --device oclgrind -q "${view[@]}"
 
+# 2b. Samples per pixel (k = 2): the centre-only item-buffer pass, one pass
+#     per sample, the primary hit counter.
+check render-spp-all-checks "${all_checks[@]}" -- \
+  "$build/opsila" render "$scene" -o "$work/spp.pfm" --size 4x3 --depth 2 --pes 4 --spp 4 --device oclgrind -q \
+  "${view[@]}"
+
 # 3. The scatter on its own: SPMD output slots with holes and unused slots,
 #    a waiting queue, banks that overflow (tests/reliability_test.cpp).
 check scatter-all-checks "${all_checks[@]}" -- \

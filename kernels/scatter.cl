@@ -17,10 +17,11 @@
  *   scatter_move_pool, scatter_move_outputs: each record to I'(i). */
 #include "lib/descriptor.cl"
 
-/* Counts of block b; hist[b * P + q] = entries bound for PE q. */
+/* Counts of block b; hist[b * P + q] = entries bound for PE q. With
+ * write_rank, also each entry's rank inside its block (for the move by entry). */
 __kernel void scatter_count(int pool_len, int pool_blocks, int num_blocks, int items_per_group, int S, int num_pes,
                             DESC_PARAMS(pool), DESC_PARAMS(out), __global const int *out_item_count,
-                            __global int *hist, __global int *rank) {
+                            __global int *hist, __global int *rank, int write_rank) {
   int b = get_global_id(0);
   if (b >= num_blocks) return;
   __global int *h = hist + (long)b * num_pes;
@@ -29,7 +30,8 @@ __kernel void scatter_count(int pool_len, int pool_blocks, int num_blocks, int i
     int end = min((b + 1) * OPSILA_SCATTER_BLOCK, pool_len);
     for (int k = b * OPSILA_SCATTER_BLOCK; k < end; ++k) {
       int d = desc_dest_at(pool, k);
-      rank[k] = (d >= 0 && d < num_pes) ? h[d]++ : -1;
+      int r = (d >= 0 && d < num_pes) ? h[d]++ : -1;
+      if (write_rank) rank[k] = r;
     }
     return;
   }
@@ -39,7 +41,8 @@ __kernel void scatter_count(int pool_len, int pool_blocks, int num_blocks, int i
     for (int j = 0; j < c; ++j) {
       int at = t * S + j;
       int d = desc_dest_at(out, at);
-      rank[pool_len + at] = (d >= 0 && d < num_pes) ? h[d]++ : -1;
+      int r = (d >= 0 && d < num_pes) ? h[d]++ : -1;
+      if (write_rank) rank[pool_len + at] = r;
     }
   }
 }
@@ -180,5 +183,35 @@ __kernel void scatter_move_outputs(int out_items, int items_per_group, int S, in
     if (rk < 0) continue;
     int d = desc_dest_at(out, at);
     place(out, at, d, h[d] + rk, bank_begin, bank_count, overflow_base, banks, next);
+  }
+}
+
+/* The move by block, for processors that run few work-items at a time (a
+ * CPU core): one work-item walks a block in source order, as scatter_count
+ * did, and takes each entry's rank from the block's running prefix, so no
+ * rank is stored; each core then writes P sequential streams. */
+__kernel void scatter_move_blocks(int pool_len, int pool_blocks, int num_blocks, int items_per_group, int S,
+                                  int num_pes, DESC_PARAMS(pool), DESC_PARAMS(out), __global const int *out_item_count,
+                                  __global int *hist, __global const int *bank_begin, __global const int *bank_count,
+                                  __global const int *overflow_base, DESC_PARAMS(banks), DESC_PARAMS(next)) {
+  int b = get_global_id(0);
+  if (b >= num_blocks) return;
+  __global int *h = hist + (long)b * num_pes;
+  if (b < pool_blocks) {
+    int end = min((b + 1) * OPSILA_SCATTER_BLOCK, pool_len);
+    for (int k = b * OPSILA_SCATTER_BLOCK; k < end; ++k) {
+      int d = desc_dest_at(pool, k);
+      if (d >= 0 && d < num_pes) place(pool, k, d, h[d]++, bank_begin, bank_count, overflow_base, banks, next);
+    }
+    return;
+  }
+  int first_item = (b - pool_blocks) * items_per_group;
+  for (int t = first_item; t < first_item + items_per_group; ++t) {
+    int c = out_item_count[t];
+    for (int j = 0; j < c; ++j) {
+      int at = t * S + j;
+      int d = desc_dest_at(out, at);
+      if (d >= 0 && d < num_pes) place(out, at, d, h[d]++, bank_begin, bank_count, overflow_base, banks, next);
+    }
   }
 }

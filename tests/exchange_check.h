@@ -22,6 +22,7 @@ namespace opsila::test {
 
 struct ExchangeCase {
   int pes = 4, slots = 8, cap = 0, group_size = 4, spawn_slots = 3;
+  int move_by_block = -1;  // -1: as the device chooses; 0: by entry (GPU path); 1: by block (CPU path)
   int pool_len = 10, out_groups = 2;
   double hole_rate = 0.25, hot_share = 0.3;  // hot_share: entries bound for PE 0 (a hot bank)
   unsigned seed = 1;
@@ -76,6 +77,7 @@ inline std::vector<cl_int> check_exchange(ClRuntime& rt, const ExchangeCase& c) 
   std::vector<LaunchRecord> records;
   Launcher launch(rt, records);
   ScatterPass scatter(rt, c.pes);
+  if (c.move_by_block >= 0) scatter.set_move_by_block(c.move_by_block == 1);
   ScatterPass::Args a;
   a.pool_len = c.pool_len;
   a.pool = &d_pool;

@@ -558,7 +558,10 @@ void small_scatter(int pes, int slots, int S, int pool_len, unsigned seed) {
   c.out_groups = 2;
   c.group_size = 2;
   c.seed = seed;
-  test::check_exchange(rt, c);
+  for (int by_block : {0, 1}) {  // both moves under Oclgrind
+    c.move_by_block = by_block;
+    test::check_exchange(rt, c);
+  }
 }
 
 TEST(SmallScatter, OutputSlotsAndQueueWithOverflow) {

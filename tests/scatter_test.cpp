@@ -24,20 +24,25 @@ TEST(Scatter, EveryDescriptorArrivesOnceInOrder) {
     c.group_size = 64;
     c.hole_rate = 0.2;
     c.seed = seed++;
+    c.move_by_block = length % 2;  // both moves, on any device
     test::check_exchange(runtime(), c);
   }
 }
 
 TEST(Scatter, SpmdOutputsAndPoolTogether) {
-  test::ExchangeCase c;
-  c.pes = 16;
-  c.pool_len = 3000;
-  c.out_groups = 40;
-  c.group_size = 64;
-  c.spawn_slots = 4;
-  c.slots = 4096;
-  const auto counts = test::check_exchange(runtime(), c);
-  EXPECT_GT(counts[0], 0) << "the case should overflow";
+  for (int by_block : {0, 1}) {  // the GPU and the CPU move, on whatever device runs the tests
+    SCOPED_TRACE(by_block ? "move by block" : "move by entry");
+    test::ExchangeCase c;
+    c.pes = 16;
+    c.pool_len = 3000;
+    c.out_groups = 40;
+    c.group_size = 64;
+    c.spawn_slots = 4;
+    c.slots = 4096;
+    c.move_by_block = by_block;
+    const auto counts = test::check_exchange(runtime(), c);
+    EXPECT_GT(counts[0], 0) << "the case should overflow";
+  }
 }
 
 TEST(Scatter, BanksFollowDemand) {

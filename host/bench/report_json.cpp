@@ -261,12 +261,23 @@ json targets_json(const BenchReport& r) {
         {"gbytes_per_s", p20->gbytes_per_s()},
         {"copy_gbytes_per_s", p20->copy_kernel_gbytes_per_s()},
         {"fraction", p20->gbytes_per_s() / std::max(1e-30, p20->copy_kernel_gbytes_per_s())},
-        {"goal", 0.6},
-        {"met", p20->gbytes_per_s() >= 0.6 * p20->copy_kernel_gbytes_per_s()}};
+        {"goal", 0.75},
+        {"met", p20->gbytes_per_s() >= 0.75 * p20->copy_kernel_gbytes_per_s()}};
   else
     targets["scatter_2p20_vs_copy"] = nullptr;
   const double share = r.exchange_share + r.overhead_share;
   targets["exchange_plus_overhead"] = {{"share", share}, {"goal", 0.10}, {"met", share < 0.10}};
+  targets["occupancy"] = {{"occupancy", optional_value(r.occupancy)},
+                          {"goal", 0.6},
+                          {"met", r.occupancy.has_value() && *r.occupancy >= 0.6}};
+  targets["rounds"] = {{"rounds", r.stats().rounds}, {"goal", 60}, {"met", r.stats().rounds <= 60}};
+  {
+    const double mega = mrays(r.megakernel.median_run.rays.total(), r.megakernel.seconds);
+    const double mine = mrays(r.rays_total(), r.render_seconds);
+    targets["opsila_vs_megakernel"] = {{"ratio", mega > 0 ? mine / mega : 0.0},
+                                       {"goal", 0.7},
+                                       {"met", mega > 0 && mine >= 0.7 * mega}};
+  }
   if (r.embree.present) {
     const double e = mrays(r.embree.median_run.rays.total(), r.embree.seconds);
     const double mine = mrays(r.rays_total(), r.render_seconds);

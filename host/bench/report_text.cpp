@@ -124,7 +124,7 @@ void scatter_text(std::string& out, const BenchReport& r) {
             1e3 * p.host_seconds, 1e3 * p.kernel_seconds, p.speedup(), p.gbytes_per_s(),
             p.copy_kernel_gbytes_per_s(), p.copy_buffer_gbytes_per_s(), percent_of_copy(p));
   if (!r.by_pes.empty()) {
-    appendf(out, "  %s descriptors over PE counts (destination streams = PEs x 5 fields):\n",
+    appendf(out, "  %s descriptors over PE counts (destination streams = PEs, one 64-byte record each):\n",
             length_label(r.by_pes.front().length).c_str());
     appendf(out, "  %8s %11s %8s %9s %9s %7s\n", "PEs", "kernel ms", "speedup", "GB/s", "copy GB/s", "%copy");
     for (const ScatterPoint& p : r.by_pes)

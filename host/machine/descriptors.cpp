@@ -139,6 +139,8 @@ ScatterPass::ScatterPass(ClRuntime& rt, int num_pes) : rt_(rt), num_pes_(num_pes
   plan_ = rt.kernel("scatter_plan");
   move_pool_ = rt.kernel("scatter_move_pool");
   move_out_ = rt.kernel("scatter_move_outputs");
+  move_blocks_ = rt.kernel("scatter_move_blocks");
+  by_block_ = !rt.device().is_gpu;
   wg_scan_ = queried_group_size(rt, scan_, 64);
   wg_plan_ = queried_group_size(rt, plan_, 64);
   bank_begin = device_buffer(rt, num_pes * sizeof(cl_int), "bank offsets");
@@ -174,7 +176,7 @@ void ScatterPass::plan(Launcher& launch, const Args& a, int round) {
   const cl::Buffer& out = a.outputs ? a.outputs->records : dummy_;
   const cl::Buffer& out_count = a.out_item_count ? *a.out_item_count : dummy_;
   set_args(count_, "clSetKernelArg(scatter_count)", a.pool_len, pool_blocks, nblocks, a.group_size, a.spawn_slots, P,
-           a.pool->records, out, out_count, hist_, rank_);
+           a.pool->records, out, out_count, hist_, rank_, by_block_ ? 0 : 1);
   launch.run(count_, "scatter_count", std::max(nblocks, 1), 0, round);
   set_args(scan_, "clSetKernelArg(scatter_scan)", nblocks, P, hist_, pe_total);
   launch.run(scan_, "scatter_scan", std::size_t(P) * wg_scan_, wg_scan_, round);
@@ -187,6 +189,15 @@ void ScatterPass::plan(Launcher& launch, const Args& a, int round) {
 void ScatterPass::move(Launcher& launch, const Args& a, int round) {
   const int P = num_pes_;
   const int pool_blocks = (a.pool_len + kBlock - 1) / kBlock;
+  if (by_block_) {
+    const cl::Buffer& out = a.outputs ? a.outputs->records : dummy_;
+    const cl::Buffer& out_count = a.out_item_count ? *a.out_item_count : dummy_;
+    set_args(move_blocks_, "clSetKernelArg(scatter_move_blocks)", a.pool_len, pool_blocks, blocks(a), a.group_size,
+             a.spawn_slots, P, a.pool->records, out, out_count, hist_, bank_begin, bank_count, overflow_base,
+             a.banks->records, a.next_pool->records);
+    if (blocks(a) > 0) launch.run(move_blocks_, "scatter_move", std::size_t(blocks(a)), 0, round);
+    return;
+  }
   if (a.pool_len > 0) {
     set_args(move_pool_, "clSetKernelArg(scatter_move_pool)", a.pool_len, P, a.pool->records, rank_, hist_,
              bank_begin, bank_count, overflow_base, a.banks->records, a.next_pool->records);

@@ -113,6 +113,9 @@ class ScatterPass {
     const DescriptorSet* banks = nullptr;
     const DescriptorSet* next_pool = nullptr;  // what finds no bank slot
   };
+  // The move by entry (GPUs) or by block (CPUs) is chosen from the device;
+  // tests run both on any device.
+  void set_move_by_block(bool by_block) { by_block_ = by_block; }
   void plan(Launcher& launch, const Args& a, int round);
   void move(Launcher& launch, const Args& a, int round);
   // Results of plan(): per PE, and the SPMD work-group table.
@@ -123,7 +126,10 @@ class ScatterPass {
   ClRuntime& rt_;
   int num_pes_;
   std::size_t wg_scan_ = 1, wg_plan_ = 1;
-  cl::Kernel count_, scan_, plan_, move_pool_, move_out_;
+  cl::Kernel count_, scan_, plan_, move_pool_, move_out_, move_blocks_;
+  // Move by block (one work-item walks a block in order: CPUs) or by entry
+  // (one work-item per record, ranks stored by the count: GPUs).
+  bool by_block_ = false;
   cl::Buffer rank_, hist_, dummy_;
   std::size_t rank_cap_ = 0, hist_cap_ = 0, group_cap_ = 0;
   int blocks(const Args& a) const;

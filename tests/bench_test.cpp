@@ -31,12 +31,7 @@ RenderResult render_opsila(const Scene& s, int pes) {
   return render(s, rs, runtime());
 }
 
-double item_agreement(const std::vector<std::int32_t>& a, const std::vector<std::int32_t>& b) {
-  EXPECT_EQ(a.size(), b.size());
-  std::size_t same = 0;
-  for (std::size_t i = 0; i + 1 < a.size(); i += 2) same += (a[i] == b[i] && a[i + 1] == b[i + 1]);
-  return double(same) / double(a.size() / 2);
-}
+using test::item_agreement;
 
 TEST(Bench, MegakernelImageEqualsOpsilaImage) {
   const Scene s = test::mirror_glass_scene(96, 5);

@@ -34,12 +34,7 @@ std::size_t non_finite(const std::vector<float>& rgb) {
   return n;
 }
 
-double item_agreement(const std::vector<std::int32_t>& a, const std::vector<std::int32_t>& b) {
-  if (a.size() != b.size() || a.empty()) return 0;
-  std::size_t same = 0;
-  for (std::size_t i = 0; i + 1 < a.size(); i += 2) same += (a[i] == b[i] && a[i + 1] == b[i + 1]);
-  return double(same) / double(a.size() / 2);
-}
+using test::item_agreement;
 
 Scene empty_scene(int w, int h, Vec3 eye, Vec3 look_at, float fov, int depth) {
   Scene s;

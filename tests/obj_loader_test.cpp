@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "test_util.h"
 #include "input/obj_loader.h"
 #include "core/scene.h"
 
@@ -24,22 +25,8 @@ namespace fs = std::filesystem;
 
 const std::string kData = std::string(OPSILA_SOURCE_DIR) + "/tests/data";
 
-std::string error_of(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "<no error>";
-}
-
-// The message must name every fragment (file, line, key word) and be one line.
-void expect_error(const std::function<void()>& f, const std::vector<std::string>& fragments) {
-  const std::string msg = error_of(f);
-  for (const std::string& frag : fragments)
-    EXPECT_NE(msg.find(frag), std::string::npos) << "message \"" << msg << "\" lacks \"" << frag << "\"";
-  EXPECT_EQ(msg.find('\n'), std::string::npos) << msg;
-}
+using test::error_of;
+using test::expect_error;
 
 Scene from_text(const std::string& text) { return load_obj_from_string(text, "t.obj", ""); }
 

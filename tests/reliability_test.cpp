@@ -52,52 +52,8 @@ bool contains(const std::string& text, const std::string& part) { return text.fi
 
 // ------------------------------------------------------------ running opsila
 
-// Runs `program args...` with this process's environment, changed by `env`:
-// a value sets the variable, std::nullopt removes it.
-RunResult run_with_env(const std::string& program, const std::vector<std::string>& args,
-                       const std::map<std::string, std::optional<std::string>>& env) {
-  std::vector<std::string> entries;
-  for (char** e = environ; *e; ++e) {
-    const std::string entry = *e;
-    const std::string name = entry.substr(0, entry.find('='));
-    if (!env.count(name)) entries.push_back(entry);
-  }
-  for (const auto& [name, value] : env)
-    if (value) entries.push_back(name + "=" + *value);
-  std::vector<char*> envp;
-  for (std::string& e : entries) envp.push_back(e.data());
-  envp.push_back(nullptr);
-
-  TempDir capture;
-  const std::string out_path = capture.file("stdout"), err_path = capture.file("stderr");
-  posix_spawn_file_actions_t actions;
-  posix_spawn_file_actions_init(&actions);
-  posix_spawn_file_actions_addopen(&actions, 1, out_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  posix_spawn_file_actions_addopen(&actions, 2, err_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  std::vector<char*> argv;
-  argv.push_back(const_cast<char*>(program.c_str()));
-  for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
-  argv.push_back(nullptr);
-  RunResult result;
-  pid_t pid;
-  const int spawned = posix_spawn(&pid, program.c_str(), &actions, nullptr, argv.data(), envp.data());
-  posix_spawn_file_actions_destroy(&actions);
-  if (spawned != 0) {
-    result.err = "spawn failed";
-    return result;
-  }
-  int status = 0;
-  while (::waitpid(pid, &status, 0) < 0) {
-  }
-  result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-  result.out = test::read_file(out_path);
-  result.err = test::read_file(err_path);
-  return result;
-}
-
-RunResult opsila(const std::vector<std::string>& args,
-                 const std::map<std::string, std::optional<std::string>>& env = {}) {
-  return run_with_env(OPSILA_BINARY, args, env);
+RunResult opsila(const std::vector<std::string>& args, const test::EnvChanges& env = {}) {
+  return test::run_program(OPSILA_BINARY, args, env);
 }
 
 // `opsila render` of the small mirror-and-glass OBJ scene into `out`.

@@ -25,12 +25,7 @@ RenderResult render_with(const Scene& s, int pes, int capacity = 0) {
   return render(s, rs, runtime());
 }
 
-double item_agreement(const std::vector<std::int32_t>& a, const std::vector<std::int32_t>& b) {
-  EXPECT_EQ(a.size(), b.size());
-  std::size_t same = 0;
-  for (std::size_t i = 0; i + 1 < a.size(); i += 2) same += (a[i] == b[i] && a[i + 1] == b[i + 1]);
-  return double(same) / double(a.size() / 2);
-}
+using test::item_agreement;
 
 void expect_balanced(const RenderStats& st) {
   EXPECT_GT(st.descriptors_spawned, 0u);

@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "test_util.h"
 #include "input/obj_loader.h"
 #include "input/primitives.h"
 #include "core/scene.h"
@@ -25,21 +26,8 @@ const std::string kSource = OPSILA_SOURCE_DIR;
 const std::string kScenes = kSource + "/scenes";
 const std::string kData = kSource + "/tests/data";
 
-std::string error_of(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "<no error>";
-}
-
-void expect_error(const std::function<void()>& f, const std::vector<std::string>& fragments) {
-  const std::string msg = error_of(f);
-  for (const std::string& frag : fragments)
-    EXPECT_NE(msg.find(frag), std::string::npos) << "message \"" << msg << "\" lacks \"" << frag << "\"";
-  EXPECT_EQ(msg.find('\n'), std::string::npos) << msg;
-}
+using test::error_of;
+using test::expect_error;
 
 Scene json(const std::string& text) { return load_scene_from_string(text, "s.json", ""); }
 

@@ -1,5 +1,6 @@
-// Helpers shared by the tests: image comparison, temporary folders, running
-// the opsila binary and capturing what it says.
+// Helpers shared by the tests: image and item-buffer comparison, temporary
+// folders, running the opsila binary and capturing what it says, one-line
+// input errors.
 #pragma once
 
 #include <dirent.h>
@@ -9,8 +10,14 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <gtest/gtest.h>
+
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <functional>
+#include <map>
+#include <optional>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
@@ -21,6 +28,7 @@
 #include <vector>
 
 #include "core/image_io.h"
+#include "core/scene.h"
 
 extern char** environ;
 
@@ -130,8 +138,24 @@ struct RunResult {
   }
 };
 
+// Changes to the environment of a run: a value sets the variable,
+// std::nullopt removes it; the rest of this process's environment is kept.
+using EnvChanges = std::map<std::string, std::optional<std::string>>;
+
 // Runs `program args...` (no shell), stdout and stderr captured via files.
-inline RunResult run_program(const std::string& program, const std::vector<std::string>& args) {
+inline RunResult run_program(const std::string& program, const std::vector<std::string>& args,
+                             const EnvChanges& env = {}) {
+  std::vector<std::string> entries;
+  for (char** e = environ; *e; ++e) {
+    const std::string entry = *e;
+    if (!env.count(entry.substr(0, entry.find('=')))) entries.push_back(entry);
+  }
+  for (const auto& [name, value] : env)
+    if (value) entries.push_back(name + "=" + *value);
+  std::vector<char*> envp;
+  for (std::string& e : entries) envp.push_back(e.data());
+  envp.push_back(nullptr);
+
   TempDir capture;
   const std::string out_path = capture.file("stdout"), err_path = capture.file("stderr");
   posix_spawn_file_actions_t actions;
@@ -144,7 +168,7 @@ inline RunResult run_program(const std::string& program, const std::vector<std::
   argv.push_back(nullptr);
   pid_t pid;
   RunResult result;
-  const int spawned = posix_spawn(&pid, program.c_str(), &actions, nullptr, argv.data(), environ);
+  const int spawned = posix_spawn(&pid, program.c_str(), &actions, nullptr, argv.data(), envp.data());
   posix_spawn_file_actions_destroy(&actions);
   if (spawned != 0) {
     result.err = "spawn failed";
@@ -157,6 +181,33 @@ inline RunResult run_program(const std::string& program, const std::vector<std::
   result.out = read_file(out_path);
   result.err = read_file(err_path);
   return result;
+}
+
+// Fraction of pixels whose (object, facet) agree; 0 when the sizes differ.
+inline double item_agreement(const std::vector<std::int32_t>& a, const std::vector<std::int32_t>& b) {
+  EXPECT_EQ(a.size(), b.size());
+  if (a.size() != b.size() || a.empty()) return 0;
+  std::size_t same = 0;
+  for (std::size_t i = 0; i + 1 < a.size(); i += 2) same += (a[i] == b[i] && a[i + 1] == b[i + 1]);
+  return double(same) / double(a.size() / 2);
+}
+
+// The InputError message `f` throws, or "<no error>".
+inline std::string error_of(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "<no error>";
+}
+
+// The message must name every fragment (file, line, key word) and be one line.
+inline void expect_error(const std::function<void()>& f, const std::vector<std::string>& fragments) {
+  const std::string msg = error_of(f);
+  for (const std::string& frag : fragments)
+    EXPECT_NE(msg.find(frag), std::string::npos) << "message \"" << msg << "\" lacks \"" << frag << "\"";
+  EXPECT_EQ(msg.find('\n'), std::string::npos) << msg;
 }
 
 #ifdef OPSILA_BINARY

@@ -84,7 +84,7 @@ check render-spp-all-checks "${all_checks[@]}" -- \
   "${view[@]}"
 
 # 3. The scatter on its own: SPMD output slots with holes and unused slots,
-#    a waiting queue, banks that overflow (tests/reliability_test.cpp).
+#    a waiting queue, banks that overflow (tests/machine/reliability_test.cpp).
 check scatter-all-checks "${all_checks[@]}" -- \
   env OPSILA_TEST_DEVICE=oclgrind "$build/opsila_tests" --gtest_filter='SmallScatter.*'
 check scatter-optimised "${optimised_checks[@]}" -- \

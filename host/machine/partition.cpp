@@ -28,10 +28,22 @@ struct ClusterBuild {
   int pe = 0;
 };
 
+// With split_flat, a flat piece (a floor, a wall, a terrain patch) must
+// also fit a fraction of a PE's region: its bounding sphere is mostly empty
+// space, so rays meet it far from any facet.
+constexpr float kFlatness = 0.125f;  // smallest box extent / largest, at most
+constexpr float kFlatShare = 0.5f;   // largest flat piece, in regions across
+
+bool is_flat(const Box& b) {
+  const float big = std::max({b.extent(0), b.extent(1), b.extent(2)});
+  const float small = std::min({b.extent(0), b.extent(1), b.extent(2)});
+  return small <= kFlatness * big;
+}
+
 // Splits a list of triangles at the median centroid of its longest axis
 // until every piece is small enough (facet count and spatial extent).
 void split_object(const Scene& scene, std::vector<int> tris, std::size_t max_tris, float max_extent,
-                  std::vector<ClusterBuild>& out) {
+                  bool split_flat, std::vector<ClusterBuild>& out) {
   std::vector<std::vector<int>> work;
   work.push_back(std::move(tris));
   while (!work.empty()) {
@@ -45,7 +57,8 @@ void split_object(const Scene& scene, std::vector<int> tris, std::size_t max_tri
       cbox.grow(c);
     }
     bool too_many = cur.size() > max_tris;
-    bool too_big = cur.size() > 1 && box.diagonal() > max_extent;
+    const float limit = split_flat && is_flat(box) ? kFlatShare * max_extent : max_extent;
+    bool too_big = cur.size() > 1 && box.diagonal() > limit;
     int axis = cbox.longest();
     if ((too_many || too_big) && cbox.extent(axis) > 0) {
       std::size_t mid = cur.size() / 2;
@@ -123,7 +136,7 @@ void build_routing(BankedScene& bs, const Box& sbox) {
 
 }  // namespace
 
-BankedScene partition_scene(const Scene& scene, int num_pes) {
+BankedScene partition_scene(const Scene& scene, int num_pes, bool split_flat) {
   BankedScene bs;
   bs.num_pes = num_pes;
   Vec3 slo, shi;
@@ -145,7 +158,7 @@ BankedScene partition_scene(const Scene& scene, int num_pes) {
   }
   std::vector<ClusterBuild> cb;
   for (auto& tris : by_object)
-    if (!tris.empty()) split_object(scene, std::move(tris), max_tris, max_extent, cb);
+    if (!tris.empty()) split_object(scene, std::move(tris), max_tris, max_extent, split_flat, cb);
 
   // 2. Regions.
   std::vector<int> all(cb.size());

@@ -34,7 +34,11 @@ struct BankedScene {
   int max_bvh_depth = 0;
 };
 
-BankedScene partition_scene(const Scene& scene, int num_pes);
+// split_flat: flat pieces are also cut to half a region across. Measured on
+// hundreds and crowd (docs/BENCHMARKS.md): with routing on spheres it saves a
+// quarter of the descriptors; with routing on boxes, which already fit flat
+// pieces, it only adds clusters and routing work, so it is off there.
+BankedScene partition_scene(const Scene& scene, int num_pes, bool split_flat = false);
 
 // Per-frame constants for the kernels: the SPEC camera basis computed in
 // float exactly as the formula reads, so that every renderer built on a

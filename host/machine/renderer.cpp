@@ -193,7 +193,7 @@ Renderer::Machine::Machine(const Scene& scene, const RenderSettings& settings, C
   choose_work_groups();
   cap = settings.work_groups_per_pe > 0 ? settings.work_groups_per_pe * static_cast<int>(spmd_wg) : 0;
 
-  BankedScene bs = partition_scene(scene, P);
+  BankedScene bs = partition_scene(scene, P, routing == OPSILA_ROUTING_SPHERES);
   S = OPSILA_SPAWN_SLOTS(static_cast<int>(bs.lights.size()));
   n = choose_bank_capacity(bs, settings);
   flight = FlightPlan(P, n, spmd_wg, S);

@@ -127,6 +127,33 @@ typedef struct {
   opsila_i32 material; /* index into the material table */
 } BankTriangle;
 
+/* What the vertices of one bank triangle carry (SPEC "barycentric
+ * attributes"), stored in the bank of the PE that owns the triangle, at the
+ * triangle's own index. Present only when some triangle needs them
+ * (FrameParams.has_attributes). 80 bytes. */
+#define OPSILA_ATTR_NORMALS 1 /* n0..n2 hold vertex normals (smooth shading) */
+#define OPSILA_ATTR_UV 2      /* uv holds texture coordinates and a map is set */
+typedef struct {
+  float n0[3];
+  opsila_i32 flags;  /* OPSILA_ATTR_* */
+  float n1[3];
+  opsila_i32 map_kd; /* this bank's copy of the Kd map (BankTexture index), -1 none */
+  float n2[3];
+  opsila_i32 map_ka; /* this bank's copy of the Ka map, -1 none */
+  float uv[6];       /* u0 v0 u1 v1 u2 v2 */
+  float pad[2];
+} BankAttributes;
+
+/* A texture map copy held by one bank: texels [texel_begin, texel_begin +
+ * width * height) of the texel array, row 0 the image's top row, each texel
+ * 8-bit sRGB packed as r | g << 8 | b << 16. 16 bytes. */
+typedef struct {
+  opsila_i32 texel_begin;
+  opsila_i32 width;
+  opsila_i32 height;
+  opsila_i32 pe; /* owning bank */
+} BankTexture;
+
 /* Bank BVH: wide nodes, OPSILA_BVH_WIDTH children each, child boxes stored
  * structure-of-arrays so that one work-item tests them all with one vector
  * slab test (kernels/lib/bvh.cl documents the traversal that reads them).
@@ -224,6 +251,8 @@ typedef struct {
   opsila_i32 num_clusters;
   opsila_i32 bank_capacity; /* n: descriptor slots per bank */
   opsila_i32 spawn_slots;   /* S = lights + 2: output slots per processed descriptor */
+  opsila_i32 has_attributes; /* 1: a BankAttributes per triangle */
+  opsila_i32 pad3[3];
 } FrameParams;
 
 #ifndef __OPENCL_C_VERSION__
@@ -244,7 +273,12 @@ static_assert(offsetof(PeInfo, tri_begin) == 32, "PeInfo layout");
 static_assert(sizeof(Material) == 80, "Material layout");
 static_assert(offsetof(Material, kt) == 64, "Material layout");
 static_assert(sizeof(Light) == 32, "Light layout");
-static_assert(sizeof(FrameParams) == 128, "FrameParams layout");
+static_assert(sizeof(BankAttributes) == 80, "BankAttributes layout");
+static_assert(offsetof(BankAttributes, map_ka) == 44, "BankAttributes layout");
+static_assert(offsetof(BankAttributes, uv) == 48, "BankAttributes layout");
+static_assert(sizeof(BankTexture) == 16, "BankTexture layout");
+static_assert(sizeof(FrameParams) == 144, "FrameParams layout");
+static_assert(offsetof(FrameParams, has_attributes) == 128, "FrameParams layout");
 static_assert(offsetof(FrameParams, width) == 96, "FrameParams layout");
 static_assert(offsetof(FrameParams, spawn_slots) == 124, "FrameParams layout");
 static_assert(OPSILA_FIXED_SCALE == 16777216.0f, "24 fraction bits");

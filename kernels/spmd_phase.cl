@@ -49,15 +49,15 @@ inline int first_destination(const Routing *rt, const RayPre *r, float eps, floa
  * descriptor per light that can contribute, reflected and transmitted
  * descriptors for the next level. */
 inline void shade(FrameParams fp, const Routing *rt, __global const BankTriangle *tris,
-                  __global const Material *materials, __global const Light *lights, float3 org, float3 d, float t, int tri_index, float3 weight,
-                  int pixel, int level, Outputs *out, volatile __global uint *accum, PrivStats *st) {
-  __global const BankTriangle *tri = &tris[tri_index];
-  SurfacePoint sp = surface_point(tri, org, d, t);
+                  __global const Material *materials, __global const Light *lights, SURFACE_PARAMS, float3 org, float3 d,
+                  float t, int tri_index, float3 weight, int pixel, int level, Outputs *out, volatile __global uint *accum,
+                  PrivStats *st) {
+  __global const Material *m = &materials[tris[tri_index].material];
+  SurfacePoint sp = surface_point(fp, tris, tri_index, m, SURFACE_ARGS, org, d, t);
   float3 p = sp.p;
-  __global const Material *m = &materials[tri->material];
   float eps = fp.epsilon;
 
-  accumulate(accum, pixel, weight * load3(fp.ambient) * load3g(m->ka));
+  accumulate(accum, pixel, weight * load3(fp.ambient) * sp.ka);
 
   for (int l = 0; l < fp.num_lights; ++l) {
     float3 lv;
@@ -111,7 +111,8 @@ inline void shade(FrameParams fp, const Routing *rt, __global const BankTriangle
  * radiance ray looks for its nearest hit here and is sent on, finished as a
  * miss, or (its nearest hit known) shaded by the PE that owns the facet. */
 inline void process(FrameParams fp, int pe, const Routing *rt, __global const BankNode *nodes, __global const BankTriangle *tris,
-                    __global const Material *materials, __global const Light *lights, Descriptor ds, Outputs *out,
+                    __global const Material *materials, __global const Light *lights, SURFACE_PARAMS, Descriptor ds,
+                    Outputs *out,
                     volatile __global uint *accum, PrivStats *st) {
   __global const PeInfo *me = &rt->pes[pe];
   int root = me->node_begin;
@@ -174,13 +175,13 @@ inline void process(FrameParams fp, int pe, const Routing *rt, __global const Ba
     }
   }
   ++st->v[OPSILA_STAT_RESOLVED];
-  shade(fp, rt, tris, materials, lights, org, d, t_best, hit, w, pixel, level, out, accum, st);
+  shade(fp, rt, tris, materials, lights, SURFACE_ARGS, org, d, t_best, hit, w, pixel, level, out, accum, st);
 }
 
 __kernel void spmd_phase(FrameParams fp, __global const PeInfo *pes, __global const Cluster *clusters,
                          __global const BankNode *route, int routing, __global const BankNode *nodes, __global const BankTriangle *tris,
-                         __global const Material *materials, __global const Light *lights, DESC_PARAMS(b),
-                         __global const int *group_pe, __global const int *group_first,
+                         __global const Material *materials, __global const Light *lights, SURFACE_PARAMS,
+                         DESC_PARAMS(b), __global const int *group_pe, __global const int *group_first,
                          __global const int *bank_begin, __global const int *bank_count, DESC_PARAMS(o),
                          __global int *out_item_count, volatile __global uint *accum, volatile __global uint *stats,
                          volatile __global uint *traffic, int traffic_levels) {
@@ -214,7 +215,7 @@ __kernel void spmd_phase(FrameParams fp, __global const PeInfo *pes, __global co
     int level = OPSILA_META_LEVEL(DESC_META(ds));
     PrivStats st;
     for (int s = 0; s < OPSILA_STAT_COUNT; ++s) st.v[s] = 0u;
-    process(fp, pe, &rt, nodes, tris, materials, lights, ds, &out, accum, &st);
+    process(fp, pe, &rt, nodes, tris, materials, lights, SURFACE_ARGS, ds, &out, accum, &st);
     /* Children that miss every sphere finish here but count at their level. */
     uint child_misses = 0u;
     if (OPSILA_META_KIND(DESC_META(ds)) != OPSILA_KIND_SHADOW && st.v[OPSILA_STAT_RESOLVED] != 0u) {

@@ -2,6 +2,8 @@
 // shadows in a few hundred facets, so that PoCL runs them in seconds.
 #pragma once
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <map>
@@ -101,6 +103,105 @@ inline Scene mirror_glass_scene(int width, int depth = 5) {
   s.ambient = {0.1f, 0.1f, 0.1f};
   s.background = {0.25f, 0.35f, 0.55f};
   s.has_camera = s.has_lights = true;
+  return s;
+}
+
+// A w x h texture whose texel (i, j) has sRGB codes (r, g, b) = f(i, j).
+template <typename F>
+inline Texture make_texture(int w, int h, F code) {
+  Texture t;
+  t.path = "generated";
+  t.width = w;
+  t.height = h;
+  for (int j = 0; j < h; ++j)
+    for (int i = 0; i < w; ++i) {
+      const std::array<int, 3> c = code(i, j);
+      t.texels.push_back(std::uint32_t(c[0]) | std::uint32_t(c[1]) << 8 | std::uint32_t(c[2]) << 16);
+    }
+  return t;
+}
+
+// Vertex attributes of one triangle.
+inline int add_attributes(Scene& s, std::array<Vec3, 3> n, std::array<std::array<float, 2>, 3> uv, bool normals,
+                          bool uvs) {
+  VertexAttributes a;
+  a.normal = n;
+  a.uv = uv;
+  a.has_normals = normals;
+  a.has_uv = uvs;
+  s.attributes.push_back(a);
+  return static_cast<int>(s.attributes.size()) - 1;
+}
+
+// SPEC's barycentric attributes at work: a texture-mapped floor (coordinates
+// running past [0, 1), so the map repeats), a textured sphere and a plain
+// sphere with vertex normals (smooth when scene.smooth), a mirror that
+// reflects them, and one facet with coordinates but no map. Two lights.
+inline Scene textured_smooth_scene(int width, bool smooth) {
+  Scene s;
+  s.materials.push_back(MaterialDesc::default_material());
+  s.textures.push_back(make_texture(16, 16, [](int i, int j) {
+    const bool dark = ((i / 4) + (j / 4)) % 2 == 1;
+    return std::array<int, 3>{dark ? 40 : 230, dark ? 90 : 200, (i * 16) % 256};
+  }));
+  s.textures.push_back(make_texture(5, 3, [](int i, int j) { return std::array<int, 3>{50 * i, 120 * j % 256, 200}; }));
+  int floor = add_material(s, {0.3f, 0.3f, 0.3f}, {0.9f, 0.9f, 0.9f}, {0, 0, 0}, 1, {0, 0, 0}, 1, 2);
+  s.materials[floor].map_kd = 0;
+  s.materials[floor].map_ka = 0;
+  int ball = add_material(s, {0.2f, 0.2f, 0.2f}, {0.8f, 0.8f, 0.8f}, {0.3f, 0.3f, 0.3f}, 30, {0, 0, 0}, 1, 2);
+  s.materials[ball].map_kd = 1;
+  int shiny = add_material(s, {0.1f, 0.1f, 0.2f}, {0.3f, 0.3f, 0.7f}, {0.6f, 0.6f, 0.6f}, 40, {0, 0, 0}, 1, 3);
+  int mirror = add_material(s, {0.02f, 0.02f, 0.02f}, {0.05f, 0.05f, 0.05f}, {0.85f, 0.85f, 0.85f}, 80, {0, 0, 0}, 1, 3);
+  int obj = 0;
+  // Floor: one quad facet, coordinates 0..3 (the map repeats three times).
+  const Vec3 up{0, 1, 0};
+  const Vec3 a{-5, 0, -5}, b{-5, 0, 5}, c{5, 0, 5}, d{5, 0, -5};
+  int f = s.num_facets++;
+  Triangle t1{a, b, c, f, obj, floor};
+  t1.attributes = add_attributes(s, {up, up, up}, {{{-0.2f, 3.1f}, {-0.2f, -0.1f}, {2.9f, -0.1f}}}, false, true);
+  Triangle t2{a, c, d, f, obj, floor};
+  t2.attributes = add_attributes(s, {up, up, up}, {{{-0.2f, 3.1f}, {2.9f, -0.1f}, {2.9f, 3.1f}}}, false, true);
+  s.triangles.push_back(t1);
+  s.triangles.push_back(t2);
+  ++obj;
+  add_quad(s, {-5, 0, -4}, {5, 0, -4}, {5, 4, -4}, {-5, 4, -4}, obj++, mirror);
+  // Spheres: vertex normals = directions from the centre; the textured one
+  // gets longitude/latitude coordinates.
+  const auto sphere = [&](Vec3 centre, float r, int material, bool uv) {
+    const std::size_t first = s.triangles.size();
+    add_sphere(s, centre, r, 2, obj++, material);
+    for (std::size_t k = first; k < s.triangles.size(); ++k) {
+      Triangle& t = s.triangles[k];
+      std::array<Vec3, 3> n;
+      std::array<std::array<float, 2>, 3> st;
+      const Vec3* v[3] = {&t.v0, &t.v1, &t.v2};
+      for (int q = 0; q < 3; ++q) {
+        for (int e = 0; e < 3; ++e) n[q][e] = ((*v[q])[e] - centre[e]) / r;
+        st[q] = {0.5f + std::atan2(n[q][2], n[q][0]) / 6.2831853f, 0.5f + std::asin(std::max(-1.0f, std::min(1.0f, n[q][1]))) / 3.1415927f};
+      }
+      t.attributes = add_attributes(s, n, st, true, uv);
+    }
+  };
+  sphere({-1.3f, 1.1f, 0.3f}, 1.0f, ball, true);
+  sphere({1.5f, 0.9f, -0.8f}, 0.9f, shiny, false);
+  // Coordinates without a map: nothing changes.
+  f = s.num_facets++;
+  Triangle plain{{2.5f, 0.01f, 1.5f}, {3.5f, 0.01f, 2.5f}, {3.5f, 0.01f, 1.0f}, f, obj++, 0};
+  plain.attributes = add_attributes(s, {up, up, up}, {{{0, 0}, {1, 0}, {1, 1}}}, false, true);
+  s.triangles.push_back(plain);
+  s.num_objects = obj;
+  s.lights.push_back({{3, 7, 5}, {0.7f, 0.7f, 0.7f}});
+  s.lights.push_back({{-4, 5, 3}, {0.35f, 0.35f, 0.45f}});
+  s.camera.eye = {0, 3, 8};
+  s.camera.look_at = {0, 1, 0};
+  s.camera.fov_deg = 55;
+  s.width = width;
+  s.height = width * 3 / 4;
+  s.max_depth = 4;
+  s.ambient = {0.15f, 0.15f, 0.15f};
+  s.background = {0.25f, 0.35f, 0.55f};
+  s.has_camera = s.has_lights = true;
+  s.smooth = smooth;
   return s;
 }
 

@@ -37,6 +37,7 @@ BaselineImage render_megakernel(const Scene& scene, ClRuntime& rt, int tile) {
   std::vector<Light> lights = bs.lights;
   if (lights.empty()) lights.push_back(Light{});
   cl::Buffer b_lights = upload(rt, lights, "lights");
+  const SurfaceBuffers surface = upload_surface(rt, bs);
   cl::Buffer b_accum = device_buffer(rt, npix * 3 * sizeof(cl_long), "pixel sums");
   cl::Buffer b_counts = device_buffer(rt, npix * sizeof(cl_uint4), "ray counts");
   cl::Buffer b_items = device_buffer(rt, npix * sizeof(cl_int2), "item buffer");
@@ -59,6 +60,7 @@ BaselineImage render_megakernel(const Scene& scene, ClRuntime& rt, int tile) {
     k.setArg(a++, b_tris);
     k.setArg(a++, b_mats);
     k.setArg(a++, b_lights);
+    a = surface.set_args(k, a);
     k.setArg(a++, bs.pes[0].node_begin);
     k.setArg(a++, spp_side(scene.spp));
     k.setArg(a++, b_offsets);

@@ -102,7 +102,7 @@ std::string bench_usage() {
          "  -h, --help         this text\n"
          "\n"
          "View flags, as for 'opsila render': --size WxH, --eye, --look-at, --up, --fov,\n"
-         "--light, --ambient, --background, --depth, --pes, --device, --bank-capacity,\n"
+         "--light, --ambient, --background, --depth, --pes, --device, --bank-capacity, --smooth,\n"
          "--routing boxes|spheres, --work-groups-per-pe.\n";
 }
 

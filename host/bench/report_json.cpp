@@ -1,4 +1,5 @@
 // The bench's --json file (keys in docs/BENCHMARKS.md).
+#include <algorithm>
 #include <cmath>
 
 #include <nlohmann/json.hpp>
@@ -205,7 +206,14 @@ json scatter_by_pes_json(const std::vector<ScatterPoint>& by_pes) {
 
 json memory_json(const BenchReport& r) {
   const RenderStats& st = r.stats();
+  // Texture maps: each bank holds the maps its facets use (part of bank_bytes).
+  std::uint64_t texture_max = 0, texture_sum = 0;
+  for (std::uint64_t b : st.texture_bytes) texture_max = std::max(texture_max, b), texture_sum += b;
   return {{"bank_bytes", st.bank_bytes},
+          {"texture_bytes", st.texture_bytes},
+          {"texture_bytes_max", texture_max},
+          {"texture_bytes_all_banks", texture_sum},
+          {"texture_replicated_bytes", st.texture_replicated_bytes},
           {"bank_bytes_max", r.bank_max},
           {"bank_bytes_mean", r.bank_mean},
           {"global_bytes", st.global_bytes},

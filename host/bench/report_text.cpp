@@ -1,5 +1,6 @@
 // The bench's summary on stdout: renders side by side, work, phases,
 // occupancy, memory and the scatter curve.
+#include <algorithm>
 #include <cmath>
 #include <cstdarg>
 #include <cstdio>
@@ -113,6 +114,13 @@ void memory_text(std::string& out, const BenchReport& r) {
           bench_bytes(double(r.bank_max)).c_str(), bench_bytes(r.bank_mean).c_str(),
           bench_bytes(double(st.global_bytes)).c_str(), bench_bytes(double(st.replicated_bytes)).c_str(),
           r.replicated_over_bank_max());
+  if (st.texture_replicated_bytes > 0) {
+    std::uint64_t texture_max = 0, texture_sum = 0;
+    for (std::uint64_t b : st.texture_bytes) texture_max = std::max(texture_max, b), texture_sum += b;
+    appendf(out, "textures: bank max %s, all banks %s; one copy of every map %s\n\n",
+            bench_bytes(double(texture_max)).c_str(), bench_bytes(double(texture_sum)).c_str(),
+            bench_bytes(double(st.texture_replicated_bytes)).c_str());
+  }
 }
 
 void scatter_text(std::string& out, const BenchReport& r) {

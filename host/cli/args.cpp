@@ -171,6 +171,7 @@ const std::vector<FlagSpec>& view_flags() {
       {"--device", "--device", true}, {"--bank-capacity", "--bank-capacity", true},
       {"--routing", "--routing", true}, {"--work-groups-per-pe", "--work-groups-per-pe", true},
       {"--spp", "--spp", true},
+      {"--smooth", "--smooth", false},
   };
   return flags;
 }
@@ -232,6 +233,8 @@ bool parse_view_flag(const std::string& name, const std::string& value, ViewOpti
   } else if (name == "--device") {
     if (value.empty()) bad_flag(name, value, "empty device name");
     o.device_spec = value;
+  } else if (name == "--smooth") {
+    o.smooth = true;
   } else {
     return false;
   }
@@ -256,6 +259,7 @@ void apply_view_options(Scene& scene, const ViewOptions& o) {
   if (o.ambient) scene.ambient = *o.ambient;
   if (o.background) scene.background = *o.background;
   if (o.fov) scene.camera.fov_deg = *o.fov;
+  if (o.smooth) scene.smooth = true;
 
   const std::string& file = o.scene_path.empty() ? std::string("scene") : o.scene_path;
   // Checks the scene file's own values too, so the renderer never sees bad ones.

@@ -78,9 +78,10 @@ struct ViewOptions {
   int bank_capacity = 0;          // 0 = automatic
   int work_groups_per_pe = 0;     // 0 = as many as each bank's descriptors need
   std::optional<int> routing;     // --routing: OPSILA_ROUTING_*
+  bool smooth = false;            // --smooth: SPEC's smooth shading (else the scene's "smooth")
 };
 
-// The view group's flags (all take a value; --light repeats).
+// The view group's flags (all but --smooth take a value; --light repeats).
 const std::vector<FlagSpec>& view_flags();
 // Parses one view flag (canonical name) into `o`; false when `name` is not a
 // view flag.

@@ -79,6 +79,7 @@ std::string render_usage() {
          "  --background R,G,B     colour of rays that hit nothing\n"
          "  --depth N              ray tree levels, 1..31 (1 = local shading only)\n"
          "  --spp N                samples per pixel on a k x k grid: 1, 4, 9, 16, ..., 1024\n"
+         "  --smooth               smooth shading: interpolate the model's vertex normals\n"
          "  --pes N                processing elements (OpenCL work-groups), 1..1024\n"
          "  --bank-capacity N      descriptor slots per bank on average: P*N in flight, shared by demand\n"
          "                         (0 = from the device)\n"

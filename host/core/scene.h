@@ -4,6 +4,7 @@
 #pragma once
 
 #include <array>
+#include <cstdint>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -30,6 +31,12 @@ struct MaterialDesc {
   Vec3 ka{0, 0, 0}, kd{0, 0, 0}, ks{0, 0, 0}, tf{0, 0, 0};
   float ns = 1.0f, ni = 1.0f;
   int illum = 0;
+  // SPEC "Texture maps": index into Scene::textures, -1 = no map (or the
+  // image could not be read).
+  int map_kd = -1, map_ka = -1;
+  // The map files as an MTL file names them (options removed, not yet
+  // looked up): the OBJ reader resolves and loads them.
+  std::string map_kd_file, map_ka_file;
   // SPEC: kr = Ks when illum in {3..7}; kt = Tf when illum in {4,6,7}.
   Vec3 kr() const;
   Vec3 kt() const;
@@ -42,7 +49,27 @@ struct Triangle {
   Vec3 v0, v1, v2;
   int facet_id = 0;
   int object_id = 0;
-  int material = 0;  // index into Scene::materials
+  int material = 0;     // index into Scene::materials
+  int attributes = -1;  // index into Scene::attributes, -1 = none
+};
+
+// What the vertices of one triangle carry besides their position (SPEC
+// "barycentric attributes"): normals (OBJ vn) and texture coordinates (OBJ
+// vt), in the triangle's vertex order. Kept apart from Triangle, since most
+// scenes have neither.
+struct VertexAttributes {
+  std::array<Vec3, 3> normal{};
+  std::array<std::array<float, 2>, 3> uv{};
+  bool has_normals = false;
+  bool has_uv = false;
+};
+
+// A decoded texture map: 8-bit sRGB texels packed as r | g << 8 | b << 16,
+// row 0 = the top row of the image (SPEC's j = 0).
+struct Texture {
+  std::string path;  // as found on disk (or "file#name" for an embedded one)
+  int width = 0, height = 0;
+  std::vector<std::uint32_t> texels;
 };
 
 struct LightDesc {
@@ -57,12 +84,15 @@ struct CameraDesc {
 
 struct Scene {
   std::vector<Triangle> triangles;
+  std::vector<VertexAttributes> attributes;  // referenced by Triangle::attributes
   std::vector<MaterialDesc> materials;  // never empty after loading
+  std::vector<Texture> textures;        // referenced by MaterialDesc::map_kd / map_ka
   std::vector<LightDesc> lights;
   CameraDesc camera;
   int width = 640, height = 480;
   int max_depth = 5;
   int spp = 1;  // samples per pixel, N = k*k (SPEC "Camera"); see spp_problem
+  bool smooth = false;  // SPEC "Smooth shading": interpolated vertex normals
   Vec3 ambient{0.1f, 0.1f, 0.1f};
   Vec3 background{0.0f, 0.0f, 0.0f};
   int num_objects = 0;  // object ids are 0 .. num_objects-1

@@ -4,6 +4,8 @@
 // precise FILE:LINE message for every bad input.
 #include "input/obj_loader.h"
 
+#include "input/texture_file.h"
+
 #include <cerrno>
 #include <charconv>
 #include <climits>
@@ -183,7 +185,7 @@ bool parse_int(std::string_view tok, long long& out) {
 // Statements of the OBJ specification that do not change the image.
 bool is_ignored_obj_statement(std::string_view kw) {
   static const char* const names[] = {
-      "vt", "vn", "vp", "l", "p", "s", "mg", "cstype", "deg", "bmat", "step", "curv",
+      "vp", "l", "p", "s", "mg", "cstype", "deg", "bmat", "step", "curv",
       "curv2", "surf", "parm", "trim", "hole", "scrv", "sp", "end", "con", "bevel",
       "c_interp", "d_interp", "lod", "maplib", "usemap", "shadow_obj", "trace_obj",
       "ctech", "stech", "call", "csh"};
@@ -234,6 +236,46 @@ float parse_single(std::string_view rest, std::string_view key, const std::strin
   return x;
 }
 
+// The file of a map statement ("map_Kd [-options] file"): options and their
+// values are skipped; the rest of the line, blanks included, is the file.
+// Options that change the mapping (-o, -s, -t, -clamp on) are not part of
+// SPEC's texture lookup: they are ignored with a warning.
+std::string map_file(std::string_view rest, std::string_view key, const std::string& file, int line,
+                     std::vector<std::string>& warnings) {
+  std::vector<std::string> ignored;
+  for (;;) {
+    std::string_view probe = rest;
+    const std::string_view tok = next_token(probe);
+    if (tok.size() < 2 || tok[0] != '-') break;
+    float number;
+    if (parse_float(tok, number) == Num::ok) break;  // "-1.png" is a name
+    rest = probe;
+    const std::string opt(tok);
+    int min_args = 1, max_args = 1;
+    if (opt == "-o" || opt == "-s" || opt == "-t") min_args = 1, max_args = 3;
+    else if (opt == "-mm") min_args = max_args = 2;
+    for (int k = 0; k < max_args; ++k) {
+      probe = rest;
+      const std::string_view arg = next_token(probe);
+      const bool numeric = parse_float(arg, number) == Num::ok;
+      if (k >= min_args && !numeric) break;
+      if (arg.empty()) break;
+      rest = probe;
+      if (opt == "-clamp" && arg == "on") ignored.push_back("-clamp on");
+    }
+    if (opt == "-o" || opt == "-s" || opt == "-t") ignored.push_back(opt);
+  }
+  const std::string name(trim(rest));
+  if (!ignored.empty()) {
+    std::string list;
+    for (const std::string& o : ignored) list += (list.empty() ? "" : ", ") + o;
+    warnings.push_back(at(file, line) + "'" + std::string(key) + "' option(s) " + list +
+                       " ignored (texture coordinates are used as they are)");
+  }
+  if (name.empty()) warnings.push_back(at(file, line) + "'" + std::string(key) + "' without a file name (ignored)");
+  return name;
+}
+
 }  // namespace
 
 std::vector<MaterialDesc> parse_mtl(const std::string& text, const std::string& name,
@@ -254,17 +296,19 @@ std::vector<MaterialDesc> parse_mtl(const std::string& text, const std::string& 
       continue;
     }
     const bool known = kw == "Ka" || kw == "Kd" || kw == "Ks" || kw == "Tf" || kw == "Ns" ||
-                       kw == "Ni" || kw == "illum";
+                       kw == "Ni" || kw == "illum" || kw == "map_Kd" || kw == "map_Ka";
     if (!known) {
       if (!is_identifier(kw)) fail(name, ln, "invalid statement " + quote(kw) + " (binary file?)");
-      continue;  // d, Tr, Ke, map_Kd, bump, ...: no effect on the image
+      continue;  // d, Tr, Ke, map_Ks, bump, ...: no effect on the image
     }
     if (out.empty()) {
       if (orphan_keys++ == 0) orphan_line = ln;
       continue;
     }
     MaterialDesc& m = out.back();
-    if (kw == "Ka" || kw == "Kd" || kw == "Ks" || kw == "Tf") {
+    if (kw == "map_Kd" || kw == "map_Ka") {
+      (kw == "map_Kd" ? m.map_kd_file : m.map_ka_file) = map_file(rest, kw, name, ln, warnings);
+    } else if (kw == "Ka" || kw == "Kd" || kw == "Ks" || kw == "Tf") {
       std::string_view probe = rest;
       const std::string_view first = next_token(probe);
       if (first == "spectral" || first == "xyz") {
@@ -334,11 +378,27 @@ std::string read_input_file(const std::string& path) {
 namespace {
 
 struct Polygon {
-  std::uint32_t first;  // into the flat index list
+  std::uint32_t first;  // into the flat index lists
   std::uint32_t count;
   int line;
   int section_o, section_g;  // 0-based index of the o / g section (clamped)
   int slot;                  // usemtl slot, -1 = no material
+  bool has_uv, has_normals;  // every corner names a vt (vn)
+};
+
+constexpr std::uint32_t kNoIndex = 0xffffffffu;
+
+// One kind of indexed list (v, vt or vn): its size so far and the largest
+// positive index named, which may lie further down the file.
+struct IndexedList {
+  const char* what;
+  std::vector<float> values;
+  int width;  // floats per entry
+  long long max_index = 0;
+  int max_line = 0;
+  bool strict;           // a bad index is an error (v), else a warning (vt, vn)
+  int missing = 0, missing_line = 0;  // corners whose index names nothing (not strict)
+  long long size() const { return static_cast<long long>(values.size() / width); }
 };
 
 class ObjParser {
@@ -360,8 +420,10 @@ class ObjParser {
         vertex(rest);
       } else if (kw == "f") {
         face(rest);
-      } else if (kw == "vt" || kw == "vn") {
-        continue;
+      } else if (kw == "vt") {
+        attribute(rest, uvs_, "vt", 1, 3);
+      } else if (kw == "vn") {
+        attribute(rest, normals_, "vn", 3, 3);
       } else if (kw == "o") {
         ++o_count_;
       } else if (kw == "g") {
@@ -403,62 +465,104 @@ class ObjParser {
     // x y z, optionally w, or the common vertex-colour extension r g b [a].
     if (n > 7)
       fail(name_, line_, "'v' line has " + std::to_string(n) + " values (at most 7 expected)");
-    verts_.insert(verts_.end(), xyz, xyz + 3);
+    verts_.values.insert(verts_.values.end(), xyz, xyz + 3);
   }
 
-  // One "v", "v/vt", "v//vn" or "v/vt/vn" reference; returns the 0-based
-  // vertex index (a positive one is range-checked at the end of the file,
-  // since it may name a vertex defined further down).
-  std::uint32_t vertex_ref(std::string_view tok) {
+  // "vt u [v [w]]" (v defaults to 0) and "vn x y z".
+  void attribute(std::string_view rest, IndexedList& list, const char* key, int min_n, int max_n) {
+    float xyz[3] = {0, 0, 0};
+    int n = 0;
+    for (std::string_view tok = next_token(rest); !tok.empty(); tok = next_token(rest)) {
+      if (tok[0] == '#') break;
+      float x;
+      const Num s = parse_float(tok, x);
+      if (s != Num::ok)
+        fail(name_, line_, std::string("'") + key + "' value " + std::to_string(n + 1) + " " + quote(tok) + " " +
+                               describe(s));
+      if (n == max_n)
+        fail(name_, line_, std::string("'") + key + "' line has more than " + std::to_string(max_n) + " values");
+      xyz[n++] = x;
+    }
+    if (n < min_n)
+      fail(name_, line_, std::string("truncated '") + key + "' line: " + std::to_string(n) + " of " +
+                             std::to_string(min_n) + " values");
+    list.values.insert(list.values.end(), xyz, xyz + list.width);
+  }
+
+  // One index of a face corner into `list`, 0-based. Negative indices count
+  // back from the entries defined so far; positive ones are range-checked at
+  // the end of the file.
+  std::uint32_t index_into(IndexedList& list, long long i, std::string_view tok) {
+    if (i == 0)
+      fail(name_, line_, std::string(list.what) + " index 0 in " + quote(tok) + " (OBJ indices start at 1)");
+    const long long have = list.size();
+    if (i < 0) {
+      if (i < -have && !list.strict) {
+        if (list.missing++ == 0) list.missing_line = line_;
+        return kNoIndex;
+      }
+      if (i < -have)
+        fail(name_, line_, std::string(list.what) + " index " + std::to_string(i) + " out of range (only " +
+                               std::to_string(have) + " defined before this line)");
+      return static_cast<std::uint32_t>(have + i);
+    }
+    if (i > 0xfffffffell) fail(name_, line_, std::string(list.what) + " index " + std::to_string(i) + " out of range");
+    if (i > list.max_index) {
+      list.max_index = i;
+      list.max_line = line_;
+    }
+    return static_cast<std::uint32_t>(i - 1);
+  }
+
+  // One "v", "v/vt", "v//vn" or "v/vt/vn" reference.
+  void vertex_ref(std::string_view tok, std::uint32_t& v, std::uint32_t& vt, std::uint32_t& vn) {
     const std::size_t s1 = tok.find('/');
     const std::string_view vpart = tok.substr(0, s1);
+    std::string_view tpart, npart;
     bool ok = true;
+    long long vi = 0, ti = 0, ni = 0;
     if (s1 != std::string_view::npos) {
       std::string_view tail = tok.substr(s1 + 1);
       const std::size_t s2 = tail.find('/');
-      const std::string_view tpart = tail.substr(0, s2);
-      long long dummy = 0;
+      tpart = tail.substr(0, s2);
       if (s2 == std::string_view::npos) {
-        ok = parse_int(tpart, dummy) && dummy != 0;  // v/vt
+        ok = parse_int(tpart, ti) && ti != 0;  // v/vt
       } else {
-        const std::string_view npart = tail.substr(s2 + 1);
-        ok = (tpart.empty() || (parse_int(tpart, dummy) && dummy != 0)) &&
-             parse_int(npart, dummy) && dummy != 0;  // v//vn or v/vt/vn
+        npart = tail.substr(s2 + 1);
+        ok = (tpart.empty() || (parse_int(tpart, ti) && ti != 0)) && parse_int(npart, ni) &&
+             ni != 0;  // v//vn or v/vt/vn
       }
     }
-    long long vi = 0;
     if (!ok || !parse_int(vpart, vi))
       fail(name_, line_, "bad vertex reference " + quote(tok) +
                              " in 'f' line (expected v, v/vt, v//vn or v/vt/vn with non-zero "
                              "integers)");
     if (vi == 0)
       fail(name_, line_, "vertex index 0 in 'f' line (OBJ indices start at 1)");
-    const long long have = static_cast<long long>(verts_.size() / 3);
-    if (vi < 0) {
-      if (vi < -have)
-        fail(name_, line_, "vertex index " + std::to_string(vi) + " out of range (only " +
-                               std::to_string(have) + " vertices defined before this line)");
-      return static_cast<std::uint32_t>(have + vi);
-    }
-    if (vi > 0xfffffffell)
-      fail(name_, line_, "vertex index " + std::to_string(vi) + " out of range");
-    if (vi > max_index_) {
-      max_index_ = vi;
-      max_index_line_ = line_;
-    }
-    return static_cast<std::uint32_t>(vi - 1);
+    v = index_into(verts_, vi, tok);
+    vt = ti != 0 ? index_into(uvs_, ti, tok) : kNoIndex;
+    vn = ni != 0 ? index_into(normals_, ni, tok) : kNoIndex;
   }
 
   void face(std::string_view rest) {
     const std::size_t start = index_.size();
     std::uint32_t n = 0;
+    bool all_uv = true, all_normals = true;
     for (std::string_view tok = next_token(rest); !tok.empty(); tok = next_token(rest)) {
       if (tok[0] == '#') break;
-      index_.push_back(vertex_ref(tok));
+      std::uint32_t v, vt, vn;
+      vertex_ref(tok, v, vt, vn);
+      index_.push_back(v);
+      uv_index_.push_back(vt);
+      normal_index_.push_back(vn);
+      all_uv = all_uv && vt != kNoIndex;
+      all_normals = all_normals && vn != kNoIndex;
       ++n;
     }
     if (n < 3) {
       index_.resize(start);
+      uv_index_.resize(start);
+      normal_index_.resize(start);
       if (short_faces_++ == 0) short_line_ = line_;
       return;
     }
@@ -469,7 +573,7 @@ class ObjParser {
       fail(name_, line_, "too many triangles (more than " + std::to_string(kMaxTriangles) + ")");
     polys_.push_back(Polygon{static_cast<std::uint32_t>(start), n, line_,
                              o_count_ > 0 ? o_count_ - 1 : 0, g_count_ > 0 ? g_count_ - 1 : 0,
-                             slot_});
+                             slot_, all_uv, all_normals});
   }
 
   void usemtl(std::string_view rest) {
@@ -522,31 +626,97 @@ class ObjParser {
           continue;
         }
         lib_index_.emplace(m.name, static_cast<int>(library_.size()));
+        const std::string mtl_dir = fs::path(path).parent_path().string();
+        if (!m.map_kd_file.empty()) m.map_kd_file = resolve_texture_path(m.map_kd_file, mtl_dir);
+        if (!m.map_ka_file.empty()) m.map_ka_file = resolve_texture_path(m.map_ka_file, mtl_dir);
         library_.push_back(std::move(m));
+        library_file_.push_back(path);
       }
     }
   }
 
-  Scene finish() {
-    const long long nverts = static_cast<long long>(verts_.size() / 3);
-    if (max_index_ > nverts) {
-      // Name the first face (in file order) that is out of range.
-      int line = max_index_line_;
-      long long index = max_index_;
-      bool found = false;
-      for (std::size_t f = 0; f < polys_.size() && !found; ++f) {
-        const Polygon& poly = polys_[f];
-        for (std::uint32_t k = 0; k < poly.count && !found; ++k) {
-          if (index_[poly.first + k] >= nverts) {
-            line = poly.line;
-            index = static_cast<long long>(index_[poly.first + k]) + 1;
-            found = true;
+  // A positive index past the end of its list: name the first face (in file
+  // order) that has one.
+  void check_range(IndexedList& list, const std::vector<std::uint32_t>& index, const char* plural) {
+    const long long have = list.size();
+    if (!list.strict) {
+      // Texture coordinates and normals that do not exist: the face gets none
+      // (files that name them without defining them do occur).
+      for (Polygon& poly : polys_) {
+        bool& has = &list == &uvs_ ? poly.has_uv : poly.has_normals;
+        for (std::uint32_t k = 0; k < poly.count && has; ++k) {
+          const std::uint32_t i = index[poly.first + k];
+          if (i == kNoIndex || i >= have) {
+            if (list.missing++ == 0 || poly.line < list.missing_line) list.missing_line = poly.line;
+            has = false;
           }
         }
       }
-      fail(name_, line, "vertex index " + std::to_string(index) + " out of range (file has " +
-                            std::to_string(nverts) + " vertices)");
+      if (list.missing > 0)
+        warnings_.push_back(at(name_, list.missing_line) + std::to_string(list.missing) + " face corner(s) name " +
+                            plural + " the file does not define (first on this line); those faces get none");
+      return;
     }
+    if (list.max_index <= have) return;
+    int line = list.max_line;
+    long long bad = list.max_index;
+    bool found = false;
+    for (std::size_t f = 0; f < polys_.size() && !found; ++f) {
+      const Polygon& poly = polys_[f];
+      for (std::uint32_t k = 0; k < poly.count && !found; ++k) {
+        const std::uint32_t i = index[poly.first + k];
+        if (i != kNoIndex && i >= have) {
+          line = poly.line;
+          bad = static_cast<long long>(i) + 1;
+          found = true;
+        }
+      }
+    }
+    fail(name_, line, std::string(list.what) + " index " + std::to_string(bad) + " out of range (file has " +
+                          std::to_string(have) + " " + plural + ")");
+  }
+
+  // Texture maps of the library materials that faces with texture
+  // coordinates use (others could not show them), loaded once each; an image
+  // that cannot be read is a warning and its map is ignored.
+  void load_maps(Scene& scene, const std::vector<int>& slot_material) {
+    std::vector<char> mapped(library_.size() + 1, 0);
+    for (const Polygon& poly : polys_)
+      if (poly.has_uv && poly.slot >= 0) mapped[slot_material[poly.slot]] = 1;
+    for (std::size_t k = 0; k < library_.size(); ++k) {
+      if (!mapped[k + 1]) continue;
+      MaterialDesc& m = scene.materials[k + 1];
+      const std::string where = library_file_[k] + ": material '" + m.name + "': ";
+      if (!m.map_kd_file.empty()) m.map_kd = add_texture_file(scene, m.map_kd_file, where);
+      if (!m.map_ka_file.empty()) m.map_ka = add_texture_file(scene, m.map_ka_file, where);
+    }
+  }
+
+  // The corners of fan triangle (0, k, k + 1) of a polygon, as attributes.
+  int add_attributes(Scene& scene, const Polygon& poly, std::uint32_t k) const {
+    if (!poly.has_uv && !poly.has_normals) return -1;
+    VertexAttributes a;
+    const std::uint32_t corner[3] = {poly.first, poly.first + k, poly.first + k + 1};
+    for (int c = 0; c < 3; ++c) {
+      if (poly.has_normals) {
+        const float* n = &normals_.values[3 * static_cast<std::size_t>(normal_index_[corner[c]])];
+        a.normal[c] = Vec3{n[0], n[1], n[2]};
+      }
+      if (poly.has_uv) {
+        const float* t = &uvs_.values[2 * static_cast<std::size_t>(uv_index_[corner[c]])];
+        a.uv[c] = {t[0], t[1]};
+      }
+    }
+    a.has_normals = poly.has_normals;
+    a.has_uv = poly.has_uv;
+    scene.attributes.push_back(a);
+    return static_cast<int>(scene.attributes.size()) - 1;
+  }
+
+  Scene finish() {
+    check_range(verts_, index_, "vertices");
+    check_range(uvs_, uv_index_, "texture coordinates");
+    check_range(normals_, normal_index_, "normals");
     Scene scene;
     scene.has_camera = false;
     scene.has_lights = false;
@@ -572,6 +742,7 @@ class ObjParser {
                             "material");
       }
     }
+    load_maps(scene, slot_material);
     if (redefined_ > kListedWarnings)
       warnings_.push_back(name_ + ": " + std::to_string(redefined_ - kListedWarnings) +
                           " more materials defined twice; the first definitions are used");
@@ -586,7 +757,7 @@ class ObjParser {
     scene.triangles.reserve(triangle_total_);
     int degenerate = 0, degenerate_line = 0;
     const auto vtx = [&](std::uint32_t i) {
-      const float* p = &verts_[3 * static_cast<std::size_t>(i)];
+      const float* p = &verts_.values[3 * static_cast<std::size_t>(i)];
       return Vec3{p[0], p[1], p[2]};
     };
     for (std::size_t f = 0; f < polys_.size(); ++f) {
@@ -614,6 +785,7 @@ class ObjParser {
         t.facet_id = static_cast<int>(f);
         t.object_id = object;
         t.material = material;
+        t.attributes = add_attributes(scene, poly, k);
         scene.triangles.push_back(t);
         any = true;
       }
@@ -640,6 +812,7 @@ class ObjParser {
     Vec3 lo, hi;
     scene.bounds(lo, hi);
     scene.camera = frame_bounds(lo, hi, 45.0f, float(scene.width) / float(scene.height));
+    for (std::string& w : scene.warnings) warnings_.push_back(std::move(w));
     scene.warnings = std::move(warnings_);
     return scene;
   }
@@ -649,12 +822,13 @@ class ObjParser {
   std::string base_dir_;
   int line_ = 0;
 
-  std::vector<float> verts_;
-  std::vector<std::uint32_t> index_;
+  IndexedList verts_{"vertex", {}, 3, 0, 0, true};
+  IndexedList uvs_{"texture coordinate", {}, 2, 0, 0, false};
+  IndexedList normals_{"normal", {}, 3, 0, 0, false};
+  // Per face corner: v, vt and vn (kNoIndex when the corner names none).
+  std::vector<std::uint32_t> index_, uv_index_, normal_index_;
   std::vector<Polygon> polys_;
   std::size_t triangle_total_ = 0;
-  long long max_index_ = 0;
-  int max_index_line_ = 0;
   int o_count_ = 0, g_count_ = 0;
   int short_faces_ = 0, short_line_ = 0;
   int unknown_count_ = 0, unknown_line_ = 0;
@@ -669,6 +843,7 @@ class ObjParser {
   static constexpr int kListedWarnings = 8;
   int redefined_ = 0;
   std::vector<MaterialDesc> library_;
+  std::vector<std::string> library_file_;  // the MTL file each material came from
   std::unordered_map<std::string, int> lib_index_;
   std::unordered_set<std::string> loaded_libs_;
   std::vector<std::string> warnings_;

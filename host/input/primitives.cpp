@@ -130,6 +130,20 @@ Vec3 Transform::apply(const Vec3& p) const {
           static_cast<float>(z + translate[2])};
 }
 
+Vec3 Transform::apply_normal(const Vec3& n) const {
+  Transform r;
+  r.rotate_deg = rotate_deg;
+  for (int a = 0; a < 3; ++a) r.scale[a] = static_cast<float>(1.0 / double(scale[a]));
+  return r.apply(n);
+}
+
+void transform_normals(std::vector<VertexAttributes>& attributes, std::size_t first, const Transform& t) {
+  if (t.is_identity()) return;
+  for (std::size_t i = first; i < attributes.size(); ++i)
+    if (attributes[i].has_normals)
+      for (Vec3& n : attributes[i].normal) n = t.apply_normal(n);
+}
+
 void transform_triangles(std::vector<Triangle>& tris, std::size_t first, const Transform& t) {
   if (t.is_identity()) return;
   for (std::size_t i = first; i < tris.size(); ++i) {

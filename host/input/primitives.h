@@ -26,10 +26,16 @@ struct Transform {
   Vec3 scale{1, 1, 1};
   bool is_identity() const;
   Vec3 apply(const Vec3& p) const;
+  // A normal under the same transform: rotated, scaled by 1 / scale (the
+  // inverse transpose), not normalised (shading normalises).
+  Vec3 apply_normal(const Vec3& n) const;
 };
 
 // Applies `t` to the vertices of triangles [first, end).
 void transform_triangles(std::vector<Triangle>& tris, std::size_t first, const Transform& t);
+
+// Applies `t` to the vertex normals of attributes [first, end).
+void transform_normals(std::vector<VertexAttributes>& attributes, std::size_t first, const Transform& t);
 
 // Makes room for `more` triangles, growing geometrically: many small shapes
 // appended one by one must not reallocate (and copy) every time.

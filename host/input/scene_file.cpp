@@ -215,7 +215,7 @@ class SceneReader {
     lines_ = std::make_unique<LineMap>(text_, name_, scene_.warnings);
     if (!root.is_object()) fail("", std::string("the scene must be a JSON object, not ") + kind(root));
     check_keys(root, "", {"description", "camera", "image", "depth", "spp", "ambient", "background",
-                          "lights", "materials", "objects"});
+                          "lights", "materials", "objects", "smooth"});
     if (const Json* d = find(root, "description"); d && !d->is_string())
       fail("description", std::string("expected a string, not ") + kind(*d));
 
@@ -227,6 +227,10 @@ class SceneReader {
     if (const Json* n = find(root, "spp")) {
       scene_.spp = integer(*n, "spp", 1, kMaxSpp);
       if (const std::string problem = spp_problem(scene_.spp); !problem.empty()) fail("spp", problem);
+    }
+    if (const Json* sm = find(root, "smooth")) {
+      if (!sm->is_boolean()) fail("smooth", std::string("expected true or false, not ") + kind(*sm));
+      scene_.smooth = sm->get<bool>();
     }
     if (const Json* a = find(root, "ambient")) scene_.ambient = colour(*a, "ambient");
     if (const Json* b = find(root, "background")) scene_.background = colour(*b, "background");
@@ -565,6 +569,7 @@ class SceneReader {
     const std::string type = string(require(v, path, "type"), join_key(path, "type"));
     const auto key = [&](const char* k) { return join_key(path, k); };
     const std::size_t first = scene_.triangles.size();
+    const std::size_t first_attribute = scene_.attributes.size();
     auto& tris = scene_.triangles;
 
     if (type == "sphere") {
@@ -633,7 +638,9 @@ class SceneReader {
                             "scatter, grid or obj)");
     }
     if (const Json* t = find(v, "transform")) {
-      transform_triangles(tris, first, transform(*t, key("transform")));
+      const Transform tf = transform(*t, key("transform"));
+      transform_triangles(tris, first, tf);
+      transform_normals(scene_.attributes, first_attribute, tf);
     }
     settle(first, path);
   }
@@ -883,14 +890,25 @@ class SceneReader {
     }
     budget(sub.triangles.size(), path);
     const int mat_offset = static_cast<int>(scene_.materials.size()) - 1;
-    if (override_mat < 0)
-      for (std::size_t k = 1; k < sub.materials.size(); ++k) scene_.materials.push_back(sub.materials[k]);
+    const int tex_offset = static_cast<int>(scene_.textures.size());
+    const int attr_offset = static_cast<int>(scene_.attributes.size());
+    if (override_mat < 0) {
+      for (std::size_t k = 1; k < sub.materials.size(); ++k) {
+        MaterialDesc m = sub.materials[k];
+        if (m.map_kd >= 0) m.map_kd += tex_offset;
+        if (m.map_ka >= 0) m.map_ka += tex_offset;
+        scene_.materials.push_back(std::move(m));
+      }
+      for (Texture& t : sub.textures) scene_.textures.push_back(std::move(t));
+    }
+    for (const VertexAttributes& a : sub.attributes) scene_.attributes.push_back(a);
     if (sub.num_objects > INT_MAX - next_object_) fail(path, "too many objects");
     reserve_more(scene_.triangles, sub.triangles.size());
     for (Triangle t : sub.triangles) {
       t.object_id += next_object_;
       t.facet_id += next_facet_;
       t.material = override_mat >= 0 ? override_mat : (t.material == 0 ? 0 : t.material + mat_offset);
+      if (t.attributes >= 0) t.attributes += attr_offset;
       scene_.triangles.push_back(t);
     }
     next_object_ += sub.num_objects;

@@ -231,7 +231,7 @@ void check_stack(const std::vector<BankNode>& nodes, int root) {
 
 int build_bank_bvh(std::vector<BankNode>& nodes, std::vector<BankTriangle>& tris, std::vector<Box>& tri_boxes,
                    std::vector<Cluster>& clusters, int c_begin, int c_end,
-                   const std::vector<std::pair<int, int>>& ranges) {
+                   const std::vector<std::pair<int, int>>& ranges, std::vector<int>* source) {
   if (c_begin == c_end) return 0;
   const int t_begin = ranges[c_begin].first, t_end = ranges[c_end - 1].second;
   Builder b;
@@ -262,6 +262,10 @@ int build_bank_bvh(std::vector<BankNode>& nodes, std::vector<BankTriangle>& tris
   for (int i = t_begin; i < t_end; ++i) {
     tris[i] = t[order[i] - t_begin];
     tri_boxes[i] = tb[order[i] - t_begin];
+  }
+  if (source) {
+    const std::vector<int> s(source->begin() + t_begin, source->begin() + t_end);
+    for (int i = t_begin; i < t_end; ++i) (*source)[i] = s[order[i] - t_begin];
   }
   std::vector<int> leaf_child(tri_boxes.size());
   std::iota(leaf_child.begin(), leaf_child.end(), 0);

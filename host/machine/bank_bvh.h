@@ -32,10 +32,11 @@ struct Box {
 // tris[ranges[c].first, ranges[c].second). Facets are reordered inside each
 // cluster's range (with their boxes); clusters[c].root is set. The bank's
 // root is appended first, so it is the first node added. Returns the depth
-// of the wide tree (0 when the bank is empty).
+// of the wide tree (0 when the bank is empty). `source`, when given, is
+// reordered with the facets (so per-facet data elsewhere can follow them).
 int build_bank_bvh(std::vector<BankNode>& nodes, std::vector<BankTriangle>& tris, std::vector<Box>& tri_boxes,
                    std::vector<Cluster>& clusters, int c_begin, int c_end,
-                   const std::vector<std::pair<int, int>>& ranges);
+                   const std::vector<std::pair<int, int>>& ranges, std::vector<int>* source = nullptr);
 
 // Builds the routing BVH of one PE over `boxes` (one per cluster, ids in
 // `cluster_ids`) into nodes[root] (already allocated; an empty PE keeps a

@@ -134,6 +134,69 @@ void build_routing(BankedScene& bs, const Box& sbox) {
   }
 }
 
+// Vertex attributes and texture copies of every bank (SPEC "barycentric
+// attributes", "Texture maps"): normals only when the scene is smooth, texture
+// coordinates only where the facet's material has a map. A bank holds its
+// own copy of each texture its facets use. Adds their bytes to bank_bytes;
+// returns the bytes of one copy of every texture used.
+std::uint64_t bank_attributes(const Scene& scene, const std::vector<int>& source, BankedScene& bs) {
+  const auto flags_of = [&](const Triangle& t) {
+    if (t.attributes < 0) return 0;
+    const VertexAttributes& a = scene.attributes[t.attributes];
+    const MaterialDesc& m = scene.materials[t.material];
+    return (scene.smooth && a.has_normals ? OPSILA_ATTR_NORMALS : 0) |
+           (a.has_uv && (m.map_kd >= 0 || m.map_ka >= 0) ? OPSILA_ATTR_UV : 0);
+  };
+  bs.texture_bytes.assign(bs.pes.size(), 0);
+  bool any = false;
+  for (int i : source) any = any || flags_of(scene.triangles[i]) != 0;
+  if (!any) return 0;
+  bs.attributes.assign(bs.triangles.size(), BankAttributes{});
+  std::vector<char> used(scene.textures.size(), 0);
+  for (std::size_t p = 0; p < bs.pes.size(); ++p) {
+    std::vector<int> copy(scene.textures.size(), -1);  // scene texture -> this bank's copy
+    const auto bank_copy = [&](int texture) {
+      if (texture < 0) return -1;
+      if (copy[texture] < 0) {
+        const Texture& tx = scene.textures[texture];
+        if (bs.texels.size() + tx.texels.size() > std::size_t(INT32_MAX))
+          throw InputError("texture maps: the banks' copies exceed 2^31 texels; use fewer --pes or smaller images");
+        copy[texture] = static_cast<int>(bs.textures.size());
+        bs.textures.push_back(BankTexture{static_cast<opsila_i32>(bs.texels.size()), tx.width, tx.height,
+                                          static_cast<opsila_i32>(p)});
+        bs.texels.insert(bs.texels.end(), tx.texels.begin(), tx.texels.end());
+        bs.texture_bytes[p] += tx.texels.size() * sizeof(std::uint32_t) + sizeof(BankTexture);
+        used[texture] = 1;
+      }
+      return copy[texture];
+    };
+    const PeInfo& pe = bs.pes[p];
+    for (int k = pe.tri_begin; k < pe.tri_end; ++k) {
+      const Triangle& t = scene.triangles[source[k]];
+      BankAttributes& out = bs.attributes[k];
+      out.flags = flags_of(t);
+      out.map_kd = out.map_ka = -1;
+      if (out.flags == 0) continue;
+      const VertexAttributes& a = scene.attributes[t.attributes];
+      if (out.flags & OPSILA_ATTR_NORMALS) {
+        put3(out.n0, a.normal[0]);
+        put3(out.n1, a.normal[1]);
+        put3(out.n2, a.normal[2]);
+      }
+      if (out.flags & OPSILA_ATTR_UV) {
+        for (int c = 0; c < 3; ++c) out.uv[2 * c] = a.uv[c][0], out.uv[2 * c + 1] = a.uv[c][1];
+        out.map_kd = bank_copy(scene.materials[t.material].map_kd);
+        out.map_ka = bank_copy(scene.materials[t.material].map_ka);
+      }
+    }
+    bs.bank_bytes[p] += std::uint64_t(pe.tri_end - pe.tri_begin) * sizeof(BankAttributes) + bs.texture_bytes[p];
+  }
+  std::uint64_t once = 0;
+  for (std::size_t t = 0; t < scene.textures.size(); ++t)
+    if (used[t]) once += scene.textures[t].texels.size() * sizeof(std::uint32_t) + sizeof(BankTexture);
+  return once;
+}
+
 }  // namespace
 
 BankedScene partition_scene(const Scene& scene, int num_pes, bool split_flat) {
@@ -170,6 +233,8 @@ BankedScene partition_scene(const Scene& scene, int num_pes, bool split_flat) {
   bs.triangles.reserve(total);
   std::vector<Box> tri_boxes;
   tri_boxes.reserve(total);
+  std::vector<int> source;
+  source.reserve(total);
   std::vector<std::pair<int, int>> ranges(cb.size());
   bs.clusters.resize(cb.size());
   for (std::size_t c = 0; c < cb.size(); ++c) {
@@ -188,6 +253,7 @@ BankedScene partition_scene(const Scene& scene, int num_pes, bool split_flat) {
       bt.material = t.material;
       bs.triangles.push_back(bt);
       tri_boxes.push_back(tri_box(t));
+      source.push_back(i);
       for (const Vec3* v : {&t.v0, &t.v1, &t.v2}) {
         double d2 = 0;
         for (int a = 0; a < 3; ++a) d2 += double((*v)[a] - ctr[a]) * double((*v)[a] - ctr[a]);
@@ -220,7 +286,7 @@ BankedScene partition_scene(const Scene& scene, int num_pes, bool split_flat) {
     pe.tri_end = c_begin < c ? ranges[c - 1].second : pe.tri_begin;
     pe.node_begin = static_cast<int>(bs.nodes.size());
     int depth = build_bank_bvh(bs.nodes, bs.triangles, tri_boxes, bs.clusters, static_cast<int>(c_begin),
-                               static_cast<int>(c), ranges);
+                               static_cast<int>(c), ranges, &source);
     bs.max_bvh_depth = std::max(bs.max_bvh_depth, depth);
     pe.node_end = static_cast<int>(bs.nodes.size());
     Box sb;
@@ -241,6 +307,7 @@ BankedScene partition_scene(const Scene& scene, int num_pes, bool split_flat) {
   }
 
   build_routing(bs, sbox);
+  std::uint64_t texture_once = bank_attributes(scene, source, bs);
 
   for (const MaterialDesc& m : scene.materials) {
     Material g{};
@@ -262,9 +329,12 @@ BankedScene partition_scene(const Scene& scene, int num_pes, bool split_flat) {
   bs.global_bytes = bs.clusters.size() * sizeof(Cluster) + bs.route_nodes.size() * sizeof(BankNode) +
                     bs.pes.size() * sizeof(PeInfo) +
                     bs.materials.size() * sizeof(Material) + bs.lights.size() * sizeof(Light);
+  // One copy of everything: every bank's facets, nodes and attributes, but
+  // each texture once (banks that share a texture each hold a copy).
   std::uint64_t all_banks = 0;
-  for (auto b : bs.bank_bytes) all_banks += b;
-  bs.replicated_bytes = all_banks + bs.global_bytes;
+  for (std::size_t p = 0; p < bs.bank_bytes.size(); ++p) all_banks += bs.bank_bytes[p] - bs.texture_bytes[p];
+  bs.texture_replicated_bytes = texture_once;
+  bs.replicated_bytes = all_banks + texture_once + bs.global_bytes;
   return bs;
 }
 
@@ -291,6 +361,7 @@ FrameParams frame_params(const Scene& scene, const BankedScene& bs, int bank_cap
   fp.num_clusters = static_cast<int>(bs.clusters.size());
   fp.bank_capacity = bank_capacity;
   fp.spawn_slots = OPSILA_SPAWN_SLOTS(fp.num_lights);
+  fp.has_attributes = bs.attributes.empty() ? 0 : 1;
   return fp;
 }
 

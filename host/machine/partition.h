@@ -1,4 +1,4 @@
-// Scene distribution over the PEs' banks (never duplicated):
+// Scene distribution over the PEs' banks (facets never duplicated):
 //  1. objects are cut into clusters: an object stays whole unless it has too
 //     many facets or is much larger than a PE's region, in which case it is
 //     split into spatially coherent pieces (median splits of its triangles);
@@ -9,6 +9,8 @@
 //  3. each bank gets its own BVH (clusters at the top, facets below,
 //     host/machine/bank_bvh.h), and every PE gets the bounding spheres and
 //     the boxes (under one small BVH per PE) of all clusters.
+//  4. what a facet needs to be shaded (vertex normals, texture coordinates,
+//     the texels of its maps) goes into the bank that owns the facet.
 #pragma once
 
 #include <cstdint>
@@ -28,7 +30,14 @@ struct BankedScene {
   std::vector<PeInfo> pes;
   std::vector<Material> materials;
   std::vector<Light> lights;
-  std::vector<std::uint64_t> bank_bytes;  // facets + BVH nodes of each bank
+  // Empty, or one per triangle (same index): vertex normals, texture
+  // coordinates and the bank's texture copies (see bank_attributes).
+  std::vector<BankAttributes> attributes;
+  std::vector<BankTexture> textures;   // texture copies, grouped by bank
+  std::vector<std::uint32_t> texels;   // their texels, packed sRGB
+  std::vector<std::uint64_t> bank_bytes;  // facets + BVH nodes + attributes + textures of each bank
+  std::vector<std::uint64_t> texture_bytes;  // texture copies of each bank (part of bank_bytes)
+  std::uint64_t texture_replicated_bytes = 0;  // every texture the facets use, once
   std::uint64_t global_bytes = 0;         // what every PE knows: spheres, routing boxes, PE boxes, materials, lights
   std::uint64_t replicated_bytes = 0;     // one full copy of the scene (what each PE would hold if duplicated)
   int max_bvh_depth = 0;

@@ -9,6 +9,7 @@
 #include <string>
 
 #include "core/camera.h"
+#include "core/texture.h"
 #include "core/fixed_point.h"
 #include "core/util.h"
 #include "machine/descriptors.h"
@@ -89,7 +90,9 @@ DevicePlan plan_device_memory(const BankedScene& bs, std::size_t npix, int P, co
   plan.scene = bs.triangles.size() * sizeof(BankTriangle) + bs.nodes.size() * sizeof(BankNode) +
                bs.clusters.size() * (sizeof(Cluster) + sizeof(cl_int4)) +
                bs.route_nodes.size() * sizeof(BankNode) + bs.pes.size() * sizeof(PeInfo) +
-               bs.materials.size() * sizeof(Material) + std::max<std::size_t>(1, bs.lights.size()) * sizeof(Light);
+               bs.materials.size() * sizeof(Material) + std::max<std::size_t>(1, bs.lights.size()) * sizeof(Light) +
+               bs.attributes.size() * sizeof(BankAttributes) + bs.textures.size() * sizeof(BankTexture) +
+               bs.texels.size() * sizeof(std::uint32_t);
   // Item buffer (pair, triangle, distance) and 64-bit fixed-point RGB sums.
   plan.image = u64(npix) * (sizeof(cl_int2) + sizeof(cl_int) + sizeof(cl_float) + OPSILA_ACCUM_WORDS * sizeof(cl_uint));
   // Banks (slots, each bank padded to a work-group), SPMD outputs, two pools.
@@ -109,6 +112,24 @@ std::uint64_t fixed_pair(const std::vector<cl_uint>& v, std::size_t i) {
 }
 
 }  // namespace
+
+int SurfaceBuffers::set_args(cl::Kernel& k, int at) const {
+  k.setArg(at++, attributes);
+  k.setArg(at++, textures);
+  k.setArg(at++, texels);
+  k.setArg(at++, srgb);
+  return at;
+}
+
+SurfaceBuffers upload_surface(ClRuntime& rt, const BankedScene& bs) {
+  SurfaceBuffers b;
+  b.attributes = upload(rt, bs.attributes, "vertex attributes");
+  b.textures = upload(rt, bs.textures, "texture copies");
+  b.texels = upload(rt, bs.texels, "texels");
+  const std::array<float, 256>& table = srgb_decode_table();
+  b.srgb = upload(rt, std::vector<float>(table.begin(), table.end()), "sRGB decode table");
+  return b;
+}
 
 void check_kernel_limits(const Scene& scene) {
   if (scene.max_depth < 1 || scene.max_depth > OPSILA_MAX_DEPTH)
@@ -140,6 +161,7 @@ struct Renderer::Machine {
   cl::Kernel k_item, k_primary, k_spmd;
   std::unique_ptr<ScatterPass> scatter;
   cl::Buffer b_tris, b_nodes, b_clusters, b_route, b_pes, b_mats, b_lights, b_rects;
+  SurfaceBuffers surface;  // vertex attributes and texture copies of the banks
   cl::Buffer b_items, b_item_tri, b_item_t, b_accum, b_stats, b_traffic, b_out_count, b_hits;
   DescriptorSet banks, outputs, pool, next_pool;
 
@@ -207,6 +229,8 @@ Renderer::Machine::Machine(const Scene& scene, const RenderSettings& settings, C
   prepared.bank_bytes = bs.bank_bytes;
   prepared.global_bytes = bs.global_bytes;
   prepared.replicated_bytes = bs.replicated_bytes;
+  prepared.texture_bytes = bs.texture_bytes;
+  prepared.texture_replicated_bytes = bs.texture_replicated_bytes;
   upload_scene(scene, bs);
   allocate_frame_buffers();
 }
@@ -271,6 +295,7 @@ void Renderer::Machine::upload_scene(const Scene& scene, const BankedScene& bs) 
   std::vector<Light> lights = bs.lights;
   if (lights.empty()) lights.push_back(Light{});
   b_lights = upload(rt, lights, "lights");
+  surface = upload_surface(rt, bs);
   b_rects = upload(rt, cluster_rects(scene, bs), "projected cluster boxes");
 }
 
@@ -422,6 +447,7 @@ void Renderer::Machine::spmd_phase(Launcher& launch, Frame& f, int round) {
   k_spmd.setArg(a++, b_tris);
   k_spmd.setArg(a++, b_mats);
   k_spmd.setArg(a++, b_lights);
+  a = surface.set_args(k_spmd, a);
   a = banks.set_args(k_spmd, a);
   k_spmd.setArg(a++, scatter->group_pe);
   k_spmd.setArg(a++, scatter->group_first);

@@ -47,6 +47,8 @@ struct RenderStats {
   double render_seconds = 0;         // host wall time of the phases
   std::vector<LaunchRecord> launches;
   std::vector<std::uint64_t> bank_bytes;  // scene bytes per bank
+  std::vector<std::uint64_t> texture_bytes;  // texture copies per bank (part of bank_bytes)
+  std::uint64_t texture_replicated_bytes = 0;  // one copy of every texture used
   std::uint64_t global_bytes = 0;         // replicated per PE: spheres, PE boxes, materials, lights
   std::uint64_t replicated_bytes = 0;     // what a replicated scene would cost on each PE
   // traffic[level][src_pe * P + dst_pe]: descriptors sent (scatter)
@@ -64,6 +66,17 @@ struct RenderStats {
 struct RenderResult : ImageResult {
   RenderStats stats;
 };
+
+struct BankedScene;
+
+// The bank data shading reads besides facets and materials (the kernels'
+// SURFACE_PARAMS): vertex attributes, texture copies, texels, and the sRGB
+// decode table. Empty parts are one-element placeholders never read.
+struct SurfaceBuffers {
+  cl::Buffer attributes, textures, texels, srgb;
+  int set_args(cl::Kernel& k, int at) const;
+};
+SurfaceBuffers upload_surface(ClRuntime& rt, const BankedScene& bs);
 
 // Throws InputError when the scene exceeds what the kernels support (depth,
 // lights) or has no facet. Shared by every OpenCL renderer.

@@ -135,6 +135,13 @@ nlohmann::json stats_json(const RenderResult& result, const Scene& scene,
                                                                 static_cast<double>(s.bank_bytes.size())},
                  {"global_bytes", s.global_bytes},
                  {"replicated_bytes", s.replicated_bytes}};
+  // Texture maps live in the banks whose facets use them (a shared one in
+  // each such bank): what each bank holds against one full copy.
+  std::uint64_t texture_max = 0;
+  for (std::uint64_t bytes : s.texture_bytes) texture_max = std::max(texture_max, bytes);
+  j["memory"]["texture_bytes"] = s.texture_bytes;
+  j["memory"]["texture_bytes_max"] = texture_max;
+  j["memory"]["texture_replicated_bytes"] = s.texture_replicated_bytes;
 
   // traffic[level] is a flat P x P array (src * P + dst): emit it as rows.
   nlohmann::json traffic = nlohmann::json::array();

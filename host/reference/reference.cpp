@@ -4,6 +4,7 @@
 #include "reference/reference.h"
 
 #include "core/progress.h"
+#include "core/texture.h"
 #include "opsila_shared.h"
 
 #include <algorithm>
@@ -36,8 +37,10 @@ struct Tri {
 };
 
 // Möller–Trumbore. Edges and vertices count as inside. Returns the ray
-// parameter t (distance along a unit direction), or nothing.
-bool intersect(const Tri& tri, const vec3& origin, const vec3& dir, float& t_out) {
+// parameter t (distance along a unit direction), or nothing; u and v are
+// SPEC's barycentrics b1, b2 of the hit.
+bool intersect(const Tri& tri, const vec3& origin, const vec3& dir, float& t_out, float* b1 = nullptr,
+               float* b2 = nullptr) {
   const vec3 p = glm::cross(dir, tri.e2);
   const float det = glm::dot(tri.e1, p);
   if (det == 0.0f) return false;  // ray parallel to the plane
@@ -49,6 +52,8 @@ bool intersect(const Tri& tri, const vec3& origin, const vec3& dir, float& t_out
   const float v = glm::dot(dir, q) * inv_det;
   if (!(v >= 0.0f && u + v <= 1.0f)) return false;
   t_out = glm::dot(tri.e2, q) * inv_det;
+  if (b1) *b1 = u;
+  if (b2) *b2 = v;
   return std::isfinite(t_out);
 }
 
@@ -162,6 +167,7 @@ bool hits_box(const Node& node, const vec3& origin, const vec3& dir, float t_min
 struct Hit {
   float t = std::numeric_limits<float>::infinity();
   int tri = -1;
+  float b1 = 0, b2 = 0;  // barycentrics of the hit on triangle `tri`
 };
 
 }  // namespace
@@ -195,11 +201,13 @@ struct ReferenceTracer::Impl {
       }
       for (int i = node.first; i < node.first + node.count; ++i) {
         const int index = bvh.order[i];
-        float t;
-        if (!intersect(tris[index], origin, dir, t) || !(t > t_min)) continue;
+        float t, b1, b2;
+        if (!intersect(tris[index], origin, dir, t, &b1, &b2) || !(t > t_min)) continue;
         if (closer(t, index, hit.t, hit.tri)) {
           hit.t = t;
           hit.tri = index;
+          hit.b1 = b1;
+          hit.b2 = b2;
         }
       }
     }
@@ -228,12 +236,39 @@ struct ReferenceTracer::Impl {
     return false;
   }
 
+  // SPEC "Smooth shading": the interpolated vertex normal, turned to the
+  // side n_facing (the facet normal facing the ray) is on; n_facing itself
+  // without vertex normals (or when they cancel out).
+  vec3 shading_normal(const Triangle& t, const Hit& hit, const vec3& n_facing) const {
+    if (!scene.smooth || t.attributes < 0) return n_facing;
+    const VertexAttributes& a = scene.attributes[t.attributes];
+    if (!a.has_normals) return n_facing;
+    const float b0 = 1.0f - hit.b1 - hit.b2;
+    const vec3 ns = b0 * to_glm(a.normal[0]) + hit.b1 * to_glm(a.normal[1]) + hit.b2 * to_glm(a.normal[2]);
+    const float len = glm::length(ns);
+    if (!(len > 0.0f) || !std::isfinite(len)) return n_facing;
+    const vec3 unit = ns / len;
+    return glm::dot(unit, n_facing) < 0.0f ? -unit : unit;
+  }
+
+  // SPEC "Texture maps": the material's colour times its map at the hit's
+  // interpolated texture coordinates, where the facet has them.
+  vec3 mapped(const Triangle& t, const Hit& hit, const Vec3& colour, int map) const {
+    if (map < 0 || map >= static_cast<int>(scene.textures.size()) || t.attributes < 0) return to_glm(colour);
+    const VertexAttributes& a = scene.attributes[t.attributes];
+    if (!a.has_uv) return to_glm(colour);
+    const float b0 = 1.0f - hit.b1 - hit.b2;
+    const float u = b0 * a.uv[0][0] + hit.b1 * a.uv[1][0] + hit.b2 * a.uv[2][0];
+    const float v = b0 * a.uv[0][1] + hit.b1 * a.uv[1][1] + hit.b2 * a.uv[2][1];
+    return to_glm(colour) * to_glm(sample_texture(scene.textures[map], u, v));
+  }
+
   // SPEC "Shading": local intensity at P with shading normal n, for a ray of
-  // unit direction d. Shadow rays are cast only where the light term can be
-  // non-zero (n.Lv > 0).
-  vec3 local_intensity(const vec3& p, const vec3& n, const vec3& d, const MaterialDesc& m,
-                       RayCounts& counts) const {
-    vec3 result = to_glm(scene.ambient) * to_glm(m.ka);
+  // unit direction d, with the (texture-mapped) ka and kd at P. Shadow rays
+  // are cast only where the light term can be non-zero (n.Lv > 0).
+  vec3 local_intensity(const vec3& p, const vec3& n, const vec3& d, const MaterialDesc& m, const vec3& ka,
+                       const vec3& kd, RayCounts& counts) const {
+    vec3 result = to_glm(scene.ambient) * ka;
     for (const LightDesc& light : scene.lights) {
       const vec3 to_light = to_glm(light.position) - p;
       const float distance = glm::length(to_light);
@@ -247,7 +282,7 @@ struct ReferenceTracer::Impl {
       const float r_dot_v = std::max(0.0f, glm::dot(rl, -d));
       // C's powf: powf(0, 0) = 1, so Ns = 0 gives the full Ks.
       const float highlight = std::pow(r_dot_v, m.ns);
-      result += to_glm(light.intensity) * (to_glm(m.kd) * n_dot_l + to_glm(m.ks) * highlight);
+      result += to_glm(light.intensity) * (kd * n_dot_l + to_glm(m.ks) * highlight);
     }
     return result;
   }
@@ -265,8 +300,10 @@ struct ReferenceTracer::Impl {
     const MaterialDesc& m = materials[tri.material];
     const vec3 p = origin + hit.t * d;
     const bool entering = glm::dot(tri.normal, d) < 0.0f;
-    const vec3 n = entering ? tri.normal : -tri.normal;
-    pixel += weight * local_intensity(p, n, d, m, counts);
+    const Triangle& source = scene.triangles[hit.tri];
+    const vec3 n = shading_normal(source, hit, entering ? tri.normal : -tri.normal);
+    const vec3 ka = mapped(source, hit, m.ka, m.map_ka), kd = mapped(source, hit, m.kd, m.map_kd);
+    pixel += weight * local_intensity(p, n, d, m, ka, kd, counts);
 
     if (level + 1 >= scene.max_depth) return hit.tri;
     // SPEC "Materials": kr = Ks for illum 3..7, kt = Tf for illum 4, 6, 7.

@@ -23,7 +23,7 @@
  * RenderStats counts them; ray-facet tests, ray-box tests).
  * items: (object, facet) of the centre ray's primary hit. */
 __kernel void megakernel(FrameParams fp, __global const BankNode *nodes, __global const BankTriangle *tris,
-                         __global const Material *materials, __global const Light *lights, int root,
+                         __global const Material *materials, __global const Light *lights, SURFACE_PARAMS, int root,
                          int spp_k, __global const float *offsets, int pixel_begin, int pixel_count,
                          __global long *accum, __global uint4 *ray_counts, __global int2 *items) {
   int k = get_global_id(0);
@@ -76,11 +76,11 @@ __kernel void megakernel(FrameParams fp, __global const BankNode *nodes, __globa
       if (level == 0 && centre) item = (int2)(tri->object_id, tri->facet_id);
 
       /* shade() of spmd_phase.cl, with the shadow ray traced here. */
-      SurfacePoint surf = surface_point(tri, org, d, t);
-      float3 p = surf.p;
       __global const Material *m = &materials[tri->material];
+      SurfacePoint surf = surface_point(fp, tris, hit, m, SURFACE_ARGS, org, d, t);
+      float3 p = surf.p;
 
-      sum += fixed3(weight * load3(fp.ambient) * load3g(m->ka));
+      sum += fixed3(weight * load3(fp.ambient) * surf.ka);
 
       for (int l = 0; l < fp.num_lights; ++l) {
         float3 lv;

@@ -50,10 +50,9 @@ inline RayPre make_ray(float3 org, float3 dir) {
   return r;
 }
 
-/* Watertight ray-triangle test: an edge shared by two facets is hit by
- * exactly one side or both, never by neither (no cracks). Returns the hit
- * distance if it lies in (tmin, tmax), else INFINITY. */
-OPSILA_INLINE float intersect_triangle(const RayPre *r, __global const BankTriangle *tri, float tmin, float tmax) {
+/* The watertight test's edge functions (u, v, w) of the triangle's
+ * vertices v0, v1, v2 as seen along the ray, and their depths along kz. */
+OPSILA_INLINE float3 edge_functions(const RayPre *r, __global const BankTriangle *tri, float3 *depths) {
   float3 a = load3g(tri->v0) - r->org;
   float3 b = load3g(tri->v1) - r->org;
   float3 c = load3g(tri->v2) - r->org;
@@ -61,17 +60,36 @@ OPSILA_INLINE float intersect_triangle(const RayPre *r, __global const BankTrian
   float ax = comp(a, r->kx) - r->sx * az, ay = comp(a, r->ky) - r->sy * az;
   float bx = comp(b, r->kx) - r->sx * bz, by = comp(b, r->ky) - r->sy * bz;
   float cx = comp(c, r->kx) - r->sx * cz, cy = comp(c, r->ky) - r->sy * cz;
-  float u = cx * by - cy * bx;
-  float v = ax * cy - ay * cx;
-  float w = bx * ay - by * ax;
+  *depths = (float3)(az, bz, cz);
+  return (float3)(cx * by - cy * bx, ax * cy - ay * cx, bx * ay - by * ax);
+}
+
+/* Watertight ray-triangle test: an edge shared by two facets is hit by
+ * exactly one side or both, never by neither (no cracks). Returns the hit
+ * distance if it lies in (tmin, tmax), else INFINITY. */
+OPSILA_INLINE float intersect_triangle(const RayPre *r, __global const BankTriangle *tri, float tmin, float tmax) {
+  float3 z;
+  float3 e = edge_functions(r, tri, &z);
+  float u = e.x, v = e.y, w = e.z;
   if ((u < 0.0f || v < 0.0f || w < 0.0f) && (u > 0.0f || v > 0.0f || w > 0.0f)) return OPSILA_INF;
   float det = u + v + w;
   if (det == 0.0f) return OPSILA_INF;
   /* Barycentrics first: u*az is of the order of the scene size cubed and
    * overflows float beyond ~1e12 units; u/det is at most 1. */
   float inv_det = 1.0f / det;
-  float t = (u * inv_det) * (r->sz * az) + (v * inv_det) * (r->sz * bz) + (w * inv_det) * (r->sz * cz);
+  float t = (u * inv_det) * (r->sz * z.x) + (v * inv_det) * (r->sz * z.y) + (w * inv_det) * (r->sz * z.z);
   return (t > tmin && t < tmax) ? t : OPSILA_INF;
+}
+
+/* SPEC's barycentrics (b1, b2) of the ray's hit on a triangle it is known
+ * to hit: P = (1 - b1 - b2) v0 + b1 v1 + b2 v2. */
+inline float2 hit_barycentrics(const RayPre *r, __global const BankTriangle *tri) {
+  float3 z;
+  float3 e = edge_functions(r, tri, &z);
+  float det = e.x + e.y + e.z;
+  if (det == 0.0f) return (float2)(0.0f, 0.0f);
+  float inv_det = 1.0f / det;
+  return (float2)(e.y * inv_det, e.z * inv_det);
 }
 
 /* Slab test, closed boxes (a ray along a face is inside). */

@@ -1,22 +1,58 @@
 /* Whitted shading rules and the SPEC camera, shared by the SPMD phase,
  * the item buffer and the replicated megakernel. */
-#include "geometry.cl"
+#include "texture.cl"
 
 /* Whitted shading pieces (SPEC "Shading"), shared by the SPMD phase and the
  * replicated megakernel so that both shade from one definition. */
 typedef struct {
   float3 p;      /* hit point */
-  float3 n;      /* shading normal: the geometric normal facing the ray */
+  float3 n;      /* shading normal, facing the ray's side of the facet */
   bool entering; /* dot(Ng, D) < 0 */
+  float3 ka, kd; /* the material's, times its texture maps at the hit */
 } SurfacePoint;
 
-inline SurfacePoint surface_point(__global const BankTriangle *tri, float3 org, float3 d, float t) {
+/* What the bank holds for shading besides facets and materials: vertex
+ * attributes, texture copies, texels and the sRGB decode table. */
+#define SURFACE_PARAMS                                                                                 \
+  __global const BankAttributes *attrs, __global const BankTexture *textures, __global const uint *texels, \
+      __global const float *srgb
+#define SURFACE_ARGS attrs, textures, texels, srgb
+
+/* The surface at the hit of ray (org, d) at distance t on bank triangle
+ * tri_index: SPEC's Ng, and where the triangle carries attributes, the
+ * smooth normal and texture-mapped Ka, Kd at the hit's barycentrics. */
+inline SurfacePoint surface_point(FrameParams fp, __global const BankTriangle *tris, int tri_index,
+                                  __global const Material *m, SURFACE_PARAMS, float3 org, float3 d, float t) {
+  __global const BankTriangle *tri = &tris[tri_index];
   float3 v0 = load3g(tri->v0), v1 = load3g(tri->v1), v2 = load3g(tri->v2);
   float3 ng = normalize(cross(v1 - v0, v2 - v0));
   SurfacePoint sp;
   sp.p = org + t * d;
   sp.entering = dot(ng, d) < 0.0f;
   sp.n = sp.entering ? ng : -ng;
+  sp.ka = load3g(m->ka);
+  sp.kd = load3g(m->kd);
+  if (!fp.has_attributes) return sp;
+  __global const BankAttributes *at = &attrs[tri_index];
+  if (at->flags == 0) return sp;
+  RayPre r = make_ray(org, d);
+  float2 b = hit_barycentrics(&r, tri);
+  float b0 = 1.0f - b.x - b.y;
+  if (at->flags & OPSILA_ATTR_NORMALS) {
+    float3 ns = b0 * load3g(at->n0) + b.x * load3g(at->n1) + b.y * load3g(at->n2);
+    float len = length(ns);
+    /* Normals that cancel out leave the facet normal. */
+    if (len > 0.0f && isfinite(len)) {
+      ns = ns / len;
+      sp.n = dot(ns, sp.n) < 0.0f ? -ns : ns;
+    }
+  }
+  if (at->flags & OPSILA_ATTR_UV) {
+    float u = b0 * at->uv[0] + b.x * at->uv[2] + b.y * at->uv[4];
+    float v = b0 * at->uv[1] + b.x * at->uv[3] + b.y * at->uv[5];
+    if (at->map_kd >= 0) sp.kd = sp.kd * sample_texture(&textures[at->map_kd], texels, srgb, u, v);
+    if (at->map_ka >= 0) sp.ka = sp.ka * sample_texture(&textures[at->map_ka], texels, srgb, u, v);
+  }
   return sp;
 }
 
@@ -31,7 +67,7 @@ inline float3 light_term(__global const Material *m, __global const Light *light
   if (!(ndl > 0.0f)) return (float3)(0.0f);
   float3 rl = 2.0f * ndl * sp.n - *lv;
   float spec = fmax(0.0f, dot(rl, -d));
-  float3 term = load3g(m->kd) * ndl + load3g(m->ks) * pow(spec, m->ns);
+  float3 term = sp.kd * ndl + load3g(m->ks) * pow(spec, m->ns);
   return weight * load3g(light->intensity) * term;
 }
 

@@ -236,5 +236,24 @@ TEST_F(CliFixture, OpenClRenderMatchesReference) {
   EXPECT_LE(differ, ia.items.size() / 100);
 }
 
+TEST_F(CliFixture, SmoothFlagInterpolatesVertexNormals) {
+  // A flat square whose vertex normals lean outwards: flat and smooth shading differ.
+  const std::string obj = dir.write("lean.obj",
+                                    "v -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\n"
+                                    "vn -0.5 -0.5 1\nvn 0.5 -0.5 1\nvn 0.5 0.5 1\nvn -0.5 0.5 1\n"
+                                    "f 1//1 2//2 3//3 4//4\n");
+  const std::vector<std::string> view = {"--size", "32x24", "--eye", "0,0,3", "--look-at", "0,0,0", "-q"};
+  std::vector<std::string> flat = {"render", obj, "-o", out("flat.pfm")}, smooth = {"render", obj, "-o", out("s.pfm"), "--smooth"};
+  flat.insert(flat.end(), view.begin(), view.end());
+  smooth.insert(smooth.end(), view.begin(), view.end());
+  ASSERT_EQ(run_opsila(flat).exit_code, 0);
+  const RunResult r = run_opsila(smooth);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const FloatImage a = read_pfm(out("flat.pfm")), b = read_pfm(out("s.pfm"));
+  EXPECT_LT(test::clamped_psnr(a.rgb, b.rgb), 30.0);
+  before = dir.entries();
+  expect_rejected({obj, "-o", out("x.png"), "--smooth=yes"}, "--smooth");
+}
+
 }  // namespace
 }  // namespace opsila

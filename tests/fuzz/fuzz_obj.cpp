@@ -24,6 +24,7 @@ void check(const opsila::Scene& s) {
     require(t.facet_id >= 0 && t.facet_id < s.num_facets);
     require(t.object_id >= 0 && t.object_id < s.num_objects);
     require(t.material >= 0 && static_cast<std::size_t>(t.material) < s.materials.size());
+    require(t.attributes >= -1 && (t.attributes < 0 || static_cast<std::size_t>(t.attributes) < s.attributes.size()));
     for (const opsila::Vec3* v : {&t.v0, &t.v1, &t.v2})
       for (float x : *v) require(std::isfinite(x));
   }

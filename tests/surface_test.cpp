@@ -1,0 +1,296 @@
+// SPEC's barycentric attributes on the host: OBJ vt/vn and face references,
+// MTL texture maps (options, Windows paths, missing images), texture decoding
+// and sampling against hand-computed texels, and where the partition puts
+// attributes and texels. No OpenCL needed.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "core/texture.h"
+#include "input/obj_loader.h"
+#include "input/scene_file.h"
+#include "input/texture_file.h"
+#include "machine/partition.h"
+#include "test_scenes.h"
+#include "test_util.h"
+
+namespace opsila {
+namespace {
+
+Scene from_text(const std::string& text) { return load_obj_from_string(text, "t.obj", ""); }
+
+std::string error_of(const std::string& text) {
+  try {
+    from_text(text);
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "<no error>";
+}
+
+bool has_warning(const Scene& s, const std::string& a, const std::string& b = "") {
+  for (const std::string& w : s.warnings)
+    if (w.find(a) != std::string::npos && w.find(b) != std::string::npos) return true;
+  return false;
+}
+
+// An uncompressed 24-bit TGA (top-left origin) with the given sRGB codes.
+std::string tga(int w, int h, const std::vector<std::array<int, 3>>& rgb) {
+  std::string out(18, '\0');
+  out[2] = 2;  // uncompressed true-colour
+  out[12] = static_cast<char>(w & 255), out[13] = static_cast<char>(w >> 8);
+  out[14] = static_cast<char>(h & 255), out[15] = static_cast<char>(h >> 8);
+  out[16] = 24;
+  out[17] = 0x20;  // rows from the top
+  for (const auto& c : rgb) {
+    out += static_cast<char>(c[2]);
+    out += static_cast<char>(c[1]);
+    out += static_cast<char>(c[0]);
+  }
+  return out;
+}
+
+float lin(int code) { return srgb_decode_table()[code]; }
+
+// ------------------------------------------------------------ OBJ vt / vn
+
+TEST(ObjAttributes, FaceReferencesCarryCoordinatesAndNormalsPerFanTriangle) {
+  const Scene s = from_text(
+      "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n"
+      "vt 0 0\nvt 1 0\nvt 1 1 0\nvt 0.5\n"
+      "vn 0 0 1\nvn 0 1 0\nvn 1 0 0\nvn 0 0 2\n"
+      "f 1/1/1 2/2/2 3/3/3 4/4/4\n"  // quad: two fan triangles, both attributes
+      "f 1//4 2//3 3//2\n"           // normals only
+      "f 1/4 3/3 4/1\n"              // coordinates only
+      "f 1 2 3\n"                    // nothing
+      "f 1/1 2/2/2 3\n");            // mixed corners: none complete
+  ASSERT_EQ(s.triangles.size(), 6u);
+  ASSERT_GE(s.triangles[0].attributes, 0);
+  const VertexAttributes& a0 = s.attributes[s.triangles[0].attributes];
+  const VertexAttributes& a1 = s.attributes[s.triangles[1].attributes];
+  EXPECT_TRUE(a0.has_uv && a0.has_normals);
+  // Fan (v1 v2 v3), (v1 v3 v4): corner k of each triangle is its own vertex.
+  EXPECT_EQ(a0.normal[1], (Vec3{0, 1, 0}));
+  EXPECT_EQ(a1.normal[2], (Vec3{0, 0, 2}));  // kept as written; shading normalises
+  EXPECT_EQ(a1.uv[1][0], 1.0f);
+  EXPECT_EQ(a1.uv[2][0], 0.5f);
+  EXPECT_EQ(a1.uv[2][1], 0.0f);  // "vt u": v defaults to 0
+  const VertexAttributes& a2 = s.attributes[s.triangles[2].attributes];
+  EXPECT_TRUE(a2.has_normals);
+  EXPECT_FALSE(a2.has_uv);
+  EXPECT_EQ(a2.normal[0], (Vec3{0, 0, 2}));
+  const VertexAttributes& a3 = s.attributes[s.triangles[3].attributes];
+  EXPECT_TRUE(a3.has_uv);
+  EXPECT_FALSE(a3.has_normals);
+  EXPECT_EQ(s.triangles[4].attributes, -1);
+  EXPECT_EQ(s.triangles[5].attributes, -1);
+  EXPECT_EQ(s.triangles[0].facet_id, s.triangles[1].facet_id);
+}
+
+TEST(ObjAttributes, NegativeAndForwardIndicesOfCoordinatesAndNormals) {
+  const Scene s = from_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0.25 0.75\nvn 0 0 1\n"
+                            "f -3/-1/-1 -2/1/1 -1/2/2\nvt 0.5 0.5\nvn 1 0 0\n");
+  ASSERT_EQ(s.triangles.size(), 1u);
+  const VertexAttributes& a = s.attributes[s.triangles[0].attributes];
+  EXPECT_EQ(a.uv[0][0], 0.25f);
+  EXPECT_EQ(a.uv[2][1], 0.5f);
+  EXPECT_EQ(a.normal[2], (Vec3{1, 0, 0}));
+}
+
+TEST(ObjAttributes, BadCoordinatesAndNormalsGiveOnePreciseMessage) {
+  const std::string tri = "v 0 0 0\nv 1 0 0\nv 0 1 0\n";
+  EXPECT_NE(error_of(tri + "vn 0 1\n").find("t.obj:4: truncated 'vn' line"), std::string::npos);
+  EXPECT_NE(error_of(tri + "vt nan 0\n").find("t.obj:4: 'vt' value 1 'nan'"), std::string::npos);
+  EXPECT_NE(error_of(tri + "vt 0 0 0 0\n").find("t.obj:4: 'vt' line has more than 3 values"), std::string::npos);
+  EXPECT_NE(error_of(tri + "f 1/0 2/1 3/1\n").find("t.obj:4: bad vertex reference '1/0'"), std::string::npos);
+}
+
+TEST(ObjAttributes, CoordinatesAndNormalsThatDoNotExistAreAWarning) {
+  const std::string tri = "v 0 0 0\nv 1 0 0\nv 0 1 0\n";
+  const Scene a = from_text(tri + "vt 0 0\nf 1/2 2/1 3/1\nf 1/1 2/1 3/1\n");
+  EXPECT_EQ(a.triangles[0].attributes, -1);
+  EXPECT_GE(a.triangles[1].attributes, 0);
+  EXPECT_TRUE(has_warning(a, "t.obj:5: 1 face corner(s) name texture coordinates the file does not define"));
+  const Scene b = from_text(tri + "vn 0 0 1\nf 1//1 2//1 3//7\nf 1//-2 2//1 3//1\n");
+  EXPECT_EQ(b.triangles[0].attributes, -1);
+  EXPECT_EQ(b.triangles[1].attributes, -1);
+  EXPECT_TRUE(has_warning(b, "2 face corner(s) name normals the file does not define"));
+}
+
+// --------------------------------------------------------------- MTL maps
+
+TEST(MtlMaps, OptionsAreSkippedAndWindowsPathsResolved) {
+  test::TempDir dir;
+  dir.write("tex.tga", tga(1, 1, {{255, 0, 0}}));
+  dir.write("sub_a.tga", tga(1, 1, {{0, 255, 0}}));
+  dir.write("m.mtl",
+            "newmtl a\nKd 1 1 1\nmap_Kd -s 1 1 1 -o 0 0 -bm 1 .\\tex.tga\n"
+            "newmtl b\nKa 1 1 1\nmap_Ka -clamp off C:\\Users\\someone\\textures\\sub_a.tga\n"
+            "newmtl c\nmap_Kd missing.png\n"
+            "newmtl d\nmap_Kd m.mtl\n");
+  dir.write("e.tga", tga(1, 1, {{1, 2, 3}}));
+  dir.write("e.mtl", "newmtl e\nmap_Kd e.tga\n");
+  const std::string obj = dir.write("m.obj", "mtllib m.mtl e.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\n"
+                                              "usemtl a\nf 1/1 2/1 3/1\nusemtl b\nf 1/1 2/1 3/1\n"
+                                              "usemtl c\nf 1/1 2/1 3/1\nusemtl d\nf 1/1 2/1 3/1\n"
+                                              "usemtl e\nf 1 2 3\n");
+  const Scene s = load_obj(obj);
+  ASSERT_EQ(s.materials.size(), 6u);
+  EXPECT_EQ(s.materials[5].map_kd, -1);  // only faces without coordinates: never read
+  ASSERT_EQ(s.textures.size(), 2u);
+  EXPECT_EQ(s.materials[1].map_kd, 0);
+  EXPECT_EQ(s.textures[0].texels[0], 0x0000ffu);
+  EXPECT_EQ(s.materials[2].map_ka, 1);  // found beside the MTL by its base name
+  EXPECT_EQ(s.textures[1].texels[0], 0x00ff00u);
+  EXPECT_EQ(s.materials[3].map_kd, -1);
+  EXPECT_EQ(s.materials[4].map_kd, -1);
+  EXPECT_TRUE(has_warning(s, "m.mtl:3:", "-s, -o ignored"));
+  EXPECT_TRUE(has_warning(s, "material 'c'", "missing.png' ignored"));
+  EXPECT_TRUE(has_warning(s, "material 'd'", "not a readable PNG, JPEG, TGA or BMP image"));
+}
+
+// ------------------------------------------------------ decoding, sampling
+
+TEST(Textures, DecodeKeepsTopRowFirstAndSrgbCodes) {
+  const std::string bytes = tga(2, 2, {{10, 20, 30}, {40, 50, 60}, {70, 80, 90}, {255, 128, 0}});
+  Texture t;
+  std::string problem;
+  ASSERT_TRUE(decode_texture_memory(reinterpret_cast<const unsigned char*>(bytes.data()), bytes.size(), "x", t,
+                                    problem))
+      << problem;
+  ASSERT_EQ(t.width, 2);
+  ASSERT_EQ(t.height, 2);
+  EXPECT_EQ(t.texels[0], 10u | 20u << 8 | 30u << 16);
+  EXPECT_EQ(t.texels[3], 255u | 128u << 8);
+  const std::string junk = "not an image at all";
+  EXPECT_FALSE(decode_texture_memory(reinterpret_cast<const unsigned char*>(junk.data()), junk.size(), "x", t,
+                                     problem));
+  EXPECT_NE(problem.find("not a readable"), std::string::npos);
+}
+
+TEST(Textures, SrgbDecodeTable) {
+  EXPECT_EQ(lin(0), 0.0f);
+  EXPECT_EQ(lin(255), 1.0f);
+  EXPECT_NEAR(lin(10), 10 / 255.0 / 12.92, 1e-7);  // linear segment
+  EXPECT_NEAR(lin(128), 0.2158605, 1e-6);
+  EXPECT_NEAR(lin(188), 0.5028865, 1e-6);
+}
+
+TEST(Textures, TexelCentresBilinearAndRepeat) {
+  // 4 x 2 texels; red code = 60 i + 10, green code = 100 j + 50.
+  const Texture t = test::make_texture(4, 2, [](int i, int j) { return std::array<int, 3>{60 * i + 10, 100 * j + 50, 7}; });
+  const auto red = [&](int i) { return lin(60 * i + 10); };
+  const auto green = [&](int j) { return lin(100 * j + 50); };
+  // Texel (i, j)'s centre: u = (i + 0.5) / 4, v = 1 - (j + 0.5) / 2.
+  for (int j = 0; j < 2; ++j)
+    for (int i = 0; i < 4; ++i) {
+      const Vec3 c = sample_texture(t, (i + 0.5f) / 4, 1.0f - (j + 0.5f) / 2);
+      EXPECT_FLOAT_EQ(c[0], red(i)) << i << "," << j;
+      EXPECT_FLOAT_EQ(c[1], green(j)) << i << "," << j;
+      EXPECT_FLOAT_EQ(c[2], lin(7));
+    }
+  // Halfway between texel centres: the mean of the decoded (linear) values.
+  const Vec3 mid = sample_texture(t, 0.25f, 0.75f);  // between i = 0, 1 on row j = 0
+  EXPECT_NEAR(mid[0], 0.5f * (red(0) + red(1)), 1e-6);
+  const Vec3 quarter = sample_texture(t, 0.125f + 0.0625f, 0.5f);  // i: 0 -> 1 at 1/4, j: 0 -> 1 at 1/2
+  EXPECT_NEAR(quarter[0], 0.75f * red(0) + 0.25f * red(1), 1e-6);
+  EXPECT_NEAR(quarter[1], 0.5f * (green(0) + green(1)), 1e-6);
+  // Repeat: whole periods do not change the value; u = 0 blends the last and
+  // the first column, v = 1 the last and first rows.
+  const Vec3 a = sample_texture(t, 0.3f, 0.6f);
+  for (float du : {-2.0f, -1.0f, 1.0f, 3.0f}) {
+    const Vec3 b = sample_texture(t, 0.3f + du, 0.6f - du);
+    for (int k = 0; k < 3; ++k) EXPECT_NEAR(a[k], b[k], 1e-5) << du;
+  }
+  const Vec3 edge = sample_texture(t, 0.0f, 1.0f);
+  EXPECT_NEAR(edge[0], 0.5f * (red(3) + red(0)), 1e-6);
+  EXPECT_NEAR(edge[1], 0.5f * (green(1) + green(0)), 1e-6);
+  // Not finite: read as 0.
+  const Vec3 nan = sample_texture(t, NAN, INFINITY);
+  const Vec3 zero = sample_texture(t, 0.0f, 0.0f);
+  EXPECT_EQ(nan, zero);
+}
+
+// ---------------------------------------------------------------- banks --
+
+TEST(BankAttributes, TexelsLiveInEveryBankThatUsesThem) {
+  const Scene s = test::textured_smooth_scene(64, true);
+  for (int pes : {1, 4, 16}) {
+    SCOPED_TRACE(pes);
+    const BankedScene bs = partition_scene(s, pes);
+    ASSERT_EQ(bs.attributes.size(), bs.triangles.size());
+    ASSERT_EQ(bs.texture_bytes.size(), std::size_t(pes));
+    std::uint64_t once = 0;
+    for (const Texture& t : s.textures) once += t.texels.size() * 4 + sizeof(BankTexture);
+    EXPECT_EQ(bs.texture_replicated_bytes, once);
+    std::uint64_t sum = 0;
+    for (int p = 0; p < pes; ++p) {
+      const PeInfo& pe = bs.pes[p];
+      std::uint64_t expect = 0;
+      std::vector<int> seen;
+      for (int k = pe.tri_begin; k < pe.tri_end; ++k) {
+        const BankAttributes& a = bs.attributes[k];
+        for (int map : {a.map_kd, a.map_ka}) {
+          if (map < 0) continue;
+          EXPECT_EQ(bs.textures[map].pe, p) << "a facet reads a texture copy of another bank";
+          if (std::find(seen.begin(), seen.end(), map) == seen.end()) {
+            seen.push_back(map);
+            expect += std::uint64_t(bs.textures[map].width) * bs.textures[map].height * 4 + sizeof(BankTexture);
+          }
+        }
+      }
+      EXPECT_EQ(bs.texture_bytes[p], expect);
+      sum += bs.texture_bytes[p];
+    }
+    EXPECT_GE(sum, once);  // shared maps are copied into each bank using them
+    EXPECT_EQ(frame_params(s, bs, 1).has_attributes, 1);
+  }
+}
+
+TEST(BankAttributes, NormalsOnlyWhenSmoothAndCoordinatesOnlyWithAMap) {
+  Scene s = test::textured_smooth_scene(64, false);
+  const BankedScene flat = partition_scene(s, 4);
+  for (std::size_t k = 0; k < flat.attributes.size(); ++k)
+    EXPECT_EQ(flat.attributes[k].flags & OPSILA_ATTR_NORMALS, 0);
+  // Without maps and without smooth shading nothing is stored at all.
+  for (MaterialDesc& m : s.materials) m.map_kd = m.map_ka = -1;
+  const BankedScene none = partition_scene(s, 4);
+  EXPECT_TRUE(none.attributes.empty());
+  EXPECT_TRUE(none.texels.empty());
+  EXPECT_EQ(frame_params(s, none, 1).has_attributes, 0);
+  for (std::uint64_t b : none.texture_bytes) EXPECT_EQ(b, 0u);
+}
+
+// ------------------------------------------------------------ scene file
+
+TEST(SceneSmooth, KeyAndIncludedObjNormalsFollowTheTransform) {
+  test::TempDir dir;
+  dir.write("n.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nvn 1 0 0\nvn 0 1 0\nf 1//1 2//2 3//3\n");
+  const std::string scene = dir.write(
+      "s.json", R"({"smooth": true, "objects": [{"type": "box", "min": [0,0,0], "max": [1,1,1]},
+        {"type": "obj", "file": "n.obj", "transform": {"rotate": [0, 90, 0], "scale": [2, 1, 1]}}]})");
+  const Scene s = load_scene(scene);
+  EXPECT_TRUE(s.smooth);
+  ASSERT_EQ(s.attributes.size(), 1u);
+  const Triangle& t = s.triangles.back();
+  ASSERT_EQ(t.attributes, 0);
+  const VertexAttributes& a = s.attributes[0];
+  // Rotating (0, 0, 1) by 90 degrees about y gives (1, 0, 0); (1, 0, 0) is
+  // scaled by 1/2 first, then rotated to (0, 0, -0.5).
+  EXPECT_NEAR(a.normal[0][0], 1.0f, 1e-6);
+  EXPECT_NEAR(a.normal[1][2], -0.5f, 1e-6);
+  EXPECT_NEAR(a.normal[2][1], 1.0f, 1e-6);
+  const std::string bad = dir.write("b.json", R"({"smooth": 1, "objects": [{"type": "box", "min": [0,0,0], "max": [1,1,1]}]})");
+  try {
+    load_scene(bad);
+    ADD_FAILURE() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("smooth: expected true or false"), std::string::npos) << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace opsila

@@ -30,7 +30,7 @@ class SurfaceRender : public ::testing::TestWithParam<bool> {};
 TEST_P(SurfaceRender, MatchesReferenceOnOneSixteenAndSixtyFourPes) {
   const bool smooth = GetParam();
   const Scene s = test::textured_smooth_scene(128, smooth);
-  const ReferenceImage ref = render_reference(s);
+  const ImageResult ref = render_reference(s);
   for (int pes : {1, 16, 64}) {
     SCOPED_TRACE(std::to_string(pes) + " PEs");
     const RenderResult r = render_with(s, pes);

@@ -35,6 +35,9 @@ struct ScatterPoint {
   double count_seconds = 0, scan_seconds = 0, plan_seconds = 0, move_seconds = 0;  // of that median run
   double copy_kernel_seconds = 0;  // median of copy_float4 over moved * kBytes bytes
   double copy_buffer_seconds = 0;  // median of clEnqueueCopyBuffer, same bytes
+  // The paper's primitive alone, Vd(I'(i)) = Vs(i) with I' given: on its six
+  // vectors, and on one 64-byte record (kernels/baselines/copy.cl).
+  double six_vectors_seconds = 0, one_record_seconds = 0;
   bool verified = false;           // bank counts and queue length equal host_scatter's
   // Bytes moved by one scatter: descriptor bytes read + written.
   double bytes() const { return 2.0 * double(DescriptorSet::kBytes) * double(moved); }
@@ -43,6 +46,8 @@ struct ScatterPoint {
   double host_gbytes_per_s() const { return host_seconds > 0 ? bytes() / host_seconds / 1e9 : 0; }
   double copy_kernel_gbytes_per_s() const { return copy_kernel_seconds > 0 ? bytes() / copy_kernel_seconds / 1e9 : 0; }
   double copy_buffer_gbytes_per_s() const { return copy_buffer_seconds > 0 ? bytes() / copy_buffer_seconds / 1e9 : 0; }
+  double six_vectors_gbytes_per_s() const { return six_vectors_seconds > 0 ? bytes() / six_vectors_seconds / 1e9 : 0; }
+  double one_record_gbytes_per_s() const { return one_record_seconds > 0 ? bytes() / one_record_seconds / 1e9 : 0; }
 };
 
 // Measures one point: `warmup` untimed runs, then the median of `repeats`.

@@ -27,6 +27,81 @@ double event_seconds(const cl::Event& ev) {
   return (t1 - t0) * 1e-9;
 }
 
+// A kernel's work-group size: what it allows, at most 64, a power of two.
+std::size_t group_size_for(ClRuntime& rt, cl::Kernel& k) {
+  std::size_t local = k.getWorkGroupInfo<CL_KERNEL_WORK_GROUP_SIZE>(rt.device().device);
+  local = std::min<std::size_t>(local, 64);
+  while (local & (local - 1)) local &= local - 1;
+  return std::max<std::size_t>(local, 1);
+}
+
+// I' as the exchange computes it, from the host scatter's plan: each
+// source entry's place in [banks | next pool], or -1 for a hole.
+std::vector<cl_int> placement_index(const HostDescriptors& src, const HostScatterResult& plan, int pes,
+                                    std::size_t bank_slots) {
+  std::vector<std::size_t> rank(pes, 0), base(pes, 0), demand(pes, 0);
+  for (const HostDescriptor& d : src)
+    if (desc_dest(d) >= 0 && desc_dest(d) < pes) ++demand[desc_dest(d)];
+  for (int q = 1; q < pes; ++q) base[q] = base[q - 1] + (demand[q - 1] - plan.bank_count[q - 1]);
+  std::vector<cl_int> index(src.size(), -1);
+  for (std::size_t i = 0; i < src.size(); ++i) {
+    const int q = desc_dest(src[i]);
+    if (q < 0 || q >= pes) continue;
+    const std::size_t r = rank[q]++, fits = plan.bank_count[q];
+    index[i] = static_cast<cl_int>(r < fits ? plan.bank_begin[q] + r : bank_slots + base[q] + (r - fits));
+  }
+  return index;
+}
+
+// The paper's primitive alone, Vd(I'(i)) = Vs(i) with I' given, on its six
+// vectors and on one 64-byte record: the layouts compared on the same bytes.
+void measure_paper_scatter(ClRuntime& rt, const HostDescriptors& src, const std::vector<cl_int>& index,
+                           std::size_t dest_len, int warmup, ScatterPoint& pt) {
+  const std::size_t n = src.size();
+  cl::Buffer b_index = upload(rt, index, "paper scatter index");
+  const std::size_t field_bytes[6] = {sizeof(cl_int2), sizeof(cl_int), sizeof(cl_float4),
+                                      sizeof(cl_float4), sizeof(cl_float4), sizeof(cl_int)};
+  std::vector<cl::Buffer> from, to;
+  for (std::size_t bytes : field_bytes) {
+    from.push_back(device_buffer(rt, std::max<std::size_t>(n, 1) * bytes, "paper scatter source"));
+    to.push_back(device_buffer(rt, std::max<std::size_t>(dest_len, 1) * bytes, "paper scatter destination"));
+    zero_buffer(rt, from.back(), std::max<std::size_t>(n, 1) * bytes, "paper scatter source");
+  }
+  DescriptorSet rec_from, rec_to;
+  rec_from.allocate(rt, n, "paper scatter records");
+  rec_to.allocate(rt, dest_len, "paper scatter records");
+  rec_from.write(rt, src);
+  cl::Kernel six = rt.kernel("scatter_six_vectors", KernelProgram::baselines);
+  cl::Kernel one = rt.kernel("scatter_one_record", KernelProgram::baselines);
+  int a = 0;
+  six.setArg(a++, static_cast<int>(n));
+  six.setArg(a++, b_index);
+  for (const cl::Buffer& b : from) six.setArg(a++, b);
+  for (const cl::Buffer& b : to) six.setArg(a++, b);
+  one.setArg(0, static_cast<int>(n));
+  one.setArg(1, b_index);
+  one.setArg(2, rec_from.records);
+  one.setArg(3, rec_to.records);
+  std::vector<double> t6, t1;
+  for (int r = 0; r < warmup + pt.repeats; ++r) {
+    cl::Event e6, e1;
+    const std::size_t l6 = group_size_for(rt, six), l1 = group_size_for(rt, one);
+    const std::size_t g = std::max<std::size_t>(n, 1);
+    cl_check(rt.queue().enqueueNDRangeKernel(six, cl::NullRange, cl::NDRange(round_up(g, l6)), cl::NDRange(l6), nullptr,
+                                             &e6),
+             "clEnqueueNDRangeKernel(scatter_six_vectors)");
+    cl_check(rt.queue().enqueueNDRangeKernel(one, cl::NullRange, cl::NDRange(round_up(g, l1)), cl::NDRange(l1), nullptr,
+                                             &e1),
+             "clEnqueueNDRangeKernel(scatter_one_record)");
+    cl_check(rt.queue().finish(), "clFinish(paper scatter)");
+    if (r < warmup) continue;
+    t6.push_back(event_seconds(e6));
+    t1.push_back(event_seconds(e1));
+  }
+  pt.six_vectors_seconds = median(t6);
+  pt.one_record_seconds = median(t1);
+}
+
 }  // namespace
 
 ScatterPoint measure_scatter(ClRuntime& rt, std::size_t length, int pes, int warmup, int repeats,
@@ -111,6 +186,9 @@ ScatterPoint measure_scatter(ClRuntime& rt, std::size_t length, int pes, int war
                   std::size_t(counts[1]) == host_result.placed && counts[2] == host_result.groups;
   }
 
+  measure_paper_scatter(rt, src, placement_index(src, host_result, pes, bank_slots), bank_slots + length, warmup,
+                        pt);
+
   // The physical ceiling: a plain copy of the same bytes, as a kernel and
   // as clEnqueueCopyBuffer.
   {
@@ -121,10 +199,7 @@ ScatterPoint measure_scatter(ClRuntime& rt, std::size_t length, int pes, int war
     zero_buffer(rt, from, n4 * sizeof(cl_float4), "copy bench source");
     zero_buffer(rt, to, n4 * sizeof(cl_float4), "copy bench destination");
     cl::Kernel copy = rt.kernel("copy_float4", KernelProgram::baselines);
-    std::size_t local = copy.getWorkGroupInfo<CL_KERNEL_WORK_GROUP_SIZE>(rt.device().device);
-    local = std::min<std::size_t>(local, 64);
-    while (local & (local - 1)) local &= local - 1;
-    local = std::max<std::size_t>(local, 1);
+    const std::size_t local = group_size_for(rt, copy);
     copy.setArg(0, from);
     copy.setArg(1, to);
     copy.setArg(2, static_cast<int>(n4));

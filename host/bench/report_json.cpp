@@ -184,6 +184,10 @@ json scatter_json(const std::vector<ScatterPoint>& curve) {
                        {"copy_buffer_seconds", p.copy_buffer_seconds},
                        {"copy_buffer_gbytes_per_s", p.copy_buffer_gbytes_per_s()},
                        {"fraction_of_copy", fraction_of_copy(p)},
+                       {"six_vectors_seconds", p.six_vectors_seconds},
+                       {"six_vectors_gbytes_per_s", p.six_vectors_gbytes_per_s()},
+                       {"one_record_seconds", p.one_record_seconds},
+                       {"one_record_gbytes_per_s", p.one_record_gbytes_per_s()},
                        {"verified", p.verified}});
   return scatter;
 }

@@ -125,12 +125,14 @@ void memory_text(std::string& out, const BenchReport& r) {
 
 void scatter_text(std::string& out, const BenchReport& r) {
   appendf(out, "scatter (%d PEs, %zu bytes per descriptor, read + written):\n", r.scatter_pes, DescriptorSet::kBytes);
-  appendf(out, "  %8s %11s %11s %8s %9s %9s %9s %7s\n", "length", "host ms", "kernel ms", "speedup", "GB/s",
-          "copy GB/s", "cpbuf GB/s", "%copy");
+  appendf(out, "  %8s %11s %11s %8s %9s %9s %9s %7s %9s %9s\n", "length", "host ms", "kernel ms", "speedup", "GB/s",
+          "copy GB/s", "cpbuf GB/s", "%copy", "6vec GB/s", "rec GB/s");
   for (const ScatterPoint& p : r.curve)
-    appendf(out, "  %8s %11.4f %11.4f %8.2f %9.2f %9.2f %9.2f %6.0f%%\n", length_label(p.length).c_str(),
+    appendf(out, "  %8s %11.4f %11.4f %8.2f %9.2f %9.2f %9.2f %6.0f%% %9.2f %9.2f\n", length_label(p.length).c_str(),
             1e3 * p.host_seconds, 1e3 * p.kernel_seconds, p.speedup(), p.gbytes_per_s(),
-            p.copy_kernel_gbytes_per_s(), p.copy_buffer_gbytes_per_s(), percent_of_copy(p));
+            p.copy_kernel_gbytes_per_s(), p.copy_buffer_gbytes_per_s(), percent_of_copy(p),
+            p.six_vectors_gbytes_per_s(), p.one_record_gbytes_per_s());
+  appendf(out, "  (6vec / rec: the paper's scatter alone, I' given, on its six vectors / on one 64-byte record)\n");
   if (!r.by_pes.empty()) {
     appendf(out, "  %s descriptors over PE counts (destination streams = PEs, one 64-byte record each):\n",
             length_label(r.by_pes.front().length).c_str());

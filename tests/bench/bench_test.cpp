@@ -153,6 +153,8 @@ TEST(Bench, ScatterPointIsSane) {
   EXPECT_GT(p.gbytes_per_s(), 0.0);
   EXPECT_GT(p.copy_kernel_gbytes_per_s(), 0.0);
   EXPECT_GT(p.copy_buffer_gbytes_per_s(), 0.0);
+  EXPECT_GT(p.six_vectors_gbytes_per_s(), 0.0);  // the paper's six-vector scatter, the reference point
+  EXPECT_GT(p.one_record_gbytes_per_s(), 0.0);
 }
 
 TEST(Bench, FlagErrorsAreInputErrors) {
@@ -236,8 +238,14 @@ TEST(Bench, QuickRunWritesEveryJsonKey) {
     EXPECT_GT(p["length"].get<std::size_t>(), 0u);
     EXPECT_GT(p["speedup"].get<double>(), 0.0);
     EXPECT_GT(p["gbytes_per_s"].get<double>(), 0.0);
+    EXPECT_GT(p["six_vectors_gbytes_per_s"].get<double>(), 0.0);
+    EXPECT_GT(p["one_record_gbytes_per_s"].get<double>(), 0.0);
     EXPECT_TRUE(p["verified"].get<bool>());
   }
+  for (const char* target : {"scatter_2p20_vs_copy", "exchange_plus_overhead", "occupancy", "rounds",
+                             "opsila_vs_megakernel", "opsila_vs_embree"})
+    EXPECT_TRUE(j["targets"].contains(target)) << target;
+  EXPECT_TRUE(j["targets"]["rounds"]["met"].is_boolean());
   EXPECT_EQ(j["scatter"].front()["length"], 16);
   EXPECT_GT(j["copy_gbytes_per_s"].get<double>(), 0.0);
   EXPECT_GT(j["memory"]["bank_bytes_max"].get<std::uint64_t>(), 0u);

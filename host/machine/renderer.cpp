@@ -1,5 +1,8 @@
 // The OPSILA host loop: item buffer (SIMD), primary descriptors, then rounds
-// of scatter (SIMD) + SPMD phase until no descriptor is left.
+// of exchange (SIMD scatter) + SPMD phase until no descriptor is left.
+// Longer than 500 lines on purpose: every stage of the machine is here, each
+// a short function, in the order render() runs them, so that the host loop
+// reads in one place; the memory plan lives in machine/memory_plan.
 #include "machine/renderer.h"
 
 #include <algorithm>
@@ -13,6 +16,7 @@
 #include "core/fixed_point.h"
 #include "core/util.h"
 #include "machine/descriptors.h"
+#include "machine/memory_plan.h"
 #include "opsila_shared.h"
 #include "machine/partition.h"
 #include "core/progress.h"
@@ -59,52 +63,6 @@ std::vector<cl_int4> cluster_rects(const Scene& scene, const BankedScene& bs) {
     rects[c] = rc;
   }
   return rects;
-}
-
-// Device memory that render() allocates before the first launch.
-struct DevicePlan {
-  std::uint64_t scene = 0, image = 0, descriptors = 0, other = 0;
-  std::uint64_t total() const { return scene + image + descriptors + other; }
-};
-
-// The descriptors of one frame: F = P * n bank slots in flight, G SPMD
-// work-groups at most, each work-item with S output places, and two pools.
-struct FlightPlan {
-  std::size_t slots = 0, group_size = 1, groups = 0, outputs = 0, inject = 0, pool = 0;
-  FlightPlan(int P, int n, std::size_t wg, int S) {
-    slots = std::size_t(P) * n;
-    group_size = wg;
-    groups = slots / wg + P + 1;
-    outputs = groups * wg * S;
-    // Primaries are injected when the pool runs short, a quarter of the
-    // slots at a time: waiting descriptors are moved again by every
-    // exchange, so fewer of them wait when the work arrives in smaller steps.
-    inject = std::max<std::size_t>(slots / 4, 1024);
-    pool = outputs + 2 * inject;
-  }
-};
-
-DevicePlan plan_device_memory(const BankedScene& bs, std::size_t npix, int P, const FlightPlan& f, int depth) {
-  using u64 = std::uint64_t;
-  DevicePlan plan;
-  plan.scene = bs.triangles.size() * sizeof(BankTriangle) + bs.nodes.size() * sizeof(BankNode) +
-               bs.clusters.size() * (sizeof(Cluster) + sizeof(cl_int4)) +
-               bs.route_nodes.size() * sizeof(BankNode) + bs.pes.size() * sizeof(PeInfo) +
-               bs.materials.size() * sizeof(Material) + std::max<std::size_t>(1, bs.lights.size()) * sizeof(Light) +
-               bs.attributes.size() * sizeof(BankAttributes) + bs.textures.size() * sizeof(BankTexture) +
-               bs.texels.size() * sizeof(std::uint32_t);
-  // Item buffer (pair, triangle, distance) and 64-bit fixed-point RGB sums.
-  plan.image = u64(npix) * (sizeof(cl_int2) + sizeof(cl_int) + sizeof(cl_float) + OPSILA_ACCUM_WORDS * sizeof(cl_uint));
-  // Banks (slots, each bank padded to a work-group), SPMD outputs, two pools.
-  plan.descriptors = (u64(f.slots) + u64(P) * f.group_size + f.outputs + 2 * u64(f.pool)) * DescriptorSet::kBytes;
-  // Stats, traffic, output counts, work-group table, and the exchange's
-  // ranks and block counts (1.5x the source).
-  const u64 source = (u64(f.outputs) + f.pool) * 3 / 2;
-  plan.other = u64(OPSILA_MAX_DEPTH) * P * OPSILA_STAT_COUNT * 2 * sizeof(cl_uint) +
-               (P <= OPSILA_TRAFFIC_MAX_PES ? u64(depth) * P * P : 1) * sizeof(cl_uint) +
-               u64(f.groups) * (f.group_size + 2) * sizeof(cl_int) + source * sizeof(cl_int) +
-               (source / ScatterPass::kBlock + f.groups + 1) * 3 / 2 * P * sizeof(cl_int);
-  return plan;
 }
 
 std::uint64_t fixed_pair(const std::vector<cl_uint>& v, std::size_t i) {

@@ -37,6 +37,8 @@ std::string count_text(double n) {
     std::snprintf(text, sizeof text, "%.3g G", n / 1e9);
   else if (n >= 1e6)
     std::snprintf(text, sizeof text, "%.3g M", n / 1e6);
+  else if (n >= 1e4)
+    std::snprintf(text, sizeof text, "%.3g k", n / 1e3);
   else
     std::snprintf(text, sizeof text, "%.0f", n);
   return text;

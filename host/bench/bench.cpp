@@ -12,6 +12,7 @@
 
 #include <cstdio>
 
+#include "bench/compare.h"
 #include "bench/measure.h"
 #include "bench/options.h"
 #include "bench/report.h"
@@ -72,6 +73,8 @@ int run_bench(const std::vector<std::string>& args) {
   }
   if (!o.json_path.empty()) check_output_path(o.json_path);
   if (!o.csv_dir.empty()) prepare_csv_dir(o.csv_dir);
+  nlohmann::json saved;  // read first, so a bad file fails before any work
+  if (!o.compare_path.empty()) saved = read_saved_bench(o.compare_path);
   const BenchProgress progress{o.quiet};
 
   ClRuntime rt(choose_device_flag(o.device_spec));
@@ -88,6 +91,7 @@ int run_bench(const std::vector<std::string>& args) {
 
   BenchReport report = start_report(o, scene, settings.num_pes);
   report.device = device_facts(rt);
+  report.context = gather_context();
   report.load_before = load_average();
   build_program(report, rt, progress);
   measure_opsila(report, scene, settings, rt, progress);
@@ -96,9 +100,11 @@ int run_bench(const std::vector<std::string>& args) {
   report.load_after = load_average();
   report.analyse();
 
-  if (!o.json_path.empty()) write_text_file(o.json_path, bench_json(report));
+  const nlohmann::json results = bench_json(report);
+  if (!o.json_path.empty()) write_text_file(o.json_path, results.dump(1) + "\n");
   if (!o.csv_dir.empty()) write_bench_csv(report, o.csv_dir);
   std::fputs(bench_text(report).c_str(), stdout);
+  if (!o.compare_path.empty()) std::fputs(compare_text(results, saved, o.compare_path).c_str(), stdout);
   if (!o.json_path.empty()) progress("wrote %s", o.json_path.c_str());
   if (!o.csv_dir.empty()) progress("wrote CSV tables in %s", o.csv_dir.c_str());
   return kExitOk;

@@ -13,6 +13,7 @@
 #include "machine/cl_runtime.h"
 #include "machine/descriptors.h"
 #include "core/image.h"
+#include "core/util.h"
 #include "core/scene.h"
 
 namespace opsila {
@@ -39,6 +40,8 @@ struct ScatterPoint {
   // vectors, and on one 64-byte record (kernels/baselines/copy.cl).
   double six_vectors_seconds = 0, one_record_seconds = 0;
   bool verified = false;           // bank counts and queue length equal host_scatter's
+  // min / median / max of the timed runs of each figure above.
+  Spread host_spread, kernel_spread, copy_kernel_spread, copy_buffer_spread, six_vectors_spread, one_record_spread;
   // Bytes moved by one scatter: descriptor bytes read + written.
   double bytes() const { return 2.0 * double(DescriptorSet::kBytes) * double(moved); }
   double speedup() const { return kernel_seconds > 0 ? host_seconds / kernel_seconds : 0; }

@@ -100,6 +100,8 @@ void measure_paper_scatter(ClRuntime& rt, const HostDescriptors& src, const std:
   }
   pt.six_vectors_seconds = median(t6);
   pt.one_record_seconds = median(t1);
+  pt.six_vectors_spread = spread_of(t6);
+  pt.one_record_spread = spread_of(t1);
 }
 
 }  // namespace
@@ -132,6 +134,7 @@ ScatterPoint measure_scatter(ClRuntime& rt, std::size_t length, int pes, int war
       if (r >= warmup) times.push_back(s);
     }
     pt.host_seconds = median(times);
+    pt.host_spread = spread_of(times);
     pt.moved = host_result.placed + host_result.waiting;
     pt.waiting = host_result.waiting;
   }
@@ -167,6 +170,7 @@ ScatterPoint measure_scatter(ClRuntime& rt, std::size_t length, int pes, int war
       runs.push_back(std::move(records));
     }
     pt.kernel_seconds = median(totals);
+    pt.kernel_spread = spread_of(totals);
     // Per-kernel split of the run closest to the median.
     std::size_t best = 0;
     for (std::size_t i = 1; i < totals.size(); ++i)
@@ -217,6 +221,8 @@ ScatterPoint measure_scatter(ClRuntime& rt, std::size_t length, int pes, int war
     }
     pt.copy_kernel_seconds = median(kt);
     pt.copy_buffer_seconds = median(bt);
+    pt.copy_kernel_spread = spread_of(kt);
+    pt.copy_buffer_spread = spread_of(bt);
   }
   return pt;
 }

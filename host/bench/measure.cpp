@@ -44,17 +44,16 @@ BaselineRun measure_baseline(const std::string& name, const std::string& label, 
   b.repeats = repeats;
   b.present = true;
   std::vector<BaselineImage> runs;
-  std::vector<double> kernel;
   for (int r = 0; r < warmup + repeats; ++r) {
     BaselineImage img = run();
     if (r < warmup) continue;
     b.seconds_all.push_back(img.seconds);
-    kernel.push_back(img.kernel_seconds);
+    b.kernel_seconds_all.push_back(img.kernel_seconds);
     runs.push_back(std::move(img));
   }
   const std::size_t m = median_index(b.seconds_all);
   b.seconds = median(b.seconds_all);
-  b.kernel_seconds = median(kernel);
+  b.kernel_seconds = median(b.kernel_seconds_all);
   b.median_run = std::move(runs[m]);
   return b;
 }

@@ -19,6 +19,7 @@ CommandSyntax bench_syntax() {
   syntax.flags = {{"--json", "--json", true},       {"--csv", "--csv", true},
                   {"--repeats", "--repeats", true}, {"--warmup", "--warmup", true},
                   {"--threads", "--threads", true}, {"--scatter-max", "--scatter-max", true},
+                  {"--compare", "--compare", true},
                   {"--quick", "--quick", false},    {"-q", "-q", false},
                   {"--quiet", "-q", false},         {"-h", "--help", false},
                   {"--help", "--help", false}};
@@ -51,6 +52,9 @@ BenchOptions parse_bench_options(const std::vector<std::string>& args) {
     } else if (flag == "--json") {
       if (extension_of(value) != ".json") bad_flag(name, value, "must end in .json");
       o.json_path = value;
+    } else if (flag == "--compare") {
+      if (extension_of(value) != ".json") bad_flag(name, value, "must end in .json (a saved --json result)");
+      o.compare_path = value;
     } else if (flag == "--csv") {
       if (value.empty()) bad_flag(name, value, "empty folder name");
       o.csv_dir = value;
@@ -93,6 +97,7 @@ std::string bench_usage() {
          "\n"
          "  --json FILE        write every result as JSON (see docs/BENCHMARKS.md)\n"
          "  --csv DIR          write CSV tables: scatter, phases, levels, occupancy, traffic, baselines\n"
+         "  --compare OLD.json print each figure beside a saved --json result, with the ratio\n"
          "  --quick            fewer repeats and shorter scatter vectors (CI)\n"
          "  --repeats N        timed runs per measurement (default 5, --quick 2)\n"
          "  --warmup N         untimed runs before them (default 1)\n"

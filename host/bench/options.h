@@ -12,6 +12,7 @@ namespace opsila {
 
 struct BenchOptions : ViewOptions {
   std::string json_path, csv_dir;
+  std::string compare_path;  // --compare: a saved --json result
   bool quick = false, quiet = false, help = false;
   std::optional<int> repeats, warmup, threads, scatter_max_log2;
 

@@ -11,6 +11,8 @@
 #include <string>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 #include "bench/bench.h"
 #include "machine/renderer.h"
 
@@ -22,7 +24,7 @@ struct BaselineRun {
   std::string name, label;
   bool present = false;
   int threads = 0, repeats = 0;
-  std::vector<double> seconds_all;
+  std::vector<double> seconds_all, kernel_seconds_all;
   BaselineImage median_run;
   double seconds = 0, kernel_seconds = 0;
 };
@@ -46,6 +48,19 @@ struct LevelWork {
 // mean / max over PEs; none when no PE worked.
 std::optional<double> occupancy_of(std::uint64_t total, std::uint64_t max, std::size_t pes);
 
+// Where and when the run happened, in the spirit of Google Benchmark's
+// context block: whoever reads a saved run knows what it was measured on.
+struct BenchContext {
+  std::string date;        // ISO 8601, UTC
+  std::string host_name;
+  int num_cpus = 0;
+  double mhz_per_cpu = 0;  // 0 when the host does not say
+  std::string cpu_model;
+  double load_avg[3] = {-1, -1, -1};  // 1, 5, 15 minutes, at the start
+  std::string build_type;             // "release", "debug", ...
+};
+BenchContext gather_context();
+
 // The device as the report names it.
 struct DeviceFacts {
   std::string description, name, platform, vendor, version, driver_version;
@@ -61,6 +76,7 @@ struct BenchReport {
   int repeats = 0, warmup = 0, host_repeats = 0, host_threads = 0, scatter_max_log2 = 0;
   // Where and on what.
   DeviceFacts device;
+  BenchContext context;
   double load_before = -1, load_after = -1;  // 1-minute load average of the host
   std::size_t triangles = 0, lights = 0;
   int facets = 0, objects = 0, width = 0, height = 0, depth = 0, pes = 0, spp = 1;
@@ -113,7 +129,7 @@ std::string length_label(std::size_t n);
 
 // The writers.
 std::string bench_text(const BenchReport& report);
-std::string bench_json(const BenchReport& report);  // the --json file's text
+nlohmann::json bench_json(const BenchReport& report);  // the --json file (docs/BENCHMARKS.md)
 void write_bench_csv(const BenchReport& report, const std::string& dir);
 
 }  // namespace opsila

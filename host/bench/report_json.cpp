@@ -5,6 +5,7 @@
 #include <nlohmann/json.hpp>
 
 #include "bench/report.h"
+#include "core/util.h"
 #include "opsila_shared.h"
 
 namespace opsila {
@@ -19,6 +20,24 @@ json optional_value(const std::optional<double>& v) { return v ? json(*v) : json
 
 double fraction_of_copy(const ScatterPoint& p) {
   return p.copy_kernel_gbytes_per_s() > 0 ? p.gbytes_per_s() / p.copy_kernel_gbytes_per_s() : 0.0;
+}
+
+json spread_json(const Spread& s) { return {{"min", s.min}, {"median", s.median}, {"max", s.max}}; }
+
+json context_json(const BenchReport& r) {
+  const BenchContext& c = r.context;
+  return {{"date", c.date},
+          {"host_name", c.host_name},
+          {"num_cpus", c.num_cpus},
+          {"mhz_per_cpu", c.mhz_per_cpu},
+          {"cpu_model", c.cpu_model},
+          {"load_avg", {c.load_avg[0], c.load_avg[1], c.load_avg[2]}},
+          {"library_build_type", c.build_type},
+          {"opsila_version", OPSILA_VERSION},
+          {"device", r.device.name},
+          {"device_platform", r.device.platform},
+          {"device_version", r.device.version},
+          {"driver_version", r.device.driver_version}};
 }
 
 json header_json(const BenchReport& r) {
@@ -111,6 +130,7 @@ json render_json(const BenchReport& r) {
   j["rays_by_kind"] = {{"primary", r.opsila.rays.primary}, {"secondary", r.opsila.rays.secondary}, {"shadow", r.opsila.rays.shadow}};
   j["seconds"] = seconds;
   j["seconds_all"] = r.render_times;
+  j["seconds_spread"] = spread_json(spread_of(r.render_times));
   j["mrays_per_s"] = mrays(r.rays_total(), seconds);
   j["mrays_per_s_by_kind"] = {{"primary", mrays(r.opsila.rays.primary, seconds)},
                               {"secondary", mrays(r.opsila.rays.secondary, seconds)},
@@ -188,7 +208,13 @@ json scatter_json(const std::vector<ScatterPoint>& curve) {
                        {"six_vectors_gbytes_per_s", p.six_vectors_gbytes_per_s()},
                        {"one_record_seconds", p.one_record_seconds},
                        {"one_record_gbytes_per_s", p.one_record_gbytes_per_s()},
-                       {"verified", p.verified}});
+                       {"verified", p.verified},
+                       {"host_seconds_spread", spread_json(p.host_spread)},
+                       {"kernel_seconds_spread", spread_json(p.kernel_spread)},
+                       {"copy_kernel_seconds_spread", spread_json(p.copy_kernel_spread)},
+                       {"copy_buffer_seconds_spread", spread_json(p.copy_buffer_spread)},
+                       {"six_vectors_seconds_spread", spread_json(p.six_vectors_spread)},
+                       {"one_record_seconds_spread", spread_json(p.one_record_spread)}});
   return scatter;
 }
 
@@ -204,7 +230,9 @@ json scatter_by_pes_json(const std::vector<ScatterPoint>& by_pes) {
                   {"host_gbytes_per_s", p.host_gbytes_per_s()},
                   {"copy_kernel_gbytes_per_s", p.copy_kernel_gbytes_per_s()},
                   {"fraction_of_copy", fraction_of_copy(p)},
-                  {"verified", p.verified}});
+                  {"verified", p.verified},
+                  {"host_seconds_spread", spread_json(p.host_spread)},
+                  {"kernel_seconds_spread", spread_json(p.kernel_spread)}});
   return sp;
 }
 
@@ -238,6 +266,7 @@ json baselines_json(const BenchReport& r) {
     json e = {{"label", b->label},
               {"seconds", b->seconds},
               {"seconds_all", b->seconds_all},
+              {"seconds_spread", spread_json(spread_of(b->seconds_all))},
               {"build_seconds", img.build_seconds},
               {"rays", img.rays.total()},
               {"rays_by_kind", {{"primary", img.rays.primary}, {"secondary", img.rays.secondary},
@@ -250,6 +279,7 @@ json baselines_json(const BenchReport& r) {
     if (b->threads > 0) e["threads"] = b->threads;
     if (b->name == "replicated_megakernel") {
       e["kernel_seconds"] = b->kernel_seconds;
+      e["kernel_seconds_spread"] = spread_json(spread_of(b->kernel_seconds_all));
       e["device"] = r.device.description;
       e["scene_bytes_per_work_item"] = st.replicated_bytes;
       e["triangle_tests"] = img.triangle_tests;
@@ -313,8 +343,9 @@ json targets_json(const BenchReport& r) {
 
 }  // namespace
 
-std::string bench_json(const BenchReport& r) {
+nlohmann::json bench_json(const BenchReport& r) {
   json j = header_json(r);
+  j["context"] = context_json(r);
   j["render"] = render_json(r);
   j["scatter"] = scatter_json(r.curve);
   j["scatter_by_pes"] = scatter_by_pes_json(r.by_pes);
@@ -325,7 +356,7 @@ std::string bench_json(const BenchReport& r) {
   j["memory"] = memory_json(r);
   j["baselines"] = baselines_json(r);
   j["targets"] = targets_json(r);
-  return j.dump(1) + "\n";
+  return j;
 }
 
 }  // namespace opsila

@@ -18,6 +18,12 @@ double median(std::vector<double> v);
 // Index of the value closest to the median (the run whose details are kept).
 std::size_t median_index(const std::vector<double>& v);
 
+// Smallest, median and largest of repeated timings (0 when there are none).
+struct Spread {
+  double min = 0, median = 0, max = 0;
+};
+Spread spread_of(const std::vector<double>& v);
+
 double seconds_since(std::chrono::steady_clock::time_point t0);
 
 // "12.3 MiB": the largest binary unit (KiB, MiB, GiB) not above `bytes`,

@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 
 #include "bench/bench.h"
+#include "bench/compare.h"
 #include "machine/host_scatter.h"
 #include "reference/reference.h"
 #include "machine/renderer.h"
@@ -264,6 +265,103 @@ TEST(Bench, QuickRunWritesEveryJsonKey) {
 
   for (const char* name : {"scatter.csv", "phases.csv", "levels.csv", "occupancy.csv", "traffic.csv", "baselines.csv"})
     EXPECT_TRUE(test::file_exists(csv + "/" + name)) << name;
+}
+
+
+// ------------------------------------------------------------ --compare
+
+// A bench result by hand: only the keys the comparison reads.
+nlohmann::json saved_result(double render_seconds, double mrays, int pes) {
+  return {{"device", "dev"},
+          {"pes", pes},
+          {"depth", 3},
+          {"scene", {{"path", "s.json"}}},
+          {"image", {{"width", 8}, {"height", 6}}},
+          {"render", {{"seconds", render_seconds}, {"mrays_per_s", mrays}}},
+          {"scatter", nlohmann::json::array({{{"length", 1024}, {"gbytes_per_s", 2.0}}})}};
+}
+
+TEST(BenchCompare, RatiosOfTheFiguresBothRunsHave) {
+  nlohmann::json now = saved_result(1.0, 3.0, 8), saved = saved_result(4.0, 1.5, 8);
+  saved["scatter"][0]["gbytes_per_s"] = 8.0;
+  saved["baselines"] = {{"embree", {{"seconds", 2.0}}}};  // this run has none: left out
+  const std::string text = compare_text(now, saved, "old.json");
+  EXPECT_NE(text.find("compared with old.json"), std::string::npos) << text;
+  EXPECT_NE(text.find("render seconds"), std::string::npos) << text;
+  EXPECT_NE(text.find("0.25x"), std::string::npos) << text;  // 1 s now, 4 s saved
+  EXPECT_NE(text.find("2x"), std::string::npos) << text;     // 3 vs 1.5 Mrays/s
+  EXPECT_NE(text.find("scatter 2^10 GB/s"), std::string::npos) << text;
+  EXPECT_EQ(text.find("embree"), std::string::npos) << text;
+  EXPECT_EQ(text.find("note:"), std::string::npos) << text;
+  EXPECT_NE(compare_text(saved_result(1, 1, 4), saved, "old.json").find("note: the runs differ"), std::string::npos);
+}
+
+TEST(BenchCompare, ASavedRunMustBeABenchResult) {
+  test::TempDir dir;
+  EXPECT_THROW(read_saved_bench(dir.file("none.json")), InputError);
+  EXPECT_THROW(read_saved_bench(dir.write("bad.json", "{ not json")), InputError);
+  EXPECT_THROW(read_saved_bench(dir.write("other.json", "{\"a\": 1}")), InputError);
+  EXPECT_NO_THROW(read_saved_bench(dir.write("ok.json", saved_result(1, 1, 1).dump())));
+  const test::RunResult r = test::run_opsila({"bench", "scene.json", "--compare", dir.file("none.json")});
+  EXPECT_EQ(r.exit_code, 2);
+  ASSERT_EQ(r.error_lines().size(), 1u) << r.err;
+  EXPECT_NE(r.error_lines()[0].find("opsila: error: --compare"), std::string::npos) << r.err;
+  EXPECT_EQ(test::run_opsila({"bench", "scene.json", "--compare", "old.txt"}).exit_code, 2);
+}
+
+// Two quick runs: the second prints each figure beside the first's, and both
+// carry the context block and min/median/max of every timed figure.
+TEST(BenchCompare, TwoSavedRuns) {
+  test::TempDir dir;
+  const std::string first = dir.file("first.json"), second = dir.file("second.json");
+  const std::vector<std::string> quick = {"bench",  std::string(OPSILA_SOURCE_DIR) + "/scenes/whitted.json",
+                                          "--size", "32x24", "--depth", "2", "--pes", "4", "--quick",
+                                          "--scatter-max", "8", "--repeats", "2", "-q"};
+  std::vector<std::string> args = quick;
+  args.insert(args.end(), {"--json", first});
+  ASSERT_EQ(test::run_opsila(args).exit_code, 0);
+  args = quick;
+  args.insert(args.end(), {"--json", second, "--compare", first});
+  const test::RunResult r = test::run_opsila(args);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+
+  const nlohmann::json a = nlohmann::json::parse(test::read_file(first));
+  const nlohmann::json b = nlohmann::json::parse(test::read_file(second));
+  EXPECT_NE(r.out.find("compared with " + first), std::string::npos) << r.out;
+  EXPECT_EQ(r.out.find("note:"), std::string::npos) << r.out;  // same settings, same device
+  for (const BenchFigure& f : bench_figures(b)) EXPECT_NE(r.out.find(f.name), std::string::npos) << f.name;
+  EXPECT_GE(bench_figures(b).size(), 10u);
+  // The render's line, as this run's and the saved values and their ratio.
+  const auto g4 = [](double v) {
+    char t[32];
+    std::snprintf(t, sizeof t, "%.4g", v);
+    return std::string(t);
+  };
+  const double now = b["render"]["seconds"], then = a["render"]["seconds"];
+  char expected[160];
+  std::snprintf(expected, sizeof expected, "  %-40s %12s %12s %8s", "render seconds", g4(now).c_str(),
+                g4(then).c_str(), (g4(now / then) + "x").c_str());
+  EXPECT_NE(r.out.find(expected), std::string::npos) << expected << "\n" << r.out;
+
+  for (const nlohmann::json* j : {&a, &b}) {
+    const nlohmann::json& c = (*j)["context"];
+    for (const char* key : {"date", "host_name", "num_cpus", "load_avg", "library_build_type", "device",
+                            "driver_version"})
+      EXPECT_TRUE(c.contains(key)) << key;
+    EXPECT_GT(c["num_cpus"].get<int>(), 0);
+    auto ordered = [](const nlohmann::json& s) {
+      return s["min"].get<double>() <= s["median"].get<double>() && s["median"].get<double>() <= s["max"].get<double>();
+    };
+    EXPECT_TRUE(ordered((*j)["render"]["seconds_spread"]));
+    EXPECT_EQ((*j)["render"]["seconds_spread"]["median"], (*j)["render"]["seconds"]);
+    for (const auto& [name, base] : (*j)["baselines"].items()) EXPECT_TRUE(ordered(base["seconds_spread"])) << name;
+    for (const auto& p : (*j)["scatter"]) {
+      EXPECT_TRUE(ordered(p["kernel_seconds_spread"]));
+      EXPECT_EQ(p["kernel_seconds_spread"]["median"], p["kernel_seconds"]);
+      EXPECT_TRUE(ordered(p["host_seconds_spread"]));
+      EXPECT_TRUE(ordered(p["copy_kernel_seconds_spread"]));
+    }
+  }
 }
 
 }  // namespace

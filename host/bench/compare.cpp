@@ -1,0 +1,125 @@
+#include "bench/compare.h"
+
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+
+#include "core/scene.h"
+
+namespace opsila {
+
+namespace {
+
+using nlohmann::json;
+
+// The number at `key` of `j`, when there is one.
+bool number_at(const json& j, const char* key, double& out) {
+  if (!j.is_object() || !j.contains(key) || !j[key].is_number()) return false;
+  out = j[key].get<double>();
+  return true;
+}
+
+void add(std::vector<BenchFigure>& out, const std::string& name, const json& j, const char* key, bool higher) {
+  double v;
+  if (number_at(j, key, v)) out.push_back({name, v, higher});
+}
+
+std::string length_name(std::uint64_t n) {
+  if (n >= 1024 && (n & (n - 1)) == 0) {
+    int k = 0;
+    while ((std::uint64_t(1) << k) < n) ++k;
+    return "2^" + std::to_string(k);
+  }
+  return std::to_string(n);
+}
+
+std::string number(double v) {
+  char s[32];
+  std::snprintf(s, sizeof s, "%.4g", v);
+  return s;
+}
+
+// "scene, WxH, depth D, P PEs" of a run, for the settings note.
+std::string settings_of(const json& j) {
+  std::ostringstream s;
+  const json none;
+  const json& scene = j.value("scene", none);
+  const json& image = j.value("image", none);
+  s << (scene.is_object() ? scene.value("path", std::string("?")) : std::string("?")) << ", "
+    << (image.is_object() ? image.value("width", 0) : 0) << "x" << (image.is_object() ? image.value("height", 0) : 0)
+    << ", depth " << j.value("depth", 0) << ", " << j.value("pes", 0) << " PEs";
+  return s.str();
+}
+
+}  // namespace
+
+std::vector<BenchFigure> bench_figures(const json& j) {
+  std::vector<BenchFigure> out;
+  add(out, "compile seconds", j, "compile_seconds", false);
+  if (j.contains("render")) {
+    const json& r = j["render"];
+    add(out, "render seconds", r, "seconds", false);
+    add(out, "render Mrays/s", r, "mrays_per_s", true);
+    add(out, "render kernel seconds", r, "kernel_seconds", false);
+    add(out, "render exchange share", r, "exchange_share", false);
+    add(out, "render launch overhead share", r, "overhead_share", false);
+    add(out, "render occupancy", r, "occupancy", true);
+  }
+  if (j.contains("baselines") && j["baselines"].is_object())
+    for (const auto& [name, b] : j["baselines"].items()) {
+      add(out, name + " seconds", b, "seconds", false);
+      add(out, name + " Mrays/s", b, "mrays_per_s", true);
+    }
+  if (j.contains("scatter") && j["scatter"].is_array())
+    for (const json& p : j["scatter"]) {
+      if (!p.contains("length") || !p["length"].is_number_integer() || p["length"].get<std::int64_t>() < 0) continue;
+      const std::string at = "scatter " + length_name(p["length"].get<std::uint64_t>());
+      add(out, at + " kernel seconds", p, "kernel_seconds", false);
+      add(out, at + " GB/s", p, "gbytes_per_s", true);
+      add(out, at + " speed-up", p, "speedup", true);
+      add(out, at + " copy GB/s", p, "copy_kernel_gbytes_per_s", true);
+    }
+  add(out, "copy ceiling GB/s", j, "copy_gbytes_per_s", true);
+  return out;
+}
+
+json read_saved_bench(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError("--compare " + path + ": cannot read the file");
+  std::ostringstream text;
+  text << in.rdbuf();
+  json j = json::parse(text.str(), nullptr, false);
+  if (j.is_discarded()) throw InputError("--compare " + path + ": not JSON");
+  if (!j.is_object() || !j.contains("render") || !j["render"].is_object())
+    throw InputError("--compare " + path + ": not an opsila bench result (no \"render\" block)");
+  return j;
+}
+
+std::string compare_text(const json& now, const json& saved, const std::string& saved_path) {
+  std::string out = "\ncompared with " + saved_path;
+  if (saved.contains("context") && saved["context"].is_object())
+    out += " (" + saved["context"].value("date", std::string("undated")) + ", " +
+           saved["context"].value("host_name", std::string("?")) + ")";
+  out += ":\n";
+  if (settings_of(now) != settings_of(saved))
+    out += "  note: the runs differ: this one " + settings_of(now) + "; saved " + settings_of(saved) + "\n";
+  if (now.value("device", std::string()) != saved.value("device", std::string()))
+    out += "  note: the saved run was on " + saved.value("device", std::string("another device")) + "\n";
+  char line[256];
+  std::snprintf(line, sizeof line, "  %-40s %12s %12s %8s\n", "figure", "this run", "saved", "ratio");
+  out += line;
+  const std::vector<BenchFigure> old_figures = bench_figures(saved);
+  for (const BenchFigure& f : bench_figures(now)) {
+    for (const BenchFigure& g : old_figures) {
+      if (g.name != f.name) continue;
+      const std::string ratio = g.value != 0 ? number(f.value / g.value) + "x" : "-";
+      std::snprintf(line, sizeof line, "  %-40s %12s %12s %8s%s\n", f.name.c_str(), number(f.value).c_str(),
+                    number(g.value).c_str(), ratio.c_str(), f.higher_is_better ? "" : " (lower is better)");
+      out += line;
+      break;
+    }
+  }
+  return out;
+}
+
+}  // namespace opsila

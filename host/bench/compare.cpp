@@ -78,6 +78,8 @@ std::vector<BenchFigure> bench_figures(const json& j) {
       add(out, at + " GB/s", p, "gbytes_per_s", true);
       add(out, at + " speed-up", p, "speedup", true);
       add(out, at + " copy GB/s", p, "copy_kernel_gbytes_per_s", true);
+      add(out, at + " six-vector scatter GB/s", p, "six_vectors_gbytes_per_s", true);
+      add(out, at + " one-record scatter GB/s", p, "one_record_gbytes_per_s", true);
     }
   add(out, "copy ceiling GB/s", j, "copy_gbytes_per_s", true);
   return out;

@@ -5,7 +5,7 @@
 #
 #   tools/gpu-check.sh pack [KIT]   on a machine set up by tools/setup.sh
 #       (PoCL): copies the header-only dependencies (OpenCL C and C++
-#       headers, glm, nlohmann/json, stb_image_write, tinyobjloader) into
+#       headers, glm, nlohmann/json, stb_image(_write), tinyobjloader) into
 #       KIT/include and renders the gallery with PoCL into KIT/pocl/*.pfm.
 #   tools/gpu-check.sh run [KIT]    on the GPU machine, with KIT copied along:
 #       builds opsila in build-gpu against KIT (tests, Embree and other
@@ -36,7 +36,7 @@ pack() {
   [ -x build/opsila ] || die "build opsila first (tools/setup.sh)"
   rm -rf "$kit" && mkdir -p "$kit/include/stb" "$kit/pocl"
   cp -r /usr/include/CL /usr/include/glm /usr/include/nlohmann "$kit/include/" || die "missing Debian headers"
-  cp /usr/include/stb/stb_image_write.h "$kit/include/stb/" || die "missing libstb-dev"
+  cp /usr/include/stb/stb_image_write.h /usr/include/stb/stb_image.h "$kit/include/stb/" || die "missing libstb-dev"
   cp /usr/include/tiny_obj_loader.h "$kit/include/" || die "missing libtinyobjloader-dev"
   for entry in "${gallery[@]}"; do
     set -- $entry

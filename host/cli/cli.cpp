@@ -65,7 +65,9 @@ std::string main_usage() {
 std::string render_usage() {
   return "usage: opsila render SCENE -o OUT.(png|pfm) [options]\n"
          "\n"
-         "SCENE is a scene file or a bare .obj (its .mtl found as OBJ says).\n"
+         "SCENE is a scene file, a bare .obj (its .mtl found as OBJ says), or a model\n"
+         "in another format the Open Asset Import Library reads (.ply, .stl, .gltf, .glb,\n"
+         ".fbx, .dae, .3ds, ...).\n"
          "Flags override the scene file; both '--flag value' and '--flag=value' work.\n"
          "\n"
          "  -o, --output OUT       output image: .png (sRGB, 8 bits) or .pfm (linear float)\n"
@@ -94,7 +96,7 @@ std::string render_usage() {
          "  -q, --quiet            no device line, warnings, progress or summary (errors still show)\n"
          "  -h, --help             this text\n"
          "\n"
-         "A scene without a camera (a bare .obj) is framed to its bounding box; with no\n"
+         "A scene without a camera (a bare model) is framed to its bounding box; with no\n"
          "light at all, one white light sits at the eye. A render that takes more than\n"
          "about two seconds shows its progress on stderr.\n";
 }

@@ -21,6 +21,7 @@
 
 #include "opsila_shared.h"
 #include "core/util.h"
+#include "input/model_import.h"
 #include "input/primitives.h"
 
 namespace opsila {
@@ -630,12 +631,12 @@ class SceneReader {
       terrain(v, path);
     } else if (type == "scatter" || type == "grid") {
       generator(v, path, type == "grid");
-    } else if (type == "obj") {
-      include_obj(v, path);
+    } else if (type == "obj" || type == "model") {
+      include_obj(v, path, type == "model");
     } else {
       fail(key("type"), "unknown object type '" + type +
                             "' (expected sphere, box, plane, checkerboard, polygon, terrain, "
-                            "scatter, grid or obj)");
+                            "scatter, grid, obj or model)");
     }
     if (const Json* t = find(v, "transform")) {
       const Transform tf = transform(*t, key("transform"));
@@ -869,7 +870,9 @@ class SceneReader {
     }
   }
 
-  void include_obj(const Json& v, const std::string& path) {
+  // An OBJ file ("obj"), or a model in any format ("model": OBJ by the strict
+  // reader, the others through the importer).
+  void include_obj(const Json& v, const std::string& path, bool any_format) {
     check_keys(v, path, {"type", "name", "file", "material", "transform"});
     const std::string fkey = join_key(path, "file");
     const std::string file = string(require(v, path, "file"), fkey);
@@ -884,7 +887,10 @@ class SceneReader {
                                  : -1;
     Scene sub;
     try {
-      sub = load_obj(full);
+      const bool obj = lower(fs::path(full).extension().string()) == ".obj";
+      if (!obj && any_format && !is_imported_model(full))
+        throw InputError(full + ": not a model format the importer reads (see scenes/FORMAT.md)");
+      sub = obj || !any_format ? load_obj(full) : load_model(full);
     } catch (const InputError& e) {
       fail(fkey, e.what());
     }
@@ -942,7 +948,9 @@ Scene load_scene_from_string(const std::string& text, const std::string& name,
 }
 
 Scene load_scene(const std::string& path) {
-  if (lower(fs::path(path).extension().string()) == ".obj") return load_obj(path);
+  const std::string ext = lower(fs::path(path).extension().string());
+  if (ext == ".obj") return load_obj(path);
+  if (ext != ".json" && is_imported_model(path)) return load_model(path);
   const std::string text = read_input_file(path);
   std::string dir = fs::path(path).parent_path().string();
   if (dir.empty()) dir = ".";

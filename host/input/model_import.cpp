@@ -1,0 +1,345 @@
+// The importer's scene -> SPEC's scene. Kept apart from the importer's own
+// post-processing: no aiProcess_Triangulate (SPEC fans polygons itself and
+// keeps one facet id per face) and no aiProcess_PreTransformVertices (it
+// joins and reorders meshes, and so would change the object ids).
+#include "input/model_import.h"
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <filesystem>
+#include <new>
+#include <stdexcept>
+#include <vector>
+
+#include "core/util.h"
+#include "input/obj_loader.h"
+#include "input/texture_file.h"
+
+#ifdef OPSILA_HAVE_ASSIMP
+#include <assimp/Importer.hpp>
+#include <assimp/material.h>
+#include <assimp/postprocess.h>
+#include <assimp/scene.h>
+#endif
+
+namespace opsila {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+// The usual file checks (exists, regular, size) with the usual messages.
+void check_model_file(const std::string& path) {
+  std::error_code ec;
+  const fs::file_status st = fs::status(path, ec);
+  if (ec || !fs::exists(st)) throw InputError(path + ": cannot open: " + (ec ? ec.message() : "no such file"));
+  if (fs::is_directory(st)) throw InputError(path + ": is a directory, not a file");
+  if (!fs::is_regular_file(st)) throw InputError(path + ": is not a regular file");
+  if (fs::file_size(path, ec) > kMaxInputFileBytes)
+    throw InputError(path + ": file too large (the limit is " + std::to_string(kMaxInputFileBytes) + " bytes)");
+}
+
+}  // namespace
+
+#ifdef OPSILA_HAVE_ASSIMP
+namespace {
+
+bool finite3(const Vec3& v) { return std::isfinite(v[0]) && std::isfinite(v[1]) && std::isfinite(v[2]); }
+
+Vec3 colour_or(const aiMaterial& m, const char* key, unsigned type, unsigned index, bool& found) {
+  aiColor4D c;
+  found = aiGetMaterialColor(&m, key, type, index, &c) == AI_SUCCESS;
+  if (!found || !std::isfinite(c.r) || !std::isfinite(c.g) || !std::isfinite(c.b)) {
+    found = false;
+    return Vec3{0, 0, 0};
+  }
+  return Vec3{std::max(0.0f, c.r), std::max(0.0f, c.g), std::max(0.0f, c.b)};
+}
+
+bool nonzero(const Vec3& c) { return c[0] != 0 || c[1] != 0 || c[2] != 0; }
+
+// Every placement of every mesh: the product of the node transforms from the
+// root down to each node that lists the mesh, in depth-first order.
+void collect_placements(const aiNode* node, const aiMatrix4x4& parent, unsigned num_meshes,
+                        std::vector<std::vector<aiMatrix4x4>>& out, int depth) {
+  if (!node || depth > 256) return;
+  const aiMatrix4x4 world = parent * node->mTransformation;
+  for (unsigned k = 0; k < node->mNumMeshes; ++k)
+    if (node->mMeshes[k] < num_meshes) out[node->mMeshes[k]].push_back(world);
+  for (unsigned c = 0; c < node->mNumChildren; ++c) collect_placements(node->mChildren[c], world, num_meshes, out, depth + 1);
+}
+
+class ModelReader {
+ public:
+  ModelReader(const aiScene& ai, const std::string& name, const std::string& base_dir)
+      : ai_(ai), name_(name), base_dir_(base_dir) {}
+
+  Scene run() {
+    scene_.has_camera = false;
+    scene_.has_lights = false;
+    scene_.materials.push_back(MaterialDesc::default_material());
+    materials();
+    std::vector<std::vector<aiMatrix4x4>> placements(ai_.mNumMeshes);
+    collect_placements(ai_.mRootNode, aiMatrix4x4(), ai_.mNumMeshes, placements, 0);
+    int unplaced = 0, facet = 0, skipped = 0;
+    for (unsigned m = 0; m < ai_.mNumMeshes; ++m) {
+      const aiMesh* mesh = ai_.mMeshes[m];
+      if (placements[m].empty()) ++unplaced;
+      const int first_facet = facet;
+      for (unsigned f = 0; f < mesh->mNumFaces; ++f) {
+        if (mesh->mFaces[f].mNumIndices >= 3) ++facet;
+        else ++skipped;
+        if (facet < 0) throw InputError(name_ + ": too many facets for 32-bit ids");
+      }
+      for (const aiMatrix4x4& place : placements[m]) emit_mesh(*mesh, static_cast<int>(m), first_facet, place);
+    }
+    scene_.num_objects = std::max(1, static_cast<int>(ai_.mNumMeshes));
+    scene_.num_facets = facet;
+    if (skipped > 0)
+      warn(std::to_string(skipped) + " point or line primitive(s) skipped; they are not facets and get no id");
+    if (unplaced > 0)
+      warn(std::to_string(unplaced) + " mesh(es) not placed by any node of the scene are not drawn (their ids are kept)");
+    if (degenerate_ > 0)
+      warn(std::to_string(degenerate_) + " degenerate (zero-area) triangle(s) not rendered; facet ids are kept");
+    if (scene_.triangles.empty()) throw InputError(name_ + ": no facets (the model has no drawable polygons)");
+    check_scene_extent(scene_, name_);
+    Vec3 lo, hi;
+    scene_.bounds(lo, hi);
+    scene_.camera = frame_bounds(lo, hi, 45.0f, float(scene_.width) / float(scene_.height));
+    return std::move(scene_);
+  }
+
+ private:
+  void warn(const std::string& what) { scene_.warnings.push_back(name_ + ": " + what); }
+
+  // SPEC material keys from the importer's: ambient, diffuse, specular
+  // colours, shininess, refraction index, transparent colour and shading
+  // model. The importer's own stand-in for "no material" is SPEC's default:
+  // the material named AI_DEFAULT_MATERIAL_NAME (STL, ...) or, as the PLY
+  // reader makes it, one without any name.
+  void materials() {
+    material_index_.assign(ai_.mNumMaterials, 0);
+    for (unsigned i = 0; i < ai_.mNumMaterials; ++i) {
+      const aiMaterial& am = *ai_.mMaterials[i];
+      aiString ainame;
+      const bool named = am.Get(AI_MATKEY_NAME, ainame) == AI_SUCCESS;
+      const std::string mname = named ? ainame.C_Str() : "material " + std::to_string(i);
+      if (!named || mname.empty() || mname == AI_DEFAULT_MATERIAL_NAME) continue;  // stays 0
+      MaterialDesc m;  // SPEC defaults for keys left out
+      m.name = mname;
+      bool found = false;
+      m.ka = colour_or(am, AI_MATKEY_COLOR_AMBIENT, found);
+      m.kd = colour_or(am, AI_MATKEY_COLOR_DIFFUSE, found);
+      m.ks = colour_or(am, AI_MATKEY_COLOR_SPECULAR, found);
+      m.tf = colour_or(am, AI_MATKEY_COLOR_TRANSPARENT, found);
+      float x = 0;
+      if (am.Get(AI_MATKEY_SHININESS, x) == AI_SUCCESS && std::isfinite(x) && x >= 0) m.ns = x;
+      if (am.Get(AI_MATKEY_REFRACTI, x) == AI_SUCCESS && std::isfinite(x) && x > 0) m.ni = x;
+      float opacity = 1;
+      if (am.Get(AI_MATKEY_OPACITY, x) == AI_SUCCESS && std::isfinite(x)) opacity = x;
+      int model = 0;
+      const bool has_model = am.Get(AI_MATKEY_SHADING_MODEL, model) == AI_SUCCESS;
+      // Shading model -> illum: unlit is 0, everything else 2 (highlights);
+      // a transparent colour on a material that is not opaque is glass
+      // (illum 4: kt = Tf, kr = Ks).
+      m.illum = has_model && model == aiShadingMode_NoShading ? 0 : 2;
+      if (nonzero(m.tf) && opacity < 1.0f) m.illum = 4;
+      m.map_kd = texture(am, aiTextureType_DIFFUSE, i);
+      m.map_ka = texture(am, aiTextureType_AMBIENT, i);
+      material_index_[i] = static_cast<int>(scene_.materials.size());
+      scene_.materials.push_back(std::move(m));
+    }
+  }
+
+  // A material's first map of one kind, read when some mesh that uses the
+  // material has texture coordinates (others could not show it).
+  int texture(const aiMaterial& am, aiTextureType type, unsigned material) {
+    aiString path;
+    if (am.GetTexture(type, 0, &path) != AI_SUCCESS || path.length == 0) return -1;
+    bool needed = false;
+    for (unsigned m = 0; m < ai_.mNumMeshes && !needed; ++m)
+      needed = ai_.mMeshes[m]->mMaterialIndex == material && ai_.mMeshes[m]->HasTextureCoords(0);
+    if (!needed) return -1;
+    if (const aiTexture* embedded = ai_.GetEmbeddedTexture(path.C_Str())) return embedded_texture(*embedded, path.C_Str());
+    if (base_dir_.empty()) {
+      warn(std::string("texture map '") + path.C_Str() + "' ignored: no files are read here");
+      return -1;
+    }
+    return add_texture_file(scene_, resolve_texture_path(path.C_Str(), base_dir_), name_ + ": ");
+  }
+
+  int embedded_texture(const aiTexture& t, const std::string& ref) {
+    const std::string key = name_ + "#" + ref;
+    for (std::size_t i = 0; i < scene_.textures.size(); ++i)
+      if (scene_.textures[i].path == key) return static_cast<int>(i);
+    Texture out;
+    std::string problem;
+    bool ok = false;
+    if (t.mHeight == 0) {  // compressed: mWidth bytes of PNG, JPEG, ...
+      ok = decode_texture_memory(reinterpret_cast<const unsigned char*>(t.pcData), t.mWidth, key, out, problem);
+    } else if (t.mWidth <= unsigned(kMaxTextureSide) && t.mHeight <= unsigned(kMaxTextureSide)) {
+      out.path = key;
+      out.width = static_cast<int>(t.mWidth);
+      out.height = static_cast<int>(t.mHeight);
+      out.texels.resize(std::size_t(t.mWidth) * t.mHeight);
+      for (std::size_t i = 0; i < out.texels.size(); ++i)
+        out.texels[i] = std::uint32_t(t.pcData[i].r) | std::uint32_t(t.pcData[i].g) << 8 |
+                        std::uint32_t(t.pcData[i].b) << 16;
+      ok = true;
+    } else {
+      problem = "image too large";
+    }
+    if (!ok) {
+      warn("embedded texture map '" + ref + "' ignored: " + problem);
+      return -1;
+    }
+    scene_.textures.push_back(std::move(out));
+    return static_cast<int>(scene_.textures.size()) - 1;
+  }
+
+  // One placement of a mesh: its faces fanned from the first vertex, every
+  // fan triangle with the face's id; positions by the node transform,
+  // normals by its inverse transpose.
+  void emit_mesh(const aiMesh& mesh, int object, int facet, const aiMatrix4x4& place) {
+    aiMatrix3x3 normal_matrix(place);
+    normal_matrix.Inverse().Transpose();
+    const bool normals = mesh.HasNormals(), uvs = mesh.HasTextureCoords(0);
+    const int material = mesh.mMaterialIndex < material_index_.size() ? material_index_[mesh.mMaterialIndex] : 0;
+    const auto position = [&](unsigned i) {
+      const aiVector3D p = place * mesh.mVertices[i];
+      return Vec3{p.x, p.y, p.z};
+    };
+    for (unsigned f = 0; f < mesh.mNumFaces; ++f) {
+      const aiFace& face = mesh.mFaces[f];
+      if (face.mNumIndices < 3) continue;
+      if (scene_.triangles.size() + face.mNumIndices > kMaxTriangles)
+        throw InputError(name_ + ": too many triangles (more than " + std::to_string(kMaxTriangles) + ")");
+      const Vec3 p0 = position(face.mIndices[0]);
+      for (unsigned k = 1; k + 1 < face.mNumIndices; ++k) {
+        const unsigned corner[3] = {face.mIndices[0], face.mIndices[k], face.mIndices[k + 1]};
+        Triangle t;
+        t.v0 = p0;
+        t.v1 = position(corner[1]);
+        t.v2 = position(corner[2]);
+        if (!finite3(t.v0) || !finite3(t.v1) || !finite3(t.v2))
+          throw InputError(name_ + ": mesh " + std::to_string(object) + " face " + std::to_string(f) +
+                           ": a vertex is not a finite number");
+        const double e1[3] = {double(t.v1[0]) - t.v0[0], double(t.v1[1]) - t.v0[1], double(t.v1[2]) - t.v0[2]};
+        const double e2[3] = {double(t.v2[0]) - t.v0[0], double(t.v2[1]) - t.v0[1], double(t.v2[2]) - t.v0[2]};
+        const float c[3] = {float(e1[1] * e2[2] - e1[2] * e2[1]), float(e1[2] * e2[0] - e1[0] * e2[2]),
+                            float(e1[0] * e2[1] - e1[1] * e2[0])};
+        if (!std::isfinite(c[0]) || !std::isfinite(c[1]) || !std::isfinite(c[2]))
+          throw InputError(name_ + ": mesh " + std::to_string(object) + " face " + std::to_string(f) +
+                           ": facet too large: its edge vectors overflow float");
+        if (c[0] == 0 && c[1] == 0 && c[2] == 0) {
+          ++degenerate_;
+          continue;
+        }
+        t.facet_id = facet;
+        t.object_id = object;
+        t.material = material;
+        if (normals || uvs) t.attributes = attributes(mesh, corner, normals, uvs, normal_matrix);
+        scene_.triangles.push_back(t);
+      }
+      ++facet;
+    }
+  }
+
+  int attributes(const aiMesh& mesh, const unsigned* corner, bool normals, bool uvs, const aiMatrix3x3& nm) {
+    VertexAttributes a;
+    a.has_normals = normals;
+    a.has_uv = uvs;
+    for (int c = 0; c < 3; ++c) {
+      if (normals) {
+        const aiVector3D n = nm * mesh.mNormals[corner[c]];
+        a.normal[c] = Vec3{n.x, n.y, n.z};
+        a.has_normals = a.has_normals && finite3(a.normal[c]);
+      }
+      if (uvs) {
+        const aiVector3D& t = mesh.mTextureCoords[0][corner[c]];
+        a.uv[c] = {t.x, t.y};
+        a.has_uv = a.has_uv && std::isfinite(t.x) && std::isfinite(t.y);
+      }
+    }
+    if (!a.has_normals && !a.has_uv) return -1;
+    scene_.attributes.push_back(a);
+    return static_cast<int>(scene_.attributes.size()) - 1;
+  }
+
+  const aiScene& ai_;
+  const std::string& name_;
+  std::string base_dir_;
+  Scene scene_;
+  std::vector<int> material_index_;  // importer material -> Scene::materials
+  long long degenerate_ = 0;
+};
+
+// aiProcess_ValidateDataStructure refuses inconsistent data (indices out of
+// range, ...) instead of handing it on.
+constexpr unsigned kImportFlags = aiProcess_ValidateDataStructure;
+
+Scene convert(Assimp::Importer& importer, const aiScene* ai, const std::string& name, const std::string& base_dir) {
+  if (!ai) {
+    std::string why = importer.GetErrorString();
+    std::replace(why.begin(), why.end(), '\n', ' ');
+    throw InputError(name + ": " + (why.empty() ? std::string("cannot read the model") : why));
+  }
+  if (!ai->mRootNode || ai->mNumMeshes == 0 || (ai->mFlags & AI_SCENE_FLAGS_INCOMPLETE))
+    throw InputError(name + ": no facets (the model has no meshes)");
+  try {
+    return ModelReader(*ai, name, base_dir).run();
+  } catch (const std::bad_alloc&) {
+    throw InputError(name + ": out of memory while loading (model too large)");
+  } catch (const std::length_error&) {
+    throw InputError(name + ": model too large to load");
+  }
+}
+
+}  // namespace
+
+bool is_imported_model(const std::string& path) {
+  const std::string ext = lower(fs::path(path).extension().string());
+  if (ext.size() < 2 || ext == ".obj" || ext == ".json") return false;
+  Assimp::Importer importer;
+  return importer.IsExtensionSupported(ext.c_str());
+}
+
+Scene load_model(const std::string& path) {
+  check_model_file(path);
+  // The importer reads the file (and the files it names) itself.
+  Assimp::Importer importer;
+  const aiScene* ai = importer.ReadFile(path, kImportFlags);
+  std::string dir = fs::path(path).parent_path().string();
+  if (dir.empty()) dir = ".";
+  return convert(importer, ai, path, dir);
+}
+
+Scene load_model_from_memory(const std::string& bytes, const std::string& name, const std::string& hint) {
+  Assimp::Importer importer;
+  const aiScene* ai = importer.ReadFileFromMemory(bytes.data(), bytes.size(), kImportFlags, hint.c_str());
+  return convert(importer, ai, name, "");
+}
+
+#else  // built without the Open Asset Import Library
+
+bool is_imported_model(const std::string& path) {
+  static const char* const kCommon[] = {".ply", ".stl", ".gltf", ".glb", ".fbx", ".dae", ".3ds", ".off", ".blend"};
+  const std::string ext = lower(fs::path(path).extension().string());
+  for (const char* e : kCommon)
+    if (ext == e) return true;
+  return false;
+}
+
+Scene load_model(const std::string& path) {
+  check_model_file(path);
+  throw InputError(path + ": this build has no Open Asset Import Library (install libassimp-dev and rebuild)");
+}
+
+Scene load_model_from_memory(const std::string&, const std::string& name, const std::string&) {
+  throw InputError(name + ": this build has no Open Asset Import Library");
+}
+
+#endif
+
+}  // namespace opsila

@@ -1,0 +1,187 @@
+// Models through the Open Asset Import Library: SPEC's ids (mesh index,
+// running face index), materials, texture maps, framing, and one clear
+// "FILE: problem" for a broken file of every format. No OpenCL needed.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <set>
+#include <string>
+
+#include "input/model_import.h"
+#include "input/scene_file.h"
+#include "test_util.h"
+
+namespace opsila {
+namespace {
+
+namespace fs = std::filesystem;
+
+const fs::path kModels = "/usr/share/assimp/models";
+
+#define REQUIRE_TEST_MODELS()                                                                    \
+  if (!fs::is_directory(kModels)) GTEST_SKIP() << "Debian package assimp-testmodels is not installed " \
+                                                  "(tools/setup.sh installs it)"
+
+std::string error_of(const std::string& path) {
+  try {
+    load_scene(path);
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "<no error>";
+}
+
+void expect_framed(const Scene& s) {
+  Vec3 lo, hi;
+  s.bounds(lo, hi);
+  EXPECT_FALSE(s.has_camera);
+  EXPECT_FALSE(s.has_lights);
+  for (int a = 0; a < 3; ++a) {
+    EXPECT_NEAR(s.camera.look_at[a], 0.5f * (lo[a] + hi[a]), 1e-3f * (hi[a] - lo[a]) + 1e-6f);
+    EXPECT_TRUE(std::isfinite(s.camera.eye[a]));
+  }
+  // Outside the box (on the +x, +y, +z side, as SPEC's framing puts it).
+  EXPECT_GT(s.camera.eye[2], hi[2]);
+}
+
+TEST(ModelImport, HandWrittenPlyFansPolygonsAndKeepsFaceIds) {
+  test::TempDir dir;
+  const std::string ply = dir.write("quad.ply",
+                                    "ply\nformat ascii 1.0\nelement vertex 5\nproperty float x\nproperty float y\n"
+                                    "property float z\nelement face 2\nproperty list uchar int vertex_indices\n"
+                                    "end_header\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n2 2 1\n4 0 1 2 3\n3 1 4 2\n");
+  ASSERT_TRUE(is_imported_model(ply));
+  const Scene s = load_scene(ply);
+  ASSERT_EQ(s.triangles.size(), 3u);  // the quad is fanned: (0 1 2), (0 2 3)
+  EXPECT_EQ(s.num_facets, 2);
+  EXPECT_EQ(s.num_objects, 1);
+  EXPECT_EQ(s.triangles[0].facet_id, 0);
+  EXPECT_EQ(s.triangles[1].facet_id, 0);
+  EXPECT_EQ(s.triangles[2].facet_id, 1);
+  EXPECT_EQ(s.triangles[1].v0, (Vec3{0, 0, 0}));
+  EXPECT_EQ(s.triangles[1].v2, (Vec3{0, 1, 0}));
+  // A PLY has no material: the importer's stand-in is SPEC's default.
+  for (const Triangle& t : s.triangles) EXPECT_EQ(t.material, 0);
+  EXPECT_EQ(s.materials[0].illum, 2);
+  EXPECT_FLOAT_EQ(s.materials[0].kd[1], 0.8f);
+  expect_framed(s);
+}
+
+TEST(ModelImport, TestModelsOfSeveralFormats) {
+  REQUIRE_TEST_MODELS();
+  struct Case {
+    const char* file;
+    int objects, facets;
+  };
+  const Case cases[] = {
+      {"PLY/cube.ply", 1, 6},
+      {"STL/Spider_binary.stl", 1, 1368},
+      {"3DS/cubes_with_alpha.3DS", 5, 60},
+      {"glTF2/BoxTextured-glTF/BoxTextured.gltf", 1, 12},
+      {"glTF2/BoxTextured-glTF-Binary/BoxTextured.glb", 1, 12},
+      {"Collada/duck.dae", 1, 2144},
+      {"FBX/box.fbx", 1, 12},  // the file stores triangles
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.file);
+    const fs::path path = kModels / c.file;
+    if (!fs::exists(path)) {
+      ADD_FAILURE() << "missing test model";
+      continue;
+    }
+    Scene s;
+    ASSERT_NO_THROW(s = load_scene(path.string()));
+    EXPECT_EQ(s.num_objects, c.objects);
+    EXPECT_EQ(s.num_facets, c.facets);
+    // Object ids are mesh indices; facet ids run over the meshes in order,
+    // so each object's facets form one range, objects in order.
+    int last_object = 0, last_facet = -1;
+    std::set<int> objects;
+    for (const Triangle& t : s.triangles) {
+      EXPECT_GE(t.object_id, 0);
+      EXPECT_LT(t.object_id, s.num_objects);
+      EXPECT_GE(t.facet_id, 0);
+      EXPECT_LT(t.facet_id, s.num_facets);
+      EXPECT_GE(t.object_id, last_object);
+      EXPECT_GE(t.facet_id, last_facet);
+      last_object = t.object_id;
+      last_facet = t.facet_id;
+      objects.insert(t.object_id);
+    }
+    EXPECT_EQ(static_cast<int>(objects.size()), c.objects);
+    expect_framed(s);
+  }
+}
+
+TEST(ModelImport, MaterialsAndTextureMaps) {
+  REQUIRE_TEST_MODELS();
+  // COLLADA duck: one material with a diffuse texture (a TGA beside it).
+  const Scene duck = load_scene((kModels / "Collada/duck.dae").string());
+  ASSERT_EQ(duck.materials.size(), 2u);
+  const MaterialDesc& m = duck.materials[1];
+  EXPECT_EQ(m.illum, 2);
+  ASSERT_GE(m.map_kd, 0);
+  EXPECT_EQ(duck.textures[m.map_kd].width, 512);
+  EXPECT_NE(duck.textures[m.map_kd].path.find("duckCM.tga"), std::string::npos);
+  EXPECT_FLOAT_EQ(m.ks[0], duck.materials[1].ks[1]);
+  int with_uv = 0;
+  for (const Triangle& t : duck.triangles) with_uv += t.attributes >= 0 && duck.attributes[t.attributes].has_uv;
+  EXPECT_EQ(with_uv, static_cast<int>(duck.triangles.size()));
+  // glTF: the texture is a PNG beside the file, or embedded in the GLB.
+  for (const char* f : {"glTF2/BoxTextured-glTF/BoxTextured.gltf", "glTF2/BoxTextured-glTF-Binary/BoxTextured.glb"}) {
+    SCOPED_TRACE(f);
+    const Scene box = load_scene((kModels / f).string());
+    bool mapped = false;
+    for (const MaterialDesc& mm : box.materials) mapped = mapped || mm.map_kd >= 0;
+    EXPECT_TRUE(mapped);
+    ASSERT_EQ(box.textures.size(), 1u);
+    EXPECT_EQ(box.textures[0].width, 211);  // CesiumLogoFlat.png
+    EXPECT_TRUE(box.warnings.empty()) << box.warnings.front();
+  }
+  // A missing texture is one warning; the model still loads.
+  const Scene cube = load_scene((kModels / "3DS/cube_with_diffuse_texture.3DS").string());
+  bool warned = false;
+  for (const std::string& w : cube.warnings) warned = warned || w.find("texture map") != std::string::npos;
+  EXPECT_TRUE(warned);
+}
+
+TEST(ModelImport, BrokenFileOfEveryFormatIsOneClearError) {
+  test::TempDir dir;
+  for (const char* ext : {"ply", "stl", "gltf", "glb", "fbx", "dae", "3ds"}) {
+    SCOPED_TRACE(ext);
+    const std::string path = dir.write(std::string("broken.") + ext, std::string("\x01\x02garbage, not a model\n", 23));
+    const std::string msg = error_of(path);
+    EXPECT_EQ(msg.rfind(path + ": ", 0), 0u) << msg;
+    EXPECT_EQ(msg.find('\n'), std::string::npos) << msg;
+    EXPECT_NE(msg, "<no error>");
+    const test::RunResult r = test::run_opsila({"render", path, "-o", dir.file("x.png")});
+    EXPECT_EQ(r.exit_code, 2) << r.err;
+    ASSERT_EQ(r.error_lines().size(), 1u) << r.err;
+    EXPECT_NE(r.error_lines()[0].find(path), std::string::npos);
+    EXPECT_FALSE(test::file_exists(dir.file("x.png")));
+  }
+  EXPECT_NE(error_of(dir.file("none.ply")).find("cannot open"), std::string::npos);
+}
+
+TEST(ModelImport, SceneFileModelObjects) {
+  REQUIRE_TEST_MODELS();
+  test::TempDir dir;
+  const std::string scene = dir.write(
+      "s.json", std::string(R"({"objects": [{"type": "box", "min": [0,0,0], "max": [1,1,1]},
+        {"type": "model", "file": ")") + (kModels / "3DS/cubes_with_alpha.3DS").string() +
+                    R"(", "transform": {"translate": [5, 0, 0]}},
+        {"type": "model", "file": ")" + (kModels / "PLY/cube.ply").string() + R"("}]})");
+  const Scene s = load_scene(scene);
+  EXPECT_EQ(s.num_objects, 1 + 5 + 1);
+  EXPECT_EQ(s.num_facets, 6 + 60 + 6);
+  EXPECT_EQ(s.triangles.back().object_id, 6);
+  EXPECT_EQ(s.triangles.back().facet_id, 71);
+  const std::string bad = dir.write("b.json", R"({"objects": [{"type": "model", "file": "s.json"}]})");
+  const std::string msg = error_of(bad);
+  EXPECT_NE(msg.find("objects[0].file"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("not a model format"), std::string::npos) << msg;
+}
+
+}  // namespace
+}  // namespace opsila

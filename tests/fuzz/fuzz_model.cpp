@@ -1,8 +1,10 @@
 // libFuzzer target: bytes -> the Open Asset Import Library -> SPEC's scene
 // (load_model_from_memory). The first byte picks the format the importer is
-// told to expect (PLY, STL, OFF or glTF, formats whose readers hold up under
-// fuzzing); the conversion layer must turn whatever the importer accepts
-// into a valid scene or one InputError. Nothing is read from disk.
+// told to expect (STL, OFF or glTF); the conversion layer must turn whatever
+// the importer accepts into a valid scene or one InputError. Nothing is read
+// from disk. PLY is left out: the importer's own PLY header reader loops
+// forever on some malformed headers (docs/RELIABILITY.md); PLY files are
+// covered by the unit tests instead.
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -39,8 +41,8 @@ void check(const opsila::Scene& s) {
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   if (size < 1) return 0;
-  static const char* const kHints[] = {"ply", "stl", "off", "gltf"};
-  const char* hint = kHints[data[0] % 4];
+  static const char* const kHints[] = {"stl", "off", "gltf"};
+  const char* hint = kHints[data[0] % 3];
   const std::string bytes(reinterpret_cast<const char*>(data + 1), size - 1);
   try {
     check(opsila::load_model_from_memory(bytes, std::string("fuzz.") + hint, hint));

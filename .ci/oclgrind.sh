@@ -83,6 +83,12 @@ check render-spp-all-checks "${all_checks[@]}" -- \
   "$build/opsila" render "$scene" -o "$work/spp.pfm" --size 4x3 --depth 2 --pes 4 --spp 4 --device oclgrind -q \
   "${view[@]}"
 
+# 2c. Texture maps and smooth shading: vertex attributes, texture copies in
+#     the banks, texel lookups and the sRGB table.
+check render-textured-smooth-all-checks "${all_checks[@]}" -- \
+  "$build/opsila" render "$root/tests/oclgrind/textured.obj" -o "$work/textured.pfm" --size 6x4 --depth 2 --pes 4 \
+  --smooth --device oclgrind -q "${view[@]}"
+
 # 3. The scatter on its own: SPMD output slots with holes and unused slots,
 #    a waiting queue, banks that overflow (tests/machine/reliability_test.cpp).
 check scatter-all-checks "${all_checks[@]}" -- \

@@ -4,6 +4,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "bench/report.h"
 #include "core/scene.h"
 
 namespace opsila {
@@ -22,15 +23,6 @@ bool number_at(const json& j, const char* key, double& out) {
 void add(std::vector<BenchFigure>& out, const std::string& name, const json& j, const char* key, bool higher) {
   double v;
   if (number_at(j, key, v)) out.push_back({name, v, higher});
-}
-
-std::string length_name(std::uint64_t n) {
-  if (n >= 1024 && (n & (n - 1)) == 0) {
-    int k = 0;
-    while ((std::uint64_t(1) << k) < n) ++k;
-    return "2^" + std::to_string(k);
-  }
-  return std::to_string(n);
 }
 
 std::string number(double v) {
@@ -73,7 +65,7 @@ std::vector<BenchFigure> bench_figures(const json& j) {
   if (j.contains("scatter") && j["scatter"].is_array())
     for (const json& p : j["scatter"]) {
       if (!p.contains("length") || !p["length"].is_number_integer() || p["length"].get<std::int64_t>() < 0) continue;
-      const std::string at = "scatter " + length_name(p["length"].get<std::uint64_t>());
+      const std::string at = "scatter " + length_label(p["length"].get<std::uint64_t>());
       add(out, at + " kernel seconds", p, "kernel_seconds", false);
       add(out, at + " GB/s", p, "gbytes_per_s", true);
       add(out, at + " speed-up", p, "speedup", true);

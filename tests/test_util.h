@@ -6,6 +6,7 @@
 #include <dirent.h>
 #include <fcntl.h>
 #include <spawn.h>
+#include <sys/resource.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -126,6 +127,7 @@ inline std::string read_file(const std::string& path) {
 
 struct RunResult {
   int exit_code = -1;  // 128 + signal when killed by one
+  long max_rss_kb = 0;  // the program's peak resident memory
   std::string out, err;
   // Lines of stderr that contain "error:".
   std::vector<std::string> error_lines() const {
@@ -175,8 +177,10 @@ inline RunResult run_program(const std::string& program, const std::vector<std::
     return result;
   }
   int status = 0;
-  while (::waitpid(pid, &status, 0) < 0) {
+  struct rusage usage {};
+  while (::wait4(pid, &status, 0, &usage) < 0) {
   }
+  result.max_rss_kb = usage.ru_maxrss;
   result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
   result.out = read_file(out_path);
   result.err = read_file(err_path);

@@ -18,6 +18,7 @@
 #include "bench/report.h"
 #include "core/progress.h"
 #include "core/image_io.h"
+#include "core/output_files.h"
 #include "input/scene_file.h"
 
 namespace opsila {
@@ -71,16 +72,24 @@ int run_bench(const std::vector<std::string>& args) {
     std::fputs(bench_usage().c_str(), stdout);
     return kExitOk;
   }
-  if (!o.json_path.empty()) check_output_path(o.json_path);
-  if (!o.csv_dir.empty()) prepare_csv_dir(o.csv_dir);
+  // Checked, not created: the CSV folder, its tables and the JSON file
+  // appear together at the end, or not at all.
+  install_interrupt_cleanup();
+  OutputFiles outputs;
+  if (!o.json_path.empty()) outputs.declare("--json", o.json_path);
+  if (!o.csv_dir.empty()) outputs.declare_folder("--csv", o.csv_dir);
+  outputs.refuse_inputs({o.scene_path});
   nlohmann::json saved;  // read first, so a bad file fails before any work
-  if (!o.compare_path.empty()) saved = read_saved_bench(o.compare_path);
+  if (!o.compare_path.empty()) {
+    outputs.refuse_inputs({o.compare_path});
+    saved = read_saved_bench(o.compare_path);
+  }
   const BenchProgress progress{o.quiet};
 
   ClRuntime rt(choose_device_flag(o.device_spec));
   progress("device: %s", rt.description().c_str());
-  Scene scene = load_scene(o.scene_path);
-  print_warnings(scene, o.quiet);
+  Scene scene = load_scene_or_explain(o.scene_path, o.quiet);
+  outputs.refuse_inputs(scene.input_files);
   apply_view_options(scene, o);
   if (const std::string note = large_work_note(scene); !note.empty()) progress("note: %s", note.c_str());
   RenderSettings settings;
@@ -101,8 +110,9 @@ int run_bench(const std::vector<std::string>& args) {
   report.analyse();
 
   const nlohmann::json results = bench_json(report);
-  if (!o.json_path.empty()) write_text_file(o.json_path, results.dump(1) + "\n");
-  if (!o.csv_dir.empty()) write_bench_csv(report, o.csv_dir);
+  if (!o.json_path.empty()) outputs.write(o.json_path, results.dump(1) + "\n");
+  if (!o.csv_dir.empty()) write_bench_csv(report, o.csv_dir, outputs);
+  outputs.commit();
   std::fputs(bench_text(report).c_str(), stdout);
   if (!o.compare_path.empty()) std::fputs(compare_text(results, saved, o.compare_path).c_str(), stdout);
   if (!o.json_path.empty()) progress("wrote %s", o.json_path.c_str());

@@ -74,16 +74,6 @@ BenchOptions parse_bench_options(const std::vector<std::string>& args) {
   return o;
 }
 
-void prepare_csv_dir(const std::string& dir) {
-  struct stat st;
-  if (::stat(dir.c_str(), &st) == 0) {
-    if (!S_ISDIR(st.st_mode)) throw InputError("--csv " + dir + ": exists and is not a folder");
-  } else if (::mkdir(dir.c_str(), 0777) != 0) {
-    throw InputError("--csv " + dir + ": cannot create folder (" + std::strerror(errno) + ")");
-  }
-  check_output_path(dir + "/scatter.csv");
-}
-
 std::string bench_usage() {
   return "usage: opsila bench SCENE [view flags] [--json FILE] [--csv DIR] [--quick] [options]\n"
          "\n"

@@ -28,7 +28,5 @@ struct BenchOptions : ViewOptions {
 BenchOptions parse_bench_options(const std::vector<std::string>& args);
 std::string bench_usage();
 
-// A folder for --csv: made if missing (one level), refused if not a folder.
-void prepare_csv_dir(const std::string& dir);
 
 }  // namespace opsila

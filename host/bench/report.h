@@ -14,6 +14,7 @@
 #include <nlohmann/json.hpp>
 
 #include "bench/bench.h"
+#include "core/output_files.h"
 #include "machine/renderer.h"
 
 namespace opsila {
@@ -130,6 +131,7 @@ std::string length_label(std::size_t n);
 // The writers.
 std::string bench_text(const BenchReport& report);
 nlohmann::json bench_json(const BenchReport& report);  // the --json file (docs/BENCHMARKS.md)
-void write_bench_csv(const BenchReport& report, const std::string& dir);
+// Into `outputs` (declared folder `dir`), renamed into place with the rest.
+void write_bench_csv(const BenchReport& report, const std::string& dir, OutputFiles& outputs);
 
 }  // namespace opsila

@@ -5,6 +5,7 @@
 
 #include "bench/report.h"
 #include "core/image_io.h"
+#include "core/output_files.h"
 
 namespace opsila {
 
@@ -101,8 +102,8 @@ std::string baselines_csv(const BenchReport& r) {
 
 }  // namespace
 
-void write_bench_csv(const BenchReport& r, const std::string& dir) {
-  const auto write = [&](const char* name, const std::string& text) { write_text_file(dir + "/" + name, text); };
+void write_bench_csv(const BenchReport& r, const std::string& dir, OutputFiles& outputs) {
+  const auto write = [&](const char* name, const std::string& text) { outputs.write(dir + "/" + name, text); };
   write("scatter.csv", scatter_csv(r.curve));
   if (!r.by_pes.empty()) write("scatter_pes.csv", scatter_pes_csv(r.by_pes));
   write("phases.csv", phases_csv(r.stats()));

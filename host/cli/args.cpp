@@ -14,6 +14,7 @@
 
 #include "core/camera.h"
 #include "core/util.h"
+#include "input/scene_file.h"
 #include "opsila_shared.h"
 
 namespace opsila {
@@ -265,8 +266,9 @@ void apply_view_options(Scene& scene, const ViewOptions& o) {
   // Checks the scene file's own values too, so the renderer never sees bad ones.
   if (scene.width <= 0 || scene.height <= 0 || scene.width > kMaxImageSide || scene.height > kMaxImageSide ||
       static_cast<long long>(scene.width) * scene.height > kMaxImagePixels)
-    throw InputError(file + ": image size " + std::to_string(scene.width) + "x" + std::to_string(scene.height) +
-                     " is outside 1..16384 per side and 2^26 pixels");
+    throw InputError((o.width ? "--size: " : file + ": image: ") + std::to_string(scene.width) + "x" +
+                     std::to_string(scene.height) + " is outside 1.." + std::to_string(kMaxImageSide) +
+                     " per side and 2^26 pixels");
   if (scene.max_depth < 1 || scene.max_depth > OPSILA_MAX_DEPTH)
     throw InputError(file + ": depth " + std::to_string(scene.max_depth) + " is outside 1.." + std::to_string(OPSILA_MAX_DEPTH));
   if (const std::string problem = spp_problem(scene.spp); !problem.empty())
@@ -323,11 +325,28 @@ void check_scene_file(const std::string& path) {
     throw InputError(path + ": cannot read scene (" + std::strerror(errno) + ")");
 }
 
-void print_warnings(const Scene& scene, bool quiet) {
+// Each distinct warning once; a flood of them (a hostile file) is cut short.
+void print_warnings(const std::vector<std::string>& warnings, bool quiet) {
   if (quiet) return;
+  constexpr std::size_t kMaxShown = 100;
   std::set<std::string> seen;
-  for (const std::string& w : scene.warnings)
-    if (seen.insert(w).second) std::fprintf(stderr, "opsila: warning: %s\n", w.c_str());
+  for (const std::string& w : warnings)
+    if (seen.size() < kMaxShown && seen.insert(w).second)
+      std::fprintf(stderr, "opsila: warning: %s\n", w.c_str());
+  if (warnings.size() > seen.size() && seen.size() == kMaxShown)
+    std::fprintf(stderr, "opsila: warning: ... and more (only the first %zu are shown)\n", kMaxShown);
+}
+
+Scene load_scene_or_explain(const std::string& path, bool quiet) {
+  Scene scene;
+  try {
+    scene = load_scene(path);
+  } catch (const InputError& e) {
+    print_warnings(e.warnings, quiet);  // a misspelt key explains many errors
+    throw;
+  }
+  print_warnings(scene.warnings, quiet);
+  return scene;
 }
 
 }  // namespace opsila

@@ -20,9 +20,7 @@ constexpr int kExitFailure = 1;  // anything unexpected
 constexpr int kExitUsage = 2;    // bad flag, bad input file, unwritable output
 constexpr int kExitDevice = 3;   // OpenCL device or driver fault
 
-// Limits checked before any work is done.
-constexpr int kMaxImageSide = 16384;
-constexpr long long kMaxImagePixels = 1LL << 26;
+// Limits checked before any work is done (image limits: core/scene.h).
 constexpr int kMaxBankCapacity = 1 << 24;
 
 // One command-line word: a positional argument, or a flag whose value may be
@@ -101,8 +99,10 @@ DeviceEntry choose_device_flag(const std::string& spec);
 
 // Checks that PATH is a readable regular file before any work is done.
 void check_scene_file(const std::string& path);
-// Prints each distinct scene warning once ("opsila: warning: ...").
-void print_warnings(const Scene& scene, bool quiet);
+// Prints each distinct warning once ("opsila: warning: ..."), at most 100.
+void print_warnings(const std::vector<std::string>& warnings, bool quiet);
+// load_scene, with its warnings printed, also those found before an error.
+Scene load_scene_or_explain(const std::string& path, bool quiet);
 
 // ------------------------------------------------------------ walk_args
 

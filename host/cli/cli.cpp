@@ -18,6 +18,7 @@
 #include "machine/cl_runtime.h"
 #include "core/image_io.h"
 #include "core/progress.h"
+#include "core/output_files.h"
 #include "core/util.h"
 #include "opsila_shared.h"
 #include "reference/reference.h"
@@ -156,11 +157,15 @@ int run_render(const std::vector<std::string>& args) {
     std::fputs(render_usage().c_str(), stdout);
     return kExitOk;
   }
-  // Everything that can be checked without rendering is checked first.
-  check_output_path(o.output_path);
-  if (!o.item_buffer_path.empty()) check_output_path(o.item_buffer_path);
-  if (!o.stats_path.empty()) check_output_path(o.stats_path);
+  // Everything that can be checked without rendering is checked first;
+  // nothing is created until every output is ready.
+  install_interrupt_cleanup();
+  OutputFiles outputs;
+  outputs.declare("-o", o.output_path);
+  if (!o.item_buffer_path.empty()) outputs.declare("--item-buffer", o.item_buffer_path);
+  if (!o.stats_path.empty()) outputs.declare("--stats", o.stats_path);
   check_scene_file(o.scene_path);
+  outputs.refuse_inputs({o.scene_path});
 
   std::optional<ClRuntime> runtime;
   if (!o.reference) {
@@ -169,8 +174,8 @@ int run_render(const std::vector<std::string>& args) {
     print_line("warning", "--device is ignored with --reference");
   }
 
-  Scene scene = load_scene(o.scene_path);
-  print_warnings(scene, o.quiet);
+  Scene scene = load_scene_or_explain(o.scene_path, o.quiet);
+  outputs.refuse_inputs(scene.input_files);
   apply_view_options(scene, o);
 
   RenderSettings settings;
@@ -208,14 +213,15 @@ int run_render(const std::vector<std::string>& args) {
   }
   progress.finish();
 
-  if (extension_of(o.output_path) == ".png")
-    write_png(o.output_path, result.width, result.height, result.rgb);
-  else
-    write_pfm(o.output_path, result.width, result.height, result.rgb);
+  outputs.write(o.output_path, extension_of(o.output_path) == ".png"
+                                   ? encode_png(result.width, result.height, result.rgb)
+                                   : encode_pfm(result.width, result.height, result.rgb));
   if (!o.item_buffer_path.empty())
-    write_npy_item_buffer(o.item_buffer_path, result.height, result.width, result.item_buffer);
+    outputs.write(o.item_buffer_path,
+                  encode_npy_item_buffer(result.height, result.width, result.item_buffer));
   if (!o.stats_path.empty())
-    write_text_file(o.stats_path, stats_json(result, scene, settings, device).dump(2) + "\n");
+    outputs.write(o.stats_path, stats_json(result, scene, settings, device).dump(2) + "\n");
+  outputs.commit();
 
   if (!o.quiet) {
     const RenderStats& s = result.stats;

@@ -176,7 +176,7 @@ void write_text_file(const std::string& path, const std::string& text) {
 
 // ------------------------------------------------------------------ PNG
 
-void write_png(const std::string& path, int width, int height, const std::vector<float>& rgb) {
+std::string encode_png(int width, int height, const std::vector<float>& rgb) {
   check_image_size(width, height, rgb.size(), 3);
   const std::vector<std::uint8_t> pixels = to_srgb8(rgb);
   std::string encoded;
@@ -184,14 +184,21 @@ void write_png(const std::string& path, int width, int height, const std::vector
     static_cast<std::string*>(context)->append(static_cast<const char*>(bytes), size);
   };
   if (!stbi_write_png_to_func(append, &encoded, width, height, 3, pixels.data(), width * 3))
-    cannot_write(path, "PNG encoding failed");
+    throw std::runtime_error("PNG encoding failed");
+  return encoded;
+}
+
+void write_png(const std::string& path, int width, int height, const std::vector<float>& rgb) {
+  const std::string encoded = encode_png(width, height, rgb);
   write_file_atomic(path, encoded.data(), encoded.size());
 }
 
 // ------------------------------------------------------------------ PFM
 
-void write_pfm(const std::string& path, int width, int height, const std::vector<float>& rgb) {
+std::string encode_pfm(int width, int height, const std::vector<float>& rgb) {
   check_image_size(width, height, rgb.size(), 3);
+  for (float v : rgb)
+    if (!std::isfinite(v)) throw std::logic_error("a pixel value is not finite; no PFM is written");
   // Scale -1 = little-endian; the format stores the bottom row first.
   std::string out = "PF\n" + std::to_string(width) + " " + std::to_string(height) + "\n-1.0\n";
   out.reserve(out.size() + rgb.size() * 4);
@@ -199,6 +206,11 @@ void write_pfm(const std::string& path, int width, int height, const std::vector
     const float* row = rgb.data() + static_cast<std::size_t>(y) * width * 3;
     for (int i = 0; i < width * 3; ++i) append_le32(out, &row[i]);
   }
+  return out;
+}
+
+void write_pfm(const std::string& path, int width, int height, const std::vector<float>& rgb) {
+  const std::string out = encode_pfm(width, height, rgb);
   write_file_atomic(path, out.data(), out.size());
 }
 
@@ -251,8 +263,7 @@ FloatImage read_pfm(const std::string& path) {
 
 // ------------------------------------------------------------------ NPY
 
-void write_npy_item_buffer(const std::string& path, int height, int width,
-                           const std::vector<std::int32_t>& items) {
+std::string encode_npy_item_buffer(int height, int width, const std::vector<std::int32_t>& items) {
   check_image_size(width, height, items.size(), 2);
   std::string header = "{'descr': '<i4', 'fortran_order': False, 'shape': (" +
                        std::to_string(height) + ", " + std::to_string(width) + ", 2), }";
@@ -268,6 +279,12 @@ void write_npy_item_buffer(const std::string& path, int height, int width,
   out += header;
   out.reserve(out.size() + items.size() * 4);
   for (std::int32_t v : items) append_le32(out, &v);
+  return out;
+}
+
+void write_npy_item_buffer(const std::string& path, int height, int width,
+                           const std::vector<std::int32_t>& items) {
+  const std::string out = encode_npy_item_buffer(height, width, items);
   write_file_atomic(path, out.data(), out.size());
 }
 

@@ -28,7 +28,12 @@ void check_output_path(const std::string& path);
 void write_file_atomic(const std::string& path, const void* data, std::size_t size);
 void write_text_file(const std::string& path, const std::string& text);
 
-// rgb: linear floats, 3 per pixel, row 0 = top.
+// rgb: linear floats, 3 per pixel, row 0 = top. The encoders return the
+// whole file (for OutputFiles); the writers write it atomically.
+std::string encode_png(int width, int height, const std::vector<float>& rgb);
+// Every value must be finite (std::logic_error otherwise: the renderers
+// never produce NaN or infinity, and a PFM must not hold one).
+std::string encode_pfm(int width, int height, const std::vector<float>& rgb);
 void write_png(const std::string& path, int width, int height, const std::vector<float>& rgb);
 void write_pfm(const std::string& path, int width, int height, const std::vector<float>& rgb);
 
@@ -41,6 +46,7 @@ struct FloatImage {
 FloatImage read_pfm(const std::string& path);
 
 // NumPy .npy v1.0, dtype '<i4', shape (H, W, 2); items: (object, facet) per pixel.
+std::string encode_npy_item_buffer(int height, int width, const std::vector<std::int32_t>& items);
 void write_npy_item_buffer(const std::string& path, int height, int width,
                            const std::vector<std::int32_t>& items);
 

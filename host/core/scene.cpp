@@ -30,6 +30,13 @@ std::string spp_problem(long long n) {
 
 int spp_side(int n) { return static_cast<int>(std::llround(std::sqrt(double(n)))); }
 
+std::string material_value_problem(const std::string& key, float value) {
+  (void)key;  // the same rule for every key today; named for the callers' messages
+  if (!std::isfinite(value)) return "must be a finite number";
+  if (value < 0) return "must not be negative (" + short_number(value) + ")";
+  return "";
+}
+
 Vec3 MaterialDesc::kr() const { return illum_reflects(illum) ? ks : Vec3{0, 0, 0}; }
 
 Vec3 MaterialDesc::kt() const { return illum_transmits(illum) ? tf : Vec3{0, 0, 0}; }

@@ -16,8 +16,11 @@ using Vec3 = std::array<float, 3>;
 
 // Any bad input (file, flag, scene value). what() is the one-line message the
 // user sees: it names the file, the line (and key) and the problem.
+// `warnings` are those the reader had gathered before the error: printed
+// before it, so that a misspelt key still shows up.
 struct InputError : std::runtime_error {
   using std::runtime_error::runtime_error;
+  std::vector<std::string> warnings;
 };
 
 // SPEC "Materials": an illumination model reflects (kr = Ks) for illum
@@ -42,6 +45,13 @@ struct MaterialDesc {
   Vec3 kt() const;
   static MaterialDesc default_material();  // the "face with no material" one
 };
+
+// The one rule every reader (MTL, scene files, other model formats) applies
+// to a material value: colours (Ka, Kd, Ks, Tf) and Ns must not be negative.
+// So every term of SPEC's pixel sum is >= 0 (what the saturating pixel sums
+// rely on) and pow(x, Ns) is never infinite. Returns "" or the problem,
+// e.g. "must not be negative (-1)".
+std::string material_value_problem(const std::string& key, float value);
 
 // One triangle of a facet (polygons are fan-triangulated; all triangles of a
 // polygon keep the polygon's facet id).
@@ -101,6 +111,9 @@ struct Scene {
   bool has_camera = false;
   bool has_lights = false;
   std::vector<std::string> warnings;  // printed once each by the CLI
+  // Every file the scene was read from (scene file, OBJ, MTL, textures): a
+  // loader that reads a file adds it here, so that no output can overwrite it.
+  std::vector<std::string> input_files;
 
   // Axis-aligned bounds of all triangles.
   void bounds(Vec3& lo, Vec3& hi) const;
@@ -127,6 +140,10 @@ int spp_side(int n);
 // view). fov_deg is the vertical field of view; aspect = width / height.
 CameraDesc frame_bounds(const Vec3& lo, const Vec3& hi, float fov_deg = 45.0f,
                         float aspect = 4.0f / 3.0f);
+
+// Largest image (scenes/FORMAT.md "Limits"): per side, and in pixels.
+constexpr int kMaxImageSide = 16384;
+constexpr long long kMaxImagePixels = 1LL << 26;
 
 // Largest accepted bounding-box diagonal: far beyond any real scene, yet small
 // enough that eye positions, distances and epsilon all stay finite in float.

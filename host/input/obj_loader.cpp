@@ -15,6 +15,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <vector>
 #include <new>
 #include <stdexcept>
 #include <string_view>
@@ -313,14 +314,19 @@ std::vector<MaterialDesc> parse_mtl(const std::string& text, const std::string& 
       const std::string_view first = next_token(probe);
       if (first == "spectral" || first == "xyz") {
         warnings.push_back(at(name, ln) + "'" + std::string(kw) + " " + std::string(first) +
-                           "' is not supported (only RGB); material '" + m.name + "' keeps " +
+                           "' is not supported (only RGB); material " + quote(m.name) + " keeps " +
                            std::string(kw) + " = 0");
         continue;
       }
       Vec3& c = kw == "Ka" ? m.ka : kw == "Kd" ? m.kd : kw == "Ks" ? m.ks : m.tf;
       parse_colour(rest, kw, name, ln, c);
+      for (float x : c)
+        if (const std::string why = material_value_problem(std::string(kw), x); !why.empty())
+          fail(name, ln, "'" + std::string(kw) + "' " + why);
     } else if (kw == "Ns") {
       m.ns = parse_single(rest, kw, name, ln);
+      if (const std::string why = material_value_problem("Ns", m.ns); !why.empty())
+        fail(name, ln, "'Ns' " + why);
     } else if (kw == "Ni") {
       m.ni = parse_single(rest, kw, name, ln);
     } else {  // illum
@@ -339,13 +345,14 @@ std::vector<MaterialDesc> parse_mtl(const std::string& text, const std::string& 
                        " material keys before the first 'newmtl' were ignored");
   for (const MaterialDesc& m : out) {
     if (illum_transmits(m.illum) && !(m.ni > 0))
-      warnings.push_back(name + ": material '" + m.name +
-                         "' transmits light but has Ni <= 0 (refraction is undefined)");
+      warnings.push_back(name + ": material " + quote(m.name) +
+                         " transmits light but has Ni <= 0 (refraction is undefined)");
   }
   return out;
 }
 
-std::string read_input_file(const std::string& path) {
+std::string read_input_file(const std::string& path, std::size_t max_bytes,
+                            const ChunkCheck& check) {
   std::error_code ec;
   const fs::file_status st = fs::status(path, ec);
   if (ec || !fs::exists(st)) {
@@ -356,21 +363,47 @@ std::string read_input_file(const std::string& path) {
   if (!fs::is_regular_file(st)) throw InputError(path + ": is not a regular file");
   const std::uintmax_t size = fs::file_size(path, ec);
   if (ec) throw InputError(path + ": cannot read: " + ec.message());
-  if (size > kMaxInputFileBytes)
-    throw InputError(path + ": file too large (" + std::to_string(size) +
-                     " bytes; the limit is " + std::to_string(kMaxInputFileBytes) + ")");
+  const auto too_large = [&](std::uintmax_t bytes) {
+    throw InputError(path + ": file too large (" + std::to_string(bytes) +
+                     " bytes; the limit is " + std::to_string(max_bytes) + ")");
+  };
+  if (size > max_bytes) too_large(size);
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(path + ": cannot open: " + std::strerror(errno));
+  // Read and checked a chunk at a time: a binary file is refused at its
+  // first bad byte, not after gigabytes, and a file that grows while it is
+  // read is still held to the limit.
   std::string text;
   try {
-    text.resize(static_cast<std::size_t>(size));
+    text.reserve(static_cast<std::size_t>(size));
   } catch (const std::bad_alloc&) {
     throw InputError(path + ": out of memory reading the file");
   }
-  in.read(text.data(), static_cast<std::streamsize>(text.size()));
-  if (static_cast<std::uintmax_t>(in.gcount()) != size)
-    throw InputError(path + ": read error (file changed or unreadable)");
+  const std::size_t kChunk = std::size_t(1) << 20;
+  std::vector<char> chunk(kChunk);
+  for (;;) {
+    in.read(chunk.data(), static_cast<std::streamsize>(chunk.size()));
+    const std::size_t got = static_cast<std::size_t>(in.gcount());
+    if (got == 0) break;
+    if (text.size() + got > max_bytes) too_large(text.size() + got);
+    check(chunk.data(), got, text.size());
+    text.append(chunk.data(), got);
+  }
+  if (in.bad()) throw InputError(path + ": read error");
   return text;
+}
+
+std::string read_input_file(const std::string& path) {
+  int line = 1;
+  return read_input_file(path, kMaxInputFileBytes, [&](const char* data, std::size_t n, std::size_t at) {
+    if (at == 0 && n >= 2 && ((data[0] == '\xff' && data[1] == '\xfe') || (data[0] == '\xfe' && data[1] == '\xff')))
+      throw InputError(path + ":1: UTF-16 text is not supported (save the file as UTF-8 or ASCII)");
+    for (std::size_t k = 0; k < n; ++k) {
+      if (data[k] == '\n') ++line;
+      if (data[k] == '\0')
+        throw InputError(path + ":" + std::to_string(line) + ": NUL byte (binary file?)");
+    }
+  });
 }
 
 // ---------------------------------------------------------------- OBJ -----
@@ -403,8 +436,11 @@ struct IndexedList {
 
 class ObjParser {
  public:
-  ObjParser(std::string_view text, const std::string& name, const std::string& base_dir)
-      : text_(text), name_(name), base_dir_(base_dir) {}
+  ObjParser(std::string_view text, const std::string& name, const std::string& base_dir,
+            std::size_t max_triangles)
+      : text_(text), name_(name), base_dir_(base_dir), max_triangles_(max_triangles) {}
+
+  std::vector<std::string>& warnings() { return warnings_; }
 
   Scene run() {
     if (text_.size() > kMaxInputFileBytes)
@@ -569,8 +605,9 @@ class ObjParser {
     if (polys_.size() >= static_cast<std::size_t>(INT_MAX))
       fail(name_, line_, "too many facets (more than " + std::to_string(INT_MAX) + ")");
     triangle_total_ += n - 2;
-    if (triangle_total_ > kMaxTriangles)
-      fail(name_, line_, "too many triangles (more than " + std::to_string(kMaxTriangles) + ")");
+    if (triangle_total_ > max_triangles_)
+      fail(name_, line_, "too many triangles (more than " + std::to_string(max_triangles_) +
+                             ", scenes/FORMAT.md, Limits)");
     polys_.push_back(Polygon{static_cast<std::uint32_t>(start), n, line_,
                              o_count_ > 0 ? o_count_ - 1 : 0, g_count_ > 0 ? g_count_ - 1 : 0,
                              slot_, all_uv, all_normals});
@@ -613,16 +650,17 @@ class ObjParser {
       const std::string path = (fs::path(base_dir_) / f).lexically_normal().string();
       if (!loaded_libs_.insert(path).second) continue;
       if (!fs::is_regular_file(path, ec)) {
-        warnings_.push_back(at(name_, line_) + "material library '" + f + "' not found (" +
-                            path + "); faces using its materials get the default material");
+        warnings_.push_back(at(name_, line_) + "material library " + quote(f) + " not found (" +
+                            quote(path) + "); faces using its materials get the default material");
         continue;
       }
       const std::string text = read_input_file(path);
+      input_files_.push_back(path);
       for (MaterialDesc& m : parse_mtl(text, path, warnings_)) {
         if (lib_index_.count(m.name)) {
           if (++redefined_ <= kListedWarnings)
-            warnings_.push_back(path + ": material '" + m.name +
-                                "' is defined again; the first definition is used");
+            warnings_.push_back(path + ": material " + quote(m.name) +
+                                " is defined again; the first definition is used");
           continue;
         }
         lib_index_.emplace(m.name, static_cast<int>(library_.size()));
@@ -737,8 +775,8 @@ class ObjParser {
       if (it != lib_index_.end()) {
         slot_material[s] = it->second + 1;
       } else if (++unknown <= kListedWarnings) {
-        warnings_.push_back(at(name_, slot_lines_[s]) + "material '" + slot_names_[s] +
-                            "' not found in any material library; its faces get the default "
+        warnings_.push_back(at(name_, slot_lines_[s]) + "material " + quote(slot_names_[s]) +
+                            " not found in any material library; its faces get the default "
                             "material");
       }
     }
@@ -814,12 +852,14 @@ class ObjParser {
     scene.camera = frame_bounds(lo, hi, 45.0f, float(scene.width) / float(scene.height));
     for (std::string& w : scene.warnings) warnings_.push_back(std::move(w));
     scene.warnings = std::move(warnings_);
+    scene.input_files.insert(scene.input_files.begin(), input_files_.begin(), input_files_.end());
     return scene;
   }
 
   std::string_view text_;
   const std::string& name_;
   std::string base_dir_;
+  std::size_t max_triangles_;
   int line_ = 0;
 
   IndexedList verts_{"vertex", {}, 3, 0, 0, true};
@@ -847,11 +887,17 @@ class ObjParser {
   std::unordered_map<std::string, int> lib_index_;
   std::unordered_set<std::string> loaded_libs_;
   std::vector<std::string> warnings_;
+  std::vector<std::string> input_files_;  // material libraries read
 };
 
-Scene parse_guarded(std::string_view text, const std::string& name, const std::string& base_dir) {
+Scene parse_guarded(std::string_view text, const std::string& name, const std::string& base_dir,
+                    std::size_t max_triangles) {
+  ObjParser parser(text, name, base_dir, max_triangles);
   try {
-    return ObjParser(text, name, base_dir).run();
+    return parser.run();
+  } catch (InputError& e) {
+    e.warnings = std::move(parser.warnings());  // found before the error: still shown
+    throw;
   } catch (const std::bad_alloc&) {
     throw InputError(name + ": out of memory while loading (input too large)");
   } catch (const std::length_error&) {
@@ -861,16 +907,18 @@ Scene parse_guarded(std::string_view text, const std::string& name, const std::s
 
 }  // namespace
 
-Scene load_obj(const std::string& path) {
+Scene load_obj(const std::string& path, std::size_t max_triangles) {
   const std::string text = read_input_file(path);
   std::string dir = fs::path(path).parent_path().string();
   if (dir.empty()) dir = ".";
-  return parse_guarded(text, path, dir);
+  Scene scene = parse_guarded(text, path, dir, max_triangles);
+  scene.input_files.insert(scene.input_files.begin(), path);
+  return scene;
 }
 
 Scene load_obj_from_string(const std::string& text, const std::string& name,
                            const std::string& base_dir) {
-  return parse_guarded(text, name, base_dir);
+  return parse_guarded(text, name, base_dir, kMaxTriangles);
 }
 
 }  // namespace opsila

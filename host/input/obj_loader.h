@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstddef>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -11,20 +12,33 @@
 
 namespace opsila {
 
-// Upper bound on the triangles one load may produce (about 6 GiB of
-// triangles); beyond it the input is refused rather than exhausting memory.
-constexpr std::size_t kMaxTriangles = std::size_t(1) << 27;
+// Upper bound on the triangles of one scene, all objects together (scenes/
+// FORMAT.md "Limits"). The whole pipeline (load, partition, bank BVHs,
+// device buffers) needs about 300 bytes per triangle on a CPU device, so
+// 2^24 triangles fit a 24 GB machine with room to spare; beyond it the input
+// is refused before it is built.
+constexpr std::size_t kMaxTriangles = std::size_t(1) << 24;
 // Upper bound on the size of any input file read by the loaders.
 constexpr std::size_t kMaxInputFileBytes = std::size_t(1) << 31;
 
-// Reads a whole regular file. Directories, devices, unreadable or oversized
-// files give an InputError naming the path.
+// Called on each chunk of a file as it is read (bytes, count, offset of the
+// first byte); throws InputError to refuse the file there.
+using ChunkCheck = std::function<void(const char*, std::size_t, std::size_t)>;
+
+// Reads a whole regular file of at most max_bytes, a chunk at a time, each
+// chunk checked before the next is read. Directories, devices, unreadable or
+// oversized files give an InputError naming the path.
+std::string read_input_file(const std::string& path, std::size_t max_bytes,
+                            const ChunkCheck& check);
+// A text file (OBJ, MTL) of at most kMaxInputFileBytes: a NUL byte is
+// refused as soon as it is read.
 std::string read_input_file(const std::string& path);
 
 // Loads an OBJ file; its mtllib files are looked up in the OBJ's folder.
-// Sets has_camera = has_lights = false; the camera frames the model.
+// Sets has_camera = has_lights = false; the camera frames the model. More
+// than max_triangles triangles are refused as soon as they are counted.
 // Throws InputError("FILE:LINE: problem") for malformed input.
-Scene load_obj(const std::string& path);
+Scene load_obj(const std::string& path, std::size_t max_triangles = kMaxTriangles);
 
 // Same, from memory. `name` is the file name used in messages; mtllib files
 // are looked up in `base_dir`. With an empty base_dir no file is read at all

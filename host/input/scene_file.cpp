@@ -1,6 +1,9 @@
 // The JSON scene format (scenes/FORMAT.md). nlohmann::json checks the syntax;
 // a second, light pass over the (then known to be valid) text records the
-// line of every key path, so that semantic errors can name file, line and key.
+// line of every key path (JsonLines), so that semantic errors can name file,
+// line and key. Objects are read in two passes: every object is checked and
+// its triangles counted first, and only when the whole scene fits the limits
+// is any geometry built.
 #include "input/scene_file.h"
 
 #include <algorithm>
@@ -10,8 +13,10 @@
 #include <cstdio>
 #include <filesystem>
 #include <initializer_list>
+#include <functional>
 #include <memory>
 #include <new>
+#include <optional>
 #include <stdexcept>
 #include <string_view>
 #include <unordered_map>
@@ -21,6 +26,7 @@
 
 #include "opsila_shared.h"
 #include "core/util.h"
+#include "input/json_text.h"
 #include "input/model_import.h"
 #include "input/primitives.h"
 
@@ -32,6 +38,8 @@ using Json = nlohmann::ordered_json;
 namespace {
 
 constexpr int kMaxNesting = 64;
+constexpr int kMaxKeys = 1024;  // in one object: FORMAT.md "Limits"
+constexpr int kMaxGeneratorItems = 1000000;  // FORMAT.md "Limits"
 
 std::string num_text(double v) {
   char buf[32];
@@ -46,144 +54,6 @@ std::string join_key(const std::string& path, const std::string& key) {
 std::string join_index(const std::string& path, std::size_t i) {
   return path + "[" + std::to_string(i) + "]";
 }
-
-// Refuses absurd nesting before anything recursive sees the text.
-void check_nesting(const std::string& text, const std::string& name) {
-  int depth = 0, line = 1;
-  bool in_string = false, escaped = false;
-  for (char c : text) {
-    if (c == '\n') ++line;
-    if (in_string) {
-      if (escaped) escaped = false;
-      else if (c == '\\') escaped = true;
-      else if (c == '"') in_string = false;
-      continue;
-    }
-    if (c == '"') in_string = true;
-    else if (c == '{' || c == '[') {
-      if (++depth > kMaxNesting)
-        throw InputError(name + ":" + std::to_string(line) + ": nesting deeper than " +
-                         std::to_string(kMaxNesting) + " levels");
-    } else if (c == '}' || c == ']') {
-      --depth;
-    }
-  }
-}
-
-// Line of every key path in valid JSON text (keys as written; a key with
-// escapes may miss, and then its parent's line is used).
-class LineMap {
- public:
-  LineMap(const std::string& text, const std::string& name, std::vector<std::string>& warnings)
-      : s_(text), name_(name), warnings_(warnings) {
-    if (s_.compare(0, 3, "\xEF\xBB\xBF") == 0) i_ = 3;  // UTF-8 BOM, as nlohmann skips it
-    value("");
-  }
-
-  int line_of(std::string path) const {
-    for (;;) {
-      auto it = lines_.find(path);
-      if (it != lines_.end()) return it->second;
-      if (path.empty()) return 1;
-      const std::size_t cut = path.find_last_of(".[");
-      path = cut == std::string::npos ? std::string() : path.substr(0, cut);
-    }
-  }
-
- private:
-  void ws() {
-    while (i_ < s_.size()) {
-      const char c = s_[i_];
-      if (c == '\n') ++line_;
-      else if (c != ' ' && c != '\t' && c != '\r') break;
-      ++i_;
-    }
-  }
-  char peek() const { return i_ < s_.size() ? s_[i_] : '\0'; }
-  std::string string() {
-    std::string out;
-    ++i_;  // opening quote
-    while (i_ < s_.size() && s_[i_] != '"') {
-      if (s_[i_] == '\\' && i_ + 1 < s_.size()) {
-        const char e = s_[i_ + 1];
-        out += e == 'n' ? '\n' : e == 't' ? '\t' : e == 'u' ? '?' : e;
-        i_ += 2;
-        continue;
-      }
-      out += s_[i_++];
-    }
-    ++i_;  // closing quote
-    return out;
-  }
-  void value(const std::string& path) {
-    ws();
-    lines_.emplace(path, line_);  // a member's line is its key's, set first
-    const char c = peek();
-    if (c == '{') {
-      ++i_;
-      std::unordered_set<std::string> seen;
-      ws();
-      if (peek() == '}') {
-        ++i_;
-        return;
-      }
-      for (;;) {
-        ws();
-        const int key_line = line_;
-        const std::string key = string();
-        const std::string child = join_key(path, key);
-        if (!seen.insert(key).second) {
-          warnings_.push_back(name_ + ":" + std::to_string(key_line) + ": " + child +
-                              ": key given twice; the last one is used");
-          lines_[child] = key_line;
-        } else {
-          lines_.emplace(child, key_line);
-        }
-        ws();
-        ++i_;  // ':'
-        value(child);
-        ws();
-        if (peek() == ',') {
-          ++i_;
-          continue;
-        }
-        ++i_;  // '}'
-        return;
-      }
-    }
-    if (c == '[') {
-      ++i_;
-      ws();
-      if (peek() == ']') {
-        ++i_;
-        return;
-      }
-      for (std::size_t k = 0;; ++k) {
-        value(join_index(path, k));
-        ws();
-        if (peek() == ',') {
-          ++i_;
-          continue;
-        }
-        ++i_;  // ']'
-        return;
-      }
-    }
-    if (c == '"') {
-      string();
-      return;
-    }
-    while (i_ < s_.size() && std::string_view(",]} \t\r\n").find(s_[i_]) == std::string_view::npos)
-      ++i_;
-  }
-
-  const std::string& s_;
-  const std::string& name_;
-  std::vector<std::string>& warnings_;
-  std::size_t i_ = 0;
-  int line_ = 1;
-  std::unordered_map<std::string, int> lines_;
-};
 
 const char* kind(const Json& v) {
   switch (v.type()) {
@@ -204,16 +74,21 @@ class SceneReader {
       : text_(text), name_(name), base_dir_(base_dir), max_triangles_(max_triangles) {}
 
   Scene run() {
-    check_nesting(text_, name_);
-    Json root;
     try {
-      root = Json::parse(text_);
-    } catch (const Json::parse_error& e) {
-      syntax_error(e.byte, e.what());
-    } catch (const Json::exception& e) {
-      throw InputError(name_ + ": " + e.what());
+      return read();
+    } catch (InputError& e) {
+      // Warnings found before the error still reach the user (a misspelt
+      // key explains a later "no facets").
+      e.warnings.insert(e.warnings.begin(), scene_.warnings.begin(), scene_.warnings.end());
+      throw;
     }
-    lines_ = std::make_unique<LineMap>(text_, name_, scene_.warnings);
+  }
+
+ private:
+  Scene read() {
+    check_json_shape(text_, name_, kMaxNesting, kMaxKeys);
+    const Json root = parse();
+    lines_ = std::make_unique<JsonLines>(text_, name_, scene_.warnings);
     if (!root.is_object()) fail("", std::string("the scene must be a JSON object, not ") + kind(root));
     check_keys(root, "", {"description", "camera", "image", "depth", "spp", "ambient", "background",
                           "lights", "materials", "objects", "smooth"});
@@ -237,6 +112,9 @@ class SceneReader {
     if (const Json* b = find(root, "background")) scene_.background = colour(*b, "background");
     if (const Json* l = find(root, "lights")) lights(*l, "lights");
     if (const Json* o = find(root, "objects")) objects(*o, "objects");
+    // Every object is checked and the total counted: only now is geometry built.
+    reserve_more(scene_.triangles, planned_triangles_);
+    for (const auto& build : builds_) build();
 
     scene_.num_objects = next_object_;
     scene_.num_facets = next_facet_;
@@ -250,9 +128,29 @@ class SceneReader {
     return std::move(scene_);
   }
 
- private:
   // ------------------------------------------------------------ errors ----
-  [[noreturn]] void syntax_error(std::size_t byte, const std::string& what) const {
+  // nlohmann's DOM builder, with every syntax or range error (number
+  // overflow included) turned into FILE:LINE:COLUMN instead of the library's
+  // own exception text.
+  struct DomBuilder : nlohmann::detail::json_sax_dom_parser<Json> {
+    DomBuilder(Json& root, const SceneReader& reader)
+        : nlohmann::detail::json_sax_dom_parser<Json>(root, false), reader_(reader) {}
+    bool parse_error(std::size_t byte, const std::string& token,
+                     const nlohmann::detail::exception& e) {
+      reader_.syntax_error(byte, e.what(), token);
+    }
+    const SceneReader& reader_;
+  };
+
+  Json parse() const {
+    Json root;
+    DomBuilder builder(root, *this);
+    if (!Json::sax_parse(text_, &builder)) syntax_error(text_.size(), "syntax error", "");
+    return root;
+  }
+
+  [[noreturn]] void syntax_error(std::size_t byte, const std::string& what,
+                                 const std::string& token) const {
     const std::size_t p = std::min(byte > 0 ? byte - 1 : 0, text_.size());
     int line = 1;
     std::size_t line_start = 0;
@@ -262,20 +160,36 @@ class SceneReader {
         line_start = k + 1;
       }
     }
+    // The library's text is "[json.exception...] parse error at line L,
+    // column C: DETAIL; last read: 'TOKEN'": keep DETAIL, quote a prefix of
+    // TOKEN only.
     std::string detail = what;
-    const std::size_t col = detail.find("column ");
-    if (col != std::string::npos) {
+    if (const std::size_t col = detail.find("column "); col != std::string::npos) {
       const std::size_t colon = detail.find(": ", col);
       if (colon != std::string::npos) detail = detail.substr(colon + 2);
+    } else if (const std::size_t close = detail.find("] "); detail.rfind("[json.", 0) == 0 &&
+                                                             close != std::string::npos) {
+      detail = detail.substr(close + 2);
     }
-    std::replace(detail.begin(), detail.end(), '\n', ' ');
+    if (const std::size_t last = detail.find("; last read: "); last != std::string::npos)
+      detail = detail.substr(0, last) + "; last read: '" + quoted_prefix(token) + "'";
+    if (const std::size_t parsing = detail.find("number overflow parsing '");
+        parsing != std::string::npos)
+      detail = "number " + quoted_prefix(token) + " is out of range";
     throw InputError(name_ + ":" + std::to_string(line) + ":" +
-                     std::to_string(p - line_start + 1) + ": " + detail);
+                     std::to_string(p - line_start + 1) + ": " + quoted_line(detail));
+  }
+
+  // A library message without line breaks and of bounded length.
+  static std::string quoted_line(std::string text) {
+    std::replace(text.begin(), text.end(), '\n', ' ');
+    if (text.size() > 200) text = text.substr(0, 200) + "...";
+    return text;
   }
 
   std::string where(const std::string& path) const {
     const int line = lines_ ? lines_->line_of(path) : 1;
-    return name_ + ":" + std::to_string(line) + ": " + (path.empty() ? "" : path + ": ");
+    return name_ + ":" + std::to_string(line) + ": " + (path.empty() ? "" : shown_path(path) + ": ");
   }
   [[noreturn]] void fail(const std::string& path, const std::string& what) const {
     throw InputError(where(path) + what);
@@ -307,7 +221,8 @@ class SceneReader {
       if (it.key() == "comment") continue;
       bool known = false;
       for (const char* a : allowed) known = known || it.key() == a;
-      if (!known) warn(join_key(path, it.key()), "unknown key '" + it.key() + "' (ignored)");
+      if (!known)
+        warn(join_key(path, it.key()), "unknown key '" + quoted_prefix(it.key()) + "' (ignored)");
     }
   }
 
@@ -354,7 +269,8 @@ class SceneReader {
       fail(path, std::string("expected a number or [r, g, b], not ") + kind(v));
     }
     for (float x : c)
-      if (x < 0) fail(path, "colour components must not be negative");
+      if (const std::string why = material_value_problem(path, x); !why.empty())
+        fail(path, "colour components " + why);
     return c;
   }
   // A positive number (both sizes alike) or [a, b].
@@ -387,7 +303,7 @@ class SceneReader {
   void image(const Json& v, const std::string& path) {
     expect_object(v, path);
     check_keys(v, path, {"width", "height", "size"});
-    const int kMax = 32768;
+    const int kMax = kMaxImageSide;
     if (const Json* s = find(v, "size")) {
       if (find(v, "width") || find(v, "height"))
         fail(join_key(path, "size"), "give either size or width/height, not both");
@@ -395,10 +311,13 @@ class SceneReader {
         fail(join_key(path, "size"), std::string("expected [width, height], not ") + kind(*s));
       scene_.width = integer((*s)[0], join_index(join_key(path, "size"), 0), 1, kMax);
       scene_.height = integer((*s)[1], join_index(join_key(path, "size"), 1), 1, kMax);
-      return;
+    } else {
+      scene_.width = integer(require(v, path, "width"), join_key(path, "width"), 1, kMax);
+      scene_.height = integer(require(v, path, "height"), join_key(path, "height"), 1, kMax);
     }
-    scene_.width = integer(require(v, path, "width"), join_key(path, "width"), 1, kMax);
-    scene_.height = integer(require(v, path, "height"), join_key(path, "height"), 1, kMax);
+    if (static_cast<long long>(scene_.width) * scene_.height > kMaxImagePixels)
+      fail(find(v, "size") ? join_key(path, "size") : path, std::to_string(scene_.width) + " x " + std::to_string(scene_.height) +
+                     " pixels; at most " + std::to_string(kMaxImagePixels) + " (2^26) are allowed");
   }
 
   void camera(const Json& v, const std::string& path) {
@@ -473,7 +392,8 @@ class SceneReader {
     if (const Json* x = find(v, "Tf")) m.tf = colour(*x, key("Tf"));
     if (const Json* x = find(v, "Ns")) {
       m.ns = real(*x, key("Ns"));
-      if (m.ns < 0) fail(key("Ns"), "must not be negative");
+      if (const std::string why = material_value_problem("Ns", m.ns); !why.empty())
+        fail(key("Ns"), why);
     }
     if (const Json* x = find(v, "Ni")) m.ni = positive(*x, key("Ni"));
     const Json* kr = find(v, "kr");
@@ -507,11 +427,19 @@ class SceneReader {
       const std::string n = v->get<std::string>();
       auto it = named_.find(n);
       if (it == named_.end()) {
+        // As in OBJ (FORMAT.md): a warning, and the default material.
         std::string known;
-        for (const std::string& k : named_order_) known += (known.empty() ? "" : ", ") + k;
-        if (known.size() > 200) known = known.substr(0, 200) + "...";
-        fail(path, "unknown material '" + n + "'" +
-                       (known.empty() ? " (the scene defines none)" : " (defined: " + known + ")"));
+        for (const std::string& k : named_order_) {
+          known += (known.empty() ? "" : ", ") + quoted_prefix(k);
+          if (known.size() > 200) {
+            known += ", ...";
+            break;
+          }
+        }
+        warn(path, "unknown material '" + quoted_prefix(n) + "'" +
+                       (known.empty() ? " (the scene defines none)" : " (defined: " + known + ")") +
+                       "; the default material is used");
+        return 0;
       }
       return it->second;
     }
@@ -552,12 +480,23 @@ class SceneReader {
   }
 
   // ------------------------------------------------------------ objects ---
-  void budget(std::size_t triangles, const std::string& path) const {
-    if (triangles > max_triangles_ || scene_.triangles.size() > max_triangles_ - triangles)
-      fail(path, "would make " + std::to_string(triangles) + " more triangles; a scene may have " +
-                     "at most " + std::to_string(max_triangles_));
-    if (triangles > std::size_t(INT_MAX) - std::size_t(next_facet_))
+  // Counts an object's triangles (and facets, an upper bound for generated
+  // shapes) against the scene's limits before anything is built.
+  void budget(std::size_t triangles, std::size_t facets, std::size_t objects,
+              const std::string& path) {
+    if (triangles > max_triangles_ || planned_triangles_ > max_triangles_ - triangles)
+      fail(path, "would make " + std::to_string(triangles) + " more triangles (" +
+                     std::to_string(planned_triangles_) + " so far); a scene may have at most " +
+                     std::to_string(max_triangles_) + " (scenes/FORMAT.md, Limits)");
+    if (facets > std::size_t(INT_MAX) - planned_facets_)
       fail(path, "too many facets for 32-bit ids");
+    if (objects > std::size_t(INT_MAX) - planned_objects_) fail(path, "too many objects");
+    planned_triangles_ += triangles;
+    planned_facets_ += facets;
+    planned_objects_ += objects;
+  }
+  void budget(std::size_t triangles, const std::string& path) {
+    budget(triangles, triangles, 1, path);
   }
 
   void objects(const Json& v, const std::string& path) {
@@ -565,13 +504,13 @@ class SceneReader {
     for (std::size_t i = 0; i < v.size(); ++i) object(v[i], join_index(path, i));
   }
 
+  // Checks one object and plans its construction; builds_ runs the plans in
+  // order once the whole scene is known to fit.
   void object(const Json& v, const std::string& path) {
     expect_object(v, path);
     const std::string type = string(require(v, path, "type"), join_key(path, "type"));
     const auto key = [&](const char* k) { return join_key(path, k); };
-    const std::size_t first = scene_.triangles.size();
-    const std::size_t first_attribute = scene_.attributes.size();
-    auto& tris = scene_.triangles;
+    std::function<void(std::vector<Triangle>&)> make;
 
     if (type == "sphere") {
       check_keys(v, path, {"type", "name", "center", "radius", "subdivisions", "material",
@@ -582,15 +521,19 @@ class SceneReader {
       if (const Json* s = find(v, "subdivisions")) sub = integer(*s, key("subdivisions"), 0, 10);
       const int mat = material_ref(find(v, "material"), key("material"));
       budget(icosphere_triangles(sub), path);
-      next_facet_ = add_icosphere(tris, c, r, sub, FacetTag{next_object_++, mat}, next_facet_);
+      make = [this, c, r, sub, mat](std::vector<Triangle>& tris) {
+        next_facet_ = add_icosphere(tris, c, r, sub, FacetTag{next_object_++, mat}, next_facet_);
+      };
     } else if (type == "box") {
       check_keys(v, path, {"type", "name", "min", "max", "center", "size", "material",
                            "transform"});
       Vec3 lo, hi;
       box_extent(v, path, lo, hi);
       const int mat = material_ref(find(v, "material"), key("material"));
-      budget(12, path);
-      next_facet_ = add_box(tris, lo, hi, FacetTag{next_object_++, mat}, next_facet_);
+      budget(12, 6, 1, path);
+      make = [this, lo, hi, mat](std::vector<Triangle>& tris) {
+        next_facet_ = add_box(tris, lo, hi, FacetTag{next_object_++, mat}, next_facet_);
+      };
     } else if (type == "plane" || type == "checkerboard") {
       const bool checker = type == "checkerboard";
       if (checker)
@@ -607,13 +550,17 @@ class SceneReader {
         if (const Json* s = find(v, "squares")) count2(*s, key("squares"), 100000, nx, nz);
         const std::vector<int> mats = material_list(require(v, path, "materials"), key("materials"));
         if (mats.size() != 2) fail(key("materials"), "expected exactly 2 materials");
-        budget(std::size_t(2) * nx * nz, path);
-        next_facet_ = add_checkerboard(tris, c, sx, sz, nx, nz, next_object_++, mats[0], mats[1],
-                                       next_facet_);
+        budget(std::size_t(2) * nx * nz, std::size_t(nx) * nz, 1, path);
+        make = [this, c, sx, sz, nx, nz, mats](std::vector<Triangle>& tris) {
+          next_facet_ = add_checkerboard(tris, c, sx, sz, nx, nz, next_object_++, mats[0], mats[1],
+                                         next_facet_);
+        };
       } else {
         const int mat = material_ref(find(v, "material"), key("material"));
-        budget(2, path);
-        next_facet_ = add_plane(tris, c, sx, sz, FacetTag{next_object_++, mat}, next_facet_);
+        budget(2, 1, 1, path);
+        make = [this, c, sx, sz, mat](std::vector<Triangle>& tris) {
+          next_facet_ = add_plane(tris, c, sx, sz, FacetTag{next_object_++, mat}, next_facet_);
+        };
       }
     } else if (type == "polygon") {
       check_keys(v, path, {"type", "name", "vertices", "material", "transform"});
@@ -624,26 +571,37 @@ class SceneReader {
       for (std::size_t k = 0; k < vs.size(); ++k)
         pts.push_back(vec3(vs[k], join_index(key("vertices"), k)));
       const int mat = material_ref(find(v, "material"), key("material"));
-      budget(pts.size() - 2, path);
-      next_facet_ = add_polygon(tris, pts, FacetTag{next_object_++, mat}, next_facet_);
-      if (tris.size() == first) fail(key("vertices"), "the polygon has zero area");
+      budget(pts.size() - 2, 1, 1, path);
+      const std::string where_vertices = key("vertices");
+      make = [this, pts, mat, where_vertices](std::vector<Triangle>& tris) {
+        const std::size_t before = tris.size();
+        next_facet_ = add_polygon(tris, pts, FacetTag{next_object_++, mat}, next_facet_);
+        if (tris.size() == before) fail(where_vertices, "the polygon has zero area");
+      };
     } else if (type == "terrain") {
-      terrain(v, path);
+      make = terrain(v, path);
     } else if (type == "scatter" || type == "grid") {
-      generator(v, path, type == "grid");
+      make = generator(v, path, type == "grid");
     } else if (type == "obj" || type == "model") {
-      include_obj(v, path, type == "model");
+      make = include_obj(v, path, type == "model");
     } else {
-      fail(key("type"), "unknown object type '" + type +
+      fail(key("type"), "unknown object type '" + quoted_prefix(type) +
                             "' (expected sphere, box, plane, checkerboard, polygon, terrain, "
                             "scatter, grid, obj or model)");
     }
-    if (const Json* t = find(v, "transform")) {
-      const Transform tf = transform(*t, key("transform"));
-      transform_triangles(tris, first, tf);
-      transform_normals(scene_.attributes, first_attribute, tf);
-    }
-    settle(first, path);
+    std::optional<Transform> placed;
+    if (const Json* t = find(v, "transform")) placed = transform(*t, key("transform"));
+    builds_.push_back([this, make, placed, path] {
+      auto& tris = scene_.triangles;
+      const std::size_t first = tris.size();
+      const std::size_t first_attribute = scene_.attributes.size();
+      make(tris);
+      if (placed) {
+        transform_triangles(tris, first, *placed);
+        transform_normals(scene_.attributes, first_attribute, *placed);
+      }
+      settle(first, path);
+    });
   }
 
   // After placement: zero-area triangles (possible after extreme scaling)
@@ -705,7 +663,7 @@ class SceneReader {
     }
   }
 
-  void terrain(const Json& v, const std::string& path) {
+  std::function<void(std::vector<Triangle>&)> terrain(const Json& v, const std::string& path) {
     check_keys(v, path, {"type", "name", "center", "size", "quads", "height", "features",
                          "octaves", "seed", "material", "materials", "transform"});
     const auto key = [&](const char* k) { return join_key(path, k); };
@@ -732,13 +690,16 @@ class SceneReader {
       a = b = material_ref(find(v, "material"), key("material"));
     }
     budget(std::size_t(2) * d.quads_x * d.quads_z, path);
-    next_facet_ = add_terrain(scene_.triangles, d, next_object_++, a, b, next_facet_);
+    return [this, d, a, b](std::vector<Triangle>& tris) {
+      next_facet_ = add_terrain(tris, d, next_object_++, a, b, next_facet_);
+    };
   }
 
   // Many spheres/boxes, each its own object, from a fixed-seed PCG32. Per item
   // seven numbers are drawn in a fixed order: shape, radius, x, y, z,
   // material, angle (see FORMAT.md), so a scene is the same everywhere.
-  void generator(const Json& v, const std::string& path, bool grid) {
+  std::function<void(std::vector<Triangle>&)> generator(const Json& v, const std::string& path,
+                                                        bool grid) {
     if (grid)
       check_keys(v, path, {"type", "name", "counts", "min", "max", "jitter", "shapes", "radius",
                            "subdivisions", "materials", "weights", "seed", "transform"});
@@ -750,7 +711,7 @@ class SceneReader {
     const Vec3 hi = vec3(require(v, path, "max"), key("max"));
     for (int a = 0; a < 3; ++a)
       if (!(hi[a] >= lo[a])) fail(key("max"), "must not be less than min on any axis");
-    const int kMaxItems = 10000000;
+    const int kMaxItems = kMaxGeneratorItems;
     int counts[3] = {1, 1, 1};
     long long items = 0;
     if (grid) {
@@ -825,12 +786,20 @@ class SceneReader {
         std::max(want_sphere ? icosphere_triangles(sub) : 0, want_box ? std::size_t(12) : 0);
     if (per_item > 0 && std::size_t(items) > max_triangles_ / per_item)
       fail(path, std::to_string(items) + " items would make more than " +
-                     std::to_string(max_triangles_) + " triangles");
-    budget(std::size_t(items) * per_item, path);
-    if (items > INT_MAX - next_object_) fail(path, "too many objects");
+                     std::to_string(max_triangles_) + " triangles (scenes/FORMAT.md, Limits)");
+    budget(std::size_t(items) * per_item, std::size_t(items) * per_item, std::size_t(items), path);
+    return [=](std::vector<Triangle>& tris) {
+      build_items(tris, grid, items, counts, lo, hi, jitter, shape_is_box, rmin, rmax, sub, mats,
+                  cumulative, total, seed);
+    };
+  }
 
+  void build_items(std::vector<Triangle>& tris, bool grid, long long items, const int counts[3],
+                   const Vec3& lo, const Vec3& hi, float jitter,
+                   const std::vector<bool>& shape_is_box, float rmin, float rmax, int sub,
+                   const std::vector<int>& mats, const std::vector<double>& cumulative,
+                   double total, std::uint64_t seed) {
     Pcg32 rng(seed);
-    auto& tris = scene_.triangles;
     for (long long n = 0; n < items; ++n) {
       const double u_shape = rng.uniform(), u_radius = rng.uniform();
       const double ux = rng.uniform(), uy = rng.uniform(), uz = rng.uniform();
@@ -871,8 +840,11 @@ class SceneReader {
   }
 
   // An OBJ file ("obj"), or a model in any format ("model": OBJ by the strict
-  // reader, the others through the importer).
-  void include_obj(const Json& v, const std::string& path, bool any_format) {
+  // reader, the others through the importer). The file is read now (an OBJ's
+  // triangles count against the scene's limit as they are read), its
+  // triangles appended when the scene is built.
+  std::function<void(std::vector<Triangle>&)> include_obj(const Json& v, const std::string& path,
+                                                          bool any_format) {
     check_keys(v, path, {"type", "name", "file", "material", "transform"});
     const std::string fkey = join_key(path, "file");
     const std::string file = string(require(v, path, "file"), fkey);
@@ -885,49 +857,62 @@ class SceneReader {
     const int override_mat = find(v, "material")
                                  ? material_ref(find(v, "material"), join_key(path, "material"))
                                  : -1;
-    Scene sub;
+    auto sub = std::make_shared<Scene>();
     try {
       const bool obj = lower(fs::path(full).extension().string()) == ".obj";
       if (!obj && any_format && !is_imported_model(full))
         throw InputError(full + ": not a model format the importer reads (see scenes/FORMAT.md)");
-      sub = obj || !any_format ? load_obj(full) : load_model(full);
+      if (obj || !any_format) {
+        *sub = load_obj(full, max_triangles_ - planned_triangles_);
+      } else {
+        *sub = load_model(full);
+        sub->input_files.insert(sub->input_files.begin(), full);
+      }
     } catch (const InputError& e) {
+      scene_.warnings.insert(scene_.warnings.end(), e.warnings.begin(), e.warnings.end());
       fail(fkey, e.what());
     }
-    budget(sub.triangles.size(), path);
+    budget(sub->triangles.size(), std::size_t(sub->num_facets), std::size_t(sub->num_objects),
+           path);
     const int mat_offset = static_cast<int>(scene_.materials.size()) - 1;
     const int tex_offset = static_cast<int>(scene_.textures.size());
-    const int attr_offset = static_cast<int>(scene_.attributes.size());
     if (override_mat < 0) {
-      for (std::size_t k = 1; k < sub.materials.size(); ++k) {
-        MaterialDesc m = sub.materials[k];
+      for (std::size_t k = 1; k < sub->materials.size(); ++k) {
+        MaterialDesc m = sub->materials[k];
         if (m.map_kd >= 0) m.map_kd += tex_offset;
         if (m.map_ka >= 0) m.map_ka += tex_offset;
         scene_.materials.push_back(std::move(m));
       }
-      for (Texture& t : sub.textures) scene_.textures.push_back(std::move(t));
+      for (Texture& t : sub->textures) scene_.textures.push_back(std::move(t));
     }
-    for (const VertexAttributes& a : sub.attributes) scene_.attributes.push_back(a);
-    if (sub.num_objects > INT_MAX - next_object_) fail(path, "too many objects");
-    reserve_more(scene_.triangles, sub.triangles.size());
-    for (Triangle t : sub.triangles) {
-      t.object_id += next_object_;
-      t.facet_id += next_facet_;
-      t.material = override_mat >= 0 ? override_mat : (t.material == 0 ? 0 : t.material + mat_offset);
-      if (t.attributes >= 0) t.attributes += attr_offset;
-      scene_.triangles.push_back(t);
-    }
-    next_object_ += sub.num_objects;
-    next_facet_ += sub.num_facets;
-    for (std::string& w : sub.warnings) scene_.warnings.push_back(std::move(w));
+    for (std::string& w : sub->warnings) scene_.warnings.push_back(std::move(w));
+    for (std::string& f : sub->input_files) scene_.input_files.push_back(std::move(f));
+    return [this, sub, override_mat, mat_offset](std::vector<Triangle>& tris) {
+      const int attr_offset = static_cast<int>(scene_.attributes.size());
+      for (const VertexAttributes& a : sub->attributes) scene_.attributes.push_back(a);
+      for (Triangle t : sub->triangles) {
+        t.object_id += next_object_;
+        t.facet_id += next_facet_;
+        t.material = override_mat >= 0 ? override_mat
+                                       : (t.material == 0 ? 0 : t.material + mat_offset);
+        if (t.attributes >= 0) t.attributes += attr_offset;
+        tris.push_back(t);
+      }
+      next_object_ += sub->num_objects;
+      next_facet_ += sub->num_facets;
+      sub->triangles = std::vector<Triangle>();
+      sub->attributes = std::vector<VertexAttributes>();
+    };
   }
 
   const std::string& text_;
   const std::string& name_;
   std::string base_dir_;
   std::size_t max_triangles_;
-  std::unique_ptr<LineMap> lines_;
+  std::unique_ptr<JsonLines> lines_;
   Scene scene_;
+  std::vector<std::function<void()>> builds_;  // one per object, in order
+  std::size_t planned_triangles_ = 0, planned_facets_ = 0, planned_objects_ = 0;
   std::unordered_map<std::string, int> named_;
   std::vector<std::string> named_order_;
   int next_object_ = 0;
@@ -939,7 +924,16 @@ class SceneReader {
 Scene load_scene_from_string(const std::string& text, const std::string& name,
                              const std::string& base_dir, std::size_t max_triangles) {
   try {
+    if (text.size() > kMaxSceneFileBytes)
+      throw InputError(name + ": scene file too large (" + std::to_string(text.size()) +
+                       " bytes; the limit is " + std::to_string(kMaxSceneFileBytes) + ")");
+    int line = 1;
+    check_json_bytes(text.data(), text.size(), 0, line, name);
     return SceneReader(text, name, base_dir, max_triangles).run();
+  } catch (const Json::exception&) {
+    // Never the library's text: the reader checks every value's type first,
+    // so this is a reader bug, reported without a misleading detail.
+    throw InputError(name + ":1: could not read the scene (unexpected value)");
   } catch (const std::bad_alloc&) {
     throw InputError(name + ": out of memory while loading the scene");
   } catch (const std::length_error&) {
@@ -950,11 +944,21 @@ Scene load_scene_from_string(const std::string& text, const std::string& name,
 Scene load_scene(const std::string& path) {
   const std::string ext = lower(fs::path(path).extension().string());
   if (ext == ".obj") return load_obj(path);
-  if (ext != ".json" && is_imported_model(path)) return load_model(path);
-  const std::string text = read_input_file(path);
+  if (ext != ".json" && is_imported_model(path)) {
+    Scene scene = load_model(path);
+    scene.input_files.insert(scene.input_files.begin(), path);
+    return scene;
+  }
+  int line = 1;
+  const std::string text = read_input_file(
+      path, kMaxSceneFileBytes, [&](const char* data, std::size_t n, std::size_t offset) {
+        check_json_bytes(data, n, offset, line, path);
+      });
   std::string dir = fs::path(path).parent_path().string();
   if (dir.empty()) dir = ".";
-  return load_scene_from_string(text, path, dir);
+  Scene scene = load_scene_from_string(text, path, dir);
+  scene.input_files.insert(scene.input_files.begin(), path);
+  return scene;
 }
 
 }  // namespace opsila

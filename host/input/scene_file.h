@@ -11,6 +11,11 @@
 
 namespace opsila {
 
+// Largest JSON scene file (scenes/FORMAT.md "Limits"): scene files describe,
+// models and generators make the geometry. Reading one costs a small
+// multiple of its size.
+constexpr std::size_t kMaxSceneFileBytes = std::size_t(4) << 20;
+
 // ".obj" (any case) goes to load_obj; anything else is read as a JSON scene.
 Scene load_scene(const std::string& path);
 

@@ -99,6 +99,7 @@ int add_texture_file(Scene& scene, const std::string& path, const std::string& w
     return -1;
   }
   scene.textures.push_back(std::move(t));
+  scene.input_files.push_back(path);  // no output may overwrite it
   return static_cast<int>(scene.textures.size()) - 1;
 }
 

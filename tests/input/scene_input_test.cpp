@@ -438,8 +438,6 @@ TEST(SceneFormat, ErrorsNameFileLineAndKeyPath) {
       {"{\"objects\": [{\"type\": \"cone\"}]}", {"objects[0].type", "unknown object type 'cone'"}},
       {"{\"objects\": [{\"type\": \"box\", \"min\": [0,0,0], \"max\": [1,0,1]}]}",
        {"objects[0].max", "greater than min"}},
-      {"{\"objects\": [{\"type\": \"box\", \"center\": [0,0,0], \"size\": 1, \"material\": \"gold\"}]}",
-       {"objects[0].material", "unknown material 'gold'"}},
       {"{\"materials\": {\"m\": {\n\"Kd\": [1, 2]}},\n \"objects\": []}",
        {"s.json:2:", "materials.m.Kd", "[r, g, b]"}},
       {"{\"materials\": {\"m\": {\"Kd\": -0.5}}, \"objects\": []}", {"materials.m.Kd", "negative"}},
@@ -450,7 +448,7 @@ TEST(SceneFormat, ErrorsNameFileLineAndKeyPath) {
       {"{\"materials\": {\"m\": {\"illum\": 2.5}}, \"objects\": []}", {"materials.m.illum", "integer"}},
       {"{\"materials\": {\"m\": {\"Ni\": 0}}, \"objects\": []}", {"materials.m.Ni", "positive"}},
       {"{\"depth\": 0, \"objects\": []}", {"depth", "must be in 1..31"}},
-      {"{\"image\": {\"width\": 0, \"height\": 10}, \"objects\": []}", {"image.width", "1..32768"}},
+      {"{\"image\": {\"width\": 0, \"height\": 10}, \"objects\": []}", {"image.width", "1..16384"}},
       {"{\"image\": {\"width\": 10}, \"objects\": []}", {"image", "missing key 'height'"}},
       {"{\"camera\": {\"eye\": [0,0,0], \"look_at\": [0,0,0]}, \"objects\": "
        "[{\"type\": \"sphere\", \"center\": [0,0,0], \"radius\": 1}]}",
@@ -479,9 +477,6 @@ TEST(SceneFormat, ErrorsNameFileLineAndKeyPath) {
        {"s.json", "extent too large"}},
       {"{\"objects\": [{\"type\": \"sphere\", \"center\": [0,0,0], \"radius\": 1, \"subdivisions\": 11}]}",
        {"objects[0].subdivisions", "0..10"}},
-      {"{\"objects\": [{\"type\": \"grid\", \"counts\": 2, \"min\": [0,0,0], \"max\": [1,1,1], "
-       "\"materials\": [\"nope\"]}]}",
-       {"objects[0].materials[0]", "unknown material 'nope'"}},
       {"{\"objects\": [{\"type\": \"scatter\", \"count\": 5, \"min\": [0,0,0], \"max\": [1,1,1], "
        "\"weights\": [0]}]}",
        {"objects[0].weights", "zero"}},
@@ -499,7 +494,7 @@ TEST(SceneFormat, ByteOrderMarkKeepsLineNumbers) {
 
 TEST(SceneFormat, DeepNestingAndBinaryAreRefused) {
   expect_error([] { json(std::string(100000, '[')); }, {"s.json:1:", "nesting"});
-  expect_error([] { json(std::string("{\"objects\": \"a\0b\"}", 18)); }, {"s.json:1:", "syntax"});
+  expect_error([] { json(std::string("{\"objects\": \"a\0b\"}", 18)); }, {"s.json:1:", "NUL"});
 }
 
 TEST(SceneFormat, FileErrorsNameTheFile) {

@@ -1,0 +1,166 @@
+// Outputs are all or nothing and never land on an input: a failed write, an
+// output naming an input or another output, an interrupted render.
+#include <fcntl.h>
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <thread>
+
+#include "core/output_files.h"
+#include "core/scene.h"
+#include "test_util.h"
+
+namespace opsila {
+namespace {
+
+using test::RunResult;
+using test::TempDir;
+using test::run_opsila;
+
+const char* kScene = R"({"image": {"width": 64, "height": 48}, "lights": [{"position": [0, 5, 5]}],
+  "objects": [{"type": "sphere", "center": [0, 0, 0], "radius": 1}]})";
+
+using Names = std::vector<std::string>;
+
+TEST(Outputs, NoOutputMayNameTheSceneOrAFileItReads) {
+  TempDir dir;
+  const std::string mtl = dir.write("lib.json", "newmtl red\nKd 1 0 0\n");
+  const std::string obj = dir.write("model.json", "mtllib lib.json\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl red\nf 1 2 3\n");
+  const std::string scene = dir.write(
+      "scene.json", R"({"objects": [{"type": "obj", "file": "model.json"}], "image": {"size": [8, 8]}})");
+  ASSERT_EQ(::symlink("scene.json", dir.file("link.json").c_str()), 0);
+  const Names before = dir.entries();
+  for (const std::string& victim : {scene, obj, mtl, dir.file("link.json"), dir.path() + "/./scene.json"}) {
+    SCOPED_TRACE(victim);
+    const RunResult r =
+        run_opsila({"render", scene, "-o", dir.file("x.png"), "--stats", victim, "--reference"});
+    EXPECT_EQ(r.exit_code, 2) << r.err;
+    EXPECT_NE(r.err.find("--stats " + victim + ": is an input of this run"), std::string::npos) << r.err;
+    EXPECT_EQ(r.error_lines().size(), 1u);
+    EXPECT_EQ(dir.entries(), before);
+  }
+  EXPECT_EQ(test::read_file(scene).front(), '{');
+  EXPECT_EQ(test::read_file(obj).rfind("mtllib", 0), 0u);
+  EXPECT_EQ(test::read_file(mtl).rfind("newmtl", 0), 0u);
+  // The bench's outputs too.
+  const RunResult r = run_opsila({"bench", scene, "--json", dir.file("link.json"), "--quick"});
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("is an input of this run"), std::string::npos) << r.err;
+  EXPECT_EQ(dir.entries(), before);
+}
+
+TEST(Outputs, NoOutputMayNameAnotherOutput) {
+  TempDir dir;
+  const std::string scene = dir.write("s.json", kScene);
+  const std::string image = dir.write("x.png", "old");
+  ASSERT_EQ(::symlink("x.png", dir.file("alias.npy").c_str()), 0);
+  const RunResult r = run_opsila(
+      {"render", scene, "-o", image, "--item-buffer", dir.file("alias.npy"), "--reference"});
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("--item-buffer " + dir.file("alias.npy") + ": same file as -o"), std::string::npos)
+      << r.err;
+  EXPECT_EQ(test::read_file(image), "old");
+}
+
+// A file size limit makes the second output's write fail (EFBIG) as a full
+// disk would, while the first (a small PNG) fits.
+TEST(Outputs, AFailedWriteLeavesNoOutputAtAll) {
+  TempDir dir;
+  const std::string scene = dir.write("s.json", kScene);
+  const std::string old_stats = dir.write("o.json", "old stats");
+  const Names before = dir.entries();
+  struct rlimit saved;
+  ASSERT_EQ(::getrlimit(RLIMIT_FSIZE, &saved), 0);
+  struct rlimit small = saved;
+  small.rlim_cur = 20000;  // PNG of 64x48 < 20000 bytes < item buffer (24704 bytes)
+  void (*old_handler)(int) = ::signal(SIGXFSZ, SIG_IGN);
+  ASSERT_EQ(::setrlimit(RLIMIT_FSIZE, &small), 0);
+  const RunResult r = run_opsila({"render", scene, "-o", dir.file("o.png"), "--item-buffer",
+                                  dir.file("o.npy"), "--stats", old_stats, "--reference"});
+  ::setrlimit(RLIMIT_FSIZE, &saved);
+  ::signal(SIGXFSZ, old_handler);
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("o.npy: cannot write"), std::string::npos) << r.err;
+  EXPECT_EQ(r.error_lines().size(), 1u);
+  EXPECT_EQ(dir.entries(), before);  // no image, no temporary file
+  EXPECT_EQ(test::read_file(old_stats), "old stats");
+  // Without the limit, all three appear.
+  const RunResult ok = run_opsila({"render", scene, "-o", dir.file("o.png"), "--item-buffer",
+                                   dir.file("o.npy"), "--stats", old_stats, "--reference"});
+  EXPECT_EQ(ok.exit_code, 0) << ok.err;
+  EXPECT_EQ(dir.entries(), (Names{"o.json", "o.npy", "o.png", "s.json"}));
+}
+
+TEST(Outputs, BenchCreatesNothingBeforeItsInputIsRead) {
+  TempDir dir;
+  const RunResult r = run_opsila({"bench", dir.file("MISSING.json"), "--csv", dir.file("tables"),
+                                  "--json", dir.file("b.json"), "--quick"});
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_EQ(r.error_lines().size(), 1u) << r.err;
+  EXPECT_TRUE(dir.entries().empty()) << dir.entries().front();
+}
+
+// In a child process: two outputs, the first written, then a signal.
+TEST(Outputs, ASignalRemovesTemporaryFilesAndExitsWith128PlusIt) {
+  for (const int sig : {SIGINT, SIGTERM}) {
+    TempDir dir;
+    const pid_t pid = ::fork();
+    ASSERT_GE(pid, 0);
+    if (pid == 0) {
+      install_interrupt_cleanup();
+      OutputFiles outputs;
+      outputs.declare("-o", dir.file("a.pfm"));
+      outputs.declare("--stats", dir.file("b.json"));
+      outputs.write(dir.file("a.pfm"), "bytes");
+      if (TempDir::list(dir.path()).size() != 1) ::_exit(1);  // the temporary file is there
+      ::raise(sig);
+      ::_exit(2);
+    }
+    int status = 0;
+    ASSERT_EQ(::waitpid(pid, &status, 0), pid);
+    ASSERT_TRUE(WIFEXITED(status));
+    EXPECT_EQ(WEXITSTATUS(status), 128 + sig);
+    EXPECT_TRUE(dir.entries().empty()) << dir.entries().front();
+  }
+}
+
+// An endless render (two facing mirrors, depth 31: 2^31 rays a pixel is
+// beyond patience), interrupted once it has started rendering.
+TEST(Outputs, AnInterruptedRenderLeavesNothingAndExits130Or143) {
+  const char* slabs = R"({"image": {"size": [64, 48]}, "depth": 31,
+    "camera": {"eye": [0, 0, 0.5], "look_at": [0, 0, -1]},
+    "materials": {"glass": {"kr": 0.9, "kt": 0.9, "Ni": 1.5}},
+    "objects": [{"type": "box", "min": [-50, -50, -1.1], "max": [50, 50, -1], "material": "glass"},
+                {"type": "box", "min": [-50, -50, 1], "max": [50, 50, 1.1], "material": "glass"}]})";
+  for (const int sig : {SIGINT, SIGTERM}) {
+    TempDir dir;
+    const std::string scene = dir.write("slabs.json", slabs);
+    const std::string err = dir.file("stderr");
+    pid_t pid = ::fork();
+    ASSERT_GE(pid, 0);
+    if (pid == 0) {
+      const int fd = ::open(err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+      ::dup2(fd, 2);
+      ::execl(OPSILA_BINARY, OPSILA_BINARY, "render", scene.c_str(), "-o", dir.file("o.pfm").c_str(),
+              "--item-buffer", dir.file("o.npy").c_str(), "--reference", static_cast<char*>(nullptr));
+      ::_exit(127);
+    }
+    // Wait (without a deadline on the render itself) until it renders.
+    for (int i = 0; i < 6000 && test::read_file(err).find("device:") == std::string::npos; ++i)
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    ASSERT_NE(test::read_file(err).find("device:"), std::string::npos);
+    ::kill(pid, sig);
+    int status = 0;
+    ASSERT_EQ(::waitpid(pid, &status, 0), pid);
+    ASSERT_TRUE(WIFEXITED(status)) << "killed by signal " << WTERMSIG(status);
+    EXPECT_EQ(WEXITSTATUS(status), 128 + sig);
+    EXPECT_EQ(dir.entries(), (Names{"slabs.json", "stderr"}));
+  }
+}
+
+}  // namespace
+}  // namespace opsila

@@ -151,9 +151,9 @@ struct Tracer {
     stack[sp++] = {eye, camera_ray(px, py), {1.0f, 1.0f, 1.0f}, 0};
     ++rays.primary;
     auto add = [&](F3 v) {
-      sum[0] += to_fixed(v.x);
-      sum[1] += to_fixed(v.y);
-      sum[2] += to_fixed(v.z);
+      sum[0] = add_fixed_saturating(sum[0], to_fixed(v.x));  // >= 0, as add_fixed saturates
+      sum[1] = add_fixed_saturating(sum[1], to_fixed(v.y));
+      sum[2] = add_fixed_saturating(sum[2], to_fixed(v.z));
     };
     while (sp > 0) {
       const Pending r = stack[--sp];
@@ -289,7 +289,7 @@ BaselineImage render_embree(const Scene& s, int threads) {
 
   out.rgb.resize(npix * 3);
   for (std::size_t i = 0; i < npix * 3; ++i)
-    out.rgb[i] = from_fixed(sums[i], s.spp);
+    out.rgb[i] = from_fixed(static_cast<std::uint64_t>(sums[i]), s.spp);
   for (const RayCounts& c : counts) {
     out.rays.primary += c.primary;
     out.rays.secondary += c.secondary;

@@ -87,7 +87,8 @@ BaselineImage render_megakernel(const Scene& scene, ClRuntime& rt, int tile) {
 
   // Pixel sums -> floats exactly as the renderer converts its fixed point.
   out.rgb.resize(npix * 3);
-  for (std::size_t i = 0; i < npix * 3; ++i) out.rgb[i] = from_fixed(static_cast<std::int64_t>(accum[i]), scene.spp);
+  for (std::size_t i = 0; i < npix * 3; ++i)
+    out.rgb[i] = from_fixed(static_cast<std::uint64_t>(accum[i]), scene.spp);  // >= 0: add_sat
   out.rays.primary = npix * static_cast<std::size_t>(scene.spp);
   for (const cl_uint4& c : counts) {
     out.rays.secondary += c.s[0];

@@ -4,6 +4,7 @@
 // the decode every renderer shares.
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -22,15 +23,45 @@ inline std::int64_t to_fixed(float v) {
   return static_cast<std::int64_t>(std::nearbyint(s));
 }
 
+// The largest pixel sum: 2^63 - 1 in fixed point, 2^39 (about 5.5e11) as a
+// value. Every term of a pixel is >= 0, so sums only grow: the kernels'
+// add_fixed marks a sum that reached 2^63, the megakernel and the Embree
+// baseline stop at 2^63 - 1, and the reference stops at the same value
+// (saturate_sum). Such a sum decodes as the largest, never as a wrapped one.
+constexpr float kMaxPixelValue = static_cast<float>(std::uint64_t(1) << (63 - OPSILA_FIXED_SHIFT));
+
+inline bool saturated(std::uint64_t sum) {
+  return sum >= std::uint64_t(std::numeric_limits<std::int64_t>::max());
+}
+
 // A sum back to a linear value.
-inline float from_fixed(std::int64_t sum) { return static_cast<float>(static_cast<double>(sum) / OPSILA_FIXED_SCALE); }
+inline float from_fixed(std::uint64_t sum) {
+  if (saturated(sum)) return kMaxPixelValue;
+  return static_cast<float>(static_cast<double>(sum) / OPSILA_FIXED_SCALE);
+}
 
 // The mean of `samples` values whose fixed-point sum is `sum` (SPEC's N
 // samples per pixel): one division by samples x 2^24, so one sample decodes
 // exactly as from_fixed does, and N equal samples (a sum N*s, exact in double
-// up to 2^53) decode to exactly the one sample's value.
-inline float from_fixed(std::int64_t sum, int samples) {
-  return static_cast<float>(static_cast<double>(sum) / (static_cast<double>(OPSILA_FIXED_SCALE) * samples));
+// up to 2^53) decode to exactly the one sample's value. A saturated sum gives
+// kMaxPixelValue / samples.
+inline float from_fixed(std::uint64_t sum, int samples) {
+  const double s = saturated(sum) ? static_cast<double>(kMaxPixelValue) * OPSILA_FIXED_SCALE
+                                  : static_cast<double>(sum);
+  return static_cast<float>(s / (static_cast<double>(OPSILA_FIXED_SCALE) * samples));
+}
+
+// Adds a contribution (>= 0) to a host-side sum, saturating at 2^63 - 1.
+inline std::int64_t add_fixed_saturating(std::int64_t sum, std::int64_t q) {
+  return q > std::numeric_limits<std::int64_t>::max() - sum ? std::numeric_limits<std::int64_t>::max()
+                                                            : sum + q;
+}
+
+// A float renderer's (the reference's) sum as the fixed-point ones give it:
+// NaN terms (0 x infinity) were left out, and it stops at kMaxPixelValue,
+// infinity included.
+inline double saturate_sum(double v) {
+  return std::isnan(v) ? 0.0 : std::min(v, static_cast<double>(kMaxPixelValue));
 }
 
 // One 64-bit counter from the (low, high) 32-bit words the kernels add to.

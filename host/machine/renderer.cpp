@@ -435,7 +435,7 @@ void Renderer::Machine::read_image(Launcher& launch, RenderResult& result) {
   launch.check(q.finish(), "clFinish");
   result.rgb.resize(npix * 3);
   for (std::size_t i = 0; i < npix * 3; ++i)
-    result.rgb[i] = from_fixed(static_cast<std::int64_t>(fixed_pair(accum, i)), spp);
+    result.rgb[i] = from_fixed(fixed_pair(accum, i), spp);
 }
 
 // Per-level, per-PE counters and traffic, then the frame's totals. Every

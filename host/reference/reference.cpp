@@ -4,6 +4,7 @@
 #include "reference/reference.h"
 
 #include "core/progress.h"
+#include "core/fixed_point.h"
 #include "core/texture.h"
 #include "opsila_shared.h"
 
@@ -287,13 +288,20 @@ struct ReferenceTracer::Impl {
     return result;
   }
 
+  // As the kernels' fixed point: a NaN term (0 x infinity, from values near
+  // the float limit) adds nothing.
+  static void add_contribution(vec3& pixel, const vec3& c) {
+    for (int k = 0; k < 3; ++k)
+      if (!std::isnan(c[k])) pixel[k] += c[k];
+  }
+
   // Adds weight x (radiance of the ray tree rooted at this ray) to `pixel`.
   // Returns the triangle hit (for the item buffer), or -1.
   int trace(const vec3& origin, const vec3& d, float t_min, int level, const vec3& weight,
             vec3& pixel, RayCounts& counts) const {
     Hit hit;
     if (!nearest(origin, d, t_min, hit)) {
-      pixel += weight * to_glm(scene.background);
+      add_contribution(pixel, weight * to_glm(scene.background));
       return -1;
     }
     const Tri& tri = tris[hit.tri];
@@ -303,7 +311,7 @@ struct ReferenceTracer::Impl {
     const Triangle& source = scene.triangles[hit.tri];
     const vec3 n = shading_normal(source, hit, entering ? tri.normal : -tri.normal);
     const vec3 ka = mapped(source, hit, m.ka, m.map_ka), kd = mapped(source, hit, m.kd, m.map_kd);
-    pixel += weight * local_intensity(p, n, d, m, ka, kd, counts);
+    add_contribution(pixel, weight * local_intensity(p, n, d, m, ka, kd, counts));
 
     if (level + 1 >= scene.max_depth) return hit.tri;
     // SPEC "Materials": kr = Ks for illum 3..7, kt = Tf for illum 4, 6, 7.
@@ -393,6 +401,8 @@ Vec3 ReferenceTracer::render_pixel(int x, int y, std::int32_t* object_facet,
     object_facet[0] = centre_tri >= 0 ? impl_->tris[centre_tri].object_id : -1;
     object_facet[1] = centre_tri >= 0 ? impl_->tris[centre_tri].facet_id : -1;
   }
+  // Saturated as the fixed-point sums of the other renderers are.
+  for (int c = 0; c < 3; ++c) sum[c] = saturate_sum(sum[c]);
   const glm::dvec3 mean = sum / static_cast<double>(scene.spp);
   return Vec3{static_cast<float>(mean.x), static_cast<float>(mean.y), static_cast<float>(mean.z)};
 }

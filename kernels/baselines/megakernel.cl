@@ -69,7 +69,7 @@ __kernel void megakernel(FrameParams fp, __global const BankNode *nodes, __globa
       int hit = -1, facet = INT_MAX;
       traverse_nearest(&r, nodes, tris, root, tmin, &t, &hit, &facet, &tri_tests, &box_tests);
       if (hit < 0) {
-        sum += fixed3(weight * load3(fp.background));
+        sum = add_sat(sum, fixed3(weight * load3(fp.background)));
         continue;
       }
       __global const BankTriangle *tri = &tris[hit];
@@ -80,7 +80,7 @@ __kernel void megakernel(FrameParams fp, __global const BankNode *nodes, __globa
       SurfacePoint surf = surface_point(fp, tris, hit, m, SURFACE_ARGS, org, d, t);
       float3 p = surf.p;
 
-      sum += fixed3(weight * load3(fp.ambient) * surf.ka);
+      sum = add_sat(sum, fixed3(weight * load3(fp.ambient) * surf.ka));
 
       for (int l = 0; l < fp.num_lights; ++l) {
         float3 lv;
@@ -89,7 +89,8 @@ __kernel void megakernel(FrameParams fp, __global const BankNode *nodes, __globa
         if (all(contrib == (float3)(0.0f))) continue;
         ++shadow;
         RayPre sr = make_ray(p, lv);
-        if (!traverse_any(&sr, nodes, tris, root, eps, dist, &tri_tests, &box_tests)) sum += fixed3(contrib);
+        if (!traverse_any(&sr, nodes, tris, root, eps, dist, &tri_tests, &box_tests))
+          sum = add_sat(sum, fixed3(contrib)); /* >= 0: saturates as add_fixed does */
       }
 
       if (level + 1 >= fp.max_depth) continue;

@@ -3,13 +3,21 @@
 
 /* 64-bit fixed-point add from two 32-bit atomics: the carry out of the low
  * word goes to the high word. Integer sums are order-independent, so the
- * image is identical however the work-items are scheduled. */
+ * image is identical however the work-items are scheduled.
+ * Saturation: values are >= 0 and < 2^63 (every term of SPEC's pixel sum
+ * is >= 0, and fixed3 saturates), so a sum reaching 2^63 sets bit 31 of
+ * the high word; an add that carries out of the high word sets it again
+ * (atomic_or), and adds that do not carry out cannot clear it. So bit 31 is
+ * set at the end exactly when the true sum is >= 2^63, whatever the order:
+ * the host then reads the largest value (from_fixed), never a wrapped one. */
 inline void add_fixed(volatile __global uint *cell, long value) {
   uint lo = (uint)value;
   uint hi = (uint)(value >> 32);
   uint old = atomic_add(&cell[0], lo);
   if (old + lo < old) hi += 1u;
-  if (hi != 0u) atomic_add(&cell[1], hi);
+  if (hi == 0u) return;
+  uint old_hi = atomic_add(&cell[1], hi);
+  if (old_hi + hi < old_hi) atomic_or(&cell[1], 0x80000000u);
 }
 
 /* A contribution in fixed point: round to nearest even, saturating (the host

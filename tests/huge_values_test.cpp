@@ -1,0 +1,137 @@
+// Accepted values never give wrong pixels: sums beyond what 64-bit fixed
+// point holds saturate at kMaxPixelValue in every renderer (OpenCL, the
+// megakernel and Embree baselines, the reference), never wrap; no pixel is
+// negative, NaN or infinite.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "bench/bench.h"
+#include "core/fixed_point.h"
+#include "core/image_io.h"
+#include "input/scene_file.h"
+#include "machine/renderer.h"
+#include "reference/reference.h"
+#include "test_device.h"
+#include "test_util.h"
+
+namespace opsila {
+namespace {
+
+ClRuntime& runtime() { return test::shared_runtime(); }
+
+// Intensities and coefficients at the top of float: single terms overflow.
+const char* kHotScene = R"({"image": {"size": [32, 24]}, "depth": 3,
+  "camera": {"eye": [0, 0, 5], "look_at": [0, 0, 0]}, "ambient": 0,
+  "lights": [{"position": [0, 0, 5], "intensity": 1e38}],
+  "materials": {"hot": {"Kd": 3e38, "kr": [0.5, 0, 1]}},
+  "objects": [{"type": "sphere", "center": [0, 0, 0], "radius": 1, "material": "hot"},
+              {"type": "box", "min": [-5, -5, -3], "max": [5, 5, -2], "material": "hot"}]})";
+
+// Each term fits the fixed point, their sum does not: 64 lights of 2e10.
+std::string many_lights_scene() {
+  std::string lights;
+  for (int i = 0; i < 64; ++i)
+    lights += std::string(i ? "," : "") + "{\"position\": [" + std::to_string(i % 8 - 3.5) + ", " +
+              std::to_string(i / 8 - 3.5) + ", 6], \"intensity\": 2e10}";
+  return R"({"image": {"size": [32, 24]}, "depth": 1, "ambient": 0,
+    "camera": {"eye": [0, 0, 5], "look_at": [0, 0, 0]}, "lights": [)" +
+         lights + R"(], "objects": [{"type": "sphere", "center": [0, 0, 0], "radius": 1.5,
+    "material": {"Kd": 1}}]})";
+}
+
+Scene scene_of(const std::string& text) { return load_scene_from_string(text, "s.json", ""); }
+
+// Every value finite and >= 0; where the reference saturates, so does the
+// other renderer, and elsewhere they agree closely. Returns the saturated
+// channels (of the reference).
+int expect_agrees_with_reference(const std::vector<float>& rgb, const std::vector<float>& ref,
+                                 const char* who, float top = kMaxPixelValue) {
+  EXPECT_EQ(rgb.size(), ref.size());
+  int saturated = 0, mismatched = 0;
+  for (std::size_t i = 0; i < rgb.size() && i < ref.size(); ++i) {
+    EXPECT_TRUE(std::isfinite(rgb[i]) && rgb[i] >= 0) << who << " value " << rgb[i] << " at " << i;
+    EXPECT_TRUE(std::isfinite(ref[i]) && ref[i] >= 0) << "reference value " << ref[i] << " at " << i;
+    EXPECT_LE(rgb[i], top);
+    saturated += ref[i] == top;
+    // Sums within rounding of the limit may fall either way.
+    const bool near_limit = ref[i] > 0.999f * top || rgb[i] > 0.999f * top;
+    if (!near_limit && std::fabs(rgb[i] - ref[i]) > 1e-3f * std::max(1.0f, ref[i])) ++mismatched;
+    if (ref[i] == top && rgb[i] != top) ++mismatched;
+  }
+  EXPECT_LE(mismatched, int(rgb.size() / 100)) << who;  // edge pixels may differ
+  return saturated;
+}
+
+TEST(HugeValues, TermsBeyondFloatSaturateEverywhere) {
+  const Scene s = scene_of(kHotScene);
+  const ImageResult ref = render_reference(s);
+  const RenderResult cl = render(s, RenderSettings{}, runtime());
+  EXPECT_GT(expect_agrees_with_reference(cl.rgb, ref.rgb, "OpenCL"), 100);
+  expect_agrees_with_reference(render_megakernel(s, runtime()).rgb, ref.rgb, "megakernel");
+#ifdef OPSILA_HAVE_EMBREE
+  expect_agrees_with_reference(render_embree(s, 2).rgb, ref.rgb, "Embree");
+#endif
+  // The green channel has kr = 0 where the others reflect: no 0 x inf NaN.
+  EXPECT_NO_THROW(encode_pfm(cl.width, cl.height, cl.rgb));
+}
+
+TEST(HugeValues, SumsBeyondTheFixedPointSaturateNotWrap) {
+  const Scene s = scene_of(many_lights_scene());
+  const ImageResult ref = render_reference(s);
+  for (int pes : {1, 7}) {
+    RenderSettings settings;
+    settings.num_pes = pes;
+    const RenderResult cl = render(s, settings, runtime());
+    EXPECT_GT(expect_agrees_with_reference(cl.rgb, ref.rgb, "OpenCL"), 30) << pes << " PEs";
+  }
+  expect_agrees_with_reference(render_megakernel(s, runtime()).rgb, ref.rgb, "megakernel");
+#ifdef OPSILA_HAVE_EMBREE
+  expect_agrees_with_reference(render_embree(s, 2).rgb, ref.rgb, "Embree");
+#endif
+  // With 4 samples a pixel, the sum of the samples saturates, then is divided.
+  Scene four = s;
+  four.spp = 4;
+  const ImageResult ref4 = render_reference(four);
+  EXPECT_GT(expect_agrees_with_reference(render(four, RenderSettings{}, runtime()).rgb, ref4.rgb, "spp 4",
+                                         kMaxPixelValue / 4),
+            30);
+}
+
+TEST(HugeValues, DecodeSaturatesAtTheLargestSum) {
+  EXPECT_EQ(from_fixed(0), 0.0f);
+  EXPECT_EQ(from_fixed(std::uint64_t(3) << OPSILA_FIXED_SHIFT), 3.0f);
+  EXPECT_EQ(from_fixed(std::uint64_t(std::numeric_limits<std::int64_t>::max())), kMaxPixelValue);
+  EXPECT_EQ(from_fixed(std::uint64_t(1) << 63 | 12345), kMaxPixelValue);  // the kernels' mark
+  EXPECT_EQ(add_fixed_saturating(std::numeric_limits<std::int64_t>::max() - 1, 5),
+            std::numeric_limits<std::int64_t>::max());
+  EXPECT_EQ(from_fixed(std::uint64_t(1) << 63, 4), kMaxPixelValue / 4);  // the mean of 4 samples
+  EXPECT_EQ(saturate_sum(std::numeric_limits<double>::infinity()), double(kMaxPixelValue));
+  EXPECT_EQ(saturate_sum(std::nan("")), 0.0);
+}
+
+TEST(HugeValues, NoPfmHoldsANonFiniteValue) {
+  EXPECT_THROW(encode_pfm(1, 1, {0.0f, std::nanf(""), 0.0f}), std::logic_error);
+  EXPECT_THROW(encode_pfm(1, 1, {std::numeric_limits<float>::infinity(), 0.0f, 0.0f}), std::logic_error);
+  EXPECT_NO_THROW(encode_pfm(1, 1, {kMaxPixelValue, 0.0f, 1.0f}));
+}
+
+TEST(HugeValues, EndToEndThePfmIsFiniteAndSaturated) {
+  test::TempDir dir;
+  const std::string scene = dir.write("hot.json", kHotScene);
+  const test::RunResult r = test::run_opsila({"render", scene, "-o", dir.file("hot.pfm"), "-q"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const FloatImage image = read_pfm(dir.file("hot.pfm"));
+  int saturated = 0;
+  for (float v : image.rgb) {
+    EXPECT_TRUE(std::isfinite(v) && v >= 0) << v;
+    saturated += v == kMaxPixelValue;
+  }
+  EXPECT_GT(saturated, 100);
+}
+
+}  // namespace
+}  // namespace opsila

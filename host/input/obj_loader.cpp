@@ -394,6 +394,10 @@ std::string read_input_file(const std::string& path, std::size_t max_bytes,
 }
 
 std::string read_input_file(const std::string& path) {
+  return read_input_file(path, kMaxInputFileBytes, [](const char*, std::size_t, std::size_t) {});
+}
+
+std::string read_text_file(const std::string& path) {
   int line = 1;
   return read_input_file(path, kMaxInputFileBytes, [&](const char* data, std::size_t n, std::size_t at) {
     if (at == 0 && n >= 2 && ((data[0] == '\xff' && data[1] == '\xfe') || (data[0] == '\xfe' && data[1] == '\xff')))
@@ -654,7 +658,7 @@ class ObjParser {
                             quote(path) + "); faces using its materials get the default material");
         continue;
       }
-      const std::string text = read_input_file(path);
+      const std::string text = read_text_file(path);
       input_files_.push_back(path);
       for (MaterialDesc& m : parse_mtl(text, path, warnings_)) {
         if (lib_index_.count(m.name)) {
@@ -908,7 +912,7 @@ Scene parse_guarded(std::string_view text, const std::string& name, const std::s
 }  // namespace
 
 Scene load_obj(const std::string& path, std::size_t max_triangles) {
-  const std::string text = read_input_file(path);
+  const std::string text = read_text_file(path);
   std::string dir = fs::path(path).parent_path().string();
   if (dir.empty()) dir = ".";
   Scene scene = parse_guarded(text, path, dir, max_triangles);

@@ -30,9 +30,11 @@ using ChunkCheck = std::function<void(const char*, std::size_t, std::size_t)>;
 // oversized files give an InputError naming the path.
 std::string read_input_file(const std::string& path, std::size_t max_bytes,
                             const ChunkCheck& check);
-// A text file (OBJ, MTL) of at most kMaxInputFileBytes: a NUL byte is
-// refused as soon as it is read.
+// Any file (an image) of at most kMaxInputFileBytes.
 std::string read_input_file(const std::string& path);
+// A text file (OBJ, MTL) of at most kMaxInputFileBytes: a NUL byte (a binary
+// file) is refused as soon as it is read, not after gigabytes.
+std::string read_text_file(const std::string& path);
 
 // Loads an OBJ file; its mtllib files are looked up in the OBJ's folder.
 // Sets has_camera = has_lights = false; the camera frames the model. More

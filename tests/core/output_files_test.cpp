@@ -10,6 +10,7 @@
 #include <chrono>
 #include <thread>
 
+#include "core/image_io.h"
 #include "core/output_files.h"
 #include "core/scene.h"
 #include "test_util.h"
@@ -28,8 +29,12 @@ using Names = std::vector<std::string>;
 
 TEST(Outputs, NoOutputMayNameTheSceneOrAFileItReads) {
   TempDir dir;
-  const std::string mtl = dir.write("lib.json", "newmtl red\nKd 1 0 0\n");
-  const std::string obj = dir.write("model.json", "mtllib lib.json\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl red\nf 1 2 3\n");
+  const std::string mtl = dir.write("lib.json", "newmtl red\nKd 1 0 0\nmap_Kd tex.png\n");
+  const std::string obj = dir.write(
+      "model.json", "mtllib lib.json\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nusemtl red\n"
+                    "f 1/1 2/2 3/3\n");
+  const std::string texture = dir.file("tex.png");
+  write_png(texture, 2, 2, std::vector<float>(12, 0.5f));
   const std::string scene = dir.write(
       "scene.json", R"({"objects": [{"type": "obj", "file": "model.json"}], "image": {"size": [8, 8]}})");
   ASSERT_EQ(::symlink("scene.json", dir.file("link.json").c_str()), 0);
@@ -43,6 +48,10 @@ TEST(Outputs, NoOutputMayNameTheSceneOrAFileItReads) {
     EXPECT_EQ(r.error_lines().size(), 1u);
     EXPECT_EQ(dir.entries(), before);
   }
+  const RunResult tex = run_opsila({"render", scene, "-o", texture, "--reference"});
+  EXPECT_EQ(tex.exit_code, 2) << tex.err;
+  EXPECT_NE(tex.err.find("-o " + texture + ": is an input of this run"), std::string::npos) << tex.err;
+  EXPECT_EQ(dir.entries(), before);
   EXPECT_EQ(test::read_file(scene).front(), '{');
   EXPECT_EQ(test::read_file(obj).rfind("mtllib", 0), 0u);
   EXPECT_EQ(test::read_file(mtl).rfind("newmtl", 0), 0u);

@@ -25,7 +25,7 @@
 __kernel void item_buffer(FrameParams fp, __global const Cluster *clusters, __global const int4 *cluster_rects,
                           __global const BankNode *nodes, __global const BankTriangle *tris, int tile_w,
                           int tiles_x, int tile_begin, float ox, float oy, int mode, __global int2 *items,
-                          __global int *item_tri, __global float *item_t) {
+                          __global int *item_tri, __global float *item_t, __global int *item_facet) {
   __local int flags[ITEM_TILE_MAX];
   __local int list[ITEM_LIST_CAP];
   __local int listed;
@@ -37,8 +37,15 @@ __kernel void item_buffer(FrameParams fp, __global const Cluster *clusters, __gl
   bool inside = lid < tile_w * tile_w && x < fp.width && y < fp.height;
   RayPre r = make_ray(load3(fp.eye), primary_direction_at(fp, (float)min(x, fp.width - 1) + ox,
                                                           (float)min(y, fp.height - 1) + oy));
-  float best_t = OPSILA_INF;
-  int best_tri = -1, best_facet = INT_MAX;
+  int pixel = y * fp.width + x;
+  /* A group of PEs after the first (an MPI rank) continues the nearest-hit
+   * search from the state the groups before it left (with hits kept), cluster
+   * after cluster as one device would: with the tie rule, the answer depends
+   * on that order (host/machine/rank_exchange.h). */
+  bool continued = fp.group_begin > 0 && inside;
+  float best_t = continued ? item_t[pixel] : OPSILA_INF;
+  int best_facet = continued && item_tri[pixel] >= 0 ? item_facet[pixel] : INT_MAX;
+  int best_tri = -1; /* a facet of this group's banks (local index) that won */
   uint tri_tests = 0, box_tests = 0;
   if (lid == 0) listed = 0;
   barrier(CLK_LOCAL_MEM_FENCE);
@@ -72,12 +79,12 @@ __kernel void item_buffer(FrameParams fp, __global const Cluster *clusters, __gl
       barrier(CLK_LOCAL_MEM_FENCE);
     }
   }
-  if (!inside) return;
-  int pixel = y * fp.width + x;
+  if (!inside || (best_tri < 0 && continued)) return; /* nothing nearer here: the state stands */
   if (mode & OPSILA_ITEM_WRITE_ITEMS)
     items[pixel] = best_tri >= 0 ? (int2)(tris[best_tri].object_id, tris[best_tri].facet_id) : (int2)(-1, -1);
   if (mode & OPSILA_ITEM_WRITE_HITS) {
-    item_tri[pixel] = best_tri;
+    item_tri[pixel] = best_tri >= 0 ? fp.tri_base + best_tri : -1;
     item_t[pixel] = best_t;
+    item_facet[pixel] = best_facet;
   }
 }

@@ -238,11 +238,15 @@ typedef struct {
   float right[3];     /* r */
   float epsilon;      /* 1e-4 x scene diagonal */
   float up[3];        /* u */
-  float pad0;
+  /* This device's group of PEs [group_begin, group_end) (all P on one
+   * device; one contiguous group per MPI rank otherwise). Only its PEs have
+   * banks here, and its facets are stored from index 0: a global triangle
+   * index is tri_base + local index. */
+  opsila_i32 group_begin;
   float ambient[3];
-  float pad1;
+  opsila_i32 group_end;
   float background[3];
-  float pad2;
+  opsila_i32 tri_base;
   opsila_i32 width;
   opsila_i32 height;
   opsila_i32 max_depth;
@@ -279,6 +283,8 @@ static_assert(offsetof(BankAttributes, uv) == 48, "BankAttributes layout");
 static_assert(sizeof(BankTexture) == 16, "BankTexture layout");
 static_assert(sizeof(FrameParams) == 144, "FrameParams layout");
 static_assert(offsetof(FrameParams, has_attributes) == 128, "FrameParams layout");
+static_assert(offsetof(FrameParams, group_begin) == 60, "FrameParams layout");
+static_assert(offsetof(FrameParams, tri_base) == 92, "FrameParams layout");
 static_assert(offsetof(FrameParams, width) == 96, "FrameParams layout");
 static_assert(offsetof(FrameParams, spawn_slots) == 124, "FrameParams layout");
 static_assert(OPSILA_FIXED_SCALE == 16777216.0f, "24 fraction bits");

@@ -24,15 +24,18 @@ __kernel void build_primary(FrameParams fp, __global const PeInfo *pes, __global
     int pixel = pixel_begin + k;
     int slot = offset + k;
     int tri = item_tri[pixel];
-    if (tri < 0) {
-      accumulate(accum, pixel, load3(fp.background));
+    int owner = tri >= 0 ? owner_pe(pes, fp.num_pes, tri) : -1;
+    if (tri < 0 || owner < fp.group_begin || owner >= fp.group_end) {
+      /* A miss adds the background once over all groups of PEs; a hit is
+       * built by the device that holds its owner PE. */
+      if (tri < 0 && fp.group_begin == 0) accumulate(accum, pixel, load3(fp.background));
       desc_store(q, slot, make_descriptor((float3)(0.0f), 0.0f, (float3)(0.0f), 0.0f, (float3)(0.0f), pixel,
                                           OPSILA_META(OPSILA_KIND_NIL, 0), -1, -1));
     } else {
       int x = pixel % fp.width, y = pixel / fp.width;
       float3 d = primary_direction_at(fp, (float)x + ox, (float)y + oy);
       desc_store(q, slot, make_descriptor(load3(fp.eye), item_t[pixel], d, -1.0f, (float3)(1.0f), pixel,
-                                          OPSILA_META(OPSILA_KIND_RESOLVED, 0), tri, owner_pe(pes, fp.num_pes, tri)));
+                                          OPSILA_META(OPSILA_KIND_RESOLVED, 0), tri, owner));
       atomic_inc(&hits);
     }
   }

@@ -7,6 +7,11 @@
  * rank(i) < bank_count[d], otherwise it waits in the next pool (no ray is
  * lost). Only the records that exist are read: empty output places never are.
  *
+ * With several devices (MPI ranks), a device has banks only for its PEs
+ * [group_begin, group_end): what is bound for other PEs all waits in the
+ * next pool, contiguous per destination PE in PE order, which is what the
+ * rank exchange sends (host/machine/rank_exchange.cpp).
+ *
  * Blocks: the pool is cut into blocks of OPSILA_SCATTER_BLOCK entries, then
  * each SPMD work-group's outputs are one block (num_blocks in all).
  *   scatter_count: per block, per-PE counts and each entry's rank inside it;
@@ -85,7 +90,13 @@ __kernel void scatter_scan(int num_blocks, int num_pes, __global int *hist, __gl
  * and a round is full whenever enough descriptors wait. Each bank starts at
  * a multiple of the SPMD work-group size, so no work-group mixes banks.
  * counts = {waiting, placed, SPMD work-groups}. One work-group. */
-__kernel void scatter_plan(int num_pes, int slots, int cap, int group_size, __global const int *pe_total,
+/* Demand for bank slots on this device: none for PEs of another group. */
+inline int bank_demand(__global const int *pe_total, int q, int group_begin, int group_end) {
+  return q >= group_begin && q < group_end ? pe_total[q] : 0;
+}
+
+__kernel void scatter_plan(int num_pes, int group_begin, int group_end, int slots, int cap, int group_size,
+                           __global const int *pe_total,
                            __global int *bank_begin, __global int *bank_count, __global int *overflow_base,
                            __global int *group_pe, __global int *group_first, __global int *counts) {
   __local int partial[256];
@@ -97,7 +108,7 @@ __kernel void scatter_plan(int num_pes, int slots, int cap, int group_size, __gl
   while (lo < hi) {
     int mid = lo + (hi - lo + 1) / 2;
     long s = 0;
-    for (int q = lid; q < num_pes; q += lsz) s += min(min(pe_total[q], mid), cap);
+    for (int q = lid; q < num_pes; q += lsz) s += min(min(bank_demand(pe_total, q, group_begin, group_end), mid), cap);
     partial[lid] = (int)min(s, (long)slots + 1);
     barrier(CLK_LOCAL_MEM_FENCE);
     if (lid == 0) {
@@ -111,11 +122,12 @@ __kernel void scatter_plan(int num_pes, int slots, int cap, int group_size, __gl
   }
   if (lid == 0) {
     int used = 0;
-    for (int q = 0; q < num_pes; ++q) used += min(min(pe_total[q], lo), cap);
+    for (int q = 0; q < num_pes; ++q) used += min(min(bank_demand(pe_total, q, group_begin, group_end), lo), cap);
     int spare = slots - used, waiting = 0, placed = 0, begin = 0, groups = 0;
     for (int q = 0; q < num_pes; ++q) {
-      int c = min(min(pe_total[q], lo), cap);
-      if (spare > 0 && c < pe_total[q] && c < cap) {
+      int demand = bank_demand(pe_total, q, group_begin, group_end);
+      int c = min(min(demand, lo), cap);
+      if (spare > 0 && c < demand && c < cap) {
         ++c;
         --spare;
       }

@@ -150,16 +150,20 @@ inline void process(FrameParams fp, int pe, const Routing *rt, __global const Ba
   int hit = DESC_HIT(ds);
   if (kind == OPSILA_KIND_TRACE) {
     ++st->v[OPSILA_STAT_RADIANCE];
-    int best_facet = hit >= 0 ? tris[hit].facet_id : INT_MAX;
+    int best_facet = hit >= 0 ? as_int(DESC_BEST_FACET(ds)) : INT_MAX;
+    int found = -1; /* local index of a facet of this bank that won */
     if (!bank_empty)
-      traverse_nearest(&r, nodes, tris, root, eps, &t_best, &hit, &best_facet, &st->v[OPSILA_STAT_TRI_TESTS],
+      traverse_nearest(&r, nodes, tris, root, eps, &t_best, &found, &best_facet, &st->v[OPSILA_STAT_TRI_TESTS],
                        &st->v[OPSILA_STAT_BOX_TESTS]);
+    if (found >= 0) hit = fp.tri_base + found;
     float entry;
     int dest = next_destination(rt, &r, eps, tie_limit(t_best), DESC_CURSOR_ENTRY(ds), pe, &entry,
                                 &st->v[OPSILA_STAT_SPHERE_TESTS], &st->v[OPSILA_STAT_ROUTE_TESTS]);
     if (dest >= 0) { /* a nearer hit (or a tie with a lower facet id) may wait in another bank */
       ++st->v[OPSILA_STAT_FORWARD];
-      emit(out, make_descriptor(org, t_best, d, entry, w, pixel, DESC_META(ds), hit, dest));
+      Descriptor sent = make_descriptor(org, t_best, d, entry, w, pixel, DESC_META(ds), hit, dest);
+      DESC_BEST_FACET(sent) = as_float(best_facet);
+      emit(out, sent);
       return;
     }
     if (hit < 0) {
@@ -175,7 +179,7 @@ inline void process(FrameParams fp, int pe, const Routing *rt, __global const Ba
     }
   }
   ++st->v[OPSILA_STAT_RESOLVED];
-  shade(fp, rt, tris, materials, lights, SURFACE_ARGS, org, d, t_best, hit, w, pixel, level, out, accum, st);
+  shade(fp, rt, tris, materials, lights, SURFACE_ARGS, org, d, t_best, hit - fp.tri_base, w, pixel, level, out, accum, st);
 }
 
 __kernel void spmd_phase(FrameParams fp, __global const PeInfo *pes, __global const Cluster *clusters,

@@ -15,6 +15,7 @@
 #include "core/camera.h"
 #include "core/util.h"
 #include "input/scene_file.h"
+#include "machine/ranks.h"
 #include "opsila_shared.h"
 
 namespace opsila {
@@ -308,7 +309,7 @@ void apply_view_options(Scene& scene, const ViewOptions& o) {
 
 DeviceEntry choose_device_flag(const std::string& spec) {
   try {
-    return choose_device(spec);
+    return choose_rank_device(spec, Ranks::world().local_rank());
   } catch (const InputError& e) {
     const std::string message = e.what();
     if (spec.empty() || message.rfind("--device", 0) == 0) throw;

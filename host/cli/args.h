@@ -93,8 +93,9 @@ void check_view_flags(const ViewOptions& o);
 // then checks the final camera, size and depth. Throws InputError.
 void apply_view_options(Scene& scene, const ViewOptions& options);
 
-// The device --device names (the default when empty); a problem with the
-// name becomes "--device SPEC: problem".
+// The device --device names (the default when empty: under mpirun, the
+// ranks of a machine take its GPUs in turn); a problem with the name
+// becomes "--device SPEC: problem".
 DeviceEntry choose_device_flag(const std::string& spec);
 
 // Checks that PATH is a readable regular file before any work is done.

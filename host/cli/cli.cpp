@@ -22,6 +22,8 @@
 #include "core/util.h"
 #include "opsila_shared.h"
 #include "reference/reference.h"
+#include "machine/pe_group.h"
+#include "machine/ranks.h"
 #include "machine/renderer.h"
 #include "input/scene_file.h"
 #include "machine/stats.h"
@@ -157,15 +159,23 @@ int run_render(const std::vector<std::string>& args) {
     std::fputs(render_usage().c_str(), stdout);
     return kExitOk;
   }
+  // Under mpirun every rank renders its group of PEs; rank 0 alone writes.
+  Ranks& ranks = Ranks::world();
+  ranks.start();
+  const bool writer = ranks.rank() == 0;
   // Everything that can be checked without rendering is checked first;
   // nothing is created until every output is ready.
   install_interrupt_cleanup();
   OutputFiles outputs;
-  outputs.declare("-o", o.output_path);
-  if (!o.item_buffer_path.empty()) outputs.declare("--item-buffer", o.item_buffer_path);
-  if (!o.stats_path.empty()) outputs.declare("--stats", o.stats_path);
+  if (writer) {
+    outputs.declare("-o", o.output_path);
+    if (!o.item_buffer_path.empty()) outputs.declare("--item-buffer", o.item_buffer_path);
+    if (!o.stats_path.empty()) outputs.declare("--stats", o.stats_path);
+  }
   check_scene_file(o.scene_path);
   outputs.refuse_inputs({o.scene_path});
+  if (o.reference && ranks.size() > 1)
+    throw InputError("--reference is the sequential host renderer: run it as one process, without mpirun");
 
   std::optional<ClRuntime> runtime;
   if (!o.reference) {
@@ -174,7 +184,7 @@ int run_render(const std::vector<std::string>& args) {
     print_line("warning", "--device is ignored with --reference");
   }
 
-  Scene scene = load_scene_or_explain(o.scene_path, o.quiet);
+  Scene scene = load_scene_or_explain(o.scene_path, o.quiet || !writer);
   outputs.refuse_inputs(scene.input_files);
   apply_view_options(scene, o);
 
@@ -184,9 +194,9 @@ int run_render(const std::vector<std::string>& args) {
   settings.work_groups_per_pe = o.work_groups_per_pe;
   if (o.routing) settings.routing = *o.routing;
 
-  if (!o.quiet)
+  if (!o.quiet && writer)
     if (const std::string note = large_work_note(scene); !note.empty()) print_line("note", note);
-  Progress progress("render", !o.quiet);
+  Progress progress("render", !o.quiet && writer);
   settings.progress = &progress;
 
   RenderResult result;
@@ -208,10 +218,22 @@ int run_render(const std::vector<std::string>& args) {
     settings.num_pes = 1;
   } else {
     device = runtime->description();
-    if (!o.quiet) print_line("device", device);
+    if (ranks.size() > 1) {
+      const PeGroup g = pe_group(settings.num_pes, ranks.size(), ranks.rank());
+      const std::string where = "rank " + std::to_string(g.rank) + " of " + std::to_string(g.ranks) + " (" +
+                                ranks.host() + "), PEs " + std::to_string(g.begin) + ".." + std::to_string(g.end - 1);
+      if (!o.quiet) print_line("device", where + ": " + device);
+      if (writer) device = std::to_string(ranks.size()) + " MPI ranks; rank 0: " + device;
+    } else if (!o.quiet) {
+      print_line("device", device);
+    }
     result = render(scene, settings, *runtime);
   }
   progress.finish();
+  if (!writer) {
+    ranks.checkpoint();  // rank 0 writes the outputs; a failure there ends every rank alike
+    return kExitOk;
+  }
 
   outputs.write(o.output_path, extension_of(o.output_path) == ".png"
                                    ? encode_png(result.width, result.height, result.rgb)
@@ -232,6 +254,7 @@ int run_render(const std::vector<std::string>& args) {
                   s.render_seconds);
     std::fprintf(stderr, "opsila: wrote %s\n", line);
   }
+  ranks.checkpoint();
   return kExitOk;
 }
 
@@ -303,6 +326,35 @@ int run_cli(const std::vector<std::string>& args) {
 
 int report_exception(std::exception_ptr error) {
   std::string message;
+  const int code = describe_exception(error, message);
+  // One error line; a multi-line message (a kernel build log) follows it indented.
+  std::istringstream lines(message);
+  std::string line;
+  std::getline(lines, line);
+  print_line("error", Ranks::world().label() + (line.empty() ? "unknown failure" : line));
+  while (std::getline(lines, line)) std::fprintf(stderr, "    %s\n", line.c_str());
+  std::fflush(stderr);
+  return code;
+}
+
+int report_rank_failure(std::exception_ptr error) {
+  Ranks& ranks = Ranks::world();
+  try {
+    std::rethrow_exception(error);
+  } catch (const OtherRankFailed& e) {
+    return e.code;  // that rank printed the message
+  } catch (...) {
+  }
+  if (ranks.size() == 1) return report_exception(error);
+  // The others may wait for this rank in a collective: end them all.
+  if (ranks.in_collective()) ranks.abort(report_exception(error));
+  std::string message;
+  int code = describe_exception(error, message);
+  if (ranks.agree(code) == ranks.rank()) report_exception(error);
+  return code;
+}
+
+int describe_exception(std::exception_ptr error, std::string& message) {
   int code = kExitFailure;
   try {
     std::rethrow_exception(error);
@@ -326,12 +378,6 @@ int report_exception(std::exception_ptr error) {
   } catch (...) {
     message = "unknown failure";
   }
-  // One error line; a multi-line message (a kernel build log) follows it indented.
-  std::istringstream lines(message);
-  std::string line;
-  std::getline(lines, line);
-  print_line("error", line.empty() ? "unknown failure" : line);
-  while (std::getline(lines, line)) std::fprintf(stderr, "    %s\n", line.c_str());
   return code;
 }
 

@@ -17,6 +17,6 @@ int main(int argc, char** argv) {
     }
     return opsila::run_cli(args);
   } catch (...) {
-    return opsila::report_exception(std::current_exception());
+    return opsila::report_rank_failure(std::current_exception());
   }
 }

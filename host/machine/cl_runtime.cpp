@@ -174,6 +174,15 @@ DeviceEntry choose_device(const std::string& spec) {
   throw InputError("--device " + spec + ": no OpenCL device matches '" + spec + "' (see 'opsila devices')");
 }
 
+DeviceEntry choose_rank_device(const std::string& spec, int local_rank) {
+  if (!spec.empty() || local_rank == 0) return choose_device(spec);
+  std::vector<DeviceEntry> gpus;
+  for (auto& e : list_devices())
+    if (e.is_gpu) gpus.push_back(e);
+  if (gpus.empty()) return choose_device("");
+  return gpus[static_cast<std::size_t>(local_rank) % gpus.size()];
+}
+
 namespace {
 
 // "OpenCL 1.2 ..." / "OpenCL C 1.2 ...": major * 10 + minor, or -1.

@@ -30,6 +30,10 @@ std::vector<DeviceEntry> list_devices();  // throws ClError when there is no pla
 // index ("2"), "platform:device" ("0:1") or a case-insensitive substring of
 // platform/device/vendor name ("pocl", "nvidia"). Throws InputError if none.
 DeviceEntry choose_device(const std::string& spec);
+// For one of several MPI ranks: a given spec applies as above; without one,
+// the ranks on a machine take its GPUs in turn (local rank modulo the GPU
+// count), or else its first CPU device.
+DeviceEntry choose_rank_device(const std::string& spec, int local_rank);
 
 // What opsila needs from a device, as the device reports it.
 struct DeviceCapabilities {

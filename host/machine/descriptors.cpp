@@ -181,7 +181,9 @@ void ScatterPass::plan(Launcher& launch, const Args& a, int round) {
   set_args(scan_, "clSetKernelArg(scatter_scan)", nblocks, P, hist_, pe_total);
   launch.run(scan_, "scatter_scan", std::size_t(P) * wg_scan_, wg_scan_, round);
   const int cap = a.cap > 0 ? a.cap : a.slots;
-  set_args(plan_, "clSetKernelArg(scatter_plan)", P, a.slots, cap, a.group_size, pe_total, bank_begin, bank_count,
+  const int group_end = a.group_end < 0 ? P : a.group_end;
+  set_args(plan_, "clSetKernelArg(scatter_plan)", P, a.group_begin, group_end, a.slots, cap, a.group_size, pe_total,
+           bank_begin, bank_count,
            overflow_base, group_pe, group_first, counts);
   launch.run(plan_, "scatter_plan", wg_plan_, wg_plan_, round);
 }

@@ -112,6 +112,10 @@ class ScatterPass {
     int slots = 1, cap = 0;
     const DescriptorSet* banks = nullptr;
     const DescriptorSet* next_pool = nullptr;  // what finds no bank slot
+    // This device's PEs [group_begin, group_end) (-1: all): only they get
+    // bank slots here; what is bound elsewhere waits in next_pool, per PE in
+    // PE order, for the rank exchange.
+    int group_begin = 0, group_end = -1;
   };
   // The move by entry (GPUs) or by block (CPUs) is chosen from the device;
   // tests run both on any device.

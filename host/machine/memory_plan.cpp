@@ -28,8 +28,8 @@ DevicePlan plan_device_memory(const BankedScene& bs, std::size_t npix, int P, co
                bs.materials.size() * sizeof(Material) + std::max<std::size_t>(1, bs.lights.size()) * sizeof(Light) +
                bs.attributes.size() * sizeof(BankAttributes) + bs.textures.size() * sizeof(BankTexture) +
                bs.texels.size() * sizeof(std::uint32_t);
-  // Item buffer (pair, triangle, distance) and 64-bit fixed-point RGB sums.
-  plan.image = u64(npix) * (sizeof(cl_int2) + sizeof(cl_int) + sizeof(cl_float) + OPSILA_ACCUM_WORDS * sizeof(cl_uint));
+  // Item buffer (pair, triangle, distance, facet) and 64-bit fixed-point RGB sums.
+  plan.image = u64(npix) * (sizeof(cl_int2) + 2 * sizeof(cl_int) + sizeof(cl_float) + OPSILA_ACCUM_WORDS * sizeof(cl_uint));
   // Banks (slots, each bank padded to a work-group), SPMD outputs, two pools.
   plan.descriptors = (u64(f.slots) + u64(P) * f.group_size + f.outputs + 2 * u64(f.pool)) * DescriptorSet::kBytes;
   // Stats, traffic, output counts, work-group table, and the exchange's

@@ -16,7 +16,8 @@ struct DevicePlan {
   std::uint64_t total() const { return scene + image + descriptors + other; }
 };
 
-// The descriptors of one frame: F = P * n bank slots in flight, G SPMD
+// The descriptors of one frame: F = P * n bank slots in flight (P: the PEs
+// with banks on this device, a group of them with several MPI ranks), G SPMD
 // work-groups at most, each work-item with S output places, and two pools.
 struct FlightPlan {
   std::size_t slots = 0, group_size = 1, groups = 0, outputs = 0, inject = 0, pool = 0;

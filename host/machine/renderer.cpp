@@ -17,6 +17,9 @@
 #include "core/util.h"
 #include "machine/descriptors.h"
 #include "machine/memory_plan.h"
+#include "machine/pe_group.h"
+#include "machine/rank_exchange.h"
+#include "machine/stats.h"
 #include "opsila_shared.h"
 #include "machine/partition.h"
 #include "core/progress.h"
@@ -104,6 +107,13 @@ void check_kernel_limits(const Scene& scene) {
 // Everything the machine keeps between frames, and the stages of a frame.
 struct Renderer::Machine {
   ClRuntime& rt;
+  // P PEs in all; with several MPI ranks this device holds the G PEs of its
+  // group (pe_group.h) and only their banks.
+  Ranks& ranks = Ranks::world();
+  PeGroup group;
+  int G = 0;
+  DevicePlan plan;
+  std::unique_ptr<RankExchange> rank_exchange;  // several ranks only
   int P = 0, n = 0, S = 0, depth = 0, width = 0, height = 0, traffic_levels = 0, cap = 0;
   int routing = OPSILA_ROUTING_BOXES;
   std::size_t npix = 0, nstats = 0, ntraffic = 0;
@@ -120,7 +130,7 @@ struct Renderer::Machine {
   std::unique_ptr<ScatterPass> scatter;
   cl::Buffer b_tris, b_nodes, b_clusters, b_route, b_pes, b_mats, b_lights, b_rects;
   SurfaceBuffers surface;  // vertex attributes and texture copies of the banks
-  cl::Buffer b_items, b_item_tri, b_item_t, b_accum, b_stats, b_traffic, b_out_count, b_hits;
+  cl::Buffer b_items, b_item_tri, b_item_t, b_item_facet, b_accum, b_stats, b_traffic, b_out_count, b_hits;
   DescriptorSet banks, outputs, pool, next_pool;
 
   // Where a frame stands between rounds.
@@ -130,6 +140,7 @@ struct Renderer::Machine {
     std::size_t pool_len = 0;    // descriptors waiting in `pool`
     int out_groups = 0;          // SPMD work-groups whose outputs the next exchange reads
     int groups = 0;              // SPMD work-groups of this round (from the exchange's plan)
+    std::size_t pool_len_max = 0;  // several ranks: the longest pool of any rank (they inject alike)
   };
 
   Machine(const Scene& scene, const RenderSettings& settings, ClRuntime& runtime);
@@ -147,6 +158,8 @@ struct Renderer::Machine {
   void report_progress(const Frame& f);
   void read_image(Launcher& launch, RenderResult& result);
   void read_stats(RenderResult& result);
+  bool end_rank_round(Launcher& launch, Frame& f);
+  RankReport rank_report(const RenderStats& st, double seconds, double mpi_seconds) const;
 };
 
 Renderer::Machine::Machine(const Scene& scene, const RenderSettings& settings, ClRuntime& runtime) : rt(runtime) {
@@ -173,11 +186,19 @@ Renderer::Machine::Machine(const Scene& scene, const RenderSettings& settings, C
   choose_work_groups();
   cap = settings.work_groups_per_pe > 0 ? settings.work_groups_per_pe * static_cast<int>(spmd_wg) : 0;
 
+  // Every rank partitions identically, then keeps only its own banks.
+  group = pe_group(P, ranks.size(), ranks.rank());
+  G = group.size();
   BankedScene bs = partition_scene(scene, P, routing == OPSILA_ROUTING_SPHERES);
+  const int tri_base = keep_group_banks(bs, group);
   S = OPSILA_SPAWN_SLOTS(static_cast<int>(bs.lights.size()));
   n = choose_bank_capacity(bs, settings);
-  flight = FlightPlan(P, n, spmd_wg, S);
+  flight = FlightPlan(G, n, spmd_wg, S);
+  plan = plan_device_memory(bs, npix, P, flight, depth);
   fp = frame_params(scene, bs, n);
+  fp.group_begin = group.begin;
+  fp.group_end = group.end;
+  fp.tri_base = tri_base;
   traffic_levels = P <= OPSILA_TRAFFIC_MAX_PES ? depth : 0;
 
   prepared.num_pes = P;
@@ -191,6 +212,7 @@ Renderer::Machine::Machine(const Scene& scene, const RenderSettings& settings, C
   prepared.texture_replicated_bytes = bs.texture_replicated_bytes;
   upload_scene(scene, bs);
   allocate_frame_buffers();
+  if (!group.all()) rank_exchange = std::make_unique<RankExchange>(rt, ranks, group, P);
 }
 
 // n, the paper's bank size: P * n descriptors in flight fill the device
@@ -204,12 +226,12 @@ int Renderer::Machine::choose_bank_capacity(const BankedScene& bs, const RenderS
   if (bank <= 0) {
     std::size_t target = rt.device().is_gpu ? (1u << 18) : (1u << 16);
     target = std::min<std::size_t>(target, std::max<std::size_t>(npix, 1024));
-    bank = static_cast<int>(std::max<std::size_t>(1, target / P));
+    bank = static_cast<int>(std::max<std::size_t>(1, target / G));
   }
-  if (std::size_t(P) * bank * S > (1u << 30))
+  if (std::size_t(G) * bank * S > (1u << 30))
     throw InputError("--bank-capacity " + std::to_string(bank) + " is too large for " + std::to_string(P) +
                      " PEs and " + std::to_string(S - 2) + " lights");
-  auto plan = [&](int b) { return plan_device_memory(bs, npix, P, FlightPlan(P, b, spmd_wg, S), depth); };
+  auto plan = [&](int b) { return plan_device_memory(bs, npix, P, FlightPlan(G, b, spmd_wg, S), depth); };
   if (settings.bank_capacity <= 0)
     while (bank > 1 && plan(bank).total() > rt.global_mem()) bank /= 2;
   if (const DevicePlan need = plan(bank); need.total() > rt.global_mem())
@@ -217,7 +239,8 @@ int Renderer::Machine::choose_bank_capacity(const BankedScene& bs, const RenderS
                   ", descriptors " + format_size(need.descriptors) + ", scene " + format_size(need.scene) + ", other " +
                   format_size(need.other) + "), more than the device's global memory (" + format_size(rt.global_mem()) +
                   (rt.memory_limit() ? ", as lowered by OPSILA_DEVICE_MEMORY_LIMIT" : ", CL_DEVICE_GLOBAL_MEM_SIZE") +
-                  "): use a smaller --size, fewer --pes or a smaller --bank-capacity");
+                  "): use a smaller --size, fewer --pes, a smaller --bank-capacity" +
+                  (ranks.built_with_mpi() ? " or more MPI ranks (mpirun -np R)" : ""));
   return bank;
 }
 
@@ -254,7 +277,10 @@ void Renderer::Machine::upload_scene(const Scene& scene, const BankedScene& bs) 
   if (lights.empty()) lights.push_back(Light{});
   b_lights = upload(rt, lights, "lights");
   surface = upload_surface(rt, bs);
-  b_rects = upload(rt, cluster_rects(scene, bs), "projected cluster boxes");
+  std::vector<cl_int4> rects = cluster_rects(scene, bs);
+  for (std::size_t c = 0; c < rects.size(); ++c)  // another rank's cluster: never listed here
+    if (bs.clusters[c].root < 0) rects[c] = cl_int4{{1 << 30, 1 << 30, -(1 << 30), -(1 << 30)}};
+  b_rects = upload(rt, rects, "projected cluster boxes");
 }
 
 // Item buffer, pixel sums, statistics and descriptor vectors: banks (the
@@ -264,6 +290,7 @@ void Renderer::Machine::allocate_frame_buffers() {
   b_items = device_buffer(rt, npix * sizeof(cl_int2), "item buffer");
   b_item_tri = device_buffer(rt, npix * sizeof(cl_int), "item buffer hits");
   b_item_t = device_buffer(rt, npix * sizeof(cl_float), "item buffer distances");
+  b_item_facet = device_buffer(rt, npix * sizeof(cl_int), "item buffer facets");
   b_accum = device_buffer(rt, npix * OPSILA_ACCUM_WORDS * sizeof(cl_uint), "pixel sums");
   nstats = std::size_t(OPSILA_MAX_DEPTH) * P * OPSILA_STAT_COUNT * 2;
   b_stats = device_buffer(rt, nstats * sizeof(cl_uint), "stats");
@@ -279,6 +306,7 @@ void Renderer::Machine::allocate_frame_buffers() {
 
 // Every frame starts from zero pixel sums, statistics and traffic.
 void Renderer::Machine::clear_frame() {
+  if (rank_exchange) rank_exchange->reset();
   zero_buffer(rt, b_accum, npix * OPSILA_ACCUM_WORDS * sizeof(cl_uint), "pixel sums");
   zero_buffer(rt, b_stats, nstats * sizeof(cl_uint), "stats");
   zero_buffer(rt, b_traffic, ntraffic * sizeof(cl_uint), "traffic");
@@ -292,18 +320,26 @@ void Renderer::Machine::clear_frame() {
 // One pass per sample (0 .. N-1, i rightwards, j downwards) keeps the
 // nearest hits for that sample's primary descriptors; the (object, facet)
 // output is the centre ray's: the centre sample's pass writes it for odd k,
-// a pass of its own (sample -1, no hits kept) for even k.
+// a pass of its own (sample -1, no hits kept) for even k. With several
+// ranks, each launch covers whole rows of tiles, which the ranks relay in
+// turn (rank_exchange.h), and every pass keeps its hits (the relayed state).
 void Renderer::Machine::item_buffer(Launcher& launch, int sample) {
   const bool centre_only = sample < 0;
   const int i = centre_only ? 0 : sample % spp_k, j = centre_only ? 0 : sample / spp_k;
   const bool centre = centre_only || (2 * i + 1 == spp_k && 2 * j + 1 == spp_k);
-  const int mode = (centre ? OPSILA_ITEM_WRITE_ITEMS : 0) | (centre_only ? 0 : OPSILA_ITEM_WRITE_HITS);
+  const int mode = (centre ? OPSILA_ITEM_WRITE_ITEMS : 0) |
+                   (centre_only && group.all() ? 0 : OPSILA_ITEM_WRITE_HITS);
   const float ox = centre_only ? 0.5f : offsets[std::size_t(i)], oy = centre_only ? 0.5f : offsets[std::size_t(j)];
   const int tiles_x = (width + tile_w - 1) / tile_w, tiles_y = (height + tile_w - 1) / tile_w;
   const int tiles = tiles_x * tiles_y;
-  const int per_launch = std::max(1, item_launch_pixels / (tile_w * tile_w));
+  int per_launch = std::max(1, item_launch_pixels / (tile_w * tile_w));
+  if (!group.all()) per_launch = std::max(1, per_launch / tiles_x) * tiles_x;
+  const ItemBuffers relay{&b_items, &b_item_tri, &b_item_t, &b_item_facet, centre};
   for (int begin = 0; begin < tiles; begin += per_launch) {
     const int count = std::min(per_launch, tiles - begin);
+    const std::size_t px0 = std::size_t(begin / tiles_x) * tile_w * width;
+    const std::size_t px1 = std::min(npix, std::size_t((begin + count) / tiles_x) * tile_w * width);
+    if (!group.all()) relay_receive(ranks, rt, relay, px0, px1 - px0);
     int a = 0;
     k_item.setArg(a++, fp);
     k_item.setArg(a++, b_clusters);
@@ -319,8 +355,11 @@ void Renderer::Machine::item_buffer(Launcher& launch, int sample) {
     k_item.setArg(a++, b_items);
     k_item.setArg(a++, b_item_tri);
     k_item.setArg(a++, b_item_t);
+    k_item.setArg(a++, b_item_facet);
     launch.run(k_item, "item_buffer", std::size_t(count) * tile_w * tile_w, std::size_t(tile_w) * tile_w, -1);
+    if (!group.all()) relay_send(ranks, rt, relay, px0, px1 - px0);
   }
+  if (!group.all()) relay_share(ranks, rt, relay, npix);
 }
 
 // Primary descriptors (SIMD), built from the item buffer into the waiting
@@ -329,13 +368,22 @@ void Renderer::Machine::item_buffer(Launcher& launch, int sample) {
 // in-order queue runs it after the builds that read the previous one), so
 // the descriptors in flight stay bounded by the injection whatever N is.
 void Renderer::Machine::primary_descriptors(Launcher& launch, Frame& f, int round) {
-  if (f.pool_len >= flight.inject) return;
+  // Several ranks decide alike (on the longest pool of any): each builds the
+  // descriptors of its own PEs from the same pixels, and the item buffer
+  // passes, relayed between ranks, start on every rank in the same round.
+  if ((group.all() ? f.pool_len : f.pool_len_max) >= flight.inject) return;
   if (f.next_pixel >= npix && f.sample + 1 < spp) {
     item_buffer(launch, ++f.sample);
     f.next_pixel = 0;
   }
   if (f.next_pixel >= npix) return;
   std::size_t count = std::min(flight.inject, npix - f.next_pixel);
+  if (!group.all() && f.pool_len + count > pool.capacity) {
+    DescriptorSet bigger;
+    bigger.allocate(rt, (f.pool_len + count) * 3 / 2, "descriptor pool");
+    pool.copy_prefix_to(rt, bigger, f.pool_len);
+    pool = bigger;
+  }
   if (f.pool_len + count > pool.capacity) count = pool.capacity - f.pool_len;
   int a = 0;
   k_primary.setArg(a++, fp);
@@ -368,6 +416,8 @@ ScatterPass::Args Renderer::Machine::exchange_args(const Frame& f) const {
   sa.cap = cap;
   sa.banks = &banks;
   sa.next_pool = &next_pool;
+  sa.group_begin = group.begin;
+  sa.group_end = group.end;
   return sa;
 }
 
@@ -387,10 +437,27 @@ void Renderer::Machine::exchange(Launcher& launch, Frame& f, int round, RenderSt
                "clEnqueueReadBuffer(scatter counts)");
   scatter->move(launch, sa, round);
   launch.check(read.wait(), "clWaitForEvents(scatter counts)");
+  if (rank_exchange) rank_exchange->start(scatter->pe_total, next_pool, static_cast<std::size_t>(counts[0]));
   std::swap(pool, next_pool);
   f.pool_len = static_cast<std::size_t>(counts[0]);
   f.groups = counts[2];
-  st.overflow_deferrals += static_cast<std::uint64_t>(counts[0]);
+  st.overflow_deferrals += rank_exchange ? rank_exchange->waiting() : static_cast<std::uint64_t>(counts[0]);
+}
+
+// Several ranks, after the SPMD launch: the records bound for other ranks
+// travel while the SPMD phase runs; the next pool is this rank's waiting
+// records followed by what the others sent. The ranks go on while any has
+// work, and take the next injection decision together. Returns false at the end.
+bool Renderer::Machine::end_rank_round(Launcher& launch, Frame& f) {
+  launch.check(rt.queue().flush(), "clFlush");
+  rank_exchange->exchange();
+  f.pool_len = rank_exchange->finish(pool, next_pool, flight.inject);
+  std::swap(pool, next_pool);
+  const bool left = f.pool_len > 0 || f.out_groups > 0 || f.next_pixel < npix || f.sample + 1 < spp;
+  std::vector<std::uint64_t> all = {left ? 1u : 0u, f.pool_len};
+  ranks.max(all);
+  f.pool_len_max = all[1];
+  return all[0] > 0;
 }
 
 // SPMD phase: the plan's work-groups, each on one PE's bank.
@@ -433,9 +500,12 @@ void Renderer::Machine::read_image(Launcher& launch, RenderResult& result) {
   launch.check(q.enqueueReadBuffer(b_items, CL_TRUE, 0, npix * sizeof(cl_int2), result.item_buffer.data()),
                "clEnqueueReadBuffer(item buffer)");
   launch.check(q.finish(), "clFinish");
+  // 64-bit integer sums: with several ranks, summed over them on rank 0.
+  std::vector<std::uint64_t> sums(npix * 3);
+  for (std::size_t i = 0; i < npix * 3; ++i) sums[i] = fixed_pair(accum, i);
+  if (!group.all()) reduce_to_root(ranks, sums);
   result.rgb.resize(npix * 3);
-  for (std::size_t i = 0; i < npix * 3; ++i)
-    result.rgb[i] = from_fixed(fixed_pair(accum, i), spp);
+  for (std::size_t i = 0; i < npix * 3; ++i) result.rgb[i] = from_fixed(sums[i], spp);
 }
 
 // Per-level, per-PE counters and traffic, then the frame's totals. Every
@@ -447,24 +517,32 @@ void Renderer::Machine::read_stats(RenderResult& result) {
   cl::CommandQueue& q = rt.queue();
   std::vector<cl_uint> raw(nstats);
   cl_check(q.enqueueReadBuffer(b_stats, CL_TRUE, 0, nstats * sizeof(cl_uint), raw.data()), "clEnqueueReadBuffer(stats)");
+  std::vector<cl_uint> tr(traffic_levels > 0 ? ntraffic : 0), hits(2);
+  if (traffic_levels > 0)
+    cl_check(q.enqueueReadBuffer(b_traffic, CL_TRUE, 0, ntraffic * sizeof(cl_uint), tr.data()),
+             "clEnqueueReadBuffer(traffic)");
+  cl_check(q.enqueueReadBuffer(b_hits, CL_TRUE, 0, 2 * sizeof(cl_uint), hits.data()),
+           "clEnqueueReadBuffer(primary hit count)");
+  // Each rank counted its own PEs and primaries: summed on rank 0.
+  std::vector<std::uint64_t> counters(std::size_t(depth) * P * OPSILA_STAT_COUNT), traffic(tr.begin(), tr.end());
+  for (std::size_t k = 0; k < counters.size(); ++k) counters[k] = fixed_pair(raw, k);
+  counters.push_back(fixed_pair(hits, 0));
+  if (!group.all()) {
+    reduce_to_root(ranks, counters);
+    reduce_to_root(ranks, traffic);
+  }
   st.counters.assign(depth, std::vector<std::vector<std::uint64_t>>(P, std::vector<std::uint64_t>(OPSILA_STAT_COUNT, 0)));
   for (int l = 0; l < depth; ++l)
     for (int p = 0; p < P; ++p)
       for (int s = 0; s < OPSILA_STAT_COUNT; ++s)
-        st.counters[l][p][s] = fixed_pair(raw, (std::size_t(l) * P + p) * OPSILA_STAT_COUNT + s);
+        st.counters[l][p][s] = counters[(std::size_t(l) * P + p) * OPSILA_STAT_COUNT + s];
   if (traffic_levels > 0) {
-    std::vector<cl_uint> tr(ntraffic);
-    cl_check(q.enqueueReadBuffer(b_traffic, CL_TRUE, 0, ntraffic * sizeof(cl_uint), tr.data()),
-             "clEnqueueReadBuffer(traffic)");
     st.traffic.assign(traffic_levels, std::vector<std::uint64_t>(std::size_t(P) * P));
     for (int l = 0; l < traffic_levels; ++l)
-      for (std::size_t k = 0; k < std::size_t(P) * P; ++k) st.traffic[l][k] = tr[std::size_t(l) * P * P + k];
+      for (std::size_t k = 0; k < std::size_t(P) * P; ++k) st.traffic[l][k] = traffic[std::size_t(l) * P * P + k];
   }
   result.rays.primary = npix * std::size_t(spp);
-  std::vector<cl_uint> hits(2);
-  cl_check(q.enqueueReadBuffer(b_hits, CL_TRUE, 0, 2 * sizeof(cl_uint), hits.data()),
-           "clEnqueueReadBuffer(primary hit count)");
-  result.rays.primary_hits = fixed_pair(hits, 0);
+  result.rays.primary_hits = counters.back();
   std::uint64_t children = 0, shadow = 0, finished = 0, forwards = 0;
   for (int l = 0; l < depth; ++l)
     for (int p = 0; p < P; ++p) {
@@ -505,6 +583,39 @@ void Renderer::Machine::report_progress(const Frame& f) {
   progress->report(done / (double(npix) * spp), rays);
 }
 
+// This rank's share of the frame, for rank 0's --stats and the bench.
+RankReport Renderer::Machine::rank_report(const RenderStats& st, double seconds, double mpi_seconds) const {
+  RankReport r;
+  r.rank = group.rank;
+  r.pe_begin = group.begin;
+  r.pe_end = group.end;
+  r.host = ranks.host();
+  r.device = rt.description();
+  r.device_bytes = plan.total();
+  r.scene_bytes = plan.scene;
+  r.host_peak_bytes = host_peak_bytes();
+  r.render_seconds = seconds;
+  r.mpi_seconds = mpi_seconds;
+  const RankExchange& x = *rank_exchange;
+  std::vector<double> spmd(x.mpi_seconds.size(), 0.0);
+  for (const LaunchRecord& l : st.launches) {
+    auto it = std::find_if(r.kernel_seconds.begin(), r.kernel_seconds.end(),
+                           [&](const auto& e) { return e.first == l.name; });
+    if (it == r.kernel_seconds.end()) it = r.kernel_seconds.insert(it, {l.name, 0.0});
+    it->second += l.seconds;
+    if (l.name == "spmd_phase" && l.round >= 0 && std::size_t(l.round) < spmd.size()) spmd[l.round] += l.seconds;
+  }
+  // The MPI part runs while the device runs the SPMD phase; the staging
+  // (reading back, writing the received records) overlaps nothing.
+  for (std::size_t k = 0; k < spmd.size(); ++k) {
+    r.exchange_seconds += x.staging_seconds[k] + x.mpi_seconds[k];
+    r.exposed_seconds += x.staging_seconds[k] + std::max(0.0, x.mpi_seconds[k] - spmd[k]);
+  }
+  r.sent = x.sent;
+  r.received = x.received;
+  return r;
+}
+
 Renderer::Renderer(const Scene& scene, const RenderSettings& settings, ClRuntime& runtime)
     : m_(std::make_unique<Machine>(scene, settings, runtime)) {}
 
@@ -519,7 +630,12 @@ RenderResult Renderer::render() {
   result.stats = m.prepared;
   RenderStats& st = result.stats;
   Launcher launch(m.rt, st.launches);
+  // Several ranks: from here on they wait on each other (a rank that failed
+  // while preparing has said so, and every rank stops here).
+  const bool ranks = !m.group.all();
+  if (ranks) m.ranks.begin_collective();
   const auto t_start = std::chrono::steady_clock::now();
+  const double mpi_start = m.ranks.mpi_seconds();
 
   if (m.progress) m.progress->start();
   m.clear_frame();
@@ -528,21 +644,29 @@ RenderResult Renderer::render() {
   Machine::Frame f;
   for (int round = 0;; ++round) {
     m.primary_descriptors(launch, f, round);
-    if (f.pool_len == 0 && f.out_groups == 0) break;
+    if (!ranks && f.pool_len == 0 && f.out_groups == 0) break;
     m.exchange(launch, f, round, st);
     if (f.groups == 0) {  // only NIL holes were left: nothing placed, nothing waits
       f.out_groups = 0;
+      if (ranks && !m.end_rank_round(launch, f)) break;
       continue;
     }
     m.spmd_phase(launch, f, round);
     ++st.rounds;
+    if (ranks && !m.end_rank_round(launch, f)) break;
     if (m.progress && m.progress->due()) m.report_progress(f);
   }
   m.read_image(launch, result);
 
   st.render_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
   launch.harvest();
+  if (ranks) {
+    const RankReport mine = m.rank_report(st, st.render_seconds, m.ranks.mpi_seconds() - mpi_start);
+    for (const std::string& text : m.ranks.gather(rank_report_json(mine), 0))
+      st.ranks.push_back(rank_report_from_json(text));
+  }
   m.read_stats(result);
+  if (ranks) m.ranks.end_collective();
   if (m.progress && m.progress->due()) m.progress->report(1.0, result.rays.total());
   return result;
 }

@@ -36,6 +36,22 @@ struct LaunchRecord {
   double seconds = 0; // CL_PROFILING_COMMAND_END - START
 };
 
+// What one rank did, for --stats and the bench (rank 0 gathers them).
+struct RankReport {
+  int rank = 0, pe_begin = 0, pe_end = 0;
+  std::string host, device;
+  std::uint64_t device_bytes = 0;     // planned device memory (scene slice, image, descriptors)
+  std::uint64_t scene_bytes = 0;      // of which the scene: own banks + global tables
+  std::uint64_t host_peak_bytes = 0;  // peak resident set of the process
+  double render_seconds = 0;
+  double mpi_seconds = 0;        // inside MPI calls (relay, exchange, reductions)
+  double exchange_seconds = 0;   // descriptor exchange: read-back, MPI, write-back (host wall time)
+  double exposed_seconds = 0;    // part of it the SPMD phase did not cover
+  std::vector<std::pair<std::string, double>> kernel_seconds;  // profiled, by kernel name
+  std::vector<std::vector<std::uint64_t>> sent;      // [round][destination rank] descriptors
+  std::vector<std::vector<std::uint64_t>> received;  // [round][source rank] descriptors
+};
+
 struct RenderStats {
   // counters[level][pe][OPSILA_STAT_*]
   std::vector<std::vector<std::vector<std::uint64_t>>> counters;
@@ -58,6 +74,7 @@ struct RenderStats {
   int num_clusters = 0;
   int routing = OPSILA_ROUTING_BOXES;
   std::size_t work_group_size = 0;
+  std::vector<RankReport> ranks;  // several MPI ranks: one report each (rank 0's result only)
 };
 
 // The image, its rays (every primary ray, N per pixel, is cast by the item

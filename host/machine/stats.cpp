@@ -4,6 +4,7 @@
 #include <cstdint>
 #include <map>
 
+#include "machine/descriptors.h"
 #include "opsila_shared.h"
 
 namespace opsila {
@@ -176,7 +177,92 @@ nlohmann::json stats_json(const RenderResult& result, const Scene& scene,
   j["memory"] = memory_json(s);
 
   j["traffic"] = traffic_json(s);
+  if (!s.ranks.empty()) j["mpi"] = ranks_json(s.ranks);
   return j;
+}
+
+nlohmann::json ranks_json(const std::vector<RankReport>& reports) {
+  const std::size_t R = reports.size();
+  std::size_t rounds = 0;
+  for (const RankReport& r : reports) rounds = std::max(rounds, r.sent.size());
+  // traffic[round][src][dst] from what each rank sent; each rank's received
+  // counts must mirror it (sent by src to dst == received by dst from src).
+  std::vector<std::vector<std::vector<std::uint64_t>>> traffic(
+      rounds, std::vector<std::vector<std::uint64_t>>(R, std::vector<std::uint64_t>(R, 0)));
+  std::vector<std::vector<std::uint64_t>> total(R, std::vector<std::uint64_t>(R, 0));
+  bool mirrored = true;
+  std::uint64_t sent = 0, received = 0;
+  for (std::size_t src = 0; src < R; ++src)
+    for (std::size_t k = 0; k < reports[src].sent.size(); ++k)
+      for (std::size_t dst = 0; dst < R && dst < reports[src].sent[k].size(); ++dst) {
+        const std::uint64_t n = reports[src].sent[k][dst];
+        traffic[k][src][dst] = n;
+        total[src][dst] += n;
+        if (dst != src) sent += n;
+        const auto& back = reports[dst].received;
+        if (k >= back.size() || src >= back[k].size() || back[k][src] != n) mirrored = false;
+      }
+  for (const RankReport& r : reports)
+    for (const auto& row : r.received)
+      for (std::size_t src = 0; src < row.size(); ++src)
+        if (src != std::size_t(r.rank)) received += row[src];
+  nlohmann::json per_rank = nlohmann::json::array();
+  for (const RankReport& r : reports) {
+    nlohmann::json e = nlohmann::json::parse(rank_report_json(r));
+    e.erase("sent");
+    e.erase("received");
+    per_rank.push_back(std::move(e));
+  }
+  return {{"ranks", R},
+          {"bytes_per_descriptor", std::uint64_t(DescriptorSet::kBytes)},
+          {"descriptors_sent", sent},
+          {"descriptors_received", received},
+          {"bytes_sent", sent * std::uint64_t(DescriptorSet::kBytes)},
+          {"exchange_balanced", mirrored && sent == received},
+          {"per_rank", std::move(per_rank)},
+          {"traffic_total", total},
+          {"traffic", traffic}};
+}
+
+std::string rank_report_json(const RankReport& r) {
+  nlohmann::json kernels = nlohmann::json::object();
+  for (const auto& [name, s] : r.kernel_seconds) kernels[name] = s;
+  nlohmann::json j = {{"rank", r.rank},
+                      {"pes", {r.pe_begin, r.pe_end}},
+                      {"host", r.host},
+                      {"device", r.device},
+                      {"device_bytes", r.device_bytes},
+                      {"scene_bytes", r.scene_bytes},
+                      {"host_peak_bytes", r.host_peak_bytes},
+                      {"render_seconds", r.render_seconds},
+                      {"mpi_seconds", r.mpi_seconds},
+                      {"exchange_seconds", r.exchange_seconds},
+                      {"exposed_seconds", r.exposed_seconds},
+                      {"kernel_seconds", kernels},
+                      {"sent", r.sent},
+                      {"received", r.received}};
+  return j.dump();
+}
+
+RankReport rank_report_from_json(const std::string& text) {
+  const nlohmann::json j = nlohmann::json::parse(text);
+  RankReport r;
+  r.rank = j.at("rank");
+  r.pe_begin = j.at("pes").at(0);
+  r.pe_end = j.at("pes").at(1);
+  r.host = j.at("host");
+  r.device = j.at("device");
+  r.device_bytes = j.at("device_bytes");
+  r.scene_bytes = j.at("scene_bytes");
+  r.host_peak_bytes = j.at("host_peak_bytes");
+  r.render_seconds = j.at("render_seconds");
+  r.mpi_seconds = j.at("mpi_seconds");
+  r.exchange_seconds = j.at("exchange_seconds");
+  r.exposed_seconds = j.at("exposed_seconds");
+  for (const auto& [name, s] : j.at("kernel_seconds").items()) r.kernel_seconds.emplace_back(name, s.get<double>());
+  r.sent = j.at("sent").get<std::vector<std::vector<std::uint64_t>>>();
+  r.received = j.at("received").get<std::vector<std::vector<std::uint64_t>>>();
+  return r;
 }
 
 }  // namespace opsila

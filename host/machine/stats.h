@@ -19,8 +19,16 @@ namespace opsila {
 // balanced (spawned == finished), launches [{name, round, seconds}],
 // launch_summary {name: {count, total_seconds}},
 // memory {bank_bytes[], bank_bytes_max, bank_bytes_mean, global_bytes, replicated_bytes},
-// traffic [level][src][dst].
+// traffic [level][src][dst]; with several MPI ranks, mpi {...} (ranks_json).
 nlohmann::json stats_json(const RenderResult& result, const Scene& scene,
                           const RenderSettings& settings, const std::string& device_description);
+
+// Several MPI ranks: per-rank reports, the rank x rank traffic of every
+// round and in all, and whether every rank received what the others sent.
+nlohmann::json ranks_json(const std::vector<RankReport>& reports);
+
+// One rank's report as JSON text (ranks gather them as text) and back.
+std::string rank_report_json(const RankReport& report);
+RankReport rank_report_from_json(const std::string& text);
 
 }  // namespace opsila

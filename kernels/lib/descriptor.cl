@@ -46,6 +46,9 @@ inline int desc_dest_at(__global const float4 *v, int k) {
 #define DESC_META(d) ((d).ids.y)
 #define DESC_HIT(d) ((d).ids.z)          /* global triangle of the best hit, -1 none */
 #define DESC_DEST(d) ((d).ids.w)         /* destination PE = cursor PE; -1 NIL */
+/* Radiance: facet id of the best hit (its bits), for the tie rule at the
+ * next PE, whose device may not hold that facet. */
+#define DESC_BEST_FACET(d) ((d).wgt.w)
 
 inline Descriptor make_descriptor(float3 origin, float t, float3 direction, float entry, float3 weight, int pixel,
                                   int meta, int hit, int dest) {

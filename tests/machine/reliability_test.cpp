@@ -375,6 +375,8 @@ struct PlanKernel {
     counts = upload(rt, std::vector<cl_int>{-1, -1, -1}, "counts");
     int a = 0;
     kernel.setArg(a++, 1);  // PEs
+    kernel.setArg(a++, 0);  // this device's PEs: [0, 1)
+    kernel.setArg(a++, 1);
     kernel.setArg(a++, 2);  // slots
     kernel.setArg(a++, 2);  // cap
     kernel.setArg(a++, 1);  // work-group size

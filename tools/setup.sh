@@ -12,6 +12,7 @@ PACKAGES=(
   ocl-icd-opencl-dev opencl-headers opencl-clhpp-headers pocl-opencl-icd clinfo
   libglm-dev libstb-dev libtinyobjloader-dev nlohmann-json3-dev libassimp-dev
   libgtest-dev googletest
+  libopenmpi-dev openmpi-bin
   assimp-testmodels python3-matplotlib python3-numpy
 )
 

@@ -209,8 +209,14 @@ nlohmann::json ranks_json(const std::vector<RankReport>& reports) {
   nlohmann::json per_rank = nlohmann::json::array();
   for (const RankReport& r : reports) {
     nlohmann::json e = nlohmann::json::parse(rank_report_json(r));
-    e.erase("sent");
-    e.erase("received");
+    // Totals over the rounds, to other ranks and from them.
+    std::uint64_t out = 0, in = 0;
+    for (const auto& row : r.sent)
+      for (std::size_t q = 0; q < row.size(); ++q) out += q != std::size_t(r.rank) ? row[q] : 0;
+    for (const auto& row : r.received)
+      for (std::size_t q = 0; q < row.size(); ++q) in += q != std::size_t(r.rank) ? row[q] : 0;
+    e["sent"] = out;
+    e["received"] = in;
     per_rank.push_back(std::move(e));
   }
   return {{"ranks", R},

@@ -1,0 +1,176 @@
+// Several MPI ranks (mpirun --oversubscribe -np R opsila render ...): the
+// same bytes as one process, every descriptor sent is received, a scene too
+// big for one device renders across four, and a failing rank ends the run
+// cleanly. Skipped, with the reason, in a build without MPI or without mpirun.
+#include <gtest/gtest.h>
+
+#include <unistd.h>
+
+#include <cstdlib>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "test_util.h"
+
+namespace opsila {
+namespace {
+
+using test::RunResult;
+using test::TempDir;
+
+#if defined(OPSILA_HAVE_MPI) && defined(OPSILA_MPIEXEC)
+constexpr const char* kMpiexec = OPSILA_MPIEXEC;
+#else
+constexpr const char* kMpiexec = "";
+#endif
+
+// Seconds after which a run counts as hung (coreutils timeout kills it).
+constexpr const char* kHangSeconds = "300";
+
+struct MpiFixture : ::testing::Test {
+  TempDir dir;
+  void SetUp() override {
+#ifndef OPSILA_HAVE_MPI
+    GTEST_SKIP() << "built without MPI (no MPI library found, or -DOPSILA_MPI=OFF)";
+#endif
+    if (std::string(kMpiexec).empty() || ::access(kMpiexec, X_OK) != 0)
+      GTEST_SKIP() << "no MPI launcher (mpirun) found at build time";
+    // Open MPI refuses root unless told twice; other MPIs ignore these.
+    ::setenv("OMPI_ALLOW_RUN_AS_ROOT", "1", 1);
+    ::setenv("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1", 1);
+  }
+  // `opsila render ARGS` on one process, without a launcher.
+  RunResult one(const std::vector<std::string>& args) {
+    std::vector<std::string> a = {kHangSeconds, OPSILA_BINARY, "render"};
+    a.insert(a.end(), args.begin(), args.end());
+    return test::run_program("/usr/bin/timeout", a);
+  }
+  // mpirun --oversubscribe -np R opsila render ARGS; `more` adds programs
+  // after ':' (MPMD), each a list of render arguments for one more rank.
+  RunResult ranks(int R, const std::vector<std::string>& args,
+                  const std::vector<std::vector<std::string>>& more = {}) {
+    std::vector<std::string> a = {kHangSeconds, kMpiexec, "--oversubscribe", "-np", std::to_string(R),
+                                  OPSILA_BINARY, "render"};
+    a.insert(a.end(), args.begin(), args.end());
+    for (const auto& m : more) {
+      a.insert(a.end(), {":", "-np", "1", OPSILA_BINARY, "render"});
+      a.insert(a.end(), m.begin(), m.end());
+    }
+    return test::run_program("/usr/bin/timeout", a);
+  }
+  std::string scene(const std::string& name) const { return std::string(OPSILA_SOURCE_DIR) + "/scenes/" + name; }
+  static nlohmann::json stats(const std::string& path) { return nlohmann::json::parse(test::read_file(path)); }
+};
+
+// Renders `name` on one process and on R = 1..4 ranks: same PFM, same item
+// buffer, the same work per level and PE, every descriptor sent received.
+void expect_same_as_one_process(MpiFixture& f, const std::string& name, const std::string& size,
+                                const std::string& pes) {
+  const std::vector<std::string> common = {f.scene(name), "--size", size, "--pes", pes, "-q"};
+  auto args = [&](const std::string& tag) {
+    std::vector<std::string> a = common;
+    a.insert(a.end(), {"-o", f.dir.file(tag + ".pfm"), "--item-buffer", f.dir.file(tag + ".npy"), "--stats",
+                       f.dir.file(tag + ".json")});
+    return a;
+  };
+  const RunResult single = f.one(args("one"));
+  ASSERT_EQ(single.exit_code, 0) << single.err;
+  const std::string pfm = test::read_file(f.dir.file("one.pfm")), npy = test::read_file(f.dir.file("one.npy"));
+  const nlohmann::json base = MpiFixture::stats(f.dir.file("one.json"));
+  ASSERT_FALSE(pfm.empty());
+  for (int R : {1, 2, 3, 4}) {
+    SCOPED_TRACE(name + " on " + std::to_string(R) + " ranks");
+    const std::string tag = "r" + std::to_string(R);
+    const RunResult r = f.ranks(R, args(tag));
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_TRUE(test::read_file(f.dir.file(tag + ".pfm")) == pfm) << "PFM differs from one process";
+    EXPECT_TRUE(test::read_file(f.dir.file(tag + ".npy")) == npy) << "item buffer differs from one process";
+    const nlohmann::json s = MpiFixture::stats(f.dir.file(tag + ".json"));
+    EXPECT_TRUE(s.at("balanced").get<bool>());
+    EXPECT_EQ(s.at("rays"), base.at("rays"));
+    EXPECT_EQ(s.at("descriptors").at("spawned"), base.at("descriptors").at("spawned"));
+    // Each descriptor is traced by the same PE whatever rank holds it.
+    EXPECT_EQ(s.at("levels"), base.at("levels")) << "per-level, per-PE work differs from one process";
+    if (R == 1) {
+      EXPECT_FALSE(s.contains("mpi"));
+      continue;
+    }
+    const nlohmann::json& mpi = s.at("mpi");
+    EXPECT_EQ(mpi.at("ranks"), R);
+    EXPECT_TRUE(mpi.at("exchange_balanced").get<bool>());
+    EXPECT_EQ(mpi.at("descriptors_sent"), mpi.at("descriptors_received"));
+    EXPECT_GT(mpi.at("descriptors_sent").get<std::uint64_t>(), 0u);
+    // What each rank received, as it counted it, is what the others sent it.
+    const auto total = mpi.at("traffic_total").get<std::vector<std::vector<std::uint64_t>>>();
+    ASSERT_EQ(total.size(), std::size_t(R));
+    for (int d = 0; d < R; ++d) {
+      std::uint64_t to_d = 0;
+      for (int src = 0; src < R; ++src)
+        if (src != d) to_d += total[src][d];
+      EXPECT_EQ(mpi.at("per_rank").at(d).at("received"), to_d) << "rank " << d;
+      EXPECT_EQ(total[d][d], 0u);
+    }
+    // The PE groups cover the PEs once, in order.
+    int next = 0;
+    for (const auto& rank : mpi.at("per_rank")) {
+      EXPECT_EQ(rank.at("pes").at(0), next);
+      next = rank.at("pes").at(1);
+    }
+    EXPECT_EQ(next, std::stoi(pes));
+  }
+}
+
+TEST_F(MpiFixture, WhittedIsTheSameOnOneToFourRanks) { expect_same_as_one_process(*this, "whitted.json", "96x72", "16"); }
+TEST_F(MpiFixture, CornellIsTheSameOnOneToFourRanks) { expect_same_as_one_process(*this, "cornell.json", "80x80", "4"); }
+TEST_F(MpiFixture, HundredsIsTheSameOnOneToFourRanks) {
+  expect_same_as_one_process(*this, "hundreds.json", "96x72", "16");
+}
+
+TEST_F(MpiFixture, MoreRanksThanPesAreRefused) {
+  const RunResult r = ranks(3, {scene("whitted.json"), "-o", dir.file("x.pfm"), "--size", "32x24", "--pes", "2"});
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  const auto errors = r.error_lines();
+  ASSERT_EQ(errors.size(), 1u) << r.err;
+  EXPECT_NE(errors[0].find("3 MPI ranks for 2 PEs"), std::string::npos) << errors[0];
+  EXPECT_TRUE(dir.entries().empty()) << "an output file was left behind";
+}
+
+TEST_F(MpiFixture, SceneTooBigForOneDeviceRendersOnFour) {
+  // hundreds at 40x30 holds ~6.2 MB of banks: over a 4.5 MB device alone,
+  // ~1.6 MB of banks per device on four ranks.
+  const std::vector<std::string> args = {scene("hundreds.json"), "--size", "40x30", "-q"};
+  auto with = [&](const std::string& out) {
+    std::vector<std::string> a = args;
+    a.insert(a.end(), {"-o", dir.file(out)});
+    return a;
+  };
+  const RunResult full = one(with("unlimited.pfm"));
+  ASSERT_EQ(full.exit_code, 0) << full.err;
+  ::setenv("OPSILA_DEVICE_MEMORY_LIMIT", "4500000", 1);
+  const RunResult alone = ranks(1, with("alone.pfm"));
+  const RunResult four = ranks(4, with("four.pfm"));
+  ::unsetenv("OPSILA_DEVICE_MEMORY_LIMIT");
+  EXPECT_EQ(alone.exit_code, 3) << alone.err;
+  ASSERT_EQ(alone.error_lines().size(), 1u) << alone.err;
+  EXPECT_NE(alone.error_lines()[0].find("OPSILA_DEVICE_MEMORY_LIMIT"), std::string::npos) << alone.err;
+  EXPECT_FALSE(test::file_exists(dir.file("alone.pfm")));
+  ASSERT_EQ(four.exit_code, 0) << four.err;
+  EXPECT_TRUE(test::read_file(dir.file("four.pfm")) == test::read_file(dir.file("unlimited.pfm")));
+}
+
+TEST_F(MpiFixture, BadDeviceOnOneRankEndsEveryRankCleanly) {
+  const std::vector<std::string> args = {scene("whitted.json"), "-o", dir.file("x.pfm"), "--size", "32x24"};
+  std::vector<std::string> bad = args;
+  bad.insert(bad.end(), {"--device", "no-such-device"});
+  const RunResult r = ranks(2, args, {bad});  // ranks 0 and 1 fine, rank 2 bad
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  const auto errors = r.error_lines();
+  ASSERT_EQ(errors.size(), 1u) << r.err;
+  EXPECT_EQ(errors[0].rfind("opsila: error: rank 2: --device no-such-device", 0), 0u) << errors[0];
+  EXPECT_TRUE(dir.entries().empty()) << "an output file was left behind";
+}
+
+}  // namespace
+}  // namespace opsila

@@ -37,15 +37,14 @@ struct MpiFixture : ::testing::Test {
 #endif
     if (std::string(kMpiexec).empty() || ::access(kMpiexec, X_OK) != 0)
       GTEST_SKIP() << "no MPI launcher (mpirun) found at build time";
-    // Open MPI refuses root unless told twice; other MPIs ignore these.
-    ::setenv("OMPI_ALLOW_RUN_AS_ROOT", "1", 1);
-    ::setenv("OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1", 1);
   }
+  // Open MPI refuses root unless told twice; other MPIs ignore these.
+  test::EnvChanges env = {{"OMPI_ALLOW_RUN_AS_ROOT", "1"}, {"OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1"}};
   // `opsila render ARGS` on one process, without a launcher.
   RunResult one(const std::vector<std::string>& args) {
     std::vector<std::string> a = {kHangSeconds, OPSILA_BINARY, "render"};
     a.insert(a.end(), args.begin(), args.end());
-    return test::run_program("/usr/bin/timeout", a);
+    return test::run_program("/usr/bin/timeout", a, env);
   }
   // mpirun --oversubscribe -np R opsila render ARGS; `more` adds programs
   // after ':' (MPMD), each a list of render arguments for one more rank.
@@ -58,7 +57,7 @@ struct MpiFixture : ::testing::Test {
       a.insert(a.end(), {":", "-np", "1", OPSILA_BINARY, "render"});
       a.insert(a.end(), m.begin(), m.end());
     }
-    return test::run_program("/usr/bin/timeout", a);
+    return test::run_program("/usr/bin/timeout", a, env);
   }
   std::string scene(const std::string& name) const { return std::string(OPSILA_SOURCE_DIR) + "/scenes/" + name; }
   static nlohmann::json stats(const std::string& path) { return nlohmann::json::parse(test::read_file(path)); }
@@ -148,10 +147,9 @@ TEST_F(MpiFixture, SceneTooBigForOneDeviceRendersOnFour) {
   };
   const RunResult full = one(with("unlimited.pfm"));
   ASSERT_EQ(full.exit_code, 0) << full.err;
-  ::setenv("OPSILA_DEVICE_MEMORY_LIMIT", "4500000", 1);
+  env["OPSILA_DEVICE_MEMORY_LIMIT"] = "4500000";
   const RunResult alone = ranks(1, with("alone.pfm"));
   const RunResult four = ranks(4, with("four.pfm"));
-  ::unsetenv("OPSILA_DEVICE_MEMORY_LIMIT");
   EXPECT_EQ(alone.exit_code, 3) << alone.err;
   ASSERT_EQ(alone.error_lines().size(), 1u) << alone.err;
   EXPECT_NE(alone.error_lines()[0].find("OPSILA_DEVICE_MEMORY_LIMIT"), std::string::npos) << alone.err;

@@ -20,6 +20,7 @@
 #include "core/image_io.h"
 #include "core/output_files.h"
 #include "input/scene_file.h"
+#include "machine/ranks.h"
 
 namespace opsila {
 
@@ -71,6 +72,17 @@ int run_bench(const std::vector<std::string>& args) {
   if (o.help) {
     std::fputs(bench_usage().c_str(), stdout);
     return kExitOk;
+  }
+  // The bench measures one process. Under an MPI launcher with several ranks
+  // each would run the whole bench alone and race for the same outputs, so
+  // it is refused; the ranks' figures come from `render --stats`.
+  if (launched_by_mpi()) {
+    Ranks& ranks = Ranks::world();
+    ranks.start();
+    if (ranks.size() > 1)  // every rank refuses; the lowest prints it, once
+      throw InputError("bench runs in one process (this run has " + std::to_string(ranks.size()) +
+                       " MPI ranks); for the exchange between ranks use `mpirun -np R opsila render SCENE "
+                       "-o OUT --stats STATS.json` (its \"mpi\" section)");
   }
   // Checked, not created: the CSV folder, its tables and the JSON file
   // appear together at the end, or not at all.

@@ -6,11 +6,17 @@
 
 #include <algorithm>
 #include <cctype>
+#include <chrono>
 #include <cmath>
+#include <condition_variable>
+#include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <mutex>
 #include <new>
 #include <stdexcept>
+#include <thread>
 #include <vector>
 
 #include "core/util.h"
@@ -284,6 +290,51 @@ void check_ply_header(const std::string& head, const std::string& name) {
     throw InputError(name + ": PLY header without 'end_header' (truncated or not PLY)");
 }
 
+// The importer's readers are not ours and some loop forever on malformed
+// files (Debian's PLY reader on some headers). A read that outlives its
+// budget ends the run with one error line instead of a hang; nothing has been
+// written yet while a scene loads, so there is no output to clean up.
+// Budget: OPSILA_IMPORT_TIMEOUT seconds if set, else 60 s + 1 s per MiB.
+class ImportWatchdog {
+ public:
+  ImportWatchdog(const std::string& name, std::uintmax_t bytes) {
+    double budget = 60.0 + double(bytes) / (1024.0 * 1024.0);
+    if (const char* env = std::getenv("OPSILA_IMPORT_TIMEOUT")) {
+      char* end = nullptr;
+      const double v = std::strtod(env, &end);
+      if (end != env && v >= 0) budget = v;
+    }
+    message_ = "opsila: error: " + name + ": the model importer did not finish within " +
+               std::to_string(static_cast<long long>(budget + 0.5)) + " s (malformed file?)\n";
+    thread_ = std::thread([this, budget] {
+      std::unique_lock<std::mutex> lock(mutex_);
+      const auto deadline = std::chrono::steady_clock::now() + std::chrono::duration<double>(budget);
+      if (!done_cv_.wait_until(lock, deadline, [this] { return done_; })) {
+        std::fputs(message_.c_str(), stderr);
+        std::fflush(stderr);
+        std::_Exit(2);  // the exit code of bad input (cli/args.h)
+      }
+    });
+  }
+  ~ImportWatchdog() {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      done_ = true;
+    }
+    done_cv_.notify_one();
+    thread_.join();
+  }
+  ImportWatchdog(const ImportWatchdog&) = delete;
+  ImportWatchdog& operator=(const ImportWatchdog&) = delete;
+
+ private:
+  std::string message_;
+  std::mutex mutex_;
+  std::condition_variable done_cv_;
+  bool done_ = false;
+  std::thread thread_;
+};
+
 // aiProcess_ValidateDataStructure refuses inconsistent data (indices out of
 // range, ...) instead of handing it on.
 constexpr unsigned kImportFlags = aiProcess_ValidateDataStructure;
@@ -326,7 +377,12 @@ Scene load_model(const std::string& path) {
   }
   // The importer reads the file (and the files it names) itself.
   Assimp::Importer importer;
-  const aiScene* ai = importer.ReadFile(path, kImportFlags);
+  const aiScene* ai = nullptr;
+  {
+    std::error_code ec;
+    const ImportWatchdog watchdog(path, fs::file_size(path, ec));
+    ai = importer.ReadFile(path, kImportFlags);
+  }
   std::string dir = fs::path(path).parent_path().string();
   if (dir.empty()) dir = ".";
   return convert(importer, ai, path, dir);

@@ -136,6 +136,19 @@ TEST_F(MpiFixture, MoreRanksThanPesAreRefused) {
   EXPECT_TRUE(dir.entries().empty()) << "an output file was left behind";
 }
 
+// The bench measures one process: under several ranks it is refused once,
+// with the way to get the ranks' figures, and writes nothing.
+TEST_F(MpiFixture, BenchOnSeveralRanksIsRefusedOnce) {
+  const std::vector<std::string> a = {kHangSeconds, kMpiexec, "--oversubscribe", "-np", "2", OPSILA_BINARY,
+                                      "bench", scene("whitted.json"), "--json", dir.file("b.json")};
+  const RunResult r = test::run_program("/usr/bin/timeout", a, env);
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  const auto errors = r.error_lines();
+  ASSERT_EQ(errors.size(), 1u) << r.err;
+  EXPECT_NE(errors[0].find("bench runs in one process"), std::string::npos) << errors[0];
+  EXPECT_TRUE(dir.entries().empty()) << "an output file was left behind";
+}
+
 TEST_F(MpiFixture, SceneTooBigForOneDeviceRendersOnFour) {
   // hundreds at 40x30 holds ~6.2 MB of banks: over a 4.5 MB device alone,
   // ~1.6 MB of banks per device on four ranks.

@@ -164,6 +164,24 @@ TEST(ModelImport, BrokenFileOfEveryFormatIsOneClearError) {
   EXPECT_NE(error_of(dir.file("none.ply")).find("cannot open"), std::string::npos);
 }
 
+// Some of the importer's readers loop forever on malformed files; a read that
+// outlives its budget is one error line and exit 2, never a hang. A zero
+// budget makes any read too slow, so the test needs no hanging file.
+TEST(ModelImport, AnImportThatOutlivesItsBudgetIsOneClearError) {
+  REQUIRE_TEST_MODELS();
+  test::TempDir dir;
+  const std::string model = (kModels / "PLY" / "Wuson.ply").string();
+  ASSERT_TRUE(fs::exists(model));
+  const test::RunResult r = test::run_program(OPSILA_BINARY, {"render", model, "-o", dir.file("x.png"), "--size", "8x8"},
+                                              {{"OPSILA_IMPORT_TIMEOUT", "0"}});
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  ASSERT_EQ(r.error_lines().size(), 1u) << r.err;
+  EXPECT_NE(r.error_lines()[0].find(model + ": the model importer did not finish"), std::string::npos) << r.err;
+  EXPECT_FALSE(test::file_exists(dir.file("x.png")));
+  // With the default budget the same file loads.
+  EXPECT_EQ(test::run_opsila({"render", model, "-o", dir.file("y.png"), "--size", "8x8"}).exit_code, 0);
+}
+
 TEST(ModelImport, SceneFileModelObjects) {
   REQUIRE_TEST_MODELS();
   test::TempDir dir;

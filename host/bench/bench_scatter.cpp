@@ -104,6 +104,115 @@ void measure_paper_scatter(ClRuntime& rt, const HostDescriptors& src, const std:
   pt.one_record_spread = spread_of(t1);
 }
 
+// Host: the same counting sort, plainly (one thread, steady_clock).
+HostScatterResult measure_host_scatter(const HostDescriptors& src, int pes, int slots, int group_size,
+                                       std::size_t bank_slots, int warmup, ScatterPoint& pt) {
+  HostScatterResult host_result;
+  HostDescriptors banks(bank_slots), next(src.size());
+  std::vector<std::size_t> scratch;
+  std::vector<double> times;
+  for (int r = 0; r < warmup + pt.repeats; ++r) {
+    auto t0 = std::chrono::steady_clock::now();
+    host_result = host_scatter(src, pes, slots, 0, group_size, banks, next, scratch);
+    double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    if (r >= warmup) times.push_back(s);
+  }
+  pt.host_seconds = median(times);
+  pt.host_spread = spread_of(times);
+  pt.moved = host_result.placed + host_result.waiting;
+  pt.waiting = host_result.waiting;
+  return host_result;
+}
+
+// Device: the renderer's ScatterPass on the same input (pool only), checked
+// against the host's counts.
+void measure_device_scatter(ClRuntime& rt, const HostDescriptors& src, int pes, int slots, int group_size,
+                            std::size_t bank_slots, int warmup, const HostScatterResult& host_result,
+                            ScatterPoint& pt) {
+  const std::size_t length = src.size();
+  cl::CommandQueue& q = rt.queue();
+  DescriptorSet pool, banks, next;
+  pool.allocate(rt, length, "scatter bench source");
+  banks.allocate(rt, bank_slots, "scatter bench banks");
+  next.allocate(rt, length, "scatter bench next pool");
+  pool.write(rt, src);
+  ScatterPass scatter(rt, pes);
+  ScatterPass::Args a;
+  a.pool_len = static_cast<int>(length);
+  a.pool = &pool;
+  a.slots = slots;
+  a.group_size = group_size;
+  a.banks = &banks;
+  a.next_pool = &next;
+  std::vector<double> totals;
+  std::vector<std::vector<LaunchRecord>> runs;
+  for (int r = 0; r < warmup + pt.repeats; ++r) {
+    std::vector<LaunchRecord> records;
+    Launcher launch(rt, records);
+    scatter.plan(launch, a, 0);
+    scatter.move(launch, a, 0);
+    launch.check(q.finish(), "clFinish(scatter bench)");
+    launch.harvest();
+    if (r < warmup) continue;
+    double sum = 0;
+    for (const LaunchRecord& rec : records) sum += rec.seconds;
+    totals.push_back(sum);
+    runs.push_back(std::move(records));
+  }
+  pt.kernel_seconds = median(totals);
+  pt.kernel_spread = spread_of(totals);
+  // Per-kernel split of the run closest to the median.
+  std::size_t best = 0;
+  for (std::size_t i = 1; i < totals.size(); ++i)
+    if (std::abs(totals[i] - pt.kernel_seconds) < std::abs(totals[best] - pt.kernel_seconds)) best = i;
+  for (const LaunchRecord& rec : runs[best]) {
+    if (rec.name == "scatter_count") pt.count_seconds += rec.seconds;
+    if (rec.name == "scatter_scan") pt.scan_seconds += rec.seconds;
+    if (rec.name == "scatter_plan") pt.plan_seconds += rec.seconds;
+    if (rec.name == "scatter_move") pt.move_seconds += rec.seconds;
+  }
+  cl_int counts[3] = {0, 0, 0};
+  std::vector<cl_int> bank_count(pes);
+  cl_check(q.enqueueReadBuffer(scatter.counts, CL_TRUE, 0, sizeof(counts), counts), "clEnqueueReadBuffer(counts)");
+  cl_check(q.enqueueReadBuffer(scatter.bank_count, CL_TRUE, 0, pes * sizeof(cl_int), bank_count.data()),
+           "clEnqueueReadBuffer(bank counts)");
+  pt.verified = bank_count == host_result.bank_count && std::size_t(counts[0]) == host_result.waiting &&
+                std::size_t(counts[1]) == host_result.placed && counts[2] == host_result.groups;
+}
+
+// The physical ceiling: a plain copy of the same bytes, as a kernel and
+// as clEnqueueCopyBuffer.
+void measure_copy_ceiling(ClRuntime& rt, int warmup, ScatterPoint& pt) {
+  cl::CommandQueue& q = rt.queue();
+  const std::size_t bytes = std::max<std::size_t>(pt.moved, 1) * DescriptorSet::kBytes;
+  const std::size_t n4 = (bytes + sizeof(cl_float4) - 1) / sizeof(cl_float4);
+  cl::Buffer from = device_buffer(rt, n4 * sizeof(cl_float4), "copy bench source");
+  cl::Buffer to = device_buffer(rt, n4 * sizeof(cl_float4), "copy bench destination");
+  zero_buffer(rt, from, n4 * sizeof(cl_float4), "copy bench source");
+  zero_buffer(rt, to, n4 * sizeof(cl_float4), "copy bench destination");
+  cl::Kernel copy = rt.kernel("copy_float4", KernelProgram::baselines);
+  const std::size_t local = group_size_for(rt, copy);
+  copy.setArg(0, from);
+  copy.setArg(1, to);
+  copy.setArg(2, static_cast<int>(n4));
+  std::vector<double> kt, bt;
+  for (int r = 0; r < warmup + pt.repeats; ++r) {
+    cl::Event ek, eb;
+    cl_check(
+        q.enqueueNDRangeKernel(copy, cl::NullRange, cl::NDRange(round_up(n4, 64)), cl::NDRange(local), nullptr, &ek),
+        "clEnqueueNDRangeKernel(copy_float4)");
+    cl_check(q.enqueueCopyBuffer(from, to, 0, 0, n4 * sizeof(cl_float4), nullptr, &eb), "clEnqueueCopyBuffer");
+    cl_check(q.finish(), "clFinish(copy bench)");
+    if (r < warmup) continue;
+    kt.push_back(event_seconds(ek));
+    bt.push_back(event_seconds(eb));
+  }
+  pt.copy_kernel_seconds = median(kt);
+  pt.copy_buffer_seconds = median(bt);
+  pt.copy_kernel_spread = spread_of(kt);
+  pt.copy_buffer_spread = spread_of(bt);
+}
+
 }  // namespace
 
 ScatterPoint measure_scatter(ClRuntime& rt, std::size_t length, int pes, int warmup, int repeats,
@@ -119,111 +228,12 @@ ScatterPoint measure_scatter(ClRuntime& rt, std::size_t length, int pes, int war
   const std::size_t bank_slots = std::size_t(slots) + std::size_t(pes) * group_size;
 
   const HostDescriptors src = random_descriptors(length, pes, hole_rate, 1987u + static_cast<unsigned>(length));
-  cl::CommandQueue& q = rt.queue();
-
-  // Host: the same counting sort, plainly (one thread, steady_clock).
-  HostScatterResult host_result;
-  {
-    HostDescriptors banks(bank_slots), next(length);
-    std::vector<std::size_t> scratch;
-    std::vector<double> times;
-    for (int r = 0; r < warmup + pt.repeats; ++r) {
-      auto t0 = std::chrono::steady_clock::now();
-      host_result = host_scatter(src, pes, slots, 0, group_size, banks, next, scratch);
-      double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-      if (r >= warmup) times.push_back(s);
-    }
-    pt.host_seconds = median(times);
-    pt.host_spread = spread_of(times);
-    pt.moved = host_result.placed + host_result.waiting;
-    pt.waiting = host_result.waiting;
-  }
-
-  // Device: the renderer's ScatterPass on the same input (pool only).
-  {
-    DescriptorSet pool, banks, next;
-    pool.allocate(rt, length, "scatter bench source");
-    banks.allocate(rt, bank_slots, "scatter bench banks");
-    next.allocate(rt, length, "scatter bench next pool");
-    pool.write(rt, src);
-    ScatterPass scatter(rt, pes);
-    ScatterPass::Args a;
-    a.pool_len = static_cast<int>(length);
-    a.pool = &pool;
-    a.slots = slots;
-    a.group_size = group_size;
-    a.banks = &banks;
-    a.next_pool = &next;
-    std::vector<double> totals;
-    std::vector<std::vector<LaunchRecord>> runs;
-    for (int r = 0; r < warmup + pt.repeats; ++r) {
-      std::vector<LaunchRecord> records;
-      Launcher launch(rt, records);
-      scatter.plan(launch, a, 0);
-      scatter.move(launch, a, 0);
-      launch.check(q.finish(), "clFinish(scatter bench)");
-      launch.harvest();
-      if (r < warmup) continue;
-      double sum = 0;
-      for (const LaunchRecord& rec : records) sum += rec.seconds;
-      totals.push_back(sum);
-      runs.push_back(std::move(records));
-    }
-    pt.kernel_seconds = median(totals);
-    pt.kernel_spread = spread_of(totals);
-    // Per-kernel split of the run closest to the median.
-    std::size_t best = 0;
-    for (std::size_t i = 1; i < totals.size(); ++i)
-      if (std::abs(totals[i] - pt.kernel_seconds) < std::abs(totals[best] - pt.kernel_seconds)) best = i;
-    for (const LaunchRecord& rec : runs[best]) {
-      if (rec.name == "scatter_count") pt.count_seconds += rec.seconds;
-      if (rec.name == "scatter_scan") pt.scan_seconds += rec.seconds;
-      if (rec.name == "scatter_plan") pt.plan_seconds += rec.seconds;
-      if (rec.name == "scatter_move") pt.move_seconds += rec.seconds;
-    }
-    cl_int counts[3] = {0, 0, 0};
-    std::vector<cl_int> bank_count(pes);
-    cl_check(q.enqueueReadBuffer(scatter.counts, CL_TRUE, 0, sizeof(counts), counts), "clEnqueueReadBuffer(counts)");
-    cl_check(q.enqueueReadBuffer(scatter.bank_count, CL_TRUE, 0, pes * sizeof(cl_int), bank_count.data()),
-             "clEnqueueReadBuffer(bank counts)");
-    pt.verified = bank_count == host_result.bank_count && std::size_t(counts[0]) == host_result.waiting &&
-                  std::size_t(counts[1]) == host_result.placed && counts[2] == host_result.groups;
-  }
-
+  const HostScatterResult host_result =
+      measure_host_scatter(src, pes, slots, group_size, bank_slots, warmup, pt);
+  measure_device_scatter(rt, src, pes, slots, group_size, bank_slots, warmup, host_result, pt);
   measure_paper_scatter(rt, src, placement_index(src, host_result, pes, bank_slots), bank_slots + length, warmup,
                         pt);
-
-  // The physical ceiling: a plain copy of the same bytes, as a kernel and
-  // as clEnqueueCopyBuffer.
-  {
-    const std::size_t bytes = std::max<std::size_t>(pt.moved, 1) * DescriptorSet::kBytes;
-    const std::size_t n4 = (bytes + sizeof(cl_float4) - 1) / sizeof(cl_float4);
-    cl::Buffer from = device_buffer(rt, n4 * sizeof(cl_float4), "copy bench source");
-    cl::Buffer to = device_buffer(rt, n4 * sizeof(cl_float4), "copy bench destination");
-    zero_buffer(rt, from, n4 * sizeof(cl_float4), "copy bench source");
-    zero_buffer(rt, to, n4 * sizeof(cl_float4), "copy bench destination");
-    cl::Kernel copy = rt.kernel("copy_float4", KernelProgram::baselines);
-    const std::size_t local = group_size_for(rt, copy);
-    copy.setArg(0, from);
-    copy.setArg(1, to);
-    copy.setArg(2, static_cast<int>(n4));
-    std::vector<double> kt, bt;
-    for (int r = 0; r < warmup + pt.repeats; ++r) {
-      cl::Event ek, eb;
-      cl_check(
-          q.enqueueNDRangeKernel(copy, cl::NullRange, cl::NDRange(round_up(n4, 64)), cl::NDRange(local), nullptr, &ek),
-          "clEnqueueNDRangeKernel(copy_float4)");
-      cl_check(q.enqueueCopyBuffer(from, to, 0, 0, n4 * sizeof(cl_float4), nullptr, &eb), "clEnqueueCopyBuffer");
-      cl_check(q.finish(), "clFinish(copy bench)");
-      if (r < warmup) continue;
-      kt.push_back(event_seconds(ek));
-      bt.push_back(event_seconds(eb));
-    }
-    pt.copy_kernel_seconds = median(kt);
-    pt.copy_buffer_seconds = median(bt);
-    pt.copy_kernel_spread = spread_of(kt);
-    pt.copy_buffer_spread = spread_of(bt);
-  }
+  measure_copy_ceiling(rt, warmup, pt);
   return pt;
 }
 

@@ -197,20 +197,11 @@ std::uint64_t bank_attributes(const Scene& scene, const std::vector<int>& source
   return once;
 }
 
-}  // namespace
-
-BankedScene partition_scene(const Scene& scene, int num_pes, bool split_flat) {
-  BankedScene bs;
-  bs.num_pes = num_pes;
-  Vec3 slo, shi;
-  scene.bounds(slo, shi);
-  Box sbox;
-  sbox.grow(slo.data());
-  sbox.grow(shi.data());
+// 1-2. Clusters and regions. Target: several clusters per PE so that
+// bisection can balance; regions are about diag / cbrt(P) across. The
+// clusters come back sorted by PE.
+std::vector<ClusterBuild> form_clusters(const Scene& scene, const Box& sbox, int num_pes, bool split_flat) {
   const std::size_t total = scene.triangles.size();
-
-  // 1. Clusters. Target: several clusters per PE so that bisection can
-  // balance; regions are about diag / cbrt(P) across.
   std::size_t max_tris = std::max<std::size_t>(64, (total + 8 * num_pes - 1) / (8 * static_cast<std::size_t>(num_pes)));
   float region = sbox.diagonal() / std::cbrt(static_cast<float>(num_pes));
   float max_extent = std::max(region, 1e-30f);
@@ -223,19 +214,24 @@ BankedScene partition_scene(const Scene& scene, int num_pes, bool split_flat) {
   for (auto& tris : by_object)
     if (!tris.empty()) split_object(scene, std::move(tris), max_tris, max_extent, split_flat, cb);
 
-  // 2. Regions.
   std::vector<int> all(cb.size());
   std::iota(all.begin(), all.end(), 0);
   assign_regions(cb, all, 0, num_pes);
   std::stable_sort(cb.begin(), cb.end(), [](const ClusterBuild& a, const ClusterBuild& b) { return a.pe < b.pe; });
+  return cb;
+}
 
-  // 3. Banks: triangles of each PE contiguous, cluster by cluster.
+// 3. Banks: triangles of each PE contiguous, cluster by cluster, and each
+// cluster's bounding sphere. ranges[c] is cluster c's triangle range, source[k]
+// the scene triangle of bank triangle k.
+void fill_banks(const Scene& scene, const Box& sbox, const std::vector<ClusterBuild>& cb, BankedScene& bs,
+                std::vector<Box>& tri_boxes, std::vector<int>& source,
+                std::vector<std::pair<int, int>>& ranges) {
+  const std::size_t total = scene.triangles.size();
   bs.triangles.reserve(total);
-  std::vector<Box> tri_boxes;
   tri_boxes.reserve(total);
-  std::vector<int> source;
   source.reserve(total);
-  std::vector<std::pair<int, int>> ranges(cb.size());
+  ranges.resize(cb.size());
   bs.clusters.resize(cb.size());
   for (std::size_t c = 0; c < cb.size(); ++c) {
     int begin = static_cast<int>(bs.triangles.size());
@@ -272,7 +268,14 @@ BankedScene partition_scene(const Scene& scene, int num_pes, bool split_flat) {
     cl.pe = cb[c].pe;
     cl.root = -1;
   }
+}
 
+// Each PE's range of clusters, triangles and bank BVH nodes, its bounds and
+// its bank's size.
+void describe_pes(const std::vector<ClusterBuild>& cb, std::vector<Box>& tri_boxes,
+                  const std::vector<std::pair<int, int>>& ranges, std::vector<int>& source,
+                  std::size_t total, BankedScene& bs) {
+  const int num_pes = bs.num_pes;
   bs.pes.resize(num_pes);
   std::size_t c = 0;
   for (int p = 0; p < num_pes; ++p) {
@@ -305,10 +308,10 @@ BankedScene partition_scene(const Scene& scene, int num_pes, bool split_flat) {
                           std::uint64_t(pe.node_end - pe.node_begin) * sizeof(BankNode);
     bs.bank_bytes.push_back(bytes);
   }
+}
 
-  build_routing(bs, sbox);
-  std::uint64_t texture_once = bank_attributes(scene, source, bs);
-
+// Materials and lights, which every PE reads.
+void global_tables(const Scene& scene, BankedScene& bs) {
   for (const MaterialDesc& m : scene.materials) {
     Material g{};
     put3(g.ka, m.ka);
@@ -326,6 +329,30 @@ BankedScene partition_scene(const Scene& scene, int num_pes, bool split_flat) {
     put3(g.intensity, l.intensity);
     bs.lights.push_back(g);
   }
+}
+
+}  // namespace
+
+BankedScene partition_scene(const Scene& scene, int num_pes, bool split_flat) {
+  BankedScene bs;
+  bs.num_pes = num_pes;
+  Vec3 slo, shi;
+  scene.bounds(slo, shi);
+  Box sbox;
+  sbox.grow(slo.data());
+  sbox.grow(shi.data());
+
+  const std::vector<ClusterBuild> cb = form_clusters(scene, sbox, num_pes, split_flat);
+  std::vector<Box> tri_boxes;
+  std::vector<int> source;
+  std::vector<std::pair<int, int>> ranges;
+  fill_banks(scene, sbox, cb, bs, tri_boxes, source, ranges);
+  describe_pes(cb, tri_boxes, ranges, source, scene.triangles.size(), bs);
+
+  build_routing(bs, sbox);
+  std::uint64_t texture_once = bank_attributes(scene, source, bs);
+  global_tables(scene, bs);
+
   bs.global_bytes = bs.clusters.size() * sizeof(Cluster) + bs.route_nodes.size() * sizeof(BankNode) +
                     bs.pes.size() * sizeof(PeInfo) +
                     bs.materials.size() * sizeof(Material) + bs.lights.size() * sizeof(Light);

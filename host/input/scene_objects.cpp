@@ -1,0 +1,440 @@
+// The objects of the JSON scene format (scenes/FORMAT.md): each is checked
+// and its triangles counted first (budget), and built only when the whole
+// scene fits the limits.
+#include "input/scene_reader.h"
+
+namespace opsila {
+
+namespace fs = std::filesystem;
+
+namespace scene_json {
+
+// ------------------------------------------------------------ objects ---
+// Counts an object's triangles (and facets, an upper bound for generated
+// shapes) against the scene's limits before anything is built.
+void SceneReader::budget(std::size_t triangles, std::size_t facets, std::size_t objects,
+                         const std::string& path) {
+  if (triangles > max_triangles_ || planned_triangles_ > max_triangles_ - triangles)
+    fail(path, "would make " + std::to_string(triangles) + " more triangles (" +
+                   std::to_string(planned_triangles_) + " so far); a scene may have at most " +
+                   std::to_string(max_triangles_) + " (scenes/FORMAT.md, Limits)");
+  if (facets > std::size_t(INT_MAX) - planned_facets_)
+    fail(path, "too many facets for 32-bit ids");
+  if (objects > std::size_t(INT_MAX) - planned_objects_) fail(path, "too many objects");
+  planned_triangles_ += triangles;
+  planned_facets_ += facets;
+  planned_objects_ += objects;
+}
+
+void SceneReader::budget(std::size_t triangles, const std::string& path) {
+  budget(triangles, triangles, 1, path);
+}
+
+void SceneReader::objects(const Json& v, const std::string& path) {
+  expect_array(v, path);
+  for (std::size_t i = 0; i < v.size(); ++i) object(v[i], join_index(path, i));
+}
+
+// Checks one object and plans its construction; builds_ runs the plans in
+// order once the whole scene is known to fit.
+void SceneReader::object(const Json& v, const std::string& path) {
+  expect_object(v, path);
+  const std::string type = string(require(v, path, "type"), join_key(path, "type"));
+  const auto key = [&](const char* k) { return join_key(path, k); };
+  std::function<void(std::vector<Triangle>&)> make;
+
+  if (type == "sphere") {
+    check_keys(v, path, {"type", "name", "center", "radius", "subdivisions", "material",
+                         "transform"});
+    const Vec3 c = vec3(require(v, path, "center"), key("center"));
+    const float r = positive(require(v, path, "radius"), key("radius"));
+    int sub = 3;
+    if (const Json* s = find(v, "subdivisions")) sub = integer(*s, key("subdivisions"), 0, 10);
+    const int mat = material_ref(find(v, "material"), key("material"));
+    budget(icosphere_triangles(sub), path);
+    make = [this, c, r, sub, mat](std::vector<Triangle>& tris) {
+      next_facet_ = add_icosphere(tris, c, r, sub, FacetTag{next_object_++, mat}, next_facet_);
+    };
+  } else if (type == "box") {
+    check_keys(v, path, {"type", "name", "min", "max", "center", "size", "material",
+                         "transform"});
+    Vec3 lo, hi;
+    box_extent(v, path, lo, hi);
+    const int mat = material_ref(find(v, "material"), key("material"));
+    budget(12, 6, 1, path);
+    make = [this, lo, hi, mat](std::vector<Triangle>& tris) {
+      next_facet_ = add_box(tris, lo, hi, FacetTag{next_object_++, mat}, next_facet_);
+    };
+  } else if (type == "plane" || type == "checkerboard") {
+    const bool checker = type == "checkerboard";
+    if (checker)
+      check_keys(v, path, {"type", "name", "center", "size", "squares", "materials",
+                           "transform"});
+    else
+      check_keys(v, path, {"type", "name", "center", "size", "material", "transform"});
+    Vec3 c{0, 0, 0};
+    if (const Json* x = find(v, "center")) c = vec3(*x, key("center"));
+    float sx, sz;
+    size2(require(v, path, "size"), key("size"), sx, sz);
+    if (checker) {
+      int nx = 8, nz = 8;
+      if (const Json* s = find(v, "squares")) count2(*s, key("squares"), 100000, nx, nz);
+      const std::vector<int> mats = material_list(require(v, path, "materials"), key("materials"));
+      if (mats.size() != 2) fail(key("materials"), "expected exactly 2 materials");
+      budget(std::size_t(2) * nx * nz, std::size_t(nx) * nz, 1, path);
+      make = [this, c, sx, sz, nx, nz, mats](std::vector<Triangle>& tris) {
+        next_facet_ = add_checkerboard(tris, c, sx, sz, nx, nz, next_object_++, mats[0], mats[1],
+                                       next_facet_);
+      };
+    } else {
+      const int mat = material_ref(find(v, "material"), key("material"));
+      budget(2, 1, 1, path);
+      make = [this, c, sx, sz, mat](std::vector<Triangle>& tris) {
+        next_facet_ = add_plane(tris, c, sx, sz, FacetTag{next_object_++, mat}, next_facet_);
+      };
+    }
+  } else if (type == "polygon") {
+    check_keys(v, path, {"type", "name", "vertices", "material", "transform"});
+    const Json& vs = require(v, path, "vertices");
+    expect_array(vs, key("vertices"));
+    if (vs.size() < 3) fail(key("vertices"), "a polygon needs at least 3 vertices");
+    std::vector<Vec3> pts;
+    for (std::size_t k = 0; k < vs.size(); ++k)
+      pts.push_back(vec3(vs[k], join_index(key("vertices"), k)));
+    const int mat = material_ref(find(v, "material"), key("material"));
+    budget(pts.size() - 2, 1, 1, path);
+    const std::string where_vertices = key("vertices");
+    make = [this, pts, mat, where_vertices](std::vector<Triangle>& tris) {
+      const std::size_t before = tris.size();
+      next_facet_ = add_polygon(tris, pts, FacetTag{next_object_++, mat}, next_facet_);
+      if (tris.size() == before) fail(where_vertices, "the polygon has zero area");
+    };
+  } else if (type == "terrain") {
+    make = terrain(v, path);
+  } else if (type == "scatter" || type == "grid") {
+    make = generator(v, path, type == "grid");
+  } else if (type == "obj" || type == "model") {
+    make = include_obj(v, path, type == "model");
+  } else {
+    fail(key("type"), "unknown object type '" + quoted_prefix(type) +
+                          "' (expected sphere, box, plane, checkerboard, polygon, terrain, "
+                          "scatter, grid, obj or model)");
+  }
+  std::optional<Transform> placed;
+  if (const Json* t = find(v, "transform")) placed = transform(*t, key("transform"));
+  builds_.push_back([this, make, placed, path] {
+    auto& tris = scene_.triangles;
+    const std::size_t first = tris.size();
+    const std::size_t first_attribute = scene_.attributes.size();
+    make(tris);
+    if (placed) {
+      transform_triangles(tris, first, *placed);
+      transform_normals(scene_.attributes, first_attribute, *placed);
+    }
+    settle(first, path);
+  });
+}
+
+// After placement: zero-area triangles (possible after extreme scaling)
+// are dropped, facets whose normal overflows float are refused.
+void SceneReader::settle(std::size_t first, const std::string& path) {
+  auto& tris = scene_.triangles;
+  std::size_t keep = first, dropped = 0;
+  for (std::size_t k = first; k < tris.size(); ++k) {
+    const Triangle& t = tris[k];
+    const float e1[3] = {t.v1[0] - t.v0[0], t.v1[1] - t.v0[1], t.v1[2] - t.v0[2]};
+    const float e2[3] = {t.v2[0] - t.v0[0], t.v2[1] - t.v0[1], t.v2[2] - t.v0[2]};
+    const float c[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
+                        e1[0] * e2[1] - e1[1] * e2[0]};
+    if (!std::isfinite(c[0]) || !std::isfinite(c[1]) || !std::isfinite(c[2]))
+      fail(path, "object too large: facet " + std::to_string(t.facet_id) +
+                     " overflows float arithmetic");
+    if (c[0] == 0 && c[1] == 0 && c[2] == 0) {
+      ++dropped;
+      continue;
+    }
+    tris[keep++] = t;
+  }
+  tris.resize(keep);
+  if (dropped > 0)
+    warn(path, std::to_string(dropped) +
+                   " zero-area triangle(s) left out (too small for float); facet ids kept");
+}
+
+void SceneReader::box_extent(const Json& v, const std::string& path, Vec3& lo, Vec3& hi) const {
+  const auto key = [&](const char* k) { return join_key(path, k); };
+  const Json* mn = find(v, "min");
+  const Json* mx = find(v, "max");
+  const Json* ce = find(v, "center");
+  const Json* sz = find(v, "size");
+  if ((mn || mx) && (ce || sz)) fail(path, "give either min/max or center/size, not both");
+  if (mn || mx) {
+    lo = vec3(require(v, path, "min"), key("min"));
+    hi = vec3(require(v, path, "max"), key("max"));
+    for (int a = 0; a < 3; ++a)
+      if (!(hi[a] > lo[a])) fail(key("max"), "must be greater than min on every axis");
+    return;
+  }
+  if (!ce || !sz) fail(path, "a box needs min and max, or center and size");
+  const Vec3 c = vec3(*ce, key("center"));
+  Vec3 s;
+  if (sz->is_number()) {
+    const float x = positive(*sz, key("size"));
+    s = {x, x, x};
+  } else if (sz->is_array() && sz->size() == 3) {
+    for (int a = 0; a < 3; ++a) s[a] = positive((*sz)[a], join_index(key("size"), a));
+  } else {
+    fail(key("size"), std::string("expected a positive number or [x, y, z], not ") + kind(*sz));
+  }
+  for (int a = 0; a < 3; ++a) {
+    lo[a] = static_cast<float>(double(c[a]) - 0.5 * s[a]);
+    hi[a] = static_cast<float>(double(c[a]) + 0.5 * s[a]);
+    if (!(hi[a] > lo[a]) || !std::isfinite(lo[a]) || !std::isfinite(hi[a]))
+      fail(key("size"), "too small or too large for the box's position");
+  }
+}
+
+std::function<void(std::vector<Triangle>&)> SceneReader::terrain(const Json& v, const std::string& path) {
+  check_keys(v, path, {"type", "name", "center", "size", "quads", "height", "features",
+                       "octaves", "seed", "material", "materials", "transform"});
+  const auto key = [&](const char* k) { return join_key(path, k); };
+  TerrainDesc d;
+  if (const Json* x = find(v, "center")) d.center = vec3(*x, key("center"));
+  size2(require(v, path, "size"), key("size"), d.size_x, d.size_z);
+  count2(require(v, path, "quads"), key("quads"), 100000, d.quads_x, d.quads_z);
+  if (const Json* x = find(v, "height")) d.height = real(*x, key("height"));
+  if (const Json* x = find(v, "features")) {
+    d.features = positive(*x, key("features"));
+    if (d.features > 1e6f) fail(key("features"), "must be at most 1e6");
+  }
+  if (const Json* x = find(v, "octaves")) d.octaves = integer(*x, key("octaves"), 1, 16);
+  if (const Json* x = find(v, "seed")) d.seed = std::uint64_t(integer(*x, key("seed"), 0, INT_MAX));
+  int a = 0, b = 0;
+  if (find(v, "material") && find(v, "materials"))
+    fail(path, "give either material or materials, not both");
+  if (const Json* m = find(v, "materials")) {
+    const std::vector<int> mats = material_list(*m, key("materials"));
+    if (mats.size() != 2) fail(key("materials"), "expected exactly 2 materials");
+    a = mats[0];
+    b = mats[1];
+  } else {
+    a = b = material_ref(find(v, "material"), key("material"));
+  }
+  budget(std::size_t(2) * d.quads_x * d.quads_z, path);
+  return [this, d, a, b](std::vector<Triangle>& tris) {
+    next_facet_ = add_terrain(tris, d, next_object_++, a, b, next_facet_);
+  };
+}
+
+// Many spheres/boxes, each its own object, from a fixed-seed PCG32. Per item
+// seven numbers are drawn in a fixed order: shape, radius, x, y, z,
+// material, angle (see FORMAT.md), so a scene is the same everywhere.
+std::function<void(std::vector<Triangle>&)> SceneReader::generator(const Json& v, const std::string& path,
+                                                                   bool grid) {
+  if (grid)
+    check_keys(v, path, {"type", "name", "counts", "min", "max", "jitter", "shapes", "radius",
+                         "subdivisions", "materials", "weights", "seed", "transform"});
+  else
+    check_keys(v, path, {"type", "name", "count", "min", "max", "shapes", "radius",
+                         "subdivisions", "materials", "weights", "seed", "transform"});
+  const auto key = [&](const char* k) { return join_key(path, k); };
+  const Vec3 lo = vec3(require(v, path, "min"), key("min"));
+  const Vec3 hi = vec3(require(v, path, "max"), key("max"));
+  for (int a = 0; a < 3; ++a)
+    if (!(hi[a] >= lo[a])) fail(key("max"), "must not be less than min on any axis");
+  const int kMaxItems = kMaxGeneratorItems;
+  int counts[3] = {1, 1, 1};
+  long long items = 0;
+  if (grid) {
+    const Json& c = require(v, path, "counts");
+    if (c.is_number()) {
+      counts[0] = counts[1] = counts[2] = integer(c, key("counts"), 1, 1000);
+    } else if (c.is_array() && c.size() == 3) {
+      for (int a = 0; a < 3; ++a) counts[a] = integer(c[a], join_index(key("counts"), a), 1, 100000);
+    } else {
+      fail(key("counts"), std::string("expected an integer or [nx, ny, nz], not ") + kind(c));
+    }
+    items = 1LL * counts[0] * counts[1] * counts[2];
+    if (items > kMaxItems) fail(key("counts"), "more than " + std::to_string(kMaxItems) + " items");
+  } else {
+    items = integer(require(v, path, "count"), key("count"), 1, kMaxItems);
+  }
+  float jitter = 0;
+  if (const Json* j = find(v, "jitter")) {
+    jitter = real(*j, key("jitter"));
+    if (!(jitter >= 0 && jitter <= 1)) fail(key("jitter"), "must be in [0, 1]");
+  }
+  bool want_sphere = true, want_box = false;
+  std::vector<bool> shape_is_box{false};
+  if (const Json* s = find(v, "shapes")) {
+    expect_array(*s, key("shapes"));
+    if (s->empty()) fail(key("shapes"), "needs at least one shape");
+    shape_is_box.clear();
+    want_sphere = false;
+    for (std::size_t k = 0; k < s->size(); ++k) {
+      const std::string n = string((*s)[k], join_index(key("shapes"), k));
+      if (n != "sphere" && n != "box")
+        fail(join_index(key("shapes"), k), "unknown shape '" + n + "' (expected sphere or box)");
+      shape_is_box.push_back(n == "box");
+      want_sphere = want_sphere || n == "sphere";
+      want_box = want_box || n == "box";
+    }
+  }
+  float rmin = 0.5f, rmax = 0.5f;
+  if (const Json* r = find(v, "radius")) {
+    if (r->is_array() && r->size() == 2) {
+      rmin = positive((*r)[0], join_index(key("radius"), 0));
+      rmax = positive((*r)[1], join_index(key("radius"), 1));
+      if (rmax < rmin) fail(key("radius"), "[min, max] with max < min");
+    } else {
+      rmin = rmax = positive(*r, key("radius"));
+    }
+  }
+  int sub = 2;
+  if (const Json* s = find(v, "subdivisions")) sub = integer(*s, key("subdivisions"), 0, 10);
+  std::vector<int> mats{0};
+  if (const Json* m = find(v, "materials")) mats = material_list(*m, key("materials"));
+  std::vector<double> cumulative;
+  double total = 0;
+  if (const Json* w = find(v, "weights")) {
+    expect_array(*w, key("weights"));
+    if (w->size() != mats.size())
+      fail(key("weights"), "needs one weight per material (" + std::to_string(mats.size()) + ")");
+    for (std::size_t k = 0; k < w->size(); ++k) {
+      const double x = number((*w)[k], join_index(key("weights"), k));
+      if (x < 0) fail(join_index(key("weights"), k), "must not be negative");
+      total += x;
+      cumulative.push_back(total);
+    }
+    if (!(total > 0)) fail(key("weights"), "must not all be zero");
+  } else {
+    for (std::size_t k = 0; k < mats.size(); ++k) cumulative.push_back(total += 1.0);
+  }
+  std::uint64_t seed = 1;
+  if (const Json* s = find(v, "seed")) seed = std::uint64_t(integer(*s, key("seed"), 0, INT_MAX));
+
+  const std::size_t per_item =
+      std::max(want_sphere ? icosphere_triangles(sub) : 0, want_box ? std::size_t(12) : 0);
+  if (per_item > 0 && std::size_t(items) > max_triangles_ / per_item)
+    fail(path, std::to_string(items) + " items would make more than " +
+                   std::to_string(max_triangles_) + " triangles (scenes/FORMAT.md, Limits)");
+  budget(std::size_t(items) * per_item, std::size_t(items) * per_item, std::size_t(items), path);
+  return [=](std::vector<Triangle>& tris) {
+    build_items(tris, grid, items, counts, lo, hi, jitter, shape_is_box, rmin, rmax, sub, mats,
+                cumulative, total, seed);
+  };
+}
+
+void SceneReader::build_items(std::vector<Triangle>& tris, bool grid, long long items, const int counts[3],
+                              const Vec3& lo, const Vec3& hi, float jitter,
+                              const std::vector<bool>& shape_is_box, float rmin, float rmax, int sub,
+                              const std::vector<int>& mats, const std::vector<double>& cumulative,
+                              double total, std::uint64_t seed) {
+  Pcg32 rng(seed);
+  for (long long n = 0; n < items; ++n) {
+    const double u_shape = rng.uniform(), u_radius = rng.uniform();
+    const double ux = rng.uniform(), uy = rng.uniform(), uz = rng.uniform();
+    const double u_mat = rng.uniform(), u_angle = rng.uniform();
+    const bool box = shape_is_box[std::min<std::size_t>(
+        std::size_t(u_shape * shape_is_box.size()), shape_is_box.size() - 1)];
+    const double r = rmin + (double(rmax) - rmin) * u_radius;
+    double centre[3];
+    const double u[3] = {ux, uy, uz};
+    if (grid) {
+      const long long cell[3] = {n % counts[0], (n / counts[0]) % counts[1],
+                                 n / (1LL * counts[0] * counts[1])};
+      for (int a = 0; a < 3; ++a) {
+        const double step = (double(hi[a]) - lo[a]) / counts[a];
+        centre[a] = lo[a] + step * (cell[a] + 0.5) + jitter * 0.5 * step * (2.0 * u[a] - 1.0);
+      }
+    } else {
+      for (int a = 0; a < 3; ++a) centre[a] = lo[a] + (double(hi[a]) - lo[a]) * u[a];
+    }
+    std::size_t m = 0;
+    const double pick = u_mat * total;
+    while (m + 1 < cumulative.size() && pick >= cumulative[m]) ++m;
+    const FacetTag tag{next_object_++, mats[m]};
+    const Vec3 c{static_cast<float>(centre[0]), static_cast<float>(centre[1]),
+                 static_cast<float>(centre[2])};
+    const float rf = static_cast<float>(r);
+    if (box) {
+      const std::size_t start = tris.size();
+      next_facet_ = add_box(tris, {-rf, -rf, -rf}, {rf, rf, rf}, tag, next_facet_);
+      Transform place;
+      place.rotate_deg = {0, static_cast<float>(90.0 * u_angle), 0};
+      place.translate = c;
+      transform_triangles(tris, start, place);
+    } else {
+      next_facet_ = add_icosphere(tris, c, rf, sub, tag, next_facet_);
+    }
+  }
+}
+
+// An OBJ file ("obj"), or a model in any format ("model": OBJ by the strict
+// reader, the others through the importer). The file is read now (an OBJ's
+// triangles count against the scene's limit as they are read), its
+// triangles appended when the scene is built.
+std::function<void(std::vector<Triangle>&)> SceneReader::include_obj(const Json& v, const std::string& path,
+                                                                     bool any_format) {
+  check_keys(v, path, {"type", "name", "file", "material", "transform"});
+  const std::string fkey = join_key(path, "file");
+  const std::string file = string(require(v, path, "file"), fkey);
+  if (file.empty()) fail(fkey, "empty file name");
+  if (base_dir_.empty())
+    fail(fkey, "this scene is read from memory and may not name other files");
+  const fs::path p(file);
+  const std::string full =
+      p.is_absolute() ? file : (fs::path(base_dir_) / p).lexically_normal().string();
+  const int override_mat = find(v, "material")
+                               ? material_ref(find(v, "material"), join_key(path, "material"))
+                               : -1;
+  auto sub = std::make_shared<Scene>();
+  try {
+    const bool obj = lower(fs::path(full).extension().string()) == ".obj";
+    if (!obj && any_format && !is_imported_model(full))
+      throw InputError(full + ": not a model format the importer reads (see scenes/FORMAT.md)");
+    if (obj || !any_format) {
+      *sub = load_obj(full, max_triangles_ - planned_triangles_);
+    } else {
+      *sub = load_model(full);
+      sub->input_files.insert(sub->input_files.begin(), full);
+    }
+  } catch (const InputError& e) {
+    scene_.warnings.insert(scene_.warnings.end(), e.warnings.begin(), e.warnings.end());
+    fail(fkey, e.what());
+  }
+  budget(sub->triangles.size(), std::size_t(sub->num_facets), std::size_t(sub->num_objects),
+         path);
+  const int mat_offset = static_cast<int>(scene_.materials.size()) - 1;
+  const int tex_offset = static_cast<int>(scene_.textures.size());
+  if (override_mat < 0) {
+    for (std::size_t k = 1; k < sub->materials.size(); ++k) {
+      MaterialDesc m = sub->materials[k];
+      if (m.map_kd >= 0) m.map_kd += tex_offset;
+      if (m.map_ka >= 0) m.map_ka += tex_offset;
+      scene_.materials.push_back(std::move(m));
+    }
+    for (Texture& t : sub->textures) scene_.textures.push_back(std::move(t));
+  }
+  for (std::string& w : sub->warnings) scene_.warnings.push_back(std::move(w));
+  for (std::string& f : sub->input_files) scene_.input_files.push_back(std::move(f));
+  return [this, sub, override_mat, mat_offset](std::vector<Triangle>& tris) {
+    const int attr_offset = static_cast<int>(scene_.attributes.size());
+    for (const VertexAttributes& a : sub->attributes) scene_.attributes.push_back(a);
+    for (Triangle t : sub->triangles) {
+      t.object_id += next_object_;
+      t.facet_id += next_facet_;
+      t.material = override_mat >= 0 ? override_mat
+                                     : (t.material == 0 ? 0 : t.material + mat_offset);
+      if (t.attributes >= 0) t.attributes += attr_offset;
+      tris.push_back(t);
+    }
+    next_object_ += sub->num_objects;
+    next_facet_ += sub->num_facets;
+    sub->triangles = std::vector<Triangle>();
+    sub->attributes = std::vector<VertexAttributes>();
+  };
+}
+
+}  // namespace scene_json
+}  // namespace opsila

@@ -1,0 +1,160 @@
+// The JSON scene reader shared by the files that read a scene document:
+// scene_file.cpp (the document, its limits and value checks),
+// scene_sections.cpp (image, camera, lights, materials, transforms) and
+// scene_objects.cpp (objects, generators, included models). Internal to
+// host/input.
+#pragma once
+
+#include "input/scene_file.h"
+
+#include <algorithm>
+#include <cctype>
+#include <climits>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <initializer_list>
+#include <functional>
+#include <memory>
+#include <new>
+#include <optional>
+#include <stdexcept>
+#include <string_view>
+#include <unordered_map>
+#include <unordered_set>
+
+#include <nlohmann/json.hpp>
+
+#include "opsila_shared.h"
+#include "core/util.h"
+#include "input/json_text.h"
+#include "input/model_import.h"
+#include "input/primitives.h"
+
+namespace opsila {
+namespace scene_json {
+
+using Json = nlohmann::ordered_json;
+
+constexpr int kMaxNesting = 64;
+constexpr int kMaxKeys = 1024;  // in one object: FORMAT.md "Limits"
+constexpr int kMaxGeneratorItems = 1000000;  // FORMAT.md "Limits"
+
+inline std::string num_text(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.9g", v);
+  return buf;
+}
+
+inline std::string join_key(const std::string& path, const std::string& key) {
+  return path.empty() ? key : path + "." + key;
+}
+
+inline std::string join_index(const std::string& path, std::size_t i) {
+  return path + "[" + std::to_string(i) + "]";
+}
+
+inline const char* kind(const Json& v) {
+  switch (v.type()) {
+    case Json::value_t::null: return "null";
+    case Json::value_t::object: return "an object";
+    case Json::value_t::array: return "an array";
+    case Json::value_t::string: return "a string";
+    case Json::value_t::boolean: return "true/false";
+    case Json::value_t::discarded: return "nothing";
+    default: return "a number";
+  }
+}
+
+class SceneReader {
+ public:
+  SceneReader(const std::string& text, const std::string& name, const std::string& base_dir,
+              std::size_t max_triangles)
+      : text_(text), name_(name), base_dir_(base_dir), max_triangles_(max_triangles) {}
+
+  Scene run();
+
+ private:
+  // nlohmann's DOM builder, with every syntax or range error (number
+  // overflow included) turned into FILE:LINE:COLUMN instead of the library's
+  // own exception text.
+  struct DomBuilder : nlohmann::detail::json_sax_dom_parser<Json> {
+    DomBuilder(Json& root, const SceneReader& reader)
+        : nlohmann::detail::json_sax_dom_parser<Json>(root, false), reader_(reader) {}
+    bool parse_error(std::size_t byte, const std::string& token,
+                     const nlohmann::detail::exception& e) {
+      reader_.syntax_error(byte, e.what(), token);
+    }
+    const SceneReader& reader_;
+  };
+
+  // The document, its errors and value checks (scene_file.cpp).
+  Scene read();
+  Json parse() const;
+  [[noreturn]] void syntax_error(std::size_t byte, const std::string& what,
+                                 const std::string& token) const;
+  static std::string quoted_line(std::string text);
+  std::string where(const std::string& path) const;
+  [[noreturn]] void fail(const std::string& path, const std::string& what) const;
+  void warn(const std::string& path, const std::string& what);
+  static const Json* find(const Json& obj, const char* key);
+  const Json& require(const Json& obj, const std::string& path, const char* key) const;
+  void expect_object(const Json& v, const std::string& path) const;
+  void expect_array(const Json& v, const std::string& path) const;
+  void check_keys(const Json& obj, const std::string& path,
+                  std::initializer_list<const char*> allowed);
+  double number(const Json& v, const std::string& path) const;
+  float real(const Json& v, const std::string& path) const;
+  float positive(const Json& v, const std::string& path) const;
+  int integer(const Json& v, const std::string& path, long long lo, long long hi) const;
+  Vec3 vec3(const Json& v, const std::string& path) const;
+  Vec3 colour(const Json& v, const std::string& path) const;
+  void size2(const Json& v, const std::string& path, float& a, float& b) const;
+  void count2(const Json& v, const std::string& path, int hi, int& a, int& b) const;
+  std::string string(const Json& v, const std::string& path) const;
+
+  // Sections (scene_sections.cpp).
+  void image(const Json& v, const std::string& path);
+  void camera(const Json& v, const std::string& path);
+  void lights(const Json& v, const std::string& path);
+  void materials(const Json& v, const std::string& path);
+  MaterialDesc material(const Json& v, const std::string& path, const std::string& name);
+  int material_ref(const Json* v, const std::string& path);
+  std::vector<int> material_list(const Json& v, const std::string& path);
+  Transform transform(const Json& v, const std::string& path);
+
+  // Objects (scene_objects.cpp).
+  void budget(std::size_t triangles, std::size_t facets, std::size_t objects,
+              const std::string& path);
+  void budget(std::size_t triangles, const std::string& path);
+  void objects(const Json& v, const std::string& path);
+  void object(const Json& v, const std::string& path);
+  void settle(std::size_t first, const std::string& path);
+  void box_extent(const Json& v, const std::string& path, Vec3& lo, Vec3& hi) const;
+  std::function<void(std::vector<Triangle>&)> terrain(const Json& v, const std::string& path);
+  std::function<void(std::vector<Triangle>&)> generator(const Json& v, const std::string& path,
+                                                        bool grid);
+  void build_items(std::vector<Triangle>& tris, bool grid, long long items, const int counts[3],
+                   const Vec3& lo, const Vec3& hi, float jitter,
+                   const std::vector<bool>& shape_is_box, float rmin, float rmax, int sub,
+                   const std::vector<int>& mats, const std::vector<double>& cumulative,
+                   double total, std::uint64_t seed);
+  std::function<void(std::vector<Triangle>&)> include_obj(const Json& v, const std::string& path,
+                                                          bool any_format);
+
+  const std::string& text_;
+  const std::string& name_;
+  std::string base_dir_;
+  std::size_t max_triangles_;
+  std::unique_ptr<JsonLines> lines_;
+  Scene scene_;
+  std::vector<std::function<void()>> builds_;  // one per object, in order
+  std::size_t planned_triangles_ = 0, planned_facets_ = 0, planned_objects_ = 0;
+  std::unordered_map<std::string, int> named_;
+  std::vector<std::string> named_order_;
+  int next_object_ = 0;
+  int next_facet_ = 0;
+};
+
+}  // namespace scene_json
+}  // namespace opsila

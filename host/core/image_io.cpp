@@ -17,6 +17,7 @@
 #include <stdexcept>
 
 #include "core/scene.h"
+#include "core/util.h"
 
 #define STB_IMAGE_WRITE_IMPLEMENTATION
 #define STB_IMAGE_WRITE_STATIC
@@ -33,18 +34,6 @@ namespace {
 
 [[noreturn]] void cannot_write(const std::string& path, const std::string& reason) {
   throw InputError(path + ": cannot write (" + reason + ")");
-}
-
-std::string folder_of(const std::string& path) {
-  const std::size_t slash = path.find_last_of('/');
-  if (slash == std::string::npos) return ".";
-  if (slash == 0) return "/";
-  return path.substr(0, slash);
-}
-
-std::string name_of(const std::string& path) {
-  const std::size_t slash = path.find_last_of('/');
-  return slash == std::string::npos ? path : path.substr(slash + 1);
 }
 
 bool little_endian_host() {

@@ -14,6 +14,7 @@
 
 #include "core/image_io.h"
 #include "core/scene.h"
+#include "core/util.h"
 
 namespace opsila {
 
@@ -50,18 +51,6 @@ int claim_slot(const std::string& temp) {
 void release_slot(int& slot) {
   if (slot >= 0) g_used[slot] = 0;
   slot = -1;
-}
-
-std::string folder_of(const std::string& path) {
-  const std::size_t slash = path.find_last_of('/');
-  if (slash == std::string::npos) return ".";
-  if (slash == 0) return "/";
-  return path.substr(0, slash);
-}
-
-std::string name_of(const std::string& path) {
-  const std::size_t slash = path.find_last_of('/');
-  return slash == std::string::npos ? path : path.substr(slash + 1);
 }
 
 [[noreturn]] void cannot_write(const std::string& path, const std::string& reason) {

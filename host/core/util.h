@@ -13,6 +13,10 @@ namespace opsila {
 // ASCII lower case.
 std::string lower(std::string s);
 
+// The folder of a path ("." when it has none) and its last component.
+std::string folder_of(const std::string& path);
+std::string name_of(const std::string& path);
+
 // The lower median: always one of the values (0 when empty).
 double median(std::vector<double> v);
 // Index of the value closest to the median (the run whose details are kept).

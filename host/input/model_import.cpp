@@ -335,6 +335,41 @@ class ImportWatchdog {
   std::thread thread_;
 };
 
+// The importer's OFF reader allocates what the header's counts ask for before
+// it reads a vertex (found by fuzz_model: tens of GB from a 100-byte file).
+// A vertex or face takes at least two bytes of text, so counts beyond the
+// file's size are refused here; everything else is left to the importer's
+// own checks.
+void check_off_header(const std::string& text, std::size_t file_bytes, const std::string& name) {
+  std::vector<std::string> tokens;
+  std::size_t i = 0;
+  while (i < text.size() && tokens.size() < 3) {
+    while (i < text.size() && std::isspace(static_cast<unsigned char>(text[i]))) ++i;
+    if (i < text.size() && text[i] == '#') {  // a comment runs to the end of its line
+      while (i < text.size() && text[i] != '\n') ++i;
+      continue;
+    }
+    const std::size_t start = i;
+    while (i < text.size() && !std::isspace(static_cast<unsigned char>(text[i]))) ++i;
+    if (i > start) tokens.push_back(text.substr(start, i - start));
+  }
+  // The counts are the first two runs of digits (the importer also reads
+  // them when they follow the OFF keyword in the same token, or precede
+  // other bytes); each must fit the file.
+  int judged = 0;
+  for (const std::string& token : tokens) {
+    const std::size_t from = token.find_first_of("0123456789");
+    if (from == std::string::npos) continue;
+    const std::size_t to = std::min(token.find_first_not_of("0123456789", from), token.size());
+    const std::string t = token.substr(from, to - from);
+    const char* what = judged == 0 ? "vertices" : "faces";
+    if (t.size() > 15 || std::stoull(t) > file_bytes / 2)
+      throw InputError(name + ": OFF header asks for " + (t.size() > 15 ? t.substr(0, 15) + "..." : t) + " " +
+                       what + ", more than a file of " + std::to_string(file_bytes) + " bytes can hold");
+    if (++judged == 2) return;
+  }
+}
+
 // aiProcess_ValidateDataStructure refuses inconsistent data (indices out of
 // range, ...) instead of handing it on.
 constexpr unsigned kImportFlags = aiProcess_ValidateDataStructure;
@@ -375,6 +410,14 @@ Scene load_model(const std::string& path) {
     head.resize(static_cast<std::size_t>(in.gcount()));
     check_ply_header(head, path);
   }
+  if (lower(fs::path(path).extension().string()) == ".off") {
+    std::ifstream in(path, std::ios::binary);
+    std::string head(64 * 1024, '\0');
+    in.read(head.data(), static_cast<std::streamsize>(head.size()));
+    head.resize(static_cast<std::size_t>(in.gcount()));
+    std::error_code ec;
+    check_off_header(head, static_cast<std::size_t>(fs::file_size(path, ec)), path);
+  }
   // The importer reads the file (and the files it names) itself.
   Assimp::Importer importer;
   const aiScene* ai = nullptr;
@@ -390,6 +433,7 @@ Scene load_model(const std::string& path) {
 
 Scene load_model_from_memory(const std::string& bytes, const std::string& name, const std::string& hint) {
   check_ply_header(bytes.substr(0, 64 * 1024), name);
+  if (lower(hint) == "off") check_off_header(bytes.substr(0, 64 * 1024), bytes.size(), name);
   Assimp::Importer importer;
   const aiScene* ai = importer.ReadFileFromMemory(bytes.data(), bytes.size(), kImportFlags, hint.c_str());
   return convert(importer, ai, name, "");

@@ -182,6 +182,17 @@ TEST(ModelImport, AnImportThatOutlivesItsBudgetIsOneClearError) {
   EXPECT_EQ(test::run_opsila({"render", model, "-o", dir.file("y.png"), "--size", "8x8"}).exit_code, 0);
 }
 
+// Counts in an OFF header that no file of that size can hold are refused
+// before the importer allocates for them (found by fuzz_model).
+TEST(ModelImport, OffCountsBeyondTheFileAreRefused) {
+  test::TempDir dir;
+  const std::string path = dir.write("huge.off", "OFF\n3 90000000000000 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
+  const std::string msg = error_of(path);
+  EXPECT_EQ(msg.rfind(path + ": OFF header asks for 90000000000000 faces", 0), 0u) << msg;
+  const std::string ok = dir.write("ok.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
+  EXPECT_EQ(load_scene(ok).triangles.size(), 1u);
+}
+
 TEST(ModelImport, SceneFileModelObjects) {
   REQUIRE_TEST_MODELS();
   test::TempDir dir;

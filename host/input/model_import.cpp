@@ -370,6 +370,18 @@ void check_off_header(const std::string& text, std::size_t file_bytes, const std
   }
 }
 
+// The importer picks its OFF reader by extension, and also by content when the
+// extension alone does not settle it (.gltf and .glb are claimed by two
+// readers): content whose first three bytes, NULs dropped, read "off" in any
+// case. Either way the header check must run first.
+bool off_reader_may_take(const std::string& head, const std::string& ext) {
+  if (lower(ext) == "off" || lower(ext) == ".off") return true;
+  std::string first;
+  for (std::size_t i = 0; i < head.size() && i < 3; ++i)
+    if (head[i] != '\0') first += static_cast<char>(std::tolower(static_cast<unsigned char>(head[i])));
+  return first == "off";
+}
+
 // aiProcess_ValidateDataStructure refuses inconsistent data (indices out of
 // range, ...) instead of handing it on.
 constexpr unsigned kImportFlags = aiProcess_ValidateDataStructure;
@@ -410,13 +422,15 @@ Scene load_model(const std::string& path) {
     head.resize(static_cast<std::size_t>(in.gcount()));
     check_ply_header(head, path);
   }
-  if (lower(fs::path(path).extension().string()) == ".off") {
+  {
     std::ifstream in(path, std::ios::binary);
     std::string head(64 * 1024, '\0');
     in.read(head.data(), static_cast<std::streamsize>(head.size()));
     head.resize(static_cast<std::size_t>(in.gcount()));
-    std::error_code ec;
-    check_off_header(head, static_cast<std::size_t>(fs::file_size(path, ec)), path);
+    if (off_reader_may_take(head, fs::path(path).extension().string())) {
+      std::error_code ec;
+      check_off_header(head, static_cast<std::size_t>(fs::file_size(path, ec)), path);
+    }
   }
   // The importer reads the file (and the files it names) itself.
   Assimp::Importer importer;
@@ -433,7 +447,7 @@ Scene load_model(const std::string& path) {
 
 Scene load_model_from_memory(const std::string& bytes, const std::string& name, const std::string& hint) {
   check_ply_header(bytes.substr(0, 64 * 1024), name);
-  if (lower(hint) == "off") check_off_header(bytes.substr(0, 64 * 1024), bytes.size(), name);
+  if (off_reader_may_take(bytes.substr(0, 3), hint)) check_off_header(bytes.substr(0, 64 * 1024), bytes.size(), name);
   Assimp::Importer importer;
   const aiScene* ai = importer.ReadFileFromMemory(bytes.data(), bytes.size(), kImportFlags, hint.c_str());
   return convert(importer, ai, name, "");

@@ -193,6 +193,25 @@ TEST(ModelImport, OffCountsBeyondTheFileAreRefused) {
   EXPECT_EQ(load_scene(ok).triangles.size(), 1u);
 }
 
+// The importer also hands OFF text named .gltf or .glb to its OFF reader (two
+// readers claim those names, neither takes the text, so content decides):
+// the same check applies (found by fuzz_model).
+TEST(ModelImport, OffTextUnderAnotherNameIsCheckedToo) {
+  test::TempDir dir;
+  for (const char* name : {"huge.gltf", "huge.glb"}) {
+    const std::string path = dir.write(name, "OFF\n3 90000000000000 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
+    const std::string msg = error_of(path);
+    EXPECT_EQ(msg.rfind(path + ": OFF header asks for 90000000000000 faces", 0), 0u) << msg;
+  }
+  const std::string mem = std::string("OFF55555555555555555555551\n1 2 0\n0 0 0\n");
+  try {
+    load_model_from_memory(mem, "fuzz.gltf", "gltf");
+    ADD_FAILURE() << "loaded";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("OFF header asks for"), std::string::npos) << e.what();
+  }
+}
+
 TEST(ModelImport, SceneFileModelObjects) {
   REQUIRE_TEST_MODELS();
   test::TempDir dir;

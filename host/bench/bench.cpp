@@ -20,6 +20,7 @@
 #include "core/image_io.h"
 #include "core/output_files.h"
 #include "input/scene_file.h"
+#include "machine/pe_group.h"
 #include "machine/ranks.h"
 
 namespace opsila {
@@ -73,34 +74,38 @@ int run_bench(const std::vector<std::string>& args) {
     std::fputs(bench_usage().c_str(), stdout);
     return kExitOk;
   }
-  // The bench measures one process. Under an MPI launcher with several ranks
-  // each would run the whole bench alone and race for the same outputs, so
-  // it is refused; the ranks' figures come from `render --stats`.
-  if (launched_by_mpi()) {
-    Ranks& ranks = Ranks::world();
-    ranks.start();
-    if (ranks.size() > 1)  // every rank refuses; the lowest prints it, once
-      throw InputError("bench runs in one process (this run has " + std::to_string(ranks.size()) +
-                       " MPI ranks); for the exchange between ranks use `mpirun -np R opsila render SCENE "
-                       "-o OUT --stats STATS.json` (its \"mpi\" section)");
-  }
+  // Under mpirun every rank drives its device and its group of PEs through
+  // the OPSILA render; rank 0 alone reports and writes. The baselines and the
+  // scatter curve measure one device alone: with several ranks they are left
+  // out (said in the report), as a single-process bench measures them.
+  Ranks& ranks = Ranks::world();
+  if (launched_by_mpi()) ranks.start();
+  const bool writer = ranks.rank() == 0;
   // Checked, not created: the CSV folder, its tables and the JSON file
   // appear together at the end, or not at all.
   install_interrupt_cleanup();
   OutputFiles outputs;
-  if (!o.json_path.empty()) outputs.declare("--json", o.json_path);
-  if (!o.csv_dir.empty()) outputs.declare_folder("--csv", o.csv_dir);
+  if (writer && !o.json_path.empty()) outputs.declare("--json", o.json_path);
+  if (writer && !o.csv_dir.empty()) outputs.declare_folder("--csv", o.csv_dir);
   outputs.refuse_inputs({o.scene_path});
   nlohmann::json saved;  // read first, so a bad file fails before any work
   if (!o.compare_path.empty()) {
     outputs.refuse_inputs({o.compare_path});
     saved = read_saved_bench(o.compare_path);
   }
-  const BenchProgress progress{o.quiet};
+  const BenchProgress progress{o.quiet || !writer};
 
   ClRuntime rt(choose_device_flag(o.device_spec));
-  progress("device: %s", rt.description().c_str());
-  Scene scene = load_scene_or_explain(o.scene_path, o.quiet);
+  if (ranks.size() > 1) {
+    // Every rank names its device (as render does), each on its own line.
+    const PeGroup g = pe_group(o.pes.value_or(RenderSettings().num_pes), ranks.size(), ranks.rank());
+    if (!o.quiet)
+      std::fprintf(stderr, "opsila: bench: device: rank %d of %d (%s), PEs %d..%d: %s\n", g.rank, g.ranks,
+                   ranks.host().c_str(), g.begin, g.end - 1, rt.description().c_str());
+  } else {
+    progress("device: %s", rt.description().c_str());
+  }
+  Scene scene = load_scene_or_explain(o.scene_path, o.quiet || !writer);
   outputs.refuse_inputs(scene.input_files);
   apply_view_options(scene, o);
   if (const std::string note = large_work_note(scene); !note.empty()) progress("note: %s", note.c_str());
@@ -116,9 +121,19 @@ int run_bench(const std::vector<std::string>& args) {
   report.load_before = load_average();
   build_program(report, rt, progress);
   measure_opsila(report, scene, settings, rt, progress);
-  measure_baselines(report, scene, rt, progress);
-  measure_scatter_curve(report, rt, progress);
+  report.ranks = ranks.size();
+  if (ranks.size() == 1) {
+    measure_baselines(report, scene, rt, progress);
+    measure_scatter_curve(report, rt, progress);
+  } else {
+    progress("%d MPI ranks: the baselines and the scatter curve are single-device measurements "
+             "(run `opsila bench` without mpirun for them)", ranks.size());
+  }
   report.load_after = load_average();
+  if (!writer) {
+    ranks.checkpoint();  // rank 0 reports; a failure there ends every rank alike
+    return kExitOk;
+  }
   report.analyse();
 
   const nlohmann::json results = bench_json(report);
@@ -129,6 +144,7 @@ int run_bench(const std::vector<std::string>& args) {
   if (!o.compare_path.empty()) std::fputs(compare_text(results, saved, o.compare_path).c_str(), stdout);
   if (!o.json_path.empty()) progress("wrote %s", o.json_path.c_str());
   if (!o.csv_dir.empty()) progress("wrote CSV tables in %s", o.csv_dir.c_str());
+  ranks.checkpoint();
   return kExitOk;
 }
 

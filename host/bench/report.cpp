@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "core/image_io.h"
+#include "machine/pe_group.h"
 #include "opsila_shared.h"
 
 namespace opsila {
@@ -68,6 +69,27 @@ Agreement compare_images(const std::vector<float>& a, const std::vector<float>& 
 std::optional<double> occupancy_of(std::uint64_t total, std::uint64_t max, std::size_t pes) {
   if (max == 0 || pes == 0) return std::nullopt;
   return double(total) / (double(pes) * double(max));
+}
+
+RankFigures rank_figures(const BenchReport& r) {
+  RankFigures f;
+  const std::vector<RankReport>& ranks = r.stats().ranks;
+  f.traffic = rank_traffic(ranks);
+  double exchange_max = 0;
+  for (const RankReport& k : ranks) {
+    f.frame_seconds = std::max(f.frame_seconds, k.render_seconds);
+    exchange_max = std::max(exchange_max, k.exchange_seconds);
+    if (k.render_seconds > 0) {
+      f.exchange_share = std::max(f.exchange_share, k.exchange_seconds / k.render_seconds);
+      f.exposed_share = std::max(f.exposed_share, k.exposed_seconds / k.render_seconds);
+      f.mpi_share = std::max(f.mpi_share, k.mpi_seconds / k.render_seconds);
+    }
+  }
+  const std::uint64_t rays = r.rays_total();
+  f.seconds_per_descriptor = f.traffic.sent > 0 ? exchange_max / double(f.traffic.sent) : 0.0;
+  f.seconds_per_ray = rays > 0 ? exchange_max / double(rays) : 0.0;
+  f.descriptors_per_ray = rays > 0 ? double(f.traffic.sent) / double(rays) : 0.0;
+  return f;
 }
 
 const char* launch_mode(const std::string& name) { return name == "spmd_phase" ? "SPMD" : "SIMD"; }
@@ -146,6 +168,20 @@ void BenchReport::analyse() {
   // allowed if every PE had been as busy as the busiest one, level by level.
   occupancy = occupancy_of(all_tests, all_max_tests, std::size_t(pes));
   occupancy_descriptors = occupancy_of(all_descriptors, all_max_desc, std::size_t(pes));
+
+  cross_rank_by_level.clear();
+  if (ranks > 1) {
+    const std::size_t P = std::size_t(st.num_pes);
+    for (const auto& level : st.traffic) {
+      std::uint64_t crossed = 0;
+      for (std::size_t src = 0; src < P; ++src)
+        for (std::size_t dst = 0; dst < P; ++dst)
+          if (src * P + dst < level.size() &&
+              rank_of_pe(int(P), ranks, int(src)) != rank_of_pe(int(P), ranks, int(dst)))
+            crossed += level[src * P + dst];
+      cross_rank_by_level.push_back(crossed);
+    }
+  }
 
   bank_max = bank_sum = 0;
   for (std::uint64_t b : st.bank_bytes) bank_max = std::max(bank_max, b), bank_sum += b;

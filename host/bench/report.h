@@ -16,6 +16,7 @@
 #include "bench/bench.h"
 #include "core/output_files.h"
 #include "machine/renderer.h"
+#include "machine/stats.h"
 
 namespace opsila {
 
@@ -89,6 +90,13 @@ struct BenchReport {
   RenderResult opsila;               // the median run
   bool deterministic = true;         // every timed run gave the same image
 
+  // MPI ranks of the run (1: one process). With several, the per-rank
+  // reports are in stats().ranks and stages 2 and 3 are not run.
+  int ranks = 1;
+  // Descriptors that crossed from one rank's PEs to another's, per level
+  // (from the PE x PE traffic and the PE groups); empty with one rank.
+  std::vector<std::uint64_t> cross_rank_by_level;
+
   // 2. baselines on the same rays.
   BaselineRun megakernel, sequential, threads, embree;
 
@@ -121,6 +129,18 @@ struct BenchReport {
   std::optional<double> vs_embree(double mrays_per_s) const;
   double replicated_over_bank_max() const;
 };
+
+// Several MPI ranks: what the exchange between them costs, from the
+// per-rank reports (each share is the largest over the ranks).
+struct RankFigures {
+  RankTraffic traffic;
+  double frame_seconds = 0;  // the slowest rank's
+  double exchange_share = 0, exposed_share = 0, mpi_share = 0;  // of a rank's frame
+  double seconds_per_descriptor = 0;  // largest exchange time over the descriptors sent
+  double seconds_per_ray = 0;         // largest exchange time over the rays of the frame
+  double descriptors_per_ray = 0;     // crossing ranks
+};
+RankFigures rank_figures(const BenchReport& report);
 
 // "launch" mode of a kernel in the paper's terms.
 const char* launch_mode(const std::string& kernel_name);

@@ -100,17 +100,46 @@ std::string baselines_csv(const BenchReport& r) {
   return bl.str();
 }
 
+// Several MPI ranks: one row per rank, and the descriptors between ranks.
+std::string ranks_csv(const BenchReport& r) {
+  const RankTraffic t = rank_traffic(r.stats().ranks);
+  std::ostringstream out;
+  out << "rank,pe_begin,pe_end,device_bytes,scene_bytes,host_peak_bytes,render_seconds,exchange_seconds,"
+         "exposed_seconds,mpi_seconds,sent,received\n";
+  for (const RankReport& k : r.stats().ranks)
+    out << k.rank << ',' << k.pe_begin << ',' << k.pe_end << ',' << k.device_bytes << ',' << k.scene_bytes << ','
+        << k.host_peak_bytes << ',' << num(k.render_seconds) << ',' << num(k.exchange_seconds) << ','
+        << num(k.exposed_seconds) << ',' << num(k.mpi_seconds) << ',' << t.sent_by_rank[std::size_t(k.rank)] << ','
+        << t.received_by_rank[std::size_t(k.rank)] << '\n';
+  return out.str();
+}
+
+std::string rank_traffic_csv(const BenchReport& r) {
+  const RankTraffic t = rank_traffic(r.stats().ranks);
+  std::ostringstream out;
+  out << "round,from,to,descriptors\n";
+  for (std::size_t k = 0; k < t.rounds.size(); ++k)
+    for (std::size_t src = 0; src < t.rounds[k].size(); ++src)
+      for (std::size_t dst = 0; dst < t.rounds[k][src].size(); ++dst)
+        if (const std::uint64_t n = t.rounds[k][src][dst]) out << k << ',' << src << ',' << dst << ',' << n << '\n';
+  return out.str();
+}
+
 }  // namespace
 
 void write_bench_csv(const BenchReport& r, const std::string& dir, OutputFiles& outputs) {
   const auto write = [&](const char* name, const std::string& text) { outputs.write(dir + "/" + name, text); };
-  write("scatter.csv", scatter_csv(r.curve));
+  if (!r.curve.empty()) write("scatter.csv", scatter_csv(r.curve));
   if (!r.by_pes.empty()) write("scatter_pes.csv", scatter_pes_csv(r.by_pes));
   write("phases.csv", phases_csv(r.stats()));
   write("levels.csv", levels_csv(r));
   write("occupancy.csv", occupancy_csv(r));
   write("traffic.csv", traffic_csv(r.stats(), r.pes));
   write("baselines.csv", baselines_csv(r));
+  if (r.ranks > 1) {
+    write("ranks.csv", ranks_csv(r));
+    write("rank_traffic.csv", rank_traffic_csv(r));
+  }
 }
 
 }  // namespace opsila

@@ -292,6 +292,22 @@ json baselines_json(const BenchReport& r) {
   return baselines;
 }
 
+// Several MPI ranks: the --stats "mpi" section (per-rank reports, the rank x
+// rank traffic) and what the exchange between ranks costs.
+json mpi_json(const BenchReport& r) {
+  const RankFigures f = rank_figures(r);
+  json j = ranks_json(r.stats().ranks);
+  j["frame_seconds_slowest_rank"] = f.frame_seconds;
+  j["exchange_share"] = f.exchange_share;
+  j["exposed_share"] = f.exposed_share;
+  j["mpi_share"] = f.mpi_share;
+  j["exchange_seconds_per_descriptor"] = f.seconds_per_descriptor;
+  j["exchange_seconds_per_ray"] = f.seconds_per_ray;
+  j["descriptors_between_ranks_per_ray"] = f.descriptors_per_ray;
+  j["descriptors_between_ranks_by_level"] = r.cross_rank_by_level;
+  return j;
+}
+
 // Targets (benchmarks, reported, never enforced).
 json targets_json(const BenchReport& r) {
   json targets = json::object();
@@ -313,7 +329,9 @@ json targets_json(const BenchReport& r) {
                           {"goal", 0.6},
                           {"met", r.occupancy.has_value() && *r.occupancy >= 0.6}};
   targets["rounds"] = {{"rounds", r.stats().rounds}, {"goal", 60}, {"met", r.stats().rounds <= 60}};
-  {
+  if (!r.megakernel.present) {
+    targets["opsila_vs_megakernel"] = nullptr;  // not measured (several MPI ranks)
+  } else {
     const double mega = mrays(r.megakernel.median_run.rays.total(), r.megakernel.seconds);
     const double mine = mrays(r.rays_total(), r.render_seconds);
     targets["opsila_vs_megakernel"] = {{"ratio", mega > 0 ? mine / mega : 0.0},
@@ -347,11 +365,14 @@ nlohmann::json bench_json(const BenchReport& r) {
   json j = header_json(r);
   j["context"] = context_json(r);
   j["render"] = render_json(r);
+  j["ranks"] = r.ranks;
+  if (r.ranks > 1) j["mpi"] = mpi_json(r);
+  // With several ranks the scatter curve is not measured (a single-device figure).
   j["scatter"] = scatter_json(r.curve);
   j["scatter_by_pes"] = scatter_by_pes_json(r.by_pes);
   // The copy ceiling: the longest vector's copy bandwidth (the asymptote).
-  j["copy_gbytes_per_s"] = r.curve.back().copy_kernel_gbytes_per_s();
-  j["copy_buffer_gbytes_per_s"] = r.curve.back().copy_buffer_gbytes_per_s();
+  j["copy_gbytes_per_s"] = r.curve.empty() ? json(nullptr) : json(r.curve.back().copy_kernel_gbytes_per_s());
+  j["copy_buffer_gbytes_per_s"] = r.curve.empty() ? json(nullptr) : json(r.curve.back().copy_buffer_gbytes_per_s());
   j["bytes_per_descriptor"] = DescriptorSet::kBytes;
   j["memory"] = memory_json(r);
   j["baselines"] = baselines_json(r);

@@ -37,7 +37,10 @@ void header_text(std::string& out, const BenchReport& r) {
   const RenderStats& st = r.stats();
   appendf(out, "opsila bench: %s, %dx%d, %d spp, depth %d, %d PEs (bank capacity %d, work-group %zu)\n",
           r.scene_path.c_str(), r.width, r.height, r.spp, r.depth, r.pes, st.bank_capacity, st.work_group_size);
-  appendf(out, "device: %s\n", r.device.description.c_str());
+  if (r.ranks > 1)
+    appendf(out, "device: %d MPI ranks, one device each (below); rank 0: %s\n", r.ranks, r.device.description.c_str());
+  else
+    appendf(out, "device: %s\n", r.device.description.c_str());
   appendf(out, "scene: %zu triangles, %d facets, %d objects, %d clusters, %zu lights\n", r.triangles, r.facets,
           r.objects, st.num_clusters, r.lights);
   appendf(out,
@@ -67,11 +70,11 @@ void renders_text(std::string& out, const BenchReport& r) {
     appendf(out, "%-40s %10.4f %10.3f %12llu %10s %10s\n", b->label.c_str(), b->seconds, m,
             ull(b->median_run.rays.total()), ps, ratio(m).c_str());
   }
-  appendf(out,
-          "work: OPSILA %llu descriptors, %llu ray-facet + %llu ray-box tests, %llu sphere tests;\n"
-          "      megakernel %llu ray-facet + %llu ray-box tests\n",
-          ull(r.all_descriptors), ull(r.all_triangle_tests), ull(r.all_box_tests), ull(r.all_sphere_tests),
-          ull(r.megakernel.median_run.triangle_tests), ull(r.megakernel.median_run.box_tests));
+  appendf(out, "work: OPSILA %llu descriptors, %llu ray-facet + %llu ray-box tests, %llu sphere tests\n",
+          ull(r.all_descriptors), ull(r.all_triangle_tests), ull(r.all_box_tests), ull(r.all_sphere_tests));
+  if (r.megakernel.present)
+    appendf(out, "      megakernel %llu ray-facet + %llu ray-box tests\n", ull(r.megakernel.median_run.triangle_tests),
+            ull(r.megakernel.median_run.box_tests));
   appendf(out, "routing (%s): %llu destination tests (%llu sphere + %llu PE-box/routing-node), %llu descriptors\n",
           r.stats().routing == OPSILA_ROUTING_SPHERES ? "spheres" : "boxes",
           ull(r.all_sphere_tests + r.all_route_tests), ull(r.all_sphere_tests), ull(r.all_route_tests),
@@ -83,7 +86,8 @@ void renders_text(std::string& out, const BenchReport& r) {
 void phases_text(std::string& out, const BenchReport& r) {
   const RenderStats& st = r.stats();
   const double rs = st.render_seconds;
-  appendf(out, "phases: %d rounds (%d phase switches), render %.4f s\n", st.rounds, 2 * st.rounds, rs);
+  appendf(out, "phases: %d rounds (%d phase switches), render %.4f s%s\n", st.rounds, 2 * st.rounds, rs,
+          r.ranks > 1 ? " (kernel times: rank 0's device)" : "");
   appendf(out, "  %-18s %5s %9s %10s %7s\n", "kernel", "mode", "launches", "seconds", "share");
   for (const auto& [name, e] : r.by_kernel)
     appendf(out, "  %-18s %5s %9d %10.4f %6.1f%%\n", name.c_str(), launch_mode(name), e.launches, e.seconds,
@@ -123,7 +127,48 @@ void memory_text(std::string& out, const BenchReport& r) {
   }
 }
 
+// Several MPI ranks: what each did, the rank x rank traffic, and what the
+// exchange between ranks costs.
+void ranks_text(std::string& out, const BenchReport& r) {
+  const std::vector<RankReport>& ranks = r.stats().ranks;
+  if (ranks.empty()) return;
+  const RankFigures f = rank_figures(r);
+  appendf(out, "MPI ranks: %d (the median run; exchange = read-back + MPI + write-back, exposed = not hidden "
+          "by the SPMD phase)\n", r.ranks);
+  appendf(out, "  %4s %7s %10s %10s %10s %9s %9s %9s %9s %10s %10s\n", "rank", "PEs", "device", "scene",
+          "host peak", "frame s", "exch. s", "exposed s", "MPI s", "sent", "received");
+  for (const RankReport& k : ranks) {
+    const std::string pes = std::to_string(k.pe_begin) + ".." + std::to_string(k.pe_end - 1);
+    appendf(out, "  %4d %7s %10s %10s %10s %9.4f %9.4f %9.4f %9.4f %10llu %10llu\n", k.rank, pes.c_str(),
+            bench_bytes(double(k.device_bytes)).c_str(), bench_bytes(double(k.scene_bytes)).c_str(),
+            bench_bytes(double(k.host_peak_bytes)).c_str(), k.render_seconds, k.exchange_seconds,
+            k.exposed_seconds, k.mpi_seconds, ull(f.traffic.sent_by_rank[std::size_t(k.rank)]),
+            ull(f.traffic.received_by_rank[std::size_t(k.rank)]));
+  }
+  appendf(out, "  descriptors between ranks (row: from, column: to), all rounds:\n");
+  for (std::size_t src = 0; src < f.traffic.total.size(); ++src) {
+    appendf(out, "    %2zu:", src);
+    for (std::uint64_t n : f.traffic.total[src]) appendf(out, " %10llu", ull(n));
+    appendf(out, "\n");
+  }
+  appendf(out, "  %llu descriptors (%s) crossed ranks in %d rounds, %.4f per ray; every one received: %s\n",
+          ull(f.traffic.sent), bench_bytes(double(f.traffic.sent) * double(DescriptorSet::kBytes)).c_str(),
+          r.stats().rounds, f.descriptors_per_ray, f.traffic.balanced ? "yes" : "NO");
+  if (!r.cross_rank_by_level.empty()) {
+    appendf(out, "  by level (descriptors sent from one rank's PEs to another's):");
+    for (std::size_t l = 0; l < r.cross_rank_by_level.size(); ++l)
+      if (r.cross_rank_by_level[l] > 0) appendf(out, " %zu: %llu", l, ull(r.cross_rank_by_level[l]));
+    appendf(out, "\n");
+  }
+  appendf(out, "  exchange between ranks: %.1f%% of the frame (%.1f%% exposed, %.1f%% in MPI calls), "
+          "%.2f us per descriptor sent, %.3f us per ray (slowest rank)\n",
+          100.0 * f.exchange_share, 100.0 * f.exposed_share, 100.0 * f.mpi_share, 1e6 * f.seconds_per_descriptor,
+          1e6 * f.seconds_per_ray);
+  appendf(out, "  (baselines and the scatter curve measure one device alone: run `opsila bench` without mpirun)\n\n");
+}
+
 void scatter_text(std::string& out, const BenchReport& r) {
+  if (r.curve.empty()) return;
   appendf(out, "scatter (%d PEs, %zu bytes per descriptor, read + written):\n", r.scatter_pes, DescriptorSet::kBytes);
   appendf(out, "  %8s %11s %11s %8s %9s %9s %9s %7s %9s %9s\n", "length", "host ms", "kernel ms", "speedup", "GB/s",
           "copy GB/s", "cpbuf GB/s", "%copy", "6vec GB/s", "rec GB/s");
@@ -151,6 +196,7 @@ std::string bench_text(const BenchReport& r) {
   header_text(out, r);
   renders_text(out, r);
   phases_text(out, r);
+  ranks_text(out, r);
   occupancy_text(out, r);
   memory_text(out, r);
   scatter_text(out, r);

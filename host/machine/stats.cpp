@@ -181,53 +181,54 @@ nlohmann::json stats_json(const RenderResult& result, const Scene& scene,
   return j;
 }
 
-nlohmann::json ranks_json(const std::vector<RankReport>& reports) {
+RankTraffic rank_traffic(const std::vector<RankReport>& reports) {
+  RankTraffic t;
   const std::size_t R = reports.size();
   std::size_t rounds = 0;
   for (const RankReport& r : reports) rounds = std::max(rounds, r.sent.size());
-  // traffic[round][src][dst] from what each rank sent; each rank's received
-  // counts must mirror it (sent by src to dst == received by dst from src).
-  std::vector<std::vector<std::vector<std::uint64_t>>> traffic(
-      rounds, std::vector<std::vector<std::uint64_t>>(R, std::vector<std::uint64_t>(R, 0)));
-  std::vector<std::vector<std::uint64_t>> total(R, std::vector<std::uint64_t>(R, 0));
+  t.rounds.assign(rounds, std::vector<std::vector<std::uint64_t>>(R, std::vector<std::uint64_t>(R, 0)));
+  t.total.assign(R, std::vector<std::uint64_t>(R, 0));
+  t.sent_by_rank.assign(R, 0);
+  t.received_by_rank.assign(R, 0);
+  // Sent by src to dst in a round must equal what dst counted from src.
   bool mirrored = true;
-  std::uint64_t sent = 0, received = 0;
   for (std::size_t src = 0; src < R; ++src)
     for (std::size_t k = 0; k < reports[src].sent.size(); ++k)
       for (std::size_t dst = 0; dst < R && dst < reports[src].sent[k].size(); ++dst) {
         const std::uint64_t n = reports[src].sent[k][dst];
-        traffic[k][src][dst] = n;
-        total[src][dst] += n;
-        if (dst != src) sent += n;
+        t.rounds[k][src][dst] = n;
+        t.total[src][dst] += n;
+        if (dst != src) t.sent += n, t.sent_by_rank[src] += n;
         const auto& back = reports[dst].received;
         if (k >= back.size() || src >= back[k].size() || back[k][src] != n) mirrored = false;
       }
-  for (const RankReport& r : reports)
-    for (const auto& row : r.received)
+  for (std::size_t d = 0; d < R; ++d)
+    for (const auto& row : reports[d].received)
       for (std::size_t src = 0; src < row.size(); ++src)
-        if (src != std::size_t(r.rank)) received += row[src];
+        if (src != d) t.received += row[src], t.received_by_rank[d] += row[src];
+  t.balanced = mirrored && t.sent == t.received;
+  return t;
+}
+
+nlohmann::json ranks_json(const std::vector<RankReport>& reports) {
+  const RankTraffic t = rank_traffic(reports);
   nlohmann::json per_rank = nlohmann::json::array();
-  for (const RankReport& r : reports) {
-    nlohmann::json e = nlohmann::json::parse(rank_report_json(r));
+  for (std::size_t k = 0; k < reports.size(); ++k) {
+    nlohmann::json e = nlohmann::json::parse(rank_report_json(reports[k]));
     // Totals over the rounds, to other ranks and from them.
-    std::uint64_t out = 0, in = 0;
-    for (const auto& row : r.sent)
-      for (std::size_t q = 0; q < row.size(); ++q) out += q != std::size_t(r.rank) ? row[q] : 0;
-    for (const auto& row : r.received)
-      for (std::size_t q = 0; q < row.size(); ++q) in += q != std::size_t(r.rank) ? row[q] : 0;
-    e["sent"] = out;
-    e["received"] = in;
+    e["sent"] = t.sent_by_rank[k];
+    e["received"] = t.received_by_rank[k];
     per_rank.push_back(std::move(e));
   }
-  return {{"ranks", R},
+  return {{"ranks", reports.size()},
           {"bytes_per_descriptor", std::uint64_t(DescriptorSet::kBytes)},
-          {"descriptors_sent", sent},
-          {"descriptors_received", received},
-          {"bytes_sent", sent * std::uint64_t(DescriptorSet::kBytes)},
-          {"exchange_balanced", mirrored && sent == received},
+          {"descriptors_sent", t.sent},
+          {"descriptors_received", t.received},
+          {"bytes_sent", t.sent * std::uint64_t(DescriptorSet::kBytes)},
+          {"exchange_balanced", t.balanced},
           {"per_rank", std::move(per_rank)},
-          {"traffic_total", total},
-          {"traffic", traffic}};
+          {"traffic_total", t.total},
+          {"traffic", t.rounds}};
 }
 
 std::string rank_report_json(const RankReport& r) {

@@ -2,7 +2,9 @@
 // launches, memory per bank, PE-to-PE traffic), for reports and benchmarks.
 #pragma once
 
+#include <cstdint>
 #include <string>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -22,6 +24,17 @@ namespace opsila {
 // traffic [level][src][dst]; with several MPI ranks, mpi {...} (ranks_json).
 nlohmann::json stats_json(const RenderResult& result, const Scene& scene,
                           const RenderSettings& settings, const std::string& device_description);
+
+// Several MPI ranks: the descriptors between ranks, from what each rank
+// says it sent and received. A rank's own PEs count on the diagonal.
+struct RankTraffic {
+  std::vector<std::vector<std::vector<std::uint64_t>>> rounds;  // [round][from][to]
+  std::vector<std::vector<std::uint64_t>> total;                // [from][to], all rounds
+  std::vector<std::uint64_t> sent_by_rank, received_by_rank;    // to / from other ranks
+  std::uint64_t sent = 0, received = 0;                         // between different ranks
+  bool balanced = false;  // each rank received from each other what it was sent, round by round
+};
+RankTraffic rank_traffic(const std::vector<RankReport>& reports);
 
 // Several MPI ranks: per-rank reports, the rank x rank traffic of every
 // round and in all, and whether every rank received what the others sent.

@@ -145,16 +145,60 @@ TEST_F(MpiFixture, MoreRanksThanPesAreRefused) {
   EXPECT_TRUE(dir.entries().empty()) << "an output file was left behind";
 }
 
-// The bench measures one process: under several ranks it is refused once,
-// with the way to get the ranks' figures, and writes nothing.
-TEST_F(MpiFixture, BenchOnSeveralRanksIsRefusedOnce) {
-  const std::vector<std::string> a = {kHangSeconds, kMpiexec, "--oversubscribe", "-np", "2", OPSILA_BINARY,
-                                      "bench", scene("whitted.json"), "--json", dir.file("b.json")};
+// `mpirun -np R opsila bench`: every rank renders its PEs, rank 0 alone
+// reports: each rank's figures, the rank x rank traffic (every descriptor
+// sent is received, and the per-level count from the PE traffic agrees), the
+// exchange's share of the frame. Baselines and the scatter curve are left out.
+TEST_F(MpiFixture, BenchOnSeveralRanksReportsEveryRank) {
+  const std::vector<std::string> a = {kHangSeconds, kMpiexec, "--oversubscribe", "-np", "3", OPSILA_BINARY, "bench",
+                                      scene("whitted.json"), "--quick", "--size", "64x48", "--json", dir.file("b.json"),
+                                      "--csv", dir.file("csv")};
+  const RunResult r = test::run_program("/usr/bin/timeout", a, env);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  // One report (rank 0's), every rank's device named.
+  EXPECT_EQ(test::count_of(r.out, "opsila bench: "), 1u) << r.out;
+  EXPECT_NE(r.out.find("MPI ranks: 3"), std::string::npos) << r.out;
+  for (int k = 0; k < 3; ++k)
+    EXPECT_NE(r.err.find("device: rank " + std::to_string(k) + " of 3"), std::string::npos) << r.err;
+  const nlohmann::json j = stats(dir.file("b.json"));
+  EXPECT_EQ(j.at("ranks"), 3);
+  const nlohmann::json& mpi = j.at("mpi");
+  ASSERT_EQ(mpi.at("per_rank").size(), 3u);
+  EXPECT_TRUE(mpi.at("exchange_balanced").get<bool>());
+  const auto sent = mpi.at("descriptors_sent").get<std::uint64_t>();
+  EXPECT_GT(sent, 0u);
+  EXPECT_EQ(sent, mpi.at("descriptors_received").get<std::uint64_t>());
+  std::uint64_t by_level = 0;
+  for (const auto& n : mpi.at("descriptors_between_ranks_by_level")) by_level += n.get<std::uint64_t>();
+  EXPECT_EQ(by_level, sent) << "the PE traffic and the ranks' own counts disagree";
+  for (const char* key : {"exchange_share", "exposed_share", "mpi_share"}) {
+    EXPECT_GT(mpi.at(key).get<double>(), 0.0) << key;
+    EXPECT_LE(mpi.at(key).get<double>(), 1.0) << key;
+  }
+  EXPECT_LE(mpi.at("exposed_share").get<double>(), mpi.at("exchange_share").get<double>());
+  for (const auto& rank : mpi.at("per_rank")) {
+    EXPECT_GT(rank.at("device_bytes").get<std::uint64_t>(), 0u);
+    EXPECT_GT(rank.at("host_peak_bytes").get<std::uint64_t>(), 0u);
+  }
+  EXPECT_TRUE(j.at("baselines").empty());
+  EXPECT_TRUE(j.at("scatter").empty());
+  EXPECT_TRUE(j.at("targets").at("opsila_vs_megakernel").is_null());
+  EXPECT_TRUE(test::file_exists(dir.file("csv/ranks.csv")));
+  EXPECT_EQ(test::count_of(test::read_file(dir.file("csv/ranks.csv")), "\n"), 4u);  // header + 3 ranks
+  EXPECT_TRUE(test::file_exists(dir.file("csv/rank_traffic.csv")));
+  EXPECT_FALSE(test::file_exists(dir.file("csv/scatter.csv")));
+}
+
+// More ranks than PEs: one error line, nothing written.
+TEST_F(MpiFixture, BenchWithMoreRanksThanPesIsRefusedOnce) {
+  const std::vector<std::string> a = {kHangSeconds, kMpiexec, "--oversubscribe", "-np", "3", OPSILA_BINARY,
+                                      "bench", scene("whitted.json"), "--quick", "--pes", "2", "--json",
+                                      dir.file("b.json")};
   const RunResult r = test::run_program("/usr/bin/timeout", a, env);
   EXPECT_EQ(r.exit_code, 2) << r.err;
   const auto errors = r.error_lines();
   ASSERT_EQ(errors.size(), 1u) << r.err;
-  EXPECT_NE(errors[0].find("bench runs in one process"), std::string::npos) << errors[0];
+  EXPECT_NE(errors[0].find("3 MPI ranks for 2 PEs"), std::string::npos) << errors[0];
   EXPECT_TRUE(dir.entries().empty()) << "an output file was left behind";
 }
 

@@ -9,10 +9,12 @@
 #                                         target (default 60; the model target
 #                                         a third of it, at most 20 s)
 #   tests/fuzz/run_fuzzers.sh --ci        the CI run: a fixed seed and a fixed
-#                                         number of inputs per target, so the
-#                                         same commit always meets the same
-#                                         inputs; what exploring finds joins
-#                                         the corpora (tests/fuzz/corpus_*)
+#                                         number of inputs per target (runs
+#                                         still differ a little: coverage
+#                                         feedback inside the libraries is
+#                                         not exactly repeatable); what
+#                                         exploring finds joins the corpora
+#                                         (tests/fuzz/corpus_*)
 set -uo pipefail
 
 ci=0

@@ -179,7 +179,9 @@ void ScatterPass::plan(Launcher& launch, const Args& a, int round) {
            a.pool->records, out, out_count, hist_, rank_, by_block_ ? 0 : 1);
   launch.run(count_, "scatter_count", std::max(nblocks, 1), 0, round);
   set_args(scan_, "clSetKernelArg(scatter_scan)", nblocks, P, hist_, pe_total);
-  launch.run(scan_, "scatter_scan", std::size_t(P) * wg_scan_, wg_scan_, round);
+  // One work-group per PE on a GPU, one in all on a CPU (see scatter_scan).
+  const std::size_t scan_groups = by_block_ ? 1 : std::size_t(P);
+  launch.run(scan_, "scatter_scan", scan_groups * wg_scan_, wg_scan_, round);
   const int cap = a.cap > 0 ? a.cap : a.slots;
   const int group_end = a.group_end < 0 ? P : a.group_end;
   set_args(plan_, "clSetKernelArg(scatter_plan)", P, a.group_begin, group_end, a.slots, cap, a.group_size, pe_total,

@@ -29,12 +29,12 @@ __kernel void build_primary(FrameParams fp, __global const PeInfo *pes, __global
       /* A miss adds the background once over all groups of PEs; a hit is
        * built by the device that holds its owner PE. */
       if (tri < 0 && fp.group_begin == 0) accumulate(accum, pixel, load3(fp.background));
-      desc_store(q, slot, make_descriptor((float3)(0.0f), 0.0f, (float3)(0.0f), 0.0f, (float3)(0.0f), pixel,
+      desc_store(q, q_dest, slot, make_descriptor((float3)(0.0f), 0.0f, (float3)(0.0f), 0.0f, (float3)(0.0f), pixel,
                                           OPSILA_META(OPSILA_KIND_NIL, 0), -1, -1));
     } else {
       int x = pixel % fp.width, y = pixel / fp.width;
       float3 d = primary_direction_at(fp, (float)x + ox, (float)y + oy);
-      desc_store(q, slot, make_descriptor(load3(fp.eye), item_t[pixel], d, -1.0f, (float3)(1.0f), pixel,
+      desc_store(q, q_dest, slot, make_descriptor(load3(fp.eye), item_t[pixel], d, -1.0f, (float3)(1.0f), pixel,
                                           OPSILA_META(OPSILA_KIND_RESOLVED, 0), tri, owner));
       atomic_inc(&hits);
     }

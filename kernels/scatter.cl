@@ -6,6 +6,8 @@
  * the same PE. Entry i goes to bank slot bank_begin[d] + rank(i) when
  * rank(i) < bank_count[d], otherwise it waits in the next pool (no ray is
  * lost). Only the records that exist are read: empty output places never are.
+ * The count reads only the dense destination stream (DESC_PARAMS), 4 bytes
+ * a descriptor; the move reads and writes each record once.
  *
  * With several devices (MPI ranks), a device has banks only for its PEs
  * [group_begin, group_end): what is bound for other PEs all waits in the
@@ -34,7 +36,7 @@ __kernel void scatter_count(int pool_len, int pool_blocks, int num_blocks, int i
   if (b < pool_blocks) {
     int end = min((b + 1) * OPSILA_SCATTER_BLOCK, pool_len);
     for (int k = b * OPSILA_SCATTER_BLOCK; k < end; ++k) {
-      int d = desc_dest_at(pool, k);
+      int d = pool_dest[k];
       int r = (d >= 0 && d < num_pes) ? h[d]++ : -1;
       if (write_rank) rank[k] = r;
     }
@@ -45,7 +47,7 @@ __kernel void scatter_count(int pool_len, int pool_blocks, int num_blocks, int i
     int c = out_item_count[t];
     for (int j = 0; j < c; ++j) {
       int at = t * S + j;
-      int d = desc_dest_at(out, at);
+      int d = out_dest[at];
       int r = (d >= 0 && d < num_pes) ? h[d]++ : -1;
       if (write_rank) rank[pool_len + at] = r;
     }
@@ -163,14 +165,14 @@ __kernel void scatter_plan(int num_pes, int group_begin, int group_end, int slot
 }
 
 /* Entry of global rank r for PE d: its bank slot, or its place in the next pool. */
-inline void place(__global const float4 *from, int k, int d, int r, __global const int *bank_begin,
-                  __global const int *bank_count, __global const int *overflow_base, DESC_PARAMS(banks),
-                  DESC_PARAMS(next)) {
+inline void place(__global const float4 *from, __global const int *from_dest, int k, int d, int r,
+                  __global const int *bank_begin, __global const int *bank_count, __global const int *overflow_base,
+                  DESC_PARAMS(banks), DESC_PARAMS(next)) {
   int c = bank_count[d];
-  if (r < c)
-    desc_move(banks, bank_begin[d] + r, from, k);
+  if (r < c) /* a bank's slots all belong to its PE: no destination stream kept there */
+    desc_move_record(banks, bank_begin[d] + r, from, k);
   else
-    desc_move(next, overflow_base[d] + (r - c), from, k);
+    desc_move(next, next_dest, overflow_base[d] + (r - c), from, from_dest, k);
 }
 
 __kernel void scatter_move_pool(int pool_len, int num_pes, DESC_PARAMS(pool), __global const int *rank,
@@ -181,9 +183,9 @@ __kernel void scatter_move_pool(int pool_len, int num_pes, DESC_PARAMS(pool), __
   if (k >= pool_len) return;
   int rk = rank[k];
   if (rk < 0) return;
-  int d = desc_dest_at(pool, k);
+  int d = pool_dest[k];
   int r = hist[(long)(k / OPSILA_SCATTER_BLOCK) * num_pes + d] + rk;
-  place(pool, k, d, r, bank_begin, bank_count, overflow_base, banks, next);
+  place(pool, pool_dest, k, d, r, bank_begin, bank_count, overflow_base, banks, banks_dest, next, next_dest);
 }
 
 /* One work-item per SPMD work-item t: its out_item_count[t] records. */
@@ -200,8 +202,9 @@ __kernel void scatter_move_outputs(int out_items, int items_per_group, int S, in
     int at = t * S + j;
     int rk = rank[pool_len + at];
     if (rk < 0) continue;
-    int d = desc_dest_at(out, at);
-    place(out, at, d, h[d] + rk, bank_begin, bank_count, overflow_base, banks, next);
+    int d = out_dest[at];
+    place(out, out_dest, at, d, h[d] + rk, bank_begin, bank_count, overflow_base, banks, banks_dest, next,
+          next_dest);
   }
 }
 
@@ -219,8 +222,10 @@ __kernel void scatter_move_blocks(int pool_len, int pool_blocks, int num_blocks,
   if (b < pool_blocks) {
     int end = min((b + 1) * OPSILA_SCATTER_BLOCK, pool_len);
     for (int k = b * OPSILA_SCATTER_BLOCK; k < end; ++k) {
-      int d = desc_dest_at(pool, k);
-      if (d >= 0 && d < num_pes) place(pool, k, d, h[d]++, bank_begin, bank_count, overflow_base, banks, next);
+      int d = pool_dest[k];
+      if (d >= 0 && d < num_pes)
+        place(pool, pool_dest, k, d, h[d]++, bank_begin, bank_count, overflow_base, banks, banks_dest, next,
+              next_dest);
     }
     return;
   }
@@ -229,8 +234,10 @@ __kernel void scatter_move_blocks(int pool_len, int pool_blocks, int num_blocks,
     int c = out_item_count[t];
     for (int j = 0; j < c; ++j) {
       int at = t * S + j;
-      int d = desc_dest_at(out, at);
-      if (d >= 0 && d < num_pes) place(out, at, d, h[d]++, bank_begin, bank_count, overflow_base, banks, next);
+      int d = out_dest[at];
+      if (d >= 0 && d < num_pes)
+        place(out, out_dest, at, d, h[d]++, bank_begin, bank_count, overflow_base, banks, banks_dest, next,
+              next_dest);
     }
   }
 }

@@ -25,14 +25,15 @@ typedef struct {
 /* Output records of one work-item: its S places, filled from the front,
  * and the PE x PE traffic of its work-group (local, flushed once). */
 typedef struct {
-  DESC_PARAMS(v);
+  __global float4 *v; /* the output records and their destinations (DESC_PARAMS) */
+  __global int *v_dest;
   int base, count;
   int num_pes, traffic_levels; /* traffic_levels = 0: not counted */
   __local uint *traffic;       /* [level][destination PE] from this work-group's PE */
 } Outputs;
 
 inline void emit(Outputs *o, Descriptor d) {
-  desc_store(o->v, o->base + o->count, d);
+  desc_store(o->v, o->v_dest, o->base + o->count, d);
   ++o->count;
   int level = OPSILA_META_LEVEL(DESC_META(d));
   if (level < o->traffic_levels) atomic_inc(&o->traffic[level * o->num_pes + DESC_DEST(d)]);
@@ -203,6 +204,7 @@ __kernel void spmd_phase(FrameParams fp, __global const PeInfo *pes, __global co
   int item = g * lsz + lid;
   Outputs out;
   out.v = o;
+  out.v_dest = o_dest;
   out.base = item * fp.spawn_slots;
   out.count = 0;
   out.num_pes = P;

@@ -1,5 +1,9 @@
 #include "machine/descriptors.h"
 
+#include <algorithm>
+#include <cstring>
+#include <vector>
+
 #include "machine/renderer.h"
 
 namespace opsila {
@@ -29,23 +33,39 @@ void zero_buffer(ClRuntime& rt, const cl::Buffer& b, std::size_t bytes, const ch
 void DescriptorSet::allocate(ClRuntime& rt, std::size_t n, const char* what) {
   n = std::max<std::size_t>(n, 1);
   records = device_buffer(rt, n * kBytes, what);
+  dests = device_buffer(rt, n * sizeof(cl_int), what);
   capacity = n;
 }
 
 int DescriptorSet::set_args(cl::Kernel& k, int at) const {
   cl_check(k.setArg(at++, records), "clSetKernelArg(descriptors)");
+  cl_check(k.setArg(at++, dests), "clSetKernelArg(descriptor destinations)");
   return at;
 }
 
 void DescriptorSet::copy_prefix_to(ClRuntime& rt, DescriptorSet& to, std::size_t count) const {
   if (count == 0) return;
   cl_check(rt.queue().enqueueCopyBuffer(records, to.records, 0, 0, count * kBytes), "clEnqueueCopyBuffer(descriptors)");
+  cl_check(rt.queue().enqueueCopyBuffer(dests, to.dests, 0, 0, count * sizeof(cl_int)),
+           "clEnqueueCopyBuffer(descriptor destinations)");
+}
+
+void DescriptorSet::write_raw(ClRuntime& rt, const unsigned char* bytes, std::size_t count, std::size_t at) const {
+  if (count == 0) return;
+  std::vector<cl_int> d(count);
+  for (std::size_t i = 0; i < count; ++i) {
+    HostDescriptor h;
+    std::memcpy(&h, bytes + i * kBytes, kBytes);
+    d[i] = desc_dest(h);
+  }
+  cl_check(rt.queue().enqueueWriteBuffer(records, CL_TRUE, at * kBytes, count * kBytes, bytes),
+           "clEnqueueWriteBuffer(descriptors)");
+  cl_check(rt.queue().enqueueWriteBuffer(dests, CL_TRUE, at * sizeof(cl_int), count * sizeof(cl_int), d.data()),
+           "clEnqueueWriteBuffer(descriptor destinations)");
 }
 
 void DescriptorSet::write(ClRuntime& rt, const std::vector<HostDescriptor>& v, std::size_t at) const {
-  if (!v.empty())
-    cl_check(rt.queue().enqueueWriteBuffer(records, CL_TRUE, at * kBytes, v.size() * kBytes, v.data()),
-             "clEnqueueWriteBuffer(descriptors)");
+  write_raw(rt, reinterpret_cast<const unsigned char*>(v.data()), v.size(), at);
 }
 
 std::vector<HostDescriptor> DescriptorSet::read(ClRuntime& rt, std::size_t count, std::size_t at) const {
@@ -174,9 +194,10 @@ void ScatterPass::plan(Launcher& launch, const Args& a, int round) {
     group_first = device_buffer(rt_, groups * sizeof(cl_int), "SPMD work-group slots");
   }
   const cl::Buffer& out = a.outputs ? a.outputs->records : dummy_;
+  const cl::Buffer& out_dest = a.outputs ? a.outputs->dests : dummy_;
   const cl::Buffer& out_count = a.out_item_count ? *a.out_item_count : dummy_;
   set_args(count_, "clSetKernelArg(scatter_count)", a.pool_len, pool_blocks, nblocks, a.group_size, a.spawn_slots, P,
-           a.pool->records, out, out_count, hist_, rank_, by_block_ ? 0 : 1);
+           a.pool->records, a.pool->dests, out, out_dest, out_count, hist_, rank_, by_block_ ? 0 : 1);
   launch.run(count_, "scatter_count", std::max(nblocks, 1), 0, round);
   set_args(scan_, "clSetKernelArg(scatter_scan)", nblocks, P, hist_, pe_total);
   // One work-group per PE on a GPU, one in all on a CPU (see scatter_scan).
@@ -195,23 +216,25 @@ void ScatterPass::move(Launcher& launch, const Args& a, int round) {
   const int pool_blocks = (a.pool_len + kBlock - 1) / kBlock;
   if (by_block_) {
     const cl::Buffer& out = a.outputs ? a.outputs->records : dummy_;
+    const cl::Buffer& out_dest = a.outputs ? a.outputs->dests : dummy_;
     const cl::Buffer& out_count = a.out_item_count ? *a.out_item_count : dummy_;
     set_args(move_blocks_, "clSetKernelArg(scatter_move_blocks)", a.pool_len, pool_blocks, blocks(a), a.group_size,
-             a.spawn_slots, P, a.pool->records, out, out_count, hist_, bank_begin, bank_count, overflow_base,
-             a.banks->records, a.next_pool->records);
+             a.spawn_slots, P, a.pool->records, a.pool->dests, out, out_dest, out_count, hist_, bank_begin,
+             bank_count, overflow_base, a.banks->records, a.banks->dests, a.next_pool->records, a.next_pool->dests);
     if (blocks(a) > 0) launch.run(move_blocks_, "scatter_move", std::size_t(blocks(a)), 0, round);
     return;
   }
   if (a.pool_len > 0) {
-    set_args(move_pool_, "clSetKernelArg(scatter_move_pool)", a.pool_len, P, a.pool->records, rank_, hist_,
-             bank_begin, bank_count, overflow_base, a.banks->records, a.next_pool->records);
+    set_args(move_pool_, "clSetKernelArg(scatter_move_pool)", a.pool_len, P, a.pool->records, a.pool->dests, rank_,
+             hist_, bank_begin, bank_count, overflow_base, a.banks->records, a.banks->dests, a.next_pool->records,
+             a.next_pool->dests);
     launch.run(move_pool_, "scatter_move", std::size_t(a.pool_len), 0, round);
   }
   if (a.out_groups > 0) {
     const int items = a.out_groups * a.group_size;
     set_args(move_out_, "clSetKernelArg(scatter_move_outputs)", items, a.group_size, a.spawn_slots, a.pool_len,
-             pool_blocks, P, a.outputs->records, *a.out_item_count, rank_, hist_, bank_begin, bank_count,
-             overflow_base, a.banks->records, a.next_pool->records);
+             pool_blocks, P, a.outputs->records, a.outputs->dests, *a.out_item_count, rank_, hist_, bank_begin,
+             bank_count, overflow_base, a.banks->records, a.banks->dests, a.next_pool->records, a.next_pool->dests);
     launch.run(move_out_, "scatter_move", std::size_t(items), 0, round);
   }
 }

@@ -50,11 +50,17 @@ inline int desc_dest(const HostDescriptor& d) { return d.ids.s[3]; }  // destina
 inline int desc_pixel(const HostDescriptor& d) { return d.ids.s[0]; }
 inline int desc_meta(const HostDescriptor& d) { return d.ids.s[1]; }
 
-// One descriptor vector on the device: `capacity` records of kBytes.
+// One descriptor vector on the device: `capacity` records of kBytes, and
+// the dense stream of their destination PEs (kernels/lib/descriptor.cl,
+// DESC_PARAMS): a kernel parameter pair, written together.
 struct DescriptorSet {
   cl::Buffer records;
+  cl::Buffer dests;
   std::size_t capacity = 0;
-  static constexpr std::size_t kBytes = OPSILA_DESCRIPTOR_BYTES;
+  static constexpr std::size_t kBytes = OPSILA_DESCRIPTOR_BYTES;           // one record
+  static constexpr std::size_t kSlotBytes = kBytes + sizeof(cl_int);       // device memory per slot
+  // Writes count records from host memory at slot `at` (and their destinations).
+  void write_raw(ClRuntime& rt, const unsigned char* bytes, std::size_t count, std::size_t at) const;
   void allocate(ClRuntime& rt, std::size_t n, const char* what);
   int set_args(cl::Kernel& k, int at) const;
   void copy_prefix_to(ClRuntime& rt, DescriptorSet& to, std::size_t count) const;

@@ -31,7 +31,7 @@ DevicePlan plan_device_memory(const BankedScene& bs, std::size_t npix, int P, co
   // Item buffer (pair, triangle, distance, facet) and 64-bit fixed-point RGB sums.
   plan.image = u64(npix) * (sizeof(cl_int2) + 2 * sizeof(cl_int) + sizeof(cl_float) + OPSILA_ACCUM_WORDS * sizeof(cl_uint));
   // Banks (slots, each bank padded to a work-group), SPMD outputs, two pools.
-  plan.descriptors = (u64(f.slots) + u64(P) * f.group_size + f.outputs + 2 * u64(f.pool)) * DescriptorSet::kBytes;
+  plan.descriptors = (u64(f.slots) + u64(P) * f.group_size + f.outputs + 2 * u64(f.pool)) * DescriptorSet::kSlotBytes;
   // Stats, traffic, output counts, work-group table, and the exchange's
   // ranks and block counts (1.5x the source).
   const u64 source = (u64(f.outputs) + f.pool) * 3 / 2;

@@ -157,12 +157,14 @@ std::size_t RankExchange::finish(const DescriptorSet& next, DescriptorSet& into,
   const std::size_t B = DescriptorSet::kBytes, in = recv_.size() / B, len = waiting_ + in;
   if (into.capacity < len + spare) into.allocate(rt_, (len + spare) * 3 / 2, "descriptor pool");
   auto& q = rt_.queue();
-  if (waiting_ > 0)
+  if (waiting_ > 0) {
     cl_check(q.enqueueCopyBuffer(next.records, into.records, lo_ * B, 0, waiting_ * B),
              "clEnqueueCopyBuffer(waiting records)");
-  if (in > 0)
-    cl_check(q.enqueueWriteBuffer(into.records, CL_TRUE, waiting_ * B, in * B, recv_.data()),
-             "clEnqueueWriteBuffer(records from other ranks)");
+    cl_check(q.enqueueCopyBuffer(next.dests, into.dests, lo_ * sizeof(cl_int), 0, waiting_ * sizeof(cl_int)),
+             "clEnqueueCopyBuffer(waiting records' destinations)");
+  }
+  // Only records travel between ranks; their destinations are read from them.
+  into.write_raw(rt_, recv_.data(), in, waiting_);
   staging_seconds.back() += since(t0);
   return len;
 }

@@ -7,8 +7,12 @@ typedef struct {
   OPSILA_DESCRIPTOR_LANES(DESC_MEMBER)
 } Descriptor;
 
-/* A descriptor vector as a kernel parameter: record k is lanes 4k .. 4k+3. */
-#define DESC_PARAMS(p) __global float4 *p
+/* A descriptor vector as a kernel parameter: record k is lanes 4k .. 4k+3,
+ * and p_dest[k] repeats record k's destination PE (DESC_DEST) in a dense
+ * stream, so that the exchange's count reads 4 bytes per descriptor, not
+ * the record's whole 64-byte line. Whoever writes a record writes both,
+ * except the exchange's move into a bank (see desc_move_record). */
+#define DESC_PARAMS(p) __global float4 *p, __global int *p##_dest
 
 #define DESC_LOAD_LANE(lane, name, type, host_type) d.name = as_##type(v[at + lane]);
 inline Descriptor desc_load(__global const float4 *v, int k) {
@@ -19,20 +23,23 @@ inline Descriptor desc_load(__global const float4 *v, int k) {
 }
 
 #define DESC_STORE_LANE(lane, name, type, host_type) v[at + lane] = as_float4(d.name);
-inline void desc_store(__global float4 *v, int k, Descriptor d) {
+inline void desc_store(__global float4 *v, __global int *v_dest, int k, Descriptor d) {
   long at = (long)k * OPSILA_DESCRIPTOR_LANE_COUNT;
   OPSILA_DESCRIPTOR_LANES(DESC_STORE_LANE)
+  v_dest[k] = d.ids.w;
 }
 
-/* The exchange's move: one record, lane by lane, untouched. */
-inline void desc_move(__global float4 *to, int j, __global const float4 *from, int k) {
+/* The exchange's move: one record, lane by lane, untouched, and its
+ * destination with it; into a bank, the record alone (every slot of a bank
+ * belongs to its PE, and the SPMD phase reads only records). */
+inline void desc_move_record(__global float4 *to, int j, __global const float4 *from, int k) {
   long a = (long)j * OPSILA_DESCRIPTOR_LANE_COUNT, b = (long)k * OPSILA_DESCRIPTOR_LANE_COUNT;
   for (int lane = 0; lane < OPSILA_DESCRIPTOR_LANE_COUNT; ++lane) to[a + lane] = from[b + lane];
 }
-
-/* Destination PE of record k, reading only its ids lane. */
-inline int desc_dest_at(__global const float4 *v, int k) {
-  return as_int4(v[(long)k * OPSILA_DESCRIPTOR_LANE_COUNT + 3]).w;
+inline void desc_move(__global float4 *to, __global int *to_dest, int j, __global const float4 *from,
+                      __global const int *from_dest, int k) {
+  desc_move_record(to, j, from, k);
+  to_dest[j] = from_dest[k];
 }
 
 /* Named slots (see the field table for every overloaded one). */

@@ -22,6 +22,7 @@
 #include "input/scene_file.h"
 #include "machine/pe_group.h"
 #include "machine/ranks.h"
+#include "reference/reference.h"
 
 namespace opsila {
 
@@ -114,6 +115,12 @@ int run_bench(const std::vector<std::string>& args) {
   settings.bank_capacity = o.bank_capacity;
   settings.work_groups_per_pe = o.work_groups_per_pe;
   if (o.routing) settings.routing = *o.routing;
+  RaySample sample;  // --balance work: the frame's rays, sampled on the host
+  if (o.balance_work) {
+    progress("sampling the frame's rays for --balance work");
+    sample = ReferenceTracer(scene).sample_rays(kBalanceSampleRays);
+    settings.ray_sample = &sample;
+  }
 
   BenchReport report = start_report(o, scene, settings.num_pes);
   report.device = device_facts(rt);

@@ -98,7 +98,7 @@ std::string bench_usage() {
          "\n"
          "View flags, as for 'opsila render': --size WxH, --eye, --look-at, --up, --fov,\n"
          "--light, --ambient, --background, --depth, --pes, --device, --bank-capacity, --smooth,\n"
-         "--routing boxes|spheres, --work-groups-per-pe.\n";
+         "--routing boxes|spheres, --work-groups-per-pe, --balance facets|work.\n";
 }
 
 }  // namespace opsila

@@ -172,6 +172,7 @@ const std::vector<FlagSpec>& view_flags() {
       {"--depth", "--depth", true},   {"--pes", "--pes", true},
       {"--device", "--device", true}, {"--bank-capacity", "--bank-capacity", true},
       {"--routing", "--routing", true}, {"--work-groups-per-pe", "--work-groups-per-pe", true},
+      {"--balance", "--balance", true},
       {"--spp", "--spp", true},
       {"--smooth", "--smooth", false},
   };
@@ -232,6 +233,13 @@ bool parse_view_flag(const std::string& name, const std::string& value, ViewOpti
       o.routing = OPSILA_ROUTING_SPHERES;
     else
       bad_flag(name, value, "must be boxes or spheres");
+  } else if (name == "--balance") {
+    if (value == "facets")
+      o.balance_work = false;
+    else if (value == "work")
+      o.balance_work = true;
+    else
+      bad_flag(name, value, "must be facets or work");
   } else if (name == "--device") {
     if (value.empty()) bad_flag(name, value, "empty device name");
     o.device_spec = value;

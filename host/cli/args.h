@@ -76,8 +76,13 @@ struct ViewOptions {
   int bank_capacity = 0;          // 0 = automatic
   int work_groups_per_pe = 0;     // 0 = as many as each bank's descriptors need
   std::optional<int> routing;     // --routing: OPSILA_ROUTING_*
+  bool balance_work = false;      // --balance work: PEs share sampled rays, not only facets
   bool smooth = false;            // --smooth: SPEC's smooth shading (else the scene's "smooth")
 };
+
+// Primary rays sampled for --balance work (core/ray_sample.h): about one in
+// 30 pixels at 800x600, a few percent of a frame's time on the host.
+constexpr int kBalanceSampleRays = 16000;
 
 // The view group's flags (all but --smooth take a value; --light repeats).
 const std::vector<FlagSpec>& view_flags();

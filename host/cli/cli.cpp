@@ -92,6 +92,9 @@ std::string render_usage() {
          "                         as its descriptors need; 1 = the paper's one processor per PE)\n"
          "  --routing MODE         destination choice: boxes (cluster boxes under a BVH, default)\n"
          "                         or spheres (the paper's bounding spheres); same image\n"
+         "  --balance MODE         how the scene is split over the PEs: facets (equal banks, default)\n"
+         "                         or work (by the frame's rays, sampled on the host first: busy\n"
+         "                         regions get more PEs, banks differ in size); same image\n"
          "  --device SPEC          device index, platform:device, or name substring (see 'opsila devices')\n"
          "  --item-buffer OUT.npy  (object, facet) of each pixel's primary hit, int32 (H, W, 2)\n"
          "  --stats OUT.json       ray counts, per-PE work, kernel times, memory, traffic\n"
@@ -193,6 +196,11 @@ int run_render(const std::vector<std::string>& args) {
   settings.bank_capacity = o.bank_capacity;
   settings.work_groups_per_pe = o.work_groups_per_pe;
   if (o.routing) settings.routing = *o.routing;
+  RaySample sample;  // --balance work: the frame's rays, sampled on the host
+  if (o.balance_work && !o.reference) {
+    sample = ReferenceTracer(scene).sample_rays(kBalanceSampleRays);
+    settings.ray_sample = &sample;
+  }
 
   if (!o.quiet && writer)
     if (const std::string note = large_work_note(scene); !note.empty()) print_line("note", note);

@@ -23,6 +23,7 @@ float centroid(const Triangle& t, int a) { return (t.v0[a] + t.v1[a] + t.v2[a]) 
 
 struct ClusterBuild {
   std::vector<int> tris;  // indices into Scene::triangles
+  double weight = 0;      // its share of the scene's expected work (region_weights)
   Box box;
   float c[3] = {0, 0, 0};  // centre for the spatial subdivision
   int pe = 0;
@@ -40,6 +41,39 @@ bool is_flat(const Box& b) {
   return small <= kFlatness * big;
 }
 
+// The bounds of a list of triangles, and of their centroids.
+void bounds_of(const Scene& scene, const std::vector<int>& tris, Box& box, Box& cbox) {
+  for (int i : tris) {
+    box.grow(tri_box(scene.triangles[i]));
+    float c[3] = {centroid(scene.triangles[i], 0), centroid(scene.triangles[i], 1), centroid(scene.triangles[i], 2)};
+    cbox.grow(c);
+  }
+}
+
+// Cuts `tris` in two at the median centroid of the centroids' longest axis
+// (ties by index); `tris` keeps the lower half. False when it cannot be cut.
+bool cut_at_median(const Scene& scene, std::vector<int>& tris, const Box& cbox, std::vector<int>& upper) {
+  const int axis = cbox.longest();
+  if (tris.size() < 2 || !(cbox.extent(axis) > 0)) return false;
+  const std::size_t mid = tris.size() / 2;
+  std::nth_element(tris.begin(), tris.begin() + mid, tris.end(), [&](int a, int b) {
+    float ca = centroid(scene.triangles[a], axis), cb = centroid(scene.triangles[b], axis);
+    return ca < cb || (ca == cb && a < b);
+  });
+  upper.assign(tris.begin() + mid, tris.end());
+  tris.resize(mid);
+  return true;
+}
+
+ClusterBuild make_cluster(std::vector<int> tris, const Box& box) {
+  ClusterBuild cb;
+  std::sort(tris.begin(), tris.end());
+  cb.tris = std::move(tris);
+  cb.box = box;
+  for (int a = 0; a < 3; ++a) cb.c[a] = 0.5f * (box.lo[a] + box.hi[a]);
+  return cb;
+}
+
 // Splits a list of triangles at the median centroid of its longest axis
 // until every piece is small enough (facet count and spatial extent).
 void split_object(const Scene& scene, std::vector<int> tris, std::size_t max_tris, float max_extent,
@@ -50,37 +84,22 @@ void split_object(const Scene& scene, std::vector<int> tris, std::size_t max_tri
     std::vector<int> cur = std::move(work.back());
     work.pop_back();
     Box box, cbox;
-    for (int i : cur) {
-      box.grow(tri_box(scene.triangles[i]));
-      float c[3] = {centroid(scene.triangles[i], 0), centroid(scene.triangles[i], 1),
-                    centroid(scene.triangles[i], 2)};
-      cbox.grow(c);
-    }
+    bounds_of(scene, cur, box, cbox);
     bool too_many = cur.size() > max_tris;
     const float limit = split_flat && is_flat(box) ? kFlatShare * max_extent : max_extent;
     bool too_big = cur.size() > 1 && box.diagonal() > limit;
-    int axis = cbox.longest();
-    if ((too_many || too_big) && cbox.extent(axis) > 0) {
-      std::size_t mid = cur.size() / 2;
-      std::nth_element(cur.begin(), cur.begin() + mid, cur.end(), [&](int a, int b) {
-        float ca = centroid(scene.triangles[a], axis), cb = centroid(scene.triangles[b], axis);
-        return ca < cb || (ca == cb && a < b);
-      });
-      work.emplace_back(cur.begin(), cur.begin() + mid);
-      work.emplace_back(cur.begin() + mid, cur.end());
+    std::vector<int> upper;
+    if ((too_many || too_big) && cut_at_median(scene, cur, cbox, upper)) {
+      work.push_back(std::move(cur));
+      work.push_back(std::move(upper));
       continue;
     }
-    ClusterBuild cb;
-    std::sort(cur.begin(), cur.end());
-    cb.tris = std::move(cur);
-    cb.box = box;
-    for (int a = 0; a < 3; ++a) cb.c[a] = 0.5f * (box.lo[a] + box.hi[a]);
-    out.push_back(std::move(cb));
+    out.push_back(make_cluster(std::move(cur), box));
   }
 }
 
-// Recursive bisection of the cluster centres, weighted by facet count, into
-// `count` regions starting at PE `first`.
+// Recursive bisection of the cluster centres, weighted by expected work
+// (region_weights), into `count` regions starting at PE `first`.
 void assign_regions(std::vector<ClusterBuild>& cl, std::vector<int> idx, int first, int count) {
   if (idx.empty()) return;
   if (count == 1) {
@@ -95,10 +114,10 @@ void assign_regions(std::vector<ClusterBuild>& cl, std::vector<int> idx, int fir
   });
   int left = count / 2;
   double total = 0;
-  for (int i : idx) total += static_cast<double>(cl[i].tris.size());
+  for (int i : idx) total += cl[i].weight;
   double target = total * left / count, acc = 0;
   std::size_t cut = 0;
-  while (cut < idx.size() && acc + 0.5 * cl[idx[cut]].tris.size() < target) acc += cl[idx[cut++]].tris.size();
+  while (cut < idx.size() && acc + 0.5 * cl[idx[cut]].weight < target) acc += cl[idx[cut++]].weight;
   // Both halves get at least one cluster when there are enough to go round.
   if (idx.size() >= 2) cut = std::clamp<std::size_t>(cut, 1, idx.size() - 1);
   std::vector<int> lo(idx.begin(), idx.begin() + cut), hi(idx.begin() + cut, idx.end());
@@ -197,10 +216,88 @@ std::uint64_t bank_attributes(const Scene& scene, const std::vector<int>& source
   return once;
 }
 
+// Sampled rays whose segment crosses box b (slab test over [0, t_max]).
+std::uint64_t crossings(const Box& b, const RaySample& sample) {
+  std::uint64_t n = 0;
+  for (const RaySegment& r : sample.rays) {
+    float t0 = 0.0f, t1 = r.t_max;
+    for (int a = 0; a < 3 && t0 <= t1; ++a) {
+      const float inv = 1.0f / r.direction[a];
+      float tn = (b.lo[a] - r.origin[a]) * inv, tf = (b.hi[a] - r.origin[a]) * inv;
+      if (tn > tf) std::swap(tn, tf);
+      // A ray parallel to a slab (0 x inf = NaN) is inside it or misses it.
+      if (std::isnan(tn) || std::isnan(tf)) {
+        if (r.origin[a] < b.lo[a] || r.origin[a] > b.hi[a]) t1 = -1.0f;
+        continue;
+      }
+      t0 = std::max(t0, tn);
+      t1 = std::min(t1, tf);
+    }
+    n += t0 <= t1;
+  }
+  return n;
+}
+
+// Each cluster's share of the expected work. Without a ray sample: its share
+// of the facets (banks of equal size). With one: mostly its share of the
+// sampled rays that cross its box, so that the PEs whose clusters the frame's
+// rays cross most (the floor under the camera, the space between lit
+// surfaces and the lights) hold fewer of them; a tenth of the weight stays
+// with the facets, so that clusters no ray crosses still spread out (a bank
+// holds at most about ten times the mean). A cluster crossed by more than
+// half a PE's share of the rays is cut in two first (until it is not, or
+// cannot be cut): one hot piece of floor would otherwise set the busiest
+// PE's load by itself. Measured in docs/BENCHMARKS.md.
+constexpr double kFacetShare = 0.1;
+void region_weights(const Scene& scene, std::vector<ClusterBuild>& cb, const RaySample* sample, int num_pes) {
+  std::vector<double> crossed(cb.size(), 0.0);
+  double all = 0;
+  if (sample) {
+    for (std::size_t i = 0; i < cb.size(); ++i) all += crossed[i] = double(crossings(cb[i].box, *sample));
+    for (bool cut = all > 0; cut;) {
+      cut = false;
+      const double limit = all / (2.0 * num_pes);
+      for (std::size_t i = 0, n = cb.size(); i < n; ++i) {
+        if (crossed[i] <= limit) continue;
+        Box unused, cbox;
+        bounds_of(scene, cb[i].tris, unused, cbox);
+        std::vector<int> lower = cb[i].tris, upper;
+        if (!cut_at_median(scene, lower, cbox, upper)) continue;
+        for (std::vector<int>* half : {&lower, &upper}) {
+          Box box, ignored;
+          bounds_of(scene, *half, box, ignored);
+          ClusterBuild piece = make_cluster(std::move(*half), box);
+          const double c = double(crossings(piece.box, *sample));
+          all += c;
+          if (half == &lower) {
+            all -= crossed[i];
+            crossed[i] = c;
+            cb[i] = std::move(piece);
+          } else {
+            crossed.push_back(c);
+            cb.push_back(std::move(piece));
+          }
+        }
+        cut = true;
+      }
+    }
+  }
+  if (!(all > 0)) {  // facets alone (no sample, or no sampled ray crosses a cluster)
+    for (ClusterBuild& c : cb) c.weight = double(c.tris.size());
+    return;
+  }
+  double facets = 0;
+  for (const ClusterBuild& c : cb) facets += double(c.tris.size());
+  for (std::size_t i = 0; i < cb.size(); ++i)
+    cb[i].weight = kFacetShare * double(cb[i].tris.size()) / std::max(facets, 1.0) +
+                   (1.0 - kFacetShare) * crossed[i] / all;
+}
+
 // 1-2. Clusters and regions. Target: several clusters per PE so that
 // bisection can balance; regions are about diag / cbrt(P) across. The
 // clusters come back sorted by PE.
-std::vector<ClusterBuild> form_clusters(const Scene& scene, const Box& sbox, int num_pes, bool split_flat) {
+std::vector<ClusterBuild> form_clusters(const Scene& scene, const Box& sbox, int num_pes, bool split_flat,
+                                        const RaySample* sample) {
   const std::size_t total = scene.triangles.size();
   std::size_t max_tris = std::max<std::size_t>(64, (total + 8 * num_pes - 1) / (8 * static_cast<std::size_t>(num_pes)));
   float region = sbox.diagonal() / std::cbrt(static_cast<float>(num_pes));
@@ -214,6 +311,7 @@ std::vector<ClusterBuild> form_clusters(const Scene& scene, const Box& sbox, int
   for (auto& tris : by_object)
     if (!tris.empty()) split_object(scene, std::move(tris), max_tris, max_extent, split_flat, cb);
 
+  region_weights(scene, cb, sample, num_pes);
   std::vector<int> all(cb.size());
   std::iota(all.begin(), all.end(), 0);
   assign_regions(cb, all, 0, num_pes);
@@ -333,7 +431,7 @@ void global_tables(const Scene& scene, BankedScene& bs) {
 
 }  // namespace
 
-BankedScene partition_scene(const Scene& scene, int num_pes, bool split_flat) {
+BankedScene partition_scene(const Scene& scene, int num_pes, bool split_flat, const RaySample* sample) {
   BankedScene bs;
   bs.num_pes = num_pes;
   Vec3 slo, shi;
@@ -342,7 +440,7 @@ BankedScene partition_scene(const Scene& scene, int num_pes, bool split_flat) {
   sbox.grow(slo.data());
   sbox.grow(shi.data());
 
-  const std::vector<ClusterBuild> cb = form_clusters(scene, sbox, num_pes, split_flat);
+  const std::vector<ClusterBuild> cb = form_clusters(scene, sbox, num_pes, split_flat, sample);
   std::vector<Box> tri_boxes;
   std::vector<int> source;
   std::vector<std::pair<int, int>> ranges;

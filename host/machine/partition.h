@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "opsila_shared.h"
+#include "core/ray_sample.h"
 #include "core/scene.h"
 
 namespace opsila {
@@ -47,7 +48,10 @@ struct BankedScene {
 // hundreds and crowd (docs/BENCHMARKS.md): with routing on spheres it saves a
 // quarter of the descriptors; with routing on boxes, which already fit flat
 // pieces, it only adds clusters and routing work, so it is off there.
-BankedScene partition_scene(const Scene& scene, int num_pes, bool split_flat = false);
+// sample: the frame's rays (core/ray_sample.h); with it, regions share the
+// expected work as well as the facets. Deterministic for equal inputs.
+BankedScene partition_scene(const Scene& scene, int num_pes, bool split_flat = false,
+                            const RaySample* sample = nullptr);
 
 // Per-frame constants for the kernels: the SPEC camera basis computed in
 // float exactly as the formula reads, so that every renderer built on a

@@ -189,7 +189,7 @@ Renderer::Machine::Machine(const Scene& scene, const RenderSettings& settings, C
   // Every rank partitions identically, then keeps only its own banks.
   group = pe_group(P, ranks.size(), ranks.rank());
   G = group.size();
-  BankedScene bs = partition_scene(scene, P, routing == OPSILA_ROUTING_SPHERES);
+  BankedScene bs = partition_scene(scene, P, routing == OPSILA_ROUTING_SPHERES, settings.ray_sample);
   const int tri_base = keep_group_banks(bs, group);
   S = OPSILA_SPAWN_SLOTS(static_cast<int>(bs.lights.size()));
   n = choose_bank_capacity(bs, settings);
@@ -205,6 +205,7 @@ Renderer::Machine::Machine(const Scene& scene, const RenderSettings& settings, C
   prepared.bank_capacity = n;
   prepared.num_clusters = static_cast<int>(bs.clusters.size());
   prepared.routing = routing;
+  prepared.balance_work = settings.ray_sample != nullptr;
   prepared.bank_bytes = bs.bank_bytes;
   prepared.global_bytes = bs.global_bytes;
   prepared.replicated_bytes = bs.replicated_bytes;

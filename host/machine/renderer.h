@@ -9,6 +9,7 @@
 
 #include "machine/cl_runtime.h"
 #include "core/image.h"
+#include "core/ray_sample.h"
 #include "opsila_shared.h"
 #include "core/scene.h"
 
@@ -27,6 +28,9 @@ struct RenderSettings {
   int item_buffer_tile = 1 << 16;  // pixels per item-buffer launch (bounded work per launch)
   int routing = OPSILA_ROUTING_BOXES;  // destination choice: cluster boxes, or the paper's spheres
   Progress* progress = nullptr;    // told at round boundaries when set (core/progress.h)
+  // The frame's rays, sampled (core/ray_sample.h): when set, the partition
+  // shares expected work as well as facets among the PEs. Never the image.
+  const RaySample* ray_sample = nullptr;
 };
 
 // One kernel launch, named, with its OpenCL-profiled time.
@@ -73,6 +77,7 @@ struct RenderStats {
   int num_pes = 0;
   int num_clusters = 0;
   int routing = OPSILA_ROUTING_BOXES;
+  bool balance_work = false;  // the partition shared sampled rays (--balance work), not only facets
   std::size_t work_group_size = 0;
   std::vector<RankReport> ranks;  // several MPI ranks: one report each (rank 0's result only)
 };

@@ -133,6 +133,7 @@ nlohmann::json stats_json(const RenderResult& result, const Scene& scene,
   j["bank_capacity"] = s.bank_capacity > 0 ? s.bank_capacity : settings.bank_capacity;
   j["clusters"] = s.num_clusters;
   j["routing"] = s.routing == OPSILA_ROUTING_SPHERES ? "spheres" : "boxes";
+  j["balance"] = s.balance_work ? "work" : "facets";
   j["work_group_size"] = s.work_group_size;
   j["rounds"] = s.rounds;
   j["scene"] = {{"triangles", scene.triangles.size()},

@@ -268,7 +268,7 @@ struct ReferenceTracer::Impl {
   // unit direction d, with the (texture-mapped) ka and kd at P. Shadow rays
   // are cast only where the light term can be non-zero (n.Lv > 0).
   vec3 local_intensity(const vec3& p, const vec3& n, const vec3& d, const MaterialDesc& m, const vec3& ka,
-                       const vec3& kd, RayCounts& counts) const {
+                       const vec3& kd, RayCounts& counts, std::vector<RaySegment>* record) const {
     vec3 result = to_glm(scene.ambient) * ka;
     for (const LightDesc& light : scene.lights) {
       const vec3 to_light = to_glm(light.position) - p;
@@ -278,6 +278,7 @@ struct ReferenceTracer::Impl {
       const float n_dot_l = glm::dot(n, lv);
       if (!(n_dot_l > 0.0f)) continue;  // SPEC: the whole light term is 0
       ++counts.shadow;
+      if (record) record->push_back(segment(p, lv, distance));
       if (occluded(p, lv, epsilon, distance)) continue;  // vis = 0
       const vec3 rl = 2.0f * n_dot_l * n - lv;
       const float r_dot_v = std::max(0.0f, glm::dot(rl, -d));
@@ -286,6 +287,14 @@ struct ReferenceTracer::Impl {
       result += to_glm(light.intensity) * (kd * n_dot_l + to_glm(m.ks) * highlight);
     }
     return result;
+  }
+
+  static RaySegment segment(const vec3& origin, const vec3& d, float t_max) {
+    RaySegment r;
+    r.origin = {origin.x, origin.y, origin.z};
+    r.direction = {d.x, d.y, d.z};
+    r.t_max = t_max;
+    return r;
   }
 
   // As the kernels' fixed point: a NaN term (0 x infinity, from values near
@@ -297,10 +306,13 @@ struct ReferenceTracer::Impl {
 
   // Adds weight x (radiance of the ray tree rooted at this ray) to `pixel`.
   // Returns the triangle hit (for the item buffer), or -1.
+  // With `record`, every ray of the tree is also appended to it as a segment.
   int trace(const vec3& origin, const vec3& d, float t_min, int level, const vec3& weight,
-            vec3& pixel, RayCounts& counts) const {
+            vec3& pixel, RayCounts& counts, std::vector<RaySegment>* record = nullptr) const {
     Hit hit;
-    if (!nearest(origin, d, t_min, hit)) {
+    const bool found = nearest(origin, d, t_min, hit);
+    if (record) record->push_back(segment(origin, d, found ? hit.t : std::numeric_limits<float>::infinity()));
+    if (!found) {
       add_contribution(pixel, weight * to_glm(scene.background));
       return -1;
     }
@@ -311,7 +323,7 @@ struct ReferenceTracer::Impl {
     const Triangle& source = scene.triangles[hit.tri];
     const vec3 n = shading_normal(source, hit, entering ? tri.normal : -tri.normal);
     const vec3 ka = mapped(source, hit, m.ka, m.map_ka), kd = mapped(source, hit, m.kd, m.map_kd);
-    add_contribution(pixel, weight * local_intensity(p, n, d, m, ka, kd, counts));
+    add_contribution(pixel, weight * local_intensity(p, n, d, m, ka, kd, counts, record));
 
     if (level + 1 >= scene.max_depth) return hit.tri;
     // SPEC "Materials": kr = Ks for illum 3..7, kt = Tf for illum 4, 6, 7.
@@ -322,7 +334,7 @@ struct ReferenceTracer::Impl {
       // Renormalised: SPEC treats every ray direction as unit, and epsilon
       // is a distance.
       const vec3 reflected = glm::normalize(d - 2.0f * glm::dot(d, n) * n);
-      trace(p, reflected, epsilon, level + 1, weight * kr, pixel, counts);
+      trace(p, reflected, epsilon, level + 1, weight * kr, pixel, counts, record);
     }
     if (any_nonzero(kt)) {
       const float eta = entering ? 1.0f / m.ni : m.ni;
@@ -331,7 +343,7 @@ struct ReferenceTracer::Impl {
       if (k >= 0.0f) {  // k < 0: total internal reflection, no transmitted ray
         ++counts.secondary;
         const vec3 transmitted = glm::normalize(eta * d + (eta * c - std::sqrt(k)) * n);
-        trace(p, transmitted, epsilon, level + 1, weight * kt, pixel, counts);
+        trace(p, transmitted, epsilon, level + 1, weight * kt, pixel, counts, record);
       }
     }
     return hit.tri;
@@ -405,6 +417,22 @@ Vec3 ReferenceTracer::render_pixel(int x, int y, std::int32_t* object_facet,
   for (int c = 0; c < 3; ++c) sum[c] = saturate_sum(sum[c]);
   const glm::dvec3 mean = sum / static_cast<double>(scene.spp);
   return Vec3{static_cast<float>(mean.x), static_cast<float>(mean.y), static_cast<float>(mean.z)};
+}
+
+RaySample ReferenceTracer::sample_rays(int target_primary) const {
+  const Scene& scene = scene_;
+  RaySample out;
+  const double pixels = double(scene.width) * double(scene.height);
+  out.stride = std::max(1, static_cast<int>(std::sqrt(pixels / std::max(1, target_primary))));
+  const vec3 eye = to_glm(scene.camera.eye);
+  RayCounts counts;
+  for (int y = out.stride / 2; y < scene.height; y += out.stride)
+    for (int x = out.stride / 2; x < scene.width; x += out.stride) {
+      const vec3 dir = to_glm(primary_direction(impl_->frame, scene.width, scene.height, x, y));
+      vec3 ignored(0.0f);
+      impl_->trace(eye, dir, 0.0f, 0, vec3(1.0f), ignored, counts, &out.rays);
+    }
+  return out;
 }
 
 void ReferenceTracer::render_rows(int y0, int y1, ImageResult& out, RayCounts& counts) const {

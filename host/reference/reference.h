@@ -10,6 +10,7 @@
 
 #include "core/camera.h"
 #include "core/image.h"
+#include "core/ray_sample.h"
 #include "core/scene.h"
 
 namespace opsila {
@@ -37,6 +38,10 @@ class ReferenceTracer {
   // also reports the centre ray's primary hit (SPEC "Item buffer").
   Vec3 render_pixel(int x, int y, std::int32_t* object_facet, RayCounts& counts) const;
   float epsilon() const { return epsilon_; }
+  // The ray trees of about `target_primary` centre rays on a regular pixel
+  // lattice, every ray as a segment (core/ray_sample.h): what the partition
+  // weighs the clusters with.
+  RaySample sample_rays(int target_primary) const;
 
  private:
   struct Impl;

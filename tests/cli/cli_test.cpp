@@ -67,6 +67,7 @@ TEST_F(CliFixture, DepthAndPesOutOfRangeAreRejected) {
   expect_rejected({scene, "-o", out("x.png"), "--pes", "1025"}, "--pes");
   expect_rejected({scene, "-o", out("x.png"), "--bank-capacity", "-1"}, "--bank-capacity");
   expect_rejected({scene, "-o", out("x.png"), "--routing", "cubes"}, "--routing");
+  expect_rejected({scene, "-o", out("x.png"), "--balance", "rays"}, "--balance");
 }
 
 TEST_F(CliFixture, UnknownDeviceIsRejected) {

@@ -136,6 +136,29 @@ TEST_F(MpiFixture, HundredsIsTheSameOnOneToFourRanks) {
   expect_same_as_one_process(*this, "hundreds.json", "96x72", "16");
 }
 
+// --balance work: every rank samples the same rays and builds the same
+// partition, so the ranks still agree with one process, byte for byte.
+TEST_F(MpiFixture, WorkBalancedPartitionIsTheSameOnThreeRanks) {
+  const std::vector<std::string> common = {scene("hundreds.json"), "--size", "64x48", "--pes", "16", "--balance",
+                                           "work", "-q"};
+  auto with = [&](const std::string& tag) {
+    std::vector<std::string> a = common;
+    a.insert(a.end(), {"-o", dir.file(tag + ".pfm"), "--item-buffer", dir.file(tag + ".npy"), "--stats",
+                       dir.file(tag + ".json")});
+    return a;
+  };
+  const RunResult single = one(with("one"));
+  ASSERT_EQ(single.exit_code, 0) << single.err;
+  const RunResult three = ranks(3, with("three"));
+  ASSERT_EQ(three.exit_code, 0) << three.err;
+  EXPECT_TRUE(test::read_file(dir.file("three.pfm")) == test::read_file(dir.file("one.pfm")));
+  EXPECT_TRUE(test::read_file(dir.file("three.npy")) == test::read_file(dir.file("one.npy")));
+  const nlohmann::json a = stats(dir.file("one.json")), b = stats(dir.file("three.json"));
+  EXPECT_EQ(a.at("balance"), "work");
+  EXPECT_EQ(a.at("levels"), b.at("levels")) << "the ranks partitioned differently from one process";
+  EXPECT_TRUE(b.at("mpi").at("exchange_balanced").get<bool>());
+}
+
 TEST_F(MpiFixture, MoreRanksThanPesAreRefused) {
   const RunResult r = ranks(3, {scene("whitted.json"), "-o", dir.file("x.pfm"), "--size", "32x24", "--pes", "2"});
   EXPECT_EQ(r.exit_code, 2) << r.err;

@@ -48,6 +48,31 @@ int walk(const BankedScene& bs, int node, std::vector<int>& seen) {
   return std::max(k_used, k_used - 1 + deeper);
 }
 
+// A partition weighted by sampled rays: still every facet once, and the same
+// partition from the same rays.
+TEST(BankBvh, WorkBalancedPartitionKeepsEveryFacetOnceAndIsDeterministic) {
+  Scene s = test::mirror_glass_scene(32);
+  RaySample sample;
+  for (int i = 0; i < 200; ++i) {  // rays fanning from the camera side
+    RaySegment r;
+    r.origin = {0.0f, 0.0f, 10.0f};
+    r.direction = {0.01f * float(i % 20) - 0.1f, 0.01f * float(i / 20) - 0.05f, -1.0f};
+    sample.rays.push_back(r);
+  }
+  for (int pes : {4, 16}) {
+    const BankedScene a = partition_scene(s, pes, false, &sample), b = partition_scene(s, pes, false, &sample);
+    std::vector<int> seen(a.triangles.size(), 0);
+    for (int p = 0; p < pes; ++p)
+      if (a.pes[p].node_begin != a.pes[p].node_end) walk(a, a.pes[p].node_begin, seen);
+    for (std::size_t i = 0; i < seen.size(); ++i) EXPECT_EQ(seen[i], 1) << "facet " << i << ", " << pes << " PEs";
+    EXPECT_EQ(a.triangles.size(), s.triangles.size());
+    EXPECT_EQ(a.bank_bytes, b.bank_bytes);
+    ASSERT_EQ(a.triangles.size(), b.triangles.size());
+    for (std::size_t i = 0; i < a.triangles.size(); ++i)
+      EXPECT_EQ(a.triangles[i].facet_id, b.triangles[i].facet_id) << "bank order differs at " << i;
+  }
+}
+
 TEST(BankBvh, EveryFacetOnceInsideItsBoxesWithinTheStack) {
   Scene s = test::mirror_glass_scene(32);
   for (int pes : {1, 4, 16}) {

@@ -2,10 +2,12 @@
 // C++), across PE counts, bank capacities and runs.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <cstring>
 #include <memory>
 
+#include "input/scene_file.h"
 #include "opsila_shared.h"
 #include "reference/reference.h"
 #include "machine/renderer.h"
@@ -81,6 +83,52 @@ TEST(Renderer, RoutingOnBoxesOrSpheresGivesTheSameImage) {
     EXPECT_EQ(spheres.item_buffer, boxes.item_buffer) << pes << " PEs";
     expect_balanced(boxes.stats);
     EXPECT_EQ(spheres.stats.descriptors_spawned, boxes.stats.descriptors_spawned) << pes << " PEs";
+  }
+}
+
+// The paper's occupancy of a render: the tests done over the tests the
+// phases would have allowed had every PE been as busy as the busiest, level
+// by level (as the bench reports it).
+double occupancy(const RenderStats& st) {
+  double done = 0, allowed = 0;
+  for (const auto& level : st.counters) {
+    std::uint64_t most = 0;
+    for (const auto& pe : level) {
+      const std::uint64_t tests = pe[OPSILA_STAT_TRI_TESTS] + pe[OPSILA_STAT_BOX_TESTS];
+      done += double(tests);
+      most = std::max(most, tests);
+    }
+    allowed += double(most) * double(level.size());
+  }
+  return allowed > 0 ? done / allowed : 0.0;
+}
+
+// A partition that shares the frame's sampled rays (--balance work) moves
+// facets between banks, never a pixel; on a scene whose work gathers under
+// the camera it spreads the tests more evenly than equal banks do.
+TEST(Renderer, BalancingByWorkGivesTheSameImageAndEvenerPes) {
+  Scene s = load_scene(std::string(OPSILA_SOURCE_DIR) + "/scenes/hundreds.json");
+  s.width = 160;
+  s.height = 120;
+  const RaySample sample = ReferenceTracer(s).sample_rays(4000);
+  EXPECT_GT(sample.rays.size(), 4000u * 3 / 4) << "every sampled primary ray is recorded, and its tree";
+  for (int pes : {4, 16}) {
+    RenderSettings rs;
+    rs.num_pes = pes;
+    const RenderResult facets = render(s, rs, runtime());
+    rs.ray_sample = &sample;
+    const RenderResult work = render(s, rs, runtime());
+    ASSERT_EQ(facets.rgb.size(), work.rgb.size());
+    EXPECT_EQ(0, std::memcmp(facets.rgb.data(), work.rgb.data(), work.rgb.size() * sizeof(float))) << pes;
+    EXPECT_EQ(facets.item_buffer, work.item_buffer) << pes << " PEs";
+    expect_balanced(work.stats);
+    EXPECT_TRUE(work.stats.balance_work);
+    EXPECT_GT(occupancy(work.stats), occupancy(facets.stats) + 0.05) << pes << " PEs";
+    // Every facet still lives in exactly one bank.
+    std::uint64_t facet_bytes = 0, work_bytes = 0;
+    for (std::uint64_t b : facets.stats.bank_bytes) facet_bytes += b;
+    for (std::uint64_t b : work.stats.bank_bytes) work_bytes += b;
+    EXPECT_NEAR(double(work_bytes), double(facet_bytes), 0.05 * double(facet_bytes)) << "facets duplicated or lost";
   }
 }
 

@@ -134,7 +134,8 @@ void put3(float* dst, const Vec3& v) {
 // test never leaves a facet's hit point outside its cluster's box.
 void build_routing(BankedScene& bs, const Box& sbox) {
   const float pad = 1e-5f * sbox.diagonal();
-  bs.route_nodes.resize(bs.num_pes);
+  const int top_nodes = (bs.num_pes + OPSILA_BVH_WIDTH - 1) / OPSILA_BVH_WIDTH;
+  bs.route_nodes.resize(std::size_t(bs.num_pes) + top_nodes);
   for (int p = 0; p < bs.num_pes; ++p) {
     std::vector<Box> boxes;
     std::vector<int> ids;
@@ -150,6 +151,35 @@ void build_routing(BankedScene& bs, const Box& sbox) {
       ids.push_back(c);
     }
     build_route_bvh(bs.route_nodes, p, boxes, ids);
+  }
+  // The top level: each PE's box is the union of its root's child boxes, so
+  // (rounded slab distances being monotonic in the planes) its entry is
+  // never above any of its clusters' and a PE it misses holds no box met.
+  for (int i = 0; i < top_nodes; ++i) {
+    BankNode& top = bs.route_nodes[std::size_t(bs.num_pes) + i];
+    for (int k = 0; k < OPSILA_BVH_WIDTH; ++k) {
+      top.lo_x[k] = top.lo_y[k] = top.lo_z[k] = top.hi_x[k] = top.hi_y[k] = top.hi_z[k] = 0.0f;
+      top.child[k] = 0;
+      top.count[k] = -1;
+      const int q = i * OPSILA_BVH_WIDTH + k;
+      if (q >= bs.num_pes) continue;
+      const BankNode& root = bs.route_nodes[std::size_t(q)];
+      Box box;
+      bool any = false;
+      for (int j = 0; j < OPSILA_BVH_WIDTH; ++j) {
+        if (root.count[j] < 0) continue;
+        const float lo[3] = {root.lo_x[j], root.lo_y[j], root.lo_z[j]};
+        const float hi[3] = {root.hi_x[j], root.hi_y[j], root.hi_z[j]};
+        box.grow(lo);
+        box.grow(hi);
+        any = true;
+      }
+      if (!any) continue;
+      top.lo_x[k] = box.lo[0], top.lo_y[k] = box.lo[1], top.lo_z[k] = box.lo[2];
+      top.hi_x[k] = box.hi[0], top.hi_y[k] = box.hi[1], top.hi_z[k] = box.hi[2];
+      top.child[k] = q;
+      top.count[k] = 1;
+    }
   }
 }
 

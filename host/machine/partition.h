@@ -27,7 +27,10 @@ struct BankedScene {
   std::vector<BankTriangle> triangles;  // bank p: [pes[p].tri_begin, tri_end)
   std::vector<BankNode> nodes;          // bank p: [pes[p].node_begin, node_end), root first
   std::vector<Cluster> clusters;        // sorted by PE
-  std::vector<BankNode> route_nodes;    // routing BVH over padded cluster boxes; PE p's root is node p
+  // Routing BVH over padded cluster boxes: PE p's root is node p; nodes
+  // P .. P + ceil(P / W) - 1 are the top level, W PEs' boxes to a node in PE
+  // order (child = the PE, count 1; absent for an empty PE).
+  std::vector<BankNode> route_nodes;
   std::vector<PeInfo> pes;
   std::vector<Material> materials;
   std::vector<Light> lights;

@@ -4,7 +4,9 @@
  * paper's scheme, OPSILA_ROUTING_SPHERES: a linear scan of each PE's
  * spheres, behind the box around them) or its box (OPSILA_ROUTING_BOXES: the
  * cluster boxes of each PE under a small wide BVH, BankNode with one cluster
- * per leaf, built by host/machine/bank_bvh.cpp; PE q's root is route[q]).
+ * per leaf, built by host/machine/bank_bvh.cpp; PE q's root is route[q],
+ * and route[P + i] holds the boxes of PEs i*W .. i*W + W-1, the top level
+ * the walks start from).
  * The boxes are padded on the host so that rounding never puts a facet's
  * hit point outside its cluster's box. Both volumes give the same
  * destinations rule below, hence the same image. */
@@ -99,66 +101,95 @@ inline int next_destination_boxes(const RayPre *r, __global const BankNode *rout
                                   float tmax, float cursor_t, int cursor_pe, float *entry_out, uint *route_tests) {
   int best_pe = -1;
   float best_entry = OPSILA_INF;
-  for (int q = 0; q < num_pes; ++q) {
-    if (q == cursor_pe) continue; /* (entry, q) == cursor: visited */
-    float entry = OPSILA_INF;
-    bool visited = false;
-    int stack[OPSILA_BVH_STACK];
-    int sp = 1;
-    stack[0] = q;
-    while (sp > 0 && !visited) {
-      __global const BankNode *nd = &route[stack[--sp]];
-      ++*route_tests;
-      floatW ent;
-      intW met = route_hits(r, nd, tmin, tmax, &ent);
-      float te[OPSILA_BVH_WIDTH];
-      int hm[OPSILA_BVH_WIDTH];
-      vstoreW(ent, 0, te);
-      vstoreW(met, 0, hm);
-      for (int k = 0; k < OPSILA_BVH_WIDTH; ++k) {
-        if (!hm[k]) continue;
-        float e = te[k];
-        if (!(e < fmin(best_entry, entry))) continue;
-        if (nd->count[k] == 0) {
-          if (sp < OPSILA_BVH_STACK) stack[sp++] = nd->child[k];
-          continue;
+  /* PEs in increasing order, as the ties want, W at a time through the top
+   * level: a PE whose box is missed, or entered at or beyond the current
+   * candidate, has no cluster box that could change the answer. */
+  int top_nodes = (num_pes + OPSILA_BVH_WIDTH - 1) / OPSILA_BVH_WIDTH;
+  for (int n = 0; n < top_nodes; ++n) {
+    __global const BankNode *tn = &route[num_pes + n];
+    ++*route_tests;
+    floatW tent;
+    intW tmet = route_hits(r, tn, tmin, tmax, &tent);
+    float pe_entry[OPSILA_BVH_WIDTH];
+    int pe_met[OPSILA_BVH_WIDTH];
+    vstoreW(tent, 0, pe_entry);
+    vstoreW(tmet, 0, pe_met);
+    for (int kq = 0; kq < OPSILA_BVH_WIDTH; ++kq) {
+      if (!pe_met[kq] || !(pe_entry[kq] < best_entry)) continue;
+      int q = tn->child[kq];
+      if (q == cursor_pe) continue; /* (entry, q) == cursor: visited */
+      float entry = OPSILA_INF;
+      bool visited = false;
+      int stack[OPSILA_BVH_STACK];
+      int sp = 1;
+      stack[0] = q;
+      while (sp > 0 && !visited) {
+        __global const BankNode *nd = &route[stack[--sp]];
+        ++*route_tests;
+        floatW ent;
+        intW met = route_hits(r, nd, tmin, tmax, &ent);
+        float te[OPSILA_BVH_WIDTH];
+        int hm[OPSILA_BVH_WIDTH];
+        vstoreW(ent, 0, te);
+        vstoreW(met, 0, hm);
+        for (int k = 0; k < OPSILA_BVH_WIDTH; ++k) {
+          if (!hm[k]) continue;
+          float e = te[k];
+          if (!(e < fmin(best_entry, entry))) continue;
+          if (nd->count[k] == 0) {
+            if (sp < OPSILA_BVH_STACK) stack[sp++] = nd->child[k];
+            continue;
+          }
+          if (e < cursor_t || (e == cursor_t && q < cursor_pe)) {
+            visited = true;
+            break;
+          }
+          entry = e;
         }
-        if (e < cursor_t || (e == cursor_t && q < cursor_pe)) {
-          visited = true;
-          break;
-        }
-        entry = e;
       }
-    }
-    if (visited || !(entry < tmax)) continue;
-    bool after_cursor = entry > cursor_t || (entry == cursor_t && q > cursor_pe);
-    if (after_cursor && entry < best_entry) {
-      best_entry = entry;
-      best_pe = q;
+      if (visited || !(entry < tmax)) continue;
+      bool after_cursor = entry > cursor_t || (entry == cursor_t && q > cursor_pe);
+      if (after_cursor && entry < best_entry) {
+        best_entry = entry;
+        best_pe = q;
+      }
     }
   }
   *entry_out = best_entry;
   return best_pe;
 }
 
-/* next_shadow_destination_spheres with cluster boxes. */
+/* next_shadow_destination_spheres with cluster boxes, through the top
+ * level: PEs whose box the segment misses are not walked. */
 inline int next_shadow_destination_boxes(const RayPre *r, __global const BankNode *route, int num_pes, float tmin,
                                          float tmax, int after_pe, uint *route_tests) {
-  for (int q = after_pe + 1; q < num_pes; ++q) {
-    int stack[OPSILA_BVH_STACK];
-    int sp = 1;
-    stack[0] = q;
-    while (sp > 0) {
-      __global const BankNode *nd = &route[stack[--sp]];
-      ++*route_tests;
-      floatW ent;
-      intW met = route_hits(r, nd, tmin, tmax, &ent);
-      int hm[OPSILA_BVH_WIDTH];
-      vstoreW(met, 0, hm);
-      for (int k = 0; k < OPSILA_BVH_WIDTH; ++k) {
-        if (!hm[k]) continue;
-        if (nd->count[k] > 0) return q;
-        if (sp < OPSILA_BVH_STACK) stack[sp++] = nd->child[k];
+  int first = after_pe + 1;
+  int top_nodes = (num_pes + OPSILA_BVH_WIDTH - 1) / OPSILA_BVH_WIDTH;
+  for (int n = first / OPSILA_BVH_WIDTH; n < top_nodes; ++n) {
+    __global const BankNode *tn = &route[num_pes + n];
+    ++*route_tests;
+    floatW tent;
+    intW tmet = route_hits(r, tn, tmin, tmax, &tent);
+    int pe_met[OPSILA_BVH_WIDTH];
+    vstoreW(tmet, 0, pe_met);
+    for (int kq = 0; kq < OPSILA_BVH_WIDTH; ++kq) {
+      int q = n * OPSILA_BVH_WIDTH + kq;
+      if (q < first || !pe_met[kq]) continue;
+      int stack[OPSILA_BVH_STACK];
+      int sp = 1;
+      stack[0] = q;
+      while (sp > 0) {
+        __global const BankNode *nd = &route[stack[--sp]];
+        ++*route_tests;
+        floatW ent;
+        intW met = route_hits(r, nd, tmin, tmax, &ent);
+        int hm[OPSILA_BVH_WIDTH];
+        vstoreW(met, 0, hm);
+        for (int k = 0; k < OPSILA_BVH_WIDTH; ++k) {
+          if (!hm[k]) continue;
+          if (nd->count[k] > 0) return q;
+          if (sp < OPSILA_BVH_STACK) stack[sp++] = nd->child[k];
+        }
       }
     }
   }

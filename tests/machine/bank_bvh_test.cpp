@@ -125,6 +125,32 @@ TEST(BankBvh, RoutingTreesHoldEachClusterOfTheirPeOnceAroundItsBox) {
   for (std::size_t c = 0; c < seen.size(); ++c) EXPECT_EQ(seen[c], 1) << "cluster " << c;
 }
 
+// The routing top level: PE q's box at node P + q / W, slot q % W, around
+// every box of its root; absent for a PE without clusters.
+TEST(BankBvh, RoutingTopLevelHoldsEachPeBoxAroundItsRoot) {
+  Scene s = test::mirror_glass_scene(32);
+  for (int pes : {3, 16, 64}) {  // 64 PEs leave some banks empty
+    BankedScene bs = partition_scene(s, pes);
+    const int W = OPSILA_BVH_WIDTH, top = (pes + W - 1) / W;
+    ASSERT_GE(bs.route_nodes.size(), std::size_t(pes + top));
+    for (int q = 0; q < pes; ++q) {
+      const BankNode& t = bs.route_nodes[pes + q / W];
+      const int k = q % W;
+      const BankNode& root = bs.route_nodes[q];
+      bool any = false;
+      for (int j = 0; j < W; ++j) {
+        if (root.count[j] < 0) continue;
+        any = true;
+        EXPECT_TRUE(t.lo_x[k] <= root.lo_x[j] && t.lo_y[k] <= root.lo_y[j] && t.lo_z[k] <= root.lo_z[j]) << q;
+        EXPECT_TRUE(t.hi_x[k] >= root.hi_x[j] && t.hi_y[k] >= root.hi_y[j] && t.hi_z[k] >= root.hi_z[j]) << q;
+      }
+      EXPECT_EQ(t.count[k], any ? 1 : -1) << "PE " << q;
+      if (any) EXPECT_EQ(t.child[k], q);
+    }
+    for (int k = pes % W == 0 ? W : pes % W; k < W; ++k) EXPECT_EQ(bs.route_nodes[pes + top - 1].count[k], -1);
+  }
+}
+
 }  // namespace
 }  // namespace opsila
 

@@ -6,6 +6,8 @@
 #include "machine/renderer.h"
 
 #include <algorithm>
+#include <cstdlib>
+#include <cctype>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -122,6 +124,10 @@ struct Renderer::Machine {
   int spp = 1, spp_k = 1;         // samples per pixel, N = k*k
   std::vector<float> offsets;     // (i + 0.5) / k, i = 0..k-1
   Progress* progress = nullptr;
+  // OPSILA_FAULT_ROUND=K: a device fault reported at round K of every frame
+  // (what a GPU reset or CL_OUT_OF_RESOURCES mid-frame looks like), so the
+  // tests can show how a failure among running ranks ends them all.
+  int fault_round = -1;
   FlightPlan flight{1, 1, 1, 1};
   FrameParams fp{};
   RenderStats prepared;  // what the prepare step knows: banks, n, work-group size
@@ -177,6 +183,12 @@ Renderer::Machine::Machine(const Scene& scene, const RenderSettings& settings, C
   spp_k = spp_side(spp);
   offsets = sample_offsets(spp);
   progress = settings.progress;
+  if (const char* k = std::getenv("OPSILA_FAULT_ROUND"); k && *k) {
+    const std::string text = k;
+    if (!std::all_of(text.begin(), text.end(), [](unsigned char c) { return std::isdigit(c); }) || text.size() > 9)
+      throw InputError("OPSILA_FAULT_ROUND=" + text + ": expected a round number");
+    fault_round = std::stoi(text);
+  }
 
   rt.program();  // compile before anything is timed
   k_item = rt.kernel("item_buffer");
@@ -644,6 +656,8 @@ RenderResult Renderer::render() {
   m.item_buffer(launch, 0);
   Machine::Frame f;
   for (int round = 0;; ++round) {
+    if (round == m.fault_round)
+      throw ClError("device fault at round " + std::to_string(round) + " (injected by OPSILA_FAULT_ROUND)");
     m.primary_descriptors(launch, f, round);
     if (!ranks && f.pool_len == 0 && f.out_groups == 0) break;
     m.exchange(launch, f, round, st);

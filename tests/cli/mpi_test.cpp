@@ -274,5 +274,26 @@ TEST_F(MpiFixture, BadDeviceOnOneRankEndsEveryRankCleanly) {
   EXPECT_TRUE(dir.entries().empty()) << "an output file was left behind";
 }
 
+// A device fault on one rank in the middle of a frame, while the others
+// wait for it in the exchange: one error line naming that rank, every rank
+// ended (MPI_Abort), a non-zero exit, no output, no hang.
+TEST_F(MpiFixture, AFaultOnOneRankMidFrameEndsEveryRank) {
+  const std::vector<std::string> args = {scene("hundreds.json"), "-o", dir.file("x.pfm"), "--size", "64x48"};
+  std::vector<std::string> faulty = {"OPSILA_FAULT_ROUND=2", OPSILA_BINARY, "render"};
+  faulty.insert(faulty.end(), args.begin(), args.end());
+  std::vector<std::string> a = launch(2);
+  a.insert(a.end(), {OPSILA_BINARY, "render"});
+  a.insert(a.end(), args.begin(), args.end());
+  a.insert(a.end(), {":", "-np", "1", "/usr/bin/env"});  // rank 2 runs with the fault
+  a.insert(a.end(), faulty.begin(), faulty.end());
+  const RunResult r = test::run_program("/usr/bin/timeout", a, env);
+  EXPECT_NE(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.exit_code, 124) << "the ranks hung";
+  const auto errors = r.error_lines();
+  ASSERT_EQ(errors.size(), 1u) << r.err;
+  EXPECT_EQ(errors[0].rfind("opsila: error: rank 2: OpenCL: device fault at round 2", 0), 0u) << errors[0];
+  EXPECT_TRUE(dir.entries().empty()) << "an output file was left behind";
+}
+
 }  // namespace
 }  // namespace opsila

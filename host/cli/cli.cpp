@@ -183,8 +183,9 @@ int run_render(const std::vector<std::string>& args) {
   std::optional<ClRuntime> runtime;
   if (!o.reference) {
     runtime.emplace(choose_device_flag(o.device_spec));
-  } else if (!o.device_spec.empty() && !o.quiet) {
-    print_line("warning", "--device is ignored with --reference");
+  } else if (!o.quiet) {
+    if (!o.device_spec.empty()) print_line("warning", "--device is ignored with --reference");
+    if (o.balance_work) print_line("warning", "--balance is ignored with --reference (one processor, no banks)");
   }
 
   Scene scene = load_scene_or_explain(o.scene_path, o.quiet || !writer);

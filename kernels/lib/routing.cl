@@ -97,6 +97,15 @@ OPSILA_INLINE intW route_hits(const RayPre *r, __global const BankNode *nd, floa
  * the current candidate's can change the answer, so subtrees entered at or
  * beyond it are skipped; a box entered at or before the cursor means the PE
  * was already visited, which ends its walk. */
+/* route_hits into per-child arrays: entries and whether each child is met. */
+OPSILA_INLINE void route_node(const RayPre *r, __global const BankNode *nd, float tmin, float tmax, float *te,
+                              int *hm) {
+  floatW ent;
+  intW met = route_hits(r, nd, tmin, tmax, &ent);
+  vstoreW(ent, 0, te);
+  vstoreW(met, 0, hm);
+}
+
 inline int next_destination_boxes(const RayPre *r, __global const BankNode *route, int num_pes, float tmin,
                                   float tmax, float cursor_t, int cursor_pe, float *entry_out, uint *route_tests) {
   int best_pe = -1;
@@ -108,12 +117,9 @@ inline int next_destination_boxes(const RayPre *r, __global const BankNode *rout
   for (int n = 0; n < top_nodes; ++n) {
     __global const BankNode *tn = &route[num_pes + n];
     ++*route_tests;
-    floatW tent;
-    intW tmet = route_hits(r, tn, tmin, tmax, &tent);
     float pe_entry[OPSILA_BVH_WIDTH];
     int pe_met[OPSILA_BVH_WIDTH];
-    vstoreW(tent, 0, pe_entry);
-    vstoreW(tmet, 0, pe_met);
+    route_node(r, tn, tmin, tmax, pe_entry, pe_met);
     for (int kq = 0; kq < OPSILA_BVH_WIDTH; ++kq) {
       if (!pe_met[kq] || !(pe_entry[kq] < best_entry)) continue;
       int q = tn->child[kq];
@@ -126,12 +132,9 @@ inline int next_destination_boxes(const RayPre *r, __global const BankNode *rout
       while (sp > 0 && !visited) {
         __global const BankNode *nd = &route[stack[--sp]];
         ++*route_tests;
-        floatW ent;
-        intW met = route_hits(r, nd, tmin, tmax, &ent);
         float te[OPSILA_BVH_WIDTH];
         int hm[OPSILA_BVH_WIDTH];
-        vstoreW(ent, 0, te);
-        vstoreW(met, 0, hm);
+        route_node(r, nd, tmin, tmax, te, hm);
         for (int k = 0; k < OPSILA_BVH_WIDTH; ++k) {
           if (!hm[k]) continue;
           float e = te[k];

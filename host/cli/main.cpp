@@ -8,9 +8,13 @@
 #include "cli/cli.h"
 
 #include "bench/bench.h"
+#include "machine/ranks.h"
 
 int main(int argc, char** argv) {
   try {
+    // Under an MPI launcher, join the job first: a bad flag is then one
+    // error line from the lowest rank, not one per rank.
+    if (opsila::launched_by_mpi()) opsila::Ranks::world().start();
     const std::vector<std::string> args(argv + 1, argv + argc);
     if (!args.empty() && args[0] == "bench") {
       return opsila::run_bench(std::vector<std::string>(args.begin() + 1, args.end()));

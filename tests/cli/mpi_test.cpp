@@ -174,6 +174,21 @@ TEST_F(MpiFixture, WorkBalancedPartitionIsTheSameOnThreeRanks) {
   EXPECT_TRUE(b.at("mpi").at("exchange_balanced").get<bool>());
 }
 
+// A bad flag is the same on every rank: one line, from the lowest, once.
+TEST_F(MpiFixture, ABadFlagOnEveryRankIsOneLine) {
+  for (const char* command : {"render", "bench"}) {
+    std::vector<std::string> a = launch(3);
+    a.insert(a.end(), {OPSILA_BINARY, command, scene("whitted.json"), "-o", dir.file("x.png"), "--pes", "0"});
+    if (std::string(command) == "bench") a.erase(a.end() - 4, a.end() - 2);  // bench has no -o
+    const RunResult r = test::run_program("/usr/bin/timeout", a, env);
+    EXPECT_EQ(r.exit_code, 2) << command << ": " << r.err;
+    const auto errors = r.error_lines();
+    ASSERT_EQ(errors.size(), 1u) << command << ": " << r.err;
+    EXPECT_EQ(errors[0].rfind("opsila: error: rank 0: --pes 0", 0), 0u) << errors[0];
+    EXPECT_TRUE(dir.entries().empty()) << "an output file was left behind";
+  }
+}
+
 TEST_F(MpiFixture, MoreRanksThanPesAreRefused) {
   const RunResult r = ranks(3, {scene("whitted.json"), "-o", dir.file("x.pfm"), "--size", "32x24", "--pes", "2"});
   EXPECT_EQ(r.exit_code, 2) << r.err;

@@ -278,7 +278,7 @@ struct ReferenceTracer::Impl {
       const float n_dot_l = glm::dot(n, lv);
       if (!(n_dot_l > 0.0f)) continue;  // SPEC: the whole light term is 0
       ++counts.shadow;
-      if (record) record->push_back(segment(p, lv, distance));
+      if (record && record->size() < kMaxSampleRays) record->push_back(segment(p, lv, distance));
       if (occluded(p, lv, epsilon, distance)) continue;  // vis = 0
       const vec3 rl = 2.0f * n_dot_l * n - lv;
       const float r_dot_v = std::max(0.0f, glm::dot(rl, -d));
@@ -306,9 +306,12 @@ struct ReferenceTracer::Impl {
 
   // Adds weight x (radiance of the ray tree rooted at this ray) to `pixel`.
   // Returns the triangle hit (for the item buffer), or -1.
-  // With `record`, every ray of the tree is also appended to it as a segment.
+  // With `record`, every ray of the tree is also appended to it as a segment,
+  // until it holds kMaxSampleRays: then the tree stops there (a sample of an
+  // endless ray tree stays bounded in time and memory).
   int trace(const vec3& origin, const vec3& d, float t_min, int level, const vec3& weight,
             vec3& pixel, RayCounts& counts, std::vector<RaySegment>* record = nullptr) const {
+    if (record && record->size() >= kMaxSampleRays) return -1;
     Hit hit;
     const bool found = nearest(origin, d, t_min, hit);
     if (record) record->push_back(segment(origin, d, found ? hit.t : std::numeric_limits<float>::infinity()));
@@ -427,7 +430,7 @@ RaySample ReferenceTracer::sample_rays(int target_primary) const {
   const vec3 eye = to_glm(scene.camera.eye);
   RayCounts counts;
   for (int y = out.stride / 2; y < scene.height; y += out.stride)
-    for (int x = out.stride / 2; x < scene.width; x += out.stride) {
+    for (int x = out.stride / 2; x < scene.width && out.rays.size() < kMaxSampleRays; x += out.stride) {
       const vec3 dir = to_glm(primary_direction(impl_->frame, scene.width, scene.height, x, y));
       vec3 ignored(0.0f);
       impl_->trace(eye, dir, 0.0f, 0, vec3(1.0f), ignored, counts, &out.rays);

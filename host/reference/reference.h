@@ -4,6 +4,7 @@
 // baseline of the benchmark.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <memory>
 #include <vector>
@@ -40,8 +41,10 @@ class ReferenceTracer {
   float epsilon() const { return epsilon_; }
   // The ray trees of about `target_primary` centre rays on a regular pixel
   // lattice, every ray as a segment (core/ray_sample.h): what the partition
-  // weighs the clusters with.
+  // weighs the clusters with. At most kMaxSampleRays segments (a deep tree of
+  // glass and mirrors is cut there).
   RaySample sample_rays(int target_primary) const;
+  static constexpr std::size_t kMaxSampleRays = std::size_t(1) << 20;
 
  private:
   struct Impl;

@@ -3,6 +3,8 @@
 
 #include <gtest/gtest.h>
 
+#include "input/scene_file.h"
+
 #include <cmath>
 #include <random>
 
@@ -427,6 +429,29 @@ TEST(Reference, RayCountsFollowTheTree) {
   EXPECT_EQ(img.rays.shadow, 4u);     // one per hit, front light only
   EXPECT_EQ(img.rays.secondary, 4u);  // reflections that then miss
   EXPECT_EQ(img.rays.total(), 12u);
+}
+
+// The ray sample of --balance work: every primary ray's tree, as segments;
+// an endless tree (facing glass slabs at depth 31) is cut at the cap, so the
+// sample ends, and soon.
+TEST(Reference, RaySampleFollowsTheTreesAndStaysBounded) {
+  Scene s = load_scene_from_string(R"({"image": {"size": [64, 48]}, "depth": 31,
+    "camera": {"eye": [0, 0, 0.5], "look_at": [0, 0, -1]},
+    "lights": [{"position": [0, 0, 0]}],
+    "materials": {"glass": {"kr": 0.9, "kt": 0.9, "Ni": 1.5}},
+    "objects": [{"type": "box", "min": [-50, -50, -1.1], "max": [50, 50, -1], "material": "glass"},
+                {"type": "box", "min": [-50, -50, 1], "max": [50, 50, 1.1], "material": "glass"}]})",
+                                    "slabs.json", "");
+  const ReferenceTracer tracer(s);
+  const RaySample endless = tracer.sample_rays(100);
+  EXPECT_LE(endless.rays.size(), ReferenceTracer::kMaxSampleRays);
+  EXPECT_GE(endless.rays.size(), ReferenceTracer::kMaxSampleRays - 8) << "the trees should fill the cap";
+  s.max_depth = 2;  // primary ray, one reflected and one transmitted, shadow rays of both levels
+  const RaySample shallow = ReferenceTracer(s).sample_rays(100);
+  int primary = 0;
+  for (const RaySegment& r : shallow.rays) primary += r.origin == s.camera.eye;
+  EXPECT_GE(primary, 60);
+  EXPECT_GT(shallow.rays.size(), std::size_t(3 * primary)) << "reflected, transmitted and shadow rays are kept";
 }
 
 }  // namespace

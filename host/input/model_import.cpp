@@ -15,6 +15,7 @@
 #include <fstream>
 #include <mutex>
 #include <new>
+#include <sstream>
 #include <stdexcept>
 #include <thread>
 #include <vector>
@@ -25,6 +26,7 @@
 
 #ifdef OPSILA_HAVE_ASSIMP
 #include <assimp/Importer.hpp>
+#include <assimp/importerdesc.h>
 #include <assimp/material.h>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
@@ -370,16 +372,42 @@ void check_off_header(const std::string& text, std::size_t file_bytes, const std
   }
 }
 
-// The importer picks its OFF reader by extension, and also by content when the
-// extension alone does not settle it (.gltf and .glb are claimed by two
-// readers): content whose first three bytes, NULs dropped, read "off" in any
-// case. Either way the header check must run first.
-bool off_reader_may_take(const std::string& head, const std::string& ext) {
-  if (lower(ext) == "off" || lower(ext) == ".off") return true;
+// The importer picks a reader by the file's extension; only when several
+// readers claim it (.gltf, .glb, .xml in libassimp 5.2) does the content
+// decide, each reader looking for its keyword in the first bytes.
+bool content_may_choose(const std::string& ext) {
+  std::string e = lower(ext);
+  if (!e.empty() && e[0] == '.') e.erase(0, 1);
+  if (e.empty()) return true;
+  Assimp::Importer importer;
+  int claims = 0;
+  for (std::size_t i = 0; i < importer.GetImporterCount(); ++i) {
+    std::istringstream list(importer.GetImporterInfo(i)->mFileExtensions);
+    std::string one;
+    while (list >> one) claims += lower(one) == e;
+  }
+  return claims > 1;
+}
+
+// The first three bytes, NULs dropped, in lower case: where the OFF and PLY
+// readers look for their keyword.
+std::string keyword_of(const std::string& head) {
   std::string first;
   for (std::size_t i = 0; i < head.size() && i < 3; ++i)
     if (head[i] != '\0') first += static_cast<char>(std::tolower(static_cast<unsigned char>(head[i])));
-  return first == "off";
+  return first;
+}
+
+// Runs the header checks of the readers that may take this file: by its
+// extension, or by its content when the extension does not settle it.
+void check_headers(const std::string& head, std::size_t file_bytes, const std::string& ext,
+                   const std::string& name) {
+  std::string e = lower(ext);
+  if (!e.empty() && e[0] == '.') e.erase(0, 1);
+  const bool by_content = content_may_choose(e);
+  const std::string keyword = keyword_of(head);
+  if (e == "ply" || (by_content && keyword == "ply")) check_ply_header(head, name);
+  if (e == "off" || (by_content && keyword == "off")) check_off_header(head, file_bytes, name);
 }
 
 // aiProcess_ValidateDataStructure refuses inconsistent data (indices out of
@@ -414,23 +442,16 @@ bool is_imported_model(const std::string& path) {
 
 Scene load_model(const std::string& path) {
   check_model_file(path);
-  if (lower(fs::path(path).extension().string()) == ".ply") {
-    // The header is text at the start; 64 KiB is far more than any needs.
-    std::ifstream in(path, std::ios::binary);
-    std::string head(64 * 1024, '\0');
-    in.read(head.data(), static_cast<std::streamsize>(head.size()));
-    head.resize(static_cast<std::size_t>(in.gcount()));
-    check_ply_header(head, path);
-  }
   {
+    // The headers are text at the start; 64 KiB is far more than any needs.
+    // Both checks go by content as well as by name: the importer may choose a
+    // reader by content when the name does not settle it.
     std::ifstream in(path, std::ios::binary);
     std::string head(64 * 1024, '\0');
     in.read(head.data(), static_cast<std::streamsize>(head.size()));
     head.resize(static_cast<std::size_t>(in.gcount()));
-    if (off_reader_may_take(head, fs::path(path).extension().string())) {
-      std::error_code ec;
-      check_off_header(head, static_cast<std::size_t>(fs::file_size(path, ec)), path);
-    }
+    std::error_code ec;
+    check_headers(head, static_cast<std::size_t>(fs::file_size(path, ec)), fs::path(path).extension().string(), path);
   }
   // The importer reads the file (and the files it names) itself.
   Assimp::Importer importer;
@@ -446,8 +467,7 @@ Scene load_model(const std::string& path) {
 }
 
 Scene load_model_from_memory(const std::string& bytes, const std::string& name, const std::string& hint) {
-  check_ply_header(bytes.substr(0, 64 * 1024), name);
-  if (off_reader_may_take(bytes.substr(0, 3), hint)) check_off_header(bytes.substr(0, 64 * 1024), bytes.size(), name);
+  check_headers(bytes.substr(0, 64 * 1024), bytes.size(), hint, name);
   Assimp::Importer importer;
   const aiScene* ai = importer.ReadFileFromMemory(bytes.data(), bytes.size(), kImportFlags, hint.c_str());
   return convert(importer, ai, name, "");

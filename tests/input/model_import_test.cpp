@@ -3,6 +3,8 @@
 // "FILE: problem" for a broken file of every format. No OpenCL needed.
 #include <gtest/gtest.h>
 
+#include <cstdint>
+
 #include <cmath>
 #include <filesystem>
 #include <set>
@@ -210,6 +212,25 @@ TEST(ModelImport, OffTextUnderAnotherNameIsCheckedToo) {
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("OFF header asks for"), std::string::npos) << e.what();
   }
+}
+
+// The content decides only where the name does not: an STL whose free-form
+// header happens to start with "off" is an STL (its reader is the only one
+// for .stl), while PLY text named .glb gets the PLY header check.
+TEST(ModelImport, HeaderChecksFollowTheReaderTheNameLeavesOpen) {
+  test::TempDir dir;
+  std::string stl(80, ' ');
+  const std::string header = "offset 900000000000 model";
+  stl.replace(0, header.size(), header);
+  const std::uint32_t count = 1;
+  stl.append(reinterpret_cast<const char*>(&count), 4);
+  const float tri[12] = {0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 0};  // normal, then three vertices
+  stl.append(reinterpret_cast<const char*>(tri), sizeof tri);
+  stl.append(2, '\0');  // attribute byte count
+  EXPECT_EQ(load_scene(dir.write("offset.stl", stl)).triangles.size(), 1u);
+  const std::string ply = dir.write("fake.glb", "ply\nformat ascii 1.0\nelement vertex 3\n");
+  const std::string msg = error_of(ply);
+  EXPECT_EQ(msg.rfind(ply + ": PLY header without 'end_header'", 0), 0u) << msg;
 }
 
 TEST(ModelImport, SceneFileModelObjects) {

@@ -13,6 +13,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <mutex>
 #include <new>
 #include <sstream>
@@ -285,11 +286,42 @@ class ModelReader {
 };
 
 // The importer's PLY reader does not stop on a header that never ends (found
-// by fuzz_model): such a file is refused before it gets there.
-void check_ply_header(const std::string& head, const std::string& name) {
+// by fuzz_model): such a file is refused before it gets there. Like the OFF
+// reader it also allocates what the element counts ask for before reading
+// one: every element takes at least a byte per property (binary or text), so
+// counts the file cannot hold are refused too.
+void check_ply_header(const std::string& head, std::size_t file_bytes, const std::string& name) {
   if (head.compare(0, 3, "ply") != 0) return;
-  if (head.find("end_header") == std::string::npos)
+  const std::size_t end = head.find("end_header");
+  if (end == std::string::npos)
     throw InputError(name + ": PLY header without 'end_header' (truncated or not PLY)");
+  std::istringstream lines(head.substr(0, end));
+  std::string line, element;
+  unsigned long long count = 0, properties = 0;
+  auto judge = [&] {
+    if (element.empty()) return;
+    const unsigned long long per = std::max(1ull, properties);
+    if (count > file_bytes / per)
+      throw InputError(name + ": PLY header asks for " + std::to_string(count) + " '" + element +
+                       "' elements, more than a file of " + std::to_string(file_bytes) + " bytes can hold");
+  };
+  while (std::getline(lines, line)) {
+    std::istringstream words(line);
+    std::string keyword;
+    words >> keyword;
+    if (keyword == "element") {
+      judge();
+      std::string text;
+      words >> element >> text;
+      count = 0;
+      properties = 0;
+      if (!text.empty() && text.find_first_not_of("0123456789") == std::string::npos)  // else the importer judges
+        count = text.size() <= 19 ? std::stoull(text) : std::numeric_limits<unsigned long long>::max();
+    } else if (keyword == "property") {
+      ++properties;
+    }
+  }
+  judge();
 }
 
 // The importer's readers are not ours and some loop forever on malformed
@@ -406,7 +438,7 @@ void check_headers(const std::string& head, std::size_t file_bytes, const std::s
   if (!e.empty() && e[0] == '.') e.erase(0, 1);
   const bool by_content = content_may_choose(e);
   const std::string keyword = keyword_of(head);
-  if (e == "ply" || (by_content && keyword == "ply")) check_ply_header(head, name);
+  if (e == "ply" || (by_content && keyword == "ply")) check_ply_header(head, file_bytes, name);
   if (e == "off" || (by_content && keyword == "off")) check_off_header(head, file_bytes, name);
 }
 

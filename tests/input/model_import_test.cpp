@@ -233,6 +233,19 @@ TEST(ModelImport, HeaderChecksFollowTheReaderTheNameLeavesOpen) {
   EXPECT_EQ(msg.rfind(ply + ": PLY header without 'end_header'", 0), 0u) << msg;
 }
 
+// Element counts in a PLY header that no file of that size can hold are
+// refused before the importer allocates for them; true counts load.
+TEST(ModelImport, PlyCountsBeyondTheFileAreRefused) {
+  test::TempDir dir;
+  const std::string body = "property float x\nproperty float y\nproperty float z\nelement face 1\n"
+                           "property list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+  const std::string huge = dir.write("huge.ply", "ply\nformat ascii 1.0\nelement vertex 3000000000\n" + body);
+  const std::string msg = error_of(huge);
+  EXPECT_EQ(msg.rfind(huge + ": PLY header asks for 3000000000 'vertex' elements", 0), 0u) << msg;
+  const std::string ok = dir.write("ok.ply", "ply\nformat ascii 1.0\nelement vertex 3\n" + body);
+  EXPECT_EQ(load_scene(ok).triangles.size(), 1u);
+}
+
 TEST(ModelImport, SceneFileModelObjects) {
   REQUIRE_TEST_MODELS();
   test::TempDir dir;

@@ -27,6 +27,7 @@
 
 #ifdef OPSILA_HAVE_ASSIMP
 #include <assimp/Importer.hpp>
+#include <assimp/BaseImporter.h>
 #include <assimp/importerdesc.h>
 #include <assimp/material.h>
 #include <assimp/postprocess.h>
@@ -404,42 +405,43 @@ void check_off_header(const std::string& text, std::size_t file_bytes, const std
   }
 }
 
-// The importer picks a reader by the file's extension; only when several
-// readers claim it (.gltf, .glb, .xml in libassimp 5.2) does the content
-// decide, each reader looking for its keyword in the first bytes.
-bool content_may_choose(const std::string& ext) {
+// The extension without its dot, in lower case.
+std::string bare_extension(const std::string& ext) {
   std::string e = lower(ext);
   if (!e.empty() && e[0] == '.') e.erase(0, 1);
-  if (e.empty()) return true;
-  Assimp::Importer importer;
-  int claims = 0;
+  return e;
+}
+
+// Only the readers that claim the file's extension may read it. Where
+// several claim it (.gltf and .glb in libassimp 5.2) the importer would
+// otherwise try, when those refuse the content, every reader whose keyword
+// appears in the first bytes, and some of them allocate whatever a header
+// asks before reading anything (fuzz_model: OFF text and a Quick3D header,
+// both named .gltf, asked for 45 GB and 1.2 TB). The others are unregistered
+// (and deleted: the importer no longer owns them). Not for .xml: several
+// XML formats (Ogre's .mesh.xml, XGL, ...) are told apart only by content.
+void keep_readers_for(Assimp::Importer& importer, const std::string& ext) {
+  const std::string e = bare_extension(ext);
+  if (e == "xml") return;
+  std::vector<Assimp::BaseImporter*> others;
   for (std::size_t i = 0; i < importer.GetImporterCount(); ++i) {
     std::istringstream list(importer.GetImporterInfo(i)->mFileExtensions);
     std::string one;
-    while (list >> one) claims += lower(one) == e;
+    bool claims = false;
+    while (list >> one) claims = claims || lower(one) == e;
+    if (!claims) others.push_back(importer.GetImporter(i));
   }
-  return claims > 1;
+  for (Assimp::BaseImporter* reader : others)
+    if (importer.UnregisterLoader(reader) == aiReturn_SUCCESS) delete reader;
 }
 
-// The first three bytes, NULs dropped, in lower case: where the OFF and PLY
-// readers look for their keyword.
-std::string keyword_of(const std::string& head) {
-  std::string first;
-  for (std::size_t i = 0; i < head.size() && i < 3; ++i)
-    if (head[i] != '\0') first += static_cast<char>(std::tolower(static_cast<unsigned char>(head[i])));
-  return first;
-}
-
-// Runs the header checks of the readers that may take this file: by its
-// extension, or by its content when the extension does not settle it.
+// The header checks of the reader the extension names (the only one left to
+// read the file, see keep_readers_for).
 void check_headers(const std::string& head, std::size_t file_bytes, const std::string& ext,
                    const std::string& name) {
-  std::string e = lower(ext);
-  if (!e.empty() && e[0] == '.') e.erase(0, 1);
-  const bool by_content = content_may_choose(e);
-  const std::string keyword = keyword_of(head);
-  if (e == "ply" || (by_content && keyword == "ply")) check_ply_header(head, file_bytes, name);
-  if (e == "off" || (by_content && keyword == "off")) check_off_header(head, file_bytes, name);
+  const std::string e = bare_extension(ext);
+  if (e == "ply") check_ply_header(head, file_bytes, name);
+  if (e == "off") check_off_header(head, file_bytes, name);
 }
 
 // aiProcess_ValidateDataStructure refuses inconsistent data (indices out of
@@ -476,8 +478,6 @@ Scene load_model(const std::string& path) {
   check_model_file(path);
   {
     // The headers are text at the start; 64 KiB is far more than any needs.
-    // Both checks go by content as well as by name: the importer may choose a
-    // reader by content when the name does not settle it.
     std::ifstream in(path, std::ios::binary);
     std::string head(64 * 1024, '\0');
     in.read(head.data(), static_cast<std::streamsize>(head.size()));
@@ -487,6 +487,7 @@ Scene load_model(const std::string& path) {
   }
   // The importer reads the file (and the files it names) itself.
   Assimp::Importer importer;
+  keep_readers_for(importer, fs::path(path).extension().string());
   const aiScene* ai = nullptr;
   {
     std::error_code ec;
@@ -501,6 +502,7 @@ Scene load_model(const std::string& path) {
 Scene load_model_from_memory(const std::string& bytes, const std::string& name, const std::string& hint) {
   check_headers(bytes.substr(0, 64 * 1024), bytes.size(), hint, name);
   Assimp::Importer importer;
+  keep_readers_for(importer, hint);
   const aiScene* ai = importer.ReadFileFromMemory(bytes.data(), bytes.size(), kImportFlags, hint.c_str());
   return convert(importer, ai, name, "");
 }

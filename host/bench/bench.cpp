@@ -22,7 +22,6 @@
 #include "input/scene_file.h"
 #include "machine/pe_group.h"
 #include "machine/ranks.h"
-#include "reference/reference.h"
 
 namespace opsila {
 
@@ -110,17 +109,9 @@ int run_bench(const std::vector<std::string>& args) {
   outputs.refuse_inputs(scene.input_files);
   apply_view_options(scene, o);
   if (const std::string note = large_work_note(scene); !note.empty()) progress("note: %s", note.c_str());
-  RenderSettings settings;
-  settings.num_pes = o.pes.value_or(settings.num_pes);
-  settings.bank_capacity = o.bank_capacity;
-  settings.work_groups_per_pe = o.work_groups_per_pe;
-  if (o.routing) settings.routing = *o.routing;
-  RaySample sample;  // --balance work: the frame's rays, sampled on the host
-  if (o.balance_work) {
-    progress("sampling the frame's rays for --balance work");
-    sample = ReferenceTracer(scene).sample_rays(kBalanceSampleRays);
-    settings.ray_sample = &sample;
-  }
+  if (o.balance_work) progress("sampling the frame's rays for --balance work");
+  RaySample sample;
+  const RenderSettings settings = render_settings(o, scene, sample);
 
   BenchReport report = start_report(o, scene, settings.num_pes);
   report.device = device_facts(rt);

@@ -17,6 +17,7 @@
 #include "input/scene_file.h"
 #include "machine/ranks.h"
 #include "opsila_shared.h"
+#include "reference/reference.h"
 
 namespace opsila {
 
@@ -259,6 +260,19 @@ void check_view_flags(const ViewOptions& o) {
     if (o.up) flags_only.up = *o.up;
     if (o.up || *o.eye == *o.look_at) check_camera(flags_only, "--eye/--look-at", "--up");
   }
+}
+
+RenderSettings render_settings(const ViewOptions& o, const Scene& scene, RaySample& sample) {
+  RenderSettings settings;
+  settings.num_pes = o.pes.value_or(settings.num_pes);
+  settings.bank_capacity = o.bank_capacity;
+  settings.work_groups_per_pe = o.work_groups_per_pe;
+  if (o.routing) settings.routing = *o.routing;
+  if (o.balance_work) {
+    sample = ReferenceTracer(scene).sample_rays(kBalanceSampleRays);
+    settings.ray_sample = &sample;
+  }
+  return settings;
 }
 
 void apply_view_options(Scene& scene, const ViewOptions& o) {

@@ -9,7 +9,9 @@
 #include <string>
 #include <vector>
 
+#include "core/ray_sample.h"
 #include "core/scene.h"
+#include "machine/renderer.h"
 #include "machine/cl_runtime.h"
 
 namespace opsila {
@@ -97,6 +99,12 @@ void check_view_flags(const ViewOptions& o);
 // camera, adds the default light at the eye when there is no light at all,
 // then checks the final camera, size and depth. Throws InputError.
 void apply_view_options(Scene& scene, const ViewOptions& options);
+
+// The machine the view flags ask for (--pes, --bank-capacity,
+// --work-groups-per-pe, --routing). With --balance work it also samples the
+// frame's rays into `sample` (which must outlive the settings) for the
+// partition.
+RenderSettings render_settings(const ViewOptions& options, const Scene& scene, RaySample& sample);
 
 // The device --device names (the default when empty: under mpirun, the
 // ranks of a machine take its GPUs in turn); a problem with the name

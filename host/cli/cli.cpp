@@ -192,16 +192,10 @@ int run_render(const std::vector<std::string>& args) {
   outputs.refuse_inputs(scene.input_files);
   apply_view_options(scene, o);
 
-  RenderSettings settings;
-  if (o.pes) settings.num_pes = *o.pes;
-  settings.bank_capacity = o.bank_capacity;
-  settings.work_groups_per_pe = o.work_groups_per_pe;
-  if (o.routing) settings.routing = *o.routing;
-  RaySample sample;  // --balance work: the frame's rays, sampled on the host
-  if (o.balance_work && !o.reference) {
-    sample = ReferenceTracer(scene).sample_rays(kBalanceSampleRays);
-    settings.ray_sample = &sample;
-  }
+  ViewOptions machine = o;
+  machine.balance_work = o.balance_work && !o.reference;  // one processor, no banks to balance
+  RaySample sample;
+  RenderSettings settings = render_settings(machine, scene, sample);
 
   if (!o.quiet && writer)
     if (const std::string note = large_work_note(scene); !note.empty()) print_line("note", note);

@@ -171,10 +171,9 @@ inline int next_shadow_destination_boxes(const RayPre *r, __global const BankNod
   for (int n = first / OPSILA_BVH_WIDTH; n < top_nodes; ++n) {
     __global const BankNode *tn = &route[num_pes + n];
     ++*route_tests;
-    floatW tent;
-    intW tmet = route_hits(r, tn, tmin, tmax, &tent);
+    float pe_entry[OPSILA_BVH_WIDTH];
     int pe_met[OPSILA_BVH_WIDTH];
-    vstoreW(tmet, 0, pe_met);
+    route_node(r, tn, tmin, tmax, pe_entry, pe_met);
     for (int kq = 0; kq < OPSILA_BVH_WIDTH; ++kq) {
       int q = n * OPSILA_BVH_WIDTH + kq;
       if (q < first || !pe_met[kq]) continue;
@@ -184,10 +183,9 @@ inline int next_shadow_destination_boxes(const RayPre *r, __global const BankNod
       while (sp > 0) {
         __global const BankNode *nd = &route[stack[--sp]];
         ++*route_tests;
-        floatW ent;
-        intW met = route_hits(r, nd, tmin, tmax, &ent);
+        float te[OPSILA_BVH_WIDTH];
         int hm[OPSILA_BVH_WIDTH];
-        vstoreW(met, 0, hm);
+        route_node(r, nd, tmin, tmax, te, hm);
         for (int k = 0; k < OPSILA_BVH_WIDTH; ++k) {
           if (!hm[k]) continue;
           if (nd->count[k] > 0) return q;

@@ -74,7 +74,7 @@ typedef std::uint32_t opsila_u32;
  *   dir: xyz direction; w: entry distance of the cursor PE (ordered forwarding)
  *   wgt: xyz weight product (radiance) or light contribution (shadow); w: 0
  *   ids: x pixel; y meta (kind | level << 2); z best hit (global triangle,
- *        -1 none); w destination PE, which is also the cursor PE of ordered
+ *        -1 none; for a shadow ray, its home PE); w destination PE, which is also the cursor PE of ordered
  *        forwarding (-1: a NIL hole that the exchange skips) */
 #define OPSILA_DESCRIPTOR_LANES(X) \
   X(0, org, float4, cl_float4)     \
@@ -114,7 +114,8 @@ typedef std::uint32_t opsila_u32;
 #define OPSILA_STAT_LIT 11          /* shadow rays finished unoccluded */
 #define OPSILA_STAT_FORWARD 12      /* descriptors sent to another PE (or back to this one) */
 #define OPSILA_STAT_ROUTE_TESTS 13  /* PE-box and routing-BVH node tests (destination choice) */
-#define OPSILA_STAT_COUNT 14
+#define OPSILA_STAT_LOCAL 14        /* new rays tested in the spawning PE's own bank at once, not sent there */
+#define OPSILA_STAT_COUNT 15
 
 /* One facet triangle as stored in a bank (48 bytes). Vertices are kept
  * exactly as loaded so that the watertight test sees shared edges alike. */

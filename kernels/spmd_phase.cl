@@ -39,24 +39,95 @@ inline void emit(Outputs *o, Descriptor d) {
   if (level < o->traffic_levels) atomic_inc(&o->traffic[level * o->num_pes + DESC_DEST(d)]);
 }
 
-/* A new ray leaving a surface (or going to a light): first destination in
- * entry order, or none. */
-inline int first_destination(const Routing *rt, const RayPre *r, float eps, float tmax, float *entry, PrivStats *st) {
-  return next_destination(rt, r, eps, tmax, -1.0f, -1, entry, &st->v[OPSILA_STAT_SPHERE_TESTS],
-                          &st->v[OPSILA_STAT_ROUTE_TESTS]);
+/* This PE's bank, which only it reads. */
+typedef struct {
+  __global const BankNode *nodes;
+  __global const BankTriangle *tris;
+  int pe, root;
+  bool empty;
+} Bank;
+
+/* What a ray's visit to this PE ends in. */
+#define VISIT_DONE 0  /* finished here (a miss, occluded or lit) */
+#define VISIT_SEND 1  /* *next goes on to its destination PE */
+#define VISIT_SHADE 2 /* a radiance ray whose nearest hit is a facet of this bank */
+
+/* A shadow ray at this PE: any hit in the bank ends it; otherwise it goes on
+ * to the next PE its segment meets in PE order after `after_pe`, skipping
+ * its home PE (which spawned it and tested its own bank first), or it is
+ * lit. */
+inline int shadow_visit(const Routing *rt, const Bank *bank, const RayPre *r, float eps, float tmax, int after_pe,
+                        int home, float3 contrib, int pixel, int meta, volatile __global uint *accum, PrivStats *st,
+                        Descriptor *next) {
+  bool blocked = !bank->empty && traverse_any(r, bank->nodes, bank->tris, bank->root, eps, tmax,
+                                              &st->v[OPSILA_STAT_TRI_TESTS], &st->v[OPSILA_STAT_BOX_TESTS]);
+  if (blocked) {
+    ++st->v[OPSILA_STAT_OCCLUDED];
+    return VISIT_DONE;
+  }
+  int dest = next_shadow_destination(rt, r, eps, tmax, after_pe, home, &st->v[OPSILA_STAT_SPHERE_TESTS],
+                                     &st->v[OPSILA_STAT_ROUTE_TESTS]);
+  if (dest < 0) {
+    ++st->v[OPSILA_STAT_LIT];
+    accumulate(accum, pixel, contrib);
+    return VISIT_DONE;
+  }
+  ++st->v[OPSILA_STAT_FORWARD];
+  *next = make_descriptor(r->org, tmax, r->dir, 0.0f, contrib, pixel, meta, home, dest);
+  return VISIT_SEND;
 }
 
-/* Whitted shading of a resolved hit at its owner PE: ambient now, one shadow
- * descriptor per light that can contribute, reflected and transmitted
- * descriptors for the next level. */
-inline void shade(FrameParams fp, const Routing *rt, __global const BankTriangle *tris,
-                  __global const Material *materials, __global const Light *lights, SURFACE_PARAMS, float3 org, float3 d,
-                  float t, int tri_index, float3 weight, int pixel, int level, Outputs *out, volatile __global uint *accum,
-                  PrivStats *st) {
-  __global const Material *m = &materials[tris[tri_index].material];
-  SurfacePoint sp = surface_point(fp, tris, tri_index, m, SURFACE_ARGS, org, d, t);
+/* A radiance ray at this PE (the cursor of its ordered forwarding: entry
+ * cursor_entry here): its nearest hit in the bank, then on to the next PE
+ * that may hold a nearer one, a miss, or to the PE that owns its hit.
+ * *t_best and *hit carry the best hit so far in and out. */
+inline int trace_visit(FrameParams fp, const Routing *rt, const Bank *bank, const RayPre *r, float3 w, int pixel,
+                       int meta, float cursor_entry, float *t_best, int *hit, int best_facet,
+                       volatile __global uint *accum, PrivStats *st, Descriptor *next) {
+  float eps = fp.epsilon;
+  int found = -1; /* local index of a facet of this bank that won */
+  if (!bank->empty)
+    traverse_nearest(r, bank->nodes, bank->tris, bank->root, eps, t_best, &found, &best_facet,
+                     &st->v[OPSILA_STAT_TRI_TESTS], &st->v[OPSILA_STAT_BOX_TESTS]);
+  if (found >= 0) *hit = fp.tri_base + found;
+  float entry;
+  int dest = next_destination(rt, r, eps, tie_limit(*t_best), cursor_entry, bank->pe, &entry,
+                              &st->v[OPSILA_STAT_SPHERE_TESTS], &st->v[OPSILA_STAT_ROUTE_TESTS]);
+  if (dest >= 0) { /* a nearer hit (or a tie with a lower facet id) may wait in another bank */
+    ++st->v[OPSILA_STAT_FORWARD];
+    *next = make_descriptor(r->org, *t_best, r->dir, entry, w, pixel, meta, *hit, dest);
+    DESC_BEST_FACET(*next) = as_float(best_facet);
+    return VISIT_SEND;
+  }
+  if (*hit < 0) {
+    ++st->v[OPSILA_STAT_MISS];
+    accumulate(accum, pixel, w * load3(fp.background));
+    return VISIT_DONE;
+  }
+  int owner = owner_pe(rt->pes, fp.num_pes, *hit);
+  if (owner == bank->pe) return VISIT_SHADE;
+  /* nearest hit known; its facet lives in another bank */
+  ++st->v[OPSILA_STAT_FORWARD];
+  *next = make_descriptor(r->org, *t_best, r->dir, 0.0f, w, pixel, OPSILA_META(OPSILA_KIND_RESOLVED,
+                                                                               OPSILA_META_LEVEL(meta)), *hit, owner);
+  return VISIT_SEND;
+}
+
+/* Whitted shading of a resolved hit at its owner PE: ambient now, a shadow
+ * ray per light that can contribute, reflected and transmitted rays for the
+ * next level. A new ray is tested in this PE's own bank at once (its origin
+ * lies in one of this PE's clusters, so it would be sent here first or
+ * soon): only what must leave the bank becomes an output descriptor, one at
+ * most per new ray. st counts at `level`, st_child at level + 1. */
+inline void shade(FrameParams fp, const Routing *rt, const Bank *bank, __global const Material *materials,
+                  __global const Light *lights, SURFACE_PARAMS, float3 org, float3 d, float t, int tri_index,
+                  float3 weight, int pixel, int level, Outputs *out, volatile __global uint *accum, PrivStats *st,
+                  PrivStats *st_child) {
+  __global const Material *m = &materials[bank->tris[tri_index].material];
+  SurfacePoint sp = surface_point(fp, bank->tris, tri_index, m, SURFACE_ARGS, org, d, t);
   float3 p = sp.p;
   float eps = fp.epsilon;
+  Descriptor next;
 
   accumulate(accum, pixel, weight * load3(fp.ambient) * sp.ka);
 
@@ -66,15 +137,11 @@ inline void shade(FrameParams fp, const Routing *rt, __global const BankTriangle
     float3 contrib = light_term(m, &lights[l], sp, d, weight, &lv, &dist);
     if (all(contrib == (float3)(0.0f))) continue;
     ++st->v[OPSILA_STAT_SPAWN_SHADOW];
+    ++st->v[OPSILA_STAT_LOCAL];
     RayPre sr = make_ray(p, lv);
-    int dest = next_shadow_destination(rt, &sr, eps, dist, -1, &st->v[OPSILA_STAT_SPHERE_TESTS],
-                                       &st->v[OPSILA_STAT_ROUTE_TESTS]);
-    if (dest < 0) { /* no sphere on the way: lit without leaving this PE */
-      ++st->v[OPSILA_STAT_LIT];
-      accumulate(accum, pixel, contrib);
-    } else {
-      emit(out, make_descriptor(p, dist, lv, 0.0f, contrib, pixel, OPSILA_META(OPSILA_KIND_SHADOW, level), -1, dest));
-    }
+    if (shadow_visit(rt, bank, &sr, eps, dist, -1, bank->pe, contrib, pixel, OPSILA_META(OPSILA_KIND_SHADOW, level),
+                     accum, st, &next) == VISIT_SEND)
+      emit(out, next);
   }
 
   if (level + 1 >= fp.max_depth) return;
@@ -92,59 +159,60 @@ inline void shade(FrameParams fp, const Routing *rt, __global const BankTriangle
     child_w[1] = weight * kt;
     child_ok[1] = true;
   }
+  int child_meta = OPSILA_META(OPSILA_KIND_TRACE, level + 1);
   for (int j = 0; j < 2; ++j) {
     if (!child_ok[j]) continue;
     ++st->v[OPSILA_STAT_SPAWN_RADIANCE];
     RayPre cr = make_ray(p, child_d[j]);
     float entry;
-    int dest = first_destination(rt, &cr, eps, OPSILA_INF, &entry, st);
-    if (dest < 0) { /* meets no sphere: a miss, finished here (counted at its own level) */
+    int dest = next_destination(rt, &cr, eps, OPSILA_INF, -1.0f, -1, &entry, &st->v[OPSILA_STAT_SPHERE_TESTS],
+                                &st->v[OPSILA_STAT_ROUTE_TESTS]);
+    if (dest < 0) { /* meets no box or sphere: a miss, finished here */
       accumulate(accum, pixel, child_w[j] * load3(fp.background));
-      ++st->v[OPSILA_STAT_MISS + 0]; /* attributed below to level + 1 */
-    } else {
-      emit(out, make_descriptor(p, OPSILA_INF, child_d[j], entry, child_w[j], pixel,
-                                OPSILA_META(OPSILA_KIND_TRACE, level + 1), -1, dest));
+      ++st_child->v[OPSILA_STAT_MISS];
+      continue;
     }
+    if (dest != bank->pe) {
+      emit(out, make_descriptor(p, OPSILA_INF, child_d[j], entry, child_w[j], pixel, child_meta, -1, dest));
+      continue;
+    }
+    /* Its first PE is this one: visit it now. A hit here that no other bank
+     * can beat is shaded next round, by this PE, like any resolved hit. */
+    ++st_child->v[OPSILA_STAT_LOCAL];
+    float t_best = OPSILA_INF;
+    int hit = -1;
+    int v = trace_visit(fp, rt, bank, &cr, child_w[j], pixel, child_meta, entry, &t_best, &hit, INT_MAX, accum,
+                        st_child, &next);
+    if (v == VISIT_SHADE) {
+      ++st_child->v[OPSILA_STAT_FORWARD];
+      next = make_descriptor(p, t_best, child_d[j], 0.0f, child_w[j], pixel,
+                             OPSILA_META(OPSILA_KIND_RESOLVED, level + 1), hit, bank->pe);
+      v = VISIT_SEND;
+    }
+    if (v == VISIT_SEND) emit(out, next);
   }
 }
 
 /* One descriptor at its PE: a shadow ray tests its segment in the bank; a
  * radiance ray looks for its nearest hit here and is sent on, finished as a
  * miss, or (its nearest hit known) shaded by the PE that owns the facet. */
-inline void process(FrameParams fp, int pe, const Routing *rt, __global const BankNode *nodes, __global const BankTriangle *tris,
-                    __global const Material *materials, __global const Light *lights, SURFACE_PARAMS, Descriptor ds,
-                    Outputs *out,
-                    volatile __global uint *accum, PrivStats *st) {
-  __global const PeInfo *me = &rt->pes[pe];
-  int root = me->node_begin;
-  bool bank_empty = me->node_begin == me->node_end;
+inline void process(FrameParams fp, const Routing *rt, const Bank *bank, __global const Material *materials,
+                    __global const Light *lights, SURFACE_PARAMS, Descriptor ds, Outputs *out,
+                    volatile __global uint *accum, PrivStats *st, PrivStats *st_child) {
   float eps = fp.epsilon;
-  int kind = OPSILA_META_KIND(DESC_META(ds)), level = OPSILA_META_LEVEL(DESC_META(ds));
+  int meta = DESC_META(ds);
+  int kind = OPSILA_META_KIND(meta), level = OPSILA_META_LEVEL(meta);
   int pixel = DESC_PIXEL(ds);
   float3 org = DESC_ORIGIN(ds), d = DESC_DIRECTION(ds), w = DESC_WEIGHT(ds);
   ++st->v[OPSILA_STAT_TRACED];
   RayPre r = make_ray(org, d);
+  Descriptor next;
 
   if (kind == OPSILA_KIND_SHADOW) {
     ++st->v[OPSILA_STAT_SHADOW];
-    float tmax = DESC_T_MAX(ds);
-    bool blocked = !bank_empty && traverse_any(&r, nodes, tris, root, eps, tmax, &st->v[OPSILA_STAT_TRI_TESTS],
-                                               &st->v[OPSILA_STAT_BOX_TESTS]);
-    if (blocked) {
-      ++st->v[OPSILA_STAT_OCCLUDED];
-      return;
-    }
-    int dest = next_shadow_destination(rt, &r, eps, tmax, pe, &st->v[OPSILA_STAT_SPHERE_TESTS],
-                                       &st->v[OPSILA_STAT_ROUTE_TESTS]);
-    if (dest < 0) {
-      ++st->v[OPSILA_STAT_LIT];
-      accumulate(accum, pixel, w);
-    } else {
-      ++st->v[OPSILA_STAT_FORWARD];
-      DESC_HIT(ds) = -1;
-      DESC_DEST(ds) = dest;
-      emit(out, ds);
-    }
+    if (shadow_visit(rt, bank, &r, eps, DESC_T_MAX(ds), bank->pe, DESC_SHADOW_HOME(ds), w, pixel, meta, accum, st,
+                     &next) == VISIT_SEND)
+      emit(out, next);
     return;
   }
   float t_best = DESC_T_BEST(ds);
@@ -152,35 +220,14 @@ inline void process(FrameParams fp, int pe, const Routing *rt, __global const Ba
   if (kind == OPSILA_KIND_TRACE) {
     ++st->v[OPSILA_STAT_RADIANCE];
     int best_facet = hit >= 0 ? as_int(DESC_BEST_FACET(ds)) : INT_MAX;
-    int found = -1; /* local index of a facet of this bank that won */
-    if (!bank_empty)
-      traverse_nearest(&r, nodes, tris, root, eps, &t_best, &found, &best_facet, &st->v[OPSILA_STAT_TRI_TESTS],
-                       &st->v[OPSILA_STAT_BOX_TESTS]);
-    if (found >= 0) hit = fp.tri_base + found;
-    float entry;
-    int dest = next_destination(rt, &r, eps, tie_limit(t_best), DESC_CURSOR_ENTRY(ds), pe, &entry,
-                                &st->v[OPSILA_STAT_SPHERE_TESTS], &st->v[OPSILA_STAT_ROUTE_TESTS]);
-    if (dest >= 0) { /* a nearer hit (or a tie with a lower facet id) may wait in another bank */
-      ++st->v[OPSILA_STAT_FORWARD];
-      Descriptor sent = make_descriptor(org, t_best, d, entry, w, pixel, DESC_META(ds), hit, dest);
-      DESC_BEST_FACET(sent) = as_float(best_facet);
-      emit(out, sent);
-      return;
-    }
-    if (hit < 0) {
-      ++st->v[OPSILA_STAT_MISS];
-      accumulate(accum, pixel, w * load3(fp.background));
-      return;
-    }
-    int owner = owner_pe(rt->pes, fp.num_pes, hit);
-    if (owner != pe) { /* nearest hit known; its facet lives in another bank */
-      ++st->v[OPSILA_STAT_FORWARD];
-      emit(out, make_descriptor(org, t_best, d, 0.0f, w, pixel, OPSILA_META(OPSILA_KIND_RESOLVED, level), hit, owner));
-      return;
-    }
+    int v = trace_visit(fp, rt, bank, &r, w, pixel, meta, DESC_CURSOR_ENTRY(ds), &t_best, &hit, best_facet, accum,
+                        st, &next);
+    if (v == VISIT_SEND) emit(out, next);
+    if (v != VISIT_SHADE) return;
   }
   ++st->v[OPSILA_STAT_RESOLVED];
-  shade(fp, rt, tris, materials, lights, SURFACE_ARGS, org, d, t_best, hit - fp.tri_base, w, pixel, level, out, accum, st);
+  shade(fp, rt, bank, materials, lights, SURFACE_ARGS, org, d, t_best, hit - fp.tri_base, w, pixel, level, out,
+        accum, st, st_child);
 }
 
 __kernel void spmd_phase(FrameParams fp, __global const PeInfo *pes, __global const Cluster *clusters,
@@ -216,22 +263,24 @@ __kernel void spmd_phase(FrameParams fp, __global const PeInfo *pes, __global co
   rt.route = route;
   rt.num_pes = P;
   rt.mode = routing;
+  Bank bank;
+  bank.nodes = nodes;
+  bank.tris = tris;
+  bank.pe = pe;
+  bank.root = pes[pe].node_begin;
+  bank.empty = pes[pe].node_begin == pes[pe].node_end;
   if (slot < bank_begin[pe] + bank_count[pe]) {
     Descriptor ds = desc_load(b, slot);
     int level = OPSILA_META_LEVEL(DESC_META(ds));
-    PrivStats st;
-    for (int s = 0; s < OPSILA_STAT_COUNT; ++s) st.v[s] = 0u;
-    process(fp, pe, &rt, nodes, tris, materials, lights, SURFACE_ARGS, ds, &out, accum, &st);
-    /* Children that miss every sphere finish here but count at their level. */
-    uint child_misses = 0u;
-    if (OPSILA_META_KIND(DESC_META(ds)) != OPSILA_KIND_SHADOW && st.v[OPSILA_STAT_RESOLVED] != 0u) {
-      child_misses = st.v[OPSILA_STAT_MISS];
-      st.v[OPSILA_STAT_MISS] = 0u;
-    }
+    PrivStats st, st_child;
+    for (int s = 0; s < OPSILA_STAT_COUNT; ++s) st.v[s] = st_child.v[s] = 0u;
+    process(fp, &rt, &bank, materials, lights, SURFACE_ARGS, ds, &out, accum, &st, &st_child);
     for (int s = 0; s < OPSILA_STAT_COUNT; ++s)
       if (st.v[s] != 0u) atomic_add(&lstats[level * OPSILA_STAT_COUNT + s], st.v[s]);
-    if (child_misses != 0u && level + 1 < OPSILA_MAX_DEPTH)
-      atomic_add(&lstats[(level + 1) * OPSILA_STAT_COUNT + OPSILA_STAT_MISS], child_misses);
+    /* Children traced or finished here count at their own level. */
+    if (level + 1 < depth)
+      for (int s = 0; s < OPSILA_STAT_COUNT; ++s)
+        if (st_child.v[s] != 0u) atomic_add(&lstats[(level + 1) * OPSILA_STAT_COUNT + s], st_child.v[s]);
   }
   out_item_count[item] = out.count;
   /* Statistics and traffic leave the work-group once, not per descriptor. */

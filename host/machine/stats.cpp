@@ -27,8 +27,9 @@ const char* const kCounterNames[OPSILA_STAT_COUNT] = {
     "lit",             // OPSILA_STAT_LIT
     "forwards",        // OPSILA_STAT_FORWARD
     "route_tests",     // OPSILA_STAT_ROUTE_TESTS
+    "local",           // OPSILA_STAT_LOCAL
 };
-static_assert(OPSILA_STAT_COUNT == 14, "update kCounterNames with the OPSILA_STAT_* list");
+static_assert(OPSILA_STAT_COUNT == 15, "update kCounterNames with the OPSILA_STAT_* list");
 
 nlohmann::json counters_object(const std::vector<std::uint64_t>& values) {
   nlohmann::json out = nlohmann::json::object();

@@ -52,6 +52,7 @@ inline void desc_move(__global float4 *to, __global int *to_dest, int j, __globa
 #define DESC_PIXEL(d) ((d).ids.x)
 #define DESC_META(d) ((d).ids.y)
 #define DESC_HIT(d) ((d).ids.z)          /* global triangle of the best hit, -1 none */
+#define DESC_SHADOW_HOME(d) ((d).ids.z)  /* shadow: the PE that spawned it (and tested its bank first) */
 #define DESC_DEST(d) ((d).ids.w)         /* destination PE = cursor PE; -1 NIL */
 /* Radiance: facet id of the best hit (its bits), for the tie rule at the
  * next PE, whose device may not hold that facet. */

@@ -60,15 +60,16 @@ inline int next_destination_spheres(const RayPre *r, __global const PeInfo *pes,
   return best_pe;
 }
 
-/* Shadow rays need no order (any occluder ends them): they visit the PEs
- * whose spheres meet the segment (tmin, tmax) in PE order. Returns the first
- * such PE after `after_pe`, or -1. */
+/* Shadow rays need no order (any occluder ends them): the PE that spawns
+ * one tests its own bank first (its `home`), then the ray visits the other
+ * PEs whose spheres meet the segment (tmin, tmax) in PE order. Returns the
+ * first such PE after `after_pe`, never `home`, or -1. */
 inline int next_shadow_destination_spheres(const RayPre *r, __global const PeInfo *pes,
                                            __global const Cluster *clusters, int num_pes, float tmin, float tmax,
-                                           int after_pe, uint *sphere_tests, uint *route_tests) {
+                                           int after_pe, int home, uint *sphere_tests, uint *route_tests) {
   for (int q = after_pe + 1; q < num_pes; ++q) {
     __global const PeInfo *pe = &pes[q];
-    if (pe->cluster_begin == pe->cluster_end) continue;
+    if (pe->cluster_begin == pe->cluster_end || q == home) continue;
     float te;
     ++*route_tests;
     if (!ray_box(r, load3g(pe->bmin), load3g(pe->bmax), tmin, tmax, &te)) continue;
@@ -165,7 +166,7 @@ inline int next_destination_boxes(const RayPre *r, __global const BankNode *rout
 /* next_shadow_destination_spheres with cluster boxes, through the top
  * level: PEs whose box the segment misses are not walked. */
 inline int next_shadow_destination_boxes(const RayPre *r, __global const BankNode *route, int num_pes, float tmin,
-                                         float tmax, int after_pe, uint *route_tests) {
+                                         float tmax, int after_pe, int home, uint *route_tests) {
   int first = after_pe + 1;
   int top_nodes = (num_pes + OPSILA_BVH_WIDTH - 1) / OPSILA_BVH_WIDTH;
   for (int n = first / OPSILA_BVH_WIDTH; n < top_nodes; ++n) {
@@ -176,7 +177,7 @@ inline int next_shadow_destination_boxes(const RayPre *r, __global const BankNod
     route_node(r, tn, tmin, tmax, pe_entry, pe_met);
     for (int kq = 0; kq < OPSILA_BVH_WIDTH; ++kq) {
       int q = n * OPSILA_BVH_WIDTH + kq;
-      if (q < first || !pe_met[kq]) continue;
+      if (q < first || q == home || !pe_met[kq]) continue;
       int stack[OPSILA_BVH_STACK];
       int sp = 1;
       stack[0] = q;
@@ -207,11 +208,11 @@ inline int next_destination(const Routing *rt, const RayPre *r, float tmin, floa
 }
 
 inline int next_shadow_destination(const Routing *rt, const RayPre *r, float tmin, float tmax, int after_pe,
-                                   uint *sphere_tests, uint *route_tests) {
+                                   int home, uint *sphere_tests, uint *route_tests) {
   if (rt->mode == OPSILA_ROUTING_BOXES)
-    return next_shadow_destination_boxes(r, rt->route, rt->num_pes, tmin, tmax, after_pe, route_tests);
-  return next_shadow_destination_spheres(r, rt->pes, rt->clusters, rt->num_pes, tmin, tmax, after_pe, sphere_tests,
-                                         route_tests);
+    return next_shadow_destination_boxes(r, rt->route, rt->num_pes, tmin, tmax, after_pe, home, route_tests);
+  return next_shadow_destination_spheres(r, rt->pes, rt->clusters, rt->num_pes, tmin, tmax, after_pe, home,
+                                         sphere_tests, route_tests);
 }
 
 /* Owner PE of a global triangle index (banks are contiguous). */

@@ -89,6 +89,12 @@ check render-textured-smooth-all-checks "${all_checks[@]}" -- \
   "$build/opsila" render "$root/tests/oclgrind/textured.obj" -o "$work/textured.pfm" --size 6x4 --depth 2 --pes 4 \
   --smooth --device oclgrind -q "${view[@]}"
 
+# 2d. --balance measured: the pilot frames' program (OPSILA_MEASURE_COST),
+#     which counts every test of the SPMD phase per cluster and level.
+check render-measured-balance-all-checks "${all_checks[@]}" -- \
+  "$build/opsila" render "$scene" -o "$work/measured.pfm" --size 6x4 --depth 2 --pes 4 --balance measured \
+  --device oclgrind -q "${view[@]}"
+
 # 3. The scatter on its own: SPMD output slots with holes and unused slots,
 #    a waiting queue, banks that overflow (tests/machine/reliability_test.cpp).
 check scatter-all-checks "${all_checks[@]}" -- \

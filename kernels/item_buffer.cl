@@ -47,6 +47,7 @@ __kernel void item_buffer(FrameParams fp, __global const Cluster *clusters, __gl
   int best_facet = continued && item_tri[pixel] >= 0 ? item_facet[pixel] : INT_MAX;
   int best_tri = -1; /* a facet of this group's banks (local index) that won */
   uint tri_tests = 0, box_tests = 0;
+  CostProbe no_probe = no_cost_probe();
   if (lid == 0) listed = 0;
   barrier(CLK_LOCAL_MEM_FENCE);
   for (int base = 0; base < fp.num_clusters; base += lsz) {
@@ -72,7 +73,7 @@ __kernel void item_buffer(FrameParams fp, __global const Cluster *clusters, __gl
         int4 pr = cluster_rects[cl]; /* x0, y0, x1, y1 inclusive */
         if (x < pr.x || x > pr.z || y < pr.y || y > pr.w) continue;
         traverse_nearest(&r, nodes, tris, clusters[cl].root, 0.0f, &best_t, &best_tri, &best_facet, &tri_tests,
-                         &box_tests);
+                         &box_tests, &no_probe);
       }
       barrier(CLK_LOCAL_MEM_FENCE);
       if (lid == 0) listed = 0;

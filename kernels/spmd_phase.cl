@@ -58,9 +58,9 @@ typedef struct {
  * lit. */
 inline int shadow_visit(const Routing *rt, const Bank *bank, const RayPre *r, float eps, float tmax, int after_pe,
                         int home, float3 contrib, int pixel, int meta, volatile __global uint *accum, PrivStats *st,
-                        Descriptor *next) {
+                        const CostProbe *probe, Descriptor *next) {
   bool blocked = !bank->empty && traverse_any(r, bank->nodes, bank->tris, bank->root, eps, tmax,
-                                              &st->v[OPSILA_STAT_TRI_TESTS], &st->v[OPSILA_STAT_BOX_TESTS]);
+                                              &st->v[OPSILA_STAT_TRI_TESTS], &st->v[OPSILA_STAT_BOX_TESTS], probe);
   if (blocked) {
     ++st->v[OPSILA_STAT_OCCLUDED];
     return VISIT_DONE;
@@ -83,12 +83,12 @@ inline int shadow_visit(const Routing *rt, const Bank *bank, const RayPre *r, fl
  * *t_best and *hit carry the best hit so far in and out. */
 inline int trace_visit(FrameParams fp, const Routing *rt, const Bank *bank, const RayPre *r, float3 w, int pixel,
                        int meta, float cursor_entry, float *t_best, int *hit, int best_facet,
-                       volatile __global uint *accum, PrivStats *st, Descriptor *next) {
+                       volatile __global uint *accum, PrivStats *st, const CostProbe *probe, Descriptor *next) {
   float eps = fp.epsilon;
   int found = -1; /* local index of a facet of this bank that won */
   if (!bank->empty)
     traverse_nearest(r, bank->nodes, bank->tris, bank->root, eps, t_best, &found, &best_facet,
-                     &st->v[OPSILA_STAT_TRI_TESTS], &st->v[OPSILA_STAT_BOX_TESTS]);
+                     &st->v[OPSILA_STAT_TRI_TESTS], &st->v[OPSILA_STAT_BOX_TESTS], probe);
   if (found >= 0) *hit = fp.tri_base + found;
   float entry;
   int dest = next_destination(rt, r, eps, tie_limit(*t_best), cursor_entry, bank->pe, &entry,
@@ -122,7 +122,7 @@ inline int trace_visit(FrameParams fp, const Routing *rt, const Bank *bank, cons
 inline void shade(FrameParams fp, const Routing *rt, const Bank *bank, __global const Material *materials,
                   __global const Light *lights, SURFACE_PARAMS, float3 org, float3 d, float t, int tri_index,
                   float3 weight, int pixel, int level, Outputs *out, volatile __global uint *accum, PrivStats *st,
-                  PrivStats *st_child) {
+                  PrivStats *st_child, const CostProbe *probe, const CostProbe *probe_child) {
   __global const Material *m = &materials[bank->tris[tri_index].material];
   SurfacePoint sp = surface_point(fp, bank->tris, tri_index, m, SURFACE_ARGS, org, d, t);
   float3 p = sp.p;
@@ -140,7 +140,7 @@ inline void shade(FrameParams fp, const Routing *rt, const Bank *bank, __global 
     ++st->v[OPSILA_STAT_LOCAL];
     RayPre sr = make_ray(p, lv);
     if (shadow_visit(rt, bank, &sr, eps, dist, -1, bank->pe, contrib, pixel, OPSILA_META(OPSILA_KIND_SHADOW, level),
-                     accum, st, &next) == VISIT_SEND)
+                     accum, st, probe, &next) == VISIT_SEND)
       emit(out, next);
   }
 
@@ -182,7 +182,7 @@ inline void shade(FrameParams fp, const Routing *rt, const Bank *bank, __global 
     float t_best = OPSILA_INF;
     int hit = -1;
     int v = trace_visit(fp, rt, bank, &cr, child_w[j], pixel, child_meta, entry, &t_best, &hit, INT_MAX, accum,
-                        st_child, &next);
+                        st_child, probe_child, &next);
     if (v == VISIT_SHADE) {
       ++st_child->v[OPSILA_STAT_FORWARD];
       next = make_descriptor(p, t_best, child_d[j], 0.0f, child_w[j], pixel,
@@ -198,7 +198,8 @@ inline void shade(FrameParams fp, const Routing *rt, const Bank *bank, __global 
  * miss, or (its nearest hit known) shaded by the PE that owns the facet. */
 inline void process(FrameParams fp, const Routing *rt, const Bank *bank, __global const Material *materials,
                     __global const Light *lights, SURFACE_PARAMS, Descriptor ds, Outputs *out,
-                    volatile __global uint *accum, PrivStats *st, PrivStats *st_child) {
+                    volatile __global uint *accum, PrivStats *st, PrivStats *st_child, const CostProbe *probe,
+                    const CostProbe *probe_child) {
   float eps = fp.epsilon;
   int meta = DESC_META(ds);
   int kind = OPSILA_META_KIND(meta), level = OPSILA_META_LEVEL(meta);
@@ -211,7 +212,7 @@ inline void process(FrameParams fp, const Routing *rt, const Bank *bank, __globa
   if (kind == OPSILA_KIND_SHADOW) {
     ++st->v[OPSILA_STAT_SHADOW];
     if (shadow_visit(rt, bank, &r, eps, DESC_T_MAX(ds), bank->pe, DESC_SHADOW_HOME(ds), w, pixel, meta, accum, st,
-                     &next) == VISIT_SEND)
+                     probe, &next) == VISIT_SEND)
       emit(out, next);
     return;
   }
@@ -221,13 +222,13 @@ inline void process(FrameParams fp, const Routing *rt, const Bank *bank, __globa
     ++st->v[OPSILA_STAT_RADIANCE];
     int best_facet = hit >= 0 ? as_int(DESC_BEST_FACET(ds)) : INT_MAX;
     int v = trace_visit(fp, rt, bank, &r, w, pixel, meta, DESC_CURSOR_ENTRY(ds), &t_best, &hit, best_facet, accum,
-                        st, &next);
+                        st, probe, &next);
     if (v == VISIT_SEND) emit(out, next);
     if (v != VISIT_SHADE) return;
   }
   ++st->v[OPSILA_STAT_RESOLVED];
   shade(fp, rt, bank, materials, lights, SURFACE_ARGS, org, d, t_best, hit - fp.tri_base, w, pixel, level, out,
-        accum, st, st_child);
+        accum, st, st_child, probe, probe_child);
 }
 
 __kernel void spmd_phase(FrameParams fp, __global const PeInfo *pes, __global const Cluster *clusters,
@@ -236,7 +237,8 @@ __kernel void spmd_phase(FrameParams fp, __global const PeInfo *pes, __global co
                          DESC_PARAMS(b), __global const int *group_pe, __global const int *group_first,
                          __global const int *bank_begin, __global const int *bank_count, DESC_PARAMS(o),
                          __global int *out_item_count, volatile __global uint *accum, volatile __global uint *stats,
-                         volatile __global uint *traffic, int traffic_levels) {
+                         volatile __global uint *traffic, int traffic_levels, __global const int *node_cluster,
+                         __global const int *tri_cluster, volatile __global uint *cost) {
   __local uint lstats[OPSILA_MAX_DEPTH * OPSILA_STAT_COUNT];
   __local uint ltraffic[OPSILA_MAX_DEPTH * OPSILA_TRAFFIC_MAX_PES];
   int g = get_group_id(0), lid = get_local_id(0), lsz = get_local_size(0);
@@ -274,7 +276,14 @@ __kernel void spmd_phase(FrameParams fp, __global const PeInfo *pes, __global co
     int level = OPSILA_META_LEVEL(DESC_META(ds));
     PrivStats st, st_child;
     for (int s = 0; s < OPSILA_STAT_COUNT; ++s) st.v[s] = st_child.v[s] = 0u;
-    process(fp, &rt, &bank, materials, lights, SURFACE_ARGS, ds, &out, accum, &st, &st_child);
+    CostProbe probe = no_cost_probe(), probe_child = no_cost_probe();
+#ifdef OPSILA_MEASURE_COST
+    probe.node_cluster = probe_child.node_cluster = node_cluster;
+    probe.tri_cluster = probe_child.tri_cluster = tri_cluster;
+    probe.cost = cost + (long)level * fp.num_clusters;
+    probe_child.cost = level + 1 < depth ? probe.cost + fp.num_clusters : 0;
+#endif
+    process(fp, &rt, &bank, materials, lights, SURFACE_ARGS, ds, &out, accum, &st, &st_child, &probe, &probe_child);
     for (int s = 0; s < OPSILA_STAT_COUNT; ++s)
       if (st.v[s] != 0u) atomic_add(&lstats[level * OPSILA_STAT_COUNT + s], st.v[s]);
     /* Children traced or finished here count at their own level. */

@@ -109,9 +109,14 @@ int run_bench(const std::vector<std::string>& args) {
   outputs.refuse_inputs(scene.input_files);
   apply_view_options(scene, o);
   if (const std::string note = large_work_note(scene); !note.empty()) progress("note: %s", note.c_str());
-  if (o.balance_work) progress("sampling the frame's rays for --balance work");
+  // The bench measures the scheme with its PEs balanced by measured work
+  // unless told otherwise (render's default, facets, skips the pilots).
+  ViewOptions view = static_cast<const ViewOptions&>(o);
+  view.balance = o.balance.value_or(kBenchBalance);
+  if (view.balance == Balance::work) progress("sampling the frame's rays for --balance work");
+  if (view.balance == Balance::measured) progress("pilot frames for --balance measured");
   RaySample sample;
-  const RenderSettings settings = render_settings(o, scene, sample);
+  const RenderSettings settings = render_settings(view, scene, sample);
 
   BenchReport report = start_report(o, scene, settings.num_pes);
   report.device = device_facts(rt);

@@ -98,7 +98,9 @@ std::string bench_usage() {
          "\n"
          "View flags, as for 'opsila render': --size WxH, --eye, --look-at, --up, --fov,\n"
          "--light, --ambient, --background, --depth, --pes, --device, --bank-capacity, --smooth,\n"
-         "--routing boxes|spheres, --work-groups-per-pe, --balance facets|work.\n";
+         "--routing boxes|spheres, --work-groups-per-pe, --balance facets|work|measured.\n"
+         "The bench's --balance is measured unless given (render's is facets): five small\n"
+         "pilot frames measure each cluster's work first, outside the timed runs.\n";
 }
 
 }  // namespace opsila

@@ -63,7 +63,9 @@ json header_json(const BenchReport& r) {
   j["spp"] = r.spp;
   j["pes"] = r.pes;
   j["routing"] = r.stats().routing == OPSILA_ROUTING_SPHERES ? "spheres" : "boxes";
-  j["balance"] = r.stats().balance_work ? "work" : "facets";
+  j["balance"] = balance_name(r.stats().balance);
+  j["pilot_frames"] = r.stats().pilot_frames;
+  j["pilot_seconds"] = r.stats().pilot_seconds;
   j["bank_capacity"] = st.bank_capacity;
   j["work_group_size"] = st.work_group_size;
   j["settings"] = {{"repeats", r.repeats}, {"warmup", r.warmup}, {"host_repeats", r.host_repeats},

@@ -37,7 +37,10 @@ void header_text(std::string& out, const BenchReport& r) {
   const RenderStats& st = r.stats();
   appendf(out, "opsila bench: %s, %dx%d, %d spp, depth %d, %d PEs (bank capacity %d, work-group %zu, balance %s)\n",
           r.scene_path.c_str(), r.width, r.height, r.spp, r.depth, r.pes, st.bank_capacity, st.work_group_size,
-          st.balance_work ? "work" : "facets");
+          balance_name(st.balance));
+  if (st.balance == Balance::measured)
+    appendf(out, "balance measured: the partition of the best of %d pilot frames, %.2f s while preparing (not timed)\n",
+            st.pilot_frames, st.pilot_seconds);
   if (r.ranks > 1)
     appendf(out, "device: %d MPI ranks, one device each (below); rank 0: %s\n", r.ranks, r.device.description.c_str());
   else

@@ -236,11 +236,13 @@ bool parse_view_flag(const std::string& name, const std::string& value, ViewOpti
       bad_flag(name, value, "must be boxes or spheres");
   } else if (name == "--balance") {
     if (value == "facets")
-      o.balance_work = false;
+      o.balance = Balance::facets;
     else if (value == "work")
-      o.balance_work = true;
+      o.balance = Balance::work;
+    else if (value == "measured")
+      o.balance = Balance::measured;
     else
-      bad_flag(name, value, "must be facets or work");
+      bad_flag(name, value, "must be facets, work or measured");
   } else if (name == "--device") {
     if (value.empty()) bad_flag(name, value, "empty device name");
     o.device_spec = value;
@@ -268,7 +270,8 @@ RenderSettings render_settings(const ViewOptions& o, const Scene& scene, RaySamp
   settings.bank_capacity = o.bank_capacity;
   settings.work_groups_per_pe = o.work_groups_per_pe;
   if (o.routing) settings.routing = *o.routing;
-  if (o.balance_work) {
+  settings.balance = o.balance.value_or(kDefaultBalance);
+  if (settings.balance == Balance::work) {
     sample = ReferenceTracer(scene).sample_rays(kBalanceSampleRays);
     settings.ray_sample = &sample;
   }

@@ -78,13 +78,19 @@ struct ViewOptions {
   int bank_capacity = 0;          // 0 = automatic
   int work_groups_per_pe = 0;     // 0 = as many as each bank's descriptors need
   std::optional<int> routing;     // --routing: OPSILA_ROUTING_*
-  bool balance_work = false;      // --balance work: PEs share sampled rays, not only facets
+  std::optional<Balance> balance;  // --balance (default kDefaultBalance)
   bool smooth = false;            // --smooth: SPEC's smooth shading (else the scene's "smooth")
 };
 
 // Primary rays sampled for --balance work (core/ray_sample.h): about one in
 // 30 pixels at 800x600, a few percent of a frame's time on the host.
 constexpr int kBalanceSampleRays = 16000;
+
+// --balance when the flag is absent: render keeps equal banks (no pilot
+// frames to pay for before the frame); the bench measures the scheme with
+// its PEs balanced by measured work (docs/BENCHMARKS.md).
+constexpr Balance kDefaultBalance = Balance::facets;
+constexpr Balance kBenchBalance = Balance::measured;
 
 // The view group's flags (all but --smooth take a value; --light repeats).
 const std::vector<FlagSpec>& view_flags();

@@ -93,8 +93,10 @@ std::string render_usage() {
          "  --routing MODE         destination choice: boxes (cluster boxes under a BVH, default)\n"
          "                         or spheres (the paper's bounding spheres); same image\n"
          "  --balance MODE         how the scene is split over the PEs: facets (equal banks, default)\n"
-         "                         or work (by the frame's rays, sampled on the host first: busy\n"
-         "                         regions get more PEs, banks differ in size); same image\n"
+         "                         work (by the frame's rays, sampled on the host first: busy\n"
+         "                         regions get more PEs, banks differ in size) or measured (by\n"
+         "                         the work two small pilot frames measure per cluster on the\n"
+         "                         device, level by level); same image\n"
          "  --device SPEC          device index, platform:device, or name substring (see 'opsila devices')\n"
          "  --item-buffer OUT.npy  (object, facet) of each pixel's primary hit, int32 (H, W, 2)\n"
          "  --stats OUT.json       ray counts, per-PE work, kernel times, memory, traffic\n"
@@ -185,7 +187,7 @@ int run_render(const std::vector<std::string>& args) {
     runtime.emplace(choose_device_flag(o.device_spec));
   } else if (!o.quiet) {
     if (!o.device_spec.empty()) print_line("warning", "--device is ignored with --reference");
-    if (o.balance_work) print_line("warning", "--balance is ignored with --reference (one processor, no banks)");
+    if (o.balance) print_line("warning", "--balance is ignored with --reference (one processor, no banks)");
   }
 
   Scene scene = load_scene_or_explain(o.scene_path, o.quiet || !writer);
@@ -193,7 +195,7 @@ int run_render(const std::vector<std::string>& args) {
   apply_view_options(scene, o);
 
   ViewOptions machine = o;
-  machine.balance_work = o.balance_work && !o.reference;  // one processor, no banks to balance
+  if (o.reference) machine.balance = Balance::facets;  // one processor, no banks to balance
   RaySample sample;
   RenderSettings settings = render_settings(machine, scene, sample);
 

@@ -23,4 +23,15 @@ struct RaySample {
   int stride = 0;  // one primary ray every `stride` pixels in x and in y
 };
 
+// The work a pilot frame measured (--balance measured): the SPMD phase's
+// ray-box and ray-facet tests, counted per cluster and level on the device,
+// then spread evenly over each cluster's facets, so that any later grouping
+// of the facets (other clusters, cut clusters) can sum its own share.
+// per_facet[t * levels + l]: scene triangle t, level l.
+struct MeasuredWork {
+  int levels = 0;
+  std::vector<float> per_facet;
+  bool empty() const { return levels == 0 || per_facet.empty(); }
+};
+
 }  // namespace opsila

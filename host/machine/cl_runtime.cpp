@@ -304,10 +304,10 @@ std::string ClRuntime::description() const {
 }
 
 cl::Program& ClRuntime::program(KernelProgram which) {
-  const int index = which == KernelProgram::render ? 0 : 1;
+  const int index = static_cast<int>(which);
   cl::Program& program = programs_[index];
   if (built_[index]) return program;
-  const bool render = which == KernelProgram::render;
+  const bool render = which != KernelProgram::baselines;
   const std::string& source = !render ? baseline_kernel_source() : source_.empty() ? kernel_source() : source_;
   const std::string origin = render ? source_origin_ : "embedded baseline kernels";
   auto t0 = std::chrono::steady_clock::now();
@@ -315,7 +315,8 @@ cl::Program& ClRuntime::program(KernelProgram which) {
   program = cl::Program(context_, source, false, &err);
   cl_check(err, "clCreateProgramWithSource");
   // No fast-math: every device must reproduce the reference's arithmetic.
-  err = program.build({device_.device}, "-cl-std=CL1.2");
+  err = program.build({device_.device}, which == KernelProgram::measure ? "-cl-std=CL1.2 -DOPSILA_MEASURE_COST=1"
+                                                                        : "-cl-std=CL1.2");
   if (err != CL_SUCCESS) {
     std::string log;
     program.getBuildInfo(device_.device, CL_PROGRAM_BUILD_LOG, &log);

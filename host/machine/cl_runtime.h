@@ -61,9 +61,11 @@ struct ClRuntimeOptions {
   bool read_environment = true;
 };
 
-// The OpenCL programs: the renderer's stages, and the bench's baselines
-// (megakernel, copy), built only when a baseline runs.
-enum class KernelProgram { render, baselines };
+// The OpenCL programs: the renderer's stages, the bench's baselines
+// (megakernel, copy), built only when a baseline runs, and the renderer's
+// stages counting each cluster's tests (OPSILA_MEASURE_COST), built only for
+// the pilot frames of --balance measured.
+enum class KernelProgram { render = 0, baselines = 1, measure = 2 };
 
 class ClRuntime {
  public:
@@ -91,8 +93,8 @@ class ClRuntime {
   DeviceEntry device_;
   cl::Context context_;
   cl::CommandQueue queue_;
-  cl::Program programs_[2];
-  bool built_[2] = {false, false};
+  cl::Program programs_[3];
+  bool built_[3] = {false, false, false};
   std::size_t max_wg_ = 1;
   cl_ulong max_alloc_ = 0, global_mem_ = 0, limit_ = 0;
   double build_seconds_ = 0;

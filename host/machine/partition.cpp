@@ -24,6 +24,7 @@ float centroid(const Triangle& t, int a) { return (t.v0[a] + t.v1[a] + t.v2[a]) 
 struct ClusterBuild {
   std::vector<int> tris;  // indices into Scene::triangles
   double weight = 0;      // its share of the scene's expected work (region_weights)
+  std::vector<double> work;  // measured: tests per level, then its facets' weight (region_weights)
   Box box;
   float c[3] = {0, 0, 0};  // centre for the spatial subdivision
   int pe = 0;
@@ -123,6 +124,44 @@ void assign_regions(std::vector<ClusterBuild>& cl, std::vector<int> idx, int fir
   std::vector<int> lo(idx.begin(), idx.begin() + cut), hi(idx.begin() + cut, idx.end());
   assign_regions(cl, std::move(lo), first, left);
   assign_regions(cl, std::move(hi), first + left, count - left);
+}
+
+// assign_regions with measured work, one weight per level (and one for the
+// facets): each cut, on whichever axis of the centres does best, minimises
+// the sum over levels of the busier half's work per PE, which is what the
+// level-by-level occupancy pays for (the busiest PE of each level).
+void assign_regions_measured(std::vector<ClusterBuild>& cl, std::vector<int> idx, int first, int count) {
+  if (idx.empty()) return;
+  if (count == 1) {
+    for (int i : idx) cl[i].pe = first;
+    return;
+  }
+  const int left = count / 2, right = count - left;
+  const std::size_t D = cl[idx[0]].work.size(), n = idx.size();
+  std::vector<double> total(D, 0.0);
+  for (int i : idx)
+    for (std::size_t d = 0; d < D; ++d) total[d] += cl[i].work[d];
+  double best = INFINITY;
+  std::vector<int> best_order = idx;
+  std::size_t best_cut = n;  // one cluster: all of it goes left
+  for (int axis = 0; axis < 3 && n >= 2; ++axis) {
+    std::vector<int> order = idx;
+    std::sort(order.begin(), order.end(), [&](int a, int b) {
+      return cl[a].c[axis] < cl[b].c[axis] || (cl[a].c[axis] == cl[b].c[axis] && a < b);
+    });
+    std::vector<double> acc(D, 0.0);
+    for (std::size_t cut = 1; cut < n; ++cut) {
+      double score = 0;
+      for (std::size_t d = 0; d < D; ++d) {
+        acc[d] += cl[order[cut - 1]].work[d];
+        score += std::max(acc[d] / left, (total[d] - acc[d]) / right);
+      }
+      if (score < best) best = score, best_cut = cut, best_order = order;
+    }
+  }
+  std::vector<int> lo(best_order.begin(), best_order.begin() + best_cut), hi(best_order.begin() + best_cut, best_order.end());
+  assign_regions_measured(cl, std::move(lo), first, left);
+  assign_regions_measured(cl, std::move(hi), first + left, right);
 }
 
 void put3(float* dst, const Vec3& v) {
@@ -268,27 +307,53 @@ std::uint64_t crossings(const Box& b, const RaySample& sample) {
   return n;
 }
 
-// Each cluster's share of the expected work. Without a ray sample: its share
-// of the facets (banks of equal size). With one: mostly its share of the
-// sampled rays that cross its box, so that the PEs whose clusters the frame's
-// rays cross most (the floor under the camera, the space between lit
-// surfaces and the lights) hold fewer of them; a tenth of the weight stays
-// with the facets, so that clusters no ray crosses still spread out (a bank
-// holds at most about ten times the mean). A cluster crossed by more than
-// half a PE's share of the rays is cut in two first (until it is not, or
-// cannot be cut): one hot piece of floor would otherwise set the busiest
-// PE's load by itself. Measured in docs/BENCHMARKS.md.
+// Each cluster's share of the expected work. Without a ray sample or
+// measured work: its share of the facets (banks of equal size).
+//
+// With a ray sample: mostly its share of the sampled rays that cross its
+// box, so that the PEs whose clusters the frame's rays cross most (the floor
+// under the camera, the space between lit surfaces and the lights) hold
+// fewer of them; a tenth of the weight stays with the facets, so that
+// clusters no ray crosses still spread out (a bank holds at most about ten
+// times the mean).
+//
+// With measured work (a pilot frame's tests per facet and level): the
+// cluster's tests level by level, and a tenth of the weight on its facets
+// (cluster.work, for assign_regions_measured).
+//
+// Either way, a cluster hotter than half a PE's share (crossed by that many
+// sampled rays, or measured that busy) is cut in two first, until it is not
+// or cannot be: one hot piece of floor would otherwise set the busiest PE's
+// load by itself. Measured in docs/BENCHMARKS.md.
 constexpr double kFacetShare = 0.1;
-void region_weights(const Scene& scene, std::vector<ClusterBuild>& cb, const RaySample* sample, int num_pes) {
-  std::vector<double> crossed(cb.size(), 0.0);
+
+std::vector<double> measured_work_of(const MeasuredWork& m, const std::vector<int>& tris) {
+  std::vector<double> w(std::size_t(m.levels), 0.0);
+  for (int t : tris)
+    for (int l = 0; l < m.levels; ++l) w[std::size_t(l)] += m.per_facet[std::size_t(t) * m.levels + l];
+  return w;
+}
+
+void region_weights(const Scene& scene, std::vector<ClusterBuild>& cb, const RaySample* sample,
+                    const MeasuredWork* measured, int num_pes) {
+  if (measured && measured->empty()) measured = nullptr;
+  if (sample && sample->rays.empty()) sample = nullptr;
+  const auto heat_of = [&](const ClusterBuild& c) {
+    if (measured) {
+      const std::vector<double> w = measured_work_of(*measured, c.tris);
+      return std::accumulate(w.begin(), w.end(), 0.0);
+    }
+    return sample ? double(crossings(c.box, *sample)) : 0.0;
+  };
+  std::vector<double> heat(cb.size(), 0.0);
   double all = 0;
-  if (sample) {
-    for (std::size_t i = 0; i < cb.size(); ++i) all += crossed[i] = double(crossings(cb[i].box, *sample));
+  if (sample || measured) {
+    for (std::size_t i = 0; i < cb.size(); ++i) all += heat[i] = heat_of(cb[i]);
     for (bool cut = all > 0; cut;) {
       cut = false;
       const double limit = all / (2.0 * num_pes);
       for (std::size_t i = 0, n = cb.size(); i < n; ++i) {
-        if (crossed[i] <= limit) continue;
+        if (heat[i] <= limit) continue;
         Box unused, cbox;
         bounds_of(scene, cb[i].tris, unused, cbox);
         std::vector<int> lower = cb[i].tris, upper;
@@ -297,14 +362,14 @@ void region_weights(const Scene& scene, std::vector<ClusterBuild>& cb, const Ray
           Box box, ignored;
           bounds_of(scene, *half, box, ignored);
           ClusterBuild piece = make_cluster(std::move(*half), box);
-          const double c = double(crossings(piece.box, *sample));
-          all += c;
+          const double h = heat_of(piece);
+          all += h;
           if (half == &lower) {
-            all -= crossed[i];
-            crossed[i] = c;
+            all -= heat[i];
+            heat[i] = h;
             cb[i] = std::move(piece);
           } else {
-            crossed.push_back(c);
+            heat.push_back(h);
             cb.push_back(std::move(piece));
           }
         }
@@ -312,22 +377,26 @@ void region_weights(const Scene& scene, std::vector<ClusterBuild>& cb, const Ray
       }
     }
   }
-  if (!(all > 0)) {  // facets alone (no sample, or no sampled ray crosses a cluster)
+  double facets = 0;
+  for (const ClusterBuild& c : cb) facets += double(c.tris.size());
+  if (!(all > 0)) {  // facets alone (nothing measured or sampled, or nothing crosses a cluster)
     for (ClusterBuild& c : cb) c.weight = double(c.tris.size());
     return;
   }
-  double facets = 0;
-  for (const ClusterBuild& c : cb) facets += double(c.tris.size());
-  for (std::size_t i = 0; i < cb.size(); ++i)
-    cb[i].weight = kFacetShare * double(cb[i].tris.size()) / std::max(facets, 1.0) +
-                   (1.0 - kFacetShare) * crossed[i] / all;
+  for (std::size_t i = 0; i < cb.size(); ++i) {
+    if (measured) {
+      cb[i].work = measured_work_of(*measured, cb[i].tris);
+      cb[i].work.push_back(kFacetShare * all * double(cb[i].tris.size()) / std::max(facets, 1.0));
+    }
+    cb[i].weight = kFacetShare * double(cb[i].tris.size()) / std::max(facets, 1.0) + (1.0 - kFacetShare) * heat[i] / all;
+  }
 }
 
 // 1-2. Clusters and regions. Target: several clusters per PE so that
 // bisection can balance; regions are about diag / cbrt(P) across. The
 // clusters come back sorted by PE.
 std::vector<ClusterBuild> form_clusters(const Scene& scene, const Box& sbox, int num_pes, bool split_flat,
-                                        const RaySample* sample) {
+                                        const RaySample* sample, const MeasuredWork* measured) {
   const std::size_t total = scene.triangles.size();
   std::size_t max_tris = std::max<std::size_t>(64, (total + 8 * num_pes - 1) / (8 * static_cast<std::size_t>(num_pes)));
   float region = sbox.diagonal() / std::cbrt(static_cast<float>(num_pes));
@@ -341,10 +410,13 @@ std::vector<ClusterBuild> form_clusters(const Scene& scene, const Box& sbox, int
   for (auto& tris : by_object)
     if (!tris.empty()) split_object(scene, std::move(tris), max_tris, max_extent, split_flat, cb);
 
-  region_weights(scene, cb, sample, num_pes);
+  region_weights(scene, cb, sample, measured, num_pes);
   std::vector<int> all(cb.size());
   std::iota(all.begin(), all.end(), 0);
-  assign_regions(cb, all, 0, num_pes);
+  if (!cb.empty() && !cb[0].work.empty())
+    assign_regions_measured(cb, all, 0, num_pes);
+  else
+    assign_regions(cb, all, 0, num_pes);
   std::stable_sort(cb.begin(), cb.end(), [](const ClusterBuild& a, const ClusterBuild& b) { return a.pe < b.pe; });
   return cb;
 }
@@ -385,6 +457,7 @@ void fill_banks(const Scene& scene, const Box& sbox, const std::vector<ClusterBu
       }
     }
     ranges[c] = {begin, static_cast<int>(bs.triangles.size())};
+    bs.tri_cluster.insert(bs.tri_cluster.end(), cb[c].tris.size(), static_cast<int>(c));
     Cluster& cl = bs.clusters[c];
     put3(cl.center, ctr);
     // Padded so that float rounding in the sphere test never culls a facet.
@@ -459,9 +532,28 @@ void global_tables(const Scene& scene, BankedScene& bs) {
   }
 }
 
+
+// Each bank node's cluster: the nodes below a cluster's root are its own;
+// a bank's nodes above its cluster roots belong to none (-1).
+void node_clusters(BankedScene& bs) {
+  bs.node_cluster.assign(bs.nodes.size(), -1);
+  for (std::size_t c = 0; c < bs.clusters.size(); ++c) {
+    std::vector<int> todo = {bs.clusters[c].root};
+    while (!todo.empty()) {
+      const int node = todo.back();
+      todo.pop_back();
+      if (node < 0) continue;
+      bs.node_cluster[std::size_t(node)] = static_cast<int>(c);
+      for (int k = 0; k < OPSILA_BVH_WIDTH; ++k)
+        if (bs.nodes[std::size_t(node)].count[k] == 0) todo.push_back(bs.nodes[std::size_t(node)].child[k]);
+    }
+  }
+}
+
 }  // namespace
 
-BankedScene partition_scene(const Scene& scene, int num_pes, bool split_flat, const RaySample* sample) {
+BankedScene partition_scene(const Scene& scene, int num_pes, bool split_flat, const RaySample* sample,
+                            const MeasuredWork* measured) {
   BankedScene bs;
   bs.num_pes = num_pes;
   Vec3 slo, shi;
@@ -470,7 +562,7 @@ BankedScene partition_scene(const Scene& scene, int num_pes, bool split_flat, co
   sbox.grow(slo.data());
   sbox.grow(shi.data());
 
-  const std::vector<ClusterBuild> cb = form_clusters(scene, sbox, num_pes, split_flat, sample);
+  const std::vector<ClusterBuild> cb = form_clusters(scene, sbox, num_pes, split_flat, sample, measured);
   std::vector<Box> tri_boxes;
   std::vector<int> source;
   std::vector<std::pair<int, int>> ranges;
@@ -478,7 +570,9 @@ BankedScene partition_scene(const Scene& scene, int num_pes, bool split_flat, co
   describe_pes(cb, tri_boxes, ranges, source, scene.triangles.size(), bs);
 
   build_routing(bs, sbox);
+  node_clusters(bs);
   std::uint64_t texture_once = bank_attributes(scene, source, bs);
+  bs.source = source;
   global_tables(scene, bs);
 
   bs.global_bytes = bs.clusters.size() * sizeof(Cluster) + bs.route_nodes.size() * sizeof(BankNode) +

@@ -45,6 +45,10 @@ struct BankedScene {
   std::uint64_t global_bytes = 0;         // what every PE knows: spheres, routing boxes, PE boxes, materials, lights
   std::uint64_t replicated_bytes = 0;     // one full copy of the scene (what each PE would hold if duplicated)
   int max_bvh_depth = 0;
+  // For pilot frames (--balance measured): the cluster of each bank facet and
+  // of each bank node (-1 for a bank's nodes above its cluster roots), and
+  // the scene triangle of each bank facet.
+  std::vector<int> tri_cluster, node_cluster, source;
 };
 
 // split_flat: flat pieces are also cut to half a region across. Measured on
@@ -52,9 +56,11 @@ struct BankedScene {
 // quarter of the descriptors; with routing on boxes, which already fit flat
 // pieces, it only adds clusters and routing work, so it is off there.
 // sample: the frame's rays (core/ray_sample.h); with it, regions share the
-// expected work as well as the facets. Deterministic for equal inputs.
+// expected work as well as the facets. measured: the work a pilot frame
+// measured per facet and level; with it, each cut of the bisection balances
+// every level's work (and a tenth on facets). Deterministic for equal inputs.
 BankedScene partition_scene(const Scene& scene, int num_pes, bool split_flat = false,
-                            const RaySample* sample = nullptr);
+                            const RaySample* sample = nullptr, const MeasuredWork* measured = nullptr);
 
 // Per-frame constants for the kernels: the SPEC camera basis computed in
 // float exactly as the formula reads, so that every renderer built on a

@@ -24,6 +24,7 @@
 #include "machine/stats.h"
 #include "opsila_shared.h"
 #include "machine/partition.h"
+#include "machine/pilot.h"
 #include "core/progress.h"
 
 namespace opsila {
@@ -94,6 +95,14 @@ SurfaceBuffers upload_surface(ClRuntime& rt, const BankedScene& bs) {
   return b;
 }
 
+const char* balance_name(Balance b) {
+  switch (b) {
+    case Balance::work: return "work";
+    case Balance::measured: return "measured";
+    default: return "facets";
+  }
+}
+
 void check_kernel_limits(const Scene& scene) {
   if (scene.max_depth < 1 || scene.max_depth > OPSILA_MAX_DEPTH)
     throw InputError("--depth " + std::to_string(scene.max_depth) + ": must be 1.." +
@@ -137,6 +146,12 @@ struct Renderer::Machine {
   cl::Buffer b_tris, b_nodes, b_clusters, b_route, b_pes, b_mats, b_lights, b_rects;
   SurfaceBuffers surface;  // vertex attributes and texture copies of the banks
   cl::Buffer b_items, b_item_tri, b_item_t, b_item_facet, b_accum, b_stats, b_traffic, b_out_count, b_hits;
+  // Pilot frames (measure_cost): each cluster's tests per level, and what
+  // maps them back to the scene's facets (every cluster's, on every rank).
+  bool measure = false;
+  cl::Buffer b_node_cluster, b_tri_cluster, b_cost;
+  std::size_t ncost = 1, num_scene_tris = 0;
+  std::vector<int> cluster_of_facet, facet_source;
   DescriptorSet banks, outputs, pool, next_pool;
 
   // Where a frame stands between rounds.
@@ -190,10 +205,12 @@ Renderer::Machine::Machine(const Scene& scene, const RenderSettings& settings, C
     fault_round = std::stoi(text);
   }
 
-  rt.program();  // compile before anything is timed
-  k_item = rt.kernel("item_buffer");
-  k_primary = rt.kernel("build_primary");
-  k_spmd = rt.kernel("spmd_phase");
+  measure = settings.measure_cost;
+  const KernelProgram program = measure ? KernelProgram::measure : KernelProgram::render;
+  rt.program(program);  // compile before anything is timed
+  k_item = rt.kernel("item_buffer", program);
+  k_primary = rt.kernel("build_primary", program);
+  k_spmd = rt.kernel("spmd_phase", program);
   scatter = std::make_unique<ScatterPass>(rt, P);
   choose_work_groups();
   cap = settings.work_groups_per_pe > 0 ? settings.work_groups_per_pe * static_cast<int>(spmd_wg) : 0;
@@ -201,7 +218,19 @@ Renderer::Machine::Machine(const Scene& scene, const RenderSettings& settings, C
   // Every rank partitions identically, then keeps only its own banks.
   group = pe_group(P, ranks.size(), ranks.rank());
   G = group.size();
-  BankedScene bs = partition_scene(scene, P, routing == OPSILA_ROUTING_SPHERES, settings.ray_sample);
+  MeasuredWork pilot;
+  const MeasuredWork* measured = settings.measured;
+  if (settings.balance == Balance::measured && !measure) {
+    pilot = pilot_work(scene, settings, rt, &prepared.pilot_frames, &prepared.pilot_seconds);
+    measured = &pilot;
+  }
+  BankedScene bs = partition_scene(scene, P, routing == OPSILA_ROUTING_SPHERES, settings.ray_sample, measured);
+  if (measure) {
+    cluster_of_facet = bs.tri_cluster;
+    facet_source = bs.source;
+    num_scene_tris = scene.triangles.size();
+    ncost = std::size_t(depth) * bs.clusters.size();
+  }
   const int tri_base = keep_group_banks(bs, group);
   S = OPSILA_SPAWN_SLOTS(static_cast<int>(bs.lights.size()));
   n = choose_bank_capacity(bs, settings);
@@ -217,7 +246,7 @@ Renderer::Machine::Machine(const Scene& scene, const RenderSettings& settings, C
   prepared.bank_capacity = n;
   prepared.num_clusters = static_cast<int>(bs.clusters.size());
   prepared.routing = routing;
-  prepared.balance_work = settings.ray_sample != nullptr;
+  prepared.balance = settings.ray_sample ? Balance::work : measured ? Balance::measured : Balance::facets;
   prepared.bank_bytes = bs.bank_bytes;
   prepared.global_bytes = bs.global_bytes;
   prepared.replicated_bytes = bs.replicated_bytes;
@@ -294,6 +323,9 @@ void Renderer::Machine::upload_scene(const Scene& scene, const BankedScene& bs) 
   for (std::size_t c = 0; c < rects.size(); ++c)  // another rank's cluster: never listed here
     if (bs.clusters[c].root < 0) rects[c] = cl_int4{{1 << 30, 1 << 30, -(1 << 30), -(1 << 30)}};
   b_rects = upload(rt, rects, "projected cluster boxes");
+  // Only the pilot's program reads these; others get one-entry stand-ins.
+  b_node_cluster = upload(rt, measure ? bs.node_cluster : std::vector<int>{-1}, "node clusters");
+  b_tri_cluster = upload(rt, measure ? bs.tri_cluster : std::vector<int>{-1}, "facet clusters");
 }
 
 // Item buffer, pixel sums, statistics and descriptor vectors: banks (the
@@ -310,6 +342,7 @@ void Renderer::Machine::allocate_frame_buffers() {
   ntraffic = std::max<std::size_t>(1, std::size_t(traffic_levels) * P * P);
   b_traffic = device_buffer(rt, ntraffic * sizeof(cl_uint), "traffic");
   b_hits = device_buffer(rt, 2 * sizeof(cl_uint), "primary hit count");
+  b_cost = device_buffer(rt, ncost * sizeof(cl_uint), "cluster work");
   b_out_count = device_buffer(rt, flight.groups * flight.group_size * sizeof(cl_int), "SPMD output counts");
   banks.allocate(rt, flight.slots + std::size_t(P) * flight.group_size, "descriptor banks");
   outputs.allocate(rt, flight.outputs, "SPMD output places");
@@ -324,6 +357,7 @@ void Renderer::Machine::clear_frame() {
   zero_buffer(rt, b_stats, nstats * sizeof(cl_uint), "stats");
   zero_buffer(rt, b_traffic, ntraffic * sizeof(cl_uint), "traffic");
   zero_buffer(rt, b_hits, 2 * sizeof(cl_uint), "primary hit count");
+  zero_buffer(rt, b_cost, ncost * sizeof(cl_uint), "cluster work");
 }
 
 // SIMD phase 1, the item buffer: one work-group per square tile of pixels;
@@ -497,6 +531,9 @@ void Renderer::Machine::spmd_phase(Launcher& launch, Frame& f, int round) {
   k_spmd.setArg(a++, b_stats);
   k_spmd.setArg(a++, b_traffic);
   k_spmd.setArg(a++, traffic_levels);
+  k_spmd.setArg(a++, b_node_cluster);
+  k_spmd.setArg(a++, b_tri_cluster);
+  k_spmd.setArg(a++, b_cost);
   launch.run(k_spmd, "spmd_phase", std::size_t(f.groups) * spmd_wg, spmd_wg, round);
   f.out_groups = f.groups;
   if (round % 16 == 15) launch.harvest();
@@ -684,6 +721,35 @@ RenderResult Renderer::render() {
   if (ranks) m.ranks.end_collective();
   if (m.progress && m.progress->due()) m.progress->report(1.0, result.rays.total());
   return result;
+}
+
+MeasuredWork Renderer::measured_work() {
+  Machine& m = *m_;
+  MeasuredWork w;
+  if (!m.measure) return w;
+  std::vector<cl_uint> raw(m.ncost);
+  cl_check(m.rt.queue().enqueueReadBuffer(m.b_cost, CL_TRUE, 0, raw.size() * sizeof(cl_uint), raw.data()),
+           "clEnqueueReadBuffer(cluster work)");
+  // A cluster is counted by the rank that holds it alone (the others count
+  // 0 for it), so the largest count over the ranks is its count.
+  std::vector<std::uint64_t> cost(raw.begin(), raw.end());
+  if (!m.group.all()) m.ranks.max(cost);
+  const std::size_t C = m.ncost / std::size_t(m.depth);
+  std::vector<std::size_t> facets(C, 0);
+  for (int c : m.cluster_of_facet) ++facets[std::size_t(c)];
+  w.levels = m.depth;
+  w.per_facet.assign(m.num_scene_tris * std::size_t(m.depth), 0.0f);
+  bool any = false;
+  for (std::size_t k = 0; k < m.cluster_of_facet.size(); ++k) {
+    const std::size_t c = std::size_t(m.cluster_of_facet[k]);
+    for (int l = 0; l < m.depth; ++l) {
+      const std::uint64_t v = cost[std::size_t(l) * C + c];
+      any = any || v != 0;
+      w.per_facet[std::size_t(m.facet_source[k]) * m.depth + l] = float(double(v) / double(facets[c]));
+    }
+  }
+  if (!any) w = MeasuredWork{};
+  return w;
 }
 
 RenderResult render(const Scene& scene, const RenderSettings& settings, ClRuntime& runtime) {

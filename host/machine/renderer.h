@@ -17,6 +17,13 @@ namespace opsila {
 
 class Progress;
 
+// How the scene is split over the PEs (--balance): equal shares of facets;
+// shares of the frame's rays, sampled on the host first (core/ray_sample.h);
+// or shares of the work that pilot frames measured on the device
+// (machine/pilot.h). Never the image.
+enum class Balance { facets, work, measured };
+const char* balance_name(Balance b);
+
 struct RenderSettings {
   int num_pes = 16;
   // n: bank slots per PE on average; P * n descriptors are in flight in each
@@ -31,6 +38,11 @@ struct RenderSettings {
   // The frame's rays, sampled (core/ray_sample.h): when set, the partition
   // shares expected work as well as facets among the PEs. Never the image.
   const RaySample* ray_sample = nullptr;
+  Balance balance = Balance::facets;  // measured: the prepare step runs the pilot frames first
+  // Set by the pilot frames (machine/pilot.h): the partition shares this
+  // measured work; measure_cost builds the program that counts it.
+  const MeasuredWork* measured = nullptr;
+  bool measure_cost = false;
 };
 
 // One kernel launch, named, with its OpenCL-profiled time.
@@ -77,7 +89,9 @@ struct RenderStats {
   int num_pes = 0;
   int num_clusters = 0;
   int routing = OPSILA_ROUTING_BOXES;
-  bool balance_work = false;  // the partition shared sampled rays (--balance work), not only facets
+  Balance balance = Balance::facets;  // how the partition shared the scene (--balance)
+  int pilot_frames = 0;               // --balance measured: pilot frames run while preparing
+  double pilot_seconds = 0;           // their time (part of the prepare step, not of the frame)
   std::size_t work_group_size = 0;
   std::vector<RankReport> ranks;  // several MPI ranks: one report each (rank 0's result only)
 };
@@ -119,6 +133,9 @@ class Renderer {
   Renderer(const Renderer&) = delete;
   Renderer& operator=(const Renderer&) = delete;
   RenderResult render();
+  // After render() of a Renderer prepared with measure_cost: each cluster's
+  // tests per level (summed over the ranks), spread over its facets.
+  MeasuredWork measured_work();
 
  private:
   struct Machine;

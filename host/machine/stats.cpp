@@ -31,6 +31,24 @@ const char* const kCounterNames[OPSILA_STAT_COUNT] = {
 };
 static_assert(OPSILA_STAT_COUNT == 15, "update kCounterNames with the OPSILA_STAT_* list");
 
+}  // namespace
+
+double test_occupancy(const RenderStats& st) {
+  double done = 0, allowed = 0;
+  for (const auto& level : st.counters) {
+    std::uint64_t most = 0;
+    for (const auto& pe : level) {
+      const std::uint64_t tests = pe[OPSILA_STAT_TRI_TESTS] + pe[OPSILA_STAT_BOX_TESTS];
+      done += double(tests);
+      most = std::max(most, tests);
+    }
+    allowed += double(most) * double(level.size());
+  }
+  return allowed > 0 ? done / allowed : 0.0;
+}
+
+namespace {
+
 nlohmann::json counters_object(const std::vector<std::uint64_t>& values) {
   nlohmann::json out = nlohmann::json::object();
   for (int i = 0; i < OPSILA_STAT_COUNT; ++i)
@@ -134,7 +152,8 @@ nlohmann::json stats_json(const RenderResult& result, const Scene& scene,
   j["bank_capacity"] = s.bank_capacity > 0 ? s.bank_capacity : settings.bank_capacity;
   j["clusters"] = s.num_clusters;
   j["routing"] = s.routing == OPSILA_ROUTING_SPHERES ? "spheres" : "boxes";
-  j["balance"] = s.balance_work ? "work" : "facets";
+  j["balance"] = balance_name(s.balance);
+  if (s.balance == Balance::measured) j["pilot"] = {{"frames", s.pilot_frames}, {"seconds", s.pilot_seconds}};
   j["work_group_size"] = s.work_group_size;
   j["rounds"] = s.rounds;
   j["scene"] = {{"triangles", scene.triangles.size()},

@@ -36,6 +36,11 @@ struct RankTraffic {
 };
 RankTraffic rank_traffic(const std::vector<RankReport>& reports);
 
+// The paper's occupancy of a render: the tests done (ray-box + ray-facet)
+// over the tests the phases would have allowed had every PE been as busy as
+// the busiest, level by level (as the bench reports it). 0 without work.
+double test_occupancy(const RenderStats& st);
+
 // Several MPI ranks: per-rank reports, the rank x rank traffic of every
 // round and in all, and whether every rank received what the others sent.
 nlohmann::json ranks_json(const std::vector<RankReport>& reports);

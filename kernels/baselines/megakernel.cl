@@ -39,13 +39,14 @@ __kernel void megakernel(FrameParams fp, __global const BankNode *nodes, __globa
   long3 sum = (long3)(0);
   uint secondary = 0u, shadow = 0u;
   uint tri_tests = 0u, box_tests = 0u;
+  CostProbe no_probe = no_cost_probe();
   int2 item = (int2)(-1, -1);
   /* Even k: the centre ray is not a sample; its hit is looked up alone. */
   if (spp_k % 2 == 0) {
     RayPre cr = make_ray(load3(fp.eye), primary_direction(fp, x, y));
     float t = OPSILA_INF;
     int hit = -1, facet = INT_MAX;
-    traverse_nearest(&cr, nodes, tris, root, 0.0f, &t, &hit, &facet, &tri_tests, &box_tests);
+    traverse_nearest(&cr, nodes, tris, root, 0.0f, &t, &hit, &facet, &tri_tests, &box_tests, &no_probe);
     if (hit >= 0) item = (int2)(tris[hit].object_id, tris[hit].facet_id);
   }
 
@@ -67,7 +68,7 @@ __kernel void megakernel(FrameParams fp, __global const BankNode *nodes, __globa
       RayPre r = make_ray(org, d);
       float t = OPSILA_INF;
       int hit = -1, facet = INT_MAX;
-      traverse_nearest(&r, nodes, tris, root, tmin, &t, &hit, &facet, &tri_tests, &box_tests);
+      traverse_nearest(&r, nodes, tris, root, tmin, &t, &hit, &facet, &tri_tests, &box_tests, &no_probe);
       if (hit < 0) {
         sum = add_sat(sum, fixed3(weight * load3(fp.background)));
         continue;
@@ -89,7 +90,7 @@ __kernel void megakernel(FrameParams fp, __global const BankNode *nodes, __globa
         if (all(contrib == (float3)(0.0f))) continue;
         ++shadow;
         RayPre sr = make_ray(p, lv);
-        if (!traverse_any(&sr, nodes, tris, root, eps, dist, &tri_tests, &box_tests))
+        if (!traverse_any(&sr, nodes, tris, root, eps, dist, &tri_tests, &box_tests, &no_probe))
           sum = add_sat(sum, fixed3(contrib)); /* >= 0: saturates as add_fixed does */
       }
 

@@ -32,6 +32,49 @@ typedef int4 intW;
 #define vstoreW vstore4
 #endif
 
+/* Pilot frames (--balance measured) build the program with
+ * OPSILA_MEASURE_COST: every ray-box and ray-facet test of the SPMD phase is
+ * also counted for the cluster it belongs to, at the ray's level, so that
+ * the partition can share the measured work among the PEs. A child box's
+ * test belongs to the child's cluster, also in a bank's own top nodes above
+ * the cluster roots (a ray pays them on every visit to the PE, and a cluster
+ * that many rays reach makes them paid often). Other builds carry an empty
+ * probe and count nothing. */
+typedef struct {
+#ifdef OPSILA_MEASURE_COST
+  __global const int *node_cluster; /* bank node -> its cluster, -1 above the cluster roots */
+  __global const int *tri_cluster;  /* bank facet -> its cluster */
+  volatile __global uint *cost;     /* cost[cluster] at the ray's level; 0: not counted */
+#else
+  int none;
+#endif
+} CostProbe;
+#ifdef OPSILA_MEASURE_COST
+#define COST_CHILD(pr, nd, k)                                                                                \
+  if ((pr)->cost) {                                                                                          \
+    int cc_ = (nd)->count[k] == 0 ? (pr)->node_cluster[(nd)->child[k]] : (pr)->tri_cluster[(nd)->child[k]]; \
+    if (cc_ >= 0) atomic_inc(&(pr)->cost[cc_]);                                                              \
+  }
+#define COST_TRI(pr, tri) \
+  if ((pr)->cost) atomic_inc(&(pr)->cost[(pr)->tri_cluster[tri]])
+#else
+#define COST_CHILD(pr, nd, k)
+#define COST_TRI(pr, tri)
+#endif
+
+/* The probe of rays whose tests are not counted (item buffer, megakernel). */
+inline CostProbe no_cost_probe(void) {
+  CostProbe p;
+#ifdef OPSILA_MEASURE_COST
+  p.node_cluster = 0;
+  p.tri_cluster = 0;
+  p.cost = 0;
+#else
+  p.none = 0;
+#endif
+  return p;
+}
+
 /* Raw slab distances of a node's child boxes: the largest plane entry and
  * the smallest plane exit, per child. Planes are taken near/far by the sign
  * of the direction, so one subtraction and one product per plane; a NaN (a
@@ -65,7 +108,8 @@ OPSILA_INLINE intW node_hits(const RayPre *r, __global const BankNode *nd, float
 /* Nearest hit below `root` (a bank, one cluster of it, or a whole scene). */
 OPSILA_INLINE void traverse_nearest(const RayPre *r, __global const BankNode *nodes,
                                     __global const BankTriangle *tris, int root, float tmin, float *best_t,
-                                    int *best_tri, int *best_facet, uint *tri_tests, uint *box_tests) {
+                                    int *best_tri, int *best_facet, uint *tri_tests, uint *box_tests,
+                                    const CostProbe *probe) {
   int s_child[OPSILA_BVH_STACK], s_count[OPSILA_BVH_STACK];
   float s_t[OPSILA_BVH_STACK];
   int sp = 1;
@@ -80,6 +124,7 @@ OPSILA_INLINE void traverse_nearest(const RayPre *r, __global const BankNode *no
     if (count > 0) {
       for (int i = child; i < child + count; ++i) {
         ++*tri_tests;
+        COST_TRI(probe, i);
         float t = intersect_triangle(r, &tris[i], tmin, OPSILA_INF);
         if (t < OPSILA_INF && closer(t, tris[i].facet_id, *best_t, *best_facet)) {
           *best_t = t;
@@ -101,6 +146,7 @@ OPSILA_INLINE void traverse_nearest(const RayPre *r, __global const BankNode *no
       int cnt = nd->count[k];
       if (cnt < 0) continue;
       ++*box_tests;
+      COST_CHILD(probe, nd, k);
       if (!hm[k] || sp >= OPSILA_BVH_STACK) continue;
       /* Insert, keeping this node's entries farthest first. */
       float t = te[k];
@@ -120,7 +166,8 @@ OPSILA_INLINE void traverse_nearest(const RayPre *r, __global const BankNode *no
 
 /* Any hit in (tmin, tmax): shadow rays. */
 OPSILA_INLINE bool traverse_any(const RayPre *r, __global const BankNode *nodes, __global const BankTriangle *tris,
-                                int root, float tmin, float tmax, uint *tri_tests, uint *box_tests) {
+                                int root, float tmin, float tmax, uint *tri_tests, uint *box_tests,
+                                const CostProbe *probe) {
   int stack[OPSILA_BVH_STACK];
   int sp = 1;
   stack[0] = root;
@@ -134,6 +181,7 @@ OPSILA_INLINE bool traverse_any(const RayPre *r, __global const BankNode *nodes,
       int cnt = nd->count[k];
       if (cnt < 0) continue;
       ++*box_tests;
+      COST_CHILD(probe, nd, k);
       if (!hm[k]) continue;
       int child = nd->child[k];
       if (cnt == 0) {
@@ -142,6 +190,7 @@ OPSILA_INLINE bool traverse_any(const RayPre *r, __global const BankNode *nodes,
       }
       for (int i = child; i < child + cnt; ++i) {
         ++*tri_tests;
+        COST_TRI(probe, i);
         if (intersect_triangle(r, &tris[i], tmin, tmax) < OPSILA_INF) return true;
       }
     }

@@ -199,6 +199,10 @@ TEST(Bench, QuickRunWritesEveryJsonKey) {
   EXPECT_EQ(j["image"]["width"], 48);
   EXPECT_GT(j["scene"]["facets"].get<int>(), 0);
   EXPECT_GT(j["scene"]["clusters"].get<int>(), 0);
+  // The bench balances by measured work unless told otherwise.
+  EXPECT_EQ(j["balance"], "measured");
+  EXPECT_GE(j["pilot_frames"].get<int>(), 1);
+  EXPECT_NE(r.out.find("balance measured: the partition of the best of"), std::string::npos) << r.out;
 
   const nlohmann::json& rj = j["render"];
   EXPECT_EQ(rj["rays"].get<std::uint64_t>(), 48u * 36u + rj["rays_by_kind"]["secondary"].get<std::uint64_t>() +

@@ -70,6 +70,20 @@ TEST_F(CliFixture, DepthAndPesOutOfRangeAreRejected) {
   expect_rejected({scene, "-o", out("x.png"), "--balance", "rays"}, "--balance");
 }
 
+// --balance measured from the command line: the pilot frames run, the stats
+// say so, and the picture is the one equal banks give.
+TEST_F(CliFixture, BalanceMeasuredRendersTheSameImage) {
+  const RunResult a = run_opsila({"render", scene, "-o", out("facets.pfm"), "--size", "48x36", "-q"});
+  ASSERT_EQ(a.exit_code, 0) << a.err;
+  const RunResult b = run_opsila({"render", scene, "-o", out("measured.pfm"), "--size", "48x36", "--balance",
+                                  "measured", "--stats", out("measured.json"), "-q"});
+  ASSERT_EQ(b.exit_code, 0) << b.err;
+  EXPECT_TRUE(test::read_file(out("facets.pfm")) == test::read_file(out("measured.pfm")));
+  const nlohmann::json st = nlohmann::json::parse(test::read_file(out("measured.json")));
+  EXPECT_EQ(st.at("balance"), "measured");
+  EXPECT_GE(st.at("pilot").at("frames").get<int>(), 1);
+}
+
 TEST_F(CliFixture, UnknownDeviceIsRejected) {
   // 2 when the platform is there but nothing matches; 3 without any platform.
   const RunResult r = run_opsila({"render", scene, "-o", out("x.png"), "--device", "nosuchdevice"});

@@ -152,26 +152,30 @@ TEST_F(MpiFixture, HundredsIsTheSameOnOneToFourRanks) {
 }
 
 // --balance work: every rank samples the same rays and builds the same
-// partition, so the ranks still agree with one process, byte for byte.
-TEST_F(MpiFixture, WorkBalancedPartitionIsTheSameOnThreeRanks) {
-  const std::vector<std::string> common = {scene("hundreds.json"), "--size", "64x48", "--pes", "16", "--balance",
-                                           "work", "-q"};
-  auto with = [&](const std::string& tag) {
-    std::vector<std::string> a = common;
-    a.insert(a.end(), {"-o", dir.file(tag + ".pfm"), "--item-buffer", dir.file(tag + ".npy"), "--stats",
-                       dir.file(tag + ".json")});
-    return a;
-  };
-  const RunResult single = one(with("one"));
-  ASSERT_EQ(single.exit_code, 0) << single.err;
-  const RunResult three = ranks(3, with("three"));
-  ASSERT_EQ(three.exit_code, 0) << three.err;
-  EXPECT_TRUE(test::read_file(dir.file("three.pfm")) == test::read_file(dir.file("one.pfm")));
-  EXPECT_TRUE(test::read_file(dir.file("three.npy")) == test::read_file(dir.file("one.npy")));
-  const nlohmann::json a = stats(dir.file("one.json")), b = stats(dir.file("three.json"));
-  EXPECT_EQ(a.at("balance"), "work");
-  EXPECT_EQ(a.at("levels"), b.at("levels")) << "the ranks partitioned differently from one process";
-  EXPECT_TRUE(b.at("mpi").at("exchange_balanced").get<bool>());
+// partition; --balance measured: the ranks run the pilot frames together
+// and share each cluster's counts, so they build the same partition. Either
+// way the ranks agree with one process, byte for byte.
+TEST_F(MpiFixture, BalancedPartitionsAreTheSameOnThreeRanks) {
+  for (const std::string mode : {"work", "measured"}) {
+    const std::vector<std::string> common = {scene("hundreds.json"), "--size", "64x48", "--pes", "16", "--balance",
+                                             mode, "-q"};
+    auto with = [&](const std::string& tag) {
+      std::vector<std::string> a = common;
+      a.insert(a.end(), {"-o", dir.file(tag + ".pfm"), "--item-buffer", dir.file(tag + ".npy"), "--stats",
+                         dir.file(tag + ".json")});
+      return a;
+    };
+    const RunResult single = one(with(mode + "-one"));
+    ASSERT_EQ(single.exit_code, 0) << single.err;
+    const RunResult three = ranks(3, with(mode + "-three"));
+    ASSERT_EQ(three.exit_code, 0) << three.err;
+    EXPECT_TRUE(test::read_file(dir.file(mode + "-three.pfm")) == test::read_file(dir.file(mode + "-one.pfm"))) << mode;
+    EXPECT_TRUE(test::read_file(dir.file(mode + "-three.npy")) == test::read_file(dir.file(mode + "-one.npy"))) << mode;
+    const nlohmann::json a = stats(dir.file(mode + "-one.json")), b = stats(dir.file(mode + "-three.json"));
+    EXPECT_EQ(a.at("balance"), mode);
+    EXPECT_EQ(a.at("levels"), b.at("levels")) << mode << ": the ranks partitioned differently from one process";
+    EXPECT_TRUE(b.at("mpi").at("exchange_balanced").get<bool>()) << mode;
+  }
 }
 
 // A bad flag is the same on every rank: one line, from the lowest, once.

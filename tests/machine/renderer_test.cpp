@@ -11,6 +11,8 @@
 #include "opsila_shared.h"
 #include "reference/reference.h"
 #include "machine/renderer.h"
+#include "machine/pilot.h"
+#include "machine/stats.h"
 #include "test_device.h"
 #include "test_scenes.h"
 #include "test_util.h"
@@ -86,22 +88,7 @@ TEST(Renderer, RoutingOnBoxesOrSpheresGivesTheSameImage) {
   }
 }
 
-// The paper's occupancy of a render: the tests done over the tests the
-// phases would have allowed had every PE been as busy as the busiest, level
-// by level (as the bench reports it).
-double occupancy(const RenderStats& st) {
-  double done = 0, allowed = 0;
-  for (const auto& level : st.counters) {
-    std::uint64_t most = 0;
-    for (const auto& pe : level) {
-      const std::uint64_t tests = pe[OPSILA_STAT_TRI_TESTS] + pe[OPSILA_STAT_BOX_TESTS];
-      done += double(tests);
-      most = std::max(most, tests);
-    }
-    allowed += double(most) * double(level.size());
-  }
-  return allowed > 0 ? done / allowed : 0.0;
-}
+double occupancy(const RenderStats& st) { return test_occupancy(st); }
 
 // A partition that shares the frame's sampled rays (--balance work) moves
 // facets between banks, never a pixel; on a scene whose work gathers under
@@ -122,7 +109,7 @@ TEST(Renderer, BalancingByWorkGivesTheSameImageAndEvenerPes) {
     EXPECT_EQ(0, std::memcmp(facets.rgb.data(), work.rgb.data(), work.rgb.size() * sizeof(float))) << pes;
     EXPECT_EQ(facets.item_buffer, work.item_buffer) << pes << " PEs";
     expect_balanced(work.stats);
-    EXPECT_TRUE(work.stats.balance_work);
+    EXPECT_EQ(work.stats.balance, Balance::work);
     EXPECT_GT(occupancy(work.stats), occupancy(facets.stats) + 0.05) << pes << " PEs";
     // Every facet still lives in exactly one bank.
     std::uint64_t facet_bytes = 0, work_bytes = 0;
@@ -130,6 +117,68 @@ TEST(Renderer, BalancingByWorkGivesTheSameImageAndEvenerPes) {
     for (std::uint64_t b : work.stats.bank_bytes) work_bytes += b;
     EXPECT_NEAR(double(work_bytes), double(facet_bytes), 0.05 * double(facet_bytes)) << "facets duplicated or lost";
   }
+}
+
+// --balance measured: pilot frames count each cluster's tests on the
+// device, and the partition shares them level by level. Facets move between
+// banks, never a pixel; the PEs are far more even than with equal banks, and
+// the partition is the same every time (the counts are deterministic).
+TEST(Renderer, BalancingByMeasuredWorkGivesTheSameImageAndEvenerPes) {
+  Scene s = load_scene(std::string(OPSILA_SOURCE_DIR) + "/scenes/hundreds.json");
+  s.width = 160;
+  s.height = 120;
+  for (int pes : {4, 16}) {
+    RenderSettings rs;
+    rs.num_pes = pes;
+    const RenderResult facets = render(s, rs, runtime());
+    rs.balance = Balance::measured;
+    const RenderResult measured = render(s, rs, runtime());
+    const RenderResult again = render(s, rs, runtime());
+    ASSERT_EQ(facets.rgb.size(), measured.rgb.size());
+    EXPECT_EQ(0, std::memcmp(facets.rgb.data(), measured.rgb.data(), measured.rgb.size() * sizeof(float))) << pes;
+    EXPECT_EQ(facets.item_buffer, measured.item_buffer) << pes << " PEs";
+    expect_balanced(measured.stats);
+    EXPECT_EQ(measured.stats.balance, Balance::measured);
+    EXPECT_EQ(measured.stats.pilot_frames, kPilotFrames);
+    EXPECT_GT(occupancy(measured.stats), occupancy(facets.stats) + 0.1) << pes << " PEs";
+    EXPECT_EQ(measured.stats.bank_bytes, again.stats.bank_bytes) << "the pilots chose another partition";
+    EXPECT_EQ(measured.stats.counters, again.stats.counters);
+    std::uint64_t facet_bytes = 0, measured_bytes = 0;
+    for (std::uint64_t b : facets.stats.bank_bytes) facet_bytes += b;
+    for (std::uint64_t b : measured.stats.bank_bytes) measured_bytes += b;
+    EXPECT_NEAR(double(measured_bytes), double(facet_bytes), 0.05 * double(facet_bytes)) << "facets duplicated or lost";
+  }
+}
+
+// The pilot's counts: every test of the SPMD phase below a cluster root is
+// counted for that cluster at the ray's level, so the counted work is close
+// to (and never above) the tests the PEs report.
+TEST(Renderer, PilotCountsTheSpmdTestsPerClusterAndLevel) {
+  Scene s = load_scene(std::string(OPSILA_SOURCE_DIR) + "/scenes/hundreds.json");
+  s.width = 80;
+  s.height = 60;
+  RenderSettings rs;
+  rs.num_pes = 8;
+  rs.measure_cost = true;
+  Renderer pilot(s, rs, runtime());
+  const RenderResult r = pilot.render();
+  const MeasuredWork w = pilot.measured_work();
+  ASSERT_EQ(w.levels, s.max_depth);
+  ASSERT_EQ(w.per_facet.size(), s.triangles.size() * std::size_t(s.max_depth));
+  for (int l = 0; l < s.max_depth; ++l) {
+    double counted = 0, reported = 0;
+    for (std::size_t t = 0; t < s.triangles.size(); ++t) counted += w.per_facet[t * w.levels + l];
+    for (const auto& pe : r.stats.counters[std::size_t(l)])
+      reported += double(pe[OPSILA_STAT_TRI_TESTS] + pe[OPSILA_STAT_BOX_TESTS]);
+    EXPECT_LE(counted, reported * 1.0001 + 1) << "level " << l;
+    EXPECT_GT(counted, 0.5 * reported) << "level " << l << ": most tests lie below the cluster roots";
+  }
+  // The renderer without the pilot's program counts nothing.
+  RenderSettings plain;
+  plain.num_pes = 8;
+  Renderer frame(s, plain, runtime());
+  frame.render();
+  EXPECT_TRUE(frame.measured_work().empty());
 }
 
 TEST(Renderer, NoRayLostWithTinyBanks) {

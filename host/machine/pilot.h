@@ -1,0 +1,38 @@
+// Pilot frames (--balance measured): before the real frame is prepared, the
+// machine renders the same view at a reduced size on the same device, with
+// the program that counts each cluster's ray-box and ray-facet tests per
+// level (kernels/lib/bvh.cl, OPSILA_MEASURE_COST). The partition then shares
+// that measured work among the PEs, level by level (machine/partition.h).
+// The first pilot runs on the facets' partition. The work a cluster does
+// depends on where it lies (which PE's bank, beside which clusters: a
+// shadow ray stops at the first occluder, every visit to a PE pays its
+// bank's top nodes), so each later pilot runs on the partition of the mean
+// of the measurements so far and measures again; the frame gets the
+// partition whose pilot measured the best occupancy (the facets' one
+// included). Deterministic: the counts are integers from deterministic
+// traversals, the partitions are deterministic functions of them.
+#pragma once
+
+#include "core/ray_sample.h"
+#include "core/scene.h"
+#include "machine/renderer.h"
+
+namespace opsila {
+
+// At most this many pixels per pilot frame: the image is shrunk by a whole
+// factor in x and y until it has no more. On hundreds, 2^13 to 2^17 pixels
+// chose partitions of the same quality (docs/BENCHMARKS.md); the pilots'
+// cost is mostly the partition and bank BVH build each one needs.
+constexpr int kPilotPixels = 1 << 14;
+// Pilot frames run; the measured occupancy does not rise steadily from one
+// to the next (a partition cut moves many clusters at once), hence the
+// choice of the best one.
+constexpr int kPilotFrames = 5;
+
+// The work measured by the pilot frames for `settings` (its PE count,
+// routing and work-groups; one sample per pixel); *frames and *seconds get
+// how many ran and how long they took.
+MeasuredWork pilot_work(const Scene& scene, const RenderSettings& settings, ClRuntime& runtime, int* frames,
+                        double* seconds);
+
+}  // namespace opsila

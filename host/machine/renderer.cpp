@@ -205,7 +205,14 @@ Renderer::Machine::Machine(const Scene& scene, const RenderSettings& settings, C
     fault_round = std::stoi(text);
   }
 
+  // --balance measured: the pilot frames run first, each a machine of its own.
   measure = settings.measure_cost;
+  MeasuredWork pilot;
+  const MeasuredWork* measured = settings.measured;
+  if (settings.balance == Balance::measured && !measure) {
+    pilot = pilot_work(scene, settings, rt, &prepared.pilot_frames, &prepared.pilot_seconds);
+    measured = &pilot;
+  }
   const KernelProgram program = measure ? KernelProgram::measure : KernelProgram::render;
   rt.program(program);  // compile before anything is timed
   k_item = rt.kernel("item_buffer", program);
@@ -218,12 +225,6 @@ Renderer::Machine::Machine(const Scene& scene, const RenderSettings& settings, C
   // Every rank partitions identically, then keeps only its own banks.
   group = pe_group(P, ranks.size(), ranks.rank());
   G = group.size();
-  MeasuredWork pilot;
-  const MeasuredWork* measured = settings.measured;
-  if (settings.balance == Balance::measured && !measure) {
-    pilot = pilot_work(scene, settings, rt, &prepared.pilot_frames, &prepared.pilot_seconds);
-    measured = &pilot;
-  }
   BankedScene bs = partition_scene(scene, P, routing == OPSILA_ROUTING_SPHERES, settings.ray_sample, measured);
   if (measure) {
     cluster_of_facet = bs.tri_cluster;

@@ -72,7 +72,7 @@ __kernel void item_buffer(FrameParams fp, __global const Cluster *clusters, __gl
         int cl = list[i];
         int4 pr = cluster_rects[cl]; /* x0, y0, x1, y1 inclusive */
         if (x < pr.x || x > pr.z || y < pr.y || y > pr.w) continue;
-        traverse_nearest(&r, nodes, tris, clusters[cl].root, 0.0f, &best_t, &best_tri, &best_facet, &tri_tests,
+        traverse_nearest(&r, nodes, tris, clusters[cl].root, 0.0f, fp.box_slack, &best_t, &best_tri, &best_facet, &tri_tests,
                          &box_tests, &no_probe);
       }
       barrier(CLK_LOCAL_MEM_FENCE);

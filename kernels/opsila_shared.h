@@ -257,7 +257,10 @@ typedef struct {
   opsila_i32 bank_capacity; /* n: descriptor slots per bank */
   opsila_i32 spawn_slots;   /* S = lights + 2: output slots per processed descriptor */
   opsila_i32 has_attributes; /* 1: a BankAttributes per triangle */
-  opsila_i32 pad3[3];
+  /* Absolute slack of the bank BVH's box culling (kernels/lib/bvh.cl,
+   * node_hits): 2^-20 of the scene's largest coordinate plus its diagonal. */
+  float box_slack;
+  opsila_i32 pad3[2];
 } FrameParams;
 
 #ifndef __OPENCL_C_VERSION__
@@ -288,6 +291,7 @@ static_assert(offsetof(FrameParams, group_begin) == 60, "FrameParams layout");
 static_assert(offsetof(FrameParams, tri_base) == 92, "FrameParams layout");
 static_assert(offsetof(FrameParams, width) == 96, "FrameParams layout");
 static_assert(offsetof(FrameParams, spawn_slots) == 124, "FrameParams layout");
+static_assert(offsetof(FrameParams, box_slack) == 132, "FrameParams layout");
 static_assert(OPSILA_FIXED_SCALE == 16777216.0f, "24 fraction bits");
 static_assert(OPSILA_ACCUM_WORDS == 3 * 2, "3 channels of 64 bits in 32-bit words");
 static_assert(OPSILA_LEVEL_BITS + 2 < 31, "kind and level fit in the meta field");

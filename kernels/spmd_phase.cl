@@ -45,6 +45,7 @@ typedef struct {
   __global const BankTriangle *tris;
   int pe, root;
   bool empty;
+  float slack; /* FrameParams.box_slack */
 } Bank;
 
 /* What a ray's visit to this PE ends in. */
@@ -59,7 +60,7 @@ typedef struct {
 inline int shadow_visit(const Routing *rt, const Bank *bank, const RayPre *r, float eps, float tmax, int after_pe,
                         int home, float3 contrib, int pixel, int meta, volatile __global uint *accum, PrivStats *st,
                         const CostProbe *probe, Descriptor *next) {
-  bool blocked = !bank->empty && traverse_any(r, bank->nodes, bank->tris, bank->root, eps, tmax,
+  bool blocked = !bank->empty && traverse_any(r, bank->nodes, bank->tris, bank->root, eps, tmax, bank->slack,
                                               &st->v[OPSILA_STAT_TRI_TESTS], &st->v[OPSILA_STAT_BOX_TESTS], probe);
   if (blocked) {
     ++st->v[OPSILA_STAT_OCCLUDED];
@@ -87,7 +88,7 @@ inline int trace_visit(FrameParams fp, const Routing *rt, const Bank *bank, cons
   float eps = fp.epsilon;
   int found = -1; /* local index of a facet of this bank that won */
   if (!bank->empty)
-    traverse_nearest(r, bank->nodes, bank->tris, bank->root, eps, t_best, &found, &best_facet,
+    traverse_nearest(r, bank->nodes, bank->tris, bank->root, eps, bank->slack, t_best, &found, &best_facet,
                      &st->v[OPSILA_STAT_TRI_TESTS], &st->v[OPSILA_STAT_BOX_TESTS], probe);
   if (found >= 0) *hit = fp.tri_base + found;
   float entry;
@@ -271,6 +272,7 @@ __kernel void spmd_phase(FrameParams fp, __global const PeInfo *pes, __global co
   bank.pe = pe;
   bank.root = pes[pe].node_begin;
   bank.empty = pes[pe].node_begin == pes[pe].node_end;
+  bank.slack = fp.box_slack;
   if (slot < bank_begin[pe] + bank_count[pe]) {
     Descriptor ds = desc_load(b, slot);
     int level = OPSILA_META_LEVEL(DESC_META(ds));

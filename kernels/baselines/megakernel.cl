@@ -46,7 +46,7 @@ __kernel void megakernel(FrameParams fp, __global const BankNode *nodes, __globa
     RayPre cr = make_ray(load3(fp.eye), primary_direction(fp, x, y));
     float t = OPSILA_INF;
     int hit = -1, facet = INT_MAX;
-    traverse_nearest(&cr, nodes, tris, root, 0.0f, &t, &hit, &facet, &tri_tests, &box_tests, &no_probe);
+    traverse_nearest(&cr, nodes, tris, root, 0.0f, fp.box_slack, &t, &hit, &facet, &tri_tests, &box_tests, &no_probe);
     if (hit >= 0) item = (int2)(tris[hit].object_id, tris[hit].facet_id);
   }
 
@@ -68,7 +68,7 @@ __kernel void megakernel(FrameParams fp, __global const BankNode *nodes, __globa
       RayPre r = make_ray(org, d);
       float t = OPSILA_INF;
       int hit = -1, facet = INT_MAX;
-      traverse_nearest(&r, nodes, tris, root, tmin, &t, &hit, &facet, &tri_tests, &box_tests, &no_probe);
+      traverse_nearest(&r, nodes, tris, root, tmin, fp.box_slack, &t, &hit, &facet, &tri_tests, &box_tests, &no_probe);
       if (hit < 0) {
         sum = add_sat(sum, fixed3(weight * load3(fp.background)));
         continue;
@@ -90,7 +90,7 @@ __kernel void megakernel(FrameParams fp, __global const BankNode *nodes, __globa
         if (all(contrib == (float3)(0.0f))) continue;
         ++shadow;
         RayPre sr = make_ray(p, lv);
-        if (!traverse_any(&sr, nodes, tris, root, eps, dist, &tri_tests, &box_tests, &no_probe))
+        if (!traverse_any(&sr, nodes, tris, root, eps, dist, fp.box_slack, &tri_tests, &box_tests, &no_probe))
           sum = add_sat(sum, fixed3(contrib)); /* >= 0: saturates as add_fixed does */
       }
 

@@ -92,22 +92,31 @@ OPSILA_INLINE void node_spans(const RayPre *r, __global const BankNode *nd, floa
   *leave = fmin(fmin(tfx, tfy), tfz);
 }
 
-/* Children met in [tmin, tmax], with ray_box's slack above tmax (a box is
- * never culled by rounding while a facet on its face could still win a
- * tie). Returns the mask; *enter gets the clamped entry distances. */
-OPSILA_INLINE intW node_hits(const RayPre *r, __global const BankNode *nd, float tmin, float tmax, floatW *enter) {
+/* Children met in [tmin, tmax], with slack: relative, above the tie
+ * tolerance (a box is never culled while a facet on its face could still
+ * win a tie), and absolute, `slack` (FrameParams.box_slack). The facet test
+ * computes t from vertices taken relative to the origin, so its rounding is
+ * of the order of the coordinates' ulp, not of t's: near the origin (a
+ * glass block standing on a floor, a ray leaving one face towards the
+ * other) a facet's t can fall below its own box's slab entry, or above the
+ * box's exit below tmin, by more than any relative slack. Culling such a box
+ * would change which facet wins with the bank's shape, hence with the PE
+ * count. Returns the mask; *enter gets the clamped entry distances. */
+OPSILA_INLINE intW node_hits(const RayPre *r, __global const BankNode *nd, float tmin, float tmax, float slack,
+                             floatW *enter) {
   floatW lo, hi;
   node_spans(r, nd, &lo, &hi);
   lo = fmax(lo, (floatW)(tmin));
   hi = fmin(hi, (floatW)(tmax));
-  hi = hi + fabs(hi) * (4.0f * OPSILA_TIE_TOLERANCE) + 1e-30f;
+  hi = hi + fabs(hi) * (4.0f * OPSILA_TIE_TOLERANCE) + slack;
   *enter = lo;
   return (lo <= hi) & (vloadW(0, nd->count) >= (intW)(0));
 }
 
-/* Nearest hit below `root` (a bank, one cluster of it, or a whole scene). */
+/* Nearest hit below `root` (a bank, one cluster of it, or a whole scene);
+ * slack: FrameParams.box_slack (node_hits). */
 OPSILA_INLINE void traverse_nearest(const RayPre *r, __global const BankNode *nodes,
-                                    __global const BankTriangle *tris, int root, float tmin, float *best_t,
+                                    __global const BankTriangle *tris, int root, float tmin, float slack, float *best_t,
                                     int *best_tri, int *best_facet, uint *tri_tests, uint *box_tests,
                                     const CostProbe *probe) {
   int s_child[OPSILA_BVH_STACK], s_count[OPSILA_BVH_STACK];
@@ -119,7 +128,7 @@ OPSILA_INLINE void traverse_nearest(const RayPre *r, __global const BankNode *no
   while (sp > 0) {
     --sp;
     float limit = tie_limit(*best_t);
-    if (s_t[sp] > limit + fabs(limit) * (4.0f * OPSILA_TIE_TOLERANCE) + 1e-30f) continue;
+    if (s_t[sp] > limit + fabs(limit) * (4.0f * OPSILA_TIE_TOLERANCE) + slack) continue;
     int child = s_child[sp], count = s_count[sp];
     if (count > 0) {
       for (int i = child; i < child + count; ++i) {
@@ -136,7 +145,7 @@ OPSILA_INLINE void traverse_nearest(const RayPre *r, __global const BankNode *no
     }
     __global const BankNode *nd = &nodes[child];
     floatW enter;
-    intW hit = node_hits(r, nd, tmin, limit, &enter);
+    intW hit = node_hits(r, nd, tmin, limit, slack, &enter);
     float te[OPSILA_BVH_WIDTH];
     int hm[OPSILA_BVH_WIDTH];
     vstoreW(enter, 0, te);
@@ -166,7 +175,7 @@ OPSILA_INLINE void traverse_nearest(const RayPre *r, __global const BankNode *no
 
 /* Any hit in (tmin, tmax): shadow rays. */
 OPSILA_INLINE bool traverse_any(const RayPre *r, __global const BankNode *nodes, __global const BankTriangle *tris,
-                                int root, float tmin, float tmax, uint *tri_tests, uint *box_tests,
+                                int root, float tmin, float tmax, float slack, uint *tri_tests, uint *box_tests,
                                 const CostProbe *probe) {
   int stack[OPSILA_BVH_STACK];
   int sp = 1;
@@ -174,7 +183,7 @@ OPSILA_INLINE bool traverse_any(const RayPre *r, __global const BankNode *nodes,
   while (sp > 0) {
     __global const BankNode *nd = &nodes[stack[--sp]];
     floatW enter;
-    intW hit = node_hits(r, nd, tmin, tmax, &enter);
+    intW hit = node_hits(r, nd, tmin, tmax, slack, &enter);
     int hm[OPSILA_BVH_WIDTH];
     vstoreW(hit, 0, hm);
     for (int k = 0; k < OPSILA_BVH_WIDTH; ++k) {

@@ -57,6 +57,14 @@ struct ScatterPoint {
 ScatterPoint measure_scatter(ClRuntime& runtime, std::size_t length, int pes, int warmup, int repeats,
                              double hole_rate = 0.0);
 
+// Device memory one point needs: its largest buffer and all its buffers at
+// once (the paper's primitive, whose destination holds the banks and the
+// waiting pool, is the largest part).
+struct ScatterFootprint {
+  std::size_t largest = 0, total = 0;
+};
+ScatterFootprint scatter_footprint(std::size_t length, int pes);
+
 // ------------------------------------------------------ baseline renderers
 
 // A baseline's image and rays, with its timings.

@@ -215,17 +215,39 @@ void measure_copy_ceiling(ClRuntime& rt, int warmup, ScatterPoint& pt) {
 
 }  // namespace
 
+namespace {
+
+// Bank slots roomy enough that uniform destinations almost never overflow.
+constexpr int kBenchGroupSize = 16;  // the SPMD work-group size on a CPU
+int bank_share(std::size_t length, int pes) {
+  const std::size_t per_pe = (length + pes - 1) / pes;
+  return static_cast<int>(per_pe + per_pe / 10 + 16);
+}
+std::size_t bank_slots_of(std::size_t length, int pes) {
+  return std::size_t(pes) * bank_share(length, pes) + std::size_t(pes) * kBenchGroupSize;
+}
+
+}  // namespace
+
+ScatterFootprint scatter_footprint(std::size_t length, int pes) {
+  const std::size_t dest = bank_slots_of(length, pes) + length;
+  ScatterFootprint f;
+  f.largest = dest * DescriptorSet::kBytes;
+  // Records and destination streams (68 bytes) and the six vectors (56) of
+  // source and destination, and the index.
+  f.total = (length + dest) * (DescriptorSet::kBytes + sizeof(cl_int) + 56) + length * sizeof(cl_int);
+  return f;
+}
+
 ScatterPoint measure_scatter(ClRuntime& rt, std::size_t length, int pes, int warmup, int repeats,
                              double hole_rate) {
   ScatterPoint pt;
   pt.length = length;
   pt.pes = pes;
   pt.repeats = std::max(1, repeats);
-  // Bank slots roomy enough that uniform destinations almost never overflow.
-  const std::size_t per_pe = (length + pes - 1) / pes;
-  pt.n = static_cast<int>(per_pe + per_pe / 10 + 16);
-  const int slots = pes * pt.n, group_size = 16;  // the SPMD work-group size on a CPU
-  const std::size_t bank_slots = std::size_t(slots) + std::size_t(pes) * group_size;
+  pt.n = bank_share(length, pes);
+  const int slots = pes * pt.n, group_size = kBenchGroupSize;
+  const std::size_t bank_slots = bank_slots_of(length, pes);
 
   const HostDescriptors src = random_descriptors(length, pes, hole_rate, 1987u + static_cast<unsigned>(length));
   const HostScatterResult host_result =

@@ -169,6 +169,17 @@ void measure_scatter_curve(BenchReport& report, ClRuntime& rt, const BenchProgre
   progress("scatter curve: %zu lengths, 16 .. %s, %d PEs", lengths.size(), length_label(lengths.back()).c_str(),
            report.scatter_pes);
   for (std::size_t len : lengths) {
+    // The curve stops where the device cannot hold a point (2^24 needs a
+    // 2.2 GB buffer, more than PoCL allows on a 24 GB machine).
+    const ScatterFootprint need = scatter_footprint(len, report.scatter_pes);
+    if (need.largest > rt.max_alloc() || need.total > rt.global_mem()) {
+      report.scatter_limit = "the curve stops at " + length_label(report.curve.empty() ? 0 : report.curve.back().length) +
+                             ": " + length_label(len) + " needs a buffer of " + format_size(need.largest) + " and " +
+                             format_size(need.total) + " in all, the device allows " + format_size(rt.max_alloc()) +
+                             " and " + format_size(rt.global_mem());
+      progress("scatter: %s", report.scatter_limit.c_str());
+      break;
+    }
     // Short vectors are cheap and noisy: more repeats there; the longest
     // take seconds each: fewer.
     const int reps = len >= (std::size_t(1) << 22) ? std::min(repeats, 3)
@@ -181,7 +192,8 @@ void measure_scatter_curve(BenchReport& report, ClRuntime& rt, const BenchProgre
   // The same scatter at one length over several PE counts: how the number
   // of destination streams (PEs x 5 descriptor fields) costs bandwidth.
   if (!report.quick) {
-    const std::size_t len = std::min<std::size_t>(std::size_t(1) << 20, std::size_t(1) << scatter_max);
+    const std::size_t longest = report.curve.empty() ? 16 : report.curve.back().length;
+    const std::size_t len = std::min<std::size_t>({std::size_t(1) << 20, std::size_t(1) << scatter_max, longest});
     progress("scatter %s over 1 .. 256 PEs", length_label(len).c_str());
     for (int pes : {1, 4, 16, 64, 256})
       report.by_pes.push_back(measure_scatter(rt, len, pes, std::max(warmup, 1), std::min(repeats, 3)));

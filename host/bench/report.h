@@ -103,6 +103,7 @@ struct BenchReport {
   // 3. the scatter curve, and one length over several PE counts.
   int scatter_pes = 0;
   std::vector<ScatterPoint> curve, by_pes;
+  std::string scatter_limit;  // why the curve stopped short of --scatter-max, if it did
 
   // ---- derived by analyse()
   struct KernelTime {

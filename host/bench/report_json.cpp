@@ -372,6 +372,7 @@ nlohmann::json bench_json(const BenchReport& r) {
   if (r.ranks > 1) j["mpi"] = mpi_json(r);
   // With several ranks the scatter curve is not measured (a single-device figure).
   j["scatter"] = scatter_json(r.curve);
+  j["scatter_limit"] = r.scatter_limit.empty() ? json(nullptr) : json(r.scatter_limit);
   j["scatter_by_pes"] = scatter_by_pes_json(r.by_pes);
   // The copy ceiling: the longest vector's copy bandwidth (the asymptote).
   j["copy_gbytes_per_s"] = r.curve.empty() ? json(nullptr) : json(r.curve.back().copy_kernel_gbytes_per_s());

@@ -182,6 +182,7 @@ void scatter_text(std::string& out, const BenchReport& r) {
             p.copy_kernel_gbytes_per_s(), p.copy_buffer_gbytes_per_s(), percent_of_copy(p),
             p.six_vectors_gbytes_per_s(), p.one_record_gbytes_per_s());
   appendf(out, "  (6vec / rec: the paper's scatter alone, I' given, on its six vectors / on one 64-byte record)\n");
+  if (!r.scatter_limit.empty()) appendf(out, "  (%s)\n", r.scatter_limit.c_str());
   if (!r.by_pes.empty()) {
     appendf(out, "  %s descriptors over PE counts (destination streams = PEs, one 64-byte record each):\n",
             length_label(r.by_pes.front().length).c_str());

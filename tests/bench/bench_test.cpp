@@ -181,6 +181,25 @@ TEST(Bench, CommandLineErrorIsOneLineExitTwo) {
   EXPECT_NE(r.error_lines()[0].find("opsila: error: --repeats"), std::string::npos) << r.err;
 }
 
+// The scatter curve stops at the longest vector the device can hold and
+// says why, instead of failing the whole bench (a 2^24 point needs a 2.2 GB
+// buffer, more than PoCL allows on a 24 GB machine).
+TEST(Bench, TheScatterCurveStopsWhereTheDeviceIsFull) {
+  test::TempDir dir;
+  const std::string json_path = dir.file("bench.json");
+  const test::RunResult r = test::run_program(
+      OPSILA_BINARY,
+      {"bench", std::string(OPSILA_SOURCE_DIR) + "/scenes/whitted.json", "--size", "16x12", "--depth", "2", "--pes",
+       "4", "--balance", "facets", "--repeats", "1", "--scatter-max", "22", "--json", json_path},
+      {{"OPSILA_DEVICE_MEMORY_LIMIT", std::to_string(200u << 20)}});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("the curve stops at 2^19: 2^20 needs a buffer of"), std::string::npos) << r.out;
+  const nlohmann::json j = nlohmann::json::parse(test::read_file(json_path));
+  EXPECT_EQ(j["scatter"].back()["length"], 1 << 19);
+  EXPECT_TRUE(j["scatter_limit"].is_string());
+  EXPECT_EQ(j["scatter_by_pes"].front()["length"], 1 << 19);
+}
+
 TEST(Bench, QuickRunWritesEveryJsonKey) {
   test::TempDir dir;
   const std::string json_path = dir.file("bench.json"), csv = dir.file("csv");

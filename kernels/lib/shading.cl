@@ -67,7 +67,11 @@ inline float3 light_term(__global const Material *m, __global const Light *light
   if (!(ndl > 0.0f)) return (float3)(0.0f);
   float3 rl = 2.0f * ndl * sp.n - *lv;
   float spec = fmax(0.0f, dot(rl, -d));
-  float3 term = sp.kd * ndl + load3g(m->ks) * pow(spec, m->ns);
+  /* pow (a log and an exp) only where Ks is not zero: spec^Ns is finite
+   * (spec in [0, 1]), so the term is exactly zero without it. */
+  float3 ks = load3g(m->ks);
+  float3 term = sp.kd * ndl;
+  if (any(ks != (float3)(0.0f))) term = term + ks * pow(spec, m->ns);
   return weight * load3g(light->intensity) * term;
 }
 

@@ -86,9 +86,33 @@ class Builder {
 
   // Best binned-SAH plane over the three axes; the median of the longest
   // centroid axis when SAH finds none (equal centres) or the tree is deep.
+  // One pass bins every item on all three axes (each box is read once, and
+  // a bin is a multiply, not a divide: this is most of a scene's build);
+  // a node of n < 16 items gets n bins (most nodes are small, and a bin per
+  // item already separates every centre the planes can).
+  static constexpr int kBins = 16;
+  struct Bin {
+    float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    double w = 0;
+    void grow(const Box& b) {
+      for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], b.lo[a]), hi[a] = std::max(hi[a], b.hi[a]);
+    }
+    void grow(const Bin& b) {
+      for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], b.lo[a]), hi[a] = std::max(hi[a], b.hi[a]);
+      w += b.w;
+    }
+    float area() const {
+      if (!(lo[0] <= hi[0])) return 0.0f;
+      float x = hi[0] - lo[0], y = hi[1] - lo[1], z = hi[2] - lo[2];
+      return 2 * (x * y + y * z + z * x);
+    }
+  };
+  static int bin_of(float c, float lo, float scale, int bins) {
+    return std::clamp(static_cast<int>((c - lo) * scale), 0, bins - 1);
+  }
+
   int split(std::vector<int>& order, int begin, int end, const std::vector<Box>& boxes,
             const std::vector<float>& weight, int depth) {
-    constexpr int kBins = 16;
     Box cbox;
     for (int i = begin; i < end; ++i) {
       float c[3] = {center(boxes[order[i]], 0), center(boxes[order[i]], 1), center(boxes[order[i]], 2)};
@@ -96,39 +120,40 @@ class Builder {
     }
     float best_cost = INFINITY;
     int best_axis = -1, best_bin = -1;
-    for (int axis = 0; axis < 3 && depth < kSahDepth; ++axis) {
-      float lo = cbox.lo[axis], ext = cbox.extent(axis);
-      if (!(ext > 0)) continue;
-      Box bins[kBins];
-      double w[kBins] = {0};
+    const int nb = std::clamp(end - begin, 2, kBins);
+    float scale[3];
+    for (int axis = 0; axis < 3; ++axis) {
+      const float ext = cbox.extent(axis);
+      scale[axis] = ext > 0 ? nb / ext : 0.0f;
+    }
+    if (depth < kSahDepth) {
+      Bin bins[3][kBins];
       for (int i = begin; i < end; ++i) {
-        int b = std::clamp(static_cast<int>(kBins * (center(boxes[order[i]], axis) - lo) / ext), 0, kBins - 1);
-        bins[b].grow(boxes[order[i]]);
-        w[b] += weight[order[i]];
+        const Box& b = boxes[order[i]];
+        const double w = weight[order[i]];
+        for (int axis = 0; axis < 3; ++axis) {
+          Bin& slot = bins[axis][bin_of(center(b, axis), cbox.lo[axis], scale[axis], nb)];
+          slot.grow(b);
+          slot.w += w;
+        }
       }
-      Box right[kBins];
-      double wr[kBins] = {0};
-      for (int b = kBins - 1; b > 0; --b) {
-        right[b] = bins[b];
-        wr[b] = w[b];
-        if (b + 1 < kBins) right[b].grow(right[b + 1]), wr[b] += wr[b + 1];
-      }
-      Box left;
-      double wl = 0;
-      for (int s = 1; s < kBins; ++s) {
-        left.grow(bins[s - 1]);
-        wl += w[s - 1];
-        if (wl == 0 || wr[s] == 0) continue;
-        float cost = static_cast<float>(left.area() * wl + right[s].area() * wr[s]);
-        if (cost < best_cost) best_cost = cost, best_axis = axis, best_bin = s;
+      for (int axis = 0; axis < 3; ++axis) {
+        if (!(cbox.extent(axis) > 0)) continue;
+        Bin right[kBins];
+        right[nb - 1] = bins[axis][nb - 1];
+        for (int k = nb - 2; k > 0; --k) right[k] = bins[axis][k], right[k].grow(right[k + 1]);
+        Bin left;
+        for (int s = 1; s < nb; ++s) {
+          left.grow(bins[axis][s - 1]);
+          if (left.w == 0 || right[s].w == 0) continue;
+          float cost = static_cast<float>(left.area() * left.w + right[s].area() * right[s].w);
+          if (cost < best_cost) best_cost = cost, best_axis = axis, best_bin = s;
+        }
       }
     }
     if (best_axis >= 0) {
-      float lo = cbox.lo[best_axis], ext = cbox.extent(best_axis);
-      auto side = [&](int id) {
-        return std::clamp(static_cast<int>(kBins * (center(boxes[id], best_axis) - lo) / ext), 0, kBins - 1) <
-               best_bin;
-      };
+      const float lo = cbox.lo[best_axis], sc = scale[best_axis];
+      auto side = [&](int id) { return bin_of(center(boxes[id], best_axis), lo, sc, nb) < best_bin; };
       // Stable, so the layout does not depend on the sort implementation.
       auto mid = std::stable_partition(order.begin() + begin, order.begin() + end, side);
       int m = static_cast<int>(mid - order.begin());

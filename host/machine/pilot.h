@@ -31,7 +31,8 @@ constexpr int kPilotFrames = 5;
 
 // The work measured by the pilot frames for `settings` (its PE count,
 // routing and work-groups; one sample per pixel); *frames and *seconds get
-// how many ran and how long they took.
+// how many ran and how long they took. The pilots' view is a copy of the
+// scene (host memory for a second copy of its facets while they run).
 MeasuredWork pilot_work(const Scene& scene, const RenderSettings& settings, ClRuntime& runtime, int* frames,
                         double* seconds);
 

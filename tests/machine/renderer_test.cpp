@@ -113,6 +113,19 @@ TEST(Renderer, RoutingOnBoxesOrSpheresGivesTheSameImage) {
 
 double occupancy(const RenderStats& st) { return test_occupancy(st); }
 
+// A rebalanced partition (`other`) against equal banks: the same image and
+// item buffer bit for bit, no ray lost, every facet still in exactly one bank.
+void expect_same_image_other_banks(const RenderResult& facets, const RenderResult& other, int pes) {
+  ASSERT_EQ(facets.rgb.size(), other.rgb.size());
+  EXPECT_EQ(0, std::memcmp(facets.rgb.data(), other.rgb.data(), other.rgb.size() * sizeof(float))) << pes << " PEs";
+  EXPECT_EQ(facets.item_buffer, other.item_buffer) << pes << " PEs";
+  expect_balanced(other.stats);
+  std::uint64_t facet_bytes = 0, other_bytes = 0;
+  for (std::uint64_t b : facets.stats.bank_bytes) facet_bytes += b;
+  for (std::uint64_t b : other.stats.bank_bytes) other_bytes += b;
+  EXPECT_NEAR(double(other_bytes), double(facet_bytes), 0.05 * double(facet_bytes)) << "facets duplicated or lost";
+}
+
 // A partition that shares the frame's sampled rays (--balance work) moves
 // facets between banks, never a pixel; on a scene whose work gathers under
 // the camera it spreads the tests more evenly than equal banks do.
@@ -128,17 +141,9 @@ TEST(Renderer, BalancingByWorkGivesTheSameImageAndEvenerPes) {
     const RenderResult facets = render(s, rs, runtime());
     rs.ray_sample = &sample;
     const RenderResult work = render(s, rs, runtime());
-    ASSERT_EQ(facets.rgb.size(), work.rgb.size());
-    EXPECT_EQ(0, std::memcmp(facets.rgb.data(), work.rgb.data(), work.rgb.size() * sizeof(float))) << pes;
-    EXPECT_EQ(facets.item_buffer, work.item_buffer) << pes << " PEs";
-    expect_balanced(work.stats);
+    expect_same_image_other_banks(facets, work, pes);
     EXPECT_EQ(work.stats.balance, Balance::work);
     EXPECT_GT(occupancy(work.stats), occupancy(facets.stats) + 0.05) << pes << " PEs";
-    // Every facet still lives in exactly one bank.
-    std::uint64_t facet_bytes = 0, work_bytes = 0;
-    for (std::uint64_t b : facets.stats.bank_bytes) facet_bytes += b;
-    for (std::uint64_t b : work.stats.bank_bytes) work_bytes += b;
-    EXPECT_NEAR(double(work_bytes), double(facet_bytes), 0.05 * double(facet_bytes)) << "facets duplicated or lost";
   }
 }
 
@@ -157,19 +162,12 @@ TEST(Renderer, BalancingByMeasuredWorkGivesTheSameImageAndEvenerPes) {
     rs.balance = Balance::measured;
     const RenderResult measured = render(s, rs, runtime());
     const RenderResult again = render(s, rs, runtime());
-    ASSERT_EQ(facets.rgb.size(), measured.rgb.size());
-    EXPECT_EQ(0, std::memcmp(facets.rgb.data(), measured.rgb.data(), measured.rgb.size() * sizeof(float))) << pes;
-    EXPECT_EQ(facets.item_buffer, measured.item_buffer) << pes << " PEs";
-    expect_balanced(measured.stats);
+    expect_same_image_other_banks(facets, measured, pes);
     EXPECT_EQ(measured.stats.balance, Balance::measured);
     EXPECT_EQ(measured.stats.pilot_frames, kPilotFrames);
     EXPECT_GT(occupancy(measured.stats), occupancy(facets.stats) + 0.1) << pes << " PEs";
     EXPECT_EQ(measured.stats.bank_bytes, again.stats.bank_bytes) << "the pilots chose another partition";
     EXPECT_EQ(measured.stats.counters, again.stats.counters);
-    std::uint64_t facet_bytes = 0, measured_bytes = 0;
-    for (std::uint64_t b : facets.stats.bank_bytes) facet_bytes += b;
-    for (std::uint64_t b : measured.stats.bank_bytes) measured_bytes += b;
-    EXPECT_NEAR(double(measured_bytes), double(facet_bytes), 0.05 * double(facet_bytes)) << "facets duplicated or lost";
   }
 }
 

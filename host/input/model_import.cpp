@@ -12,7 +12,6 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
-#include <fstream>
 #include <limits>
 #include <mutex>
 #include <new>
@@ -22,6 +21,8 @@
 #include <vector>
 
 #include "core/util.h"
+#include "input/model_checks.h"
+#include "input/model_files.h"
 #include "input/obj_loader.h"
 #include "input/texture_file.h"
 
@@ -37,21 +38,6 @@
 namespace opsila {
 
 namespace fs = std::filesystem;
-
-namespace {
-
-// The usual file checks (exists, regular, size) with the usual messages.
-void check_model_file(const std::string& path) {
-  std::error_code ec;
-  const fs::file_status st = fs::status(path, ec);
-  if (ec || !fs::exists(st)) throw InputError(path + ": cannot open: " + (ec ? ec.message() : "no such file"));
-  if (fs::is_directory(st)) throw InputError(path + ": is a directory, not a file");
-  if (!fs::is_regular_file(st)) throw InputError(path + ": is not a regular file");
-  if (fs::file_size(path, ec) > kMaxInputFileBytes)
-    throw InputError(path + ": file too large (the limit is " + std::to_string(kMaxInputFileBytes) + " bytes)");
-}
-
-}  // namespace
 
 #ifdef OPSILA_HAVE_ASSIMP
 namespace {
@@ -71,14 +57,30 @@ Vec3 colour_or(const aiMaterial& m, const char* key, unsigned type, unsigned ind
 bool nonzero(const Vec3& c) { return c[0] != 0 || c[1] != 0 || c[2] != 0; }
 
 // Every placement of every mesh: the product of the node transforms from the
-// root down to each node that lists the mesh, in depth-first order.
-void collect_placements(const aiNode* node, const aiMatrix4x4& parent, unsigned num_meshes,
-                        std::vector<std::vector<aiMatrix4x4>>& out, int depth) {
-  if (!node || depth > 256) return;
-  const aiMatrix4x4 world = parent * node->mTransformation;
-  for (unsigned k = 0; k < node->mNumMeshes; ++k)
-    if (node->mMeshes[k] < num_meshes) out[node->mMeshes[k]].push_back(world);
-  for (unsigned c = 0; c < node->mNumChildren; ++c) collect_placements(node->mChildren[c], world, num_meshes, out, depth + 1);
+// root down to each node that lists the mesh, in depth-first order. Without
+// recursion; a hierarchy deeper than kMaxNodeDepth is refused (the glTF
+// checks refuse one before the importer builds it). The importer may add
+// one root above the file's own.
+void collect_placements(const aiNode* root, unsigned num_meshes, std::vector<std::vector<aiMatrix4x4>>& out,
+                        const std::string& name) {
+  struct Pending {
+    const aiNode* node;
+    aiMatrix4x4 parent;
+    int depth;
+  };
+  std::vector<Pending> stack{{root, aiMatrix4x4(), 0}};
+  while (!stack.empty()) {
+    const Pending at = stack.back();
+    stack.pop_back();
+    if (!at.node) continue;
+    if (at.depth > kMaxNodeDepth + 1)
+      throw InputError(name + ": node hierarchy more than " + std::to_string(kMaxNodeDepth) +
+                       " levels deep (the limit)");
+    const aiMatrix4x4 world = at.parent * at.node->mTransformation;
+    for (unsigned k = 0; k < at.node->mNumMeshes; ++k)
+      if (at.node->mMeshes[k] < num_meshes) out[at.node->mMeshes[k]].push_back(world);
+    for (unsigned c = at.node->mNumChildren; c-- > 0;) stack.push_back({at.node->mChildren[c], world, at.depth + 1});
+  }
 }
 
 class ModelReader {
@@ -92,7 +94,7 @@ class ModelReader {
     scene_.materials.push_back(MaterialDesc::default_material());
     materials();
     std::vector<std::vector<aiMatrix4x4>> placements(ai_.mNumMeshes);
-    collect_placements(ai_.mRootNode, aiMatrix4x4(), ai_.mNumMeshes, placements, 0);
+    collect_placements(ai_.mRootNode, ai_.mNumMeshes, placements, name_);
     int unplaced = 0, facet = 0, skipped = 0;
     for (unsigned m = 0; m < ai_.mNumMeshes; ++m) {
       const aiMesh* mesh = ai_.mMeshes[m];
@@ -286,45 +288,6 @@ class ModelReader {
   long long degenerate_ = 0;
 };
 
-// The importer's PLY reader does not stop on a header that never ends (found
-// by fuzz_model): such a file is refused before it gets there. Like the OFF
-// reader it also allocates what the element counts ask for before reading
-// one: every element takes at least a byte per property (binary or text), so
-// counts the file cannot hold are refused too.
-void check_ply_header(const std::string& head, std::size_t file_bytes, const std::string& name) {
-  if (head.compare(0, 3, "ply") != 0) return;
-  const std::size_t end = head.find("end_header");
-  if (end == std::string::npos)
-    throw InputError(name + ": PLY header without 'end_header' (truncated or not PLY)");
-  std::istringstream lines(head.substr(0, end));
-  std::string line, element;
-  unsigned long long count = 0, properties = 0;
-  auto judge = [&] {
-    if (element.empty()) return;
-    const unsigned long long per = std::max(1ull, properties);
-    if (count > file_bytes / per)
-      throw InputError(name + ": PLY header asks for " + std::to_string(count) + " '" + element +
-                       "' elements, more than a file of " + std::to_string(file_bytes) + " bytes can hold");
-  };
-  while (std::getline(lines, line)) {
-    std::istringstream words(line);
-    std::string keyword;
-    words >> keyword;
-    if (keyword == "element") {
-      judge();
-      std::string text;
-      words >> element >> text;
-      count = 0;
-      properties = 0;
-      if (!text.empty() && text.find_first_not_of("0123456789") == std::string::npos)  // else the importer judges
-        count = text.size() <= 19 ? std::stoull(text) : std::numeric_limits<unsigned long long>::max();
-    } else if (keyword == "property") {
-      ++properties;
-    }
-  }
-  judge();
-}
-
 // The importer's readers are not ours and some loop forever on malformed
 // files (Debian's PLY reader on some headers). A read that outlives its
 // budget ends the run with one error line instead of a hang; nothing has been
@@ -370,41 +333,6 @@ class ImportWatchdog {
   std::thread thread_;
 };
 
-// The importer's OFF reader allocates what the header's counts ask for before
-// it reads a vertex (found by fuzz_model: tens of GB from a 100-byte file).
-// A vertex or face takes at least two bytes of text, so counts beyond the
-// file's size are refused here; everything else is left to the importer's
-// own checks.
-void check_off_header(const std::string& text, std::size_t file_bytes, const std::string& name) {
-  std::vector<std::string> tokens;
-  std::size_t i = 0;
-  while (i < text.size() && tokens.size() < 3) {
-    while (i < text.size() && std::isspace(static_cast<unsigned char>(text[i]))) ++i;
-    if (i < text.size() && text[i] == '#') {  // a comment runs to the end of its line
-      while (i < text.size() && text[i] != '\n') ++i;
-      continue;
-    }
-    const std::size_t start = i;
-    while (i < text.size() && !std::isspace(static_cast<unsigned char>(text[i]))) ++i;
-    if (i > start) tokens.push_back(text.substr(start, i - start));
-  }
-  // The counts are the first two runs of digits (the importer also reads
-  // them when they follow the OFF keyword in the same token, or precede
-  // other bytes); each must fit the file.
-  int judged = 0;
-  for (const std::string& token : tokens) {
-    const std::size_t from = token.find_first_of("0123456789");
-    if (from == std::string::npos) continue;
-    const std::size_t to = std::min(token.find_first_not_of("0123456789", from), token.size());
-    const std::string t = token.substr(from, to - from);
-    const char* what = judged == 0 ? "vertices" : "faces";
-    if (t.size() > 15 || std::stoull(t) > file_bytes / 2)
-      throw InputError(name + ": OFF header asks for " + (t.size() > 15 ? t.substr(0, 15) + "..." : t) + " " +
-                       what + ", more than a file of " + std::to_string(file_bytes) + " bytes can hold");
-    if (++judged == 2) return;
-  }
-}
-
 // The extension without its dot, in lower case.
 std::string bare_extension(const std::string& ext) {
   std::string e = lower(ext);
@@ -435,24 +363,17 @@ void keep_readers_for(Assimp::Importer& importer, const std::string& ext) {
     if (importer.UnregisterLoader(reader) == aiReturn_SUCCESS) delete reader;
 }
 
-// The header checks of the reader the extension names (the only one left to
-// read the file, see keep_readers_for).
-void check_headers(const std::string& head, std::size_t file_bytes, const std::string& ext,
-                   const std::string& name) {
-  const std::string e = bare_extension(ext);
-  if (e == "ply") check_ply_header(head, file_bytes, name);
-  if (e == "off") check_off_header(head, file_bytes, name);
-}
-
 // aiProcess_ValidateDataStructure refuses inconsistent data (indices out of
 // range, ...) instead of handing it on.
 constexpr unsigned kImportFlags = aiProcess_ValidateDataStructure;
 
-Scene convert(Assimp::Importer& importer, const aiScene* ai, const std::string& name, const std::string& base_dir) {
+Scene convert(Assimp::Importer& importer, const aiScene* ai, const std::string& name, const std::string& base_dir,
+              const ModelFiles& files) {
   if (!ai) {
     std::string why = importer.GetErrorString();
     std::replace(why.begin(), why.end(), '\n', ' ');
-    throw InputError(name + ": " + (why.empty() ? std::string("cannot read the model") : why));
+    if (why.empty()) why = "cannot read the model";
+    throw InputError(name + ": " + why + (files.refusal().empty() ? "" : " (" + files.refusal() + ")"));
   }
   if (!ai->mRootNode || ai->mNumMeshes == 0 || (ai->mFlags & AI_SCENE_FLAGS_INCOMPLETE))
     throw InputError(name + ": no facets (the model has no meshes)");
@@ -465,6 +386,37 @@ Scene convert(Assimp::Importer& importer, const aiScene* ai, const std::string& 
   }
 }
 
+// The stack of the import thread: the importer's readers, its validation
+// and its scene's destructor recurse once per node level (kMaxNodeDepth at
+// most from glTF; other formats are not checked before the importer builds
+// them) and once per level of JSON or XML nesting. Reserved, not touched,
+// until used.
+constexpr std::size_t kImportStackBytes = std::size_t(256) << 20;
+
+// The file's shape checks, then the importer, through `files` (which
+// records every file read as an input of the scene), on a thread with a
+// large stack.
+Scene import_model(ModelFiles& files, const std::string& path, const std::string& base_dir, bool watched) {
+  Scene scene;
+  run_with_stack(kImportStackBytes, [&] {
+    const std::string ext = fs::path(path).extension().string();
+    check_model_file_shape(files, path, ext);
+    Assimp::Importer importer;
+    importer.SetIOHandler(files.io_system());  // the importer owns it
+    keep_readers_for(importer, ext);
+    const aiScene* ai = nullptr;
+    if (watched) {
+      const ImportWatchdog watchdog(path, files.size(path));
+      ai = importer.ReadFile(path, kImportFlags);
+    } else {
+      ai = importer.ReadFile(path, kImportFlags);
+    }
+    scene = convert(importer, ai, path, base_dir, files);
+  });
+  scene.input_files.insert(scene.input_files.begin(), files.files().begin(), files.files().end());
+  return scene;
+}
+
 }  // namespace
 
 bool is_imported_model(const std::string& path) {
@@ -475,36 +427,19 @@ bool is_imported_model(const std::string& path) {
 }
 
 Scene load_model(const std::string& path) {
-  check_model_file(path);
-  {
-    // The headers are text at the start; 64 KiB is far more than any needs.
-    std::ifstream in(path, std::ios::binary);
-    std::string head(64 * 1024, '\0');
-    in.read(head.data(), static_cast<std::streamsize>(head.size()));
-    head.resize(static_cast<std::size_t>(in.gcount()));
-    std::error_code ec;
-    check_headers(head, static_cast<std::size_t>(fs::file_size(path, ec)), fs::path(path).extension().string(), path);
-  }
-  // The importer reads the file (and the files it names) itself.
-  Assimp::Importer importer;
-  keep_readers_for(importer, fs::path(path).extension().string());
-  const aiScene* ai = nullptr;
-  {
-    std::error_code ec;
-    const ImportWatchdog watchdog(path, fs::file_size(path, ec));
-    ai = importer.ReadFile(path, kImportFlags);
-  }
+  ModelFiles files;
+  files.size(path);  // the usual messages for a missing, special or huge file
   std::string dir = fs::path(path).parent_path().string();
   if (dir.empty()) dir = ".";
-  return convert(importer, ai, path, dir);
+  return import_model(files, path, dir, true);
 }
 
-Scene load_model_from_memory(const std::string& bytes, const std::string& name, const std::string& hint) {
-  check_headers(bytes.substr(0, 64 * 1024), bytes.size(), hint, name);
-  Assimp::Importer importer;
-  keep_readers_for(importer, hint);
-  const aiScene* ai = importer.ReadFileFromMemory(bytes.data(), bytes.size(), kImportFlags, hint.c_str());
-  return convert(importer, ai, name, "");
+Scene load_model_from_memory(const std::string& bytes, const std::string& name, const std::string& hint,
+                             const std::string& other) {
+  // The importer picks its reader by the name's extension.
+  const std::string path = bare_extension(fs::path(name).extension().string()) == lower(hint) ? name : name + "." + hint;
+  ModelFiles files(path, bytes, other);
+  return import_model(files, path, "", false);
 }
 
 #else  // built without the Open Asset Import Library
@@ -518,11 +453,11 @@ bool is_imported_model(const std::string& path) {
 }
 
 Scene load_model(const std::string& path) {
-  check_model_file(path);
+  ModelFiles().size(path);  // the usual messages for a missing, special or huge file
   throw InputError(path + ": this build has no Open Asset Import Library (install libassimp-dev and rebuild)");
 }
 
-Scene load_model_from_memory(const std::string&, const std::string& name, const std::string&) {
+Scene load_model_from_memory(const std::string&, const std::string& name, const std::string&, const std::string&) {
   throw InputError(name + ": this build has no Open Asset Import Library");
 }
 

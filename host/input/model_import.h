@@ -21,8 +21,10 @@ bool is_imported_model(const std::string& path);
 Scene load_model(const std::string& path);
 
 // The same from bytes in memory; `hint` is the format's extension (for
-// example "ply"). Reads no other file (external buffers and textures are
-// refused or ignored), which is what fuzzing wants.
-Scene load_model_from_memory(const std::string& bytes, const std::string& name, const std::string& hint);
+// example "ply"). Reads nothing from disk: any other file the importer asks
+// for (a glTF's external buffer) holds `other`, absent when it is empty;
+// texture maps named by path are ignored. This is what fuzzing wants.
+Scene load_model_from_memory(const std::string& bytes, const std::string& name, const std::string& hint,
+                             const std::string& other = "");
 
 }  // namespace opsila

@@ -92,6 +92,8 @@ std::string resolve_texture_path(const std::string& written, const std::string& 
 int add_texture_file(Scene& scene, const std::string& path, const std::string& where) {
   for (std::size_t i = 0; i < scene.textures.size(); ++i)
     if (scene.textures[i].path == path) return static_cast<int>(i);
+  // An input, whether or not it decodes: no output may overwrite it.
+  scene.input_files.push_back(path);
   Texture t;
   std::string problem;
   if (!decode_texture_file(path, t, problem)) {
@@ -99,7 +101,6 @@ int add_texture_file(Scene& scene, const std::string& path, const std::string& w
     return -1;
   }
   scene.textures.push_back(std::move(t));
-  scene.input_files.push_back(path);  // no output may overwrite it
   return static_cast<int>(scene.textures.size()) - 1;
 }
 

@@ -30,7 +30,8 @@ std::string resolve_texture_path(const std::string& written, const std::string& 
 
 // Texture maps a scene already holds are shared: loads `path` once and
 // returns its index in scene.textures, or -1 (with one warning naming
-// `where`) when the image cannot be read.
+// `where`) when the image cannot be read. Either way the file is one of
+// scene.input_files (no output may overwrite it).
 int add_texture_file(Scene& scene, const std::string& path, const std::string& where);
 
 }  // namespace opsila

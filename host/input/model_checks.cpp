@@ -1,0 +1,246 @@
+// PLY, OFF and STL checks (glTF's are in gltf_checks.cpp).
+#include "input/model_checks.h"
+
+#include <algorithm>
+#include <cctype>
+#include <cstdint>
+#include <limits>
+#include <sstream>
+#include <string_view>
+#include <vector>
+
+#include "core/util.h"
+#include "input/obj_loader.h"
+
+namespace opsila {
+
+namespace {
+
+// The next whitespace-separated word of `text` from `at` (false at the end).
+bool next_word(std::string_view text, std::size_t& at, std::string_view& out) {
+  while (at < text.size() && std::isspace(static_cast<unsigned char>(text[at]))) ++at;
+  const std::size_t start = at;
+  while (at < text.size() && !std::isspace(static_cast<unsigned char>(text[at]))) ++at;
+  out = text.substr(start, at - start);
+  return at > start;
+}
+
+struct PlyProperty {
+  int count_bytes = 0;  // > 0 for a list: the size of its count
+  int item_bytes = 0;   // size of the value (or of each list item)
+};
+struct PlyElement {
+  std::string name;
+  unsigned long long count = 0;
+  std::vector<PlyProperty> properties;
+};
+
+// Bytes of a PLY scalar type, 0 for an unknown one (the importer judges it).
+int ply_type_bytes(const std::string& t) {
+  if (t == "char" || t == "uchar" || t == "int8" || t == "uint8") return 1;
+  if (t == "short" || t == "ushort" || t == "int16" || t == "uint16") return 2;
+  if (t == "int" || t == "uint" || t == "float" || t == "int32" || t == "uint32" || t == "float32") return 4;
+  if (t == "double" || t == "float64") return 8;
+  return 0;
+}
+
+[[noreturn]] void ply_truncated(const std::string& name, const PlyElement& e, unsigned long long i) {
+  throw InputError(name + ": PLY data ends early: '" + e.name + "' element " + std::to_string(i + 1) + " of " +
+                   std::to_string(e.count) + " is missing or incomplete (truncated file)");
+}
+
+// The text data: every property one word, a list its count and that many.
+void check_ply_text(std::string_view data, const std::vector<PlyElement>& elements, const std::string& name) {
+  std::size_t at = 0;
+  std::string_view w;
+  for (const PlyElement& e : elements) {
+    if (e.properties.empty()) continue;
+    for (unsigned long long i = 0; i < e.count; ++i)
+      for (const PlyProperty& p : e.properties) {
+        if (!next_word(data, at, w)) ply_truncated(name, e, i);
+        if (p.count_bytes == 0) continue;
+        unsigned long long n = 0;
+        if (w.size() > 19 || w.find_first_not_of("0123456789") != std::string_view::npos)
+          throw InputError(name + ": PLY '" + e.name + "' element " + std::to_string(i + 1) + ": list length '" +
+                           std::string(w.substr(0, 20)) + "' is not a count");
+        for (char c : w) n = n * 10 + unsigned(c - '0');
+        for (unsigned long long k = 0; k < n; ++k)
+          if (!next_word(data, at, w)) ply_truncated(name, e, i);
+      }
+  }
+}
+
+// The binary data: fixed sizes, lists read for their counts.
+void check_ply_binary(std::string_view data, const std::vector<PlyElement>& elements, bool big_endian,
+                      const std::string& name) {
+  std::uint64_t at = 0;
+  const std::uint64_t size = data.size();
+  for (const PlyElement& e : elements) {
+    bool lists = false;
+    std::uint64_t fixed = 0;
+    for (const PlyProperty& p : e.properties) lists = lists || p.count_bytes > 0, fixed += p.item_bytes;
+    if (!lists) {  // count <= file size (check_ply_header), so no overflow
+      if (fixed > 0 && e.count > (size - at) / fixed) ply_truncated(name, e, (size - at) / fixed);
+      at += e.count * fixed;
+      continue;
+    }
+    for (unsigned long long i = 0; i < e.count; ++i)
+      for (const PlyProperty& p : e.properties) {
+        std::uint64_t n = 1;
+        if (p.count_bytes > 0) {
+          if (std::uint64_t(p.count_bytes) > size - at) ply_truncated(name, e, i);
+          n = 0;
+          for (int b = 0; b < p.count_bytes; ++b) {
+            const int k = big_endian ? b : p.count_bytes - 1 - b;
+            n = n << 8 | static_cast<unsigned char>(data[at + k]);
+          }
+          at += p.count_bytes;
+        }
+        if (n > (size - at) / std::max(1, p.item_bytes)) ply_truncated(name, e, i);
+        at += n * p.item_bytes;
+      }
+  }
+}
+
+// The importer's PLY reader does not stop on a header that never ends (found
+// by fuzz_model), allocates what the element counts ask for before reading
+// one, and renders a file that holds fewer elements than its header counts.
+void check_ply_header(const std::string& head, std::size_t file_bytes, const std::string& name,
+                      std::vector<PlyElement>& elements, std::string& format) {
+  std::istringstream lines(head);
+  std::string line;
+  auto judge = [&] {
+    if (elements.empty()) return;
+    const PlyElement& e = elements.back();
+    const unsigned long long per = std::max<std::size_t>(1, e.properties.size());
+    if (e.count > file_bytes / per)
+      throw InputError(name + ": PLY header asks for " + std::to_string(e.count) + " '" + e.name +
+                       "' elements, more than a file of " + std::to_string(file_bytes) + " bytes can hold");
+  };
+  while (std::getline(lines, line)) {
+    std::istringstream words(line);
+    std::string keyword, a, b, c;
+    words >> keyword >> a >> b >> c;
+    if (keyword == "format") {
+      format = a;
+    } else if (keyword == "element") {
+      judge();
+      elements.push_back(PlyElement{a, 0, {}});
+      if (!b.empty() && b.find_first_not_of("0123456789") == std::string::npos)  // else the importer judges
+        elements.back().count = b.size() <= 19 ? std::stoull(b) : std::numeric_limits<unsigned long long>::max();
+    } else if (keyword == "property" && !elements.empty()) {
+      elements.back().properties.push_back(a == "list" ? PlyProperty{ply_type_bytes(b), ply_type_bytes(c)}
+                                                       : PlyProperty{0, ply_type_bytes(a)});
+    }
+  }
+  judge();
+}
+
+}  // namespace
+
+void check_ply(const std::string& bytes, const std::string& name) {
+  if (bytes.compare(0, 3, "ply") != 0) return;
+  const std::size_t end = bytes.find("end_header");
+  if (end == std::string::npos || end > 64 * 1024)
+    throw InputError(name + ": PLY header without 'end_header' (truncated or not PLY)");
+  std::vector<PlyElement> elements;
+  std::string format;
+  check_ply_header(bytes.substr(0, end), bytes.size(), name, elements, format);
+  std::size_t data = bytes.find('\n', end);
+  data = data == std::string::npos ? bytes.size() : data + 1;
+  for (const PlyElement& e : elements)
+    for (const PlyProperty& p : e.properties)
+      if (p.item_bytes == 0 || p.count_bytes < 0) return;  // an unknown type: the importer refuses it
+  const std::string_view body = std::string_view(bytes).substr(data);
+  if (format == "ascii") check_ply_text(body, elements, name);
+  else if (format == "binary_little_endian" || format == "binary_big_endian")
+    check_ply_binary(body, elements, format == "binary_big_endian", name);
+}
+
+// The importer's OFF reader allocates what the header's counts ask for before
+// it reads a vertex (found by fuzz_model: tens of GB from a 100-byte file).
+// A vertex or face takes at least two bytes of text, so counts beyond the
+// file's size are refused here; everything else is left to the importer's
+// own checks.
+void check_off(const std::string& text, std::size_t file_bytes, const std::string& name) {
+  std::vector<std::string> tokens;
+  std::size_t i = 0;
+  while (i < text.size() && tokens.size() < 3) {
+    while (i < text.size() && std::isspace(static_cast<unsigned char>(text[i]))) ++i;
+    if (i < text.size() && text[i] == '#') {  // a comment runs to the end of its line
+      while (i < text.size() && text[i] != '\n') ++i;
+      continue;
+    }
+    const std::size_t start = i;
+    while (i < text.size() && !std::isspace(static_cast<unsigned char>(text[i]))) ++i;
+    if (i > start) tokens.push_back(text.substr(start, i - start));
+  }
+  // The counts are the first two runs of digits (the importer also reads
+  // them when they follow the OFF keyword in the same token, or precede
+  // other bytes); each must fit the file.
+  int judged = 0;
+  for (const std::string& token : tokens) {
+    const std::size_t from = token.find_first_of("0123456789");
+    if (from == std::string::npos) continue;
+    const std::size_t to = std::min(token.find_first_not_of("0123456789", from), token.size());
+    const std::string t = token.substr(from, to - from);
+    const char* what = judged == 0 ? "vertices" : "faces";
+    if (t.size() > 15 || std::stoull(t) > file_bytes / 2)
+      throw InputError(name + ": OFF header asks for " + (t.size() > 15 ? t.substr(0, 15) + "..." : t) + " " +
+                       what + ", more than a file of " + std::to_string(file_bytes) + " bytes can hold");
+    if (++judged == 2) return;
+  }
+}
+
+// Binary STL: 80 bytes of header, a 32-bit facet count, 50 bytes a facet.
+// The importer takes a file whose size is exactly that as binary even when
+// it starts with "solid", as here; anything else starting so is text.
+void check_stl(const std::string& bytes, const std::string& name) {
+  const std::uint64_t size = bytes.size();
+  std::uint64_t count = 0;
+  if (size >= 84)
+    for (int b = 3; b >= 0; --b) count = count << 8 | static_cast<unsigned char>(bytes[80 + b]);
+  std::size_t start = 0;
+  while (start < bytes.size() && std::isspace(static_cast<unsigned char>(bytes[start]))) ++start;
+  const bool text = bytes.compare(start, 5, "solid") == 0 && !(size >= 84 && 84 + 50 * count == size);
+  if (!text) {
+    if (size < 84) throw InputError(name + ": binary STL shorter than its 84-byte header (truncated file)");
+    if (84 + 50 * count > size)
+      throw InputError(name + ": binary STL header counts " + std::to_string(count) + " facets; the file holds " +
+                       std::to_string((size - 84) / 50) + " (truncated file)");
+    return;
+  }
+  // Text: every facet ends ("endfacet") and so does the last solid.
+  std::size_t at = 0;
+  std::string_view w;
+  unsigned long long facets = 0;
+  bool in_facet = false, in_solid = false;
+  while (next_word(bytes, at, w)) {
+    if (w == "solid") in_solid = true;
+    else if (w == "endsolid") in_solid = false;
+    else if (w == "facet") in_facet = true, ++facets;
+    else if (w == "endfacet") in_facet = false;
+  }
+  if (in_facet)
+    throw InputError(name + ": STL data ends inside facet " + std::to_string(facets) +
+                     " (no 'endfacet': truncated file)");
+  if (in_solid)
+    throw InputError(name + ": STL data ends after facet " + std::to_string(facets) +
+                     " without 'endsolid' (truncated file)");
+}
+
+void check_model_file_shape(ModelFiles& files, const std::string& path, const std::string& ext) {
+  const std::string e = lower(!ext.empty() && ext[0] == '.' ? ext.substr(1) : ext);
+  if (e == "off") {
+    const std::uint64_t size = files.size(path);
+    check_off(files.head(path, 64 * 1024), static_cast<std::size_t>(size), path);
+    return;
+  }
+  if (e != "ply" && e != "stl" && e != "gltf" && e != "glb") return;
+  const std::string bytes = files.head(path, kMaxInputFileBytes);
+  if (e == "ply") check_ply(bytes, path);
+  else if (e == "stl") check_stl(bytes, path);
+  else check_gltf(files, bytes, path);
+}
+
+}  // namespace opsila

@@ -1,0 +1,244 @@
+// Models crafted to break the importer: every file it opens is an input
+// (never an output's target) and is size-checked first; glTF/GLB headers
+// that promise sizes, offsets and node graphs are checked before the
+// importer believes them; deep hierarchies are placed or refused by depth;
+// truncated data is refused in every format. No OpenCL needed.
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cstdint>
+#include <cstring>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "input/model_checks.h"
+#include "input/model_import.h"
+#include "input/scene_file.h"
+#include "test_util.h"
+
+namespace opsila {
+namespace {
+
+using test::RunResult;
+using test::TempDir;
+using test::run_opsila;
+
+std::string le32(std::uint32_t v) {
+  std::string s(4, '\0');
+  for (int k = 0; k < 4; ++k) s[k] = char(v >> (8 * k) & 0xff);
+  return s;
+}
+
+std::string f32(float x) {
+  std::uint32_t v;
+  static_assert(sizeof v == sizeof x);
+  std::memcpy(&v, &x, sizeof v);
+  return le32(v);
+}
+
+// One triangle's positions, 36 bytes.
+std::string triangle_bytes() {
+  std::string b;
+  for (float x : {0.f, 0.f, 0.f, 1.f, 0.f, 0.f, 0.f, 1.f, 0.f}) b += f32(x);
+  return b;
+}
+
+// A glTF 2 whose one triangle sits at the end of a chain of `depth` + 1
+// nodes; the buffer is `uri` (external or data:), the view and accessor as given.
+std::string gltf(const std::string& uri, const std::string& view = R"("byteOffset": 0, "byteLength": 36)",
+                 const std::string& accessor_count = "3", int depth = 0) {
+  std::string nodes;
+  for (int i = 0; i < depth; ++i) nodes += "{\"children\": [" + std::to_string(i + 1) + "]},";
+  nodes += "{\"mesh\": 0}";
+  return R"({"asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0]}], "nodes": [)" + nodes +
+         R"(], "meshes": [{"primitives": [{"attributes": {"POSITION": 0}}]}],
+  "buffers": [{"uri": ")" + uri + R"(", "byteLength": 36}],
+  "bufferViews": [{"buffer": 0, )" + view + R"(}],
+  "accessors": [{"bufferView": 0, "componentType": 5126, "count": )" + accessor_count +
+         R"(, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 0]}]})";
+}
+
+std::string error_loading(const std::string& path) {
+  return test::error_of([&] { load_scene(path); });
+}
+
+// ---------------------------------------------------------------- inputs ---
+
+// A buffer may have any name; whatever it is, no output may replace it.
+TEST(HostileModel, ExternalBufferIsAnInputAndNeverAnOutput) {
+  TempDir dir;
+  const std::pair<const char*, const char*> cases[] = {{"-o", "tri.png"}, {"--stats", "tri.json"},
+                                                      {"--item-buffer", "tri.npy"}};
+  for (const auto& [flag, name] : cases) {
+    SCOPED_TRACE(flag);
+    const std::string bin = dir.write(name, triangle_bytes());
+    const std::string model = dir.write("tri.gltf", gltf(name));
+    const Scene s = load_scene(model);
+    ASSERT_EQ(s.triangles.size(), 1u);
+    EXPECT_NE(std::find(s.input_files.begin(), s.input_files.end(), bin), s.input_files.end());
+    std::vector<std::string> args = {"render", model, "--reference", "--size", "16x16"};
+    if (std::string(flag) != "-o") args.insert(args.end(), {"-o", dir.file("x.png")});
+    args.insert(args.end(), {flag, bin});
+    const RunResult r = run_opsila(args);
+    EXPECT_EQ(r.exit_code, 2) << r.err;
+    EXPECT_NE(r.err.find(std::string(flag) + " " + bin + ": is an input of this run"), std::string::npos) << r.err;
+    EXPECT_EQ(test::read_file(bin), triangle_bytes());
+    EXPECT_FALSE(test::file_exists(dir.file("x.png")));
+  }
+}
+
+TEST(HostileModel, TextureThatFailsToDecodeIsStillAnInput) {
+  TempDir dir;
+  const std::string corrupt = dir.write("bad.png", "\x89PNG\r\n\x1a\n not really an image");
+  dir.write("m.mtl", "newmtl t\nmap_Kd bad.png\n");
+  const std::string obj =
+      dir.write("m.obj", "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nusemtl t\nf 1/1 2/2 3/3\n");
+  const Scene s = load_scene(obj);
+  EXPECT_NE(std::find(s.input_files.begin(), s.input_files.end(), corrupt), s.input_files.end());
+  const RunResult r = run_opsila({"render", obj, "--reference", "--size", "16x16", "-o", corrupt});
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("-o " + corrupt + ": is an input of this run"), std::string::npos) << r.err;
+  EXPECT_EQ(test::read_file(corrupt), "\x89PNG\r\n\x1a\n not really an image");
+}
+
+TEST(HostileModel, FilesTheImporterOpensAreCheckedBeforeTheyAreRead) {
+  TempDir dir;
+  // A 3 GiB buffer (sparse: no disk is spent) is over the 2 GiB limit.
+  const std::string huge = dir.file("huge.bin");
+  ASSERT_EQ(::truncate(dir.write("huge.bin", "").c_str(), off_t(3) << 30), 0);
+  const std::string e = error_loading(dir.write("huge.gltf", gltf("huge.bin")));
+  EXPECT_NE(e.find(huge + ": file too large (the limit is 2147483648 bytes)"), std::string::npos) << e;
+  // A FIFO would block a plain open; a folder is not a file.
+  ASSERT_EQ(::mkfifo(dir.file("pipe.bin").c_str(), 0600), 0);
+  EXPECT_NE(error_loading(dir.write("p.gltf", gltf("pipe.bin"))).find("pipe.bin: is not a regular file"),
+            std::string::npos);
+  ASSERT_EQ(::mkdir(dir.file("d.bin").c_str(), 0700), 0);
+  EXPECT_NE(error_loading(dir.write("d.gltf", gltf("d.bin"))).find("d.bin: is a directory"), std::string::npos);
+  EXPECT_NE(error_loading(dir.write("m.gltf", gltf("missing.bin"))).find("missing.bin: cannot open"),
+            std::string::npos);
+}
+
+// ----------------------------------------------------------- glTF headers ---
+
+std::string glb(const std::string& json, std::uint32_t json_claim, const std::string& bin = "") {
+  std::string chunks = le32(json_claim) + "JSON" + json;
+  if (!bin.empty()) chunks += le32(std::uint32_t(bin.size())) + std::string("BIN\0", 4) + bin;
+  return "glTF" + le32(2) + le32(std::uint32_t(12 + chunks.size())) + chunks;
+}
+
+TEST(HostileModel, GlbChunkLengthsAreCheckedAgainstTheFile) {
+  TempDir dir;
+  std::string json = gltf("");
+  json.erase(json.find(R"("uri": "", )"), 11);
+  json.resize((json.size() + 3) / 4 * 4, ' ');
+  const std::string good = dir.write("ok.glb", glb(json, std::uint32_t(json.size()), triangle_bytes()));
+  EXPECT_EQ(load_scene(good).triangles.size(), 1u);
+  // About 4 GiB claimed by a 600-byte file: refused before anything is allocated.
+  const std::string liar = dir.write("liar.glb", glb(json, 0xfffffff0u, triangle_bytes()));
+  const RunResult r = run_opsila({"render", liar, "--reference", "-o", dir.file("x.png")});
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("liar.glb: GLB chunk 0 claims 4294967280 bytes"), std::string::npos) << r.err;
+  EXPECT_LT(r.max_rss_kb, 1024 * 1024) << "the claim was believed";
+  // A binary chunk shorter than the buffer it holds.
+  const std::string short_bin = dir.write("short.glb", glb(json, std::uint32_t(json.size()), std::string(12, '\0')));
+  EXPECT_NE(error_loading(short_bin).find("buffers[0]: byteLength 36 but the GLB binary chunk holds 12 bytes"),
+            std::string::npos);
+}
+
+TEST(HostileModel, OffsetsNear2To64AreRefusedBeforeTheImporterSeesThem) {
+  TempDir dir;
+  dir.write("tri.bin", triangle_bytes());
+  const std::string view = dir.write(
+      "view.gltf", gltf("tri.bin", R"("byteOffset": 18446744073709551600, "byteLength": 36)"));
+  EXPECT_NE(error_loading(view).find("bufferViews[0]: byteOffset 18446744073709551600 + byteLength 36 runs past "
+                                     "the end of its buffer (36 bytes)"),
+            std::string::npos)
+      << error_loading(view);
+  const std::string wrap = dir.write(
+      "wrap.gltf", gltf("tri.bin", R"("byteOffset": 16, "byteLength": 18446744073709551606)"));
+  EXPECT_NE(error_loading(wrap).find("runs past the end of its buffer"), std::string::npos) << error_loading(wrap);
+  // An accessor that reads beyond its view (truncated data, in glTF terms).
+  const std::string beyond = dir.write("beyond.gltf", gltf("tri.bin", R"("byteLength": 36)", "4"));
+  EXPECT_NE(error_loading(beyond).find("accessors[0]: 4 element(s) of 12 bytes from byteOffset 0 run past the end "
+                                       "of bufferViews[0] (36 bytes)"),
+            std::string::npos)
+      << error_loading(beyond);
+  const std::string huge_count = dir.write("count.gltf", gltf("tri.bin", R"("byteLength": 36)", "1e19"));
+  EXPECT_NE(error_loading(huge_count).find("accessors[0]: count"), std::string::npos) << error_loading(huge_count);
+  // A buffer longer than its file.
+  dir.write("short.bin", "0123");
+  EXPECT_NE(error_loading(dir.write("s.gltf", gltf("short.bin"))).find("byteLength 36 but"), std::string::npos);
+}
+
+// ------------------------------------------------------ deep hierarchies ---
+
+TEST(HostileModel, AMeshDeepInTheHierarchyIsPlaced) {
+  TempDir dir;
+  dir.write("tri.bin", triangle_bytes());
+  const Scene s = load_scene(dir.write("deep.gltf", gltf("tri.bin", R"("byteLength": 36)", "3", 300)));
+  EXPECT_EQ(s.triangles.size(), 1u);
+  const Scene limit =
+      load_scene(dir.write("limit.gltf", gltf("tri.bin", R"("byteLength": 36)", "3", kMaxNodeDepth)));
+  EXPECT_EQ(limit.triangles.size(), 1u);
+}
+
+TEST(HostileModel, AChainTensOfThousandsDeepIsOneClearError) {
+  TempDir dir;
+  dir.write("tri.bin", triangle_bytes());
+  const std::string model = dir.write("chain.gltf", gltf("tri.bin", R"("byteLength": 36)", "3", 40000));
+  const std::string scene =
+      dir.write("s.json", R"({"objects": [{"type": "model", "file": "chain.gltf"}], "image": {"size": [8, 8]}})");
+  for (const std::string& input : {model, scene}) {
+    SCOPED_TRACE(input);
+    const RunResult r = run_opsila({"render", input, "--reference", "-o", dir.file("x.png")});
+    EXPECT_EQ(r.exit_code, 2) << r.err;
+    EXPECT_EQ(r.error_lines().size(), 1u) << r.err;
+    EXPECT_NE(r.err.find("chain.gltf: node hierarchy 40000 levels deep (the limit is 1024)"), std::string::npos)
+        << r.err;
+    EXPECT_FALSE(test::file_exists(dir.file("x.png")));
+  }
+  // A cycle, and a node with two parents.
+  std::string cycle = gltf("tri.bin", R"("byteLength": 36)", "3", 2);
+  cycle.replace(cycle.find("{\"mesh\": 0}"), 11, "{\"mesh\": 0, \"children\": [1]}");
+  EXPECT_NE(error_loading(dir.write("cycle.gltf", cycle)).find("nodes[1]: has two parents"), std::string::npos)
+      << error_loading(dir.file("cycle.gltf"));
+}
+
+// --------------------------------------------------------- truncated data ---
+
+const char* kPlyHeader =
+    "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n"
+    "element face 2\nproperty list uchar int vertex_indices\nend_header\n";
+
+TEST(HostileModel, TruncatedDataIsRefusedInEveryFormat) {
+  TempDir dir;
+  const std::string whole = std::string(kPlyHeader) + "0 0 0\n1 0 0\n1 1 0\n0 1 0\n3 0 1 2\n3 0 2 3\n";
+  EXPECT_EQ(load_scene(dir.write("ok.ply", whole)).num_facets, 2);
+  const auto expect = [&](const std::string& file, const std::string& bytes, const std::string& what) {
+    const std::string e = error_loading(dir.write(file, bytes));
+    EXPECT_NE(e.find(dir.file(file) + ": " + what), std::string::npos) << e;
+  };
+  expect("few.ply", std::string(kPlyHeader) + "0 0 0\n1 0 0\n1 1 0\n",
+         "PLY data ends early: 'vertex' element 4 of 4 is missing or incomplete (truncated file)");
+  expect("face.ply", std::string(kPlyHeader) + "0 0 0\n1 0 0\n1 1 0\n0 1 0\n3 0 1 2\n3 0 2",
+         "PLY data ends early: 'face' element 2 of 2");
+  std::string binary = "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+                       "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n";
+  binary += triangle_bytes() + '\x03' + le32(0) + le32(1);
+  expect("bin.ply", binary, "PLY data ends early: 'face' element 1 of 1");
+  expect("vbin.ply", binary.substr(0, binary.size() - 30), "PLY data ends early: 'vertex' element 2 of 3");
+  std::string stl(80, ' ');
+  stl += le32(2) + std::string(50, '\0');
+  expect("bin.stl", stl, "binary STL header counts 2 facets; the file holds 1 (truncated file)");
+  expect("text.stl", "solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\n",
+         "STL data ends inside facet 1 (no 'endfacet': truncated file)");
+  expect("end.stl", "solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 1 0\nendloop\n"
+         "endfacet\n", "STL data ends after facet 1 without 'endsolid' (truncated file)");
+}
+
+}  // namespace
+}  // namespace opsila

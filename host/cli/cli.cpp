@@ -377,7 +377,11 @@ int describe_exception(std::exception_ptr error, std::string& message) {
   }
 #endif
   catch (const std::bad_alloc&) {
-    message = "out of memory";
+    // The loaders name the file they were reading; what is left is the
+    // host running out while the scene is banked or the frame prepared.
+    message = "out of host memory while preparing the render: the scene's meshes and texture maps with the "
+              "frame's buffers do not fit (use a smaller --size, fewer --pes or smaller models and images)";
+    code = kExitUsage;
   } catch (const std::exception& e) {
     message = e.what();
   } catch (...) {

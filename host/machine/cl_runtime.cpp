@@ -93,6 +93,10 @@ void cl_check(cl_int code, const char* what) {
   if (code != CL_SUCCESS) {
     std::ostringstream os;
     os << what << ": " << cl_error_name(code) << " (" << code << ")";
+    // Memory the plan (machine/memory_plan.h) did not foresee, or a driver
+    // that promised more than it has: said in words, still exit 3.
+    if (code == CL_MEM_OBJECT_ALLOCATION_FAILURE || code == CL_OUT_OF_RESOURCES || code == CL_OUT_OF_HOST_MEMORY)
+      os << ": the device ran out of memory (use a smaller --size, fewer --pes or a smaller --bank-capacity)";
     throw ClError(os.str());
   }
 }

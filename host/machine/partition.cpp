@@ -225,8 +225,11 @@ void build_routing(BankedScene& bs, const Box& sbox) {
 // Vertex attributes and texture copies of every bank (SPEC "barycentric
 // attributes", "Texture maps"): normals only when the scene is smooth, texture
 // coordinates only where the facet's material has a map. A bank holds its
-// own copy of each texture its facets use. Adds their bytes to bank_bytes;
-// returns the bytes of one copy of every texture used.
+// own copy of each texture its facets use, as the paper's banks would, and
+// its bytes count in bank_bytes and texture_bytes; but the banks that share
+// a device share one copy of the texels (a copy per bank would multiply
+// device memory by the PEs for nothing: 16 banks of one 256 MB map are 4 GB).
+// Returns the bytes of one copy of every texture used.
 std::uint64_t bank_attributes(const Scene& scene, const std::vector<int>& source, BankedScene& bs) {
   const auto flags_of = [&](const Triangle& t) {
     if (t.attributes < 0) return 0;
@@ -241,18 +244,22 @@ std::uint64_t bank_attributes(const Scene& scene, const std::vector<int>& source
   if (!any) return 0;
   bs.attributes.assign(bs.triangles.size(), BankAttributes{});
   std::vector<char> used(scene.textures.size(), 0);
+  std::vector<opsila_i32> texels_at(scene.textures.size(), -1);  // the device's one copy of each
   for (std::size_t p = 0; p < bs.pes.size(); ++p) {
     std::vector<int> copy(scene.textures.size(), -1);  // scene texture -> this bank's copy
     const auto bank_copy = [&](int texture) {
       if (texture < 0) return -1;
       if (copy[texture] < 0) {
         const Texture& tx = scene.textures[texture];
-        if (bs.texels.size() + tx.texels.size() > std::size_t(INT32_MAX))
-          throw InputError("texture maps: the banks' copies exceed 2^31 texels; use fewer --pes or smaller images");
+        if (texels_at[texture] < 0) {
+          if (bs.texels.size() + tx.texels.size() > std::size_t(INT32_MAX))
+            throw InputError("texture maps: " + tx.path + " (" + std::to_string(tx.texels.size() * 4) +
+                             " bytes) brings the maps' texels past 2^31; use smaller images");
+          texels_at[texture] = static_cast<opsila_i32>(bs.texels.size());
+          bs.texels.insert(bs.texels.end(), tx.texels.begin(), tx.texels.end());
+        }
         copy[texture] = static_cast<int>(bs.textures.size());
-        bs.textures.push_back(BankTexture{static_cast<opsila_i32>(bs.texels.size()), tx.width, tx.height,
-                                          static_cast<opsila_i32>(p)});
-        bs.texels.insert(bs.texels.end(), tx.texels.begin(), tx.texels.end());
+        bs.textures.push_back(BankTexture{texels_at[texture], tx.width, tx.height, static_cast<opsila_i32>(p)});
         bs.texture_bytes[p] += tx.texels.size() * sizeof(std::uint32_t) + sizeof(BankTexture);
         used[texture] = 1;
       }

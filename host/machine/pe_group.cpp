@@ -1,6 +1,7 @@
 #include "machine/pe_group.h"
 
 #include <algorithm>
+#include <cstdint>
 #include <stdexcept>
 #include <string>
 
@@ -49,8 +50,11 @@ int keep_group_banks(BankedScene& bs, const PeGroup& group) {
   for (std::size_t k = 0; k < bs.textures.size(); ++k)
     if (bs.textures[k].pe >= group.begin && bs.textures[k].pe < group.end) k0 = std::min(k0, k), k1 = k + 1;
   if (k0 >= k1) k0 = k1 = 0;
-  const int x0 = k0 < k1 ? bs.textures[k0].texel_begin : 0;
-  const int x1 = k0 < k1 ? bs.textures[k1 - 1].texel_begin + bs.textures[k1 - 1].width * bs.textures[k1 - 1].height : 0;
+  // Banks share the texels of a map (bank_attributes): keep the span of them.
+  int x0 = k0 < k1 ? INT32_MAX : 0, x1 = 0;
+  for (std::size_t k = k0; k < k1; ++k)
+    x0 = std::min(x0, bs.textures[k].texel_begin),
+    x1 = std::max(x1, bs.textures[k].texel_begin + bs.textures[k].width * bs.textures[k].height);
   bs.textures = std::vector<BankTexture>(bs.textures.begin() + k0, bs.textures.begin() + k1);
   for (BankTexture& t : bs.textures) t.texel_begin -= x0;
   bs.texels = std::vector<std::uint32_t>(bs.texels.begin() + x0, bs.texels.begin() + x1);

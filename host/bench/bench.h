@@ -83,9 +83,10 @@ BaselineImage render_megakernel(const Scene& scene, ClRuntime& runtime, int tile
 // True when the binary was built with Embree (CMake found it).
 bool embree_available();
 std::string embree_version();
-// The same rays and the same shading as the OPSILA renderer, traced with
-// Embree's rtcIntersect1 / rtcOccluded1 on `threads` host threads. Throws
-// std::runtime_error when Embree is not built in.
+// The same rays and the same shading as the OPSILA renderer (textures,
+// smooth normals, samples per pixel: the host reference's tracer), with the
+// hits found by Embree's rtcIntersect1 / rtcOccluded1, on `threads` host
+// threads. Throws std::runtime_error when Embree is not built in.
 BaselineImage render_embree(const Scene& scene, int threads);
 
 }  // namespace opsila

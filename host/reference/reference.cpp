@@ -165,11 +165,8 @@ bool hits_box(const Node& node, const vec3& origin, const vec3& dir, float t_min
   return true;
 }
 
-struct Hit {
-  float t = std::numeric_limits<float>::infinity();
-  int tri = -1;
-  float b1 = 0, b2 = 0;  // barycentrics of the hit on triangle `tri`
-};
+using Hit = FacetHit;
+Vec3 to_vec(const vec3& v) { return {v.x, v.y, v.z}; }
 
 }  // namespace
 
@@ -182,12 +179,13 @@ struct ReferenceTracer::Impl {
   Bvh bvh;
   CameraFrame frame;
   float epsilon = 0;
+  const FacetQueries* queries = nullptr;  // instead of `bvh`, when given
 
   explicit Impl(const Scene& s) : scene(s) {}
-
   // Nearest hit with t > t_min. Ties go to the lower triangle index
   // (Scene::triangles order), whatever order the BVH visits them in.
   bool nearest(const vec3& origin, const vec3& dir, float t_min, Hit& hit) const {
+    if (queries) return queries->nearest(to_vec(origin), to_vec(dir), t_min, hit);
     if (bvh.nodes.empty()) return false;
     int stack[128];
     int top = 0;
@@ -217,6 +215,7 @@ struct ReferenceTracer::Impl {
 
   // Shadow test: is any triangle hit with t in (t_min, t_max)?
   bool occluded(const vec3& origin, const vec3& dir, float t_min, float t_max) const {
+    if (queries) return queries->occluded(to_vec(origin), to_vec(dir), t_min, t_max);
     if (bvh.nodes.empty()) return false;
     int stack[128];
     int top = 0;
@@ -353,15 +352,15 @@ struct ReferenceTracer::Impl {
   }
 };
 
-ReferenceTracer::ReferenceTracer(const Scene& scene) : scene_(scene), impl_(new Impl(scene)) {
+ReferenceTracer::ReferenceTracer(const Scene& scene, const FacetQueries* queries)
+    : scene_(scene), impl_(new Impl(scene)) {
   // SPEC: epsilon = 1e-4 x the diagonal of the bounding box of the facets.
   epsilon_ = scene.epsilon();
   impl_->epsilon = epsilon_;
 
   impl_->materials = scene.materials;
-  if (impl_->materials.empty()) {
-    impl_->materials.push_back(MaterialDesc::default_material());  // SPEC "a face with no material"
-  }
+  // SPEC "a face with no material".
+  if (impl_->materials.empty()) impl_->materials.push_back(MaterialDesc::default_material());
   impl_->tris.reserve(scene.triangles.size());
   for (const Triangle& t : scene.triangles) {
     Tri tri;
@@ -372,15 +371,14 @@ ReferenceTracer::ReferenceTracer(const Scene& scene) : scene_(scene), impl_(new 
     const float len = glm::length(c);
     tri.degenerate = !(len > 0.0f) || !std::isfinite(len);
     tri.normal = tri.degenerate ? vec3(0.0f) : c / len;
-    tri.material = (t.material >= 0 && t.material < static_cast<int>(impl_->materials.size()))
-                       ? t.material
-                       : 0;
+    tri.material = t.material >= 0 && t.material < static_cast<int>(impl_->materials.size()) ? t.material : 0;
     tri.object_id = t.object_id;
     tri.facet_id = t.facet_id;
     impl_->tris.push_back(tri);
   }
+  impl_->queries = queries;
   const float pad = static_cast<float>(1e-5 * scene.diagonal()) + 1e-30f;
-  impl_->bvh = build_bvh(impl_->tris, scene.triangles, pad);
+  if (!queries) impl_->bvh = build_bvh(impl_->tris, scene.triangles, pad);
   impl_->frame = camera_frame(scene.camera, scene.width, scene.height);
 }
 

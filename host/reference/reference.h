@@ -6,6 +6,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <vector>
 
@@ -18,12 +19,33 @@ namespace opsila {
 
 class Progress;
 
+// A ray's nearest facet: its index in Scene::triangles (-1: none), the ray
+// parameter t and SPEC's barycentrics b1, b2 of the hit.
+struct FacetHit {
+  float t = std::numeric_limits<float>::infinity();
+  int tri = -1;
+  float b1 = 0, b2 = 0;
+};
+
+// Where rays meet the facets, when another library traverses the scene (the
+// bench's Embree baseline): the tracer then shades, samples and counts as
+// always, on these answers. Called from several threads at once.
+class FacetQueries {
+ public:
+  virtual ~FacetQueries() = default;
+  // The nearest facet with t > t_min along the unit direction `dir`.
+  virtual bool nearest(const Vec3& origin, const Vec3& dir, float t_min, FacetHit& hit) const = 0;
+  // Is any facet hit with t in (t_min, t_max)?
+  virtual bool occluded(const Vec3& origin, const Vec3& dir, float t_min, float t_max) const = 0;
+};
+
 // Holds the scene (by reference: it must outlive the tracer), its epsilon and
-// a BVH. Const after construction, so several threads may render row ranges
-// of one tracer at once.
+// a BVH, or the `queries` it is given instead (which must outlive it too).
+// Const after construction, so several threads may render row ranges of one
+// tracer at once.
 class ReferenceTracer {
  public:
-  explicit ReferenceTracer(const Scene& scene);
+  explicit ReferenceTracer(const Scene& scene, const FacetQueries* queries = nullptr);
   ~ReferenceTracer();
   ReferenceTracer(const ReferenceTracer&) = delete;
   ReferenceTracer& operator=(const ReferenceTracer&) = delete;

@@ -13,6 +13,7 @@
 #include "bench/bench.h"
 #include "bench/compare.h"
 #include "machine/host_scatter.h"
+#include "input/scene_file.h"
 #include "reference/reference.h"
 #include "machine/renderer.h"
 #include "exchange_check.h"
@@ -80,6 +81,30 @@ TEST(Bench, RayCountsAgreeAcrossImplementations) {
     EXPECT_GE(test::clamped_psnr(e.rgb, render_opsila(s, 8).rgb), 35.0);
   }
 }
+
+// The Embree baseline shades what OPSILA shades: texture maps, smooth
+// normals and k x k samples, on the gallery's scenes at a small size.
+void expect_embree_agrees(const std::string& scene_file, int spp) {
+  if (!embree_available()) GTEST_SKIP() << "built without Embree";
+  const std::string models = "/usr/share/assimp/models";
+  const std::string path = std::string(OPSILA_SOURCE_DIR) + "/scenes/" + scene_file;
+  if (test::read_file(path).find(models) != std::string::npos && !test::file_exists(models))
+    GTEST_SKIP() << scene_file << " needs Debian's assimp-testmodels";
+  Scene s = load_scene(path);
+  s.width = 64;
+  s.height = 48;
+  s.spp = spp;
+  const RenderResult opsila = render_opsila(s, 16);
+  const BaselineImage e = render_embree(s, 2);
+  EXPECT_GE(test::clamped_psnr(e.rgb, opsila.rgb), 40.0) << scene_file << ", " << spp << " spp";
+  EXPECT_EQ(e.rays.primary, opsila.rays.primary);
+  EXPECT_GE(item_agreement(e.item_buffer, opsila.item_buffer), 0.99);
+}
+
+TEST(Bench, EmbreeAgreesOnTexturedScene) { expect_embree_agrees("textured.json", 1); }
+TEST(Bench, EmbreeAgreesOnTexturedSceneWithSamples) { expect_embree_agrees("textured.json", 4); }
+TEST(Bench, EmbreeAgreesOnSmoothScene) { expect_embree_agrees("smooth.json", 1); }
+TEST(Bench, EmbreeAgreesOnSmoothSceneWithSamples) { expect_embree_agrees("smooth.json", 4); }
 
 // Host scatter and ScatterPass on the same input, with holes and overflow:
 // the same plan, and every lane of every bank slot and waiting entry.

@@ -229,6 +229,62 @@ void check_stl(const std::string& bytes, const std::string& name) {
                      " without 'endsolid' (truncated file)");
 }
 
+namespace {
+
+// Depth of XML element nesting (comments, CDATA, declarations and quoted
+// attribute values skipped), or of braces outside quotes for other text.
+long nesting_depth(std::string_view text, bool xml) {
+  long depth = 0, deepest = 0;
+  const auto skip_to = [&](std::size_t& i, std::string_view end) {
+    const std::size_t at = text.find(end, i);
+    i = at == std::string_view::npos ? text.size() : at + end.size() - 1;
+  };
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    const char c = text[i];
+    if (!xml) {
+      if (c == '"') skip_to(++i, "\"");
+      else if (c == '{') deepest = std::max(deepest, ++depth);
+      else if (c == '}') --depth;
+      continue;
+    }
+    if (c != '<' || i + 1 >= text.size()) continue;
+    const char next = text[i + 1];
+    if (text.compare(i, 4, "<!--") == 0) skip_to(i, "-->");
+    else if (text.compare(i, 9, "<![CDATA[") == 0) skip_to(i, "]]>");
+    else if (next == '?') skip_to(i, "?>");
+    else if (next == '!') skip_to(i, ">");
+    else if (next == '/') --depth, skip_to(i, ">");
+    else {
+      char quote = 0;
+      std::size_t j = i + 1;
+      for (; j < text.size() && (quote || text[j] != '>'); ++j)
+        if (quote ? text[j] == quote : text[j] == '"' || text[j] == '\'') quote = quote ? 0 : text[j];
+      if (j < text.size() && text[j - 1] != '/') deepest = std::max(deepest, ++depth);
+      i = j;
+    }
+  }
+  return deepest;
+}
+
+}  // namespace
+
+// The importer's other readers (COLLADA, X3D, DirectX .x, ASE, FBX text, ...)
+// recurse once per level of nesting, and their node hierarchies are known
+// only after the import: a 2-million-level COLLADA file overflowed even the
+// import thread's stack. Text nested deeper than kMaxNesting is refused
+// first. Binary files (a NUL in the first 64 KiB) are left to the importer.
+void check_nesting(const std::string& bytes, const std::string& name) {
+  const std::string_view head = std::string_view(bytes).substr(0, 64 * 1024);
+  if (head.find('\0') != std::string_view::npos) return;
+  std::size_t first = head.find_first_not_of(" \t\r\n");
+  if (head.compare(0, 3, "\xEF\xBB\xBF") == 0) first = head.find_first_not_of(" \t\r\n", 3);
+  const bool xml = first != std::string_view::npos && head[first] == '<';
+  const long depth = nesting_depth(bytes, xml);
+  if (depth > kMaxNesting)
+    throw InputError(name + ": " + (xml ? "XML elements" : "braces") + " nested " + std::to_string(depth) +
+                     " levels deep (the limit is " + std::to_string(kMaxNesting) + ")");
+}
+
 void check_model_file_shape(ModelFiles& files, const std::string& path, const std::string& ext) {
   const std::string e = lower(!ext.empty() && ext[0] == '.' ? ext.substr(1) : ext);
   if (e == "off") {
@@ -236,11 +292,11 @@ void check_model_file_shape(ModelFiles& files, const std::string& path, const st
     check_off(files.head(path, 64 * 1024), static_cast<std::size_t>(size), path);
     return;
   }
-  if (e != "ply" && e != "stl" && e != "gltf" && e != "glb") return;
   const std::string bytes = files.head(path, kMaxInputFileBytes);
   if (e == "ply") check_ply(bytes, path);
   else if (e == "stl") check_stl(bytes, path);
-  else check_gltf(files, bytes, path);
+  else if (e == "gltf" || e == "glb") check_gltf(files, bytes, path);
+  else check_nesting(bytes, path);
 }
 
 }  // namespace opsila

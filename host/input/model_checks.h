@@ -17,6 +17,9 @@ namespace opsila {
 // or count, before the importer builds them.
 constexpr int kMaxNodeDepth = 1024;
 constexpr std::size_t kMaxNodes = std::size_t(1) << 20;
+// The deepest nesting of XML elements or braces in other text formats
+// (a node level takes a few).
+constexpr long kMaxNesting = 4 * kMaxNodeDepth;
 
 // The checks of the format that `ext` names (with or without its dot), for
 // the file `path` read through `files`.
@@ -30,6 +33,8 @@ void check_off(const std::string& head, std::size_t file_bytes, const std::strin
 // STL: a binary file holds the facets its header counts; a text file ends
 // every facet and solid it opens.
 void check_stl(const std::string& bytes, const std::string& name);
+// Other text formats: XML elements or braces nested at most kMaxNesting deep.
+void check_nesting(const std::string& bytes, const std::string& name);
 // glTF (text) and GLB: chunk lengths within the file; buffers, buffer views
 // and accessors within one another, in 64-bit arithmetic; external buffers
 // within the file limit and as long as declared; node graph a forest of at

@@ -208,6 +208,32 @@ TEST(HostileModel, AChainTensOfThousandsDeepIsOneClearError) {
       << error_loading(dir.file("cycle.gltf"));
 }
 
+// Formats whose hierarchy is known only after the import: their nesting is
+// bounded before it (2 million levels of COLLADA overflowed the import
+// thread's stack).
+TEST(HostileModel, DeeplyNestedTextIsRefusedBeforeTheImport) {
+  TempDir dir;
+  const auto collada = [&](int depth) {
+    std::string nodes;
+    for (int i = 0; i < depth; ++i) nodes += "<node>";
+    nodes += "<!-- <node> --><instance_geometry url=\"#g\"/>";
+    for (int i = 0; i < depth; ++i) nodes += "</node>";
+    return R"(<?xml version="1.0"?><COLLADA xmlns="http://www.collada.org/2005/11/COLLADASchema" version="1.4.1">
+<library_geometries><geometry id="g"><mesh><source id="p"><float_array id="pa" count="9">0 0 0 1 0 0 0 1 0
+</float_array><technique_common><accessor source="#pa" count="3" stride="3"><param name="X" type="float"/>
+<param name="Y" type="float"/><param name="Z" type="float"/></accessor></technique_common></source>
+<vertices id="v"><input semantic="POSITION" source="#p"/></vertices><triangles count="1">
+<input semantic="VERTEX" source="#v" offset="0"/><p>0 1 2</p></triangles></mesh></geometry></library_geometries>
+<library_visual_scenes><visual_scene id="s">)" +
+           nodes + R"(</visual_scene></library_visual_scenes><scene><instance_visual_scene url="#s"/></scene></COLLADA>)";
+  };
+  EXPECT_EQ(load_scene(dir.write("ok.dae", collada(500))).triangles.size(), 1u);
+  const std::string e = error_loading(dir.write("deep.dae", collada(20000)));
+  EXPECT_NE(e.find("deep.dae: XML elements nested 20003 levels deep (the limit is 4096)"), std::string::npos) << e;
+  const std::string braces = error_loading(dir.write("deep.x", "xof 0302txt 0032\n" + std::string(5000, '{')));
+  EXPECT_NE(braces.find("deep.x: braces nested 5000 levels deep"), std::string::npos) << braces;
+}
+
 // --------------------------------------------------------- truncated data ---
 
 const char* kPlyHeader =

@@ -8,7 +8,7 @@
 #include "bench/bench.h"
 #include "core/util.h"
 #include "machine/host_scatter.h"
-#include "machine/renderer.h"
+#include "machine/render_types.h"
 
 namespace opsila {
 

@@ -12,6 +12,8 @@
 
 #include "core/progress.h"
 #include "core/util.h"
+#include "machine/prepare_banks.h"
+#include "machine/renderer.h"
 #include "reference/reference.h"
 
 namespace opsila {
@@ -112,7 +114,7 @@ void measure_opsila(BenchReport& report, const Scene& scene, const RenderSetting
   Progress live("bench", !progress.quiet);
   RenderSettings with_progress = settings;
   with_progress.progress = &live;
-  Renderer renderer(scene, with_progress, rt);
+  Renderer renderer(scene, prepare_banks(scene, settings, rt), with_progress, rt);
   for (int r = 0; r < warmup + repeats; ++r) {
     auto t0 = std::chrono::steady_clock::now();
     live.restart("bench: OPSILA run " + std::to_string(r + 1) + "/" + std::to_string(warmup + repeats));

@@ -5,7 +5,7 @@
 #include "bench/report.h"
 #include "core/scene.h"
 #include "machine/cl_runtime.h"
-#include "machine/renderer.h"
+#include "machine/render_types.h"
 
 namespace opsila {
 

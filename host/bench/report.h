@@ -15,7 +15,7 @@
 
 #include "bench/bench.h"
 #include "core/output_files.h"
-#include "machine/renderer.h"
+#include "machine/render_types.h"
 #include "machine/stats.h"
 
 namespace opsila {

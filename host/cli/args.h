@@ -11,7 +11,7 @@
 
 #include "core/ray_sample.h"
 #include "core/scene.h"
-#include "machine/renderer.h"
+#include "machine/render_types.h"
 #include "machine/cl_runtime.h"
 
 namespace opsila {

@@ -4,7 +4,7 @@
 #include <cstring>
 #include <vector>
 
-#include "machine/renderer.h"
+#include "machine/render_types.h"
 
 namespace opsila {
 

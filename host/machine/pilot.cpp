@@ -2,7 +2,9 @@
 
 #include <chrono>
 
+#include "machine/banks.h"
 #include "machine/ranks.h"
+#include "machine/renderer.h"
 #include "machine/stats.h"
 
 namespace opsila {
@@ -39,6 +41,30 @@ Scene pilot_scene(const Scene& scene) {
 
 }  // namespace
 
+MeasuredWork spread_cluster_work(const std::vector<std::uint64_t>& work, int levels,
+                                 const std::vector<int>& facet_cluster) {
+  MeasuredWork w;
+  if (work.empty() || levels < 1) return w;
+  const std::size_t C = work.size() / std::size_t(levels);
+  std::vector<std::size_t> facets(C, 0);
+  for (int c : facet_cluster)
+    if (c >= 0) ++facets[std::size_t(c)];
+  w.levels = levels;
+  w.per_facet.assign(facet_cluster.size() * std::size_t(levels), 0.0f);
+  bool any = false;
+  for (std::size_t t = 0; t < facet_cluster.size(); ++t) {
+    if (facet_cluster[t] < 0) continue;  // a facet no bank holds (none today)
+    const std::size_t c = std::size_t(facet_cluster[t]);
+    for (int l = 0; l < levels; ++l) {
+      const std::uint64_t v = work[std::size_t(l) * C + c];
+      any = any || v != 0;
+      w.per_facet[t * std::size_t(levels) + std::size_t(l)] = float(double(v) / double(facets[c]));
+    }
+  }
+  if (!any) w = MeasuredWork{};
+  return w;
+}
+
 MeasuredWork pilot_work(const Scene& scene, const RenderSettings& settings, ClRuntime& runtime, int* frames,
                         double* seconds) {
   const auto t0 = std::chrono::steady_clock::now();
@@ -48,20 +74,25 @@ MeasuredWork pilot_work(const Scene& scene, const RenderSettings& settings, ClRu
   ps.work_groups_per_pe = settings.work_groups_per_pe;
   ps.routing = settings.routing;
   ps.measure_cost = true;
+  Ranks& ranks = Ranks::world();
+  const PeGroup group = pe_group(ps.num_pes, ranks.size(), ranks.rank());
   // mean: the mean of the measurements so far, the partition of the next
   // pilot; best: the input whose partition measured the best occupancy.
   MeasuredWork mean, best;
   double best_occupancy = -1;
   int k = 0;
   for (; k < kPilotFrames; ++k) {
-    ps.measured = k == 0 ? nullptr : &mean;
-    Renderer pilot(view, ps, runtime);
+    BalancePolicy policy;
+    if (k > 0) policy = BalancePolicy{Balance::measured, nullptr, &mean};
+    PreparedBanks banks = bank_scene(view, ps.num_pes, ps.routing, policy, group);
+    const std::vector<int> facet_cluster = banks.facet_cluster;
+    Renderer pilot(view, std::move(banks), ps, runtime);
     const RenderResult r = pilot.render();
     if (const double occ = shared_occupancy(r.stats); occ > best_occupancy) {
       best_occupancy = occ;
       best = k == 0 ? MeasuredWork{} : mean;  // k = 0: the facets' partition
     }
-    const MeasuredWork w = pilot.measured_work();
+    const MeasuredWork w = spread_cluster_work(pilot.cluster_work(), view.max_depth, facet_cluster);
     if (w.empty()) break;  // nothing to measure (no descriptor reached a bank)
     if (k == 0) {
       mean = w;

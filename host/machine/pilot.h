@@ -13,9 +13,13 @@
 // traversals, the partitions are deterministic functions of them.
 #pragma once
 
+#include <cstdint>
+#include <vector>
+
 #include "core/ray_sample.h"
 #include "core/scene.h"
-#include "machine/renderer.h"
+#include "machine/cl_runtime.h"
+#include "machine/render_types.h"
 
 namespace opsila {
 
@@ -33,6 +37,13 @@ constexpr int kPilotFrames = 5;
 // routing and work-groups; one sample per pixel); *frames and *seconds get
 // how many ran and how long they took. The pilots' view is a copy of the
 // scene (host memory for a second copy of its facets while they run).
+// A pilot's per-cluster counts (Renderer::cluster_work, [level * C +
+// cluster]) spread evenly over each cluster's facets; facet_cluster holds
+// the cluster of every scene facet (PreparedBanks). Empty when nothing was
+// counted.
+MeasuredWork spread_cluster_work(const std::vector<std::uint64_t>& work, int levels,
+                                 const std::vector<int>& facet_cluster);
+
 MeasuredWork pilot_work(const Scene& scene, const RenderSettings& settings, ClRuntime& runtime, int* frames,
                         double* seconds);
 

@@ -17,6 +17,7 @@
 #include "core/texture.h"
 #include "core/fixed_point.h"
 #include "core/util.h"
+#include "machine/banks.h"
 #include "machine/descriptors.h"
 #include "machine/memory_plan.h"
 #include "machine/pe_group.h"
@@ -24,7 +25,7 @@
 #include "machine/stats.h"
 #include "opsila_shared.h"
 #include "machine/partition.h"
-#include "machine/pilot.h"
+#include "machine/prepare_banks.h"
 #include "core/progress.h"
 
 namespace opsila {
@@ -103,18 +104,6 @@ const char* balance_name(Balance b) {
   }
 }
 
-void check_kernel_limits(const Scene& scene) {
-  if (scene.max_depth < 1 || scene.max_depth > OPSILA_MAX_DEPTH)
-    throw InputError("--depth " + std::to_string(scene.max_depth) + ": must be 1.." +
-                     std::to_string(OPSILA_MAX_DEPTH));
-  if (static_cast<int>(scene.lights.size()) > OPSILA_MAX_LIGHTS)
-    throw InputError("scene has " + std::to_string(scene.lights.size()) + " lights; at most " +
-                     std::to_string(OPSILA_MAX_LIGHTS) + " are supported");
-  if (scene.triangles.empty()) throw InputError("scene has no facets");
-  if (const std::string problem = spp_problem(scene.spp); !problem.empty())
-    throw InputError("--spp " + std::to_string(scene.spp) + ": " + problem);
-}
-
 // Everything the machine keeps between frames, and the stages of a frame.
 struct Renderer::Machine {
   ClRuntime& rt;
@@ -150,8 +139,7 @@ struct Renderer::Machine {
   // maps them back to the scene's facets (every cluster's, on every rank).
   bool measure = false;
   cl::Buffer b_node_cluster, b_tri_cluster, b_cost;
-  std::size_t ncost = 1, num_scene_tris = 0;
-  std::vector<int> cluster_of_facet, facet_source;
+  std::size_t ncost = 1;
   DescriptorSet banks, outputs, pool, next_pool;
 
   // Where a frame stands between rounds.
@@ -164,7 +152,7 @@ struct Renderer::Machine {
     std::size_t pool_len_max = 0;  // several ranks: the longest pool of any rank (they inject alike)
   };
 
-  Machine(const Scene& scene, const RenderSettings& settings, ClRuntime& runtime);
+  Machine(const Scene& scene, PreparedBanks banks, const RenderSettings& settings, ClRuntime& runtime);
   int choose_bank_capacity(const BankedScene& bs, const RenderSettings& settings) const;
   void choose_work_groups();
   void upload_scene(const Scene& scene, const BankedScene& bs);
@@ -183,11 +171,13 @@ struct Renderer::Machine {
   RankReport rank_report(const RenderStats& st, double seconds, double mpi_seconds) const;
 };
 
-Renderer::Machine::Machine(const Scene& scene, const RenderSettings& settings, ClRuntime& runtime) : rt(runtime) {
+Renderer::Machine::Machine(const Scene& scene, PreparedBanks banks, const RenderSettings& settings,
+                           ClRuntime& runtime)
+    : rt(runtime) {
   P = settings.num_pes;
-  if (P < 1 || P > OPSILA_MAX_PES)
-    throw InputError("--pes " + std::to_string(P) + ": must be 1.." + std::to_string(OPSILA_MAX_PES));
-  check_kernel_limits(scene);
+  check_machine_request(scene, P);
+  if (banks.scene.num_pes != P || banks.group.begin < 0 || banks.group.end > P)
+    throw std::invalid_argument("Renderer: the banks were prepared for another machine");
   width = scene.width;
   height = scene.height;
   depth = scene.max_depth;
@@ -205,14 +195,7 @@ Renderer::Machine::Machine(const Scene& scene, const RenderSettings& settings, C
     fault_round = std::stoi(text);
   }
 
-  // --balance measured: the pilot frames run first, each a machine of its own.
   measure = settings.measure_cost;
-  MeasuredWork pilot;
-  const MeasuredWork* measured = settings.measured;
-  if (settings.balance == Balance::measured && !measure) {
-    pilot = pilot_work(scene, settings, rt, &prepared.pilot_frames, &prepared.pilot_seconds);
-    measured = &pilot;
-  }
   const KernelProgram program = measure ? KernelProgram::measure : KernelProgram::render;
   rt.program(program);  // compile before anything is timed
   k_item = rt.kernel("item_buffer", program);
@@ -222,17 +205,11 @@ Renderer::Machine::Machine(const Scene& scene, const RenderSettings& settings, C
   choose_work_groups();
   cap = settings.work_groups_per_pe > 0 ? settings.work_groups_per_pe * static_cast<int>(spmd_wg) : 0;
 
-  // Every rank partitions identically, then keeps only its own banks.
-  group = pe_group(P, ranks.size(), ranks.rank());
+  // This device's PEs and their banks, prepared before (machine/banks.h).
+  group = banks.group;
   G = group.size();
-  BankedScene bs = partition_scene(scene, P, routing == OPSILA_ROUTING_SPHERES, settings.ray_sample, measured);
-  if (measure) {
-    cluster_of_facet = bs.tri_cluster;
-    facet_source = bs.source;
-    num_scene_tris = scene.triangles.size();
-    ncost = std::size_t(depth) * bs.clusters.size();
-  }
-  const int tri_base = keep_group_banks(bs, group);
+  const BankedScene& bs = banks.scene;
+  if (measure) ncost = std::size_t(depth) * bs.clusters.size();
   S = OPSILA_SPAWN_SLOTS(static_cast<int>(bs.lights.size()));
   n = choose_bank_capacity(bs, settings);
   flight = FlightPlan(G, n, spmd_wg, S);
@@ -240,14 +217,16 @@ Renderer::Machine::Machine(const Scene& scene, const RenderSettings& settings, C
   fp = frame_params(scene, bs, n);
   fp.group_begin = group.begin;
   fp.group_end = group.end;
-  fp.tri_base = tri_base;
+  fp.tri_base = banks.tri_base;
   traffic_levels = P <= OPSILA_TRAFFIC_MAX_PES ? depth : 0;
 
   prepared.num_pes = P;
   prepared.bank_capacity = n;
   prepared.num_clusters = static_cast<int>(bs.clusters.size());
   prepared.routing = routing;
-  prepared.balance = settings.ray_sample ? Balance::work : measured ? Balance::measured : Balance::facets;
+  prepared.balance = banks.balance;
+  prepared.pilot_frames = banks.pilot_frames;
+  prepared.pilot_seconds = banks.pilot_seconds;
   prepared.bank_bytes = bs.bank_bytes;
   prepared.global_bytes = bs.global_bytes;
   prepared.replicated_bytes = bs.replicated_bytes;
@@ -667,8 +646,8 @@ RankReport Renderer::Machine::rank_report(const RenderStats& st, double seconds,
   return r;
 }
 
-Renderer::Renderer(const Scene& scene, const RenderSettings& settings, ClRuntime& runtime)
-    : m_(std::make_unique<Machine>(scene, settings, runtime)) {}
+Renderer::Renderer(const Scene& scene, PreparedBanks banks, const RenderSettings& settings, ClRuntime& runtime)
+    : m_(std::make_unique<Machine>(scene, std::move(banks), settings, runtime)) {}
 
 Renderer::~Renderer() = default;
 
@@ -724,10 +703,9 @@ RenderResult Renderer::render() {
   return result;
 }
 
-MeasuredWork Renderer::measured_work() {
+std::vector<std::uint64_t> Renderer::cluster_work() {
   Machine& m = *m_;
-  MeasuredWork w;
-  if (!m.measure) return w;
+  if (!m.measure) return {};
   std::vector<cl_uint> raw(m.ncost);
   cl_check(m.rt.queue().enqueueReadBuffer(m.b_cost, CL_TRUE, 0, raw.size() * sizeof(cl_uint), raw.data()),
            "clEnqueueReadBuffer(cluster work)");
@@ -735,26 +713,12 @@ MeasuredWork Renderer::measured_work() {
   // 0 for it), so the largest count over the ranks is its count.
   std::vector<std::uint64_t> cost(raw.begin(), raw.end());
   if (!m.group.all()) m.ranks.max(cost);
-  const std::size_t C = m.ncost / std::size_t(m.depth);
-  std::vector<std::size_t> facets(C, 0);
-  for (int c : m.cluster_of_facet) ++facets[std::size_t(c)];
-  w.levels = m.depth;
-  w.per_facet.assign(m.num_scene_tris * std::size_t(m.depth), 0.0f);
-  bool any = false;
-  for (std::size_t k = 0; k < m.cluster_of_facet.size(); ++k) {
-    const std::size_t c = std::size_t(m.cluster_of_facet[k]);
-    for (int l = 0; l < m.depth; ++l) {
-      const std::uint64_t v = cost[std::size_t(l) * C + c];
-      any = any || v != 0;
-      w.per_facet[std::size_t(m.facet_source[k]) * m.depth + l] = float(double(v) / double(facets[c]));
-    }
-  }
-  if (!any) w = MeasuredWork{};
-  return w;
+  return cost;
 }
 
 RenderResult render(const Scene& scene, const RenderSettings& settings, ClRuntime& runtime) {
-  return Renderer(scene, settings, runtime).render();
+  PreparedBanks banks = prepare_banks(scene, settings, runtime);
+  return Renderer(scene, std::move(banks), settings, runtime).render();
 }
 
 }  // namespace opsila

@@ -8,7 +8,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "machine/renderer.h"
+#include "machine/render_types.h"
 #include "core/scene.h"
 
 namespace opsila {

@@ -12,6 +12,7 @@
 #include "reference/reference.h"
 #include "machine/renderer.h"
 #include "machine/pilot.h"
+#include "machine/prepare_banks.h"
 #include "machine/stats.h"
 #include "test_device.h"
 #include "test_scenes.h"
@@ -139,6 +140,7 @@ TEST(Renderer, BalancingByWorkGivesTheSameImageAndEvenerPes) {
     RenderSettings rs;
     rs.num_pes = pes;
     const RenderResult facets = render(s, rs, runtime());
+    rs.balance = Balance::work;
     rs.ray_sample = &sample;
     const RenderResult work = render(s, rs, runtime());
     expect_same_image_other_banks(facets, work, pes);
@@ -180,9 +182,11 @@ TEST(Pilot, CountsTheSpmdTestsPerClusterAndLevel) {
   RenderSettings rs;
   rs.num_pes = 4;
   rs.measure_cost = true;
-  Renderer pilot(s, rs, runtime());
+  PreparedBanks banks = prepare_banks(s, rs, runtime());
+  const std::vector<int> facet_cluster = banks.facet_cluster;
+  Renderer pilot(s, std::move(banks), rs, runtime());
   const RenderResult r = pilot.render();
-  const MeasuredWork w = pilot.measured_work();
+  const MeasuredWork w = spread_cluster_work(pilot.cluster_work(), s.max_depth, facet_cluster);
   ASSERT_EQ(w.levels, s.max_depth);
   ASSERT_EQ(w.per_facet.size(), s.triangles.size() * std::size_t(s.max_depth));
   for (int l = 0; l < s.max_depth; ++l) {
@@ -196,9 +200,9 @@ TEST(Pilot, CountsTheSpmdTestsPerClusterAndLevel) {
   // The renderer without the pilot's program counts nothing.
   RenderSettings plain;
   plain.num_pes = 8;
-  Renderer frame(s, plain, runtime());
+  Renderer frame(s, prepare_banks(s, plain, runtime()), plain, runtime());
   frame.render();
-  EXPECT_TRUE(frame.measured_work().empty());
+  EXPECT_TRUE(frame.cluster_work().empty());
 }
 
 TEST(Renderer, NoRayLostWithTinyBanks) {
@@ -254,7 +258,7 @@ TEST(Renderer, PreparedOnceRendersEqualFrames) {
   RenderSettings rs;
   rs.num_pes = 4;
   rs.bank_capacity = 32;
-  Renderer machine(s, rs, runtime());
+  Renderer machine(s, prepare_banks(s, rs, runtime()), rs, runtime());
   RenderResult first = machine.render();
   RenderResult second = machine.render();
   RenderResult fresh = render_with(s, 4, 32);

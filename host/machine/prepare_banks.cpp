@@ -1,0 +1,28 @@
+#include "machine/prepare_banks.h"
+
+#include "machine/pilot.h"
+#include "machine/ranks.h"
+
+namespace opsila {
+
+PreparedBanks prepare_banks(const Scene& scene, const RenderSettings& settings, ClRuntime& runtime) {
+  check_machine_request(scene, settings.num_pes);
+  Ranks& ranks = Ranks::world();
+  const PeGroup group = pe_group(settings.num_pes, ranks.size(), ranks.rank());
+  BalancePolicy policy;
+  policy.balance = settings.balance;
+  policy.sample = settings.ray_sample;
+  MeasuredWork measured;
+  int frames = 0;
+  double seconds = 0;
+  if (settings.balance == Balance::measured) {
+    measured = pilot_work(scene, settings, runtime, &frames, &seconds);
+    policy.measured = &measured;
+  }
+  PreparedBanks banks = bank_scene(scene, settings.num_pes, settings.routing, policy, group);
+  banks.pilot_frames = frames;
+  banks.pilot_seconds = seconds;
+  return banks;
+}
+
+}  // namespace opsila

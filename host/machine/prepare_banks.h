@@ -1,0 +1,18 @@
+// The prepare step's first part: the banks a render's settings ask for.
+// With --balance measured the pilot frames (machine/pilot.h) run here,
+// before the frame's renderer exists; the renderer then takes the banks.
+#pragma once
+
+#include "machine/banks.h"
+#include "machine/cl_runtime.h"
+#include "machine/render_types.h"
+
+namespace opsila {
+
+// The banks of this rank's PE group (every PE's with one rank), partitioned
+// as settings.balance says: facets; work, with settings.ray_sample; or
+// measured, from pilot frames run on `runtime` first. Throws InputError for
+// a machine the kernels cannot run (check_machine_request).
+PreparedBanks prepare_banks(const Scene& scene, const RenderSettings& settings, ClRuntime& runtime);
+
+}  // namespace opsila

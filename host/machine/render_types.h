@@ -1,0 +1,107 @@
+// The renderer's vocabulary that other rooms share: what a frame is asked
+// for (RenderSettings, Balance), and what it reports (launch records, the
+// frame's statistics, each MPI rank's report, the result). Declared here,
+// below the renderer, so that the statistics, the pilot frames, the memory
+// plan, the rank exchange, the bench and the command line need not include
+// machine/renderer.h.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "core/image.h"
+#include "core/ray_sample.h"
+#include "opsila_shared.h"
+
+namespace opsila {
+
+class Progress;
+
+// How the scene is split over the PEs (--balance): equal shares of facets;
+// shares of the frame's rays, sampled on the host first (core/ray_sample.h);
+// or shares of the work that pilot frames measured on the device
+// (machine/pilot.h). Never the image.
+enum class Balance { facets, work, measured };
+const char* balance_name(Balance b);
+
+struct RenderSettings {
+  int num_pes = 16;
+  // n: bank slots per PE on average; P * n descriptors are in flight in each
+  // SPMD phase, shared out by demand. 0 = choose from the device.
+  int bank_capacity = 0;
+  // At most this many work-groups serve one PE's bank per round (0 = as
+  // many as its count needs). 1 is the paper's one PE, one processor.
+  int work_groups_per_pe = 0;
+  int item_buffer_tile = 1 << 16;  // pixels per item-buffer launch (bounded work per launch)
+  int routing = OPSILA_ROUTING_BOXES;  // destination choice: cluster boxes, or the paper's spheres
+  Progress* progress = nullptr;    // told at round boundaries when set (core/progress.h)
+  // measured: the prepare step runs the pilot frames first (machine/prepare_banks.h).
+  Balance balance = Balance::facets;
+  // --balance work: the frame's rays, sampled (core/ray_sample.h); the
+  // partition shares expected work as well as facets among the PEs.
+  const RaySample* ray_sample = nullptr;
+  // The pilot frames' program, which counts each cluster's tests (machine/pilot.h).
+  bool measure_cost = false;
+};
+
+// One kernel launch, named, with its OpenCL-profiled time.
+struct LaunchRecord {
+  std::string name;   // e.g. "item_buffer", "spmd_phase", "scatter_move"
+  int round = -1;     // SPMD/scatter round, -1 for set-up kernels
+  double seconds = 0; // CL_PROFILING_COMMAND_END - START
+};
+
+// What one rank did, for --stats and the bench (rank 0 gathers them).
+struct RankReport {
+  int rank = 0, pe_begin = 0, pe_end = 0;
+  std::string host, device;
+  std::uint64_t device_bytes = 0;     // planned device memory (scene slice, image, descriptors)
+  std::uint64_t scene_bytes = 0;      // of which the scene: own banks + global tables
+  std::uint64_t host_peak_bytes = 0;  // peak resident set of the process
+  double render_seconds = 0;
+  double mpi_seconds = 0;        // inside MPI calls (relay, exchange, reductions)
+  double exchange_seconds = 0;   // descriptor exchange: read-back, MPI, write-back (host wall time)
+  double exposed_seconds = 0;    // part of it the SPMD phase did not cover
+  std::vector<std::pair<std::string, double>> kernel_seconds;  // profiled, by kernel name
+  std::vector<std::vector<std::uint64_t>> sent;      // [round][destination rank] descriptors
+  std::vector<std::vector<std::uint64_t>> received;  // [round][source rank] descriptors
+};
+
+struct RenderStats {
+  // counters[level][pe][OPSILA_STAT_*]
+  std::vector<std::vector<std::vector<std::uint64_t>>> counters;
+  std::uint64_t descriptors_spawned = 0;   // descriptors created (primary hits + forwards excluded)
+  std::uint64_t descriptors_finished = 0;  // shaded hits + misses + occluded + lit
+  std::uint64_t forwards = 0;        // extra descriptors for cross-bank nearest hit / shadows
+  std::uint64_t overflow_deferrals = 0;  // descriptors that waited a round for a bank slot
+  int rounds = 0;                    // SPMD + scatter rounds
+  double render_seconds = 0;         // host wall time of the phases
+  std::vector<LaunchRecord> launches;
+  std::vector<std::uint64_t> bank_bytes;  // scene bytes per bank
+  std::vector<std::uint64_t> texture_bytes;  // texture copies per bank (part of bank_bytes)
+  std::uint64_t texture_replicated_bytes = 0;  // one copy of every texture used
+  std::uint64_t global_bytes = 0;         // replicated per PE: spheres, PE boxes, materials, lights
+  std::uint64_t replicated_bytes = 0;     // what a replicated scene would cost on each PE
+  // traffic[level][src_pe * P + dst_pe]: descriptors sent (scatter)
+  std::vector<std::vector<std::uint64_t>> traffic;
+  int bank_capacity = 0;
+  int num_pes = 0;
+  int num_clusters = 0;
+  int routing = OPSILA_ROUTING_BOXES;
+  Balance balance = Balance::facets;  // how the partition shared the scene (--balance)
+  int pilot_frames = 0;               // --balance measured: pilot frames run while preparing
+  double pilot_seconds = 0;           // their time (part of the prepare step, not of the frame)
+  std::size_t work_group_size = 0;
+  std::vector<RankReport> ranks;  // several MPI ranks: one report each (rank 0's result only)
+};
+
+// The image, its rays (every primary ray, N per pixel, is cast by the item
+// buffer; primary hits are the primary descriptors built from it) and how
+// the machine ran.
+struct RenderResult : ImageResult {
+  RenderStats stats;
+};
+
+}  // namespace opsila

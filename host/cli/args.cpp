@@ -304,7 +304,7 @@ void apply_view_options(Scene& scene, const ViewOptions& o) {
                      " is not strictly between 0 and 180 degrees");
 
   // A scene without a camera frames its bounding box; flags given still win.
-  if (!scene.has_camera && !scene.triangles.empty()) {
+  if (!scene.has_camera && scene.total_triangles() > 0) {
     Vec3 lo, hi;
     scene.bounds(lo, hi);
     const float fov = scene.camera.fov_deg;
@@ -363,10 +363,10 @@ void print_warnings(const std::vector<std::string>& warnings, bool quiet) {
     std::fprintf(stderr, "opsila: warning: ... and more (only the first %zu are shown)\n", kMaxShown);
 }
 
-Scene load_scene_or_explain(const std::string& path, bool quiet) {
+Scene load_scene_or_explain(const std::string& path, bool quiet, const SceneShare& share) {
   Scene scene;
   try {
-    scene = load_scene(path);
+    scene = load_scene(path, share);
   } catch (const InputError& e) {
     print_warnings(e.warnings, quiet);  // a misspelt key explains many errors
     throw;

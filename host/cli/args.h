@@ -122,7 +122,7 @@ void check_scene_file(const std::string& path);
 // Prints each distinct warning once ("opsila: warning: ..."), at most 100.
 void print_warnings(const std::vector<std::string>& warnings, bool quiet);
 // load_scene, with its warnings printed, also those found before an error.
-Scene load_scene_or_explain(const std::string& path, bool quiet);
+Scene load_scene_or_explain(const std::string& path, bool quiet, const SceneShare& share = SceneShare{});
 
 // ------------------------------------------------------------ walk_args
 

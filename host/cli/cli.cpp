@@ -190,7 +190,16 @@ int run_render(const std::vector<std::string>& args) {
     if (o.balance) print_line("warning", "--balance is ignored with --reference (one processor, no banks)");
   }
 
-  Scene scene = load_scene_or_explain(o.scene_path, o.quiet || !writer);
+  // Under mpirun each rank reads only its share of a JSON scene and the
+  // ranks partition it together (docs/DISTRIBUTED.md); the ray sample and
+  // the pilots of the other balance modes need the whole scene on every rank.
+  SceneShare share;
+  const Balance balance = o.balance.value_or(kDefaultBalance);
+  if (ranks.size() > 1 && balance == Balance::facets) share.rank = ranks.rank(), share.ranks = ranks.size();
+  if (ranks.size() > 1 && balance != Balance::facets && writer && !o.quiet)
+    print_line("note", std::string("--balance ") + balance_name(balance) +
+                           ": every rank reads the whole scene (--balance facets reads a share per rank)");
+  Scene scene = load_scene_or_explain(o.scene_path, o.quiet || !writer, share);
   outputs.refuse_inputs(scene.input_files);
   apply_view_options(scene, o);
 

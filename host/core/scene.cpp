@@ -55,6 +55,10 @@ MaterialDesc MaterialDesc::default_material() {
 }
 
 void Scene::bounds(Vec3& lo, Vec3& hi) const {
+  if (is_share()) {
+    lo = share.lo, hi = share.hi;
+    return;
+  }
   if (triangles.empty()) {
     lo = hi = Vec3{0, 0, 0};
     return;
@@ -111,7 +115,7 @@ CameraDesc frame_bounds(const Vec3& lo, const Vec3& hi, float fov_deg, float asp
 }
 
 void check_scene_extent(const Scene& scene, const std::string& where) {
-  if (scene.triangles.empty()) throw InputError(where + ": no facets");
+  if (scene.total_triangles() == 0) throw InputError(where + ": no facets");
   const double diag = scene.diagonal();
   const float diag_f = static_cast<float>(diag);
   if (!std::isfinite(diag_f))

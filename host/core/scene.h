@@ -92,8 +92,18 @@ struct CameraDesc {
   float fov_deg = 45.0f;
 };
 
+// A rank's share of a scene read by several MPI ranks (docs/DISTRIBUTED.md):
+// Scene::triangles then holds only the objects dealt to this rank, and
+// these figures describe the whole scene.
+struct SceneShare {
+  int rank = 0, ranks = 1;         // ranks == 1: the scene is whole
+  std::size_t total_triangles = 0;  // every rank's, together
+  Vec3 lo{0, 0, 0}, hi{0, 0, 0};    // bounds of every rank's triangles
+};
+
 struct Scene {
-  std::vector<Triangle> triangles;
+  std::vector<Triangle> triangles;  // all of them, or this rank's share
+  SceneShare share;
   std::vector<VertexAttributes> attributes;  // referenced by Triangle::attributes
   std::vector<MaterialDesc> materials;  // never empty after loading
   std::vector<Texture> textures;        // referenced by MaterialDesc::map_kd / map_ka
@@ -115,8 +125,11 @@ struct Scene {
   // loader that reads a file adds it here, so that no output can overwrite it.
   std::vector<std::string> input_files;
 
-  // Axis-aligned bounds of all triangles.
+  // Axis-aligned bounds of all triangles (every rank's, for a share).
   void bounds(Vec3& lo, Vec3& hi) const;
+  bool is_share() const { return share.ranks > 1; }
+  // Triangles of the whole scene (every rank's, for a share).
+  std::size_t total_triangles() const { return is_share() ? share.total_triangles : triangles.size(); }
   // SPEC: epsilon = 1e-4 x the diagonal of the scene's bounding box.
   float epsilon() const;
   // Length of the bounding box diagonal (computed in double, so a scene too

@@ -8,6 +8,8 @@
 
 #include "input/scene_reader.h"
 
+#include <cstdlib>
+
 namespace opsila {
 
 namespace fs = std::filesystem;
@@ -53,12 +55,13 @@ Scene SceneReader::read() {
   if (const Json* l = find(root, "lights")) lights(*l, "lights");
   if (const Json* o = find(root, "objects")) objects(*o, "objects");
   // Every object is checked and the total counted: only now is geometry built.
-  reserve_more(scene_.triangles, planned_triangles_);
+  if (share_.ranks == 1) reserve_more(scene_.triangles, planned_triangles_);  // a share grows as it is dealt
   for (const auto& build : builds_) build();
 
   scene_.num_objects = next_object_;
   scene_.num_facets = next_facet_;
-  if (scene_.triangles.empty()) fail("objects", "no facets: the scene has no visible objects");
+  if (share_.ranks > 1) settle_share();
+  if (scene_.total_triangles() == 0) fail("objects", "no facets: the scene has no visible objects");
   check_scene_extent(scene_, name_);
   Vec3 lo, hi;
   scene_.bounds(lo, hi);
@@ -245,14 +248,15 @@ using scene_json::Json;
 using scene_json::SceneReader;
 
 Scene load_scene_from_string(const std::string& text, const std::string& name,
-                             const std::string& base_dir, std::size_t max_triangles) {
+                             const std::string& base_dir, std::size_t max_triangles,
+                             const SceneShare& share) {
   try {
     if (text.size() > kMaxSceneFileBytes)
       throw InputError(name + ": scene file too large (" + std::to_string(text.size()) +
                        " bytes; the limit is " + std::to_string(kMaxSceneFileBytes) + ")");
     int line = 1;
     check_json_bytes(text.data(), text.size(), 0, line, name);
-    return SceneReader(text, name, base_dir, max_triangles).run();
+    return SceneReader(text, name, base_dir, max_triangles, share).run();
   } catch (const Json::exception&) {
     // Never the library's text: the reader checks every value's type first,
     // so this is a reader bug, reported without a misleading detail.
@@ -264,7 +268,18 @@ Scene load_scene_from_string(const std::string& text, const std::string& name,
   }
 }
 
-Scene load_scene(const std::string& path) {
+std::size_t rank_triangle_limit() {
+  const char* text = std::getenv("OPSILA_RANK_TRIANGLE_LIMIT");
+  if (!text || !*text) return kMaxTriangles;
+  const std::string value = text;
+  if (value.size() > 9 || !std::all_of(value.begin(), value.end(), [](unsigned char c) { return std::isdigit(c); }) ||
+      std::stoul(value) == 0 || std::stoul(value) > kMaxTriangles)
+    throw InputError("OPSILA_RANK_TRIANGLE_LIMIT=" + value + ": expected a number of triangles, 1.." +
+                     std::to_string(kMaxTriangles));
+  return std::stoul(value);
+}
+
+Scene load_scene(const std::string& path, const SceneShare& share) {
   const std::string ext = lower(fs::path(path).extension().string());
   if (ext == ".obj") return load_obj(path);
   if (ext != ".json" && is_imported_model(path)) {
@@ -279,7 +294,7 @@ Scene load_scene(const std::string& path) {
       });
   std::string dir = fs::path(path).parent_path().string();
   if (dir.empty()) dir = ".";
-  Scene scene = load_scene_from_string(text, path, dir);
+  Scene scene = load_scene_from_string(text, path, dir, rank_triangle_limit(), share);
   scene.input_files.insert(scene.input_files.begin(), path);
   return scene;
 }

@@ -17,7 +17,15 @@ namespace opsila {
 constexpr std::size_t kMaxSceneFileBytes = std::size_t(4) << 20;
 
 // ".obj" (any case) goes to load_obj; anything else is read as a JSON scene.
-Scene load_scene(const std::string& path);
+// With share.ranks > 1 a JSON scene is read as this rank's share
+// (share.rank of share.ranks; Scene::share), and may have share.ranks times
+// one rank's triangles; other files are read whole.
+Scene load_scene(const std::string& path, const SceneShare& share = SceneShare{});
+
+// One rank's triangle limit: kMaxTriangles, or lower where the environment
+// variable OPSILA_RANK_TRIANGLE_LIMIT says so (the tests' way to reach it
+// with a small scene).
+std::size_t rank_triangle_limit();
 
 // A JSON scene from memory. `name` is the file name used in messages; OBJ
 // files named by the scene are looked up relative to `base_dir`. With an
@@ -26,6 +34,7 @@ Scene load_scene(const std::string& path);
 // more than `max_triangles` triangles are refused before they are built.
 Scene load_scene_from_string(const std::string& text, const std::string& name,
                              const std::string& base_dir,
-                             std::size_t max_triangles = kMaxTriangles);
+                             std::size_t max_triangles = kMaxTriangles,
+                             const SceneShare& share = SceneShare{});
 
 }  // namespace opsila

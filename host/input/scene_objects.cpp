@@ -14,10 +14,16 @@ namespace scene_json {
 // shapes) against the scene's limits before anything is built.
 void SceneReader::budget(std::size_t triangles, std::size_t facets, std::size_t objects,
                          const std::string& path) {
+  const std::string on_ranks = share_.ranks > 1 ? " on " + std::to_string(share_.ranks) + " ranks (" +
+                                                     std::to_string(entry_limit_) + " per rank)"
+                                               : std::string();
   if (triangles > max_triangles_ || planned_triangles_ > max_triangles_ - triangles)
     fail(path, "would make " + std::to_string(triangles) + " more triangles (" +
                    std::to_string(planned_triangles_) + " so far); a scene may have at most " +
-                   std::to_string(max_triangles_) + " (scenes/FORMAT.md, Limits)");
+                   std::to_string(max_triangles_) + on_ranks + " (scenes/FORMAT.md, Limits)");
+  if (triangles > entry_limit_)  // every rank builds an entry whole
+    fail(path, "would make " + std::to_string(triangles) + " triangles; one entry of objects may have at most " +
+                   std::to_string(entry_limit_) + " on any number of ranks (scenes/FORMAT.md, Limits)");
   if (facets > std::size_t(INT_MAX) - planned_facets_)
     fail(path, "too many facets for 32-bit ids");
   if (objects > std::size_t(INT_MAX) - planned_objects_) fail(path, "too many objects");
@@ -39,6 +45,7 @@ void SceneReader::objects(const Json& v, const std::string& path) {
 // order once the whole scene is known to fit.
 void SceneReader::object(const Json& v, const std::string& path) {
   expect_object(v, path);
+  const std::size_t planned_before = planned_triangles_;  // where this entry's triangles start in the plan
   const std::string type = string(require(v, path, "type"), join_key(path, "type"));
   const auto key = [&](const char* k) { return join_key(path, k); };
   std::function<void(std::vector<Triangle>&)> make;
@@ -122,7 +129,8 @@ void SceneReader::object(const Json& v, const std::string& path) {
   }
   std::optional<Transform> placed;
   if (const Json* t = find(v, "transform")) placed = transform(*t, key("transform"));
-  builds_.push_back([this, make, placed, path] {
+  const std::size_t planned_after = planned_triangles_;
+  builds_.push_back([this, make, placed, path, planned_before, planned_after] {
     auto& tris = scene_.triangles;
     const std::size_t first = tris.size();
     const std::size_t first_attribute = scene_.attributes.size();
@@ -132,6 +140,7 @@ void SceneReader::object(const Json& v, const std::string& path) {
       transform_normals(scene_.attributes, first_attribute, *placed);
     }
     settle(first, path);
+    if (share_.ranks > 1) deal(first, first_attribute, planned_before, planned_after);
   });
 }
 
@@ -394,7 +403,7 @@ std::function<void(std::vector<Triangle>&)> SceneReader::include_obj(const Json&
     if (!obj && any_format && !is_imported_model(full))
       throw InputError(full + ": not a model format the importer reads (see scenes/FORMAT.md)");
     if (obj || !any_format) {
-      *sub = load_obj(full, max_triangles_ - planned_triangles_);
+      *sub = load_obj(full, std::min(entry_limit_, max_triangles_ - planned_triangles_));
     } else {
       *sub = load_model(full);
       sub->input_files.insert(sub->input_files.begin(), full);

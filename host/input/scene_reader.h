@@ -68,9 +68,12 @@ inline const char* kind(const Json& v) {
 
 class SceneReader {
  public:
+  // share.ranks > 1: read this rank's share (scene_share.cpp); max_triangles
+  // is then one rank's limit, and the scene may have ranks times it.
   SceneReader(const std::string& text, const std::string& name, const std::string& base_dir,
-              std::size_t max_triangles)
-      : text_(text), name_(name), base_dir_(base_dir), max_triangles_(max_triangles) {}
+              std::size_t max_triangles, const SceneShare& share = SceneShare{})
+      : text_(text), name_(name), base_dir_(base_dir), entry_limit_(max_triangles),
+        max_triangles_(max_triangles * std::size_t(std::max(share.ranks, 1))), share_(share) {}
 
   Scene run();
 
@@ -141,11 +144,17 @@ class SceneReader {
                    double total, std::uint64_t seed);
   std::function<void(std::vector<Triangle>&)> include_obj(const Json& v, const std::string& path,
                                                           bool any_format);
+  // Shares (scene_share.cpp).
+  void deal(std::size_t first, std::size_t first_attribute, std::size_t planned_begin, std::size_t planned_end);
+  void settle_share();
 
   const std::string& text_;
   const std::string& name_;
   std::string base_dir_;
-  std::size_t max_triangles_;
+  std::size_t entry_limit_;    // one entry of "objects" (one rank's limit)
+  std::size_t max_triangles_;  // the whole scene
+  SceneShare share_;           // rank and ranks; the whole scene's figures as they are built
+  std::vector<int> owner_;     // object id -> the rank it is dealt to (-1: not yet seen)
   std::unique_ptr<JsonLines> lines_;
   Scene scene_;
   std::vector<std::function<void()>> builds_;  // one per object, in order

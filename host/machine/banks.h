@@ -39,6 +39,7 @@ struct PreparedBanks {
   // The cluster of every scene facet (every rank's): the pilot frames'
   // per-cluster counts are spread over these (machine/pilot.h).
   std::vector<int> facet_cluster;
+  ShareFigures share;  // a scene read in shares: what the collective partition did here
 };
 
 // Throws InputError when the scene exceeds what the kernels support (depth,

@@ -1,6 +1,7 @@
 #include "machine/partition.h"
 
 #include "machine/bank_bvh.h"
+#include "machine/partition_steps.h"
 
 #include <algorithm>
 #include <cmath>
@@ -9,7 +10,7 @@
 #include "core/camera.h"
 
 namespace opsila {
-namespace {
+namespace partition_steps {
 
 Box tri_box(const Triangle& t) {
   Box b;
@@ -20,15 +21,6 @@ Box tri_box(const Triangle& t) {
 }
 
 float centroid(const Triangle& t, int a) { return (t.v0[a] + t.v1[a] + t.v2[a]) * (1.0f / 3.0f); }
-
-struct ClusterBuild {
-  std::vector<int> tris;  // indices into Scene::triangles
-  double weight = 0;      // its share of the scene's expected work (region_weights)
-  std::vector<double> work;  // measured: tests per level, then its facets' weight (region_weights)
-  Box box;
-  float c[3] = {0, 0, 0};  // centre for the spatial subdivision
-  int pe = 0;
-};
 
 // With split_flat, a flat piece (a floor, a wall, a terrain patch) must
 // also fit a fraction of a PE's region: its bounding sphere is mostly empty
@@ -230,7 +222,8 @@ void build_routing(BankedScene& bs, const Box& sbox) {
 // a device share one copy of the texels (a copy per bank would multiply
 // device memory by the PEs for nothing: 16 banks of one 256 MB map are 4 GB).
 // Returns the bytes of one copy of every texture used.
-std::uint64_t bank_attributes(const Scene& scene, const std::vector<int>& source, BankedScene& bs) {
+std::uint64_t bank_attributes(const Scene& scene, const std::vector<int>& source, BankedScene& bs,
+                              std::vector<char>* used_out) {
   const auto flags_of = [&](const Triangle& t) {
     if (t.attributes < 0) return 0;
     const VertexAttributes& a = scene.attributes[t.attributes];
@@ -241,7 +234,10 @@ std::uint64_t bank_attributes(const Scene& scene, const std::vector<int>& source
   bs.texture_bytes.assign(bs.pes.size(), 0);
   bool any = false;
   for (int i : source) any = any || flags_of(scene.triangles[i]) != 0;
-  if (!any) return 0;
+  if (!any) {
+    if (used_out) used_out->assign(scene.textures.size(), 0);
+    return 0;
+  }
   bs.attributes.assign(bs.triangles.size(), BankAttributes{});
   std::vector<char> used(scene.textures.size(), 0);
   std::vector<opsila_i32> texels_at(scene.textures.size(), -1);  // the device's one copy of each
@@ -286,8 +282,13 @@ std::uint64_t bank_attributes(const Scene& scene, const std::vector<int>& source
     }
     bs.bank_bytes[p] += std::uint64_t(pe.tri_end - pe.tri_begin) * sizeof(BankAttributes) + bs.texture_bytes[p];
   }
+  if (used_out) *used_out = used;
+  return texture_once(scene, used);
+}
+
+std::uint64_t texture_once(const Scene& scene, const std::vector<char>& used) {
   std::uint64_t once = 0;
-  for (std::size_t t = 0; t < scene.textures.size(); ++t)
+  for (std::size_t t = 0; t < scene.textures.size() && t < used.size(); ++t)
     if (used[t]) once += scene.textures[t].texels.size() * sizeof(std::uint32_t) + sizeof(BankTexture);
   return once;
 }
@@ -402,21 +403,25 @@ void region_weights(const Scene& scene, std::vector<ClusterBuild>& cb, const Ray
 // 1-2. Clusters and regions. Target: several clusters per PE so that
 // bisection can balance; regions are about diag / cbrt(P) across. The
 // clusters come back sorted by PE.
-std::vector<ClusterBuild> form_clusters(const Scene& scene, const Box& sbox, int num_pes, bool split_flat,
-                                        const RaySample* sample, const MeasuredWork* measured) {
-  const std::size_t total = scene.triangles.size();
+std::vector<ClusterBuild> split_clusters(const Scene& scene, std::size_t total, const Box& sbox, int num_pes,
+                                         bool split_flat) {
   std::size_t max_tris = std::max<std::size_t>(64, (total + 8 * num_pes - 1) / (8 * static_cast<std::size_t>(num_pes)));
   float region = sbox.diagonal() / std::cbrt(static_cast<float>(num_pes));
   float max_extent = std::max(region, 1e-30f);
   std::vector<std::vector<int>> by_object(std::max(scene.num_objects, 1));
-  for (std::size_t i = 0; i < total; ++i) {
+  for (std::size_t i = 0; i < scene.triangles.size(); ++i) {
     int o = std::clamp(scene.triangles[i].object_id, 0, static_cast<int>(by_object.size()) - 1);
     by_object[o].push_back(static_cast<int>(i));
   }
   std::vector<ClusterBuild> cb;
   for (auto& tris : by_object)
     if (!tris.empty()) split_object(scene, std::move(tris), max_tris, max_extent, split_flat, cb);
+  return cb;
+}
 
+std::vector<ClusterBuild> form_clusters(const Scene& scene, const Box& sbox, int num_pes, bool split_flat,
+                                        const RaySample* sample, const MeasuredWork* measured) {
+  std::vector<ClusterBuild> cb = split_clusters(scene, scene.triangles.size(), sbox, num_pes, split_flat);
   region_weights(scene, cb, sample, measured, num_pes);
   std::vector<int> all(cb.size());
   std::iota(all.begin(), all.end(), 0);
@@ -478,6 +483,22 @@ void fill_banks(const Scene& scene, const Box& sbox, const std::vector<ClusterBu
   }
 }
 
+void pe_bounds(const std::vector<Cluster>& clusters, PeInfo& pe) {
+  Box sb;
+  for (int k = pe.cluster_begin; k < pe.cluster_end; ++k) {
+    const Cluster& cl = clusters[std::size_t(k)];
+    float lo[3], hi[3];
+    for (int a = 0; a < 3; ++a) lo[a] = cl.center[a] - cl.radius, hi[a] = cl.center[a] + cl.radius;
+    sb.grow(lo);
+    sb.grow(hi);
+  }
+  const bool any = pe.cluster_begin < pe.cluster_end;
+  for (int a = 0; a < 3; ++a) {
+    pe.bmin[a] = any ? sb.lo[a] : 0.0f;
+    pe.bmax[a] = any ? sb.hi[a] : 0.0f;
+  }
+}
+
 // Each PE's range of clusters, triangles and bank BVH nodes, its bounds and
 // its bank's size.
 void describe_pes(const std::vector<ClusterBuild>& cb, std::vector<Box>& tri_boxes,
@@ -500,18 +521,7 @@ void describe_pes(const std::vector<ClusterBuild>& cb, std::vector<Box>& tri_box
                                static_cast<int>(c), ranges, &source);
     bs.max_bvh_depth = std::max(bs.max_bvh_depth, depth);
     pe.node_end = static_cast<int>(bs.nodes.size());
-    Box sb;
-    for (std::size_t k = c_begin; k < c; ++k) {
-      const Cluster& cl = bs.clusters[k];
-      float lo[3], hi[3];
-      for (int a = 0; a < 3; ++a) lo[a] = cl.center[a] - cl.radius, hi[a] = cl.center[a] + cl.radius;
-      sb.grow(lo);
-      sb.grow(hi);
-    }
-    for (int a = 0; a < 3; ++a) {
-      pe.bmin[a] = c_begin < c ? sb.lo[a] : 0.0f;
-      pe.bmax[a] = c_begin < c ? sb.hi[a] : 0.0f;
-    }
+    pe_bounds(bs.clusters, pe);
     std::uint64_t bytes = std::uint64_t(pe.tri_end - pe.tri_begin) * sizeof(BankTriangle) +
                           std::uint64_t(pe.node_end - pe.node_begin) * sizeof(BankNode);
     bs.bank_bytes.push_back(bytes);
@@ -557,7 +567,21 @@ void node_clusters(BankedScene& bs) {
   }
 }
 
-}  // namespace
+void scene_bytes(BankedScene& bs, std::uint64_t texture_once) {
+  bs.global_bytes = bs.clusters.size() * sizeof(Cluster) + bs.route_nodes.size() * sizeof(BankNode) +
+                    bs.pes.size() * sizeof(PeInfo) +
+                    bs.materials.size() * sizeof(Material) + bs.lights.size() * sizeof(Light);
+  // One copy of everything: every bank's facets, nodes and attributes, but
+  // each texture once (banks that share a texture each hold a copy).
+  std::uint64_t all_banks = 0;
+  for (std::size_t p = 0; p < bs.bank_bytes.size(); ++p) all_banks += bs.bank_bytes[p] - bs.texture_bytes[p];
+  bs.texture_replicated_bytes = texture_once;
+  bs.replicated_bytes = all_banks + texture_once + bs.global_bytes;
+}
+
+}  // namespace partition_steps
+
+using namespace partition_steps;
 
 BankedScene partition_scene(const Scene& scene, int num_pes, bool split_flat, const RaySample* sample,
                             const MeasuredWork* measured) {
@@ -578,19 +602,11 @@ BankedScene partition_scene(const Scene& scene, int num_pes, bool split_flat, co
 
   build_routing(bs, sbox);
   node_clusters(bs);
-  std::uint64_t texture_once = bank_attributes(scene, source, bs);
+  const std::uint64_t once = bank_attributes(scene, source, bs, nullptr);
   bs.source = source;
   global_tables(scene, bs);
 
-  bs.global_bytes = bs.clusters.size() * sizeof(Cluster) + bs.route_nodes.size() * sizeof(BankNode) +
-                    bs.pes.size() * sizeof(PeInfo) +
-                    bs.materials.size() * sizeof(Material) + bs.lights.size() * sizeof(Light);
-  // One copy of everything: every bank's facets, nodes and attributes, but
-  // each texture once (banks that share a texture each hold a copy).
-  std::uint64_t all_banks = 0;
-  for (std::size_t p = 0; p < bs.bank_bytes.size(); ++p) all_banks += bs.bank_bytes[p] - bs.texture_bytes[p];
-  bs.texture_replicated_bytes = texture_once;
-  bs.replicated_bytes = all_banks + texture_once + bs.global_bytes;
+  scene_bytes(bs, once);
   return bs;
 }
 

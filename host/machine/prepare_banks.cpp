@@ -1,5 +1,8 @@
 #include "machine/prepare_banks.h"
 
+#include <stdexcept>
+
+#include "machine/collective_partition.h"
 #include "machine/pilot.h"
 #include "machine/ranks.h"
 
@@ -9,6 +12,11 @@ PreparedBanks prepare_banks(const Scene& scene, const RenderSettings& settings, 
   check_machine_request(scene, settings.num_pes);
   Ranks& ranks = Ranks::world();
   const PeGroup group = pe_group(settings.num_pes, ranks.size(), ranks.rank());
+  if (scene.is_share()) {  // read in shares: the ranks partition it together
+    if (settings.balance != Balance::facets)
+      throw std::invalid_argument("prepare_banks: a scene read in shares is balanced by facets");
+    return bank_share(scene, settings.num_pes, settings.routing, group, ranks);
+  }
   BalancePolicy policy;
   policy.balance = settings.balance;
   policy.sample = settings.ray_sample;

@@ -185,6 +185,19 @@ std::vector<std::string> Ranks::gather(const std::string& mine, int root) {
   return out;
 }
 
+std::vector<unsigned char> Ranks::all_gather(const std::vector<unsigned char>& mine) {
+  if (size_ == 1) return mine;
+  RanksTimer t(*this);
+  int n = checked_int(mine.size(), "gathered bytes");
+  std::vector<int> sizes(size_), at(size_);
+  MPI_Allgather(&n, 1, MPI_INT, sizes.data(), 1, MPI_INT, MPI_COMM_WORLD);
+  std::uint64_t total = 0;
+  for (int q = 0; q < size_; ++q) at[q] = checked_int(total, "gathered bytes"), total += sizes[q];
+  std::vector<unsigned char> all(total);
+  MPI_Allgatherv(mine.data(), n, MPI_BYTE, all.data(), sizes.data(), at.data(), MPI_BYTE, MPI_COMM_WORLD);
+  return all;
+}
+
 void Ranks::send(const void* data, std::size_t bytes, int to, int tag) {
   RanksTimer t(*this);
   auto* request = new MPI_Request;
@@ -240,6 +253,7 @@ std::vector<std::uint64_t> Ranks::all_to_all(const std::vector<unsigned char>& s
 void Ranks::reduce_sum(std::vector<std::uint64_t>&, int) {}
 void Ranks::broadcast(void*, std::size_t, int) {}
 std::vector<std::string> Ranks::gather(const std::string& mine, int) { return {mine}; }
+std::vector<unsigned char> Ranks::all_gather(const std::vector<unsigned char>& mine) { return mine; }
 void Ranks::send(const void*, std::size_t, int, int) { throw std::logic_error("Ranks::send without MPI"); }
 void Ranks::receive(void*, std::size_t, int, int) { throw std::logic_error("Ranks::receive without MPI"); }
 void Ranks::wait_sends() {}

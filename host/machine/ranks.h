@@ -55,6 +55,8 @@ class Ranks {
   void reduce_sum(std::vector<std::uint64_t>& values, int root);  // in place; valid on root
   void broadcast(void* data, std::size_t bytes, int root);
   std::vector<std::string> gather(const std::string& mine, int root);  // all ranks' strings on root
+  // Every rank's bytes, concatenated in rank order, on every rank.
+  std::vector<unsigned char> all_gather(const std::vector<unsigned char>& mine);
 
   // Point to point (the item-buffer pipeline). send() does not wait; the
   // data must stay untouched until wait_sends().

@@ -53,6 +53,15 @@ struct LaunchRecord {
   double seconds = 0; // CL_PROFILING_COMMAND_END - START
 };
 
+// A rank's part of a scene read in shares (machine/collective_partition.h):
+// inactive when every rank read the whole scene.
+struct ShareFigures {
+  bool active = false;            // the scene was read in shares
+  std::uint64_t facets_read = 0;  // triangles of this rank's share of the scene
+  std::uint64_t facets_held = 0;  // triangles of its group's banks
+  double partition_seconds = 0, exchange_seconds = 0, bank_seconds = 0;
+};
+
 // What one rank did, for --stats and the bench (rank 0 gathers them).
 struct RankReport {
   int rank = 0, pe_begin = 0, pe_end = 0;
@@ -67,6 +76,7 @@ struct RankReport {
   std::vector<std::pair<std::string, double>> kernel_seconds;  // profiled, by kernel name
   std::vector<std::vector<std::uint64_t>> sent;      // [round][destination rank] descriptors
   std::vector<std::vector<std::uint64_t>> received;  // [round][source rank] descriptors
+  ShareFigures share;
 };
 
 struct RenderStats {

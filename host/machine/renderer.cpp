@@ -129,6 +129,7 @@ struct Renderer::Machine {
   FlightPlan flight{1, 1, 1, 1};
   FrameParams fp{};
   RenderStats prepared;  // what the prepare step knows: banks, n, work-group size
+  ShareFigures share;    // a scene read in shares: what the collective partition did here
 
   cl::Kernel k_item, k_primary, k_spmd;
   std::unique_ptr<ScatterPass> scatter;
@@ -227,6 +228,7 @@ Renderer::Machine::Machine(const Scene& scene, PreparedBanks banks, const Render
   prepared.balance = banks.balance;
   prepared.pilot_frames = banks.pilot_frames;
   prepared.pilot_seconds = banks.pilot_seconds;
+  share = banks.share;
   prepared.bank_bytes = bs.bank_bytes;
   prepared.global_bytes = bs.global_bytes;
   prepared.replicated_bytes = bs.replicated_bytes;
@@ -643,6 +645,7 @@ RankReport Renderer::Machine::rank_report(const RenderStats& st, double seconds,
   }
   r.sent = x.sent;
   r.received = x.received;
+  r.share = share;
   return r;
 }
 

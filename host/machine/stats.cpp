@@ -156,7 +156,7 @@ nlohmann::json stats_json(const RenderResult& result, const Scene& scene,
   if (s.balance == Balance::measured) j["pilot"] = {{"frames", s.pilot_frames}, {"seconds", s.pilot_seconds}};
   j["work_group_size"] = s.work_group_size;
   j["rounds"] = s.rounds;
-  j["scene"] = {{"triangles", scene.triangles.size()},
+  j["scene"] = {{"triangles", scene.total_triangles()},
                 {"facets", scene.num_facets},
                 {"objects", scene.num_objects},
                 {"lights", scene.lights.size()}};
@@ -269,6 +269,12 @@ std::string rank_report_json(const RankReport& r) {
                       {"kernel_seconds", kernels},
                       {"sent", r.sent},
                       {"received", r.received}};
+  if (r.share.active)  // a scene read in shares: what this rank read, held and spent on it
+    j["share"] = {{"facets_read", r.share.facets_read},
+                  {"facets_held", r.share.facets_held},
+                  {"partition_seconds", r.share.partition_seconds},
+                  {"exchange_seconds", r.share.exchange_seconds},
+                  {"bank_seconds", r.share.bank_seconds}};
   return j.dump();
 }
 
@@ -290,6 +296,14 @@ RankReport rank_report_from_json(const std::string& text) {
   for (const auto& [name, s] : j.at("kernel_seconds").items()) r.kernel_seconds.emplace_back(name, s.get<double>());
   r.sent = j.at("sent").get<std::vector<std::vector<std::uint64_t>>>();
   r.received = j.at("received").get<std::vector<std::vector<std::uint64_t>>>();
+  if (const auto s = j.find("share"); s != j.end()) {
+    r.share.active = true;
+    r.share.facets_read = s->at("facets_read");
+    r.share.facets_held = s->at("facets_held");
+    r.share.partition_seconds = s->at("partition_seconds");
+    r.share.exchange_seconds = s->at("exchange_seconds");
+    r.share.bank_seconds = s->at("bank_seconds");
+  }
   return r;
 }
 

@@ -151,6 +151,121 @@ TEST_F(MpiFixture, HundredsIsTheSameOnOneToFourRanks) {
   expect_same_as_one_process(*this, "hundreds.json", "96x72", "16");
 }
 
+TEST_F(MpiFixture, TexturedAndSmoothAreTheSameOnThreeRanks) {
+  expect_same_as_one_process(*this, "textured.json", "64x48", "8");
+  expect_same_as_one_process(*this, "smooth.json", "64x48", "8");
+}
+
+// A scene of `entries` grids of small spheres (80 triangles, one object
+// each), side by side, each grid one entry of "objects"; `files` adds that
+// many included OBJ files (a box each), the one named `broken` (if any)
+// with a face that names a missing vertex.
+std::string share_scene(TempDir& dir, int entries, int files = 0, int broken = -1) {
+  std::string objects;
+  for (int e = 0; e < entries; ++e)
+    objects += std::string(objects.empty() ? "" : ",\n") + R"({"type": "grid", "counts": [6, 6, 2], "min": [)" +
+               std::to_string(4 * e) + R"(, 0, 0], "max": [)" + std::to_string(4 * e + 3) +
+               R"(, 3, 1], "radius": 0.2, "subdivisions": 1, "seed": )" + std::to_string(e + 1) + "}";
+  for (int k = 0; k < files; ++k) {
+    const std::string name = "part" + std::to_string(k) + ".obj";
+    dir.write(name, std::string("o part\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\n") +
+                                         (k == broken ? "f 1 2 9\n" : "f 1 2 3 4\nf 1 2 5\nf 2 3 5\n"));
+    objects += ",\n" R"({"type": "obj", "file": ")" + name + R"(", "transform": {"translate": [)" +
+               std::to_string(2 * k) + ", -2, 0]}}";
+  }
+  dir.write("share.json", "{\"objects\": [\n" + objects + "\n]}\n");
+  return dir.file("share.json");
+}
+
+// Under mpirun each rank reads only its share of a JSON scene and the ranks
+// partition it together into the banks one process builds: the same image,
+// item buffer and work per PE, the same banks (memory, clusters), and each
+// rank read about 1/R of the facets and holds its group's banks only.
+TEST_F(MpiFixture, ScenesReadInSharesAreTheSameAsOneProcess) {
+  const std::string path = share_scene(dir, 6, 5);
+  auto with = [&](const std::string& tag) {
+    return std::vector<std::string>{path,    "--size", "64x48", "--pes", "12", "-q", "-o", dir.file(tag + ".pfm"),
+                                    "--item-buffer", dir.file(tag + ".npy"), "--stats", dir.file(tag + ".json")};
+  };
+  const RunResult single = one(with("one"));
+  ASSERT_EQ(single.exit_code, 0) << single.err;
+  const nlohmann::json base = stats(dir.file("one.json"));
+  const std::uint64_t N = base.at("scene").at("triangles");
+  ASSERT_EQ(N, 6u * 72 * 80 + 5 * 4);
+  for (int R : {2, 3, 4}) {
+    SCOPED_TRACE(std::to_string(R) + " ranks");
+    const std::string tag = "r" + std::to_string(R);
+    const RunResult r = ranks(R, with(tag));
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_TRUE(test::read_file(dir.file(tag + ".pfm")) == test::read_file(dir.file("one.pfm")));
+    EXPECT_TRUE(test::read_file(dir.file(tag + ".npy")) == test::read_file(dir.file("one.npy")));
+    const nlohmann::json s = stats(dir.file(tag + ".json"));
+    for (const char* key : {"scene", "clusters", "rays", "levels", "memory"}) EXPECT_EQ(s.at(key), base.at(key)) << key;
+    std::uint64_t read = 0, held = 0;
+    for (const auto& rank : s.at("mpi").at("per_rank")) {
+      const nlohmann::json& share = rank.at("share");
+      const std::uint64_t pes = rank.at("pes").at(1).get<std::uint64_t>() - rank.at("pes").at(0).get<std::uint64_t>();
+      // Whole objects are dealt: a share is 1/R of the facets, give or take one object.
+      EXPECT_LE(share.at("facets_read").get<std::uint64_t>(), N / R + 80);
+      // Banks of equal facet counts, within a cluster's size or so.
+      EXPECT_LE(share.at("facets_held").get<std::uint64_t>(), N * pes / 12 + N / 12);
+      read += share.at("facets_read").get<std::uint64_t>();
+      held += share.at("facets_held").get<std::uint64_t>();
+    }
+    EXPECT_EQ(read, N);
+    EXPECT_EQ(held, N);
+  }
+}
+
+// One rank's triangle limit (lowered here by OPSILA_RANK_TRIANGLE_LIMIT):
+// a scene over it is refused on one process, before anything is built,
+// naming the file, the key and the figures; two ranks accept twice the
+// limit and render the same image as one process without the limit.
+TEST_F(MpiFixture, TwoRanksAcceptTwiceOneRanksTriangles) {
+  const std::string path = share_scene(dir, 4);  // 4 x 5760 triangles
+  auto with = [&](const std::string& out) {
+    return std::vector<std::string>{path, "--size", "48x36", "--pes", "4", "-q", "-o", dir.file(out)};
+  };
+  ASSERT_EQ(one(with("unlimited.pfm")).exit_code, 0);
+  env["OPSILA_RANK_TRIANGLE_LIMIT"] = "15000";
+  const RunResult alone = one(with("alone.pfm"));
+  EXPECT_EQ(alone.exit_code, 2) << alone.err;
+  ASSERT_EQ(alone.error_lines().size(), 1u) << alone.err;
+  EXPECT_NE(alone.error_lines()[0].find("share.json:"), std::string::npos) << alone.err;
+  EXPECT_NE(alone.error_lines()[0].find("objects[2]"), std::string::npos) << alone.err;
+  EXPECT_NE(alone.error_lines()[0].find("at most 15000"), std::string::npos) << alone.err;
+  EXPECT_FALSE(test::file_exists(dir.file("alone.pfm")));
+  const RunResult two = ranks(2, with("two.pfm"));
+  ASSERT_EQ(two.exit_code, 0) << two.err;
+  EXPECT_TRUE(test::read_file(dir.file("two.pfm")) == test::read_file(dir.file("unlimited.pfm")));
+  // One entry is built whole by every rank: it must fit one rank's limit.
+  env["OPSILA_RANK_TRIANGLE_LIMIT"] = "5000";
+  const RunResult entry = ranks(4, with("entry.pfm"));
+  EXPECT_EQ(entry.exit_code, 2) << entry.err;
+  ASSERT_EQ(entry.error_lines().size(), 1u) << entry.err;
+  EXPECT_NE(entry.error_lines()[0].find("one entry of objects may have at most 5000"), std::string::npos) << entry.err;
+}
+
+// A broken file among many, which one rank reads (its scene names it) and
+// the others do not: one error line naming the file, every rank ended, no
+// output left behind.
+TEST_F(MpiFixture, ABrokenFileOnOneRankEndsEveryRank) {
+  const std::string good = share_scene(dir, 2, 4);
+  TempDir other;
+  const std::string bad = share_scene(other, 2, 4, 3);
+  const std::vector<std::string> args = {"--size", "32x24", "--pes", "6", "-o", dir.file("x.pfm")};
+  std::vector<std::string> mine = {good}, theirs = {bad};
+  mine.insert(mine.end(), args.begin(), args.end());
+  theirs.insert(theirs.end(), args.begin(), args.end());
+  const RunResult r = ranks(2, mine, {theirs});  // rank 2 reads the broken scene
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  const auto errors = r.error_lines();
+  ASSERT_EQ(errors.size(), 1u) << r.err;
+  EXPECT_EQ(errors[0].rfind("opsila: error: rank 2: ", 0), 0u) << errors[0];
+  EXPECT_NE(errors[0].find("part3.obj"), std::string::npos) << errors[0];
+  EXPECT_EQ(dir.entries().size(), 5u) << "an output file was left behind (the folder held the scene and 4 OBJ files)";
+}
+
 // --balance work: every rank samples the same rays and builds the same
 // partition; --balance measured: the ranks run the pilot frames together
 // and share each cluster's counts, so they build the same partition. Either

@@ -1,0 +1,61 @@
+// A rank's share of a JSON scene (docs/DISTRIBUTED.md). Every rank reads
+// the scene file and builds every entry of "objects" in order, so ids, the facet counters and every error are the
+// same on every rank; after each entry it counts the entry into the whole
+// scene's figures and keeps only the objects dealt to it. An object goes
+// whole to the rank whose equal slice of the planned triangles holds its
+// first triangle (each entry's built triangles spread evenly over its part
+// of the plan): ranks hold about equal shares, and a rank's peak is its
+// share plus the largest entry.
+#include "input/scene_reader.h"
+
+namespace opsila {
+namespace scene_json {
+
+void SceneReader::deal(std::size_t first, std::size_t first_attribute, std::size_t planned_begin,
+                       std::size_t planned_end) {
+  auto& tris = scene_.triangles;
+  auto& attributes = scene_.attributes;
+  const std::uint64_t planned = std::max<std::size_t>(planned_triangles_, 1);
+  const std::uint64_t built = tris.size() - first, span = planned_end - planned_begin;
+  const std::uint64_t ranks = std::uint64_t(share_.ranks);
+  std::size_t keep = first;
+  std::vector<int> moved(attributes.size() - first_attribute, -1);  // this entry's attributes, renumbered
+  std::vector<VertexAttributes> kept;
+  for (std::size_t k = first; k < tris.size(); ++k) {
+    Triangle t = tris[k];
+    const std::size_t g = share_.total_triangles++;
+    for (const Vec3* v : {&t.v0, &t.v1, &t.v2})
+      for (int a = 0; a < 3; ++a) {
+        share_.lo[a] = g == 0 ? (*v)[a] : std::min(share_.lo[a], (*v)[a]);
+        share_.hi[a] = g == 0 ? (*v)[a] : std::max(share_.hi[a], (*v)[a]);
+      }
+    if (std::size_t(t.object_id) >= owner_.size()) owner_.resize(std::size_t(t.object_id) + 1, -1);
+    int& owner = owner_[std::size_t(t.object_id)];
+    // The entry's triangles spread evenly over its part of the plan (a plan
+    // counts the largest shape of a generator for each item).
+    const std::uint64_t at = planned_begin + (k - first) * span / built;
+    if (owner < 0) owner = static_cast<int>(std::min(at * ranks / planned, ranks - 1));
+    if (owner != share_.rank) continue;
+    if (t.attributes >= 0 && std::size_t(t.attributes) >= first_attribute) {
+      int& to = moved[std::size_t(t.attributes) - first_attribute];
+      if (to < 0) {
+        to = static_cast<int>(first_attribute + kept.size());
+        kept.push_back(attributes[std::size_t(t.attributes)]);
+      }
+      t.attributes = to;
+    }
+    tris[keep++] = t;
+  }
+  tris.resize(keep);
+  attributes.resize(first_attribute);
+  attributes.insert(attributes.end(), kept.begin(), kept.end());
+}
+
+void SceneReader::settle_share() {
+  scene_.share = share_;
+  scene_.triangles.shrink_to_fit();
+  scene_.attributes.shrink_to_fit();
+}
+
+}  // namespace scene_json
+}  // namespace opsila

@@ -1,0 +1,319 @@
+#include "machine/collective_partition.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cstring>
+#include <numeric>
+#include <stdexcept>
+#include <type_traits>
+
+#include "machine/partition_steps.h"
+
+namespace opsila {
+namespace {
+
+using namespace partition_steps;
+
+// One cluster as every rank learns it: enough to place it in a region and
+// to find its facets (rank, index in that rank's list).
+struct ClusterSummary {
+  std::int32_t object = 0, rank = 0, local = 0, pad = 0;
+  std::uint64_t facets = 0;
+  float c[3] = {0, 0, 0}, lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0};
+};
+
+// One facet on its way to the rank of its PE.
+struct Shipped {
+  Triangle t;
+  VertexAttributes a;
+  std::int32_t cluster = 0;  // global cluster index
+  std::int32_t has_attributes = 0;
+};
+
+static_assert(std::is_trivially_copyable<ClusterSummary>::value && std::is_trivially_copyable<Shipped>::value &&
+                  std::is_trivially_copyable<Cluster>::value,
+              "sent as bytes");
+
+template <typename T>
+std::vector<unsigned char> bytes_of(const std::vector<T>& v) {
+  std::vector<unsigned char> b(v.size() * sizeof(T));
+  if (!v.empty()) std::memcpy(b.data(), v.data(), b.size());
+  return b;
+}
+
+template <typename T>
+std::vector<T> records_of(const std::vector<unsigned char>& b) {
+  std::vector<T> v(b.size() / sizeof(T));
+  if (!v.empty()) std::memcpy(v.data(), b.data(), v.size() * sizeof(T));
+  return v;
+}
+
+// Facets in flight per rank and round: the exchange's buffer stays bounded
+// (2^16 records of about 128 bytes: 8 MB to send, at most R times that to
+// receive) whatever the scene's size.
+constexpr std::size_t kChunk = std::size_t(1) << 16;
+
+double seconds_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+// Where every cluster goes: the whole scene's clusters in partition_scene's
+// order (object, then the order the cuts made them), placed by the same
+// bisection, then sorted by PE (stably) as partition_scene sorts them.
+struct Placement {
+  std::vector<ClusterSummary> clusters;  // global order (sorted by PE)
+  std::vector<int> pe;                   // of each
+  std::vector<int> global_of_local;      // this rank's clusters -> global index
+};
+
+Placement place_clusters(const Scene& scene, const std::vector<ClusterBuild>& local, int num_pes, Ranks& ranks) {
+  std::vector<ClusterSummary> mine(local.size());
+  const int last_object = std::max(scene.num_objects, 1) - 1;
+  for (std::size_t i = 0; i < local.size(); ++i) {
+    ClusterSummary& s = mine[i];
+    s.object = std::clamp(scene.triangles[std::size_t(local[i].tris[0])].object_id, 0, last_object);
+    s.rank = ranks.rank();
+    s.local = static_cast<int>(i);
+    s.facets = local[i].tris.size();
+    for (int a = 0; a < 3; ++a) s.c[a] = local[i].c[a], s.lo[a] = local[i].box.lo[a], s.hi[a] = local[i].box.hi[a];
+  }
+  std::vector<ClusterSummary> all = records_of<ClusterSummary>(ranks.all_gather(bytes_of(mine)));
+  std::stable_sort(all.begin(), all.end(), [](const ClusterSummary& a, const ClusterSummary& b) {
+    return a.object < b.object || (a.object == b.object && (a.rank < b.rank || (a.rank == b.rank && a.local < b.local)));
+  });
+  std::vector<ClusterBuild> table(all.size());
+  for (std::size_t k = 0; k < all.size(); ++k) {
+    for (int a = 0; a < 3; ++a) table[k].c[a] = all[k].c[a];
+    table[k].weight = double(all[k].facets);
+  }
+  std::vector<int> idx(all.size());
+  std::iota(idx.begin(), idx.end(), 0);
+  assign_regions(table, idx, 0, num_pes);
+  std::stable_sort(idx.begin(), idx.end(), [&](int a, int b) { return table[a].pe < table[b].pe; });
+  Placement out;
+  out.global_of_local.assign(local.size(), -1);
+  for (std::size_t g = 0; g < idx.size(); ++g) {
+    const ClusterSummary& s = all[std::size_t(idx[g])];
+    out.clusters.push_back(s);
+    out.pe.push_back(table[std::size_t(idx[g])].pe);
+    if (s.rank == ranks.rank()) out.global_of_local[std::size_t(s.local)] = static_cast<int>(g);
+  }
+  return out;
+}
+
+// Each local cluster's facets to the rank of its PE, kChunk at a time;
+// returns this rank's clusters' facets, by global cluster, each cluster's
+// in the order its rank held them.
+std::vector<Shipped> exchange_facets(const Scene& scene, const std::vector<ClusterBuild>& local, const Placement& pl,
+                                     int num_pes, Ranks& ranks) {
+  const int R = ranks.size();
+  std::vector<Shipped> received;
+  std::size_t cluster = 0, facet = 0;  // the next facet to send
+  for (;;) {
+    std::vector<std::vector<Shipped>> to(static_cast<std::size_t>(R));
+    std::size_t n = 0;
+    for (; cluster < local.size() && n < kChunk; facet = 0, ++cluster) {
+      const int g = pl.global_of_local[cluster];
+      std::vector<Shipped>& out = to[std::size_t(rank_of_pe(num_pes, R, pl.pe[std::size_t(g)]))];
+      const std::vector<int>& tris = local[cluster].tris;
+      for (; facet < tris.size() && n < kChunk; ++facet, ++n) {
+        Shipped s;
+        s.t = scene.triangles[std::size_t(tris[facet])];
+        s.cluster = g;
+        s.has_attributes = s.t.attributes >= 0;
+        if (s.has_attributes) s.a = scene.attributes[std::size_t(s.t.attributes)];
+        out.push_back(s);
+      }
+      if (facet < tris.size()) break;  // the chunk is full inside this cluster
+    }
+    if (ranks.sum(n) == 0) break;
+    std::vector<unsigned char> send, recv;
+    std::vector<std::uint64_t> counts(static_cast<std::size_t>(R));
+    for (int q = 0; q < R; ++q) {
+      counts[std::size_t(q)] = to[std::size_t(q)].size();
+      const std::vector<unsigned char> b = bytes_of(to[std::size_t(q)]);
+      send.insert(send.end(), b.begin(), b.end());
+    }
+    ranks.all_to_all(send, counts, sizeof(Shipped), recv);
+    const std::vector<Shipped> got = records_of<Shipped>(recv);
+    received.insert(received.end(), got.begin(), got.end());
+  }
+  std::stable_sort(received.begin(), received.end(),
+                   [](const Shipped& a, const Shipped& b) { return a.cluster < b.cluster; });
+  return received;
+}
+
+}  // namespace
+
+namespace {
+
+// The rank's own part of the scene after the exchange: its clusters' facets
+// (and their attributes) with the scene's materials and textures, and the
+// clusters as the bank build wants them (PEs numbered in the group).
+struct OwnPart {
+  Scene scene;
+  std::vector<ClusterBuild> clusters;
+  int first_cluster = 0;  // global index of the first
+};
+
+OwnPart own_part(const Scene& share, std::vector<Shipped> received, const Placement& pl, const PeGroup& group) {
+  OwnPart own;
+  own.scene.materials = share.materials;
+  own.scene.textures = share.textures;
+  own.scene.smooth = share.smooth;
+  own.scene.triangles.reserve(received.size());
+  int g0 = 0;
+  while (g0 < int(pl.pe.size()) && pl.pe[std::size_t(g0)] < group.begin) ++g0;
+  own.first_cluster = g0;
+  for (int g = g0; g < int(pl.pe.size()) && pl.pe[std::size_t(g)] < group.end; ++g) {
+    ClusterBuild cb;
+    const ClusterSummary& s = pl.clusters[std::size_t(g)];
+    for (int a = 0; a < 3; ++a) cb.c[a] = s.c[a], cb.box.lo[a] = s.lo[a], cb.box.hi[a] = s.hi[a];
+    cb.pe = pl.pe[std::size_t(g)] - group.begin;
+    cb.weight = double(s.facets);
+    own.clusters.push_back(std::move(cb));
+  }
+  for (Shipped& s : received) {
+    Triangle t = s.t;
+    t.attributes = -1;
+    if (s.has_attributes) {
+      t.attributes = static_cast<int>(own.scene.attributes.size());
+      own.scene.attributes.push_back(s.a);
+    }
+    own.clusters[std::size_t(s.cluster - g0)].tris.push_back(static_cast<int>(own.scene.triangles.size()));
+    own.scene.triangles.push_back(t);
+  }
+  received = std::vector<Shipped>();
+  return own;
+}
+
+// The group's banks from its own part: partition_scene's steps 3-4 on the
+// group's PEs only (numbered from 0, as keep_group_banks leaves them).
+BankedScene group_banks(OwnPart& own, const Box& sbox, int group_size, std::vector<char>& used) {
+  BankedScene loc;
+  loc.num_pes = group_size;
+  std::vector<Box> tri_boxes;
+  std::vector<int> source;
+  std::vector<std::pair<int, int>> ranges;
+  fill_banks(own.scene, sbox, own.clusters, loc, tri_boxes, source, ranges);
+  describe_pes(own.clusters, tri_boxes, ranges, source, own.scene.triangles.size(), loc);
+  node_clusters(loc);
+  bank_attributes(own.scene, source, loc, &used);
+  loc.source = std::move(source);
+  return loc;
+}
+
+// Everything the other ranks built that every PE must know: cluster
+// spheres and boxes, the PE table, bank sizes, routing. `loc` (the group's
+// banks) becomes what keep_group_banks leaves of the whole scene's banks.
+BankedScene share_tables(const Scene& share, const Box& sbox, const Placement& pl, const PeGroup& group,
+                         int num_pes, int first_cluster, const std::vector<char>& used, Ranks& ranks,
+                         BankedScene& loc) {
+  const std::size_t P = std::size_t(num_pes), T = share.textures.size();
+  // Vertex attributes are one flag for the whole scene (FrameParams): a
+  // rank whose facets have none still gives each of them an empty record.
+  std::vector<std::uint64_t> any{loc.attributes.empty() ? 0u : 1u};
+  ranks.max(any);
+  if (any[0] && loc.attributes.empty()) {
+    BankAttributes none{};
+    none.flags = 0;
+    none.map_kd = none.map_ka = -1;
+    loc.attributes.assign(loc.triangles.size(), none);
+    for (std::size_t p = 0; p < loc.pes.size(); ++p)
+      loc.bank_bytes[p] += std::uint64_t(loc.pes[p].tri_end - loc.pes[p].tri_begin) * sizeof(BankAttributes);
+  }
+  std::vector<std::uint64_t> v(2 * P + 1 + T, 0);  // bank bytes, texture bytes, depth, textures used
+  for (int p = group.begin; p < group.end; ++p) {
+    v[std::size_t(p)] = loc.bank_bytes[std::size_t(p - group.begin)];
+    v[P + std::size_t(p)] = loc.texture_bytes[std::size_t(p - group.begin)];
+  }
+  v[2 * P] = std::uint64_t(loc.max_bvh_depth);
+  for (std::size_t t = 0; t < T && t < used.size(); ++t) v[2 * P + 1 + t] = used[t];
+  ranks.max(v);
+
+  BankedScene bs;
+  bs.num_pes = num_pes;
+  bs.bank_bytes.assign(v.begin(), v.begin() + std::ptrdiff_t(P));
+  bs.texture_bytes.assign(v.begin() + std::ptrdiff_t(P), v.begin() + std::ptrdiff_t(2 * P));
+  bs.max_bvh_depth = static_cast<int>(v[2 * P]);
+  const std::vector<char> used_anywhere(v.begin() + std::ptrdiff_t(2 * P + 1), v.end());
+  bs.triangles = std::move(loc.triangles);
+  bs.nodes = std::move(loc.nodes);
+  bs.attributes = std::move(loc.attributes);
+  bs.textures = std::move(loc.textures);
+  for (BankTexture& t : bs.textures) t.pe += group.begin;
+  bs.texels = std::move(loc.texels);
+  bs.source = std::move(loc.source);
+  bs.tri_cluster = std::move(loc.tri_cluster);
+  for (int& c : bs.tri_cluster) c += first_cluster;
+  bs.node_cluster = std::move(loc.node_cluster);
+  for (int& c : bs.node_cluster)
+    if (c >= 0) c += first_cluster;
+
+  for (Cluster& c : loc.clusters) c.pe += group.begin;
+  bs.clusters = records_of<Cluster>(ranks.all_gather(bytes_of(loc.clusters)));
+  if (bs.clusters.size() != pl.pe.size()) throw std::logic_error("partition_share: the ranks' clusters disagree");
+  const int own_end = first_cluster + static_cast<int>(loc.clusters.size());
+  for (int c = 0; c < int(bs.clusters.size()); ++c)
+    if (c < first_cluster || c >= own_end) bs.clusters[std::size_t(c)].root = -1;
+
+  bs.pes.resize(P);
+  std::size_t c = 0;
+  std::uint64_t tri = 0;
+  for (int p = 0; p < num_pes; ++p) {
+    PeInfo& pe = bs.pes[std::size_t(p)];
+    pe.cluster_begin = static_cast<int>(c);
+    pe.tri_begin = static_cast<int>(tri);
+    for (; c < pl.pe.size() && pl.pe[c] == p; ++c) tri += pl.clusters[c].facets;
+    pe.cluster_end = static_cast<int>(c);
+    pe.tri_end = static_cast<int>(tri);
+    const bool mine = p >= group.begin && p < group.end;
+    pe.node_begin = mine ? loc.pes[std::size_t(p - group.begin)].node_begin : 0;
+    pe.node_end = mine ? loc.pes[std::size_t(p - group.begin)].node_end : 0;
+    pe_bounds(bs.clusters, pe);
+  }
+  build_routing(bs, sbox);
+  global_tables(share, bs);
+  scene_bytes(bs, texture_once(share, used_anywhere));
+  return bs;
+}
+
+}  // namespace
+
+PreparedBanks bank_share(const Scene& share, int num_pes, int routing, const PeGroup& group, Ranks& ranks) {
+  if (share.share.ranks != ranks.size() || share.share.rank != ranks.rank() || group.rank != ranks.rank())
+    throw std::invalid_argument("bank_share: one share per rank, read for this rank");
+  ranks.begin_collective();  // from here a failure on one rank ends them all
+  const bool split_flat = routing == OPSILA_ROUTING_SPHERES;
+  PreparedBanks out;
+  out.group = group;
+  ShareFigures& figures = out.share;
+  auto t0 = std::chrono::steady_clock::now();
+  figures.active = true;
+  figures.facets_read = share.triangles.size();
+  Vec3 slo, shi;
+  share.bounds(slo, shi);
+  Box sbox;
+  sbox.grow(slo.data());
+  sbox.grow(shi.data());
+  const std::vector<ClusterBuild> local = split_clusters(share, share.total_triangles(), sbox, num_pes, split_flat);
+  const Placement pl = place_clusters(share, local, num_pes, ranks);
+  figures.partition_seconds = seconds_since(t0);
+
+  t0 = std::chrono::steady_clock::now();
+  OwnPart own = own_part(share, exchange_facets(share, local, pl, num_pes, ranks), pl, group);
+  figures.exchange_seconds = seconds_since(t0);
+  figures.facets_held = own.scene.triangles.size();
+
+  t0 = std::chrono::steady_clock::now();
+  std::vector<char> used;
+  BankedScene loc = group_banks(own, sbox, group.size(), used);
+  own.scene = Scene();
+  out.scene = share_tables(share, sbox, pl, group, num_pes, own.first_cluster, used, ranks, loc);
+  figures.bank_seconds = seconds_since(t0);
+  out.tri_base = out.scene.pes[std::size_t(group.begin)].tri_begin;
+  ranks.end_collective();
+  return out;
+}
+
+}  // namespace opsila

@@ -1,0 +1,27 @@
+// The collective partition of a scene read in shares (Scene::share,
+// docs/DISTRIBUTED.md). Every rank holds
+// whole objects of the scene; together the ranks build exactly the banks
+// partition_scene builds from the whole scene, each rank only its group's:
+//  1. each rank cuts its own objects into clusters (machine/partition.cpp);
+//  2. the clusters' centres, boxes and sizes (a small table) go to every
+//     rank, which runs the same bisection into PE regions on it;
+//  3. each cluster's facets move to the rank that holds its PE, in chunks
+//     of bounded size (MPI_Alltoallv);
+//  4. each rank builds its banks; the cluster spheres and boxes, the PE
+//     table and every bank's size go to every rank, which builds the
+//     routing tables from them.
+#pragma once
+
+#include "machine/banks.h"
+#include "machine/ranks.h"
+
+namespace opsila {
+
+// The banks of `group`, as bank_scene(whole scene) prepares them with
+// --balance facets, built by every rank of `ranks` together from their
+// shares (a collective call: a failure inside it ends every rank). The ray
+// sample and the pilot frames of the other balance modes need the whole
+// scene, so the command line reads it whole for them.
+PreparedBanks bank_share(const Scene& share, int num_pes, int routing, const PeGroup& group, Ranks& ranks);
+
+}  // namespace opsila

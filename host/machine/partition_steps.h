@@ -1,0 +1,53 @@
+// The steps of partition_scene (machine/partition.cpp), for the collective
+// partition of a scene read in shares (machine/collective_partition.cpp),
+// which runs the same steps on each rank's part and so builds the same banks.
+// Internal to host/machine.
+#pragma once
+
+#include <cstdint>
+#include <utility>
+#include <vector>
+
+#include "machine/bank_bvh.h"
+#include "machine/partition.h"
+
+namespace opsila {
+namespace partition_steps {
+
+struct ClusterBuild {
+  std::vector<int> tris;  // indices into Scene::triangles
+  double weight = 0;      // its share of the scene's expected work (region_weights)
+  std::vector<double> work;  // measured: tests per level, then its facets' weight (region_weights)
+  Box box;
+  float c[3] = {0, 0, 0};  // centre for the spatial subdivision
+  int pe = 0;
+};
+
+// 1. Objects cut into clusters, in object order; `total` is the whole
+// scene's triangle count (the pieces' size follows it).
+std::vector<ClusterBuild> split_clusters(const Scene& scene, std::size_t total, const Box& sbox, int num_pes,
+                                         bool split_flat);
+// 2. Recursive bisection of the clusters' centres by weight into PEs
+// [first, first + count); ties broken by the clusters' order.
+void assign_regions(std::vector<ClusterBuild>& cl, std::vector<int> idx, int first, int count);
+// 3. The banks of clusters `cb` (sorted by PE, PEs 0 .. bs.num_pes - 1).
+void fill_banks(const Scene& scene, const Box& sbox, const std::vector<ClusterBuild>& cb, BankedScene& bs,
+                std::vector<Box>& tri_boxes, std::vector<int>& source, std::vector<std::pair<int, int>>& ranges);
+void describe_pes(const std::vector<ClusterBuild>& cb, std::vector<Box>& tri_boxes,
+                  const std::vector<std::pair<int, int>>& ranges, std::vector<int>& source, std::size_t total,
+                  BankedScene& bs);
+// A PE's box: around its clusters' spheres (zero when it has none).
+void pe_bounds(const std::vector<Cluster>& clusters, PeInfo& pe);
+void node_clusters(BankedScene& bs);
+// Vertex attributes and texture copies; `used_out` (when given) gets which
+// scene textures the banks use. Returns the bytes of one copy of each.
+std::uint64_t bank_attributes(const Scene& scene, const std::vector<int>& source, BankedScene& bs,
+                              std::vector<char>* used_out);
+std::uint64_t texture_once(const Scene& scene, const std::vector<char>& used);
+// 4. What every PE knows.
+void build_routing(BankedScene& bs, const Box& sbox);
+void global_tables(const Scene& scene, BankedScene& bs);
+void scene_bytes(BankedScene& bs, std::uint64_t texture_once);
+
+}  // namespace partition_steps
+}  // namespace opsila

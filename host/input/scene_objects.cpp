@@ -131,22 +131,40 @@ void SceneReader::object(const Json& v, const std::string& path) {
   if (const Json* t = find(v, "transform")) placed = transform(*t, key("transform"));
   const std::size_t planned_after = planned_triangles_;
   builds_.push_back([this, make, placed, path, planned_before, planned_after] {
-    auto& tris = scene_.triangles;
-    const std::size_t first = tris.size();
-    const std::size_t first_attribute = scene_.attributes.size();
-    make(tris);
-    if (placed) {
-      transform_triangles(tris, first, *placed);
-      transform_normals(scene_.attributes, first_attribute, *placed);
-    }
-    settle(first, path);
-    if (share_.ranks > 1) deal(first, first_attribute, planned_before, planned_after);
+    entry_ = Entry{};
+    entry_.placed = placed;
+    entry_.path = path;
+    entry_.first = scene_.triangles.size();
+    entry_.first_attribute = scene_.attributes.size();
+    entry_.planned_begin = planned_before;
+    entry_.planned_end = planned_after;
+    make(scene_.triangles);
+    flush_entry();
+    if (entry_.dropped > 0)
+      warn(path, std::to_string(entry_.dropped) +
+                     " zero-area triangle(s) left out (too small for float); facet ids kept");
   });
+}
+
+// What the entry has made since the last flush: placed, settled and, on
+// several ranks, dealt (scene_share.cpp). A generator flushes every few
+// thousand items, so a rank never holds a whole generator's triangles.
+void SceneReader::flush_entry() {
+  auto& tris = scene_.triangles;
+  const std::size_t first = entry_.first, first_attribute = entry_.first_attribute;
+  if (entry_.placed) {
+    transform_triangles(tris, first, *entry_.placed);
+    transform_normals(scene_.attributes, first_attribute, *entry_.placed);
+  }
+  entry_.dropped += settle(first, entry_.path);
+  if (share_.ranks > 1) deal(first, first_attribute);
+  entry_.first = tris.size();
+  entry_.first_attribute = scene_.attributes.size();
 }
 
 // After placement: zero-area triangles (possible after extreme scaling)
 // are dropped, facets whose normal overflows float are refused.
-void SceneReader::settle(std::size_t first, const std::string& path) {
+std::size_t SceneReader::settle(std::size_t first, const std::string& path) {
   auto& tris = scene_.triangles;
   std::size_t keep = first, dropped = 0;
   for (std::size_t k = first; k < tris.size(); ++k) {
@@ -165,9 +183,7 @@ void SceneReader::settle(std::size_t first, const std::string& path) {
     tris[keep++] = t;
   }
   tris.resize(keep);
-  if (dropped > 0)
-    warn(path, std::to_string(dropped) +
-                   " zero-area triangle(s) left out (too small for float); facet ids kept");
+  return dropped;
 }
 
 void SceneReader::box_extent(const Json& v, const std::string& path, Vec3& lo, Vec3& hi) const {
@@ -339,13 +355,24 @@ void SceneReader::build_items(std::vector<Triangle>& tris, bool grid, long long 
                               const std::vector<bool>& shape_is_box, float rmin, float rmax, int sub,
                               const std::vector<int>& mats, const std::vector<double>& cumulative,
                               double total, std::uint64_t seed) {
+  const auto is_box = [&](double u_shape) {
+    return shape_is_box[std::min<std::size_t>(std::size_t(u_shape * shape_is_box.size()), shape_is_box.size() - 1)];
+  };
+  if (share_.ranks > 1) {  // the items' exact triangle count, for dealing them evenly: the shapes drawn alone
+    Pcg32 dry(seed);
+    entry_.expected = 0;
+    for (long long n = 0; n < items; ++n) {
+      entry_.expected += is_box(dry.uniform()) ? 12 : icosphere_triangles(sub);
+      for (int k = 0; k < 6; ++k) dry.next();
+    }
+  }
   Pcg32 rng(seed);
   for (long long n = 0; n < items; ++n) {
+    if (n % kFlushItems == 0 && n > 0) flush_entry();
     const double u_shape = rng.uniform(), u_radius = rng.uniform();
     const double ux = rng.uniform(), uy = rng.uniform(), uz = rng.uniform();
     const double u_mat = rng.uniform(), u_angle = rng.uniform();
-    const bool box = shape_is_box[std::min<std::size_t>(
-        std::size_t(u_shape * shape_is_box.size()), shape_is_box.size() - 1)];
+    const bool box = is_box(u_shape);
     const double r = rmin + (double(rmax) - rmin) * u_radius;
     double centre[3];
     const double u[3] = {ux, uy, uz};

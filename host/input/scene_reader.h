@@ -132,7 +132,8 @@ class SceneReader {
   void budget(std::size_t triangles, const std::string& path);
   void objects(const Json& v, const std::string& path);
   void object(const Json& v, const std::string& path);
-  void settle(std::size_t first, const std::string& path);
+  std::size_t settle(std::size_t first, const std::string& path);  // returns the triangles dropped
+  void flush_entry();
   void box_extent(const Json& v, const std::string& path, Vec3& lo, Vec3& hi) const;
   std::function<void(std::vector<Triangle>&)> terrain(const Json& v, const std::string& path);
   std::function<void(std::vector<Triangle>&)> generator(const Json& v, const std::string& path,
@@ -145,7 +146,7 @@ class SceneReader {
   std::function<void(std::vector<Triangle>&)> include_obj(const Json& v, const std::string& path,
                                                           bool any_format);
   // Shares (scene_share.cpp).
-  void deal(std::size_t first, std::size_t first_attribute, std::size_t planned_begin, std::size_t planned_end);
+  void deal(std::size_t first, std::size_t first_attribute);
   void settle_share();
 
   const std::string& text_;
@@ -155,6 +156,17 @@ class SceneReader {
   std::size_t max_triangles_;  // the whole scene
   SceneShare share_;           // rank and ranks; the whole scene's figures as they are built
   std::vector<int> owner_;     // object id -> the rank it is dealt to (-1: not yet seen)
+  // The entry of "objects" being built: what is not yet placed, settled and
+  // dealt starts at `first`; `dealt` of its triangles were dealt before.
+  struct Entry {
+    std::optional<Transform> placed;
+    std::string path;
+    std::size_t first = 0, first_attribute = 0, dropped = 0;
+    std::size_t planned_begin = 0, planned_end = 0;  // its part of the plan
+    std::size_t expected = 0;  // its exact triangle count when known before it is built (generators)
+    std::size_t dealt = 0;
+  } entry_;
+  static constexpr long long kFlushItems = 4096;  // generator items between flushes
   std::unique_ptr<JsonLines> lines_;
   Scene scene_;
   std::vector<std::function<void()>> builds_;  // one per object, in order

@@ -11,12 +11,15 @@
 namespace opsila {
 namespace scene_json {
 
-void SceneReader::deal(std::size_t first, std::size_t first_attribute, std::size_t planned_begin,
-                       std::size_t planned_end) {
+void SceneReader::deal(std::size_t first, std::size_t first_attribute) {
   auto& tris = scene_.triangles;
   auto& attributes = scene_.attributes;
   const std::uint64_t planned = std::max<std::size_t>(planned_triangles_, 1);
-  const std::uint64_t built = tris.size() - first, span = planned_end - planned_begin;
+  // The entry's size: exact when known before it is built, else (one flush
+  // at the end) what it built.
+  const std::uint64_t built = std::max<std::uint64_t>(
+      1, entry_.expected > 0 ? entry_.expected : entry_.dealt + (tris.size() - first));
+  const std::uint64_t span = entry_.planned_end - entry_.planned_begin;
   const std::uint64_t ranks = std::uint64_t(share_.ranks);
   std::size_t keep = first;
   std::vector<int> moved(attributes.size() - first_attribute, -1);  // this entry's attributes, renumbered
@@ -33,7 +36,7 @@ void SceneReader::deal(std::size_t first, std::size_t first_attribute, std::size
     int& owner = owner_[std::size_t(t.object_id)];
     // The entry's triangles spread evenly over its part of the plan (a plan
     // counts the largest shape of a generator for each item).
-    const std::uint64_t at = planned_begin + (k - first) * span / built;
+    const std::uint64_t at = entry_.planned_begin + std::min<std::uint64_t>(entry_.dealt++, built - 1) * span / built;
     if (owner < 0) owner = static_cast<int>(std::min(at * ranks / planned, ranks - 1));
     if (owner != share_.rank) continue;
     if (t.attributes >= 0 && std::size_t(t.attributes) >= first_attribute) {

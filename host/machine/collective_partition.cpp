@@ -102,8 +102,8 @@ Placement place_clusters(const Scene& scene, const std::vector<ClusterBuild>& lo
 }
 
 // Each local cluster's facets to the rank of its PE, kChunk at a time;
-// returns this rank's clusters' facets, by global cluster, each cluster's
-// in the order its rank held them.
+// returns this rank's clusters' facets as they came: each cluster's from
+// one rank, in the order that rank held them.
 std::vector<Shipped> exchange_facets(const Scene& scene, const std::vector<ClusterBuild>& local, const Placement& pl,
                                      int num_pes, Ranks& ranks) {
   const int R = ranks.size();
@@ -138,8 +138,6 @@ std::vector<Shipped> exchange_facets(const Scene& scene, const std::vector<Clust
     const std::vector<Shipped> got = records_of<Shipped>(recv);
     received.insert(received.end(), got.begin(), got.end());
   }
-  std::stable_sort(received.begin(), received.end(),
-                   [](const Shipped& a, const Shipped& b) { return a.cluster < b.cluster; });
   return received;
 }
 

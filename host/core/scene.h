@@ -99,6 +99,7 @@ struct SceneShare {
   int rank = 0, ranks = 1;         // ranks == 1: the scene is whole
   std::size_t total_triangles = 0;  // every rank's, together
   Vec3 lo{0, 0, 0}, hi{0, 0, 0};    // bounds of every rank's triangles
+  double read_seconds = 0;          // this rank's time to read its share
 };
 
 struct Scene {

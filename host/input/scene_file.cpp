@@ -8,6 +8,7 @@
 
 #include "input/scene_reader.h"
 
+#include <chrono>
 #include <cstdlib>
 
 namespace opsila {
@@ -280,6 +281,7 @@ std::size_t rank_triangle_limit() {
 }
 
 Scene load_scene(const std::string& path, const SceneShare& share) {
+  const auto start = std::chrono::steady_clock::now();
   const std::string ext = lower(fs::path(path).extension().string());
   if (ext == ".obj") return load_obj(path);
   if (ext != ".json" && is_imported_model(path)) {
@@ -296,6 +298,7 @@ Scene load_scene(const std::string& path, const SceneShare& share) {
   if (dir.empty()) dir = ".";
   Scene scene = load_scene_from_string(text, path, dir, rank_triangle_limit(), share);
   scene.input_files.insert(scene.input_files.begin(), path);
+  scene.share.read_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return scene;
 }
 

@@ -22,16 +22,22 @@ struct ClusterSummary {
   float c[3] = {0, 0, 0}, lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0};
 };
 
-// One facet on its way to the rank of its PE.
+// One facet on its way to the rank of its PE (Triangle::attributes: -1, or
+// 0 when its vertex attributes follow in the attribute stream).
 struct Shipped {
   Triangle t;
-  VertexAttributes a;
   std::int32_t cluster = 0;  // global cluster index
-  std::int32_t has_attributes = 0;
+};
+
+// The facets a rank received, and the attributes of those that have them,
+// in the same order.
+struct Received {
+  std::vector<Shipped> facets;
+  std::vector<VertexAttributes> attributes;
 };
 
 static_assert(std::is_trivially_copyable<ClusterSummary>::value && std::is_trivially_copyable<Shipped>::value &&
-                  std::is_trivially_copyable<Cluster>::value,
+                  std::is_trivially_copyable<VertexAttributes>::value && std::is_trivially_copyable<Cluster>::value,
               "sent as bytes");
 
 template <typename T>
@@ -49,8 +55,8 @@ std::vector<T> records_of(const std::vector<unsigned char>& b) {
 }
 
 // Facets in flight per rank and round: the exchange's buffer stays bounded
-// (2^16 records of about 128 bytes: 8 MB to send, at most R times that to
-// receive) whatever the scene's size.
+// (2^16 records of 56 bytes, and 64 more for a facet with attributes: at
+// most 8 MB to send, R times that to receive) whatever the scene's size.
 constexpr std::size_t kChunk = std::size_t(1) << 16;
 
 double seconds_since(std::chrono::steady_clock::time_point t0) {
@@ -101,42 +107,58 @@ Placement place_clusters(const Scene& scene, const std::vector<ClusterBuild>& lo
   return out;
 }
 
+// Records for each rank, laid out in rank order, and their counts.
+template <typename T>
+std::vector<std::uint64_t> lay_out(const std::vector<std::vector<T>>& to, std::vector<unsigned char>& send) {
+  std::vector<std::uint64_t> counts;
+  for (const std::vector<T>& records : to) {
+    counts.push_back(records.size());
+    const std::vector<unsigned char> b = bytes_of(records);
+    send.insert(send.end(), b.begin(), b.end());
+  }
+  return counts;
+}
+
+template <typename T>
+void exchange_records(Ranks& ranks, const std::vector<std::vector<T>>& to, std::vector<T>& received) {
+  std::vector<unsigned char> send, recv;
+  const std::vector<std::uint64_t> counts = lay_out(to, send);
+  ranks.all_to_all(send, counts, sizeof(T), recv);
+  const std::vector<T> got = records_of<T>(recv);
+  received.insert(received.end(), got.begin(), got.end());
+}
+
 // Each local cluster's facets to the rank of its PE, kChunk at a time;
 // returns this rank's clusters' facets as they came: each cluster's from
 // one rank, in the order that rank held them.
-std::vector<Shipped> exchange_facets(const Scene& scene, const std::vector<ClusterBuild>& local, const Placement& pl,
-                                     int num_pes, Ranks& ranks) {
+Received exchange_facets(const Scene& scene, const std::vector<ClusterBuild>& local, const Placement& pl,
+                         int num_pes, Ranks& ranks) {
   const int R = ranks.size();
-  std::vector<Shipped> received;
+  std::vector<std::uint64_t> any{scene.attributes.empty() ? 0u : 1u};  // a second stream only when needed
+  ranks.max(any);
+  Received received;
   std::size_t cluster = 0, facet = 0;  // the next facet to send
   for (;;) {
     std::vector<std::vector<Shipped>> to(static_cast<std::size_t>(R));
+    std::vector<std::vector<VertexAttributes>> to_attributes(static_cast<std::size_t>(R));
     std::size_t n = 0;
     for (; cluster < local.size() && n < kChunk; facet = 0, ++cluster) {
       const int g = pl.global_of_local[cluster];
-      std::vector<Shipped>& out = to[std::size_t(rank_of_pe(num_pes, R, pl.pe[std::size_t(g)]))];
+      const std::size_t dest = std::size_t(rank_of_pe(num_pes, R, pl.pe[std::size_t(g)]));
       const std::vector<int>& tris = local[cluster].tris;
       for (; facet < tris.size() && n < kChunk; ++facet, ++n) {
         Shipped s;
         s.t = scene.triangles[std::size_t(tris[facet])];
         s.cluster = g;
-        s.has_attributes = s.t.attributes >= 0;
-        if (s.has_attributes) s.a = scene.attributes[std::size_t(s.t.attributes)];
-        out.push_back(s);
+        if (s.t.attributes >= 0) to_attributes[dest].push_back(scene.attributes[std::size_t(s.t.attributes)]);
+        s.t.attributes = s.t.attributes >= 0 ? 0 : -1;
+        to[dest].push_back(s);
       }
       if (facet < tris.size()) break;  // the chunk is full inside this cluster
     }
     if (ranks.sum(n) == 0) break;
-    std::vector<unsigned char> send, recv;
-    std::vector<std::uint64_t> counts(static_cast<std::size_t>(R));
-    for (int q = 0; q < R; ++q) {
-      counts[std::size_t(q)] = to[std::size_t(q)].size();
-      const std::vector<unsigned char> b = bytes_of(to[std::size_t(q)]);
-      send.insert(send.end(), b.begin(), b.end());
-    }
-    ranks.all_to_all(send, counts, sizeof(Shipped), recv);
-    const std::vector<Shipped> got = records_of<Shipped>(recv);
-    received.insert(received.end(), got.begin(), got.end());
+    exchange_records(ranks, to, received.facets);
+    if (any[0]) exchange_records(ranks, to_attributes, received.attributes);
   }
   return received;
 }
@@ -154,12 +176,13 @@ struct OwnPart {
   int first_cluster = 0;  // global index of the first
 };
 
-OwnPart own_part(const Scene& share, std::vector<Shipped> received, const Placement& pl, const PeGroup& group) {
+OwnPart own_part(const Scene& share, Received received, const Placement& pl, const PeGroup& group) {
   OwnPart own;
   own.scene.materials = share.materials;
   own.scene.textures = share.textures;
   own.scene.smooth = share.smooth;
-  own.scene.triangles.reserve(received.size());
+  own.scene.triangles.reserve(received.facets.size());
+  own.scene.attributes = std::move(received.attributes);  // in the order of the facets that have them
   int g0 = 0;
   while (g0 < int(pl.pe.size()) && pl.pe[std::size_t(g0)] < group.begin) ++g0;
   own.first_cluster = g0;
@@ -171,17 +194,14 @@ OwnPart own_part(const Scene& share, std::vector<Shipped> received, const Placem
     cb.weight = double(s.facets);
     own.clusters.push_back(std::move(cb));
   }
-  for (Shipped& s : received) {
+  int next_attributes = 0;
+  for (const Shipped& s : received.facets) {
     Triangle t = s.t;
-    t.attributes = -1;
-    if (s.has_attributes) {
-      t.attributes = static_cast<int>(own.scene.attributes.size());
-      own.scene.attributes.push_back(s.a);
-    }
+    if (t.attributes >= 0) t.attributes = next_attributes++;
     own.clusters[std::size_t(s.cluster - g0)].tris.push_back(static_cast<int>(own.scene.triangles.size()));
     own.scene.triangles.push_back(t);
   }
-  received = std::vector<Shipped>();
+  received.facets = std::vector<Shipped>();
   return own;
 }
 
@@ -289,6 +309,7 @@ PreparedBanks bank_share(const Scene& share, int num_pes, int routing, const PeG
   auto t0 = std::chrono::steady_clock::now();
   figures.active = true;
   figures.facets_read = share.triangles.size();
+  figures.read_seconds = share.share.read_seconds;
   Vec3 slo, shi;
   share.bounds(slo, shi);
   Box sbox;

@@ -59,7 +59,7 @@ struct ShareFigures {
   bool active = false;            // the scene was read in shares
   std::uint64_t facets_read = 0;  // triangles of this rank's share of the scene
   std::uint64_t facets_held = 0;  // triangles of its group's banks
-  double partition_seconds = 0, exchange_seconds = 0, bank_seconds = 0;
+  double read_seconds = 0, partition_seconds = 0, exchange_seconds = 0, bank_seconds = 0;
 };
 
 // What one rank did, for --stats and the bench (rank 0 gathers them).

@@ -209,6 +209,8 @@ TEST_F(MpiFixture, ScenesReadInSharesAreTheSameAsOneProcess) {
       EXPECT_LE(share.at("facets_read").get<std::uint64_t>(), N / R + 80);
       // Banks of equal facet counts, within a cluster's size or so.
       EXPECT_LE(share.at("facets_held").get<std::uint64_t>(), N * pes / 12 + N / 12);
+      for (const char* stage : {"read_seconds", "partition_seconds", "exchange_seconds", "bank_seconds"})
+        EXPECT_GE(share.at(stage).get<double>(), 0.0) << stage;
       read += share.at("facets_read").get<std::uint64_t>();
       held += share.at("facets_held").get<std::uint64_t>();
     }

@@ -219,6 +219,32 @@ TEST_F(MpiFixture, ScenesReadInSharesAreTheSameAsOneProcess) {
   }
 }
 
+// One object is dealt whole: a terrain is read by one rank (the others read
+// nothing of it, one reads nothing at all), then its clusters are shared
+// out like any others; the same image and item buffer as one process.
+TEST_F(MpiFixture, OneBigObjectIsReadByOneRankAndSharedOut) {
+  const std::string path = dir.write("terrain.json", R"({"objects": [
+    {"type": "terrain", "size": [20, 20], "quads": [60, 60], "height": 3},
+    {"type": "sphere", "center": [0, 4, 0], "radius": 1, "subdivisions": 2}]})");
+  auto with = [&](const std::string& tag) {
+    return std::vector<std::string>{path, "--size", "48x36", "--pes", "6", "-q", "-o", dir.file(tag + ".pfm"),
+                                    "--item-buffer", dir.file(tag + ".npy"), "--stats", dir.file(tag + ".json")};
+  };
+  ASSERT_EQ(one(with("one")).exit_code, 0);
+  const RunResult r = ranks(3, with("three"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(test::read_file(dir.file("three.pfm")) == test::read_file(dir.file("one.pfm")));
+  EXPECT_TRUE(test::read_file(dir.file("three.npy")) == test::read_file(dir.file("one.npy")));
+  const nlohmann::json s = stats(dir.file("three.json"));
+  std::vector<std::uint64_t> read, held;
+  for (const auto& rank : s.at("mpi").at("per_rank")) {
+    read.push_back(rank.at("share").at("facets_read"));
+    held.push_back(rank.at("share").at("facets_held"));
+  }
+  EXPECT_EQ(read, (std::vector<std::uint64_t>{7200, 0, 320}));  // the terrain, nothing, the sphere
+  for (std::uint64_t h : held) EXPECT_GT(h, 0u) << "every rank holds banks of the terrain";
+}
+
 // One rank's triangle limit (lowered here by OPSILA_RANK_TRIANGLE_LIMIT):
 // a scene over it is refused on one process, before anything is built,
 // naming the file, the key and the figures; two ranks accept twice the

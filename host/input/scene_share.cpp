@@ -27,10 +27,11 @@ void SceneReader::deal(std::size_t first, std::size_t first_attribute) {
   for (std::size_t k = first; k < tris.size(); ++k) {
     Triangle t = tris[k];
     const std::size_t g = share_.total_triangles++;
+    if (g == 0) share_.lo = share_.hi = t.v0;
     for (const Vec3* v : {&t.v0, &t.v1, &t.v2})
       for (int a = 0; a < 3; ++a) {
-        share_.lo[a] = g == 0 ? (*v)[a] : std::min(share_.lo[a], (*v)[a]);
-        share_.hi[a] = g == 0 ? (*v)[a] : std::max(share_.hi[a], (*v)[a]);
+        share_.lo[a] = std::min(share_.lo[a], (*v)[a]);
+        share_.hi[a] = std::max(share_.hi[a], (*v)[a]);
       }
     if (std::size_t(t.object_id) >= owner_.size()) owner_.resize(std::size_t(t.object_id) + 1, -1);
     int& owner = owner_[std::size_t(t.object_id)];

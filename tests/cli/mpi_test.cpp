@@ -245,6 +245,21 @@ TEST_F(MpiFixture, OneBigObjectIsReadByOneRankAndSharedOut) {
   for (std::uint64_t h : held) EXPECT_GT(h, 0u) << "every rank holds banks of the terrain";
 }
 
+// The whole scene's bounds (so epsilon) come from every facet read, the
+// first one's included: a one-facet scene on four ranks, three of which
+// read and hold nothing, is the same as on one process.
+TEST_F(MpiFixture, AOneFacetSceneRendersOnFourRanks) {
+  const std::string path =
+      dir.write("one.json", R"({"objects": [{"type": "polygon", "vertices": [[0,0,0],[1,0,0],[0,1,0]]}]})");
+  auto with = [&](const std::string& tag) {
+    return std::vector<std::string>{path, "--size", "32x24", "--pes", "4", "-q", "-o", dir.file(tag + ".pfm")};
+  };
+  ASSERT_EQ(one(with("single")).exit_code, 0);
+  const RunResult r = ranks(4, with("four"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(test::read_file(dir.file("four.pfm")) == test::read_file(dir.file("single.pfm")));
+}
+
 // One rank's triangle limit (lowered here by OPSILA_RANK_TRIANGLE_LIMIT):
 // a scene over it is refused on one process, before anything is built,
 // naming the file, the key and the figures; two ranks accept twice the

@@ -6,23 +6,14 @@
 #   .ci/oclgrind.sh BUILD_DIR
 #
 # BUILD_DIR is a normal build (not OPSILA_SANITIZE) holding `opsila` and
-# `opsila_tests`. Needs Debian's `oclgrind` package. Takes well under a
-# minute: Oclgrind is about 1000x slower than a real device, so the scenes are
-# tiny. What runs, and why the flags differ, is in docs/RELIABILITY.md.
+# `opsila_tests`. Needs Debian's `oclgrind` package. Takes about a minute
+# or two: Oclgrind is about 1000x slower than a real device, so the scenes
+# are tiny. What runs, and why the flags differ, is in docs/RELIABILITY.md.
 set -uo pipefail
 
-if [ $# -ne 1 ]; then
-  echo "usage: $0 BUILD_DIR" >&2
-  exit 2
-fi
-root=$(cd "$(dirname "$0")/.." && pwd)
-build=$(cd "$1" 2>/dev/null && pwd) || { echo "oclgrind.sh: no build folder '$1'" >&2; exit 2; }
-for tool in oclgrind; do
-  command -v "$tool" >/dev/null || { echo "oclgrind.sh: '$tool' not found (apt-get install oclgrind)" >&2; exit 2; }
-done
-for bin in opsila opsila_tests; do
-  [ -x "$build/$bin" ] || { echo "oclgrind.sh: $build/$bin not built" >&2; exit 2; }
-done
+. "$(dirname "$0")/build_dir.sh"
+require_build oclgrind.sh "$@"
+command -v oclgrind >/dev/null || { echo "oclgrind.sh: 'oclgrind' not found (apt-get install oclgrind)" >&2; exit 2; }
 
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
@@ -108,6 +99,21 @@ check scatter-all-checks "${all_checks[@]}" -- \
   env OPSILA_TEST_DEVICE=oclgrind "$build/opsila_tests" --gtest_filter='SmallScatter.*'
 check scatter-optimised "${optimised_checks[@]}" -- \
   env OPSILA_TEST_DEVICE=oclgrind "$build/opsila_tests" --gtest_filter='SmallScatter.*'
+
+# 3b. GPU-like: work-groups of 256 work-items (OPSILA_GROUP_SIZE; 64 is the
+#     default) on a simulated device with a typical GPU's 48 KiB of local
+#     memory and at most 1024 work-items per group. Barriers, work-group
+#     arrays and the exchange's scan and plan then span 256 work-items, most
+#     of them idle in a small frame.
+gpu_like=(--max-wgsize 1024 --local-mem-size 49152)
+check render-gpu-like-all-checks "${all_checks[@]}" "${gpu_like[@]}" -- \
+  env OPSILA_GROUP_SIZE=256 "$build/opsila" render "$scene" -o "$work/gpu.pfm" --size 16x16 --depth 3 --pes 4 \
+  --device oclgrind -q "${view[@]}"
+check render-gpu-like-tiny-banks-optimised "${optimised_checks[@]}" "${gpu_like[@]}" -- \
+  env OPSILA_GROUP_SIZE=256 "$build/opsila" render "$scene" -o "$work/gpu-banks.pfm" --size 8x6 --depth 4 --pes 4 \
+  --bank-capacity 1 --device oclgrind -q "${view[@]}"
+check scatter-gpu-like-all-checks "${all_checks[@]}" "${gpu_like[@]}" -- \
+  env OPSILA_GROUP_SIZE=256 OPSILA_TEST_DEVICE=oclgrind "$build/opsila_tests" --gtest_filter='SmallScatter.*'
 
 # 4. Sanity: the simulated render is the image a real device makes (when
 #    there is one besides Oclgrind): same scene, 40 dB or better.

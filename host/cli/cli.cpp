@@ -316,6 +316,10 @@ int run_devices(const std::vector<std::string>& args) {
     std::printf("      compute units: %u, global memory: %s, max work-group size: %zu\n", units,
                 format_bytes(double(memory), 1, 2).c_str(), max_wg);
   }
+  for (const std::string& name : platforms_without_devices()) {
+    const std::string hint = no_devices_hint(name);
+    std::printf("  platform %s: no devices%s\n", name.c_str(), hint.empty() ? "" : (" (" + hint + ")").c_str());
+  }
   return kExitOk;
 }
 

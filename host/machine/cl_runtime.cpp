@@ -113,20 +113,43 @@ bool all_digits(const std::string& s) {
          std::all_of(s.begin(), s.end(), [](unsigned char c) { return std::isdigit(c); });
 }
 
-}  // namespace
-
-std::vector<DeviceEntry> list_devices() {
+std::vector<cl::Platform> all_platforms() {
   std::vector<cl::Platform> platforms;
   cl_int err = cl::Platform::get(&platforms);
   if (err == -1001 || (err == CL_SUCCESS && platforms.empty()))
     throw ClError("no OpenCL platform found (clGetPlatformIDs): install an OpenCL driver, e.g. pocl-opencl-icd");
   cl_check(err, "clGetPlatformIDs");
+  return platforms;
+}
+
+// The platform's devices; none (not an error) where it reports CL_DEVICE_NOT_FOUND.
+std::vector<cl::Device> platform_devices(const cl::Platform& platform) {
+  std::vector<cl::Device> devices;
+  const cl_int err = platform.getDevices(CL_DEVICE_TYPE_ALL, &devices);
+  if (err == CL_DEVICE_NOT_FOUND) return {};
+  cl_check(err, "clGetDeviceIDs");
+  return devices;
+}
+
+}  // namespace
+
+std::vector<std::string> platforms_without_devices() {
+  std::vector<std::string> out;
+  for (const cl::Platform& p : all_platforms())
+    if (platform_devices(p).empty()) out.push_back(trim(p.getInfo<CL_PLATFORM_NAME>()));
+  return out;
+}
+
+std::string no_devices_hint(const std::string& platform_name) {
+  if (lower(platform_name) != "rusticl") return "";
+  return "Rusticl lists a device only for the drivers RUSTICL_ENABLE names, e.g. RUSTICL_ENABLE=llvmpipe";
+}
+
+std::vector<DeviceEntry> list_devices() {
+  const std::vector<cl::Platform> platforms = all_platforms();
   std::vector<DeviceEntry> out;
   for (std::size_t p = 0; p < platforms.size(); ++p) {
-    std::vector<cl::Device> devices;
-    err = platforms[p].getDevices(CL_DEVICE_TYPE_ALL, &devices);
-    if (err == CL_DEVICE_NOT_FOUND) continue;
-    cl_check(err, "clGetDeviceIDs");
+    const std::vector<cl::Device> devices = platform_devices(platforms[p]);
     for (std::size_t d = 0; d < devices.size(); ++d) {
       DeviceEntry e;
       e.platform_index = static_cast<int>(p);
@@ -143,7 +166,17 @@ std::vector<DeviceEntry> list_devices() {
       out.push_back(e);
     }
   }
-  if (out.empty()) throw ClError("no OpenCL device found on any platform (clGetDeviceIDs)");
+  if (out.empty()) {
+    // Say which platforms are there, and why one may list nothing.
+    std::string names, hint;
+    for (const cl::Platform& p : platforms) {
+      const std::string name = trim(p.getInfo<CL_PLATFORM_NAME>());
+      names += (names.empty() ? "" : ", ") + name;
+      if (hint.empty()) hint = no_devices_hint(name);
+    }
+    throw ClError("no OpenCL device found on any platform (clGetDeviceIDs; platforms: " + names + ")" +
+                  (hint.empty() ? "" : ": " + hint));
+  }
   return out;
 }
 
@@ -175,6 +208,14 @@ DeviceEntry choose_device(const std::string& spec) {
                             " " + e.vendor + " " + e.version);
     if (hay.find(needle) != std::string::npos) return e;
   }
+  // Clover without a GPU, or Rusticl without RUSTICL_ENABLE: the platform is
+  // there, its devices are not.
+  for (const std::string& name : platforms_without_devices())
+    if (lower(name).find(needle) != std::string::npos) {
+      const std::string hint = no_devices_hint(name);
+      throw InputError("--device " + spec + ": platform '" + name + "' has no devices" +
+                       (hint.empty() ? "" : " (" + hint + ")") + " (see 'opsila devices')");
+    }
   throw InputError("--device " + spec + ": no OpenCL device matches '" + spec + "' (see 'opsila devices')");
 }
 
@@ -248,6 +289,21 @@ std::vector<std::string> missing_capabilities(const DeviceCapabilities& c) {
   return missing;
 }
 
+namespace {
+
+// A work-group size asked for (ClRuntimeOptions::group_size or
+// OPSILA_GROUP_SIZE): a power of two from 1 to 1024.
+std::size_t checked_group_size(const std::string& text, const std::string& origin) {
+  const bool digits = !text.empty() && text.size() <= 4 &&
+                      std::all_of(text.begin(), text.end(), [](unsigned char c) { return std::isdigit(c); });
+  const std::size_t n = digits ? std::stoul(text) : 0;
+  if (n < 1 || n > 1024 || (n & (n - 1)) != 0)
+    throw InputError(origin + "=" + text + ": expected a power of two from 1 to 1024");
+  return n;
+}
+
+}  // namespace
+
 ClRuntime::ClRuntime(const DeviceEntry& device, const ClRuntimeOptions& options) : device_(device) {
   const DeviceCapabilities caps = query_capabilities(device_.device);
   const std::vector<std::string> missing = missing_capabilities(caps);
@@ -263,7 +319,11 @@ ClRuntime::ClRuntime(const DeviceEntry& device, const ClRuntimeOptions& options)
                                    : (options.kernel_source_origin.empty() ? "kernel source given by the caller"
                                                                            : options.kernel_source_origin);
   cl_ulong limit = options.memory_limit;
+  if (options.group_size) group_size_ = checked_group_size(std::to_string(options.group_size), "group size");
   if (options.read_environment) {
+    // OPSILA_GROUP_SIZE=N: work-groups of N (capped by each kernel's limit).
+    const char* group = std::getenv("OPSILA_GROUP_SIZE");
+    if (group && *group && options.group_size == 0) group_size_ = checked_group_size(group, "OPSILA_GROUP_SIZE");
     // OPSILA_KERNEL_SOURCE=path: build this file instead of the embedded
     // kernels (to try a kernel change without rebuilding, or to test faults).
     const char* path = std::getenv("OPSILA_KERNEL_SOURCE");

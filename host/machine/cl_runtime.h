@@ -25,6 +25,11 @@ struct DeviceEntry {
 };
 
 std::vector<DeviceEntry> list_devices();  // throws ClError when there is no platform
+// Platforms that list no device (Mesa's Clover without a GPU; Rusticl unless
+// RUSTICL_ENABLE names a driver), by name; and what to do about one, if
+// anything is known ("" otherwise).
+std::vector<std::string> platforms_without_devices();
+std::string no_devices_hint(const std::string& platform_name);
 
 // SPEC: empty -> first GPU, else first CPU, else first device. Otherwise an
 // index ("2"), "platform:device" ("0:1") or a case-insensitive substring of
@@ -56,8 +61,12 @@ struct ClRuntimeOptions {
   // Non-zero: believe the device has at most this many bytes of global
   // memory and of single allocation (tests use it to provoke refusals).
   cl_ulong memory_limit = 0;
-  // Honour OPSILA_KERNEL_SOURCE=path (a file replacing the embedded kernels)
-  // and OPSILA_DEVICE_MEMORY_LIMIT=bytes, read when the runtime is created.
+  // Non-zero: the work-group size the kernels ask for instead of 64 (a power
+  // of two up to 1024), still capped by what each kernel allows.
+  std::size_t group_size = 0;
+  // Honour OPSILA_KERNEL_SOURCE=path (a file replacing the embedded kernels),
+  // OPSILA_DEVICE_MEMORY_LIMIT=bytes and OPSILA_GROUP_SIZE=N, read when the
+  // runtime is created.
   bool read_environment = true;
 };
 
@@ -80,6 +89,11 @@ class ClRuntime {
   cl::Kernel kernel(const char* name, KernelProgram which = KernelProgram::render);
   // Limits read from the device (never assumed).
   std::size_t max_work_group_size() const { return max_wg_; }
+  // The work-group size the kernels ask for (each capped by what it allows):
+  // 64, where PoCL measured fastest and a GPU runs two warps or one
+  // wavefront; or ClRuntimeOptions::group_size / OPSILA_GROUP_SIZE, to check
+  // the kernels with GPU-sized groups (.ci/oclgrind.sh runs 256).
+  std::size_t group_size() const { return group_size_; }
   cl_ulong max_alloc() const { return max_alloc_; }
   cl_ulong global_mem() const { return global_mem_; }
   cl_ulong memory_limit() const { return limit_; }  // 0, or the limit that lowered the two above
@@ -96,6 +110,7 @@ class ClRuntime {
   cl::Program programs_[3];
   bool built_[3] = {false, false, false};
   std::size_t max_wg_ = 1;
+  std::size_t group_size_ = 64;
   cl_ulong max_alloc_ = 0, global_mem_ = 0, limit_ = 0;
   double build_seconds_ = 0;
   std::string source_, source_origin_;  // source_ empty: the embedded kernels

@@ -84,7 +84,7 @@ void Launcher::run(cl::Kernel& k, const char* name, std::size_t global, std::siz
     std::size_t allowed = 0;
     cl_check(k.getWorkGroupInfo(rt_.device().device, CL_KERNEL_WORK_GROUP_SIZE, &allowed),
              "clGetKernelWorkGroupInfo(CL_KERNEL_WORK_GROUP_SIZE)");
-    local = 64;
+    local = rt_.group_size();
     while (local > 1 && local > allowed) local /= 2;
   }
   global = round_up(std::max<std::size_t>(global, 1), local);
@@ -161,8 +161,9 @@ ScatterPass::ScatterPass(ClRuntime& rt, int num_pes) : rt_(rt), num_pes_(num_pes
   move_out_ = rt.kernel("scatter_move_outputs");
   move_blocks_ = rt.kernel("scatter_move_blocks");
   by_block_ = !rt.device().is_gpu;
-  wg_scan_ = queried_group_size(rt, scan_, 64);
-  wg_plan_ = queried_group_size(rt, plan_, 64);
+  // At most 256: scatter.cl's work-group arrays hold 256 entries.
+  wg_scan_ = queried_group_size(rt, scan_, std::min<std::size_t>(rt.group_size(), 256));
+  wg_plan_ = queried_group_size(rt, plan_, std::min<std::size_t>(rt.group_size(), 256));
   bank_begin = device_buffer(rt, num_pes * sizeof(cl_int), "bank offsets");
   bank_count = device_buffer(rt, num_pes * sizeof(cl_int), "bank counts");
   pe_total = device_buffer(rt, num_pes * sizeof(cl_int), "scatter totals");

@@ -31,14 +31,6 @@
 namespace opsila {
 namespace {
 
-// Largest SPMD work-group (one descriptor per work-item). On PoCL, 64
-// measured faster than 16 and 256 on hundreds (docs/BENCHMARKS.md); on a
-// GPU it is two warps or one wavefront.
-#ifndef OPSILA_SPMD_GROUP_SIZE
-#define OPSILA_SPMD_GROUP_SIZE 64
-#endif
-
-
 // "Projected object boxes": each cluster box as a conservative pixel
 // rectangle (x0, y0, x1, y1), the whole screen when a corner is behind the eye.
 std::vector<cl_int4> cluster_rects(const Scene& scene, const BankedScene& bs) {
@@ -278,7 +270,7 @@ void Renderer::Machine::choose_work_groups() {
            "clGetKernelWorkGroupInfo(spmd_phase)");
   cl_check(k_spmd.getWorkGroupInfo(dev, CL_KERNEL_PREFERRED_WORK_GROUP_SIZE_MULTIPLE, &multiple),
            "clGetKernelWorkGroupInfo(spmd_phase)");
-  spmd_wg = std::min<std::size_t>(allowed, OPSILA_SPMD_GROUP_SIZE);
+  spmd_wg = std::min<std::size_t>(allowed, rt.group_size());  // 64 unless asked (ClRuntime::group_size)
   if (multiple > 0 && spmd_wg >= multiple) spmd_wg = spmd_wg / multiple * multiple;
   spmd_wg = std::max<std::size_t>(1, spmd_wg);
   prepared.work_group_size = spmd_wg;

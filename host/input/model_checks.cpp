@@ -129,7 +129,7 @@ void check_ply_header(const std::string& head, std::size_t file_bytes, const std
       if (!b.empty() && b.find_first_not_of("0123456789") == std::string::npos)  // else the importer judges
         elements.back().count = b.size() <= 19 ? std::stoull(b) : std::numeric_limits<unsigned long long>::max();
     } else if (keyword == "property" && !elements.empty()) {
-      elements.back().properties.push_back(a == "list" ? PlyProperty{ply_type_bytes(b), ply_type_bytes(c)}
+      elements.back().properties.push_back(a == "list" ? PlyProperty{ply_type_bytes(b) > 0 ? ply_type_bytes(b) : -1, ply_type_bytes(c)}
                                                        : PlyProperty{0, ply_type_bytes(a)});
     }
   }
@@ -139,22 +139,34 @@ void check_ply_header(const std::string& head, std::size_t file_bytes, const std
 }  // namespace
 
 void check_ply(const std::string& bytes, const std::string& name) {
-  if (bytes.compare(0, 3, "ply") != 0) return;
-  const std::size_t end = bytes.find("end_header");
+  // The importer takes "PLY" in any case, and then lines it does not know.
+  if (bytes.compare(0, 4, "ply\n") != 0 && bytes.compare(0, 5, "ply\r\n") != 0)
+    throw InputError(name + ": not PLY (a PLY file starts with the line 'ply')");
+  // A line of its own (the importer misreads one that ends another line).
+  std::size_t end = bytes.find("\nend_header");
   if (end == std::string::npos || end > 64 * 1024)
-    throw InputError(name + ": PLY header without 'end_header' (truncated or not PLY)");
+    throw InputError(name + ": PLY header without an 'end_header' line (truncated or not PLY)");
+  ++end;
   std::vector<PlyElement> elements;
   std::string format;
   check_ply_header(bytes.substr(0, end), bytes.size(), name, elements, format);
-  std::size_t data = bytes.find('\n', end);
-  data = data == std::string::npos ? bytes.size() : data + 1;
+  std::size_t data = end + 10;
+  if (bytes.compare(data, 2, "\r\n") == 0) ++data;
+  if (data >= bytes.size() || bytes[data] != '\n')
+    throw InputError(name + ": PLY 'end_header' not followed by a line break");
+  ++data;
+  // Unknown types and formats: the importer reads binary data out of
+  // bounds with them (fuzz_model).
   for (const PlyElement& e : elements)
     for (const PlyProperty& p : e.properties)
-      if (p.item_bytes == 0 || p.count_bytes < 0) return;  // an unknown type: the importer refuses it
+      if (p.item_bytes == 0 || p.count_bytes < 0)
+        throw InputError(name + ": PLY '" + e.name.substr(0, 20) + "' element: a property of unknown type");
+  if (format != "ascii" && format != "binary_little_endian" && format != "binary_big_endian")
+    throw InputError(name + ": PLY format '" + format.substr(0, 20) +
+                     "' (ascii, binary_little_endian or binary_big_endian)");
   const std::string_view body = std::string_view(bytes).substr(data);
   if (format == "ascii") check_ply_text(body, elements, name);
-  else if (format == "binary_little_endian" || format == "binary_big_endian")
-    check_ply_binary(body, elements, format == "binary_big_endian", name);
+  else check_ply_binary(body, elements, format == "binary_big_endian", name);
 }
 
 // The importer's OFF reader allocates what the header's counts ask for before

@@ -1,10 +1,11 @@
 // libFuzzer target: bytes -> the Open Asset Import Library -> SPEC's scene
 // (load_model_from_memory). The first byte picks the format the importer is
-// told to expect (STL, OFF or glTF); the conversion layer must turn whatever
-// the importer accepts into a valid scene or one InputError. Nothing is read
-// from disk. PLY is left out: the importer's own PLY header reader loops
-// forever on some malformed headers (docs/RELIABILITY.md); PLY files are
-// covered by the unit tests instead.
+// told to expect (STL, OFF, glTF, GLB or PLY); bytes after the first
+// "#EXTERNAL#" are every other file the importer opens (a glTF's external
+// buffers), so crafted buffers take the path files on disk take. The checks
+// before the importer (input/model_checks.h) and the conversion layer must
+// turn whatever the importer accepts into a valid scene or one InputError.
+// Nothing is read from disk.
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -41,11 +42,16 @@ void check(const opsila::Scene& s) {
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   if (size < 1) return 0;
-  static const char* const kHints[] = {"stl", "off", "gltf"};
-  const char* hint = kHints[data[0] % 3];
-  const std::string bytes(reinterpret_cast<const char*>(data + 1), size - 1);
+  static const char* const kHints[] = {"stl", "off", "gltf", "glb", "ply"};
+  const char* hint = kHints[data[0] % 5];
+  std::string bytes(reinterpret_cast<const char*>(data + 1), size - 1), other;
+  const std::size_t cut = bytes.find("#EXTERNAL#");
+  if (cut != std::string::npos) {
+    other = bytes.substr(cut + 10);
+    bytes.resize(cut);
+  }
   try {
-    check(opsila::load_model_from_memory(bytes, std::string("fuzz.") + hint, hint));
+    check(opsila::load_model_from_memory(bytes, std::string("fuzz.") + hint, hint, other));
   } catch (const opsila::InputError&) {
   }
   return 0;

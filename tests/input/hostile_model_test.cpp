@@ -257,6 +257,14 @@ TEST(HostileModel, TruncatedDataIsRefusedInEveryFormat) {
   binary += triangle_bytes() + '\x03' + le32(0) + le32(1);
   expect("bin.ply", binary, "PLY data ends early: 'face' element 1 of 1");
   expect("vbin.ply", binary.substr(0, binary.size() - 30), "PLY data ends early: 'vertex' element 2 of 3");
+  // Headers the importer misreads, then reading binary data out of bounds
+  // (found by fuzz_model).
+  expect("case.ply", "plY\nformat ascii 1.0\nend_header\n", "not PLY (a PLY file starts with the line 'ply')");
+  expect("format.ply", "ply\nformat binary_little_endi`n 1.0\nend_header\n", "PLY format 'binary_little_endi`n'");
+  expect("inline.ply", "ply\nformat ascii 1.0\nelement face 1 end_header\n3 0 1 2\n",
+         "PLY header without an 'end_header' line");
+  expect("type.ply", "ply\nformat ascii 1.0\nelement face 1\nproperty list uc| int v\nend_header\n3 0 1 2\n",
+         "PLY 'face' element: a property of unknown type");
   std::string stl(80, ' ');
   stl += le32(2) + std::string(50, '\0');
   expect("bin.stl", stl, "binary STL header counts 2 facets; the file holds 1 (truncated file)");

@@ -99,23 +99,38 @@ typedef std::uint32_t opsila_u32;
 #define OPSILA_META_KIND(meta) ((meta)&3)
 #define OPSILA_META_LEVEL(meta) (((meta) >> 2) & OPSILA_MAX_DEPTH)
 
-/* Stats counters, per (level, PE): see OPSILA_STAT_* indices. */
-#define OPSILA_STAT_TRACED 0        /* descriptors processed by the PE (any kind) */
-#define OPSILA_STAT_RADIANCE 1      /* TRACE descriptors processed */
-#define OPSILA_STAT_RESOLVED 2      /* radiance rays shaded here (hit found) */
-#define OPSILA_STAT_SHADOW 3        /* shadow descriptors processed */
-#define OPSILA_STAT_TRI_TESTS 4     /* ray-facet intersection tests */
-#define OPSILA_STAT_BOX_TESTS 5     /* ray-box tests in the bank BVH */
-#define OPSILA_STAT_SPHERE_TESTS 6  /* ray-bounding-sphere tests (destination choice) */
-#define OPSILA_STAT_SPAWN_RADIANCE 7 /* radiance rays spawned at this level (children) */
-#define OPSILA_STAT_SPAWN_SHADOW 8  /* shadow rays spawned at this level */
-#define OPSILA_STAT_MISS 9          /* radiance rays finished as misses */
-#define OPSILA_STAT_OCCLUDED 10     /* shadow rays finished occluded */
-#define OPSILA_STAT_LIT 11          /* shadow rays finished unoccluded */
-#define OPSILA_STAT_FORWARD 12      /* descriptors sent to another PE (or back to this one) */
-#define OPSILA_STAT_ROUTE_TESTS 13  /* PE-box and routing-BVH node tests (destination choice) */
-#define OPSILA_STAT_LOCAL 14        /* new rays tested in the spawning PE's own bank at once, not sent there */
-#define OPSILA_STAT_COUNT 15
+/* Statistics counters per (level, PE), declared once, in index order:
+ * X(NAME, "JSON name", SUM). The kernels count OPSILA_STAT_NAME; SUM says
+ * which of the frame's totals the counter adds to: SPAWNED (descriptors
+ * created at this level), FINISHED (descriptors that end here) or NONE.
+ * The host takes the JSON names and the sums from here
+ * (host/machine/counters.h). A new counter is one line below. */
+#define OPSILA_STAT_COUNTERS(X)                                                                            \
+  X(TRACED, "traced", NONE)                     /* descriptors processed by the PE (any kind) */           \
+  X(RADIANCE, "radiance", NONE)                 /* TRACE descriptors processed */                           \
+  X(RESOLVED, "resolved", FINISHED)             /* radiance rays shaded here (hit found) */                 \
+  X(SHADOW, "shadow", NONE)                     /* shadow descriptors processed */                          \
+  X(TRI_TESTS, "triangle_tests", NONE)          /* ray-facet intersection tests */                          \
+  X(BOX_TESTS, "box_tests", NONE)               /* ray-box tests in the bank BVH */                         \
+  X(SPHERE_TESTS, "sphere_tests", NONE)         /* ray-bounding-sphere tests (destination choice) */        \
+  X(SPAWN_RADIANCE, "spawned_radiance", SPAWNED) /* radiance rays spawned at this level (children) */       \
+  X(SPAWN_SHADOW, "spawned_shadow", SPAWNED)    /* shadow rays spawned at this level */                     \
+  X(MISS, "misses", FINISHED)                   /* radiance rays finished as misses */                      \
+  X(OCCLUDED, "occluded", FINISHED)             /* shadow rays finished occluded */                         \
+  X(LIT, "lit", FINISHED)                       /* shadow rays finished unoccluded */                       \
+  X(FORWARD, "forwards", NONE)                  /* descriptors sent to another PE (or back to this one) */  \
+  X(ROUTE_TESTS, "route_tests", NONE)           /* PE-box and routing-BVH node tests (destination choice) */ \
+  X(LOCAL, "local", NONE)                       /* new rays tested in the spawning PE's own bank at once */
+#define OPSILA_STAT_INDEX(name, json, sum) OPSILA_STAT_##name,
+enum { OPSILA_STAT_COUNTERS(OPSILA_STAT_INDEX) OPSILA_STAT_COUNT };
+#undef OPSILA_STAT_INDEX
+
+/* Every counter the device accumulates over a frame (statistics, PE x PE
+ * traffic, primary hits) is 64 bits wide, stored as two 32-bit words (low,
+ * high) and added with add_fixed (kernels/lib/accum.cl): enough for the
+ * largest frame accepted, 16384^2 pixels at 1024 samples (2^38 primary
+ * rays), many times over. */
+#define OPSILA_COUNTER_WORDS 2
 
 /* One facet triangle as stored in a bank (48 bytes). Vertices are kept
  * exactly as loaded so that the watertight test sees shared edges alike. */

@@ -40,5 +40,5 @@ __kernel void build_primary(FrameParams fp, __global const PeInfo *pes, __global
     }
   }
   barrier(CLK_LOCAL_MEM_FENCE);
-  if (get_local_id(0) == 0 && hits != 0u) add_fixed(hit_count, (long)hits);
+  if (get_local_id(0) == 0) count_add(hit_count, 0, hits);
 }

@@ -302,6 +302,6 @@ __kernel void spmd_phase(FrameParams fp, __global const PeInfo *pes, __global co
   }
   for (int i = lid; i < ntraffic; i += lsz) {
     uint v = ltraffic[i];
-    if (v != 0u) atomic_add(&traffic[((long)(i / P) * P + pe) * P + i % P], v);
+    count_add(traffic, ((long)(i / P) * P + pe) * P + i % P, v);
   }
 }

@@ -9,6 +9,7 @@
 #include "core/fixed_point.h"
 #include "opsila_shared.h"
 #include "machine/partition.h"
+#include "machine/kernel_args.h"
 #include "machine/renderer.h"
 
 namespace opsila {
@@ -27,7 +28,13 @@ BaselineImage render_megakernel(const Scene& scene, ClRuntime& rt, int tile) {
   out.build_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_build).count();
 
   rt.program();  // compile before timing
-  cl::Kernel k = rt.kernel("megakernel", KernelProgram::baselines);
+  // kernels/baselines/megakernel.cl: frame, bank nodes and facets,
+  // materials, lights, surface, root node, sample grid side and offsets,
+  // pixels, pixel sums, ray counts, item buffer.
+  using Buf = cl::Buffer;
+  KernelBinding<FrameParams, Buf, Buf, Buf, Buf, SurfaceBuffers, int, int, Buf, int, int, Buf, Buf, Buf> mega(
+      rt, "megakernel", KernelProgram::baselines);
+  cl::Kernel& k = mega.kernel();
   cl::CommandQueue& q = rt.queue();
 
   auto t0 = std::chrono::steady_clock::now();
@@ -54,21 +61,8 @@ BaselineImage render_megakernel(const Scene& scene, ClRuntime& rt, int tile) {
   tile = std::max(1, tile);
   for (std::size_t begin = 0; begin < npix; begin += tile) {
     int count = static_cast<int>(std::min<std::size_t>(tile, npix - begin));
-    int a = 0;
-    k.setArg(a++, fp);
-    k.setArg(a++, b_nodes);
-    k.setArg(a++, b_tris);
-    k.setArg(a++, b_mats);
-    k.setArg(a++, b_lights);
-    a = surface.set_args(k, a);
-    k.setArg(a++, bs.pes[0].node_begin);
-    k.setArg(a++, spp_side(scene.spp));
-    k.setArg(a++, b_offsets);
-    k.setArg(a++, static_cast<int>(begin));
-    k.setArg(a++, count);
-    k.setArg(a++, b_accum);
-    k.setArg(a++, b_counts);
-    k.setArg(a++, b_items);
+    mega.bind(fp, b_nodes, b_tris, b_mats, b_lights, surface, bs.pes[0].node_begin, spp_side(scene.spp), b_offsets,
+              static_cast<int>(begin), count, b_accum, b_counts, b_items);
     launch.run(k, "megakernel", round_up(count, 64), local, -1);
   }
   std::vector<cl_long> accum(npix * 3);

@@ -8,6 +8,7 @@
 #include "bench/bench.h"
 #include "core/util.h"
 #include "machine/host_scatter.h"
+#include "machine/kernel_args.h"
 #include "machine/render_types.h"
 
 namespace opsila {
@@ -71,17 +72,15 @@ void measure_paper_scatter(ClRuntime& rt, const HostDescriptors& src, const std:
   rec_from.allocate(rt, n, "paper scatter records");
   rec_to.allocate(rt, dest_len, "paper scatter records");
   rec_from.write(rt, src);
-  cl::Kernel six = rt.kernel("scatter_six_vectors", KernelProgram::baselines);
-  cl::Kernel one = rt.kernel("scatter_one_record", KernelProgram::baselines);
-  int a = 0;
-  six.setArg(a++, static_cast<int>(n));
-  six.setArg(a++, b_index);
-  for (const cl::Buffer& b : from) six.setArg(a++, b);
-  for (const cl::Buffer& b : to) six.setArg(a++, b);
-  one.setArg(0, static_cast<int>(n));
-  one.setArg(1, b_index);
-  one.setArg(2, rec_from.records);
-  one.setArg(3, rec_to.records);
+  // kernels/baselines/copy.cl: count, index, then six source and six
+  // destination vectors; or one source and one destination of records.
+  using Buf = cl::Buffer;
+  KernelBinding<int, Buf, Buf, Buf, Buf, Buf, Buf, Buf, Buf, Buf, Buf, Buf, Buf, Buf> six_vectors(
+      rt, "scatter_six_vectors", KernelProgram::baselines);
+  KernelBinding<int, Buf, Buf, Buf> one_record(rt, "scatter_one_record", KernelProgram::baselines);
+  cl::Kernel& six = six_vectors.bind(static_cast<int>(n), b_index, from[0], from[1], from[2], from[3], from[4], from[5],
+                                     to[0], to[1], to[2], to[3], to[4], to[5]);
+  cl::Kernel& one = one_record.bind(static_cast<int>(n), b_index, rec_from.records, rec_to.records);
   std::vector<double> t6, t1;
   for (int r = 0; r < warmup + pt.repeats; ++r) {
     cl::Event e6, e1;
@@ -190,11 +189,9 @@ void measure_copy_ceiling(ClRuntime& rt, int warmup, ScatterPoint& pt) {
   cl::Buffer to = device_buffer(rt, n4 * sizeof(cl_float4), "copy bench destination");
   zero_buffer(rt, from, n4 * sizeof(cl_float4), "copy bench source");
   zero_buffer(rt, to, n4 * sizeof(cl_float4), "copy bench destination");
-  cl::Kernel copy = rt.kernel("copy_float4", KernelProgram::baselines);
+  KernelBinding<cl::Buffer, cl::Buffer, int> copy_float4(rt, "copy_float4", KernelProgram::baselines);
+  cl::Kernel& copy = copy_float4.bind(from, to, static_cast<int>(n4));
   const std::size_t local = group_size_for(rt, copy);
-  copy.setArg(0, from);
-  copy.setArg(1, to);
-  copy.setArg(2, static_cast<int>(n4));
   std::vector<double> kt, bt;
   for (int r = 0; r < warmup + pt.repeats; ++r) {
     cl::Event ek, eb;

@@ -37,12 +37,6 @@ void DescriptorSet::allocate(ClRuntime& rt, std::size_t n, const char* what) {
   capacity = n;
 }
 
-int DescriptorSet::set_args(cl::Kernel& k, int at) const {
-  cl_check(k.setArg(at++, records), "clSetKernelArg(descriptors)");
-  cl_check(k.setArg(at++, dests), "clSetKernelArg(descriptor destinations)");
-  return at;
-}
-
 void DescriptorSet::copy_prefix_to(ClRuntime& rt, DescriptorSet& to, std::size_t count) const {
   if (count == 0) return;
   cl_check(rt.queue().enqueueCopyBuffer(records, to.records, 0, 0, count * kBytes), "clEnqueueCopyBuffer(descriptors)");
@@ -145,25 +139,19 @@ std::size_t queried_group_size(ClRuntime& rt, cl::Kernel& k, std::size_t cap) {
   return local;
 }
 
-template <typename... T>
-void set_args(cl::Kernel& k, const char* name, const T&... values) {
-  int at = 0;
-  (cl_check(k.setArg(at++, values), name), ...);
-}
-
 }  // namespace
 
 ScatterPass::ScatterPass(ClRuntime& rt, int num_pes) : rt_(rt), num_pes_(num_pes) {
-  count_ = rt.kernel("scatter_count");
-  scan_ = rt.kernel("scatter_scan");
-  plan_ = rt.kernel("scatter_plan");
-  move_pool_ = rt.kernel("scatter_move_pool");
-  move_out_ = rt.kernel("scatter_move_outputs");
-  move_blocks_ = rt.kernel("scatter_move_blocks");
+  count_ = decltype(count_)(rt, "scatter_count");
+  scan_ = decltype(scan_)(rt, "scatter_scan");
+  plan_ = decltype(plan_)(rt, "scatter_plan");
+  move_pool_ = decltype(move_pool_)(rt, "scatter_move_pool");
+  move_out_ = decltype(move_out_)(rt, "scatter_move_outputs");
+  move_blocks_ = decltype(move_blocks_)(rt, "scatter_move_blocks");
   by_block_ = !rt.device().is_gpu;
   // At most 256: scatter.cl's work-group arrays hold 256 entries.
-  wg_scan_ = queried_group_size(rt, scan_, std::min<std::size_t>(rt.group_size(), 256));
-  wg_plan_ = queried_group_size(rt, plan_, std::min<std::size_t>(rt.group_size(), 256));
+  wg_scan_ = queried_group_size(rt, scan_.kernel(), std::min<std::size_t>(rt.group_size(), 256));
+  wg_plan_ = queried_group_size(rt, plan_.kernel(), std::min<std::size_t>(rt.group_size(), 256));
   bank_begin = device_buffer(rt, num_pes * sizeof(cl_int), "bank offsets");
   bank_count = device_buffer(rt, num_pes * sizeof(cl_int), "bank counts");
   pe_total = device_buffer(rt, num_pes * sizeof(cl_int), "scatter totals");
@@ -197,19 +185,18 @@ void ScatterPass::plan(Launcher& launch, const Args& a, int round) {
   const cl::Buffer& out = a.outputs ? a.outputs->records : dummy_;
   const cl::Buffer& out_dest = a.outputs ? a.outputs->dests : dummy_;
   const cl::Buffer& out_count = a.out_item_count ? *a.out_item_count : dummy_;
-  set_args(count_, "clSetKernelArg(scatter_count)", a.pool_len, pool_blocks, nblocks, a.group_size, a.spawn_slots, P,
-           a.pool->records, a.pool->dests, out, out_dest, out_count, hist_, rank_, by_block_ ? 0 : 1);
-  launch.run(count_, "scatter_count", std::max(nblocks, 1), 0, round);
-  set_args(scan_, "clSetKernelArg(scatter_scan)", nblocks, P, hist_, pe_total);
+  count_.bind(a.pool_len, pool_blocks, nblocks, a.group_size, a.spawn_slots, P, *a.pool, out, out_dest, out_count, hist_,
+              rank_, by_block_ ? 0 : 1);
+  launch.run(count_.kernel(), "scatter_count", std::max(nblocks, 1), 0, round);
+  scan_.bind(nblocks, P, hist_, pe_total);
   // One work-group per PE on a GPU, one in all on a CPU (see scatter_scan).
   const std::size_t scan_groups = by_block_ ? 1 : std::size_t(P);
-  launch.run(scan_, "scatter_scan", scan_groups * wg_scan_, wg_scan_, round);
+  launch.run(scan_.kernel(), "scatter_scan", scan_groups * wg_scan_, wg_scan_, round);
   const int cap = a.cap > 0 ? a.cap : a.slots;
   const int group_end = a.group_end < 0 ? P : a.group_end;
-  set_args(plan_, "clSetKernelArg(scatter_plan)", P, a.group_begin, group_end, a.slots, cap, a.group_size, pe_total,
-           bank_begin, bank_count,
-           overflow_base, group_pe, group_first, counts);
-  launch.run(plan_, "scatter_plan", wg_plan_, wg_plan_, round);
+  plan_.bind(P, a.group_begin, group_end, a.slots, cap, a.group_size, pe_total, bank_begin, bank_count, overflow_base,
+             group_pe, group_first, counts);
+  launch.run(plan_.kernel(), "scatter_plan", wg_plan_, wg_plan_, round);
 }
 
 void ScatterPass::move(Launcher& launch, const Args& a, int round) {
@@ -219,24 +206,21 @@ void ScatterPass::move(Launcher& launch, const Args& a, int round) {
     const cl::Buffer& out = a.outputs ? a.outputs->records : dummy_;
     const cl::Buffer& out_dest = a.outputs ? a.outputs->dests : dummy_;
     const cl::Buffer& out_count = a.out_item_count ? *a.out_item_count : dummy_;
-    set_args(move_blocks_, "clSetKernelArg(scatter_move_blocks)", a.pool_len, pool_blocks, blocks(a), a.group_size,
-             a.spawn_slots, P, a.pool->records, a.pool->dests, out, out_dest, out_count, hist_, bank_begin,
-             bank_count, overflow_base, a.banks->records, a.banks->dests, a.next_pool->records, a.next_pool->dests);
-    if (blocks(a) > 0) launch.run(move_blocks_, "scatter_move", std::size_t(blocks(a)), 0, round);
+    move_blocks_.bind(a.pool_len, pool_blocks, blocks(a), a.group_size, a.spawn_slots, P, *a.pool, out, out_dest,
+                      out_count, hist_, bank_begin, bank_count, overflow_base, *a.banks, *a.next_pool);
+    if (blocks(a) > 0) launch.run(move_blocks_.kernel(), "scatter_move", std::size_t(blocks(a)), 0, round);
     return;
   }
   if (a.pool_len > 0) {
-    set_args(move_pool_, "clSetKernelArg(scatter_move_pool)", a.pool_len, P, a.pool->records, a.pool->dests, rank_,
-             hist_, bank_begin, bank_count, overflow_base, a.banks->records, a.banks->dests, a.next_pool->records,
-             a.next_pool->dests);
-    launch.run(move_pool_, "scatter_move", std::size_t(a.pool_len), 0, round);
+    move_pool_.bind(a.pool_len, P, *a.pool, rank_, hist_, bank_begin, bank_count, overflow_base, *a.banks,
+                    *a.next_pool);
+    launch.run(move_pool_.kernel(), "scatter_move", std::size_t(a.pool_len), 0, round);
   }
   if (a.out_groups > 0) {
     const int items = a.out_groups * a.group_size;
-    set_args(move_out_, "clSetKernelArg(scatter_move_outputs)", items, a.group_size, a.spawn_slots, a.pool_len,
-             pool_blocks, P, a.outputs->records, a.outputs->dests, *a.out_item_count, rank_, hist_, bank_begin,
-             bank_count, overflow_base, a.banks->records, a.banks->dests, a.next_pool->records, a.next_pool->dests);
-    launch.run(move_out_, "scatter_move", std::size_t(items), 0, round);
+    move_out_.bind(items, a.group_size, a.spawn_slots, a.pool_len, pool_blocks, P, *a.outputs, *a.out_item_count, rank_,
+                   hist_, bank_begin, bank_count, overflow_base, *a.banks, *a.next_pool);
+    launch.run(move_out_.kernel(), "scatter_move", std::size_t(items), 0, round);
   }
 }
 

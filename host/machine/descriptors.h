@@ -4,9 +4,11 @@
 
 #include <cstddef>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "machine/cl_runtime.h"
+#include "machine/kernel_args.h"
 #include "opsila_shared.h"
 
 namespace opsila {
@@ -62,7 +64,7 @@ struct DescriptorSet {
   // Writes count records from host memory at slot `at` (and their destinations).
   void write_raw(ClRuntime& rt, const unsigned char* bytes, std::size_t count, std::size_t at) const;
   void allocate(ClRuntime& rt, std::size_t n, const char* what);
-  int set_args(cl::Kernel& k, int at) const;
+  auto kernel_args() const { return std::tie(records, dests); }  // DESC_PARAMS (machine/kernel_args.h)
   void copy_prefix_to(ClRuntime& rt, DescriptorSet& to, std::size_t count) const;
   void write(ClRuntime& rt, const std::vector<HostDescriptor>& v, std::size_t at = 0) const;
   std::vector<HostDescriptor> read(ClRuntime& rt, std::size_t count, std::size_t at = 0) const;
@@ -136,7 +138,15 @@ class ScatterPass {
   ClRuntime& rt_;
   int num_pes_;
   std::size_t wg_scan_ = 1, wg_plan_ = 1;
-  cl::Kernel count_, scan_, plan_, move_pool_, move_out_, move_blocks_;
+  // kernels/scatter.cl, their parameters as bound (machine/kernel_args.h).
+  using Buf = cl::Buffer;
+  using Set = DescriptorSet;
+  KernelBinding<int, int, int, int, int, int, Set, Buf, Buf, Buf, Buf, Buf, int> count_;
+  KernelBinding<int, int, Buf, Buf> scan_;
+  KernelBinding<int, int, int, int, int, int, Buf, Buf, Buf, Buf, Buf, Buf, Buf> plan_;
+  KernelBinding<int, int, Set, Buf, Buf, Buf, Buf, Buf, Set, Set> move_pool_;
+  KernelBinding<int, int, int, int, int, int, Set, Buf, Buf, Buf, Buf, Buf, Buf, Set, Set> move_out_;
+  KernelBinding<int, int, int, int, int, int, Set, Buf, Buf, Buf, Buf, Buf, Buf, Buf, Set, Set> move_blocks_;
   // Move by block (one work-item walks a block in order: CPUs) or by entry
   // (one work-item per record, ranks stored by the count: GPUs).
   bool by_block_ = false;

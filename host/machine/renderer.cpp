@@ -18,7 +18,9 @@
 #include "core/fixed_point.h"
 #include "core/util.h"
 #include "machine/banks.h"
+#include "machine/counters.h"
 #include "machine/descriptors.h"
+#include "machine/kernel_args.h"
 #include "machine/memory_plan.h"
 #include "machine/pe_group.h"
 #include "machine/rank_exchange.h"
@@ -30,6 +32,24 @@
 
 namespace opsila {
 namespace {
+
+using Buf = cl::Buffer;
+// The three kernels of the frame, their parameters as the host passes them.
+// kernels/item_buffer.cl: frame, clusters, projected boxes, bank nodes and
+// facets, tile side, tiles per row, first tile, sample offsets, mode, and
+// the item buffer with its hits, distances and facets.
+using ItemBufferKernel =
+    KernelBinding<FrameParams, Buf, Buf, Buf, Buf, int, int, int, float, float, int, Buf, Buf, Buf, Buf>;
+// kernels/primary.cl: frame, PE table, item hits and distances, pixels,
+// sample offsets, pool offset, the pool, pixel sums, primary hit count.
+using PrimaryKernel = KernelBinding<FrameParams, Buf, Buf, Buf, int, int, float, float, int, DescriptorSet, Buf, Buf>;
+// kernels/spmd_phase.cl: frame, PE table, clusters, routing boxes, routing,
+// bank nodes, facets, materials, lights, surface, banks, the exchange's
+// work-group table and bank ranges, outputs and their counts, pixel sums,
+// statistics, traffic and its levels, and the pilots' cluster work.
+using SpmdKernel = KernelBinding<FrameParams, Buf, Buf, Buf, int, Buf, Buf, Buf, Buf, SurfaceBuffers, DescriptorSet,
+                                 Buf, Buf, Buf, Buf, DescriptorSet, Buf, Buf, Buf, Buf, int, Buf, Buf, Buf>;
+
 
 // "Projected object boxes": each cluster box as a conservative pixel
 // rectangle (x0, y0, x1, y1), the whole screen when a corner is behind the eye.
@@ -64,19 +84,7 @@ std::vector<cl_int4> cluster_rects(const Scene& scene, const BankedScene& bs) {
   return rects;
 }
 
-std::uint64_t fixed_pair(const std::vector<cl_uint>& v, std::size_t i) {
-  return join_words(v[2 * i], v[2 * i + 1]);
-}
-
 }  // namespace
-
-int SurfaceBuffers::set_args(cl::Kernel& k, int at) const {
-  k.setArg(at++, attributes);
-  k.setArg(at++, textures);
-  k.setArg(at++, texels);
-  k.setArg(at++, srgb);
-  return at;
-}
 
 SurfaceBuffers upload_surface(ClRuntime& rt, const BankedScene& bs) {
   SurfaceBuffers b;
@@ -123,7 +131,9 @@ struct Renderer::Machine {
   RenderStats prepared;  // what the prepare step knows: banks, n, work-group size
   ShareFigures share;    // a scene read in shares: what the collective partition did here
 
-  cl::Kernel k_item, k_primary, k_spmd;
+  ItemBufferKernel k_item;
+  PrimaryKernel k_primary;
+  SpmdKernel k_spmd;
   std::unique_ptr<ScatterPass> scatter;
   cl::Buffer b_tris, b_nodes, b_clusters, b_route, b_pes, b_mats, b_lights, b_rects;
   SurfaceBuffers surface;  // vertex attributes and texture copies of the banks
@@ -191,9 +201,9 @@ Renderer::Machine::Machine(const Scene& scene, PreparedBanks banks, const Render
   measure = settings.measure_cost;
   const KernelProgram program = measure ? KernelProgram::measure : KernelProgram::render;
   rt.program(program);  // compile before anything is timed
-  k_item = rt.kernel("item_buffer", program);
-  k_primary = rt.kernel("build_primary", program);
-  k_spmd = rt.kernel("spmd_phase", program);
+  k_item = ItemBufferKernel(rt, "item_buffer", program);
+  k_primary = PrimaryKernel(rt, "build_primary", program);
+  k_spmd = SpmdKernel(rt, "spmd_phase", program);
   scatter = std::make_unique<ScatterPass>(rt, P);
   choose_work_groups();
   cap = settings.work_groups_per_pe > 0 ? settings.work_groups_per_pe * static_cast<int>(spmd_wg) : 0;
@@ -266,16 +276,16 @@ int Renderer::Machine::choose_bank_capacity(const BankedScene& bs, const RenderS
 void Renderer::Machine::choose_work_groups() {
   const cl::Device& dev = rt.device().device;
   std::size_t allowed = 0, multiple = 0;
-  cl_check(k_spmd.getWorkGroupInfo(dev, CL_KERNEL_WORK_GROUP_SIZE, &allowed),
+  cl_check(k_spmd.kernel().getWorkGroupInfo(dev, CL_KERNEL_WORK_GROUP_SIZE, &allowed),
            "clGetKernelWorkGroupInfo(spmd_phase)");
-  cl_check(k_spmd.getWorkGroupInfo(dev, CL_KERNEL_PREFERRED_WORK_GROUP_SIZE_MULTIPLE, &multiple),
+  cl_check(k_spmd.kernel().getWorkGroupInfo(dev, CL_KERNEL_PREFERRED_WORK_GROUP_SIZE_MULTIPLE, &multiple),
            "clGetKernelWorkGroupInfo(spmd_phase)");
   spmd_wg = std::min<std::size_t>(allowed, rt.group_size());  // 64 unless asked (ClRuntime::group_size)
   if (multiple > 0 && spmd_wg >= multiple) spmd_wg = spmd_wg / multiple * multiple;
   spmd_wg = std::max<std::size_t>(1, spmd_wg);
   prepared.work_group_size = spmd_wg;
 
-  cl_check(k_item.getWorkGroupInfo(dev, CL_KERNEL_WORK_GROUP_SIZE, &allowed),
+  cl_check(k_item.kernel().getWorkGroupInfo(dev, CL_KERNEL_WORK_GROUP_SIZE, &allowed),
            "clGetKernelWorkGroupInfo(item_buffer)");
   tile_w = OPSILA_ITEM_TILE_SIDE;
   while (tile_w > 1 && std::size_t(tile_w) * tile_w > allowed) tile_w /= 2;
@@ -311,11 +321,11 @@ void Renderer::Machine::allocate_frame_buffers() {
   b_item_t = device_buffer(rt, npix * sizeof(cl_float), "item buffer distances");
   b_item_facet = device_buffer(rt, npix * sizeof(cl_int), "item buffer facets");
   b_accum = device_buffer(rt, npix * OPSILA_ACCUM_WORDS * sizeof(cl_uint), "pixel sums");
-  nstats = std::size_t(OPSILA_MAX_DEPTH) * P * OPSILA_STAT_COUNT * 2;
-  b_stats = device_buffer(rt, nstats * sizeof(cl_uint), "stats");
+  nstats = std::size_t(OPSILA_MAX_DEPTH) * P * OPSILA_STAT_COUNT;
+  b_stats = device_buffer(rt, counter_bytes(nstats), "stats");
   ntraffic = std::max<std::size_t>(1, std::size_t(traffic_levels) * P * P);
-  b_traffic = device_buffer(rt, ntraffic * sizeof(cl_uint), "traffic");
-  b_hits = device_buffer(rt, 2 * sizeof(cl_uint), "primary hit count");
+  b_traffic = device_buffer(rt, counter_bytes(ntraffic), "traffic");
+  b_hits = device_buffer(rt, counter_bytes(1), "primary hit count");
   b_cost = device_buffer(rt, ncost * sizeof(cl_uint), "cluster work");
   b_out_count = device_buffer(rt, flight.groups * flight.group_size * sizeof(cl_int), "SPMD output counts");
   banks.allocate(rt, flight.slots + std::size_t(P) * flight.group_size, "descriptor banks");
@@ -328,9 +338,9 @@ void Renderer::Machine::allocate_frame_buffers() {
 void Renderer::Machine::clear_frame() {
   if (rank_exchange) rank_exchange->reset();
   zero_buffer(rt, b_accum, npix * OPSILA_ACCUM_WORDS * sizeof(cl_uint), "pixel sums");
-  zero_buffer(rt, b_stats, nstats * sizeof(cl_uint), "stats");
-  zero_buffer(rt, b_traffic, ntraffic * sizeof(cl_uint), "traffic");
-  zero_buffer(rt, b_hits, 2 * sizeof(cl_uint), "primary hit count");
+  zero_buffer(rt, b_stats, counter_bytes(nstats), "stats");
+  zero_buffer(rt, b_traffic, counter_bytes(ntraffic), "traffic");
+  zero_buffer(rt, b_hits, counter_bytes(1), "primary hit count");
   zero_buffer(rt, b_cost, ncost * sizeof(cl_uint), "cluster work");
 }
 
@@ -361,23 +371,9 @@ void Renderer::Machine::item_buffer(Launcher& launch, int sample) {
     const std::size_t px0 = std::size_t(begin / tiles_x) * tile_w * width;
     const std::size_t px1 = std::min(npix, std::size_t((begin + count) / tiles_x) * tile_w * width);
     if (!group.all()) relay_receive(ranks, rt, relay, px0, px1 - px0);
-    int a = 0;
-    k_item.setArg(a++, fp);
-    k_item.setArg(a++, b_clusters);
-    k_item.setArg(a++, b_rects);
-    k_item.setArg(a++, b_nodes);
-    k_item.setArg(a++, b_tris);
-    k_item.setArg(a++, tile_w);
-    k_item.setArg(a++, tiles_x);
-    k_item.setArg(a++, begin);
-    k_item.setArg(a++, ox);
-    k_item.setArg(a++, oy);
-    k_item.setArg(a++, mode);
-    k_item.setArg(a++, b_items);
-    k_item.setArg(a++, b_item_tri);
-    k_item.setArg(a++, b_item_t);
-    k_item.setArg(a++, b_item_facet);
-    launch.run(k_item, "item_buffer", std::size_t(count) * tile_w * tile_w, std::size_t(tile_w) * tile_w, -1);
+    k_item.bind(fp, b_clusters, b_rects, b_nodes, b_tris, tile_w, tiles_x, begin, ox, oy, mode, b_items, b_item_tri,
+                b_item_t, b_item_facet);
+    launch.run(k_item.kernel(), "item_buffer", std::size_t(count) * tile_w * tile_w, std::size_t(tile_w) * tile_w, -1);
     if (!group.all()) relay_send(ranks, rt, relay, px0, px1 - px0);
   }
   if (!group.all()) relay_share(ranks, rt, relay, npix);
@@ -406,20 +402,10 @@ void Renderer::Machine::primary_descriptors(Launcher& launch, Frame& f, int roun
     pool = bigger;
   }
   if (f.pool_len + count > pool.capacity) count = pool.capacity - f.pool_len;
-  int a = 0;
-  k_primary.setArg(a++, fp);
-  k_primary.setArg(a++, b_pes);
-  k_primary.setArg(a++, b_item_tri);
-  k_primary.setArg(a++, b_item_t);
-  k_primary.setArg(a++, static_cast<int>(f.next_pixel));
-  k_primary.setArg(a++, static_cast<int>(count));
-  k_primary.setArg(a++, offsets[std::size_t(f.sample % spp_k)]);
-  k_primary.setArg(a++, offsets[std::size_t(f.sample / spp_k)]);
-  k_primary.setArg(a++, static_cast<int>(f.pool_len));
-  a = pool.set_args(k_primary, a);
-  k_primary.setArg(a++, b_accum);
-  k_primary.setArg(a++, b_hits);
-  launch.run(k_primary, "build_primary", round_up(count, 64), 0, round);
+  k_primary.bind(fp, b_pes, b_item_tri, b_item_t, static_cast<int>(f.next_pixel), static_cast<int>(count),
+                 offsets[std::size_t(f.sample % spp_k)], offsets[std::size_t(f.sample / spp_k)],
+                 static_cast<int>(f.pool_len), pool, b_accum, b_hits);
+  launch.run(k_primary.kernel(), "build_primary", round_up(count, 64), 0, round);
   f.next_pixel += count;
   f.pool_len += count;
 }
@@ -483,32 +469,10 @@ bool Renderer::Machine::end_rank_round(Launcher& launch, Frame& f) {
 
 // SPMD phase: the plan's work-groups, each on one PE's bank.
 void Renderer::Machine::spmd_phase(Launcher& launch, Frame& f, int round) {
-  int a = 0;
-  k_spmd.setArg(a++, fp);
-  k_spmd.setArg(a++, b_pes);
-  k_spmd.setArg(a++, b_clusters);
-  k_spmd.setArg(a++, b_route);
-  k_spmd.setArg(a++, routing);
-  k_spmd.setArg(a++, b_nodes);
-  k_spmd.setArg(a++, b_tris);
-  k_spmd.setArg(a++, b_mats);
-  k_spmd.setArg(a++, b_lights);
-  a = surface.set_args(k_spmd, a);
-  a = banks.set_args(k_spmd, a);
-  k_spmd.setArg(a++, scatter->group_pe);
-  k_spmd.setArg(a++, scatter->group_first);
-  k_spmd.setArg(a++, scatter->bank_begin);
-  k_spmd.setArg(a++, scatter->bank_count);
-  a = outputs.set_args(k_spmd, a);
-  k_spmd.setArg(a++, b_out_count);
-  k_spmd.setArg(a++, b_accum);
-  k_spmd.setArg(a++, b_stats);
-  k_spmd.setArg(a++, b_traffic);
-  k_spmd.setArg(a++, traffic_levels);
-  k_spmd.setArg(a++, b_node_cluster);
-  k_spmd.setArg(a++, b_tri_cluster);
-  k_spmd.setArg(a++, b_cost);
-  launch.run(k_spmd, "spmd_phase", std::size_t(f.groups) * spmd_wg, spmd_wg, round);
+  k_spmd.bind(fp, b_pes, b_clusters, b_route, routing, b_nodes, b_tris, b_mats, b_lights, surface, banks,
+              scatter->group_pe, scatter->group_first, scatter->bank_begin, scatter->bank_count, outputs, b_out_count,
+              b_accum, b_stats, b_traffic, traffic_levels, b_node_cluster, b_tri_cluster, b_cost);
+  launch.run(k_spmd.kernel(), "spmd_phase", std::size_t(f.groups) * spmd_wg, spmd_wg, round);
   f.out_groups = f.groups;
   if (round % 16 == 15) launch.harvest();
 }
@@ -525,8 +489,7 @@ void Renderer::Machine::read_image(Launcher& launch, RenderResult& result) {
                "clEnqueueReadBuffer(item buffer)");
   launch.check(q.finish(), "clFinish");
   // 64-bit integer sums: with several ranks, summed over them on rank 0.
-  std::vector<std::uint64_t> sums(npix * 3);
-  for (std::size_t i = 0; i < npix * 3; ++i) sums[i] = fixed_pair(accum, i);
+  std::vector<std::uint64_t> sums = join_word_pairs(accum);
   if (!group.all()) reduce_to_root(ranks, sums);
   result.rgb.resize(npix * 3);
   for (std::size_t i = 0; i < npix * 3; ++i) result.rgb[i] = from_fixed(sums[i], spp);
@@ -538,48 +501,42 @@ void Renderer::Machine::read_image(Launcher& launch, RenderResult& result) {
 // occluded or lit shadow rays.
 void Renderer::Machine::read_stats(RenderResult& result) {
   RenderStats& st = result.stats;
-  cl::CommandQueue& q = rt.queue();
-  std::vector<cl_uint> raw(nstats);
-  cl_check(q.enqueueReadBuffer(b_stats, CL_TRUE, 0, nstats * sizeof(cl_uint), raw.data()), "clEnqueueReadBuffer(stats)");
-  std::vector<cl_uint> tr(traffic_levels > 0 ? ntraffic : 0), hits(2);
-  if (traffic_levels > 0)
-    cl_check(q.enqueueReadBuffer(b_traffic, CL_TRUE, 0, ntraffic * sizeof(cl_uint), tr.data()),
-             "clEnqueueReadBuffer(traffic)");
-  cl_check(q.enqueueReadBuffer(b_hits, CL_TRUE, 0, 2 * sizeof(cl_uint), hits.data()),
-           "clEnqueueReadBuffer(primary hit count)");
+  const std::size_t ncounters = std::size_t(depth) * P * OPSILA_STAT_COUNT;
+  std::vector<std::uint64_t> counters = read_counters(rt, b_stats, ncounters, "stats");
+  std::vector<std::uint64_t> traffic;
+  if (traffic_levels > 0) traffic = read_counters(rt, b_traffic, ntraffic, "traffic");
+  counters.push_back(read_counters(rt, b_hits, 1, "primary hit count")[0]);
   // Each rank counted its own PEs and primaries: summed on rank 0.
-  std::vector<std::uint64_t> counters(std::size_t(depth) * P * OPSILA_STAT_COUNT), traffic(tr.begin(), tr.end());
-  for (std::size_t k = 0; k < counters.size(); ++k) counters[k] = fixed_pair(raw, k);
-  counters.push_back(fixed_pair(hits, 0));
   if (!group.all()) {
     reduce_to_root(ranks, counters);
     reduce_to_root(ranks, traffic);
   }
-  st.counters.assign(depth, std::vector<std::vector<std::uint64_t>>(P, std::vector<std::uint64_t>(OPSILA_STAT_COUNT, 0)));
+  const std::uint64_t primary_hits = counters.back();
+  counters.pop_back();
+  st.counters.assign(depth, std::vector<std::vector<std::uint64_t>>(P));
   for (int l = 0; l < depth; ++l)
-    for (int p = 0; p < P; ++p)
-      for (int s = 0; s < OPSILA_STAT_COUNT; ++s)
-        st.counters[l][p][s] = counters[(std::size_t(l) * P + p) * OPSILA_STAT_COUNT + s];
+    for (int p = 0; p < P; ++p) {
+      const auto at = counters.begin() + std::ptrdiff_t((std::size_t(l) * P + p) * OPSILA_STAT_COUNT);
+      st.counters[l][p].assign(at, at + OPSILA_STAT_COUNT);
+    }
   if (traffic_levels > 0) {
     st.traffic.assign(traffic_levels, std::vector<std::uint64_t>(std::size_t(P) * P));
     for (int l = 0; l < traffic_levels; ++l)
       for (std::size_t k = 0; k < std::size_t(P) * P; ++k) st.traffic[l][k] = traffic[std::size_t(l) * P * P + k];
   }
   result.rays.primary = npix * std::size_t(spp);
-  result.rays.primary_hits = counters.back();
-  std::uint64_t children = 0, shadow = 0, finished = 0, forwards = 0;
-  for (int l = 0; l < depth; ++l)
-    for (int p = 0; p < P; ++p) {
-      const auto& c = st.counters[l][p];
-      children += c[OPSILA_STAT_SPAWN_RADIANCE];
-      shadow += c[OPSILA_STAT_SPAWN_SHADOW];
-      finished += c[OPSILA_STAT_RESOLVED] + c[OPSILA_STAT_MISS] + c[OPSILA_STAT_OCCLUDED] + c[OPSILA_STAT_LIT];
-      forwards += c[OPSILA_STAT_FORWARD];
-    }
+  result.rays.primary_hits = primary_hits;
+  std::uint64_t children = 0, shadow = 0, forwards = 0;
+  for (std::size_t at = 0; at < counters.size(); at += OPSILA_STAT_COUNT) {
+    children += counters[at + OPSILA_STAT_SPAWN_RADIANCE];
+    shadow += counters[at + OPSILA_STAT_SPAWN_SHADOW];
+    forwards += counters[at + OPSILA_STAT_FORWARD];
+  }
+  const CounterSums sums = counter_sums(counters);
   result.rays.secondary = children;
   result.rays.shadow = shadow;
-  st.descriptors_spawned = result.rays.primary_hits + children + shadow;
-  st.descriptors_finished = finished;
+  st.descriptors_spawned = primary_hits + sums.spawned;
+  st.descriptors_finished = sums.finished;
   st.forwards = forwards;
 }
 
@@ -587,23 +544,15 @@ void Renderer::Machine::read_stats(RenderResult& result) {
 // trees are finished, out of all samples: samples injected, less one per
 // descriptor still in flight (spawned - finished, from the counters).
 void Renderer::Machine::report_progress(const Frame& f) {
-  std::vector<cl_uint> raw(nstats), hits(2);
-  cl::CommandQueue& q = rt.queue();
-  cl_check(q.enqueueReadBuffer(b_stats, CL_TRUE, 0, nstats * sizeof(cl_uint), raw.data()), "clEnqueueReadBuffer(stats)");
-  cl_check(q.enqueueReadBuffer(b_hits, CL_TRUE, 0, 2 * sizeof(cl_uint), hits.data()),
-           "clEnqueueReadBuffer(primary hit count)");
-  std::uint64_t spawned = fixed_pair(hits, 0), finished = 0;
-  for (int l = 0; l < depth; ++l)
-    for (int p = 0; p < P; ++p) {
-      const std::size_t at = (std::size_t(l) * P + p) * OPSILA_STAT_COUNT;
-      spawned += fixed_pair(raw, at + OPSILA_STAT_SPAWN_RADIANCE) + fixed_pair(raw, at + OPSILA_STAT_SPAWN_SHADOW);
-      finished += fixed_pair(raw, at + OPSILA_STAT_RESOLVED) + fixed_pair(raw, at + OPSILA_STAT_MISS) +
-                  fixed_pair(raw, at + OPSILA_STAT_OCCLUDED) + fixed_pair(raw, at + OPSILA_STAT_LIT);
-    }
+  const std::vector<std::uint64_t> counters =
+      read_counters(rt, b_stats, std::size_t(depth) * P * OPSILA_STAT_COUNT, "stats");
+  const std::uint64_t primary_hits = read_counters(rt, b_hits, 1, "primary hit count")[0];
+  const CounterSums sums = counter_sums(counters);
+  const std::uint64_t spawned = primary_hits + sums.spawned, finished = sums.finished;
   const std::uint64_t injected = std::uint64_t(f.sample) * npix + f.next_pixel;
   const std::uint64_t in_flight = spawned > finished ? spawned - finished : 0;
   const double done = injected > in_flight ? double(injected - in_flight) : 0.0;
-  const std::uint64_t rays = injected + (spawned - fixed_pair(hits, 0));
+  const std::uint64_t rays = injected + sums.spawned;
   progress->report(done / (double(npix) * spp), rays);
 }
 

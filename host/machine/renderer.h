@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <memory>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "machine/banks.h"
@@ -24,7 +25,7 @@ struct BankedScene;
 // decode table. Empty parts are one-element placeholders never read.
 struct SurfaceBuffers {
   cl::Buffer attributes, textures, texels, srgb;
-  int set_args(cl::Kernel& k, int at) const;
+  auto kernel_args() const { return std::tie(attributes, textures, texels, srgb); }  // machine/kernel_args.h
 };
 SurfaceBuffers upload_surface(ClRuntime& rt, const BankedScene& bs);
 

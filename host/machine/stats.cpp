@@ -4,34 +4,11 @@
 #include <cstdint>
 #include <map>
 
+#include "machine/counters.h"
 #include "machine/descriptors.h"
 #include "opsila_shared.h"
 
 namespace opsila {
-
-namespace {
-
-// JSON names of the OPSILA_STAT_* counters, by index.
-const char* const kCounterNames[OPSILA_STAT_COUNT] = {
-    "traced",          // OPSILA_STAT_TRACED
-    "radiance",        // OPSILA_STAT_RADIANCE
-    "resolved",        // OPSILA_STAT_RESOLVED
-    "shadow",          // OPSILA_STAT_SHADOW
-    "triangle_tests",  // OPSILA_STAT_TRI_TESTS
-    "box_tests",       // OPSILA_STAT_BOX_TESTS
-    "sphere_tests",    // OPSILA_STAT_SPHERE_TESTS
-    "spawned_radiance",  // OPSILA_STAT_SPAWN_RADIANCE
-    "spawned_shadow",    // OPSILA_STAT_SPAWN_SHADOW
-    "misses",          // OPSILA_STAT_MISS
-    "occluded",        // OPSILA_STAT_OCCLUDED
-    "lit",             // OPSILA_STAT_LIT
-    "forwards",        // OPSILA_STAT_FORWARD
-    "route_tests",     // OPSILA_STAT_ROUTE_TESTS
-    "local",           // OPSILA_STAT_LOCAL
-};
-static_assert(OPSILA_STAT_COUNT == 15, "update kCounterNames with the OPSILA_STAT_* list");
-
-}  // namespace
 
 double test_occupancy(const RenderStats& st) {
   double done = 0, allowed = 0;
@@ -50,14 +27,13 @@ double test_occupancy(const RenderStats& st) {
 namespace {
 
 nlohmann::json counters_object(const std::vector<std::uint64_t>& values) {
+  std::vector<std::uint64_t> all(OPSILA_STAT_COUNT, 0);
+  std::copy_n(values.begin(), std::min<std::size_t>(values.size(), OPSILA_STAT_COUNT), all.begin());
   nlohmann::json out = nlohmann::json::object();
-  for (int i = 0; i < OPSILA_STAT_COUNT; ++i)
-    out[kCounterNames[i]] = i < static_cast<int>(values.size()) ? values[i] : 0;
-  // Every ray that finishes at this level: shaded hits, misses, shadow rays.
-  const auto at = [&](int i) -> std::uint64_t { return i < static_cast<int>(values.size()) ? values[i] : 0; };
-  out["finished"] = at(OPSILA_STAT_RESOLVED) + at(OPSILA_STAT_MISS) + at(OPSILA_STAT_OCCLUDED) +
-                    at(OPSILA_STAT_LIT);
-  out["spawned"] = at(OPSILA_STAT_SPAWN_RADIANCE) + at(OPSILA_STAT_SPAWN_SHADOW);
+  for (int i = 0; i < OPSILA_STAT_COUNT; ++i) out[stat_name(i)] = all[std::size_t(i)];
+  const CounterSums sums = counter_sums(all.data());
+  out["finished"] = sums.finished;  // every ray that finishes at this level
+  out["spawned"] = sums.spawned;
   return out;
 }
 

@@ -31,6 +31,12 @@ inline void accumulate(volatile __global uint *accum, int pixel, float3 value) {
   if (q.z != 0) add_fixed(&accum[pixel * OPSILA_ACCUM_WORDS + 4], q.z);
 }
 
+/* Counter `index` of a 64-bit counter array (OPSILA_COUNTER_WORDS words
+ * each): statistics, PE x PE traffic, primary hits. */
+inline void count_add(volatile __global uint *counters, long index, uint amount) {
+  if (amount != 0u) add_fixed(&counters[index * OPSILA_COUNTER_WORDS], (long)amount);
+}
+
 inline void count_stat(volatile __global uint *stats, int num_pes, int level, int pe, int which, uint amount) {
-  if (amount != 0u) add_fixed(&stats[((level * num_pes + pe) * OPSILA_STAT_COUNT + which) * 2], (long)amount);
+  count_add(stats, ((long)level * num_pes + pe) * OPSILA_STAT_COUNT + which, amount);
 }

@@ -1,0 +1,78 @@
+// The device's counters (kernels/lib/accum.cl count_add, read back by
+// machine/counters.h): 64 bits each, so that the largest frame opsila
+// accepts cannot wrap them. A counter-only kernel adds, from many
+// work-items at once, what the largest frame could put in one PE x PE
+// traffic cell, and the host must read it back exactly.
+#include <gtest/gtest.h>
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "core/scene.h"
+#include "machine/counters.h"
+#include "machine/descriptors.h"
+#include "opsila_shared.h"
+#include "test_device.h"
+
+namespace opsila {
+
+const std::string& kernel_source();  // the embedded kernels (generated from kernels/*.cl)
+
+namespace {
+
+// Every work-item adds `amount` to counter (id % cells), through the
+// function the SPMD phase flushes its statistics and traffic with.
+const char* const kCountMany = R"(
+__kernel void count_many(volatile __global uint *counters, int cells, uint amount) {
+  count_add(counters, (long)(get_global_id(0) % (size_t)cells), amount);
+}
+)";
+
+TEST(Counters, HoldTheLargestFrameAcceptedManyTimesOver) {
+  // The largest frame: kMaxImageSide^2 pixels at kMaxSpp samples, 2^38
+  // primary rays; if every one crossed the same PE pair at one level 64
+  // times, one traffic cell would count 2^44.
+  const std::uint64_t largest_frame = std::uint64_t(kMaxImageSide) * kMaxImageSide * kMaxSpp;
+  ASSERT_EQ(largest_frame, std::uint64_t(1) << 38);
+  ClRuntimeOptions o;
+  o.read_environment = false;
+  o.kernel_source = kernel_source() + kCountMany;
+  o.kernel_source_origin = "counter test kernel";
+  ClRuntime rt(test::test_device(), o);
+  cl::Kernel k = rt.kernel("count_many");
+  // A work-group flushes at most a 32-bit local count per counter: each
+  // work-item adds the largest, 2^32 - 1, to one of three cells.
+  const int cells = 3, items = 3 << 12, launches = 2;
+  const cl_uint amount = 0xffffffffu;
+  cl::Buffer counters = device_buffer(rt, counter_bytes(cells), "test counters");
+  zero_buffer(rt, counters, counter_bytes(cells), "test counters");
+  cl_check(k.setArg(0, counters), "setArg");
+  cl_check(k.setArg(1, cells), "setArg");
+  cl_check(k.setArg(2, amount), "setArg");
+  for (int l = 0; l < launches; ++l)  // as rounds do, one after the other
+    cl_check(rt.queue().enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(items), cl::NullRange), "count_many");
+  const std::vector<std::uint64_t> got = read_counters(rt, counters, cells, "test counters");
+  const std::uint64_t expected = std::uint64_t(items / cells) * launches * amount;
+  ASSERT_GE(expected, largest_frame * 64);
+  for (int c = 0; c < cells; ++c) EXPECT_EQ(got[std::size_t(c)], expected) << "cell " << c;
+}
+
+// The statistics' sums come from their one declaration: what each counter
+// adds to (spawned, finished, neither).
+TEST(Counters, SumsFollowTheCounterTable) {
+  std::vector<std::uint64_t> one(OPSILA_STAT_COUNT, 0);
+  for (int i = 0; i < OPSILA_STAT_COUNT; ++i) one[std::size_t(i)] = std::uint64_t(1) << i;
+  const CounterSums s = counter_sums(one.data());
+  EXPECT_EQ(s.spawned, one[OPSILA_STAT_SPAWN_RADIANCE] + one[OPSILA_STAT_SPAWN_SHADOW]);
+  EXPECT_EQ(s.finished,
+            one[OPSILA_STAT_RESOLVED] + one[OPSILA_STAT_MISS] + one[OPSILA_STAT_OCCLUDED] + one[OPSILA_STAT_LIT]);
+  std::vector<std::uint64_t> two_pes = one;
+  two_pes.insert(two_pes.end(), one.begin(), one.end());
+  EXPECT_EQ(counter_sums(two_pes).spawned, 2 * s.spawned);
+  EXPECT_EQ(std::string(stat_name(OPSILA_STAT_TRI_TESTS)), "triangle_tests");
+  EXPECT_EQ(std::string(stat_name(OPSILA_STAT_LOCAL)), "local");
+}
+
+}  // namespace
+}  // namespace opsila

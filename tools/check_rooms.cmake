@@ -24,12 +24,13 @@ foreach(room core input machine reference bench cli)
   endforeach()
 endforeach()
 # Below the renderer nothing includes it: the types other rooms need are in
-# machine/render_types.h. Only the renderer itself and the pilot frames
-# (which run renderers) include machine/renderer.h inside the machine room.
+# machine/render_types.h. Only the renderer itself (renderer.cpp, its
+# private frame.h and frame_*.cpp stages) and the pilot frames (which run
+# renderers) include machine/renderer.h inside the machine room.
 file(GLOB files ${SRC}/host/machine/*.h ${SRC}/host/machine/*.cpp)
 foreach(f ${files})
   get_filename_component(name ${f} NAME)
-  if(NOT name MATCHES "^(renderer\\.cpp|pilot\\.cpp)$")
+  if(NOT name MATCHES "^(renderer\\.cpp|pilot\\.cpp|frame\\.h|frame_[a-z_]+\\.cpp)$")
     file(STRINGS ${f} lines REGEX "^#include \"machine/renderer\\.h\"")
     if(lines)
       string(APPEND bad "  host/machine/${name}: includes machine/renderer.h (below the renderer: use machine/render_types.h)\n")

@@ -1,0 +1,122 @@
+// The frame machine's private header: the state the renderer keeps between
+// frames (Renderer::Machine) and the stages of a frame, one file each, each
+// named after the kernel file it drives:
+//   frame_prepare.cpp      the machine for one scene and view (bank size n,
+//                          work-group sizes, the program's kernels)
+//   frame_buffers.cpp      device buffers: scene uploads, frame buffers, clearing
+//   frame_item_buffer.cpp  kernels/item_buffer.cl
+//   frame_primary.cpp      kernels/primary.cl
+//   frame_scatter.cpp      kernels/scatter.cl (the exchange, and the ranks' part of it)
+//   frame_spmd_phase.cpp   kernels/spmd_phase.cl
+//   frame_readback.cpp     image, counters, progress, rank report
+// renderer.cpp holds the loop that runs them. Only these files include it.
+#pragma once
+
+#include <memory>
+#include <vector>
+
+#include "machine/banks.h"
+#include "machine/descriptors.h"
+#include "machine/kernel_args.h"
+#include "machine/memory_plan.h"
+#include "machine/pe_group.h"
+#include "machine/rank_exchange.h"
+#include "machine/ranks.h"
+#include "machine/renderer.h"
+#include "opsila_shared.h"
+
+namespace opsila {
+
+namespace frame_kernels {
+using Buf = cl::Buffer;
+// The three kernels of the frame, their parameters as the host passes them.
+// kernels/item_buffer.cl: frame, clusters, projected boxes, bank nodes and
+// facets, tile side, tiles per row, first tile, sample offsets, mode, and
+// the item buffer with its hits, distances and facets.
+using ItemBufferKernel =
+    KernelBinding<FrameParams, Buf, Buf, Buf, Buf, int, int, int, float, float, int, Buf, Buf, Buf, Buf>;
+// kernels/primary.cl: frame, PE table, item hits and distances, pixels,
+// sample offsets, pool offset, the pool, pixel sums, primary hit count.
+using PrimaryKernel = KernelBinding<FrameParams, Buf, Buf, Buf, int, int, float, float, int, DescriptorSet, Buf, Buf>;
+// kernels/spmd_phase.cl: frame, PE table, clusters, routing boxes, routing,
+// bank nodes, facets, materials, lights, surface, banks, the exchange's
+// work-group table and bank ranges, outputs and their counts, pixel sums,
+// statistics, traffic and its levels, and the pilots' cluster work.
+using SpmdKernel = KernelBinding<FrameParams, Buf, Buf, Buf, int, Buf, Buf, Buf, Buf, SurfaceBuffers, DescriptorSet,
+                                 Buf, Buf, Buf, Buf, DescriptorSet, Buf, Buf, Buf, Buf, int, Buf, Buf, Buf>;
+}  // namespace frame_kernels
+
+// Everything the machine keeps between frames, and the stages of a frame.
+struct Renderer::Machine {
+  ClRuntime& rt;
+  // P PEs in all; with several MPI ranks this device holds the G PEs of its
+  // group (pe_group.h) and only their banks.
+  Ranks& ranks = Ranks::world();
+  PeGroup group;
+  int G = 0;
+  DevicePlan plan;
+  std::unique_ptr<RankExchange> rank_exchange;  // several ranks only
+  int P = 0, n = 0, S = 0, depth = 0, width = 0, height = 0, traffic_levels = 0, cap = 0;
+  int routing = OPSILA_ROUTING_BOXES;
+  std::size_t npix = 0, nstats = 0, ntraffic = 0;
+  std::size_t spmd_wg = 1;
+  int tile_w = 1, item_launch_pixels = 1;
+  int spp = 1, spp_k = 1;         // samples per pixel, N = k*k
+  std::vector<float> offsets;     // (i + 0.5) / k, i = 0..k-1
+  Progress* progress = nullptr;
+  // OPSILA_FAULT_ROUND=K: a device fault reported at round K of every frame
+  // (what a GPU reset or CL_OUT_OF_RESOURCES mid-frame looks like), so the
+  // tests can show how a failure among running ranks ends them all.
+  int fault_round = -1;
+  FlightPlan flight{1, 1, 1, 1};
+  FrameParams fp{};
+  RenderStats prepared;  // what the prepare step knows: banks, n, work-group size
+  ShareFigures share;    // a scene read in shares: what the collective partition did here
+
+  frame_kernels::ItemBufferKernel k_item;
+  frame_kernels::PrimaryKernel k_primary;
+  frame_kernels::SpmdKernel k_spmd;
+  std::unique_ptr<ScatterPass> scatter;
+  cl::Buffer b_tris, b_nodes, b_clusters, b_route, b_pes, b_mats, b_lights, b_rects;
+  SurfaceBuffers surface;  // vertex attributes and texture copies of the banks
+  cl::Buffer b_items, b_item_tri, b_item_t, b_item_facet, b_accum, b_stats, b_traffic, b_out_count, b_hits;
+  // Pilot frames (measure_cost): each cluster's tests per level, and what
+  // maps them back to the scene's facets (every cluster's, on every rank).
+  bool measure = false;
+  cl::Buffer b_node_cluster, b_tri_cluster, b_cost;
+  std::size_t ncost = 1;
+  DescriptorSet banks, outputs, pool, next_pool;
+
+  // Where a frame stands between rounds.
+  struct Frame {
+    int sample = 0;              // the sample pass whose hits the item buffer holds
+    std::size_t next_pixel = 0;  // first pixel without a primary descriptor yet, in this pass
+    std::size_t pool_len = 0;    // descriptors waiting in `pool`
+    int out_groups = 0;          // SPMD work-groups whose outputs the next exchange reads
+    int groups = 0;              // SPMD work-groups of this round (from the exchange's plan)
+    std::size_t pool_len_max = 0;  // several ranks: the longest pool of any rank (they inject alike)
+  };
+
+  Machine(const Scene& scene, PreparedBanks banks, const RenderSettings& settings, ClRuntime& runtime);
+  int choose_bank_capacity(const BankedScene& bs, const RenderSettings& settings) const;
+  void choose_work_groups();
+  void upload_scene(const Scene& scene, const BankedScene& bs);
+  void allocate_frame_buffers();
+
+  void clear_frame();
+  void item_buffer(Launcher& launch, int sample);
+  void primary_descriptors(Launcher& launch, Frame& f, int round);
+  ScatterPass::Args exchange_args(const Frame& f) const;
+  void exchange(Launcher& launch, Frame& f, int round, RenderStats& st);
+  void spmd_phase(Launcher& launch, Frame& f, int round);
+  void report_progress(const Frame& f);
+  void read_image(Launcher& launch, RenderResult& result);
+  void read_stats(RenderResult& result);
+  bool end_rank_round(Launcher& launch, Frame& f);
+  RankReport rank_report(const RenderStats& st, double seconds, double mpi_seconds) const;
+};
+
+// "Projected object boxes" of the item buffer (frame_buffers.cpp).
+std::vector<cl_int4> cluster_rects(const Scene& scene, const BankedScene& bs);
+
+}  // namespace opsila

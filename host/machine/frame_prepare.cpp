@@ -1,0 +1,135 @@
+// The machine for one scene and view, on prepared banks: bank size n and
+// the memory plan, work-group sizes, the program's kernels, then the
+// uploads and buffers (frame_buffers.cpp).
+#include "machine/frame.h"
+
+#include <algorithm>
+#include <cctype>
+#include <cstdlib>
+#include <stdexcept>
+#include <string>
+
+#include "core/camera.h"
+#include "core/util.h"
+#include "machine/ranks.h"
+
+namespace opsila {
+
+Renderer::Machine::Machine(const Scene& scene, PreparedBanks banks, const RenderSettings& settings,
+                           ClRuntime& runtime)
+    : rt(runtime) {
+  P = settings.num_pes;
+  check_machine_request(scene, P);
+  if (banks.scene.num_pes != P || banks.group.begin < 0 || banks.group.end > P)
+    throw std::invalid_argument("Renderer: the banks were prepared for another machine");
+  width = scene.width;
+  height = scene.height;
+  depth = scene.max_depth;
+  npix = std::size_t(width) * height;
+  item_launch_pixels = settings.item_buffer_tile;
+  routing = settings.routing;
+  spp = scene.spp;
+  spp_k = spp_side(spp);
+  offsets = sample_offsets(spp);
+  progress = settings.progress;
+  if (const char* k = std::getenv("OPSILA_FAULT_ROUND"); k && *k) {
+    const std::string text = k;
+    if (!std::all_of(text.begin(), text.end(), [](unsigned char c) { return std::isdigit(c); }) || text.size() > 9)
+      throw InputError("OPSILA_FAULT_ROUND=" + text + ": expected a round number");
+    fault_round = std::stoi(text);
+  }
+
+  measure = settings.measure_cost;
+  const KernelProgram program = measure ? KernelProgram::measure : KernelProgram::render;
+  rt.program(program);  // compile before anything is timed
+  k_item = decltype(k_item)(rt, "item_buffer", program);
+  k_primary = decltype(k_primary)(rt, "build_primary", program);
+  k_spmd = decltype(k_spmd)(rt, "spmd_phase", program);
+  scatter = std::make_unique<ScatterPass>(rt, P);
+  choose_work_groups();
+  cap = settings.work_groups_per_pe > 0 ? settings.work_groups_per_pe * static_cast<int>(spmd_wg) : 0;
+
+  // This device's PEs and their banks, prepared before (machine/banks.h).
+  group = banks.group;
+  G = group.size();
+  const BankedScene& bs = banks.scene;
+  if (measure) ncost = std::size_t(depth) * bs.clusters.size();
+  S = OPSILA_SPAWN_SLOTS(static_cast<int>(bs.lights.size()));
+  n = choose_bank_capacity(bs, settings);
+  flight = FlightPlan(G, n, spmd_wg, S);
+  plan = plan_device_memory(bs, npix, P, flight, depth);
+  fp = frame_params(scene, bs, n);
+  fp.group_begin = group.begin;
+  fp.group_end = group.end;
+  fp.tri_base = banks.tri_base;
+  traffic_levels = P <= OPSILA_TRAFFIC_MAX_PES ? depth : 0;
+
+  prepared.num_pes = P;
+  prepared.bank_capacity = n;
+  prepared.num_clusters = static_cast<int>(bs.clusters.size());
+  prepared.routing = routing;
+  prepared.balance = banks.balance;
+  prepared.pilot_frames = banks.pilot_frames;
+  prepared.pilot_seconds = banks.pilot_seconds;
+  share = banks.share;
+  prepared.bank_bytes = bs.bank_bytes;
+  prepared.global_bytes = bs.global_bytes;
+  prepared.replicated_bytes = bs.replicated_bytes;
+  prepared.texture_bytes = bs.texture_bytes;
+  prepared.texture_replicated_bytes = bs.texture_replicated_bytes;
+  upload_scene(scene, bs);
+  allocate_frame_buffers();
+  if (!group.all()) rank_exchange = std::make_unique<RankExchange>(rt, ranks, group, P);
+}
+
+// n, the paper's bank size: P * n descriptors in flight fill the device
+// (2^18 on a GPU, 2^16 on a CPU), bounded by memory. Everything allocated
+// before the first launch must fit the device's global memory (device_buffer
+// checks each buffer against the largest single allocation). An automatic n
+// halves until it fits; an explicit --bank-capacity, or an image that does
+// not fit even with n = 1, is refused.
+int Renderer::Machine::choose_bank_capacity(const BankedScene& bs, const RenderSettings& settings) const {
+  int bank = settings.bank_capacity;
+  if (bank <= 0) {
+    std::size_t target = rt.device().is_gpu ? (1u << 18) : (1u << 16);
+    target = std::min<std::size_t>(target, std::max<std::size_t>(npix, 1024));
+    bank = static_cast<int>(std::max<std::size_t>(1, target / G));
+  }
+  if (std::size_t(G) * bank * S > (1u << 30))
+    throw InputError("--bank-capacity " + std::to_string(bank) + " is too large for " + std::to_string(P) +
+                     " PEs and " + std::to_string(S - 2) + " lights");
+  auto plan = [&](int b) { return plan_device_memory(bs, npix, P, FlightPlan(G, b, spmd_wg, S), depth); };
+  if (settings.bank_capacity <= 0)
+    while (bank > 1 && plan(bank).total() > rt.global_mem()) bank /= 2;
+  if (const DevicePlan need = plan(bank); need.total() > rt.global_mem())
+    throw ClError("the render needs " + format_size(need.total()) + " of device memory (image " + format_size(need.image) +
+                  ", descriptors " + format_size(need.descriptors) + ", scene " + format_size(need.scene) + ", other " +
+                  format_size(need.other) + "), more than the device's global memory (" + format_size(rt.global_mem()) +
+                  (rt.memory_limit() ? ", as lowered by OPSILA_DEVICE_MEMORY_LIMIT" : ", CL_DEVICE_GLOBAL_MEM_SIZE") +
+                  "): use a smaller --size, fewer --pes, a smaller --bank-capacity" +
+                  (ranks.built_with_mpi() ? " or more MPI ranks (mpirun -np R)" : ""));
+  return bank;
+}
+
+// Work-group sizes: queried, never assumed. The SPMD phase's (one
+// descriptor per work-item), and the item buffer's square tile of pixels (as
+// large as the kernel allows up to 8x8).
+void Renderer::Machine::choose_work_groups() {
+  const cl::Device& dev = rt.device().device;
+  std::size_t allowed = 0, multiple = 0;
+  cl_check(k_spmd.kernel().getWorkGroupInfo(dev, CL_KERNEL_WORK_GROUP_SIZE, &allowed),
+           "clGetKernelWorkGroupInfo(spmd_phase)");
+  cl_check(k_spmd.kernel().getWorkGroupInfo(dev, CL_KERNEL_PREFERRED_WORK_GROUP_SIZE_MULTIPLE, &multiple),
+           "clGetKernelWorkGroupInfo(spmd_phase)");
+  spmd_wg = std::min<std::size_t>(allowed, rt.group_size());  // 64 unless asked (ClRuntime::group_size)
+  if (multiple > 0 && spmd_wg >= multiple) spmd_wg = spmd_wg / multiple * multiple;
+  spmd_wg = std::max<std::size_t>(1, spmd_wg);
+  prepared.work_group_size = spmd_wg;
+
+  cl_check(k_item.kernel().getWorkGroupInfo(dev, CL_KERNEL_WORK_GROUP_SIZE, &allowed),
+           "clGetKernelWorkGroupInfo(item_buffer)");
+  tile_w = OPSILA_ITEM_TILE_SIDE;
+  while (tile_w > 1 && std::size_t(tile_w) * tile_w > allowed) tile_w /= 2;
+}
+
+}  // namespace opsila

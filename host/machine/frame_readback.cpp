@@ -1,0 +1,127 @@
+// What a frame reads back: the image, the counters, the progress line
+// and, with several ranks, this rank's report.
+#include "machine/frame.h"
+
+#include <algorithm>
+
+#include "core/fixed_point.h"
+#include "core/progress.h"
+#include "machine/counters.h"
+#include "machine/stats.h"
+
+namespace opsila {
+
+// Read back the pixel sums (fixed point: the sum of the N samples, decoded
+// here into their mean) and the item buffer.
+void Renderer::Machine::read_image(Launcher& launch, RenderResult& result) {
+  cl::CommandQueue& q = rt.queue();
+  std::vector<cl_uint> accum(npix * OPSILA_ACCUM_WORDS);
+  launch.check(q.enqueueReadBuffer(b_accum, CL_TRUE, 0, accum.size() * sizeof(cl_uint), accum.data()),
+               "clEnqueueReadBuffer(pixel sums)");
+  result.item_buffer.resize(npix * 2);
+  launch.check(q.enqueueReadBuffer(b_items, CL_TRUE, 0, npix * sizeof(cl_int2), result.item_buffer.data()),
+               "clEnqueueReadBuffer(item buffer)");
+  launch.check(q.finish(), "clFinish");
+  // 64-bit integer sums: with several ranks, summed over them on rank 0.
+  std::vector<std::uint64_t> sums = join_word_pairs(accum);
+  if (!group.all()) reduce_to_root(ranks, sums);
+  result.rgb.resize(npix * 3);
+  for (std::size_t i = 0; i < npix * 3; ++i) result.rgb[i] = from_fixed(sums[i], spp);
+}
+
+// Per-level, per-PE counters and traffic, then the frame's totals. Every
+// primary ray is cast by the item buffer; descriptors are spawned as primary
+// hits, children and shadow rays, and finish as shaded hits, misses,
+// occluded or lit shadow rays.
+void Renderer::Machine::read_stats(RenderResult& result) {
+  RenderStats& st = result.stats;
+  const std::size_t ncounters = std::size_t(depth) * P * OPSILA_STAT_COUNT;
+  std::vector<std::uint64_t> counters = read_counters(rt, b_stats, ncounters, "stats");
+  std::vector<std::uint64_t> traffic;
+  if (traffic_levels > 0) traffic = read_counters(rt, b_traffic, ntraffic, "traffic");
+  counters.push_back(read_counters(rt, b_hits, 1, "primary hit count")[0]);
+  // Each rank counted its own PEs and primaries: summed on rank 0.
+  if (!group.all()) {
+    reduce_to_root(ranks, counters);
+    reduce_to_root(ranks, traffic);
+  }
+  const std::uint64_t primary_hits = counters.back();
+  counters.pop_back();
+  st.counters.assign(depth, std::vector<std::vector<std::uint64_t>>(P));
+  for (int l = 0; l < depth; ++l)
+    for (int p = 0; p < P; ++p) {
+      const auto at = counters.begin() + std::ptrdiff_t((std::size_t(l) * P + p) * OPSILA_STAT_COUNT);
+      st.counters[l][p].assign(at, at + OPSILA_STAT_COUNT);
+    }
+  if (traffic_levels > 0) {
+    st.traffic.assign(traffic_levels, std::vector<std::uint64_t>(std::size_t(P) * P));
+    for (int l = 0; l < traffic_levels; ++l)
+      for (std::size_t k = 0; k < std::size_t(P) * P; ++k) st.traffic[l][k] = traffic[std::size_t(l) * P * P + k];
+  }
+  result.rays.primary = npix * std::size_t(spp);
+  result.rays.primary_hits = primary_hits;
+  std::uint64_t children = 0, shadow = 0, forwards = 0;
+  for (std::size_t at = 0; at < counters.size(); at += OPSILA_STAT_COUNT) {
+    children += counters[at + OPSILA_STAT_SPAWN_RADIANCE];
+    shadow += counters[at + OPSILA_STAT_SPAWN_SHADOW];
+    forwards += counters[at + OPSILA_STAT_FORWARD];
+  }
+  const CounterSums sums = counter_sums(counters);
+  result.rays.secondary = children;
+  result.rays.shadow = shadow;
+  st.descriptors_spawned = primary_hits + sums.spawned;
+  st.descriptors_finished = sums.finished;
+  st.forwards = forwards;
+}
+
+// Progress (only when a line is due): a lower bound of the samples whose ray
+// trees are finished, out of all samples: samples injected, less one per
+// descriptor still in flight (spawned - finished, from the counters).
+void Renderer::Machine::report_progress(const Frame& f) {
+  const std::vector<std::uint64_t> counters =
+      read_counters(rt, b_stats, std::size_t(depth) * P * OPSILA_STAT_COUNT, "stats");
+  const std::uint64_t primary_hits = read_counters(rt, b_hits, 1, "primary hit count")[0];
+  const CounterSums sums = counter_sums(counters);
+  const std::uint64_t spawned = primary_hits + sums.spawned, finished = sums.finished;
+  const std::uint64_t injected = std::uint64_t(f.sample) * npix + f.next_pixel;
+  const std::uint64_t in_flight = spawned > finished ? spawned - finished : 0;
+  const double done = injected > in_flight ? double(injected - in_flight) : 0.0;
+  const std::uint64_t rays = injected + sums.spawned;
+  progress->report(done / (double(npix) * spp), rays);
+}
+
+// This rank's share of the frame, for rank 0's --stats and the bench.
+RankReport Renderer::Machine::rank_report(const RenderStats& st, double seconds, double mpi_seconds) const {
+  RankReport r;
+  r.rank = group.rank;
+  r.pe_begin = group.begin;
+  r.pe_end = group.end;
+  r.host = ranks.host();
+  r.device = rt.description();
+  r.device_bytes = plan.total();
+  r.scene_bytes = plan.scene;
+  r.host_peak_bytes = host_peak_bytes();
+  r.render_seconds = seconds;
+  r.mpi_seconds = mpi_seconds;
+  const RankExchange& x = *rank_exchange;
+  std::vector<double> spmd(x.mpi_seconds.size(), 0.0);
+  for (const LaunchRecord& l : st.launches) {
+    auto it = std::find_if(r.kernel_seconds.begin(), r.kernel_seconds.end(),
+                           [&](const auto& e) { return e.first == l.name; });
+    if (it == r.kernel_seconds.end()) it = r.kernel_seconds.insert(it, {l.name, 0.0});
+    it->second += l.seconds;
+    if (l.name == "spmd_phase" && l.round >= 0 && std::size_t(l.round) < spmd.size()) spmd[l.round] += l.seconds;
+  }
+  // The MPI part runs while the device runs the SPMD phase; the staging
+  // (reading back, writing the received records) overlaps nothing.
+  for (std::size_t k = 0; k < spmd.size(); ++k) {
+    r.exchange_seconds += x.staging_seconds[k] + x.mpi_seconds[k];
+    r.exposed_seconds += x.staging_seconds[k] + std::max(0.0, x.mpi_seconds[k] - spmd[k]);
+  }
+  r.sent = x.sent;
+  r.received = x.received;
+  r.share = share;
+  return r;
+}
+
+}  // namespace opsila

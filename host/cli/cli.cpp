@@ -383,12 +383,6 @@ int describe_exception(std::exception_ptr error, std::string& message) {
     message = std::string("OpenCL: ") + e.what();
     code = kExitDevice;
   }
-#ifdef CL_HPP_ENABLE_EXCEPTIONS
-  catch (const cl::Error& e) {
-    message = std::string("OpenCL: ") + e.what() + ": " + cl_error_name(e.err()) + " (" + std::to_string(e.err()) + ")";
-    code = kExitDevice;
-  }
-#endif
   catch (const std::bad_alloc&) {
     // The loaders name the file they were reading; what is left is the
     // host running out while the scene is banked or the frame prepared.

@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cctype>
-#include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
@@ -352,7 +351,6 @@ ClRuntime::ClRuntime(const DeviceEntry& device, const ClRuntimeOptions& options)
   cl_check(err, "clCreateContext");
   queue_ = cl::CommandQueue(context_, device_.device, CL_QUEUE_PROFILING_ENABLE, &err);
   cl_check(err, "clCreateCommandQueue");
-  max_wg_ = caps.max_work_group_size;
   max_alloc_ = device_.device.getInfo<CL_DEVICE_MAX_MEM_ALLOC_SIZE>();
   global_mem_ = device_.device.getInfo<CL_DEVICE_GLOBAL_MEM_SIZE>();
   limit_ = limit;
@@ -374,7 +372,6 @@ cl::Program& ClRuntime::program(KernelProgram which) {
   const bool render = which != KernelProgram::baselines;
   const std::string& source = !render ? baseline_kernel_source() : source_.empty() ? kernel_source() : source_;
   const std::string origin = render ? source_origin_ : "embedded baseline kernels";
-  auto t0 = std::chrono::steady_clock::now();
   cl_int err = CL_SUCCESS;
   program = cl::Program(context_, source, false, &err);
   cl_check(err, "clCreateProgramWithSource");
@@ -389,7 +386,6 @@ cl::Program& ClRuntime::program(KernelProgram which) {
                   device_.device_name + " (kernel source: " + origin + "); build log:\n" +
                   (log.empty() ? "(the driver gave no build log)" : log));
   }
-  build_seconds_ = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   built_[index] = true;
   return program;
 }

@@ -4,6 +4,7 @@
 #include <CL/opencl.hpp>
 
 #include <stdexcept>
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -88,17 +89,19 @@ class ClRuntime {
   cl::Program& program(KernelProgram which = KernelProgram::render);
   cl::Kernel kernel(const char* name, KernelProgram which = KernelProgram::render);
   // Limits read from the device (never assumed).
-  std::size_t max_work_group_size() const { return max_wg_; }
   // The work-group size the kernels ask for (each capped by what it allows):
   // 64, where PoCL measured fastest and a GPU runs two warps or one
   // wavefront; or ClRuntimeOptions::group_size / OPSILA_GROUP_SIZE, to check
   // the kernels with GPU-sized groups (.ci/oclgrind.sh runs 256).
   std::size_t group_size() const { return group_size_; }
   cl_ulong max_alloc() const { return max_alloc_; }
+  // Device bytes asked for through device_buffer (machine/descriptors.h)
+  // since the runtime was made: what the memory plan is checked against.
+  std::uint64_t allocated_bytes() const { return allocated_; }
+  void count_allocation(std::size_t bytes) { allocated_ += bytes; }
   cl_ulong global_mem() const { return global_mem_; }
   cl_ulong memory_limit() const { return limit_; }  // 0, or the limit that lowered the two above
   std::string description() const;  // "device (platform, driver)"
-  double last_build_seconds() const { return build_seconds_; }
   // "embedded kernels", or where the replacement source of the render
   // program came from (the baselines are always the embedded ones).
   const std::string& kernel_source_origin() const { return source_origin_; }
@@ -109,10 +112,9 @@ class ClRuntime {
   cl::CommandQueue queue_;
   cl::Program programs_[3];
   bool built_[3] = {false, false, false};
-  std::size_t max_wg_ = 1;
   std::size_t group_size_ = 64;
   cl_ulong max_alloc_ = 0, global_mem_ = 0, limit_ = 0;
-  double build_seconds_ = 0;
+  std::uint64_t allocated_ = 0;
   std::string source_, source_origin_;  // source_ empty: the embedded kernels
 };
 

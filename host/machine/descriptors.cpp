@@ -17,6 +17,7 @@ cl::Buffer device_buffer(ClRuntime& rt, std::size_t bytes, const char* what) {
   cl_int err = CL_SUCCESS;
   cl::Buffer b(rt.context(), CL_MEM_READ_WRITE, std::max<std::size_t>(bytes, 16), nullptr, &err);
   cl_check(err, (std::string("clCreateBuffer(") + what + ", " + std::to_string(bytes) + " bytes)").c_str());
+  rt.count_allocation(bytes);
   return b;
 }
 

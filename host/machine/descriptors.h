@@ -50,7 +50,6 @@ static_assert(sizeof(HostDescriptor) == OPSILA_DESCRIPTOR_BYTES, "HostDescriptor
 // Named slots, as kernels/lib/descriptor.cl names them.
 inline int desc_dest(const HostDescriptor& d) { return d.ids.s[3]; }  // destination PE, -1 NIL
 inline int desc_pixel(const HostDescriptor& d) { return d.ids.s[0]; }
-inline int desc_meta(const HostDescriptor& d) { return d.ids.s[1]; }
 
 // One descriptor vector on the device: `capacity` records of kBytes, and
 // the dense stream of their destination PEs (kernels/lib/descriptor.cl,

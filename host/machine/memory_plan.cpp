@@ -2,6 +2,7 @@
 
 #include <algorithm>
 
+#include "machine/counters.h"
 #include "machine/descriptors.h"
 #include "opsila_shared.h"
 
@@ -35,8 +36,8 @@ DevicePlan plan_device_memory(const BankedScene& bs, std::size_t npix, int P, co
   // Stats, traffic, output counts, work-group table, and the exchange's
   // ranks and block counts (1.5x the source).
   const u64 source = (u64(f.outputs) + f.pool) * 3 / 2;
-  plan.other = u64(OPSILA_MAX_DEPTH) * P * OPSILA_STAT_COUNT * 2 * sizeof(cl_uint) +
-               (P <= OPSILA_TRAFFIC_MAX_PES ? u64(depth) * P * P : 1) * sizeof(cl_uint) +
+  plan.other = counter_bytes(std::size_t(OPSILA_MAX_DEPTH) * P * OPSILA_STAT_COUNT) +
+               counter_bytes(P <= OPSILA_TRAFFIC_MAX_PES ? std::size_t(depth) * P * P : 1) + counter_bytes(1) +
                u64(f.groups) * (f.group_size + 2) * sizeof(cl_int) + source * sizeof(cl_int) +
                (source / ScatterPass::kBlock + f.groups + 1) * 3 / 2 * P * sizeof(cl_int);
   return plan;

@@ -517,9 +517,8 @@ void describe_pes(const std::vector<ClusterBuild>& cb, std::vector<Box>& tri_box
                                                                                     : static_cast<int>(total));
     pe.tri_end = c_begin < c ? ranges[c - 1].second : pe.tri_begin;
     pe.node_begin = static_cast<int>(bs.nodes.size());
-    int depth = build_bank_bvh(bs.nodes, bs.triangles, tri_boxes, bs.clusters, static_cast<int>(c_begin),
-                               static_cast<int>(c), ranges, &source);
-    bs.max_bvh_depth = std::max(bs.max_bvh_depth, depth);
+    build_bank_bvh(bs.nodes, bs.triangles, tri_boxes, bs.clusters, static_cast<int>(c_begin), static_cast<int>(c),
+                   ranges, &source);
     pe.node_end = static_cast<int>(bs.nodes.size());
     pe_bounds(bs.clusters, pe);
     std::uint64_t bytes = std::uint64_t(pe.tri_end - pe.tri_begin) * sizeof(BankTriangle) +

@@ -44,7 +44,6 @@ struct BankedScene {
   std::uint64_t texture_replicated_bytes = 0;  // every texture the facets use, once
   std::uint64_t global_bytes = 0;         // what every PE knows: spheres, routing boxes, PE boxes, materials, lights
   std::uint64_t replicated_bytes = 0;     // one full copy of the scene (what each PE would hold if duplicated)
-  int max_bvh_depth = 0;
   // For pilot frames (--balance measured): the cluster of each bank facet and
   // of each bank node (-1 for a bank's nodes above its cluster roots), and
   // the scene triangle of each bank facet.

@@ -80,10 +80,4 @@ int keep_group_banks(BankedScene& bs, const PeGroup& group) {
   return t0;
 }
 
-std::uint64_t group_scene_bytes(const BankedScene& bs, const PeGroup& group) {
-  std::uint64_t bytes = bs.global_bytes;
-  for (int p = group.begin; p < group.end; ++p) bytes += bs.bank_bytes[p];
-  return bytes;
-}
-
 }  // namespace opsila

@@ -33,7 +33,4 @@ int rank_of_pe(int num_pes, int ranks, int pe);
 // bank_bytes, global_bytes and replicated_bytes keep describing the whole scene.
 int keep_group_banks(BankedScene& bs, const PeGroup& group);
 
-// Scene bytes this device holds: its banks plus the global tables.
-std::uint64_t group_scene_bytes(const BankedScene& bs, const PeGroup& group);
-
 }  // namespace opsila

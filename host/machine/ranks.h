@@ -32,7 +32,6 @@ class Ranks {
   void finish();  // MPI_Finalize when started
 
   bool built_with_mpi() const;
-  bool started() const { return started_; }
   int rank() const { return rank_; }
   int size() const { return size_; }
   int local_rank() const { return local_rank_; }  // among the ranks on this machine

@@ -92,6 +92,8 @@ std::vector<std::uint64_t> Renderer::cluster_work() {
   return cost;
 }
 
+std::uint64_t Renderer::planned_device_bytes() const { return m_->plan.total(); }
+
 RenderResult render(const Scene& scene, const RenderSettings& settings, ClRuntime& runtime) {
   PreparedBanks banks = prepare_banks(scene, settings, runtime);
   return Renderer(scene, std::move(banks), settings, runtime).render();

@@ -50,6 +50,8 @@ class Renderer {
   // tests per level, [level * clusters + cluster], summed over the ranks
   // (machine/pilot.h spreads them over the facets); empty otherwise.
   std::vector<std::uint64_t> cluster_work();
+  // The device memory the memory plan gave this machine (machine/memory_plan.h).
+  std::uint64_t planned_device_bytes() const;
 
  private:
   struct Machine;

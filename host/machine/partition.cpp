@@ -643,7 +643,7 @@ FrameParams frame_params(const Scene& scene, const BankedScene& bs, int bank_cap
   fp.bank_capacity = bank_capacity;
   fp.spawn_slots = OPSILA_SPAWN_SLOTS(fp.num_lights);
   fp.has_attributes = bs.attributes.empty() ? 0 : 1;
-  // One device holds every PE; pe_group.cpp narrows this for MPI ranks.
+  // One device holds every PE; the renderer sets its PreparedBanks' group.
   fp.group_begin = 0;
   fp.group_end = bs.num_pes;
   fp.tri_base = 0;

@@ -82,7 +82,7 @@ struct RankReport {
 struct RenderStats {
   // counters[level][pe][OPSILA_STAT_*]
   std::vector<std::vector<std::vector<std::uint64_t>>> counters;
-  std::uint64_t descriptors_spawned = 0;   // descriptors created (primary hits + forwards excluded)
+  std::uint64_t descriptors_spawned = 0;   // descriptors created: primary hits, children, shadow rays (not forwards)
   std::uint64_t descriptors_finished = 0;  // shaded hits + misses + occluded + lit
   std::uint64_t forwards = 0;        // extra descriptors for cross-bank nearest hit / shadows
   std::uint64_t overflow_deferrals = 0;  // descriptors that waited a round for a bank slot

@@ -136,7 +136,6 @@ Bvh build_bvh(const std::vector<Tri>& tris, const std::vector<Triangle>& source,
   return bvh;
 }
 
-// Slab test: does the ray meet the box for some t in [t_min, t_max]?
 // Nearer first; distances equal within OPSILA_TIE_TOLERANCE (relative) are a
 // tie, won by the lower triangle index (file order): coplanar facets and
 // shared edges get the answer of exact arithmetic, not rounding noise.
@@ -147,6 +146,7 @@ bool closer(float t, int index, float best_t, int best_index) {
   return t <= best_t + tol && index < best_index;
 }
 
+// Slab test: does the ray meet the box for some t in [t_min, t_max]?
 bool hits_box(const Node& node, const vec3& origin, const vec3& dir, float t_min, float t_max) {
   for (int a = 0; a < 3; ++a) {
     if (dir[a] == 0.0f) {

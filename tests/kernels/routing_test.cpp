@@ -140,7 +140,7 @@ TEST(Routing, ForwardingVisitsTheMetPesInEntryOrderOnRandomRays) {
     const Routed r = routed(pes, 1e-3f, 2.0f, 20.0f);
     for (int mode : {OPSILA_ROUTING_BOXES, OPSILA_ROUTING_SPHERES}) {
       const auto [visits, entries] = run_chain(r, mode, "destination_chain", -1);
-      std::size_t checked = 0, visited = 0;
+      std::size_t checked = 0, ordered = 0;
       for (std::size_t i = 0; i < r.rays.size(); ++i) {
         const std::vector<Reach> reach = reach_of_pes(r.bs, mode, r.rays.org[i], r.rays.dir[i]);
         if (std::any_of(reach.begin(), reach.end(), [](const Reach& x) { return x.marginal; })) continue;
@@ -163,10 +163,10 @@ TEST(Routing, ForwardingVisitsTheMetPesInEntryOrderOnRandomRays) {
             ASSERT_NEAR(entries[i * pes + j], expect[j].first, 1e-4f * (1 + expect[j].first)) << at;
         }
         ++checked;
-        visited += expect.size();
+        ordered += expect.size() >= 2;
       }
       EXPECT_GT(checked, r.rays.size() * 3 / 4) << mode_name(mode) << ": too many rays left out as marginal";
-      EXPECT_GT(visited, checked) << mode_name(mode) << ": too few PEs met to test the forwarding";
+      EXPECT_GT(ordered, checked / 10) << mode_name(mode) << ": too few rays meet two PEs to test the order";
     }
   }
 }

@@ -12,8 +12,7 @@
  * (object, facet) output is the centre ray's, (0.5, 0.5): written by the
  * centre sample for odd k, by a pass of its own (no hits) for even k. */
 #include "lib/bvh.cl"
-#include "lib/shading.cl"
-#include "lib/accum.cl"
+#include "lib/camera.cl"
 
 #define ITEM_TILE_MAX (OPSILA_ITEM_TILE_SIDE * OPSILA_ITEM_TILE_SIDE) /* pixels per tile, at most */
 #define ITEM_LIST_CAP 512  /* clusters listed per tile before they are traced */

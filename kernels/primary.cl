@@ -1,7 +1,7 @@
 /* Primary descriptors, SIMD: built from the item buffer in the banks of the
  * PEs that own the items. */
 #include "lib/routing.cl"
-#include "lib/shading.cl"
+#include "lib/camera.cl"
 #include "lib/accum.cl"
 
 /* From the item buffer, primary ray descriptors are built for the banks of

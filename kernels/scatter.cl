@@ -24,6 +24,66 @@
  *   scatter_move_pool, scatter_move_outputs: each record to I'(i). */
 #include "lib/descriptor.cl"
 
+/* Where an entry of global rank r for PE d goes: its bank slot, or its place
+ * in the next pool (scatter_plan's layout). */
+typedef struct {
+  __global const int *bank_begin, *bank_count, *overflow_base;
+  __global float4 *banks; /* bank slots: records only (see place) */
+  __global float4 *next;
+  __global int *next_dest;
+} Placement;
+
+/* Entry k of a source vector, of global rank r for PE d, to I'(k). */
+inline void place(__global const float4 *from, __global const int *from_dest, int k, int d, int r,
+                  const Placement *to) {
+  int c = to->bank_count[d];
+  if (r < c) /* a bank's slots all belong to its PE: no destination stream kept there */
+    desc_move_record(to->banks, to->bank_begin[d] + r, from, k);
+  else
+    desc_move(to->next, to->next_dest, to->overflow_base[d] + (r - c), from, from_dest, k);
+}
+
+/* One entry of a block walk: entry k of a source vector, whose rank is
+ * stored at rank[rank_at]. A valid entry takes the next rank of its PE in
+ * the block (h[d]++); with `to`, it moves at once to the block's prefix plus
+ * that rank (h holds the prefix then); else, with write_rank, the rank (-1
+ * for a NIL hole) is stored for the move by entry. */
+OPSILA_INLINE void block_entry(__global const float4 *from, __global const int *from_dest, int k, long rank_at,
+                               int num_pes, __global int *h, __global int *rank, int write_rank,
+                               const Placement *to) {
+  int d = from_dest[k];
+  bool valid = d >= 0 && d < num_pes;
+  if (to) {
+    if (valid) place(from, from_dest, k, d, h[d]++, to);
+    return;
+  }
+  int r = valid ? h[d]++ : -1;
+  if (write_rank) rank[rank_at] = r;
+}
+
+/* The block walk: block b's entries in source order, the pool's entries of
+ * a pool block or the records of one SPMD work-group's items, each through
+ * block_entry. scatter_count and scatter_move_blocks both walk this way, so
+ * the ranks the count gives are the ones the move takes. */
+OPSILA_INLINE void walk_block(int b, int pool_len, int pool_blocks, int items_per_group, int S, int num_pes,
+                              DESC_PARAMS(pool), DESC_PARAMS(out), __global const int *out_item_count,
+                              __global int *h, __global int *rank, int write_rank, const Placement *to) {
+  if (b < pool_blocks) {
+    int end = min((b + 1) * OPSILA_SCATTER_BLOCK, pool_len);
+    for (int k = b * OPSILA_SCATTER_BLOCK; k < end; ++k)
+      block_entry(pool, pool_dest, k, k, num_pes, h, rank, write_rank, to);
+    return;
+  }
+  int first_item = (b - pool_blocks) * items_per_group;
+  for (int t = first_item; t < first_item + items_per_group; ++t) {
+    int c = out_item_count[t];
+    for (int j = 0; j < c; ++j) {
+      int at = t * S + j;
+      block_entry(out, out_dest, at, (long)pool_len + at, num_pes, h, rank, write_rank, to);
+    }
+  }
+}
+
 /* Counts of block b; hist[b * P + q] = entries bound for PE q. With
  * write_rank, also each entry's rank inside its block (for the move by entry). */
 __kernel void scatter_count(int pool_len, int pool_blocks, int num_blocks, int items_per_group, int S, int num_pes,
@@ -33,25 +93,8 @@ __kernel void scatter_count(int pool_len, int pool_blocks, int num_blocks, int i
   if (b >= num_blocks) return;
   __global int *h = hist + (long)b * num_pes;
   for (int q = 0; q < num_pes; ++q) h[q] = 0;
-  if (b < pool_blocks) {
-    int end = min((b + 1) * OPSILA_SCATTER_BLOCK, pool_len);
-    for (int k = b * OPSILA_SCATTER_BLOCK; k < end; ++k) {
-      int d = pool_dest[k];
-      int r = (d >= 0 && d < num_pes) ? h[d]++ : -1;
-      if (write_rank) rank[k] = r;
-    }
-    return;
-  }
-  int first_item = (b - pool_blocks) * items_per_group;
-  for (int t = first_item; t < first_item + items_per_group; ++t) {
-    int c = out_item_count[t];
-    for (int j = 0; j < c; ++j) {
-      int at = t * S + j;
-      int d = out_dest[at];
-      int r = (d >= 0 && d < num_pes) ? h[d]++ : -1;
-      if (write_rank) rank[pool_len + at] = r;
-    }
-  }
+  walk_block(b, pool_len, pool_blocks, items_per_group, S, num_pes, pool, pool_dest, out, out_dest, out_item_count,
+             h, rank, write_rank, 0);
 }
 
 /* Per PE q: hist[b * P + q] becomes the exclusive prefix over blocks,
@@ -92,6 +135,11 @@ __kernel void scatter_scan(int num_blocks, int num_pes, __global int *hist, __gl
   }
 }
 
+/* Demand for bank slots on this device: none for PEs of another group. */
+inline int bank_demand(__global const int *pe_total, int q, int group_begin, int group_end) {
+  return q >= group_begin && q < group_end ? pe_total[q] : 0;
+}
+
 /* Bank capacity that follows demand: `slots` bank slots this round, split
  * by water-filling. Every PE gets min(demand, level, cap); the level is the
  * largest that fits; slots left over go one each to the PEs still waiting,
@@ -99,11 +147,6 @@ __kernel void scatter_scan(int num_blocks, int num_pes, __global int *hist, __gl
  * and a round is full whenever enough descriptors wait. Each bank starts at
  * a multiple of the SPMD work-group size, so no work-group mixes banks.
  * counts = {waiting, placed, SPMD work-groups}. One work-group. */
-/* Demand for bank slots on this device: none for PEs of another group. */
-inline int bank_demand(__global const int *pe_total, int q, int group_begin, int group_end) {
-  return q >= group_begin && q < group_end ? pe_total[q] : 0;
-}
-
 __kernel void scatter_plan(int num_pes, int group_begin, int group_end, int slots, int cap, int group_size,
                            __global const int *pe_total,
                            __global int *bank_begin, __global int *bank_count, __global int *overflow_base,
@@ -164,17 +207,6 @@ __kernel void scatter_plan(int num_pes, int group_begin, int group_end, int slot
   }
 }
 
-/* Entry of global rank r for PE d: its bank slot, or its place in the next pool. */
-inline void place(__global const float4 *from, __global const int *from_dest, int k, int d, int r,
-                  __global const int *bank_begin, __global const int *bank_count, __global const int *overflow_base,
-                  DESC_PARAMS(banks), DESC_PARAMS(next)) {
-  int c = bank_count[d];
-  if (r < c) /* a bank's slots all belong to its PE: no destination stream kept there */
-    desc_move_record(banks, bank_begin[d] + r, from, k);
-  else
-    desc_move(next, next_dest, overflow_base[d] + (r - c), from, from_dest, k);
-}
-
 __kernel void scatter_move_pool(int pool_len, int num_pes, DESC_PARAMS(pool), __global const int *rank,
                                 __global const int *hist, __global const int *bank_begin,
                                 __global const int *bank_count, __global const int *overflow_base,
@@ -185,7 +217,8 @@ __kernel void scatter_move_pool(int pool_len, int num_pes, DESC_PARAMS(pool), __
   if (rk < 0) return;
   int d = pool_dest[k];
   int r = hist[(long)(k / OPSILA_SCATTER_BLOCK) * num_pes + d] + rk;
-  place(pool, pool_dest, k, d, r, bank_begin, bank_count, overflow_base, banks, banks_dest, next, next_dest);
+  Placement to = {bank_begin, bank_count, overflow_base, banks, next, next_dest};
+  place(pool, pool_dest, k, d, r, &to);
 }
 
 /* One work-item per SPMD work-item t: its out_item_count[t] records. */
@@ -198,46 +231,27 @@ __kernel void scatter_move_outputs(int out_items, int items_per_group, int S, in
   if (t >= out_items) return;
   int c = out_item_count[t];
   __global const int *h = hist + (long)(pool_blocks + t / items_per_group) * num_pes;
+  Placement to = {bank_begin, bank_count, overflow_base, banks, next, next_dest};
   for (int j = 0; j < c; ++j) {
     int at = t * S + j;
     int rk = rank[pool_len + at];
     if (rk < 0) continue;
     int d = out_dest[at];
-    place(out, out_dest, at, d, h[d] + rk, bank_begin, bank_count, overflow_base, banks, banks_dest, next,
-          next_dest);
+    place(out, out_dest, at, d, h[d] + rk, &to);
   }
 }
 
 /* The move by block, for processors that run few work-items at a time (a
- * CPU core): one work-item walks a block in source order, as scatter_count
- * did, and takes each entry's rank from the block's running prefix, so no
- * rank is stored; each core then writes P sequential streams. */
+ * CPU core): one work-item walks a block as scatter_count did and takes each
+ * entry's rank from the block's running prefix, so no rank is stored; each
+ * core then writes P sequential streams. */
 __kernel void scatter_move_blocks(int pool_len, int pool_blocks, int num_blocks, int items_per_group, int S,
                                   int num_pes, DESC_PARAMS(pool), DESC_PARAMS(out), __global const int *out_item_count,
                                   __global int *hist, __global const int *bank_begin, __global const int *bank_count,
                                   __global const int *overflow_base, DESC_PARAMS(banks), DESC_PARAMS(next)) {
   int b = get_global_id(0);
   if (b >= num_blocks) return;
-  __global int *h = hist + (long)b * num_pes;
-  if (b < pool_blocks) {
-    int end = min((b + 1) * OPSILA_SCATTER_BLOCK, pool_len);
-    for (int k = b * OPSILA_SCATTER_BLOCK; k < end; ++k) {
-      int d = pool_dest[k];
-      if (d >= 0 && d < num_pes)
-        place(pool, pool_dest, k, d, h[d]++, bank_begin, bank_count, overflow_base, banks, banks_dest, next,
-              next_dest);
-    }
-    return;
-  }
-  int first_item = (b - pool_blocks) * items_per_group;
-  for (int t = first_item; t < first_item + items_per_group; ++t) {
-    int c = out_item_count[t];
-    for (int j = 0; j < c; ++j) {
-      int at = t * S + j;
-      int d = out_dest[at];
-      if (d >= 0 && d < num_pes)
-        place(out, out_dest, at, d, h[d]++, bank_begin, bank_count, overflow_base, banks, banks_dest, next,
-              next_dest);
-    }
-  }
+  Placement to = {bank_begin, bank_count, overflow_base, banks, next, next_dest};
+  walk_block(b, pool_len, pool_blocks, items_per_group, S, num_pes, pool, pool_dest, out, out_dest, out_item_count,
+             hist + (long)b * num_pes, 0, 0, &to);
 }

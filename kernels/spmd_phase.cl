@@ -22,6 +22,12 @@ typedef struct {
   uint v[OPSILA_STAT_COUNT];
 } PrivStats;
 
+/* A work-item's counts into its work-group's, at `level`. */
+inline void add_stats(__local uint *lstats, int level, const PrivStats *st) {
+  for (int s = 0; s < OPSILA_STAT_COUNT; ++s)
+    if (st->v[s] != 0u) atomic_add(&lstats[level * OPSILA_STAT_COUNT + s], st->v[s]);
+}
+
 /* Output records of one work-item: its S places, filled from the front,
  * and the PE x PE traffic of its work-group (local, flushed once). */
 typedef struct {
@@ -252,27 +258,9 @@ __kernel void spmd_phase(FrameParams fp, __global const PeInfo *pes, __global co
   int pe = group_pe[g];
   int slot = group_first[g] + lid;
   int item = g * lsz + lid;
-  Outputs out;
-  out.v = o;
-  out.v_dest = o_dest;
-  out.base = item * fp.spawn_slots;
-  out.count = 0;
-  out.num_pes = P;
-  out.traffic_levels = traffic_levels;
-  out.traffic = ltraffic;
-  Routing rt;
-  rt.pes = pes;
-  rt.clusters = clusters;
-  rt.route = route;
-  rt.num_pes = P;
-  rt.mode = routing;
-  Bank bank;
-  bank.nodes = nodes;
-  bank.tris = tris;
-  bank.pe = pe;
-  bank.root = pes[pe].node_begin;
-  bank.empty = pes[pe].node_begin == pes[pe].node_end;
-  bank.slack = fp.box_slack;
+  Outputs out = {o, o_dest, item * fp.spawn_slots, 0, P, traffic_levels, ltraffic};
+  Routing rt = {pes, clusters, route, P, routing};
+  Bank bank = {nodes, tris, pe, pes[pe].node_begin, pes[pe].node_begin == pes[pe].node_end, fp.box_slack};
   if (slot < bank_begin[pe] + bank_count[pe]) {
     Descriptor ds = desc_load(b, slot);
     int level = OPSILA_META_LEVEL(DESC_META(ds));
@@ -286,12 +274,9 @@ __kernel void spmd_phase(FrameParams fp, __global const PeInfo *pes, __global co
     probe_child.cost = level + 1 < depth ? probe.cost + fp.num_clusters : 0;
 #endif
     process(fp, &rt, &bank, materials, lights, SURFACE_ARGS, ds, &out, accum, &st, &st_child, &probe, &probe_child);
-    for (int s = 0; s < OPSILA_STAT_COUNT; ++s)
-      if (st.v[s] != 0u) atomic_add(&lstats[level * OPSILA_STAT_COUNT + s], st.v[s]);
+    add_stats(lstats, level, &st);
     /* Children traced or finished here count at their own level. */
-    if (level + 1 < depth)
-      for (int s = 0; s < OPSILA_STAT_COUNT; ++s)
-        if (st_child.v[s] != 0u) atomic_add(&lstats[(level + 1) * OPSILA_STAT_COUNT + s], st_child.v[s]);
+    if (level + 1 < depth) add_stats(lstats, level + 1, &st_child);
   }
   out_item_count[item] = out.count;
   /* Statistics and traffic leave the work-group once, not per descriptor. */

@@ -3,22 +3,14 @@
 #include <cmath>
 #include <sstream>
 
-#include <glm/glm.hpp>
-
 namespace opsila {
 
 namespace {
 
 // Unit vector, divided by its length in float (the order of operations the
-// kernels' FrameParams have always been computed with).
-Vec3 unit(const Vec3& v) {
-  const float l = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
-  return Vec3{v[0] / l, v[1] / l, v[2] / l};
-}
-
-Vec3 cross(const Vec3& a, const Vec3& b) {
-  return Vec3{a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
-}
+// kernels' FrameParams have always been computed with; normalize multiplies
+// by the inverse instead).
+Vec3 unit(const Vec3& v) { return v / length(v); }
 
 double dot(const Vec3& a, const double (&b)[3]) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
 
@@ -33,8 +25,7 @@ std::string format_vec(const Vec3& v) {
 CameraFrame camera_frame(const CameraDesc& camera, int width, int height) {
   CameraFrame frame;
   frame.eye = camera.eye;
-  frame.forward = unit(Vec3{camera.look_at[0] - camera.eye[0], camera.look_at[1] - camera.eye[1],
-                            camera.look_at[2] - camera.eye[2]});
+  frame.forward = unit(camera.look_at - camera.eye);
   frame.right = unit(cross(frame.forward, camera.up));
   frame.up = cross(frame.right, frame.forward);
   frame.tan_half_fov = std::tan(camera.fov_deg * 0.5f * static_cast<float>(M_PI) / 180.0f);
@@ -52,12 +43,10 @@ std::vector<float> sample_offsets(int spp) {
 }
 
 Vec3 primary_direction_at(const CameraFrame& frame, int width, int height, float px, float py) {
-  const auto g = [](const Vec3& v) { return glm::vec3(v[0], v[1], v[2]); };
   const float s = frame.tan_half_fov, a = frame.aspect;
   const float sx = 2.0f * px / static_cast<float>(width) - 1.0f;
   const float sy = 1.0f - 2.0f * py / static_cast<float>(height);
-  const glm::vec3 d = glm::normalize(g(frame.forward) + sx * s * a * g(frame.right) + sy * s * g(frame.up));
-  return Vec3{d.x, d.y, d.z};
+  return normalize(frame.forward + sx * s * a * frame.right + sy * s * frame.up);
 }
 
 Vec3 primary_direction(const CameraFrame& frame, int width, int height, int x, int y) {

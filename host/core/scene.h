@@ -10,9 +10,9 @@
 #include <string>
 #include <vector>
 
-namespace opsila {
+#include "core/vec.h"
 
-using Vec3 = std::array<float, 3>;
+namespace opsila {
 
 // Any bad input (file, flag, scene value). what() is the one-line message the
 // user sees: it names the file, the line (and key) and the problem.

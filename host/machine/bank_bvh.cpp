@@ -8,33 +8,6 @@
 
 namespace opsila {
 
-void Box::grow(const float* p) {
-  for (int a = 0; a < 3; ++a) {
-    lo[a] = std::min(lo[a], p[a]);
-    hi[a] = std::max(hi[a], p[a]);
-  }
-}
-void Box::grow(const Box& b) {
-  grow(b.lo);
-  grow(b.hi);
-}
-int Box::longest() const {
-  int a = 0;
-  for (int k = 1; k < 3; ++k)
-    if (extent(k) > extent(a)) a = k;
-  return a;
-}
-float Box::diagonal() const {
-  float s = 0;
-  for (int a = 0; a < 3; ++a) s += extent(a) * extent(a);
-  return std::sqrt(s);
-}
-float Box::area() const {
-  if (empty()) return 0.0f;
-  float x = extent(0), y = extent(1), z = extent(2);
-  return 2 * (x * y + y * z + z * x);
-}
-
 namespace {
 
 constexpr int kWidth = OPSILA_BVH_WIDTH;
@@ -82,8 +55,6 @@ class Builder {
   }
 
  private:
-  static float center(const Box& b, int a) { return 0.5f * (b.lo[a] + b.hi[a]); }
-
   // Best binned-SAH plane over the three axes; the median of the longest
   // centroid axis when SAH finds none (equal centres) or the tree is deep.
   // One pass bins every item on all three axes (each box is read once, and
@@ -92,19 +63,11 @@ class Builder {
   // item already separates every centre the planes can).
   static constexpr int kBins = 16;
   struct Bin {
-    float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    Box box;
     double w = 0;
-    void grow(const Box& b) {
-      for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], b.lo[a]), hi[a] = std::max(hi[a], b.hi[a]);
-    }
     void grow(const Bin& b) {
-      for (int a = 0; a < 3; ++a) lo[a] = std::min(lo[a], b.lo[a]), hi[a] = std::max(hi[a], b.hi[a]);
+      box.grow(b.box);
       w += b.w;
-    }
-    float area() const {
-      if (!(lo[0] <= hi[0])) return 0.0f;
-      float x = hi[0] - lo[0], y = hi[1] - lo[1], z = hi[2] - lo[2];
-      return 2 * (x * y + y * z + z * x);
     }
   };
   static int bin_of(float c, float lo, float scale, int bins) {
@@ -115,8 +78,8 @@ class Builder {
             const std::vector<float>& weight, int depth) {
     Box cbox;
     for (int i = begin; i < end; ++i) {
-      float c[3] = {center(boxes[order[i]], 0), center(boxes[order[i]], 1), center(boxes[order[i]], 2)};
-      cbox.grow(c);
+      const Box& b = boxes[order[i]];
+      cbox.grow(Vec3{b.center(0), b.center(1), b.center(2)});
     }
     float best_cost = INFINITY;
     int best_axis = -1, best_bin = -1;
@@ -132,8 +95,8 @@ class Builder {
         const Box& b = boxes[order[i]];
         const double w = weight[order[i]];
         for (int axis = 0; axis < 3; ++axis) {
-          Bin& slot = bins[axis][bin_of(center(b, axis), cbox.lo[axis], scale[axis], nb)];
-          slot.grow(b);
+          Bin& slot = bins[axis][bin_of(b.center(axis), cbox.lo[axis], scale[axis], nb)];
+          slot.box.grow(b);
           slot.w += w;
         }
       }
@@ -146,14 +109,14 @@ class Builder {
         for (int s = 1; s < nb; ++s) {
           left.grow(bins[axis][s - 1]);
           if (left.w == 0 || right[s].w == 0) continue;
-          float cost = static_cast<float>(left.area() * left.w + right[s].area() * right[s].w);
+          float cost = static_cast<float>(left.box.area() * left.w + right[s].box.area() * right[s].w);
           if (cost < best_cost) best_cost = cost, best_axis = axis, best_bin = s;
         }
       }
     }
     if (best_axis >= 0) {
       const float lo = cbox.lo[best_axis], sc = scale[best_axis];
-      auto side = [&](int id) { return bin_of(center(boxes[id], best_axis), lo, sc, nb) < best_bin; };
+      auto side = [&](int id) { return bin_of(boxes[id].center(best_axis), lo, sc, nb) < best_bin; };
       // Stable, so the layout does not depend on the sort implementation.
       auto mid = std::stable_partition(order.begin() + begin, order.begin() + end, side);
       int m = static_cast<int>(mid - order.begin());
@@ -161,11 +124,23 @@ class Builder {
     }
     int axis = cbox.longest();
     std::stable_sort(order.begin() + begin, order.begin() + end, [&](int a, int b) {
-      return center(boxes[a], axis) < center(boxes[b], axis);
+      return boxes[a].center(axis) < boxes[b].center(axis);
     });
     return begin + (end - begin) / 2;
   }
 };
+
+// A node with every child slot empty.
+BankNode empty_node() {
+  BankNode n;
+  for (int i = 0; i < kWidth; ++i) {
+    n.lo_x[i] = n.lo_y[i] = n.lo_z[i] = 0.0f;
+    n.hi_x[i] = n.hi_y[i] = n.hi_z[i] = 0.0f;
+    n.child[i] = 0;
+    n.count[i] = -1;
+  }
+  return n;
+}
 
 // Collapses binary node b into the wide node nodes[slot] (wide_of[b] =
 // slot). `budget` bounds the private stack this subtree may need: a node
@@ -206,13 +181,7 @@ int collapse(const std::vector<BinNode>& bin, int b, int budget, std::vector<Ban
     kids = std::move(trial);
   }
   const int k = static_cast<int>(kids.size());
-  BankNode wide;
-  for (int i = 0; i < kWidth; ++i) {
-    wide.lo_x[i] = wide.lo_y[i] = wide.lo_z[i] = 0.0f;
-    wide.hi_x[i] = wide.hi_y[i] = wide.hi_z[i] = 0.0f;
-    wide.child[i] = 0;
-    wide.count[i] = -1;
-  }
+  BankNode wide = empty_node();
   for (int i = 0; i < k; ++i) {
     const BinNode& n = bin[kids[i]];
     wide.lo_x[i] = n.box.lo[0], wide.lo_y[i] = n.box.lo[1], wide.lo_z[i] = n.box.lo[2];
@@ -306,14 +275,7 @@ int build_bank_bvh(std::vector<BankNode>& nodes, std::vector<BankTriangle>& tris
 
 void build_route_bvh(std::vector<BankNode>& nodes, int root, const std::vector<Box>& boxes,
                      const std::vector<int>& cluster_ids) {
-  BankNode empty;
-  for (int i = 0; i < kWidth; ++i) {
-    empty.lo_x[i] = empty.lo_y[i] = empty.lo_z[i] = 0.0f;
-    empty.hi_x[i] = empty.hi_y[i] = empty.hi_z[i] = 0.0f;
-    empty.child[i] = 0;
-    empty.count[i] = -1;
-  }
-  nodes[root] = empty;
+  nodes[root] = empty_node();
   if (boxes.empty()) return;
   Builder b;
   std::vector<int> order(boxes.size());

@@ -8,25 +8,13 @@
 // stack of OPSILA_BVH_STACK entries never overflows.
 #pragma once
 
-#include <cmath>
 #include <utility>
 #include <vector>
 
+#include "core/vec.h"
 #include "opsila_shared.h"
 
 namespace opsila {
-
-struct Box {
-  float lo[3] = {INFINITY, INFINITY, INFINITY};
-  float hi[3] = {-INFINITY, -INFINITY, -INFINITY};
-  void grow(const float* p);
-  void grow(const Box& b);
-  float extent(int a) const { return hi[a] - lo[a]; }
-  int longest() const;
-  float diagonal() const;
-  float area() const;
-  bool empty() const { return !(lo[0] <= hi[0]); }
-};
 
 // Builds the BVH of one bank whose clusters [c_begin, c_end) own the facets
 // tris[ranges[c].first, ranges[c].second). Facets are reordered inside each

@@ -38,8 +38,7 @@ bool is_flat(const Box& b) {
 void bounds_of(const Scene& scene, const std::vector<int>& tris, Box& box, Box& cbox) {
   for (int i : tris) {
     box.grow(tri_box(scene.triangles[i]));
-    float c[3] = {centroid(scene.triangles[i], 0), centroid(scene.triangles[i], 1), centroid(scene.triangles[i], 2)};
-    cbox.grow(c);
+    cbox.grow(Vec3{centroid(scene.triangles[i], 0), centroid(scene.triangles[i], 1), centroid(scene.triangles[i], 2)});
   }
 }
 
@@ -63,7 +62,7 @@ ClusterBuild make_cluster(std::vector<int> tris, const Box& box) {
   std::sort(tris.begin(), tris.end());
   cb.tris = std::move(tris);
   cb.box = box;
-  for (int a = 0; a < 3; ++a) cb.c[a] = 0.5f * (box.lo[a] + box.hi[a]);
+  cb.c = box.center();
   return cb;
 }
 
@@ -296,22 +295,7 @@ std::uint64_t texture_once(const Scene& scene, const std::vector<char>& used) {
 // Sampled rays whose segment crosses box b (slab test over [0, t_max]).
 std::uint64_t crossings(const Box& b, const RaySample& sample) {
   std::uint64_t n = 0;
-  for (const RaySegment& r : sample.rays) {
-    float t0 = 0.0f, t1 = r.t_max;
-    for (int a = 0; a < 3 && t0 <= t1; ++a) {
-      const float inv = 1.0f / r.direction[a];
-      float tn = (b.lo[a] - r.origin[a]) * inv, tf = (b.hi[a] - r.origin[a]) * inv;
-      if (tn > tf) std::swap(tn, tf);
-      // A ray parallel to a slab (0 x inf = NaN) is inside it or misses it.
-      if (std::isnan(tn) || std::isnan(tf)) {
-        if (r.origin[a] < b.lo[a] || r.origin[a] > b.hi[a]) t1 = -1.0f;
-        continue;
-      }
-      t0 = std::max(t0, tn);
-      t1 = std::min(t1, tf);
-    }
-    n += t0 <= t1;
-  }
+  for (const RaySegment& r : sample.rays) n += slab_test(b, r.origin, r.direction, 0.0f, r.t_max);
   return n;
 }
 
@@ -447,8 +431,7 @@ void fill_banks(const Scene& scene, const Box& sbox, const std::vector<ClusterBu
   bs.clusters.resize(cb.size());
   for (std::size_t c = 0; c < cb.size(); ++c) {
     int begin = static_cast<int>(bs.triangles.size());
-    Vec3 ctr{0.5f * (cb[c].box.lo[0] + cb[c].box.hi[0]), 0.5f * (cb[c].box.lo[1] + cb[c].box.hi[1]),
-             0.5f * (cb[c].box.lo[2] + cb[c].box.hi[2])};
+    const Vec3 ctr = cb[c].box.center();
     double r2 = 0;
     for (int i : cb[c].tris) {
       const Triangle& t = scene.triangles[i];
@@ -487,10 +470,9 @@ void pe_bounds(const std::vector<Cluster>& clusters, PeInfo& pe) {
   Box sb;
   for (int k = pe.cluster_begin; k < pe.cluster_end; ++k) {
     const Cluster& cl = clusters[std::size_t(k)];
-    float lo[3], hi[3];
-    for (int a = 0; a < 3; ++a) lo[a] = cl.center[a] - cl.radius, hi[a] = cl.center[a] + cl.radius;
-    sb.grow(lo);
-    sb.grow(hi);
+    const Vec3 c{cl.center[0], cl.center[1], cl.center[2]};
+    sb.grow(c - splat(cl.radius));
+    sb.grow(c + splat(cl.radius));
   }
   const bool any = pe.cluster_begin < pe.cluster_end;
   for (int a = 0; a < 3; ++a) {

@@ -19,7 +19,7 @@ struct ClusterBuild {
   double weight = 0;      // its share of the scene's expected work (region_weights)
   std::vector<double> work;  // measured: tests per level, then its facets' weight (region_weights)
   Box box;
-  float c[3] = {0, 0, 0};  // centre for the spatial subdivision
+  Vec3 c{0, 0, 0};  // centre for the spatial subdivision
   int pe = 0;
 };
 

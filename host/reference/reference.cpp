@@ -15,24 +15,18 @@
 #include <limits>
 #include <thread>
 
-#include <glm/glm.hpp>
 
 namespace opsila {
 
 namespace {
-
-using glm::vec3;
-
-vec3 to_glm(const Vec3& v) { return vec3(v[0], v[1], v[2]); }
-bool any_nonzero(const vec3& v) { return v.x != 0.0f || v.y != 0.0f || v.z != 0.0f; }
 
 // ---------------------------------------------------------------- geometry
 
 // A triangle as the tracer needs it: the vertices' edges for the
 // intersection test, Ng from the vertices (SPEC "Geometry"), and the ids.
 struct Tri {
-  vec3 v0, e1, e2;
-  vec3 normal;   // Ng = normalize(cross(v1 - v0, v2 - v0))
+  Vec3 v0, e1, e2;
+  Vec3 normal;   // Ng = normalize(cross(v1 - v0, v2 - v0))
   bool degenerate;  // zero area: no well-defined Ng, never hit
   int material, object_id, facet_id;
 };
@@ -40,19 +34,19 @@ struct Tri {
 // Möller–Trumbore. Edges and vertices count as inside. Returns the ray
 // parameter t (distance along a unit direction), or nothing; u and v are
 // SPEC's barycentrics b1, b2 of the hit.
-bool intersect(const Tri& tri, const vec3& origin, const vec3& dir, float& t_out, float* b1 = nullptr,
+bool intersect(const Tri& tri, const Vec3& origin, const Vec3& dir, float& t_out, float* b1 = nullptr,
                float* b2 = nullptr) {
-  const vec3 p = glm::cross(dir, tri.e2);
-  const float det = glm::dot(tri.e1, p);
+  const Vec3 p = cross(dir, tri.e2);
+  const float det = dot(tri.e1, p);
   if (det == 0.0f) return false;  // ray parallel to the plane
   const float inv_det = 1.0f / det;
-  const vec3 s = origin - tri.v0;
-  const float u = glm::dot(s, p) * inv_det;
+  const Vec3 s = origin - tri.v0;
+  const float u = dot(s, p) * inv_det;
   if (!(u >= 0.0f && u <= 1.0f)) return false;
-  const vec3 q = glm::cross(s, tri.e1);
-  const float v = glm::dot(dir, q) * inv_det;
+  const Vec3 q = cross(s, tri.e1);
+  const float v = dot(dir, q) * inv_det;
   if (!(v >= 0.0f && u + v <= 1.0f)) return false;
-  t_out = glm::dot(tri.e2, q) * inv_det;
+  t_out = dot(tri.e2, q) * inv_det;
   if (b1) *b1 = u;
   if (b2) *b2 = v;
   return std::isfinite(t_out);
@@ -62,7 +56,7 @@ bool intersect(const Tri& tri, const vec3& origin, const vec3& dir, float& t_out
 // which triangles get tested; the nearest-hit rule below does not depend on
 // the order in which they are visited.
 struct Node {
-  vec3 lo, hi;
+  Box box;
   int first = 0;  // leaf: first index into `order`; inner: left child
   int count = 0;  // leaf: number of triangles; inner: 0 (right child = left + 1)
 };
@@ -74,26 +68,26 @@ struct Bvh {
 
 constexpr int kLeafSize = 4;
 
-void build_node(Bvh& bvh, int node_index, int begin, int end, const std::vector<vec3>& lo_of,
-                const std::vector<vec3>& hi_of, float pad) {
-  vec3 lo(std::numeric_limits<float>::max()), hi(-std::numeric_limits<float>::max());
-  vec3 clo = lo, chi = hi;
+void build_node(Bvh& bvh, int node_index, int begin, int end, const std::vector<Vec3>& lo_of,
+                const std::vector<Vec3>& hi_of, float pad) {
+  Vec3 lo = splat(std::numeric_limits<float>::max()), hi = splat(-std::numeric_limits<float>::max());
+  Vec3 clo = lo, chi = hi;
   for (int i = begin; i < end; ++i) {
     const int t = bvh.order[i];
-    lo = glm::min(lo, lo_of[t]);
-    hi = glm::max(hi, hi_of[t]);
-    const vec3 c = (lo_of[t] + hi_of[t]) * 0.5f;
-    clo = glm::min(clo, c);
-    chi = glm::max(chi, c);
+    lo = min(lo, lo_of[t]);
+    hi = max(hi, hi_of[t]);
+    const Vec3 c = (lo_of[t] + hi_of[t]) * 0.5f;
+    clo = min(clo, c);
+    chi = max(chi, c);
   }
   // Padding keeps boxes conservative against rounding in the slab test.
-  bvh.nodes[node_index].lo = lo - vec3(pad);
-  bvh.nodes[node_index].hi = hi + vec3(pad);
+  bvh.nodes[node_index].box.lo = lo - splat(pad);
+  bvh.nodes[node_index].box.hi = hi + splat(pad);
 
-  const vec3 extent = chi - clo;
+  const Vec3 extent = chi - clo;
   int axis = 0;
-  if (extent.y > extent[axis]) axis = 1;
-  if (extent.z > extent[axis]) axis = 2;
+  if (extent[1] > extent[axis]) axis = 1;
+  if (extent[2] > extent[axis]) axis = 2;
   if (end - begin <= kLeafSize || !(extent[axis] > 0.0f)) {
     bvh.nodes[node_index].first = begin;
     bvh.nodes[node_index].count = end - begin;
@@ -117,7 +111,7 @@ void build_node(Bvh& bvh, int node_index, int begin, int end, const std::vector<
 
 Bvh build_bvh(const std::vector<Tri>& tris, const std::vector<Triangle>& source, float pad) {
   Bvh bvh;
-  std::vector<vec3> lo_of, hi_of;
+  std::vector<Vec3> lo_of, hi_of;
   for (std::size_t i = 0; i < tris.size(); ++i) {
     if (tris[i].degenerate) continue;
     bvh.order.push_back(static_cast<int>(i));
@@ -125,9 +119,9 @@ Bvh build_bvh(const std::vector<Tri>& tris, const std::vector<Triangle>& source,
   lo_of.resize(tris.size());
   hi_of.resize(tris.size());
   for (std::size_t i = 0; i < tris.size(); ++i) {
-    const vec3 a = to_glm(source[i].v0), b = to_glm(source[i].v1), c = to_glm(source[i].v2);
-    lo_of[i] = glm::min(a, glm::min(b, c));
-    hi_of[i] = glm::max(a, glm::max(b, c));
+    const Vec3 a = source[i].v0, b = source[i].v1, c = source[i].v2;
+    lo_of[i] = min(a, min(b, c));
+    hi_of[i] = max(a, max(b, c));
   }
   if (bvh.order.empty()) return bvh;
   bvh.nodes.reserve(2 * bvh.order.size());
@@ -146,27 +140,13 @@ bool closer(float t, int index, float best_t, int best_index) {
   return t <= best_t + tol && index < best_index;
 }
 
-// Slab test: does the ray meet the box for some t in [t_min, t_max]?
-bool hits_box(const Node& node, const vec3& origin, const vec3& dir, float t_min, float t_max) {
-  for (int a = 0; a < 3; ++a) {
-    if (dir[a] == 0.0f) {
-      if (origin[a] < node.lo[a] || origin[a] > node.hi[a]) return false;
-      continue;
-    }
-    const float inv = 1.0f / dir[a];
-    float t0 = (node.lo[a] - origin[a]) * inv;
-    float t1 = (node.hi[a] - origin[a]) * inv;
-    if (t0 > t1) std::swap(t0, t1);
-    t_min = std::max(t_min, t0);
-    // Slack above the tie tolerance, so rounding never culls a possible tie.
-    t_max = std::min(t_max, t1 + std::fabs(t1) * (4 * OPSILA_TIE_TOLERANCE));
-    if (t_min > t_max) return false;
-  }
-  return true;
+// A node's box met within [t_min, t_max]; the exit widened above the tie
+// tolerance, so that rounding never culls a box holding a possible tie.
+bool hits_box(const Node& node, const Vec3& origin, const Vec3& dir, float t_min, float t_max) {
+  return slab_test(node.box, origin, dir, t_min, t_max, 4 * OPSILA_TIE_TOLERANCE);
 }
 
 using Hit = FacetHit;
-Vec3 to_vec(const vec3& v) { return {v.x, v.y, v.z}; }
 
 }  // namespace
 
@@ -182,123 +162,122 @@ struct ReferenceTracer::Impl {
   const FacetQueries* queries = nullptr;  // instead of `bvh`, when given
 
   explicit Impl(const Scene& s) : scene(s) {}
-  // Nearest hit with t > t_min. Ties go to the lower triangle index
-  // (Scene::triangles order), whatever order the BVH visits them in.
-  bool nearest(const vec3& origin, const vec3& dir, float t_min, Hit& hit) const {
-    if (queries) return queries->nearest(to_vec(origin), to_vec(dir), t_min, hit);
-    if (bvh.nodes.empty()) return false;
+
+  // The BVH walk both searches share: nodes whose box the ray meets within
+  // [t_min, t_max()] (read at each node: the nearest search narrows it),
+  // their triangles handed to leaf(index), which returns true to stop.
+  template <typename TMax, typename Leaf>
+  void walk(const Vec3& origin, const Vec3& dir, float t_min, TMax t_max, Leaf leaf) const {
+    if (bvh.nodes.empty()) return;
     int stack[128];
     int top = 0;
     stack[top++] = 0;
     while (top > 0) {
       const Node& node = bvh.nodes[stack[--top]];
-      if (!hits_box(node, origin, dir, t_min, hit.t + hit.t * (2 * OPSILA_TIE_TOLERANCE))) continue;
+      if (!hits_box(node, origin, dir, t_min, t_max())) continue;
       if (node.count == 0) {
         stack[top++] = node.first;
         stack[top++] = node.first + 1;
         continue;
       }
-      for (int i = node.first; i < node.first + node.count; ++i) {
-        const int index = bvh.order[i];
-        float t, b1, b2;
-        if (!intersect(tris[index], origin, dir, t, &b1, &b2) || !(t > t_min)) continue;
-        if (closer(t, index, hit.t, hit.tri)) {
-          hit.t = t;
-          hit.tri = index;
-          hit.b1 = b1;
-          hit.b2 = b2;
-        }
-      }
+      for (int i = node.first; i < node.first + node.count; ++i)
+        if (leaf(bvh.order[i])) return;
     }
+  }
+
+  // Nearest hit with t > t_min. Ties go to the lower triangle index
+  // (Scene::triangles order), whatever order the BVH visits them in.
+  bool nearest(const Vec3& origin, const Vec3& dir, float t_min, Hit& hit) const {
+    if (queries) return queries->nearest(origin, dir, t_min, hit);
+    walk(origin, dir, t_min, [&] { return hit.t + hit.t * (2 * OPSILA_TIE_TOLERANCE); },
+         [&](int index) {
+           float t, b1, b2;
+           if (intersect(tris[index], origin, dir, t, &b1, &b2) && t > t_min && closer(t, index, hit.t, hit.tri)) {
+             hit.t = t;
+             hit.tri = index;
+             hit.b1 = b1;
+             hit.b2 = b2;
+           }
+           return false;
+         });
     return hit.tri >= 0;
   }
 
   // Shadow test: is any triangle hit with t in (t_min, t_max)?
-  bool occluded(const vec3& origin, const vec3& dir, float t_min, float t_max) const {
-    if (queries) return queries->occluded(to_vec(origin), to_vec(dir), t_min, t_max);
-    if (bvh.nodes.empty()) return false;
-    int stack[128];
-    int top = 0;
-    stack[top++] = 0;
-    while (top > 0) {
-      const Node& node = bvh.nodes[stack[--top]];
-      if (!hits_box(node, origin, dir, t_min, t_max)) continue;
-      if (node.count == 0) {
-        stack[top++] = node.first;
-        stack[top++] = node.first + 1;
-        continue;
-      }
-      for (int i = node.first; i < node.first + node.count; ++i) {
-        float t;
-        if (intersect(tris[bvh.order[i]], origin, dir, t) && t > t_min && t < t_max) return true;
-      }
-    }
-    return false;
+  bool occluded(const Vec3& origin, const Vec3& dir, float t_min, float t_max) const {
+    if (queries) return queries->occluded(origin, dir, t_min, t_max);
+    bool blocked = false;
+    walk(origin, dir, t_min, [&] { return t_max; }, [&](int index) {
+      float t;
+      blocked = intersect(tris[index], origin, dir, t) && t > t_min && t < t_max;
+      return blocked;
+    });
+    return blocked;
   }
 
   // SPEC "Smooth shading": the interpolated vertex normal, turned to the
   // side n_facing (the facet normal facing the ray) is on; n_facing itself
   // without vertex normals (or when they cancel out).
-  vec3 shading_normal(const Triangle& t, const Hit& hit, const vec3& n_facing) const {
+  Vec3 shading_normal(const Triangle& t, const Hit& hit, const Vec3& n_facing) const {
     if (!scene.smooth || t.attributes < 0) return n_facing;
     const VertexAttributes& a = scene.attributes[t.attributes];
     if (!a.has_normals) return n_facing;
     const float b0 = 1.0f - hit.b1 - hit.b2;
-    const vec3 ns = b0 * to_glm(a.normal[0]) + hit.b1 * to_glm(a.normal[1]) + hit.b2 * to_glm(a.normal[2]);
-    const float len = glm::length(ns);
+    const Vec3 ns = b0 * a.normal[0] + hit.b1 * a.normal[1] + hit.b2 * a.normal[2];
+    const float len = length(ns);
     if (!(len > 0.0f) || !std::isfinite(len)) return n_facing;
-    const vec3 unit = ns / len;
-    return glm::dot(unit, n_facing) < 0.0f ? -unit : unit;
+    const Vec3 unit = ns / len;
+    return dot(unit, n_facing) < 0.0f ? -unit : unit;
   }
 
   // SPEC "Texture maps": the material's colour times its map at the hit's
   // interpolated texture coordinates, where the facet has them.
-  vec3 mapped(const Triangle& t, const Hit& hit, const Vec3& colour, int map) const {
-    if (map < 0 || map >= static_cast<int>(scene.textures.size()) || t.attributes < 0) return to_glm(colour);
+  Vec3 mapped(const Triangle& t, const Hit& hit, const Vec3& colour, int map) const {
+    if (map < 0 || map >= static_cast<int>(scene.textures.size()) || t.attributes < 0) return colour;
     const VertexAttributes& a = scene.attributes[t.attributes];
-    if (!a.has_uv) return to_glm(colour);
+    if (!a.has_uv) return colour;
     const float b0 = 1.0f - hit.b1 - hit.b2;
     const float u = b0 * a.uv[0][0] + hit.b1 * a.uv[1][0] + hit.b2 * a.uv[2][0];
     const float v = b0 * a.uv[0][1] + hit.b1 * a.uv[1][1] + hit.b2 * a.uv[2][1];
-    return to_glm(colour) * to_glm(sample_texture(scene.textures[map], u, v));
+    return colour * sample_texture(scene.textures[map], u, v);
   }
 
   // SPEC "Shading": local intensity at P with shading normal n, for a ray of
   // unit direction d, with the (texture-mapped) ka and kd at P. Shadow rays
   // are cast only where the light term can be non-zero (n.Lv > 0).
-  vec3 local_intensity(const vec3& p, const vec3& n, const vec3& d, const MaterialDesc& m, const vec3& ka,
-                       const vec3& kd, RayCounts& counts, std::vector<RaySegment>* record) const {
-    vec3 result = to_glm(scene.ambient) * ka;
+  Vec3 local_intensity(const Vec3& p, const Vec3& n, const Vec3& d, const MaterialDesc& m, const Vec3& ka,
+                       const Vec3& kd, RayCounts& counts, std::vector<RaySegment>* record) const {
+    Vec3 result = scene.ambient * ka;
     for (const LightDesc& light : scene.lights) {
-      const vec3 to_light = to_glm(light.position) - p;
-      const float distance = glm::length(to_light);
+      const Vec3 to_light = light.position - p;
+      const float distance = length(to_light);
       if (!(distance > 0.0f)) continue;  // light at P: no direction to it
-      const vec3 lv = to_light / distance;
-      const float n_dot_l = glm::dot(n, lv);
+      const Vec3 lv = to_light / distance;
+      const float n_dot_l = dot(n, lv);
       if (!(n_dot_l > 0.0f)) continue;  // SPEC: the whole light term is 0
       ++counts.shadow;
       if (record && record->size() < kMaxSampleRays) record->push_back(segment(p, lv, distance));
       if (occluded(p, lv, epsilon, distance)) continue;  // vis = 0
-      const vec3 rl = 2.0f * n_dot_l * n - lv;
-      const float r_dot_v = std::max(0.0f, glm::dot(rl, -d));
+      const Vec3 rl = 2.0f * n_dot_l * n - lv;
+      const float r_dot_v = std::max(0.0f, dot(rl, -d));
       // C's powf: powf(0, 0) = 1, so Ns = 0 gives the full Ks.
       const float highlight = std::pow(r_dot_v, m.ns);
-      result += to_glm(light.intensity) * (kd * n_dot_l + to_glm(m.ks) * highlight);
+      result += light.intensity * (kd * n_dot_l + m.ks * highlight);
     }
     return result;
   }
 
-  static RaySegment segment(const vec3& origin, const vec3& d, float t_max) {
+  static RaySegment segment(const Vec3& origin, const Vec3& d, float t_max) {
     RaySegment r;
-    r.origin = {origin.x, origin.y, origin.z};
-    r.direction = {d.x, d.y, d.z};
+    r.origin = origin;
+    r.direction = d;
     r.t_max = t_max;
     return r;
   }
 
   // As the kernels' fixed point: a NaN term (0 x infinity, from values near
   // the float limit) adds nothing.
-  static void add_contribution(vec3& pixel, const vec3& c) {
+  static void add_contribution(Vec3& pixel, const Vec3& c) {
     for (int k = 0; k < 3; ++k)
       if (!std::isnan(c[k])) pixel[k] += c[k];
   }
@@ -308,43 +287,43 @@ struct ReferenceTracer::Impl {
   // With `record`, every ray of the tree is also appended to it as a segment,
   // until it holds kMaxSampleRays: then the tree stops there (a sample of an
   // endless ray tree stays bounded in time and memory).
-  int trace(const vec3& origin, const vec3& d, float t_min, int level, const vec3& weight,
-            vec3& pixel, RayCounts& counts, std::vector<RaySegment>* record = nullptr) const {
+  int trace(const Vec3& origin, const Vec3& d, float t_min, int level, const Vec3& weight,
+            Vec3& pixel, RayCounts& counts, std::vector<RaySegment>* record = nullptr) const {
     if (record && record->size() >= kMaxSampleRays) return -1;
     Hit hit;
     const bool found = nearest(origin, d, t_min, hit);
     if (record) record->push_back(segment(origin, d, found ? hit.t : std::numeric_limits<float>::infinity()));
     if (!found) {
-      add_contribution(pixel, weight * to_glm(scene.background));
+      add_contribution(pixel, weight * scene.background);
       return -1;
     }
     const Tri& tri = tris[hit.tri];
     const MaterialDesc& m = materials[tri.material];
-    const vec3 p = origin + hit.t * d;
-    const bool entering = glm::dot(tri.normal, d) < 0.0f;
+    const Vec3 p = origin + hit.t * d;
+    const bool entering = dot(tri.normal, d) < 0.0f;
     const Triangle& source = scene.triangles[hit.tri];
-    const vec3 n = shading_normal(source, hit, entering ? tri.normal : -tri.normal);
-    const vec3 ka = mapped(source, hit, m.ka, m.map_ka), kd = mapped(source, hit, m.kd, m.map_kd);
+    const Vec3 n = shading_normal(source, hit, entering ? tri.normal : -tri.normal);
+    const Vec3 ka = mapped(source, hit, m.ka, m.map_ka), kd = mapped(source, hit, m.kd, m.map_kd);
     add_contribution(pixel, weight * local_intensity(p, n, d, m, ka, kd, counts, record));
 
     if (level + 1 >= scene.max_depth) return hit.tri;
     // SPEC "Materials": kr = Ks for illum 3..7, kt = Tf for illum 4, 6, 7.
-    const vec3 kr = to_glm(m.kr());
-    const vec3 kt = to_glm(m.kt());
+    const Vec3 kr = m.kr();
+    const Vec3 kt = m.kt();
     if (any_nonzero(kr)) {
       ++counts.secondary;
       // Renormalised: SPEC treats every ray direction as unit, and epsilon
       // is a distance.
-      const vec3 reflected = glm::normalize(d - 2.0f * glm::dot(d, n) * n);
+      const Vec3 reflected = normalize(d - 2.0f * dot(d, n) * n);
       trace(p, reflected, epsilon, level + 1, weight * kr, pixel, counts, record);
     }
     if (any_nonzero(kt)) {
       const float eta = entering ? 1.0f / m.ni : m.ni;
-      const float c = -glm::dot(n, d);
+      const float c = -dot(n, d);
       const float k = 1.0f - eta * eta * (1.0f - c * c);
       if (k >= 0.0f) {  // k < 0: total internal reflection, no transmitted ray
         ++counts.secondary;
-        const vec3 transmitted = glm::normalize(eta * d + (eta * c - std::sqrt(k)) * n);
+        const Vec3 transmitted = normalize(eta * d + (eta * c - std::sqrt(k)) * n);
         trace(p, transmitted, epsilon, level + 1, weight * kt, pixel, counts, record);
       }
     }
@@ -364,13 +343,13 @@ ReferenceTracer::ReferenceTracer(const Scene& scene, const FacetQueries* queries
   impl_->tris.reserve(scene.triangles.size());
   for (const Triangle& t : scene.triangles) {
     Tri tri;
-    tri.v0 = to_glm(t.v0);
-    tri.e1 = to_glm(t.v1) - tri.v0;
-    tri.e2 = to_glm(t.v2) - tri.v0;
-    const vec3 c = glm::cross(tri.e1, tri.e2);
-    const float len = glm::length(c);
+    tri.v0 = t.v0;
+    tri.e1 = t.v1 - tri.v0;
+    tri.e2 = t.v2 - tri.v0;
+    const Vec3 c = cross(tri.e1, tri.e2);
+    const float len = length(c);
     tri.degenerate = !(len > 0.0f) || !std::isfinite(len);
-    tri.normal = tri.degenerate ? vec3(0.0f) : c / len;
+    tri.normal = tri.degenerate ? splat(0.0f) : c / len;
     tri.material = t.material >= 0 && t.material < static_cast<int>(impl_->materials.size()) ? t.material : 0;
     tri.object_id = t.object_id;
     tri.facet_id = t.facet_id;
@@ -387,28 +366,28 @@ ReferenceTracer::~ReferenceTracer() = default;
 Vec3 ReferenceTracer::render_pixel(int x, int y, std::int32_t* object_facet,
                                    RayCounts& counts) const {
   const Scene& scene = scene_;
-  const vec3 eye = to_glm(scene.camera.eye);
+  const Vec3 eye = scene.camera.eye;
   // SPEC "Camera": a k x k grid of samples; the pixel is their mean.
   const int k = spp_side(scene.spp);
-  glm::dvec3 sum(0.0);
+  double sum[3] = {0.0, 0.0, 0.0};
   int centre_tri = -1;
   for (int j = 0; j < k; ++j) {
     for (int i = 0; i < k; ++i) {
       const float px = static_cast<float>(x) + spp_offset(i, k), py = static_cast<float>(y) + spp_offset(j, k);
-      const vec3 dir = to_glm(primary_direction_at(impl_->frame, scene.width, scene.height, px, py));
+      const Vec3 dir = primary_direction_at(impl_->frame, scene.width, scene.height, px, py);
       ++counts.primary;
-      vec3 sample(0.0f);
+      Vec3 sample = splat(0.0f);
       // Primary rays accept any t > 0 (only secondary and shadow rays skip t <= epsilon).
-      const int tri = impl_->trace(eye, dir, 0.0f, 0, vec3(1.0f), sample, counts);
+      const int tri = impl_->trace(eye, dir, 0.0f, 0, splat(1.0f), sample, counts);
       if (tri >= 0) ++counts.primary_hits;
       if (2 * i + 1 == k && 2 * j + 1 == k) centre_tri = tri;  // odd k: this sample is the centre ray
-      sum += glm::dvec3(sample);
+      for (int c = 0; c < 3; ++c) sum[c] += double(sample[c]);
     }
   }
   if (object_facet) {
     if (k % 2 == 0) {  // even k: the centre ray is not a sample; find its hit alone
       Hit hit;
-      const vec3 dir = to_glm(primary_direction(impl_->frame, scene.width, scene.height, x, y));
+      const Vec3 dir = primary_direction(impl_->frame, scene.width, scene.height, x, y);
       centre_tri = impl_->nearest(eye, dir, 0.0f, hit) ? hit.tri : -1;
     }
     object_facet[0] = centre_tri >= 0 ? impl_->tris[centre_tri].object_id : -1;
@@ -416,8 +395,9 @@ Vec3 ReferenceTracer::render_pixel(int x, int y, std::int32_t* object_facet,
   }
   // Saturated as the fixed-point sums of the other renderers are.
   for (int c = 0; c < 3; ++c) sum[c] = saturate_sum(sum[c]);
-  const glm::dvec3 mean = sum / static_cast<double>(scene.spp);
-  return Vec3{static_cast<float>(mean.x), static_cast<float>(mean.y), static_cast<float>(mean.z)};
+  Vec3 mean;
+  for (int c = 0; c < 3; ++c) mean[c] = static_cast<float>(sum[c] / static_cast<double>(scene.spp));
+  return mean;
 }
 
 RaySample ReferenceTracer::sample_rays(int target_primary) const {
@@ -425,13 +405,13 @@ RaySample ReferenceTracer::sample_rays(int target_primary) const {
   RaySample out;
   const double pixels = double(scene.width) * double(scene.height);
   out.stride = std::max(1, static_cast<int>(std::sqrt(pixels / std::max(1, target_primary))));
-  const vec3 eye = to_glm(scene.camera.eye);
+  const Vec3 eye = scene.camera.eye;
   RayCounts counts;
   for (int y = out.stride / 2; y < scene.height; y += out.stride)
     for (int x = out.stride / 2; x < scene.width && out.rays.size() < kMaxSampleRays; x += out.stride) {
-      const vec3 dir = to_glm(primary_direction(impl_->frame, scene.width, scene.height, x, y));
-      vec3 ignored(0.0f);
-      impl_->trace(eye, dir, 0.0f, 0, vec3(1.0f), ignored, counts, &out.rays);
+      const Vec3 dir = primary_direction(impl_->frame, scene.width, scene.height, x, y);
+      Vec3 ignored = splat(0.0f);
+      impl_->trace(eye, dir, 0.0f, 0, splat(1.0f), ignored, counts, &out.rays);
     }
   return out;
 }

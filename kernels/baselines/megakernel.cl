@@ -9,6 +9,7 @@
  * contribution is quantised to fixed point exactly as accumulate() does, so
  * the sums (and the image) equal the OPSILA renderer's up to float ties. */
 #include "../lib/bvh.cl"
+#include "../lib/camera.cl"
 #include "../lib/shading.cl"
 #include "../lib/accum.cl"
 

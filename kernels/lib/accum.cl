@@ -1,5 +1,5 @@
 /* Fixed-point pixel and statistics accumulation. */
-#include "opsila_shared.h"
+#include "../opsila_shared.h"
 
 /* 64-bit fixed-point add from two 32-bit atomics: the carry out of the low
  * word goes to the high word. Integer sums are order-independent, so the

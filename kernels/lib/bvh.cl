@@ -1,36 +1,10 @@
-/* Wide-BVH traversal: nearest hit (radiance rays, the item buffer, the
- * megakernel) and any hit (shadow rays).
- *
- * Node layout (BankNode, kernels/opsila_shared.h; built by
- * host/machine/bank_bvh.cpp): OPSILA_BVH_WIDTH children per node, their
- * boxes stored per plane (lo_x[W], hi_x[W], lo_y[W], ... ), then child[W]
- * and count[W]:
- *   count == 0: inner node, child = node index;
- *   count >  0: leaf, facets child .. child + count - 1;
- *   count <  0: empty slot.
- * A root has no box of its own: a walk starts by testing its children.
- *
- * PoCL does not vectorise these loops across work-items (divergent control
- * flow), so the width is used inside one work-item: the W child boxes of a
- * node are tested together, one floatW per plane. The nearest-hit walk pushes
- * the children it meets farthest first, so the nearest is popped next, and
- * skips a popped entry that lies beyond the best hit found since it was
- * pushed. The any-hit walk needs no order and tests a leaf as soon as its
- * box is met. The host builder bounds every path so that the private stack
- * of OPSILA_BVH_STACK entries is enough. */
-#include "geometry.cl"
-
-#if OPSILA_BVH_WIDTH == 8
-typedef float8 floatW;
-typedef int8 intW;
-#define vloadW vload8
-#define vstoreW vstore8
-#else
-typedef float4 floatW;
-typedef int4 intW;
-#define vloadW vload4
-#define vstoreW vstore4
-#endif
+/* The bank BVH's walks: nearest hit (radiance rays, the item buffer, the
+ * megakernel) and any hit (shadow rays), both on the traversal skeleton of
+ * lib/walk.cl. The nearest-hit walk pushes the children it meets farthest
+ * first, so the nearest is popped next, and skips a popped entry that lies
+ * beyond the best hit found since it was pushed. The any-hit walk needs no
+ * order and tests a leaf as soon as its box is met. */
+#include "walk.cl"
 
 /* Pilot frames (--balance measured) build the program with
  * OPSILA_MEASURE_COST: every ray-box and ray-facet test of the SPMD phase is
@@ -75,23 +49,6 @@ inline CostProbe no_cost_probe(void) {
   return p;
 }
 
-/* Raw slab distances of a node's child boxes: the largest plane entry and
- * the smallest plane exit, per child. Planes are taken near/far by the sign
- * of the direction, so one subtraction and one product per plane; a NaN (a
- * ray in a slab's boundary plane) is ignored by fmax/fmin, i.e. that slab
- * counts as containing the ray, as in ray_box_span. */
-OPSILA_INLINE void node_spans(const RayPre *r, __global const BankNode *nd, floatW *enter, floatW *leave) {
-  __global const float *nx = r->neg.x ? nd->hi_x : nd->lo_x, *fx = r->neg.x ? nd->lo_x : nd->hi_x;
-  __global const float *ny = r->neg.y ? nd->hi_y : nd->lo_y, *fy = r->neg.y ? nd->lo_y : nd->hi_y;
-  __global const float *nz = r->neg.z ? nd->hi_z : nd->lo_z, *fz = r->neg.z ? nd->lo_z : nd->hi_z;
-  floatW ox = (floatW)(r->org.x), oy = (floatW)(r->org.y), oz = (floatW)(r->org.z);
-  floatW ix = (floatW)(r->inv_dir.x), iy = (floatW)(r->inv_dir.y), iz = (floatW)(r->inv_dir.z);
-  floatW tnx = (vloadW(0, nx) - ox) * ix, tny = (vloadW(0, ny) - oy) * iy, tnz = (vloadW(0, nz) - oz) * iz;
-  floatW tfx = (vloadW(0, fx) - ox) * ix, tfy = (vloadW(0, fy) - oy) * iy, tfz = (vloadW(0, fz) - oz) * iz;
-  *enter = fmax(fmax(tnx, tny), tnz);
-  *leave = fmin(fmin(tfx, tfy), tfz);
-}
-
 /* Children met in [tmin, tmax], with slack: relative, above the tie
  * tolerance (a box is never culled while a facet on its face could still
  * win a tie), and absolute, `slack` (FrameParams.box_slack). The facet test
@@ -113,96 +70,85 @@ OPSILA_INLINE intW node_hits(const RayPre *r, __global const BankNode *nd, float
   return (lo <= hi) & (vloadW(0, nd->count) >= (intW)(0));
 }
 
-/* Nearest hit below `root` (a bank, one cluster of it, or a whole scene);
+/* A walk of one bank's BVH: the ray, its segment, and (nearest hit) the
+ * best hit so far; the tests are counted as they are made. */
+typedef struct {
+  const RayPre *r;
+  __global const BankTriangle *tris;
+  float tmin, tmax, slack; /* nearest hit: tmax is the tie limit of best_t, set at each pop */
+  float best_t;
+  int best_tri, best_facet;
+  uint *tri_tests, *box_tests;
+  const CostProbe *probe;
+} BankWalk;
+
+OPSILA_INLINE void bank_node(BankWalk *w, __global const BankNode *nd, float *te, int *hm) {
+  floatW enter;
+  intW hit = node_hits(w->r, nd, w->tmin, w->tmax, w->slack, &enter);
+  vstoreW(enter, 0, te);
+  vstoreW(hit, 0, hm);
+}
+
+/* Every child box is a test, met or not. */
+OPSILA_INLINE bool bank_child(BankWalk *w, __global const BankNode *nd, int k, int cnt, int met, float entry) {
+  if (cnt < 0) return false;
+  ++*w->box_tests;
+  COST_CHILD(w->probe, nd, k);
+  return met;
+}
+
+/* A popped entry beyond the tie limit of the best hit found since it was
+ * pushed cannot hold a winner; the limit bounds the node's test too. */
+OPSILA_INLINE bool nearest_pop(BankWalk *w, float entry) {
+  float limit = tie_limit(w->best_t);
+  w->tmax = limit;
+  return !(entry > limit + fabs(limit) * (4.0f * OPSILA_TIE_TOLERANCE) + w->slack);
+}
+
+OPSILA_INLINE bool nearest_leaf(BankWalk *w, int first, int count, float entry) {
+  for (int i = first; i < first + count; ++i) {
+    ++*w->tri_tests;
+    COST_TRI(w->probe, i);
+    float t = intersect_triangle(w->r, &w->tris[i], w->tmin, OPSILA_INF);
+    if (t < OPSILA_INF && closer(t, w->tris[i].facet_id, w->best_t, w->best_facet)) {
+      w->best_t = t;
+      w->best_tri = i;
+      w->best_facet = w->tris[i].facet_id;
+    }
+  }
+  return false;
+}
+
+OPSILA_INLINE bool any_leaf(BankWalk *w, int first, int count, float entry) {
+  for (int i = first; i < first + count; ++i) {
+    ++*w->tri_tests;
+    COST_TRI(w->probe, i);
+    if (intersect_triangle(w->r, &w->tris[i], w->tmin, w->tmax) < OPSILA_INF) return true;
+  }
+  return false;
+}
+
+OPSILA_DEFINE_WALK(walk_nearest, BankWalk, bank_node, bank_child, nearest_leaf, nearest_pop, 1)
+OPSILA_DEFINE_WALK(walk_any, BankWalk, bank_node, bank_child, any_leaf, WALK_NO_POP, 0)
+
+/* Nearest hit below `root` (a bank, one cluster of it, or a whole scene),
+ * after the best one so far (*best_t, *best_tri, *best_facet, updated);
  * slack: FrameParams.box_slack (node_hits). */
 OPSILA_INLINE void traverse_nearest(const RayPre *r, __global const BankNode *nodes,
                                     __global const BankTriangle *tris, int root, float tmin, float slack, float *best_t,
                                     int *best_tri, int *best_facet, uint *tri_tests, uint *box_tests,
                                     const CostProbe *probe) {
-  int s_child[OPSILA_BVH_STACK], s_count[OPSILA_BVH_STACK];
-  float s_t[OPSILA_BVH_STACK];
-  int sp = 1;
-  s_child[0] = root;
-  s_count[0] = 0;
-  s_t[0] = -INFINITY;
-  while (sp > 0) {
-    --sp;
-    float limit = tie_limit(*best_t);
-    if (s_t[sp] > limit + fabs(limit) * (4.0f * OPSILA_TIE_TOLERANCE) + slack) continue;
-    int child = s_child[sp], count = s_count[sp];
-    if (count > 0) {
-      for (int i = child; i < child + count; ++i) {
-        ++*tri_tests;
-        COST_TRI(probe, i);
-        float t = intersect_triangle(r, &tris[i], tmin, OPSILA_INF);
-        if (t < OPSILA_INF && closer(t, tris[i].facet_id, *best_t, *best_facet)) {
-          *best_t = t;
-          *best_tri = i;
-          *best_facet = tris[i].facet_id;
-        }
-      }
-      continue;
-    }
-    __global const BankNode *nd = &nodes[child];
-    floatW enter;
-    intW hit = node_hits(r, nd, tmin, limit, slack, &enter);
-    float te[OPSILA_BVH_WIDTH];
-    int hm[OPSILA_BVH_WIDTH];
-    vstoreW(enter, 0, te);
-    vstoreW(hit, 0, hm);
-    int base = sp;
-    for (int k = 0; k < OPSILA_BVH_WIDTH; ++k) {
-      int cnt = nd->count[k];
-      if (cnt < 0) continue;
-      ++*box_tests;
-      COST_CHILD(probe, nd, k);
-      if (!hm[k] || sp >= OPSILA_BVH_STACK) continue;
-      /* Insert, keeping this node's entries farthest first. */
-      float t = te[k];
-      int j = sp++;
-      while (j > base && s_t[j - 1] < t) {
-        s_t[j] = s_t[j - 1];
-        s_child[j] = s_child[j - 1];
-        s_count[j] = s_count[j - 1];
-        --j;
-      }
-      s_t[j] = t;
-      s_child[j] = nd->child[k];
-      s_count[j] = cnt;
-    }
-  }
+  BankWalk w = {r, tris, tmin, OPSILA_INF, slack, *best_t, *best_tri, *best_facet, tri_tests, box_tests, probe};
+  walk_nearest(&w, nodes, root);
+  *best_t = w.best_t;
+  *best_tri = w.best_tri;
+  *best_facet = w.best_facet;
 }
 
 /* Any hit in (tmin, tmax): shadow rays. */
 OPSILA_INLINE bool traverse_any(const RayPre *r, __global const BankNode *nodes, __global const BankTriangle *tris,
                                 int root, float tmin, float tmax, float slack, uint *tri_tests, uint *box_tests,
                                 const CostProbe *probe) {
-  int stack[OPSILA_BVH_STACK];
-  int sp = 1;
-  stack[0] = root;
-  while (sp > 0) {
-    __global const BankNode *nd = &nodes[stack[--sp]];
-    floatW enter;
-    intW hit = node_hits(r, nd, tmin, tmax, slack, &enter);
-    int hm[OPSILA_BVH_WIDTH];
-    vstoreW(hit, 0, hm);
-    for (int k = 0; k < OPSILA_BVH_WIDTH; ++k) {
-      int cnt = nd->count[k];
-      if (cnt < 0) continue;
-      ++*box_tests;
-      COST_CHILD(probe, nd, k);
-      if (!hm[k]) continue;
-      int child = nd->child[k];
-      if (cnt == 0) {
-        if (sp < OPSILA_BVH_STACK) stack[sp++] = child;
-        continue;
-      }
-      for (int i = child; i < child + cnt; ++i) {
-        ++*tri_tests;
-        COST_TRI(probe, i);
-        if (intersect_triangle(r, &tris[i], tmin, tmax) < OPSILA_INF) return true;
-      }
-    }
-  }
-  return false;
+  BankWalk w = {r, tris, tmin, tmax, slack, OPSILA_INF, -1, INT_MAX, tri_tests, box_tests, probe};
+  return walk_any(&w, nodes, root);
 }

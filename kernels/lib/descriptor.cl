@@ -1,6 +1,6 @@
 /* Ray descriptors as the kernels see them: a vector of 64-byte records,
  * generated from the field table OPSILA_DESCRIPTOR_LANES (opsila_shared.h). */
-#include "opsila_shared.h"
+#include "../opsila_shared.h"
 
 #define DESC_MEMBER(lane, name, type, host_type) type name;
 typedef struct {

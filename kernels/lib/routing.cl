@@ -10,7 +10,7 @@
  * The boxes are padded on the host so that rounding never puts a facet's
  * hit point outside its cluster's box. Both volumes give the same
  * destinations rule below, hence the same image. */
-#include "bvh.cl"
+#include "walk.cl"
 
 typedef struct {
   __global const PeInfo *pes;
@@ -93,73 +93,85 @@ OPSILA_INLINE intW route_hits(const RayPre *r, __global const BankNode *nd, floa
   return (lo <= hi) & (hi > (floatW)(tmin)) & (lo < (floatW)(tmax)) & (vloadW(0, nd->count) >= (intW)(0));
 }
 
+/* A walk of one PE's routing BVH (or of the top level): the ray and its
+ * segment, one routing test counted per node; the nearest-entry walk also
+ * carries the cursor, the candidate to beat and the PE's entry so far. */
+typedef struct {
+  const RayPre *r;
+  float tmin, tmax;
+  uint *route_tests;
+  float cursor_t, best_entry, entry;
+  int cursor_pe, q;
+} RouteWalk;
+
+/* route_hits into per-child arrays: entries and whether each child is met. */
+OPSILA_INLINE void route_node(RouteWalk *w, __global const BankNode *nd, float *te, int *hm) {
+  ++*w->route_tests;
+  floatW ent;
+  intW met = route_hits(w->r, nd, w->tmin, w->tmax, &ent);
+  vstoreW(ent, 0, te);
+  vstoreW(met, 0, hm);
+}
+
+/* Nearest entry: only a box entered below both the candidate's entry and
+ * this PE's entry so far can change the answer. */
+OPSILA_INLINE bool entry_child(RouteWalk *w, __global const BankNode *nd, int k, int cnt, int met, float entry) {
+  return met && entry < fmin(w->best_entry, w->entry);
+}
+
+/* A cluster box entered at or before the cursor: the PE was already visited
+ * (ends the walk); otherwise the PE's entry so far. */
+OPSILA_INLINE bool entry_leaf(RouteWalk *w, int first, int count, float entry) {
+  if (entry < w->cursor_t || (entry == w->cursor_t && w->q < w->cursor_pe)) return true;
+  w->entry = entry;
+  return false;
+}
+
+OPSILA_INLINE bool segment_child(RouteWalk *w, __global const BankNode *nd, int k, int cnt, int met, float entry) {
+  return met;
+}
+
+/* Any cluster box met by the segment: the shadow ray goes to this PE. */
+OPSILA_INLINE bool segment_leaf(RouteWalk *w, int first, int count, float entry) { return true; }
+
+OPSILA_DEFINE_WALK(walk_route_entry, RouteWalk, route_node, entry_child, entry_leaf, WALK_NO_POP, 0)
+OPSILA_DEFINE_WALK(walk_route_segment, RouteWalk, route_node, segment_child, segment_leaf, WALK_NO_POP, 0)
+
 /* next_destination_spheres with cluster boxes: the entry of PE q is the
  * smallest entry over its boxes that meet (tmin, tmax). Only an entry below
  * the current candidate's can change the answer, so subtrees entered at or
  * beyond it are skipped; a box entered at or before the cursor means the PE
  * was already visited, which ends its walk. */
-/* route_hits into per-child arrays: entries and whether each child is met. */
-OPSILA_INLINE void route_node(const RayPre *r, __global const BankNode *nd, float tmin, float tmax, float *te,
-                              int *hm) {
-  floatW ent;
-  intW met = route_hits(r, nd, tmin, tmax, &ent);
-  vstoreW(ent, 0, te);
-  vstoreW(met, 0, hm);
-}
-
 inline int next_destination_boxes(const RayPre *r, __global const BankNode *route, int num_pes, float tmin,
                                   float tmax, float cursor_t, int cursor_pe, float *entry_out, uint *route_tests) {
   int best_pe = -1;
-  float best_entry = OPSILA_INF;
+  RouteWalk w = {r, tmin, tmax, route_tests, cursor_t, OPSILA_INF, OPSILA_INF, cursor_pe, -1};
   /* PEs in increasing order, as the ties want, W at a time through the top
    * level: a PE whose box is missed, or entered at or beyond the current
    * candidate, has no cluster box that could change the answer. */
   int top_nodes = (num_pes + OPSILA_BVH_WIDTH - 1) / OPSILA_BVH_WIDTH;
   for (int n = 0; n < top_nodes; ++n) {
     __global const BankNode *tn = &route[num_pes + n];
-    ++*route_tests;
     float pe_entry[OPSILA_BVH_WIDTH];
     int pe_met[OPSILA_BVH_WIDTH];
-    route_node(r, tn, tmin, tmax, pe_entry, pe_met);
+    route_node(&w, tn, pe_entry, pe_met);
     for (int kq = 0; kq < OPSILA_BVH_WIDTH; ++kq) {
-      if (!pe_met[kq] || !(pe_entry[kq] < best_entry)) continue;
+      if (!pe_met[kq] || !(pe_entry[kq] < w.best_entry)) continue;
       int q = tn->child[kq];
       if (q == cursor_pe) continue; /* (entry, q) == cursor: visited */
-      float entry = OPSILA_INF;
-      bool visited = false;
-      int stack[OPSILA_BVH_STACK];
-      int sp = 1;
-      stack[0] = q;
-      while (sp > 0 && !visited) {
-        __global const BankNode *nd = &route[stack[--sp]];
-        ++*route_tests;
-        float te[OPSILA_BVH_WIDTH];
-        int hm[OPSILA_BVH_WIDTH];
-        route_node(r, nd, tmin, tmax, te, hm);
-        for (int k = 0; k < OPSILA_BVH_WIDTH; ++k) {
-          if (!hm[k]) continue;
-          float e = te[k];
-          if (!(e < fmin(best_entry, entry))) continue;
-          if (nd->count[k] == 0) {
-            if (sp < OPSILA_BVH_STACK) stack[sp++] = nd->child[k];
-            continue;
-          }
-          if (e < cursor_t || (e == cursor_t && q < cursor_pe)) {
-            visited = true;
-            break;
-          }
-          entry = e;
-        }
-      }
+      w.q = q;
+      w.entry = OPSILA_INF;
+      bool visited = walk_route_entry(&w, route, q);
+      float entry = w.entry;
       if (visited || !(entry < tmax)) continue;
       bool after_cursor = entry > cursor_t || (entry == cursor_t && q > cursor_pe);
-      if (after_cursor && entry < best_entry) {
-        best_entry = entry;
+      if (after_cursor && entry < w.best_entry) {
+        w.best_entry = entry;
         best_pe = q;
       }
     }
   }
-  *entry_out = best_entry;
+  *entry_out = w.best_entry;
   return best_pe;
 }
 
@@ -167,32 +179,18 @@ inline int next_destination_boxes(const RayPre *r, __global const BankNode *rout
  * level: PEs whose box the segment misses are not walked. */
 inline int next_shadow_destination_boxes(const RayPre *r, __global const BankNode *route, int num_pes, float tmin,
                                          float tmax, int after_pe, int home, uint *route_tests) {
+  RouteWalk w = {r, tmin, tmax, route_tests, -1.0f, OPSILA_INF, OPSILA_INF, -1, -1};
   int first = after_pe + 1;
   int top_nodes = (num_pes + OPSILA_BVH_WIDTH - 1) / OPSILA_BVH_WIDTH;
   for (int n = first / OPSILA_BVH_WIDTH; n < top_nodes; ++n) {
     __global const BankNode *tn = &route[num_pes + n];
-    ++*route_tests;
     float pe_entry[OPSILA_BVH_WIDTH];
     int pe_met[OPSILA_BVH_WIDTH];
-    route_node(r, tn, tmin, tmax, pe_entry, pe_met);
+    route_node(&w, tn, pe_entry, pe_met);
     for (int kq = 0; kq < OPSILA_BVH_WIDTH; ++kq) {
       int q = n * OPSILA_BVH_WIDTH + kq;
       if (q < first || q == home || !pe_met[kq]) continue;
-      int stack[OPSILA_BVH_STACK];
-      int sp = 1;
-      stack[0] = q;
-      while (sp > 0) {
-        __global const BankNode *nd = &route[stack[--sp]];
-        ++*route_tests;
-        float te[OPSILA_BVH_WIDTH];
-        int hm[OPSILA_BVH_WIDTH];
-        route_node(r, nd, tmin, tmax, te, hm);
-        for (int k = 0; k < OPSILA_BVH_WIDTH; ++k) {
-          if (!hm[k]) continue;
-          if (nd->count[k] > 0) return q;
-          if (sp < OPSILA_BVH_STACK) stack[sp++] = nd->child[k];
-        }
-      }
+      if (walk_route_segment(&w, route, q)) return q;
     }
   }
   return -1;

@@ -1,9 +1,7 @@
-/* Whitted shading rules and the SPEC camera, shared by the SPMD phase,
- * the item buffer and the replicated megakernel. */
-#include "texture.cl"
-
 /* Whitted shading pieces (SPEC "Shading"), shared by the SPMD phase and the
  * replicated megakernel so that both shade from one definition. */
+#include "texture.cl"
+
 typedef struct {
   float3 p;      /* hit point */
   float3 n;      /* shading normal, facing the ray's side of the facet */
@@ -85,18 +83,4 @@ inline bool transmitted_direction(__global const Material *m, SurfacePoint sp, f
   if (k < 0.0f) return false;
   *out = normalize(eta * d + (eta * c - sqrt(k)) * sp.n);
   return true;
-}
-
-/* SPEC camera: direction of the ray through image point (px, py); pixel
- * (x, y)'s centre is (x + 0.5, y + 0.5), its sample (i, j) is
- * (x + (i+0.5)/k, y + (j+0.5)/k) with the offsets computed on the host. */
-inline float3 primary_direction_at(FrameParams fp, float px, float py) {
-  float sx = (2.0f * px / (float)fp.width - 1.0f) * fp.tan_half_fov * fp.aspect;
-  float sy = (1.0f - 2.0f * py / (float)fp.height) * fp.tan_half_fov;
-  return normalize(load3(fp.forward) + sx * load3(fp.right) + sy * load3(fp.up));
-}
-
-/* Primary (centre) ray direction of pixel (x, y). */
-inline float3 primary_direction(FrameParams fp, int x, int y) {
-  return primary_direction_at(fp, (float)x + 0.5f, (float)y + 0.5f);
 }

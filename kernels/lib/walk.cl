@@ -1,0 +1,126 @@
+/* The traversal skeleton of every walk over wide BVH nodes (BankNode,
+ * kernels/opsila_shared.h): the bank BVH's nearest-hit and any-hit walks
+ * (lib/bvh.cl) and the routing walks (lib/routing.cl). Two parts, as in
+ * Embree's split of a node intersector from the traverser:
+ *   - the node test: node_spans below, the slab distances of a node's W
+ *     child boxes for one ray, which each walk turns into entries and a mask
+ *     of the children met (node_hits, route_hits);
+ *   - the traverser: OPSILA_DEFINE_WALK, the stack, the order of the visit
+ *     and what is pushed, written once; a walk brings its state and hooks.
+ *
+ * Node layout (built by host/machine/bank_bvh.cpp): OPSILA_BVH_WIDTH
+ * children per node, their boxes stored per plane (lo_x[W], hi_x[W],
+ * lo_y[W], ... ), then child[W] and count[W]:
+ *   count == 0: inner node, child = node index;
+ *   count >  0: leaf, items child .. child + count - 1;
+ *   count <  0: empty slot.
+ * A root has no box of its own: a walk starts by testing its children.
+ *
+ * PoCL does not vectorise these loops across work-items (divergent control
+ * flow), so the width is used inside one work-item: the W child boxes of a
+ * node are tested together, one floatW per plane. The host builder bounds
+ * every path so that the private stack of OPSILA_BVH_STACK entries is
+ * enough. */
+#include "geometry.cl"
+
+#if OPSILA_BVH_WIDTH == 8
+typedef float8 floatW;
+typedef int8 intW;
+#define vloadW vload8
+#define vstoreW vstore8
+#else
+typedef float4 floatW;
+typedef int4 intW;
+#define vloadW vload4
+#define vstoreW vstore4
+#endif
+
+/* Raw slab distances of a node's child boxes: the largest plane entry and
+ * the smallest plane exit, per child. Planes are taken near/far by the sign
+ * of the direction, so one subtraction and one product per plane; a NaN (a
+ * ray in a slab's boundary plane) is ignored by fmax/fmin, i.e. that slab
+ * counts as containing the ray, as in ray_box_span. */
+OPSILA_INLINE void node_spans(const RayPre *r, __global const BankNode *nd, floatW *enter, floatW *leave) {
+  __global const float *nx = r->neg.x ? nd->hi_x : nd->lo_x, *fx = r->neg.x ? nd->lo_x : nd->hi_x;
+  __global const float *ny = r->neg.y ? nd->hi_y : nd->lo_y, *fy = r->neg.y ? nd->lo_y : nd->hi_y;
+  __global const float *nz = r->neg.z ? nd->hi_z : nd->lo_z, *fz = r->neg.z ? nd->lo_z : nd->hi_z;
+  floatW ox = (floatW)(r->org.x), oy = (floatW)(r->org.y), oz = (floatW)(r->org.z);
+  floatW ix = (floatW)(r->inv_dir.x), iy = (floatW)(r->inv_dir.y), iz = (floatW)(r->inv_dir.z);
+  floatW tnx = (vloadW(0, nx) - ox) * ix, tny = (vloadW(0, ny) - oy) * iy, tnz = (vloadW(0, nz) - oz) * iz;
+  floatW tfx = (vloadW(0, fx) - ox) * ix, tfy = (vloadW(0, fy) - oy) * iy, tfz = (vloadW(0, fz) - oz) * iz;
+  *enter = fmax(fmax(tnx, tny), tnz);
+  *leave = fmin(fmin(tfx, tfy), tfz);
+}
+
+/* OPSILA_DEFINE_WALK(name, State, NODE, CHILD, LEAF, POP, ORDERED) defines
+ *   bool name(State *w, __global const BankNode *nodes, int root)
+ * a depth-first walk below `root` (OpenCL C has no templates: the hooks are
+ * functions named here, inlined into the walk):
+ *   NODE(w, nd, float te[W], int hm[W]): the node test; per child, its
+ *     entry distance and whether the ray meets it (empty slots never do);
+ *   CHILD(w, nd, k, count, met, entry): whether child k is visited; it sees
+ *     every child, empty slots (count < 0) and missed ones included, so that
+ *     it may count the tests;
+ *   LEAF(w, first, count, entry): a leaf's items; true ends the walk (and
+ *     the walk returns true);
+ *   POP(w, entry): ordered walks: whether a popped entry is still worth
+ *     visiting (it may set the bound the next NODE uses).
+ * ORDERED 0: a met inner child is pushed, a met leaf visited at once.
+ * ORDERED 1: every met child, leaves too, is pushed, the children of one
+ *   node farthest first, so that the nearest is popped next; a leaf is
+ *   visited when popped.
+ * A child that would overflow the stack is dropped (the builder's bound
+ * makes that never happen). */
+#define OPSILA_DEFINE_WALK(name, State, NODE, CHILD, LEAF, POP, ORDERED)           \
+  OPSILA_INLINE bool name(State *w, __global const BankNode *nodes, int root) {  \
+    int s_node[OPSILA_BVH_STACK], s_count[OPSILA_BVH_STACK];                      \
+    float s_t[OPSILA_BVH_STACK];                                                  \
+    int sp = 1;                                                                   \
+    s_node[0] = root;                                                             \
+    s_count[0] = 0;                                                               \
+    s_t[0] = -INFINITY;                                                           \
+    while (sp > 0) {                                                              \
+      --sp;                                                                       \
+      if (ORDERED) {                                                              \
+        if (!POP(w, s_t[sp])) continue;                                           \
+        if (s_count[sp] > 0) {                                                    \
+          if (LEAF(w, s_node[sp], s_count[sp], s_t[sp])) return true;             \
+          continue;                                                               \
+        }                                                                         \
+      }                                                                           \
+      __global const BankNode *nd = &nodes[s_node[sp]];                           \
+      float te[OPSILA_BVH_WIDTH];                                                 \
+      int hm[OPSILA_BVH_WIDTH];                                                   \
+      NODE(w, nd, te, hm);                                                        \
+      int base = sp;                                                              \
+      for (int k = 0; k < OPSILA_BVH_WIDTH; ++k) {                                \
+        int cnt = nd->count[k];                                                   \
+        if (!CHILD(w, nd, k, cnt, hm[k], te[k])) continue;                        \
+        if (ORDERED) {                                                            \
+          if (sp >= OPSILA_BVH_STACK) continue;                                   \
+          /* Insert, keeping this node's entries farthest first. */               \
+          float t = te[k];                                                        \
+          int j = sp++;                                                           \
+          while (j > base && s_t[j - 1] < t) {                                    \
+            s_t[j] = s_t[j - 1];                                                  \
+            s_node[j] = s_node[j - 1];                                            \
+            s_count[j] = s_count[j - 1];                                          \
+            --j;                                                                  \
+          }                                                                       \
+          s_t[j] = t;                                                             \
+          s_node[j] = nd->child[k];                                               \
+          s_count[j] = cnt;                                                       \
+          continue;                                                               \
+        }                                                                         \
+        if (cnt == 0) {                                                           \
+          if (sp < OPSILA_BVH_STACK) s_node[sp++] = nd->child[k];                 \
+          continue;                                                               \
+        }                                                                         \
+        if (LEAF(w, nd->child[k], cnt, te[k])) return true;                       \
+      }                                                                           \
+    }                                                                             \
+    return false;                                                                 \
+  }
+
+/* POP of the unordered walks (never called). */
+#define WALK_NO_POP(w, entry) true

@@ -1,0 +1,186 @@
+// kernels/lib/bvh.cl alone: the bank BVH walks (nearest hit, any hit) on
+// many random rays, each answer held against a brute-force search of the
+// bank's facets on the host, so that a walk that loses a facet fails here
+// and not only as a wrong pixel.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include "batch.h"
+#include "machine/partition.h"
+#include "opsila_shared.h"
+
+namespace opsila {
+namespace {
+
+constexpr float kInf = std::numeric_limits<float>::infinity();
+
+// The watertight ray-facet test of kernels/lib/geometry.cl, expression for
+// expression, in float: the oracle's facet test.
+struct HostRay {
+  float org[3], dir[3];
+  int kx, ky, kz;
+  float sx, sy, sz;
+};
+
+HostRay host_ray(const cl_float4& o, const cl_float4& d) {
+  HostRay r{{o.s[0], o.s[1], o.s[2]}, {d.s[0], d.s[1], d.s[2]}, 0, 0, 0, 0, 0, 0};
+  const float a[3] = {std::fabs(d.s[0]), std::fabs(d.s[1]), std::fabs(d.s[2])};
+  r.kz = (a[0] > a[1]) ? (a[0] > a[2] ? 0 : 2) : (a[1] > a[2] ? 1 : 2);
+  r.kx = r.kz + 1 == 3 ? 0 : r.kz + 1;
+  r.ky = r.kx + 1 == 3 ? 0 : r.kx + 1;
+  if (r.dir[r.kz] < 0.0f) std::swap(r.kx, r.ky);
+  const float dz = r.dir[r.kz];
+  r.sx = r.dir[r.kx] / dz;
+  r.sy = r.dir[r.ky] / dz;
+  r.sz = 1.0f / dz;
+  return r;
+}
+
+float host_intersect(const HostRay& r, const BankTriangle& tri, float tmin, float tmax) {
+  const float* v[3] = {tri.v0, tri.v1, tri.v2};
+  float x[3], y[3], z[3];
+  for (int i = 0; i < 3; ++i) {
+    const float p[3] = {v[i][0] - r.org[0], v[i][1] - r.org[1], v[i][2] - r.org[2]};
+    z[i] = p[r.kz];
+    x[i] = p[r.kx] - r.sx * z[i];
+    y[i] = p[r.ky] - r.sy * z[i];
+  }
+  const float u = x[2] * y[1] - y[2] * x[1], v_ = x[0] * y[2] - y[0] * x[2], w = x[1] * y[0] - y[1] * x[0];
+  if ((u < 0.0f || v_ < 0.0f || w < 0.0f) && (u > 0.0f || v_ > 0.0f || w > 0.0f)) return kInf;
+  const float det = u + v_ + w;
+  if (det == 0.0f) return kInf;
+  const float inv_det = 1.0f / det;
+  const float t = (u * inv_det) * (r.sz * z[0]) + (v_ * inv_det) * (r.sz * z[1]) + (w * inv_det) * (r.sz * z[2]);
+  return (t > tmin && t < tmax) ? t : kInf;
+}
+
+// The tie rule of kernels/lib/geometry.cl.
+bool closer(float t, int facet, float best_t, int best_facet) {
+  if (best_t == kInf) return t < kInf;
+  const float tol = OPSILA_TIE_TOLERANCE * best_t;
+  if (t < best_t - tol) return true;
+  return t <= best_t + tol && facet < best_facet;
+}
+
+struct Bank {
+  Scene scene;
+  BankedScene bs;
+  float slack = 0;
+};
+
+Bank make_bank(int pes) {
+  Bank b;
+  b.scene = test::batch_scene(1987);
+  b.bs = partition_scene(b.scene, pes);
+  b.slack = frame_params(b.scene, b.bs, 1).box_slack;
+  return b;
+}
+
+struct Walks {
+  std::vector<int> tri, blocked;
+  std::vector<float> t;
+  std::vector<cl_uint2> tests;
+};
+
+// Runs `kernel` (nearest_batch or any_batch) from PE p's bank root.
+Walks run_walk(const Bank& b, int p, const test::RayBatch& rays, const char* kernel) {
+  ClRuntime& rt = test::batch_runtime();
+  const std::size_t n = rays.size();
+  cl::Buffer nodes = test::to_device(rt, b.bs.nodes), tris = test::to_device(rt, b.bs.triangles);
+  cl::Buffer org = test::to_device(rt, rays.org), dir = test::to_device(rt, rays.dir);
+  cl::Buffer out_a = test::to_device(rt, std::vector<cl_int>(n)), out_t = test::to_device(rt, std::vector<float>(n));
+  cl::Buffer tests = test::to_device(rt, std::vector<cl_uint2>(n));
+  cl::Kernel k = rt.kernel(kernel);
+  const bool nearest = std::string(kernel) == "nearest_batch";
+  int a = 0;
+  for (const cl::Buffer* buf : {&nodes, &tris}) k.setArg(a++, *buf);
+  k.setArg(a++, cl_int(b.bs.pes[p].node_begin));
+  k.setArg(a++, b.slack);
+  k.setArg(a++, org);
+  k.setArg(a++, dir);
+  k.setArg(a++, cl_int(n));
+  k.setArg(a++, out_a);
+  if (nearest) k.setArg(a++, out_t);
+  k.setArg(a++, tests);
+  test::run_batch(rt, k, n);
+  Walks w;
+  (nearest ? w.tri : w.blocked) = test::from_device<cl_int>(rt, out_a, n);
+  if (nearest) w.t = test::from_device<float>(rt, out_t, n);
+  w.tests = test::from_device<cl_uint2>(rt, tests, n);
+  return w;
+}
+
+// Runs `kernel` from the root of every bank that holds facets and hands
+// each ray's answer to check(pe, walks, i, host ray); stops at the first
+// failure (one message, not thousands).
+template <typename Check>
+void for_each_bank(const Bank& b, const test::RayBatch& rays, const char* kernel, Check check) {
+  for (int p = 0; p < b.bs.num_pes; ++p) {
+    const PeInfo& pe = b.bs.pes[p];
+    if (pe.node_begin == pe.node_end) continue;
+    const Walks w = run_walk(b, p, rays, kernel);
+    for (std::size_t i = 0; i < rays.size() && !::testing::Test::HasFailure(); ++i)
+      check(pe, w, i, host_ray(rays.org[i], rays.dir[i]));
+  }
+}
+
+// Every PE's bank (and the whole scene as one bank): the walk's nearest hit
+// is the brute-force search's, facet for facet, up to a tie within the
+// tolerance; and the walk tests far fewer facets than the search.
+TEST(BankBvhWalk, NearestHitIsTheBruteForceNearestOnRandomRays) {
+  for (int pes : {1, 16}) {
+    const Bank b = make_bank(pes);
+    const test::RayBatch rays = test::random_rays(2000, 17 + pes, 0.0f, kInf, kInf);
+    std::size_t hits = 0, walk_tests = 0, brute_tests = 0;
+    for_each_bank(b, rays, "nearest_batch", [&](const PeInfo& pe, const Walks& w, std::size_t i, const HostRay& r) {
+      float best_t = kInf;
+      int best = -1, best_facet = std::numeric_limits<int>::max();
+      for (int f = pe.tri_begin; f < pe.tri_end; ++f) {
+        const float t = host_intersect(r, b.bs.triangles[f], rays.org[i].s[3], kInf);
+        if (t < kInf && closer(t, b.bs.triangles[f].facet_id, best_t, best_facet)) {
+          best_t = t;
+          best = f;
+          best_facet = b.bs.triangles[f].facet_id;
+        }
+      }
+      const std::string at = std::to_string(pes) + " PEs, facets from " + std::to_string(pe.tri_begin) + ", ray " +
+                             std::to_string(i);
+      EXPECT_EQ(w.tri[i] >= 0, best >= 0) << at;
+      walk_tests += w.tests[i].s[0];
+      brute_tests += static_cast<std::size_t>(pe.tri_end - pe.tri_begin);
+      if (best < 0 || w.tri[i] < 0) return;
+      ++hits;
+      EXPECT_NEAR(w.t[i], best_t, 1e-5f * best_t) << at;
+      if (w.tri[i] != best) {  // only a tie may go either way
+        EXPECT_LE(std::fabs(w.t[i] - best_t), 2 * OPSILA_TIE_TOLERANCE * best_t)
+            << at << ": facet " << w.tri[i] << ", brute force " << best;
+      }
+    });
+    EXPECT_GT(hits, rays.size() / 4) << "too few rays hit anything to test the walk";
+    EXPECT_LT(walk_tests * 5, brute_tests) << "the walk culls too little";
+  }
+}
+
+// Shadow segments: the any-hit walk is blocked exactly when some facet of
+// the bank is hit inside the segment.
+TEST(BankBvhWalk, AnyHitMatchesTheBruteForceOnRandomSegments) {
+  const Bank b = make_bank(8);
+  const test::RayBatch rays = test::random_rays(2000, 5, 1e-3f, 0.5f, 12.0f);
+  std::size_t blocked = 0;
+  for_each_bank(b, rays, "any_batch", [&](const PeInfo& pe, const Walks& w, std::size_t i, const HostRay& r) {
+    bool hit = false;
+    for (int f = pe.tri_begin; f < pe.tri_end && !hit; ++f)
+      hit = host_intersect(r, b.bs.triangles[f], rays.org[i].s[3], rays.dir[i].s[3]) < kInf;
+    EXPECT_EQ(w.blocked[i] != 0, hit) << "facets from " << pe.tri_begin << ", ray " << i;
+    blocked += hit;
+  });
+  EXPECT_GT(blocked, 100u) << "too few segments blocked to test the walk";
+}
+
+}  // namespace
+}  // namespace opsila

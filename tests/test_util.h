@@ -14,6 +14,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <functional>
@@ -112,6 +113,22 @@ class TempDir {
   }
   std::string path_;
 };
+
+// An uncompressed 24-bit TGA (top-left origin) with the given sRGB codes.
+inline std::string tga(int w, int h, const std::vector<std::array<int, 3>>& rgb) {
+  std::string out(18, '\0');
+  out[2] = 2;  // uncompressed true-colour
+  out[12] = static_cast<char>(w & 255), out[13] = static_cast<char>(w >> 8);
+  out[14] = static_cast<char>(h & 255), out[15] = static_cast<char>(h >> 8);
+  out[16] = 24;
+  out[17] = 0x20;  // rows from the top
+  for (const auto& c : rgb) {
+    out += static_cast<char>(c[2]);
+    out += static_cast<char>(c[1]);
+    out += static_cast<char>(c[0]);
+  }
+  return out;
+}
 
 inline bool file_exists(const std::string& path) {
   struct stat st;

@@ -47,6 +47,14 @@ void check_distinct_outputs(const RenderOptions& o) {
                          outputs[i].first);
 }
 
+// The -o file's bytes, in the format its extension names.
+std::string encode_output(const RenderOptions& o, const ImageResult& r) {
+  const std::string ext = extension_of(o.output_path);
+  if (ext == ".png") return encode_png(r.width, r.height, r.rgb);
+  if (ext == ".exr") return encode_exr(r.width, r.height, r.rgb, o.exr_half);
+  return encode_pfm(r.width, r.height, r.rgb);
+}
+
 }  // namespace
 
 // ------------------------------------------------------------------- usage
@@ -56,9 +64,9 @@ std::string main_usage() {
          " - a ray tracer that splits the scene into banks over OpenCL processing elements\n"
          "\n"
          "usage:\n"
-         "  opsila render SCENE -o OUT.(png|pfm) [options]   render an image\n"
-         "  opsila devices                                  list OpenCL platforms and devices\n"
-         "  opsila bench [options]                          run the benchmarks\n"
+         "  opsila render SCENE -o OUT.(png|pfm|exr) [options]   render an image\n"
+         "  opsila devices                                      list OpenCL platforms and devices\n"
+         "  opsila bench [options]                              run the benchmarks\n"
          "  opsila --help | --version\n"
          "\n"
          "Run 'opsila render --help' for the render options.\n"
@@ -66,14 +74,16 @@ std::string main_usage() {
 }
 
 std::string render_usage() {
-  return "usage: opsila render SCENE -o OUT.(png|pfm) [options]\n"
+  return "usage: opsila render SCENE -o OUT.(png|pfm|exr) [options]\n"
          "\n"
          "SCENE is a scene file, a bare .obj (its .mtl found as OBJ says), or a model\n"
          "in another format the Open Asset Import Library reads (.ply, .stl, .gltf, .glb,\n"
          ".fbx, .dae, .3ds, ...).\n"
          "Flags override the scene file; both '--flag value' and '--flag=value' work.\n"
          "\n"
-         "  -o, --output OUT       output image: .png (sRGB, 8 bits) or .pfm (linear float)\n"
+         "  -o, --output OUT       output image: .png (sRGB, 8 bits), .pfm (linear float) or .exr\n"
+         "                         (OpenEXR, linear RGB, 32-bit float)\n"
+         "  --exr-half             .exr output in 16-bit half floats\n"
          "  --size WxH             image size (each side <= 16384, at most 2^26 pixels)\n"
          "  --eye X,Y,Z            camera position\n"
          "  --look-at X,Y,Z        point the camera looks at\n"
@@ -117,7 +127,7 @@ CommandSyntax render_syntax() {
   CommandSyntax syntax;
   syntax.command = "render";
   syntax.flags = {{"-o", "-o", true},          {"--output", "-o", true},     {"--item-buffer", "--item-buffer", true},
-                  {"--stats", "--stats", true}, {"--reference", "--reference", false}, {"-q", "-q", false},
+                  {"--stats", "--stats", true}, {"--reference", "--reference", false}, {"--exr-half", "--exr-half", false}, {"-q", "-q", false},
                   {"--quiet", "-q", false},     {"-h", "--help", false},       {"--help", "--help", false}};
   syntax.flags.insert(syntax.flags.end(), view_flags().begin(), view_flags().end());
   return syntax;
@@ -136,9 +146,13 @@ RenderOptions parse_render_options(const std::vector<std::string>& args) {
       o.quiet = true;
     } else if (flag == "--reference") {
       o.reference = true;
+    } else if (flag == "--exr-half") {
+      o.exr_half = true;
     } else if (flag == "-o") {
       const std::string ext = extension_of(value);
-      if (ext != ".png" && ext != ".pfm") bad_flag(name, value, "output must end in .png or .pfm");
+      if (ext != ".png" && ext != ".pfm" && ext != ".exr") bad_flag(name, value, "output must end in .png, .pfm or .exr");
+      if (ext == ".exr" && !exr_available())
+        bad_flag(name, value, "this build has no OpenEXR (install libopenexr-dev and rebuild)");
       o.output_path = value;
     } else if (flag == "--item-buffer") {
       if (extension_of(value) != ".npy") bad_flag(name, value, "item buffer must end in .npy");
@@ -150,7 +164,9 @@ RenderOptions parse_render_options(const std::vector<std::string>& args) {
   });
   if (o.help) return o;
   if (o.scene_path.empty()) throw InputError("missing SCENE (see 'opsila render --help')");
-  if (o.output_path.empty()) throw InputError("-o: missing output file OUT.png or OUT.pfm");
+  if (o.output_path.empty()) throw InputError("-o: missing output file OUT.png, OUT.pfm or OUT.exr");
+  if (o.exr_half && extension_of(o.output_path) != ".exr")
+    throw InputError("--exr-half: the output " + o.output_path + " is not .exr");
   check_view_flags(o);
   check_distinct_outputs(o);
   return o;
@@ -249,9 +265,7 @@ int run_render(const std::vector<std::string>& args) {
     return kExitOk;
   }
 
-  outputs.write(o.output_path, extension_of(o.output_path) == ".png"
-                                   ? encode_png(result.width, result.height, result.rgb)
-                                   : encode_pfm(result.width, result.height, result.rgb));
+  outputs.write(o.output_path, encode_output(o, result));
   if (!o.item_buffer_path.empty())
     outputs.write(o.item_buffer_path,
                   encode_npy_item_buffer(result.height, result.width, result.item_buffer));

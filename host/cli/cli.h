@@ -14,7 +14,8 @@ namespace opsila {
 
 // `opsila render` arguments: the view group (cli/args.h) and the outputs.
 struct RenderOptions : ViewOptions {
-  std::string output_path;       // -o, .png or .pfm
+  std::string output_path;       // -o, .png, .pfm or .exr
+  bool exr_half = false;         // --exr-half: .exr in 16-bit half floats
   std::string item_buffer_path;  // --item-buffer, .npy
   std::string stats_path;        // --stats, .json
   bool reference = false;        // sequential host reference instead of OpenCL

@@ -1,4 +1,4 @@
-// Output files (SPEC "Outputs"): PNG, PFM, the item buffer as .npy, text.
+// Output files (SPEC "Outputs"): PNG, PFM, OpenEXR, the item buffer as .npy, text.
 // Every writer builds the whole file in memory, writes it to a temporary file
 // in the destination folder and renames it into place only after a complete,
 // checked write, so no partial output file is ever left behind.
@@ -34,6 +34,13 @@ std::string encode_png(int width, int height, const std::vector<float>& rgb);
 // Every value must be finite (std::logic_error otherwise: the renderers
 // never produce NaN or infinity, and a PFM must not hold one).
 std::string encode_pfm(int width, int height, const std::vector<float>& rgb);
+// OpenEXR (host/core/image_exr.cpp): linear RGB channels R, G, B, 32-bit
+// float, or 16-bit half when `half` (a value beyond half's range is stored
+// as its largest, 65504), lossless ZIP compression, row 0 = top. Every
+// value must be finite, as for PFM. Throws InputError when this build has
+// no OpenEXR (exr_available() says so before any rendering).
+bool exr_available();
+std::string encode_exr(int width, int height, const std::vector<float>& rgb, bool half);
 void write_png(const std::string& path, int width, int height, const std::vector<float>& rgb);
 void write_pfm(const std::string& path, int width, int height, const std::vector<float>& rgb);
 

@@ -41,6 +41,8 @@ Vec3 MaterialDesc::kr() const { return illum_reflects(illum) ? ks : Vec3{0, 0, 0
 
 Vec3 MaterialDesc::kt() const { return illum_transmits(illum) ? tf : Vec3{0, 0, 0}; }
 
+Vec3 left_out_colour(bool has_map) { return has_map ? Vec3{1, 1, 1} : Vec3{0, 0, 0}; }
+
 MaterialDesc MaterialDesc::default_material() {
   MaterialDesc m;
   m.name = "default";

@@ -46,6 +46,13 @@ struct MaterialDesc {
   static MaterialDesc default_material();  // the "face with no material" one
 };
 
+// SPEC "Materials": the Ka (Kd) of a material that leaves the key out:
+// (1, 1, 1) when the material has a map_Ka (map_Kd), so that the texture
+// alone gives the colour (glTF 1, IQM, SMD and MDL materials often carry
+// only a texture), else 0. Every reader of materials (MTL, other model
+// formats) fills left-out colours from here.
+Vec3 left_out_colour(bool has_map);
+
 // The one rule every reader (MTL, scene files, other model formats) applies
 // to a material value: colours (Ka, Kd, Ks, Tf) and Ns must not be negative.
 // So every term of SPEC's pixel sum is >= 0 (what the saturating pixel sums

@@ -24,13 +24,12 @@
 #include "input/model_checks.h"
 #include "input/model_files.h"
 #include "input/obj_loader.h"
-#include "input/texture_file.h"
+#include "input/model_materials.h"
 
 #ifdef OPSILA_HAVE_ASSIMP
 #include <assimp/Importer.hpp>
 #include <assimp/BaseImporter.h>
 #include <assimp/importerdesc.h>
-#include <assimp/material.h>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 #endif
@@ -43,18 +42,6 @@ namespace fs = std::filesystem;
 namespace {
 
 bool finite3(const Vec3& v) { return std::isfinite(v[0]) && std::isfinite(v[1]) && std::isfinite(v[2]); }
-
-Vec3 colour_or(const aiMaterial& m, const char* key, unsigned type, unsigned index, bool& found) {
-  aiColor4D c;
-  found = aiGetMaterialColor(&m, key, type, index, &c) == AI_SUCCESS;
-  if (!found || !std::isfinite(c.r) || !std::isfinite(c.g) || !std::isfinite(c.b)) {
-    found = false;
-    return Vec3{0, 0, 0};
-  }
-  return Vec3{std::max(0.0f, c.r), std::max(0.0f, c.g), std::max(0.0f, c.b)};
-}
-
-bool nonzero(const Vec3& c) { return c[0] != 0 || c[1] != 0 || c[2] != 0; }
 
 // Every placement of every mesh: the product of the node transforms from the
 // root down to each node that lists the mesh, in depth-first order. Without
@@ -92,7 +79,7 @@ class ModelReader {
     scene_.has_camera = false;
     scene_.has_lights = false;
     scene_.materials.push_back(MaterialDesc::default_material());
-    materials();
+    material_index_ = import_materials(ai_, name_, base_dir_, scene_);
     std::vector<std::vector<aiMatrix4x4>> placements(ai_.mNumMeshes);
     collect_placements(ai_.mRootNode, ai_.mNumMeshes, placements, name_);
     int unplaced = 0, facet = 0, skipped = 0;
@@ -125,91 +112,6 @@ class ModelReader {
 
  private:
   void warn(const std::string& what) { scene_.warnings.push_back(name_ + ": " + what); }
-
-  // SPEC material keys from the importer's: ambient, diffuse, specular
-  // colours, shininess, refraction index, transparent colour and shading
-  // model. The importer's own stand-in for "no material" is SPEC's default:
-  // the material named AI_DEFAULT_MATERIAL_NAME (STL, ...) or, as the PLY
-  // reader makes it, one without any name.
-  void materials() {
-    material_index_.assign(ai_.mNumMaterials, 0);
-    for (unsigned i = 0; i < ai_.mNumMaterials; ++i) {
-      const aiMaterial& am = *ai_.mMaterials[i];
-      aiString ainame;
-      const bool named = am.Get(AI_MATKEY_NAME, ainame) == AI_SUCCESS;
-      const std::string mname = named ? ainame.C_Str() : "material " + std::to_string(i);
-      if (!named || mname.empty() || mname == AI_DEFAULT_MATERIAL_NAME) continue;  // stays 0
-      MaterialDesc m;  // SPEC defaults for keys left out
-      m.name = mname;
-      bool found = false;
-      m.ka = colour_or(am, AI_MATKEY_COLOR_AMBIENT, found);
-      m.kd = colour_or(am, AI_MATKEY_COLOR_DIFFUSE, found);
-      m.ks = colour_or(am, AI_MATKEY_COLOR_SPECULAR, found);
-      m.tf = colour_or(am, AI_MATKEY_COLOR_TRANSPARENT, found);
-      float x = 0;
-      if (am.Get(AI_MATKEY_SHININESS, x) == AI_SUCCESS && std::isfinite(x) && x >= 0) m.ns = x;
-      if (am.Get(AI_MATKEY_REFRACTI, x) == AI_SUCCESS && std::isfinite(x) && x > 0) m.ni = x;
-      float opacity = 1;
-      if (am.Get(AI_MATKEY_OPACITY, x) == AI_SUCCESS && std::isfinite(x)) opacity = x;
-      int model = 0;
-      const bool has_model = am.Get(AI_MATKEY_SHADING_MODEL, model) == AI_SUCCESS;
-      // Shading model -> illum: unlit is 0, everything else 2 (highlights);
-      // a transparent colour on a material that is not opaque is glass
-      // (illum 4: kt = Tf, kr = Ks).
-      m.illum = has_model && model == aiShadingMode_NoShading ? 0 : 2;
-      if (nonzero(m.tf) && opacity < 1.0f) m.illum = 4;
-      m.map_kd = texture(am, aiTextureType_DIFFUSE, i);
-      m.map_ka = texture(am, aiTextureType_AMBIENT, i);
-      material_index_[i] = static_cast<int>(scene_.materials.size());
-      scene_.materials.push_back(std::move(m));
-    }
-  }
-
-  // A material's first map of one kind, read when some mesh that uses the
-  // material has texture coordinates (others could not show it).
-  int texture(const aiMaterial& am, aiTextureType type, unsigned material) {
-    aiString path;
-    if (am.GetTexture(type, 0, &path) != AI_SUCCESS || path.length == 0) return -1;
-    bool needed = false;
-    for (unsigned m = 0; m < ai_.mNumMeshes && !needed; ++m)
-      needed = ai_.mMeshes[m]->mMaterialIndex == material && ai_.mMeshes[m]->HasTextureCoords(0);
-    if (!needed) return -1;
-    if (const aiTexture* embedded = ai_.GetEmbeddedTexture(path.C_Str())) return embedded_texture(*embedded, path.C_Str());
-    if (base_dir_.empty()) {
-      warn(std::string("texture map '") + path.C_Str() + "' ignored: no files are read here");
-      return -1;
-    }
-    return add_texture_file(scene_, resolve_texture_path(path.C_Str(), base_dir_), name_ + ": ");
-  }
-
-  int embedded_texture(const aiTexture& t, const std::string& ref) {
-    const std::string key = name_ + "#" + ref;
-    for (std::size_t i = 0; i < scene_.textures.size(); ++i)
-      if (scene_.textures[i].path == key) return static_cast<int>(i);
-    Texture out;
-    std::string problem;
-    bool ok = false;
-    if (t.mHeight == 0) {  // compressed: mWidth bytes of PNG, JPEG, ...
-      ok = decode_texture_memory(reinterpret_cast<const unsigned char*>(t.pcData), t.mWidth, key, out, problem);
-    } else if (t.mWidth <= unsigned(kMaxTextureSide) && t.mHeight <= unsigned(kMaxTextureSide)) {
-      out.path = key;
-      out.width = static_cast<int>(t.mWidth);
-      out.height = static_cast<int>(t.mHeight);
-      out.texels.resize(std::size_t(t.mWidth) * t.mHeight);
-      for (std::size_t i = 0; i < out.texels.size(); ++i)
-        out.texels[i] = std::uint32_t(t.pcData[i].r) | std::uint32_t(t.pcData[i].g) << 8 |
-                        std::uint32_t(t.pcData[i].b) << 16;
-      ok = true;
-    } else {
-      problem = "image too large";
-    }
-    if (!ok) {
-      warn("embedded texture map '" + ref + "' ignored: " + problem);
-      return -1;
-    }
-    scene_.textures.push_back(std::move(out));
-    return static_cast<int>(scene_.textures.size()) - 1;
-  }
 
   // One placement of a mesh: its faces fanned from the first vertex, every
   // fan triangle with the face's id; positions by the node transform,

@@ -2,6 +2,7 @@
 // every problem named by FILE:LINE.
 #include "input/obj_loader.h"
 
+#include <array>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -99,6 +100,7 @@ std::string map_file(std::string_view rest, std::string_view key, const std::str
 std::vector<MaterialDesc> parse_mtl(const std::string& text, const std::string& name,
                                     std::vector<std::string>& warnings) {
   std::vector<MaterialDesc> out;
+  std::vector<std::array<bool, 2>> given;  // per material: Ka, Kd stated
   LineScanner sc(text, name);
   std::string_view line;
   int orphan_keys = 0, orphan_line = 0;
@@ -111,6 +113,7 @@ std::vector<MaterialDesc> parse_mtl(const std::string& text, const std::string& 
       MaterialDesc m;  // SPEC defaults for keys left out
       m.name = std::string(trim(rest));
       out.push_back(std::move(m));
+      given.push_back({false, false});
       continue;
     }
     const bool known = kw == "Ka" || kw == "Kd" || kw == "Ks" || kw == "Tf" || kw == "Ns" ||
@@ -127,6 +130,7 @@ std::vector<MaterialDesc> parse_mtl(const std::string& text, const std::string& 
     if (kw == "map_Kd" || kw == "map_Ka") {
       (kw == "map_Kd" ? m.map_kd_file : m.map_ka_file) = map_file(rest, kw, name, ln, warnings);
     } else if (kw == "Ka" || kw == "Kd" || kw == "Ks" || kw == "Tf") {
+      if (kw == "Ka" || kw == "Kd") given.back()[kw == "Kd"] = true;
       std::string_view probe = rest;
       const std::string_view first = next_token(probe);
       if (first == "spectral" || first == "xyz") {
@@ -160,7 +164,12 @@ std::vector<MaterialDesc> parse_mtl(const std::string& text, const std::string& 
   if (orphan_keys > 0)
     warnings.push_back(at(name, orphan_line) + std::to_string(orphan_keys) +
                        " material keys before the first 'newmtl' were ignored");
-  for (const MaterialDesc& m : out) {
+  for (std::size_t k = 0; k < out.size(); ++k) {
+    MaterialDesc& m = out[k];
+    // A map is known by its statement, read or not (SPEC: the colour is the
+    // texture's alone; an image that cannot be read is then ignored).
+    if (!given[k][0]) m.ka = left_out_colour(!m.map_ka_file.empty());
+    if (!given[k][1]) m.kd = left_out_colour(!m.map_kd_file.empty());
     if (illum_transmits(m.illum) && !(m.ni > 0))
       warnings.push_back(name + ": material " + quote(m.name) +
                          " transmits light but has Ni <= 0 (refraction is undefined)");

@@ -37,21 +37,7 @@ bool has_warning(const Scene& s, const std::string& a, const std::string& b = ""
   return false;
 }
 
-// An uncompressed 24-bit TGA (top-left origin) with the given sRGB codes.
-std::string tga(int w, int h, const std::vector<std::array<int, 3>>& rgb) {
-  std::string out(18, '\0');
-  out[2] = 2;  // uncompressed true-colour
-  out[12] = static_cast<char>(w & 255), out[13] = static_cast<char>(w >> 8);
-  out[14] = static_cast<char>(h & 255), out[15] = static_cast<char>(h >> 8);
-  out[16] = 24;
-  out[17] = 0x20;  // rows from the top
-  for (const auto& c : rgb) {
-    out += static_cast<char>(c[2]);
-    out += static_cast<char>(c[1]);
-    out += static_cast<char>(c[0]);
-  }
-  return out;
-}
+using test::tga;
 
 float lin(int code) { return srgb_decode_table()[code]; }
 
@@ -150,6 +136,28 @@ TEST(MtlMaps, OptionsAreSkippedAndWindowsPathsResolved) {
   EXPECT_TRUE(has_warning(s, "m.mtl:3:", "-s, -o ignored"));
   EXPECT_TRUE(has_warning(s, "material 'c'", "missing.png' ignored"));
   EXPECT_TRUE(has_warning(s, "material 'd'", "not a readable PNG, JPEG, TGA or BMP image"));
+}
+
+// SPEC: a material with a map_Kd (map_Ka) but no Kd (Ka) takes (1, 1, 1),
+// in whatever order the keys come; a colour the material states is kept,
+// and one it leaves out without a map is 0.
+TEST(MtlMaps, MapWithoutItsColourTakesOne) {
+  std::vector<std::string> warnings;
+  const std::vector<MaterialDesc> m = parse_mtl(
+      "newmtl only_map\nmap_Kd t.png\n"
+      "newmtl map_then_kd\nmap_Kd t.png\nKd 0.5 0.25 0\n"
+      "newmtl ambient_map\nmap_Ka t.png\nKd 0.2\n"
+      "newmtl none\nNs 3\n"
+      "newmtl empty_map\nmap_Kd\n",
+      "m.mtl", warnings);
+  ASSERT_EQ(m.size(), 5u);
+  EXPECT_EQ(m[0].kd, (Vec3{1, 1, 1}));
+  EXPECT_EQ(m[0].ka, (Vec3{0, 0, 0}));
+  EXPECT_EQ(m[1].kd, (Vec3{0.5f, 0.25f, 0}));
+  EXPECT_EQ(m[2].ka, (Vec3{1, 1, 1}));
+  EXPECT_EQ(m[2].kd, (Vec3{0.2f, 0.2f, 0.2f}));
+  EXPECT_EQ(m[3].kd, (Vec3{0, 0, 0}));
+  EXPECT_EQ(m[4].kd, (Vec3{0, 0, 0}));  // a map statement without a file is no map
 }
 
 // ------------------------------------------------------ decoding, sampling

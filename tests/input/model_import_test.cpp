@@ -149,6 +149,85 @@ TEST(ModelImport, MaterialsAndTextureMaps) {
   EXPECT_TRUE(warned);
 }
 
+// SPEC: a material is used as the file gives it, whatever its name; only the
+// importer's placeholder (no name or DefaultMaterial, no map, grey or no
+// diffuse colour) is "no material". NFF names its coloured materials
+// DefaultMaterial; HL1 MDL leaves its textured ones unnamed.
+TEST(ModelImport, MaterialsAreUsedWhateverTheirName) {
+  REQUIRE_TEST_MODELS();
+  const Scene nff = load_scene((kModels / "NFF/NFF/WithCamera.nff").string());
+  // Four meshes: a grey one (the placeholder) and red, green, blue ones.
+  ASSERT_EQ(nff.materials.size(), 4u);
+  EXPECT_EQ(nff.materials[1].kd, (Vec3{0.8f, 0, 0}));
+  EXPECT_EQ(nff.materials[2].kd, (Vec3{0, 0.8f, 0}));
+  EXPECT_EQ(nff.materials[3].kd, (Vec3{0, 0, 0.8f}));
+  EXPECT_EQ(nff.materials[1].ka, (Vec3{0, 0, 0}));  // as the file gives it, not SPEC's default 0.8
+  std::set<int> used;
+  for (const Triangle& t : nff.triangles) used.insert(t.material);
+  EXPECT_EQ(used, (std::set<int>{0, 1, 2, 3}));
+  // An NFF material with a map is used too, grey or not.
+  const Scene spheres = load_scene((kModels / "NFF/NFF/spheres.nff").string());
+  EXPECT_EQ(spheres.materials.size(), 4u);  // default + blue + two with the earth map
+  // HL1 MDL: unnamed materials, each with a texture and no diffuse colour.
+  const Scene man = load_scene((kModels / "MDL/MDL (HL1)/man.mdl").string());
+  ASSERT_EQ(man.materials.size(), 6u);
+  for (std::size_t k = 1; k < man.materials.size(); ++k) {
+    SCOPED_TRACE(k);
+    EXPECT_EQ(man.materials[k].kd, (Vec3{1, 1, 1}));
+    if (k <= 3) EXPECT_GE(man.materials[k].map_kd, 0);  // the file's meshes use the first three
+  }
+  for (const Triangle& t : man.triangles) EXPECT_GT(t.material, 0);
+  // The placeholder of a format without materials is still SPEC's default
+  // (PLY: unnamed; STL: DefaultMaterial, both with a grey diffuse colour).
+  for (const char* f : {"PLY/cube.ply", "STL/Spider_binary.stl"}) {
+    SCOPED_TRACE(f);
+    const Scene s = load_scene((kModels / f).string());
+    EXPECT_EQ(s.materials.size(), 1u);
+    for (const Triangle& t : s.triangles) EXPECT_EQ(t.material, 0);
+  }
+}
+
+// SPEC: a material with a map_Kd (map_Ka) but no Kd (Ka) takes (1, 1, 1):
+// the texture alone gives the colour. glTF 1, IQM, SMD and HL1 MDL
+// materials carry a texture and no diffuse colour; where the file gives a
+// diffuse colour beside the map it is kept.
+TEST(ModelImport, TextureOnlyMaterialsTakeDiffuseOne) {
+  REQUIRE_TEST_MODELS();
+  struct Case {
+    const char* file;
+    std::size_t textured;  // materials with a map and no diffuse colour
+  };
+  const Case cases[] = {{"glTF/CesiumMilkTruck/CesiumMilkTruck.gltf", 2},
+                        {"IQM/mrfixit.iqm", 2},
+                        {"SMD/holy_grailref.smd", 1},
+                        {"MDL/MDL (HL1)/chrome_sphere.mdl", 1}};
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.file);
+    const Scene s = load_scene((kModels / c.file).string());
+    std::size_t white = 0;
+    for (const MaterialDesc& m : s.materials) {
+      if (m.map_kd < 0) continue;
+      EXPECT_EQ(m.kd, (Vec3{1, 1, 1}));
+      EXPECT_GT(s.textures[m.map_kd].width, 0);
+      ++white;
+    }
+    EXPECT_EQ(white, c.textured);
+  }
+  // The truck's untextured materials keep the colours the file gives.
+  const Scene truck = load_scene((kModels / "glTF/CesiumMilkTruck/CesiumMilkTruck.gltf").string());
+  ASSERT_EQ(truck.materials.size(), 5u);
+  EXPECT_EQ(truck.materials[4].map_kd, -1);
+  EXPECT_FLOAT_EQ(truck.materials[4].kd[0], 0.064f);
+  // IQM gives no ambient colour and no ambient map: Ka stays 0.
+  const Scene iqm = load_scene((kModels / "IQM/mrfixit.iqm").string());
+  EXPECT_EQ(iqm.materials[1].ka, (Vec3{0, 0, 0}));
+  // A diffuse colour beside a map is kept as given (NFF: red with a map
+  // whose file is not there, a warning).
+  const Scene spheres = load_scene((kModels / "NFF/NFF/spheres.nff").string());
+  ASSERT_EQ(spheres.materials.size(), 4u);
+  EXPECT_EQ(spheres.materials[3].kd, (Vec3{1, 0, 0}));
+}
+
 TEST(ModelImport, BrokenFileOfEveryFormatIsOneClearError) {
   test::TempDir dir;
   for (const char* ext : {"ply", "stl", "gltf", "glb", "fbx", "dae", "3ds"}) {

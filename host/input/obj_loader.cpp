@@ -5,6 +5,7 @@
 // precise FILE:LINE message for every bad input.
 #include "input/obj_loader.h"
 
+#include "core/stage_clock.h"
 #include "input/obj_text.h"
 #include "input/texture_file.h"
 
@@ -74,8 +75,8 @@ struct IndexedList {
 class ObjParser {
  public:
   ObjParser(std::string_view text, const std::string& name, const std::string& base_dir,
-            std::size_t max_triangles)
-      : text_(text), name_(name), base_dir_(base_dir), max_triangles_(max_triangles) {}
+            std::size_t max_triangles, StageClock* clock)
+      : text_(text), name_(name), base_dir_(base_dir), max_triangles_(max_triangles), clock_(clock) {}
 
   std::vector<std::string>& warnings() { return warnings_; }
 
@@ -86,6 +87,7 @@ class ObjParser {
     std::string_view line;
     while (sc.next(line)) {
       line_ = sc.line_no();
+      if (clock_ && (line_ & 0xffff) == 0) clock_->progress(double(line.data() - text_.data()) / double(text_.size()));
       std::string_view rest = line;
       const std::string_view kw = next_token(rest);
       if (kw.empty() || kw[0] == '#') continue;
@@ -497,6 +499,7 @@ class ObjParser {
   const std::string& name_;
   std::string base_dir_;
   std::size_t max_triangles_;
+  StageClock* clock_;
   int line_ = 0;
 
   IndexedList verts_{"vertex", {}, 3, 0, 0, true};
@@ -528,8 +531,8 @@ class ObjParser {
 };
 
 Scene parse_guarded(std::string_view text, const std::string& name, const std::string& base_dir,
-                    std::size_t max_triangles) {
-  ObjParser parser(text, name, base_dir, max_triangles);
+                    std::size_t max_triangles, StageClock* clock = nullptr) {
+  ObjParser parser(text, name, base_dir, max_triangles, clock);
   try {
     return parser.run();
   } catch (InputError& e) {
@@ -548,7 +551,8 @@ Scene load_obj(const std::string& path, std::size_t max_triangles) {
   const std::string text = read_text_file(path);
   std::string dir = fs::path(path).parent_path().string();
   if (dir.empty()) dir = ".";
-  Scene scene = parse_guarded(text, path, dir, max_triangles);
+  StageClock clock(PrepareStage::parse);
+  Scene scene = parse_guarded(text, path, dir, max_triangles, &clock);
   scene.input_files.insert(scene.input_files.begin(), path);
   return scene;
 }

@@ -13,6 +13,7 @@
 #include <system_error>
 #include <vector>
 
+#include "core/stage_clock.h"
 #include "input/obj_loader.h"
 
 namespace opsila {
@@ -161,7 +162,9 @@ std::string read_input_file(const std::string& path, std::size_t max_bytes,
   }
   const std::size_t kChunk = std::size_t(1) << 20;
   std::vector<char> chunk(kChunk);
+  StageClock clock(PrepareStage::read);
   for (;;) {
+    if (size > 0) clock.progress(double(text.size()) / double(size));
     in.read(chunk.data(), static_cast<std::streamsize>(chunk.size()));
     const std::size_t got = static_cast<std::size_t>(in.gcount());
     if (got == 0) break;

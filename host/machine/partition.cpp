@@ -8,6 +8,7 @@
 #include <numeric>
 
 #include "core/camera.h"
+#include "core/stage_clock.h"
 
 namespace opsila {
 namespace partition_steps {
@@ -506,21 +507,26 @@ void describe_pes(const std::vector<ClusterBuild>& cb, std::vector<Box>& tri_box
                   std::size_t total, BankedScene& bs) {
   const int num_pes = bs.num_pes;
   bs.pes.resize(num_pes);
-  std::size_t c = 0;
+  std::vector<std::pair<int, int>> pe_clusters(static_cast<std::size_t>(num_pes));
+  for (std::size_t p = 0, c = 0; p < pe_clusters.size(); ++p) {
+    const std::size_t c_begin = c;
+    while (c < cb.size() && cb[c].pe == static_cast<int>(p)) ++c;
+    pe_clusters[p] = {static_cast<int>(c_begin), static_cast<int>(c)};
+  }
+  const std::vector<BankBvh> built =
+      build_bank_bvhs(bs.nodes, bs.triangles, tri_boxes, bs.clusters, pe_clusters, ranges, &source);
   for (int p = 0; p < num_pes; ++p) {
     PeInfo& pe = bs.pes[p];
-    std::size_t c_begin = c;
-    while (c < cb.size() && cb[c].pe == p) ++c;
+    const std::size_t c_begin = static_cast<std::size_t>(pe_clusters[p].first);
+    const std::size_t c = static_cast<std::size_t>(pe_clusters[p].second);
     pe.cluster_begin = static_cast<int>(c_begin);
     pe.cluster_end = static_cast<int>(c);
     pe.tri_begin = c_begin < c ? ranges[c_begin].first : (c_begin < ranges.size() ? ranges[c_begin].first
                                                                                     : static_cast<int>(total));
     pe.tri_end = c_begin < c ? ranges[c - 1].second : pe.tri_begin;
-    pe.node_begin = static_cast<int>(bs.nodes.size());
-    int depth = build_bank_bvh(bs.nodes, bs.triangles, tri_boxes, bs.clusters, static_cast<int>(c_begin),
-                               static_cast<int>(c), ranges, &source);
-    bs.max_bvh_depth = std::max(bs.max_bvh_depth, depth);
-    pe.node_end = static_cast<int>(bs.nodes.size());
+    pe.node_begin = built[p].node_begin;
+    bs.max_bvh_depth = std::max(bs.max_bvh_depth, built[p].depth);
+    pe.node_end = built[p].node_end;
     pe_bounds(bs.clusters, pe);
     std::uint64_t bytes = std::uint64_t(pe.tri_end - pe.tri_begin) * sizeof(BankTriangle) +
                           std::uint64_t(pe.node_end - pe.node_begin) * sizeof(BankNode);
@@ -593,11 +599,14 @@ BankedScene partition_scene(const Scene& scene, int num_pes, bool split_flat, co
   sbox.grow(slo.data());
   sbox.grow(shi.data());
 
+  StageClock clock(PrepareStage::partition);
   const std::vector<ClusterBuild> cb = form_clusters(scene, sbox, num_pes, split_flat, sample, measured);
+  clock.progress(0.6);  // roughly: the clusters and regions are most of it
   std::vector<Box> tri_boxes;
   std::vector<int> source;
   std::vector<std::pair<int, int>> ranges;
   fill_banks(scene, sbox, cb, bs, tri_boxes, source, ranges);
+  clock.progress(0.8);
   describe_pes(cb, tri_boxes, ranges, source, scene.triangles.size(), bs);
 
   build_routing(bs, sbox);

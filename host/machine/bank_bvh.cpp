@@ -67,15 +67,21 @@ class Builder {
     if (end - begin == 1 && single) return (*single)[order[begin]];
     int node = static_cast<int>(bin.size());
     bin.emplace_back();
-    Box box;
-    for (int i = begin; i < end; ++i) box.grow(boxes[order[i]]);
+    // The node's box and its items' centre box, in one pass over the items.
+    Box box, cbox;
+    for (int i = begin; i < end; ++i) {
+      const Box& b = boxes[order[i]];
+      box.grow(b);
+      const float c[3] = {center(b, 0), center(b, 1), center(b, 2)};
+      cbox.grow(c);
+    }
     bin[node].box = box;
     if ((end - begin <= leaf_size && !single) || (depth >= kMaxBinaryDepth && !single)) {
       bin[node].first = begin;
       bin[node].count = end - begin;
       return node;
     }
-    int mid = split(order, begin, end, boxes, weight, depth);
+    int mid = split(order, begin, end, boxes, weight, depth, cbox);
     int l = build(order, begin, mid, boxes, weight, leaf_size, depth + 1, single);
     int r = build(order, mid, end, boxes, weight, leaf_size, depth + 1, single);
     bin[node].kid[0] = l;
@@ -85,6 +91,7 @@ class Builder {
   }
 
  private:
+  std::vector<int> scratch_;  // the right side of a partition, reused
   static float center(const Box& b, int a) { return 0.5f * (b.lo[a] + b.hi[a]); }
 
   // Best binned-SAH plane over the three axes; the median of the longest
@@ -114,12 +121,8 @@ class Builder {
     return std::clamp(static_cast<int>((c - lo) * scale), 0, bins - 1);
   }
 
-  int split(std::vector<int>& order, int begin, int end, const Box* boxes, const float* weight, int depth) {
-    Box cbox;
-    for (int i = begin; i < end; ++i) {
-      float c[3] = {center(boxes[order[i]], 0), center(boxes[order[i]], 1), center(boxes[order[i]], 2)};
-      cbox.grow(c);
-    }
+  int split(std::vector<int>& order, int begin, int end, const Box* boxes, const float* weight, int depth,
+            const Box& cbox) {
     float best_cost = INFINITY;
     int best_axis = -1, best_bin = -1;
     const int nb = std::clamp(end - begin, 2, kBins);
@@ -156,9 +159,18 @@ class Builder {
     if (best_axis >= 0) {
       const float lo = cbox.lo[best_axis], sc = scale[best_axis];
       auto side = [&](int id) { return bin_of(center(boxes[id], best_axis), lo, sc, nb) < best_bin; };
-      // Stable, so the layout does not depend on the sort implementation.
-      auto mid = std::stable_partition(order.begin() + begin, order.begin() + end, side);
-      int m = static_cast<int>(mid - order.begin());
+      // Stable, so the layout does not depend on the sort implementation
+      // (as std::stable_partition, without its allocation at every node).
+      int m = begin;
+      scratch_.clear();
+      for (int i = begin; i < end; ++i) {
+        const int id = order[i];
+        if (side(id))
+          order[m++] = id;
+        else
+          scratch_.push_back(id);
+      }
+      std::copy(scratch_.begin(), scratch_.end(), order.begin() + m);
       if (m > begin && m < end) return m;
     }
     int axis = cbox.longest();

@@ -5,9 +5,13 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <numeric>
+#include <utility>
+#include <vector>
 
 #include "core/camera.h"
+#include "core/parallel.h"
 #include "core/stage_clock.h"
 
 namespace opsila {
@@ -50,10 +54,14 @@ bool cut_at_median(const Scene& scene, std::vector<int>& tris, const Box& cbox, 
   const int axis = cbox.longest();
   if (tris.size() < 2 || !(cbox.extent(axis) > 0)) return false;
   const std::size_t mid = tris.size() / 2;
-  std::nth_element(tris.begin(), tris.begin() + mid, tris.end(), [&](int a, int b) {
-    float ca = centroid(scene.triangles[a], axis), cb = centroid(scene.triangles[b], axis);
-    return ca < cb || (ca == cb && a < b);
+  // Each centre computed once, next to its index (the same comparisons in
+  // the same order as on the facets themselves, so the same halves).
+  std::vector<std::pair<float, int>> keyed(tris.size());
+  for (std::size_t i = 0; i < tris.size(); ++i) keyed[i] = {centroid(scene.triangles[tris[i]], axis), tris[i]};
+  std::nth_element(keyed.begin(), keyed.begin() + mid, keyed.end(), [](const auto& a, const auto& b) {
+    return a.first < b.first || (a.first == b.first && a.second < b.second);
   });
+  for (std::size_t i = 0; i < tris.size(); ++i) tris[i] = keyed[i].second;
   upper.assign(tris.begin() + mid, tris.end());
   tris.resize(mid);
   return true;
@@ -69,27 +77,37 @@ ClusterBuild make_cluster(std::vector<int> tris, const Box& box) {
 }
 
 // Splits a list of triangles at the median centroid of its longest axis
-// until every piece is small enough (facet count and spatial extent).
-void split_object(const Scene& scene, std::vector<int> tris, std::size_t max_tris, float max_extent,
-                  bool split_flat, std::vector<ClusterBuild>& out) {
-  std::vector<std::vector<int>> work;
-  work.push_back(std::move(tris));
-  while (!work.empty()) {
-    std::vector<int> cur = std::move(work.back());
-    work.pop_back();
-    Box box, cbox;
-    bounds_of(scene, cur, box, cbox);
-    bool too_many = cur.size() > max_tris;
-    const float limit = split_flat && is_flat(box) ? kFlatShare * max_extent : max_extent;
-    bool too_big = cur.size() > 1 && box.diagonal() > limit;
-    std::vector<int> upper;
-    if ((too_many || too_big) && cut_at_median(scene, cur, cbox, upper)) {
-      work.push_back(std::move(cur));
-      work.push_back(std::move(upper));
-      continue;
-    }
+// until every piece is small enough (facet count and spatial extent). The
+// upper half's clusters are listed before the lower half's. Large halves
+// are split side by side on the host threads (`spread` levels deep).
+void split_object(const Scene& scene, std::vector<int> cur, std::size_t max_tris, float max_extent,
+                  bool split_flat, std::vector<ClusterBuild>& out, int spread) {
+  Box box, cbox;
+  bounds_of(scene, cur, box, cbox);
+  bool too_many = cur.size() > max_tris;
+  const float limit = split_flat && is_flat(box) ? kFlatShare * max_extent : max_extent;
+  bool too_big = cur.size() > 1 && box.diagonal() > limit;
+  std::vector<int> upper;
+  if (!((too_many || too_big) && cut_at_median(scene, cur, cbox, upper))) {
     out.push_back(make_cluster(std::move(cur), box));
+    return;
   }
+  constexpr std::size_t kSpreadFacets = 1 << 16;  // smaller halves are not worth a thread
+  if (spread <= 0 || upper.size() < kSpreadFacets) {
+    split_object(scene, std::move(upper), max_tris, max_extent, split_flat, out, 0);
+    split_object(scene, std::move(cur), max_tris, max_extent, split_flat, out, 0);
+    return;
+  }
+  std::vector<ClusterBuild> halves[2];
+  std::vector<int>* pieces[2] = {&upper, &cur};
+  parallel_for(
+      2,
+      [&](std::size_t k) {
+        split_object(scene, std::move(*pieces[k]), max_tris, max_extent, split_flat, halves[k], spread - 1);
+      },
+      2);
+  for (std::vector<ClusterBuild>& h : halves) out.insert(out.end(), std::make_move_iterator(h.begin()),
+                                                          std::make_move_iterator(h.end()));
 }
 
 // Recursive bisection of the cluster centres, weighted by expected work
@@ -415,8 +433,10 @@ std::vector<ClusterBuild> split_clusters(const Scene& scene, std::size_t total, 
     by_object[o].push_back(static_cast<int>(i));
   }
   std::vector<ClusterBuild> cb;
+  int spread = 0;  // levels of halves split side by side: enough for every host thread
+  while ((1 << spread) < host_threads() && spread < 6) ++spread;
   for (auto& tris : by_object)
-    if (!tris.empty()) split_object(scene, std::move(tris), max_tris, max_extent, split_flat, cb);
+    if (!tris.empty()) split_object(scene, std::move(tris), max_tris, max_extent, split_flat, cb, spread);
   return cb;
 }
 

@@ -17,6 +17,7 @@
 #include "bench/options.h"
 #include "bench/report.h"
 #include "core/progress.h"
+#include "core/stage_clock.h"
 #include "core/image_io.h"
 #include "core/output_files.h"
 #include "input/scene_file.h"
@@ -105,6 +106,7 @@ int run_bench(const std::vector<std::string>& args) {
   } else {
     progress("device: %s", rt.description().c_str());
   }
+  show_prepare_progress(!o.quiet && writer);
   Scene scene = load_scene_or_explain(o.scene_path, o.quiet || !writer);
   outputs.refuse_inputs(scene.input_files);
   apply_view_options(scene, o);

@@ -123,6 +123,12 @@ std::optional<double> BenchReport::vs_embree(double mrays_per_s) const {
   return mrays_per_s / e;
 }
 
+double BenchReport::prepare_seconds() const {
+  const PrepareTimes& t = stats().prepare;
+  return t[PrepareStage::read] + t[PrepareStage::parse] + t[PrepareStage::partition] + t[PrepareStage::bank_build] +
+         t[PrepareStage::upload];
+}
+
 bool BenchReport::all_verified() const {
   bool ok = true;
   for (const ScatterPoint& p : curve) ok = ok && p.verified;

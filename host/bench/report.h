@@ -128,6 +128,10 @@ struct BenchReport {
   bool all_verified() const;  // every scatter point placed like host_scatter
   // Mrays/s of the OPSILA frame or a baseline over Embree's (none without Embree).
   std::optional<double> vs_embree(double mrays_per_s) const;
+  // OPSILA's preparation of the scene: reading and parsing through the
+  // upload (the pilot frames of --balance measured apart, a choice of
+  // balance), to set beside the baselines' builds (build_seconds).
+  double prepare_seconds() const;
   double replicated_over_bank_max() const;
 };
 

@@ -6,6 +6,7 @@
 
 #include "bench/report.h"
 #include "core/util.h"
+#include "machine/stats.h"
 #include "opsila_shared.h"
 
 namespace opsila {
@@ -259,6 +260,17 @@ json memory_json(const BenchReport& r) {
           {"all_pes_replicated_bytes", std::uint64_t(r.pes) * st.replicated_bytes}};
 }
 
+// OPSILA's preparation stage by stage, beside the baselines' builds.
+json prepare_bench_json(const BenchReport& r) {
+  json j = prepare_json(r.stats().prepare);
+  j["seconds"] = r.prepare_seconds();
+  const double embree = r.embree.present ? r.embree.median_run.build_seconds : 0.0;
+  j["embree_build_seconds"] = r.embree.present ? json(embree) : json(nullptr);
+  j["megakernel_build_seconds"] = r.megakernel.present ? json(r.megakernel.median_run.build_seconds) : json(nullptr);
+  j["vs_embree_build"] = embree > 0 ? json(r.prepare_seconds() / embree) : json(nullptr);
+  return j;
+}
+
 json baselines_json(const BenchReport& r) {
   const RenderStats& st = r.stats();
   json baselines = json::object();
@@ -379,6 +391,7 @@ nlohmann::json bench_json(const BenchReport& r) {
   j["copy_buffer_gbytes_per_s"] = r.curve.empty() ? json(nullptr) : json(r.curve.back().copy_buffer_gbytes_per_s());
   j["bytes_per_descriptor"] = DescriptorSet::kBytes;
   j["memory"] = memory_json(r);
+  j["prepare"] = prepare_bench_json(r);
   j["baselines"] = baselines_json(r);
   j["targets"] = targets_json(r);
   return j;

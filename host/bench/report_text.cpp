@@ -87,6 +87,25 @@ void renders_text(std::string& out, const BenchReport& r) {
           ull(r.opsila.rays.shadow));
 }
 
+// OPSILA's preparation beside the baselines' builds of the same scene.
+void prepare_text(std::string& out, const BenchReport& r) {
+  const PrepareTimes& t = r.stats().prepare;
+  appendf(out, "preparation: OPSILA %.2f s (read %.2f, parse %.2f, partition %.2f, bank BVHs %.2f, upload %.2f",
+          r.prepare_seconds(), t[PrepareStage::read], t[PrepareStage::parse], t[PrepareStage::partition],
+          t[PrepareStage::bank_build], t[PrepareStage::upload]);
+  if (t[PrepareStage::pilots] > 0) appendf(out, "; pilot frames %.2f apart", t[PrepareStage::pilots]);
+  appendf(out, "), peak host memory %s\n", bench_bytes(double(t.peak_host_bytes)).c_str());
+  if (r.embree.present) {
+    const double e = r.embree.median_run.build_seconds;
+    appendf(out, "             Embree BVH build %.2f s", e);
+    if (e > 0) appendf(out, " (OPSILA %.2fx)", r.prepare_seconds() / e);
+    appendf(out, "\n");
+  }
+  if (r.megakernel.present)
+    appendf(out, "             megakernel BVH build (one bank) %.2f s\n", r.megakernel.median_run.build_seconds);
+  appendf(out, "\n");
+}
+
 void phases_text(std::string& out, const BenchReport& r) {
   const RenderStats& st = r.stats();
   const double rs = st.render_seconds;
@@ -200,6 +219,7 @@ std::string bench_text(const BenchReport& r) {
   std::string out;
   header_text(out, r);
   renders_text(out, r);
+  prepare_text(out, r);
   phases_text(out, r);
   ranks_text(out, r);
   occupancy_text(out, r);

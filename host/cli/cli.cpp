@@ -18,6 +18,7 @@
 #include "machine/cl_runtime.h"
 #include "core/image_io.h"
 #include "core/progress.h"
+#include "core/stage_clock.h"
 #include "core/output_files.h"
 #include "core/util.h"
 #include "opsila_shared.h"
@@ -215,6 +216,7 @@ int run_render(const std::vector<std::string>& args) {
   if (ranks.size() > 1 && balance != Balance::facets && writer && !o.quiet)
     print_line("note", std::string("--balance ") + balance_name(balance) +
                            ": every rank reads the whole scene (--balance facets reads a share per rank)");
+  show_prepare_progress(!o.quiet && writer);
   Scene scene = load_scene_or_explain(o.scene_path, o.quiet || !writer, share);
   outputs.refuse_inputs(scene.input_files);
   apply_view_options(scene, o);
@@ -239,6 +241,7 @@ int run_render(const std::vector<std::string>& args) {
     static_cast<ImageResult&>(result) = render_reference(scene, threads, &progress);
     result.stats.render_seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    result.stats.prepare = prepare_times();  // reading and parsing: nothing else to prepare
     RenderStats& s = result.stats;
     // One processor: every primary hit and spawned ray is a "descriptor"
     // that finishes at once, as RenderStats counts them.

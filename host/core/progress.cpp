@@ -76,15 +76,24 @@ bool Progress::due() { return enabled_ && Clock::now() >= next_; }
 
 void Progress::report(double fraction, std::uint64_t rays) {
   if (!enabled_) return;
+  const double elapsed = seconds_between(start_, Clock::now());
+  const double rate = elapsed > 0 ? double(rays) / elapsed : 0;
+  show(fraction, count_text(rate).c_str());
+}
+
+void Progress::report(double fraction) { show(fraction, nullptr); }
+
+void Progress::show(double fraction, const char* rays_per_s) {
+  if (!enabled_) return;
   const Clock::time_point now = Clock::now();
   next_ = now + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(every_));
   shown_fraction_ = std::max(shown_fraction_, std::clamp(fraction, 0.0, 1.0));
   const double elapsed = seconds_between(start_, now);
   std::string left = "time left unknown";
   if (shown_fraction_ > 0) left = "about " + duration_text(elapsed * (1 - shown_fraction_) / shown_fraction_) + " left";
-  const double rate = elapsed > 0 ? double(rays) / elapsed : 0;
-  std::fprintf(stderr, "%sopsila: %s: %5.1f%% done, %s rays/s, %s elapsed, %s%s", tty_ ? "\r" : "", label_.c_str(),
-               100 * shown_fraction_, count_text(rate).c_str(), duration_text(elapsed).c_str(), left.c_str(),
+  const std::string rate = rays_per_s ? std::string(rays_per_s) + " rays/s, " : std::string();
+  std::fprintf(stderr, "%sopsila: %s: %5.1f%% done, %s%s elapsed, %s%s", tty_ ? "\r" : "", label_.c_str(),
+               100 * shown_fraction_, rate.c_str(), duration_text(elapsed).c_str(), left.c_str(),
                tty_ ? "\033[K" : "\n");
   std::fflush(stderr);
   drawn_ = tty_;

@@ -1,5 +1,5 @@
-// Progress of a long render or bench stage on stderr: fraction done, rays/s,
-// elapsed and estimated time left. Silent for the first couple of seconds (a
+// Progress of a long render, bench or preparation stage on stderr: fraction
+// done, rays/s (where rays are cast), elapsed and estimated time left. Silent for the first couple of seconds (a
 // short run prints nothing), then redrawn in place on a terminal, or one
 // plain line every few seconds when stderr is a file or a pipe.
 //
@@ -40,6 +40,8 @@ class Progress {
   // it counts); rays cast so far. Monotone: a smaller fraction than the last
   // one shown is shown as the last one.
   void report(double fraction, std::uint64_t rays);
+  // The same line for a stage that casts no rays (core/stage_clock.h).
+  void report(double fraction);
   // Ends the stage: a line redrawn in place gets its newline.
   void finish();
 
@@ -50,6 +52,7 @@ class Progress {
   double after_ = 2.0, every_ = 5.0;
   double shown_fraction_ = 0;
   Clock::time_point start_, next_;
+  void show(double fraction, const char* rays_per_s);
 };
 
 // Upper bound of the rays a render can cast: pixels x spp x the largest ray

@@ -48,6 +48,16 @@ Scene load_obj(const std::string& path, std::size_t max_triangles = kMaxTriangle
 Scene load_obj_from_string(const std::string& text, const std::string& name,
                            const std::string& base_dir);
 
+// How OBJ text is split to be parsed on several threads (the result never
+// depends on it: the chunks are merged in file order, and a file with an
+// error is read again whole, for its exact message). Tests force small chunks.
+struct ObjChunking {
+  std::size_t chunk_bytes = 0;  // 0: from the text's size and the threads (at least 1 MiB)
+  int threads = 0;              // 0: core/parallel.h's host_threads()
+};
+Scene load_obj_from_string(const std::string& text, const std::string& name, const std::string& base_dir,
+                           const ObjChunking& chunking, std::size_t max_triangles = kMaxTriangles);
+
 // Parses MTL text (`name` for messages). Materials come back in definition
 // order; a key a material leaves out keeps the SPEC default (colours 0,
 // Ns = Ni = 1, illum 0). Soft problems are appended to `warnings`.

@@ -2,6 +2,7 @@
 // checked reading of input files.
 #include "input/obj_text.h"
 
+#include <algorithm>
 #include <cerrno>
 #include <charconv>
 #include <climits>
@@ -13,6 +14,7 @@
 #include <system_error>
 #include <vector>
 
+#include "core/stage_clock.h"
 #include "input/obj_loader.h"
 
 namespace opsila {
@@ -161,7 +163,9 @@ std::string read_input_file(const std::string& path, std::size_t max_bytes,
   }
   const std::size_t kChunk = std::size_t(1) << 20;
   std::vector<char> chunk(kChunk);
+  StageClock clock(PrepareStage::read);
   for (;;) {
+    if (size > 0) clock.progress(double(text.size()) / double(size));
     in.read(chunk.data(), static_cast<std::streamsize>(chunk.size()));
     const std::size_t got = static_cast<std::size_t>(in.gcount());
     if (got == 0) break;
@@ -182,11 +186,12 @@ std::string read_text_file(const std::string& path) {
   return read_input_file(path, kMaxInputFileBytes, [&](const char* data, std::size_t n, std::size_t at) {
     if (at == 0 && n >= 2 && ((data[0] == '\xff' && data[1] == '\xfe') || (data[0] == '\xfe' && data[1] == '\xff')))
       throw InputError(path + ":1: UTF-16 text is not supported (save the file as UTF-8 or ASCII)");
-    for (std::size_t k = 0; k < n; ++k) {
-      if (data[k] == '\n') ++line;
-      if (data[k] == '\0')
-        throw InputError(path + ":" + std::to_string(line) + ": NUL byte (binary file?)");
+    // Counted, not looped over byte by byte: this runs at memory speed.
+    if (const char* nul = static_cast<const char*>(std::memchr(data, 0, n))) {
+      line += static_cast<int>(std::count(data, nul, '\n'));
+      throw InputError(path + ":" + std::to_string(line) + ": NUL byte (binary file?)");
     }
+    line += static_cast<int>(std::count(data, data + n, '\n'));
   });
 }
 

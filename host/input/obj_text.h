@@ -27,8 +27,11 @@ bool is_identifier(std::string_view s);
 // every later message can name a line.
 class LineScanner {
  public:
-  LineScanner(std::string_view text, const std::string& file)
+  // file_start: the text is the start of the file (where a byte-order mark
+  // may stand), not a later chunk of it.
+  LineScanner(std::string_view text, const std::string& file, bool file_start = true)
       : p_(text.data()), end_(text.data() + text.size()), file_(file) {
+    if (!file_start) return;
     const auto* u = reinterpret_cast<const unsigned char*>(p_);
     const std::size_t n = text.size();
     if (n >= 2 && ((u[0] == 0xfe && u[1] == 0xff) || (u[0] == 0xff && u[1] == 0xfe)))

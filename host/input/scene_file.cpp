@@ -7,6 +7,7 @@
 #include "input/scene_file.h"
 
 #include "input/scene_reader.h"
+#include "core/stage_clock.h"
 
 #include <chrono>
 #include <cstdlib>
@@ -284,6 +285,8 @@ Scene load_scene(const std::string& path, const SceneShare& share) {
   const auto start = std::chrono::steady_clock::now();
   const std::string ext = lower(fs::path(path).extension().string());
   if (ext == ".obj") return load_obj(path);
+  // Parsing, and the shapes and generators it builds (a read is its own stage).
+  StageClock clock(PrepareStage::parse);
   if (ext != ".json" && is_imported_model(path)) {
     Scene scene = load_model(path);
     scene.input_files.insert(scene.input_files.begin(), path);

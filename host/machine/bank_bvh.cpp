@@ -1,9 +1,12 @@
 #include "machine/bank_bvh.h"
 
 #include <algorithm>
+#include <atomic>
 #include <numeric>
 #include <string>
 
+#include "core/parallel.h"
+#include "core/stage_clock.h"
 #include "core/scene.h"
 
 namespace opsila {
@@ -32,20 +35,26 @@ class Builder {
   // reordering them; leaves of at most leaf_size items. `single` (when not
   // null) turns a one-item leaf into an existing binary node (a cluster's
   // facet tree). Returns the node.
-  int build(std::vector<int>& order, int begin, int end, const std::vector<Box>& boxes,
-            const std::vector<float>& weight, int leaf_size, int depth, const std::vector<int>* single) {
+  int build(std::vector<int>& order, int begin, int end, const Box* boxes, const float* weight, int leaf_size,
+            int depth, const std::vector<int>* single) {
     if (end - begin == 1 && single) return (*single)[order[begin]];
     int node = static_cast<int>(bin.size());
     bin.emplace_back();
-    Box box;
-    for (int i = begin; i < end; ++i) box.grow(boxes[order[i]]);
+    // The node's box and its items' centre box, in one pass over the items.
+    Box box, cbox;
+    for (int i = begin; i < end; ++i) {
+      const Box& b = boxes[order[i]];
+      box.grow(b);
+      const float c[3] = {center(b, 0), center(b, 1), center(b, 2)};
+      cbox.grow(c);
+    }
     bin[node].box = box;
     if ((end - begin <= leaf_size && !single) || (depth >= kMaxBinaryDepth && !single)) {
       bin[node].first = begin;
       bin[node].count = end - begin;
       return node;
     }
-    int mid = split(order, begin, end, boxes, weight, depth);
+    int mid = split(order, begin, end, boxes, weight, depth, cbox);
     int l = build(order, begin, mid, boxes, weight, leaf_size, depth + 1, single);
     int r = build(order, mid, end, boxes, weight, leaf_size, depth + 1, single);
     bin[node].kid[0] = l;
@@ -55,6 +64,9 @@ class Builder {
   }
 
  private:
+  std::vector<int> scratch_;  // the right side of a partition, reused
+  static float center(const Box& b, int a) { return 0.5f * (b.lo[a] + b.hi[a]); }
+
   // Best binned-SAH plane over the three axes; the median of the longest
   // centroid axis when SAH finds none (equal centres) or the tree is deep.
   // One pass bins every item on all three axes (each box is read once, and
@@ -74,13 +86,8 @@ class Builder {
     return std::clamp(static_cast<int>((c - lo) * scale), 0, bins - 1);
   }
 
-  int split(std::vector<int>& order, int begin, int end, const std::vector<Box>& boxes,
-            const std::vector<float>& weight, int depth) {
-    Box cbox;
-    for (int i = begin; i < end; ++i) {
-      const Box& b = boxes[order[i]];
-      cbox.grow(Vec3{b.center(0), b.center(1), b.center(2)});
-    }
+  int split(std::vector<int>& order, int begin, int end, const Box* boxes, const float* weight, int depth,
+            const Box& cbox) {
     float best_cost = INFINITY;
     int best_axis = -1, best_bin = -1;
     const int nb = std::clamp(end - begin, 2, kBins);
@@ -116,10 +123,19 @@ class Builder {
     }
     if (best_axis >= 0) {
       const float lo = cbox.lo[best_axis], sc = scale[best_axis];
-      auto side = [&](int id) { return bin_of(boxes[id].center(best_axis), lo, sc, nb) < best_bin; };
-      // Stable, so the layout does not depend on the sort implementation.
-      auto mid = std::stable_partition(order.begin() + begin, order.begin() + end, side);
-      int m = static_cast<int>(mid - order.begin());
+      auto side = [&](int id) { return bin_of(center(boxes[id], best_axis), lo, sc, nb) < best_bin; };
+      // Stable, so the layout does not depend on the sort implementation
+      // (as std::stable_partition, without its allocation at every node).
+      int m = begin;
+      scratch_.clear();
+      for (int i = begin; i < end; ++i) {
+        const int id = order[i];
+        if (side(id))
+          order[m++] = id;
+        else
+          scratch_.push_back(id);
+      }
+      std::copy(scratch_.begin(), scratch_.end(), order.begin() + m);
       if (m > begin && m < end) return m;
     }
     int axis = cbox.longest();
@@ -227,50 +243,90 @@ int build_bank_bvh(std::vector<BankNode>& nodes, std::vector<BankTriangle>& tris
                    std::vector<Cluster>& clusters, int c_begin, int c_end,
                    const std::vector<std::pair<int, int>>& ranges, std::vector<int>* source) {
   if (c_begin == c_end) return 0;
+  // Everything below is the bank's own: positions and cluster numbers count
+  // from its first facet and first cluster (banks build side by side).
   const int t_begin = ranges[c_begin].first, t_end = ranges[c_end - 1].second;
+  const int nt = t_end - t_begin, nc = c_end - c_begin;
+  const Box* boxes = tri_boxes.data() + t_begin;
   Builder b;
   // Facets: one binary tree per cluster, over positions of the bank's order.
-  std::vector<int> order(tri_boxes.size());
+  std::vector<int> order(static_cast<std::size_t>(nt));
   std::iota(order.begin(), order.end(), 0);
-  std::vector<float> unit(tri_boxes.size(), 1.0f);
-  std::vector<int> cluster_root(clusters.size(), -1);
-  for (int c = c_begin; c < c_end; ++c) {
-    cluster_root[c] = b.build(order, ranges[c].first, ranges[c].second, tri_boxes, unit, kFacetsPerLeaf, 1, nullptr);
+  const std::vector<float> unit(static_cast<std::size_t>(nt), 1.0f);
+  std::vector<int> cluster_root(static_cast<std::size_t>(nc), -1);
+  for (int c = 0; c < nc; ++c) {
+    const std::pair<int, int>& r = ranges[c_begin + c];
+    cluster_root[c] = b.build(order, r.first - t_begin, r.second - t_begin, boxes, unit.data(), kFacetsPerLeaf, 1,
+                              nullptr);
     b.bin[cluster_root[c]].keep = true;
   }
   // Clusters above them, weighted by their facet counts.
-  std::vector<Box> cboxes(clusters.size());
-  std::vector<float> cweight(clusters.size(), 0.0f);
-  std::vector<int> corder;
-  for (int c = c_begin; c < c_end; ++c) {
-    cboxes[c].grow(clusters[c].bmin);
-    cboxes[c].grow(clusters[c].bmax);
-    cweight[c] = static_cast<float>(ranges[c].second - ranges[c].first);
-    corder.push_back(c);
+  std::vector<Box> cboxes(static_cast<std::size_t>(nc));
+  std::vector<float> cweight(static_cast<std::size_t>(nc), 0.0f);
+  std::vector<int> corder(static_cast<std::size_t>(nc));
+  std::iota(corder.begin(), corder.end(), 0);
+  for (int c = 0; c < nc; ++c) {
+    cboxes[c].grow(clusters[c_begin + c].bmin);
+    cboxes[c].grow(clusters[c_begin + c].bmax);
+    cweight[c] = static_cast<float>(ranges[c_begin + c].second - ranges[c_begin + c].first);
   }
-  int root = b.build(corder, 0, static_cast<int>(corder.size()), cboxes, cweight, 1, 1, &cluster_root);
+  int root = b.build(corder, 0, nc, cboxes.data(), cweight.data(), 1, 1, &cluster_root);
 
   // Facets in their new order; leaves name global facet indices.
-  std::vector<BankTriangle> t(tris.begin() + t_begin, tris.begin() + t_end);
-  std::vector<Box> tb(tri_boxes.begin() + t_begin, tri_boxes.begin() + t_end);
-  for (int i = t_begin; i < t_end; ++i) {
-    tris[i] = t[order[i] - t_begin];
-    tri_boxes[i] = tb[order[i] - t_begin];
+  const std::vector<BankTriangle> t(tris.begin() + t_begin, tris.begin() + t_end);
+  for (int i = 0; i < nt; ++i) tris[t_begin + i] = t[order[i]];
+  {
+    const std::vector<Box> tb(tri_boxes.begin() + t_begin, tri_boxes.begin() + t_end);
+    for (int i = 0; i < nt; ++i) tri_boxes[t_begin + i] = tb[order[i]];
   }
   if (source) {
     const std::vector<int> s(source->begin() + t_begin, source->begin() + t_end);
-    for (int i = t_begin; i < t_end; ++i) (*source)[i] = s[order[i] - t_begin];
+    for (int i = 0; i < nt; ++i) (*source)[t_begin + i] = s[order[i]];
   }
-  std::vector<int> leaf_child(tri_boxes.size());
-  std::iota(leaf_child.begin(), leaf_child.end(), 0);
+  std::vector<int> leaf_child(static_cast<std::size_t>(nt));
+  std::iota(leaf_child.begin(), leaf_child.end(), t_begin);
 
   int slot = static_cast<int>(nodes.size());
   nodes.emplace_back();
   std::vector<int> wide_of(b.bin.size(), -1);
   int depth = collapse(b.bin, root, OPSILA_BVH_STACK, nodes, slot, leaf_child, wide_of);
-  for (int c = c_begin; c < c_end; ++c) clusters[c].root = wide_of[cluster_root[c]];
+  for (int c = 0; c < nc; ++c) clusters[c_begin + c].root = wide_of[cluster_root[c]];
   check_stack(nodes, slot);
   return depth;
+}
+
+std::vector<BankBvh> build_bank_bvhs(std::vector<BankNode>& nodes, std::vector<BankTriangle>& tris,
+                                     std::vector<Box>& tri_boxes, std::vector<Cluster>& clusters,
+                                     const std::vector<std::pair<int, int>>& pe_clusters,
+                                     const std::vector<std::pair<int, int>>& ranges, std::vector<int>* source) {
+  const std::size_t P = pe_clusters.size();
+  StageClock clock(PrepareStage::bank_build);
+  std::vector<std::vector<BankNode>> own(P);
+  std::vector<BankBvh> out(P);
+  std::atomic<std::size_t> done{0};
+  // Each task touches only its bank's facets, boxes, sources and clusters.
+  parallel_for(P, [&](std::size_t p) {
+    out[p].depth = build_bank_bvh(own[p], tris, tri_boxes, clusters, pe_clusters[p].first, pe_clusters[p].second,
+                                  ranges, source);
+    clock.progress(double(++done) / double(P));
+  });
+  // In PE order, as one build after another would have laid them out.
+  std::size_t total = nodes.size();
+  for (const std::vector<BankNode>& v : own) total += v.size();
+  nodes.reserve(total);
+  for (std::size_t p = 0; p < P; ++p) {
+    const int base = static_cast<int>(nodes.size());
+    out[p].node_begin = base;
+    for (BankNode& n : own[p]) {
+      for (int i = 0; i < kWidth; ++i)
+        if (n.count[i] == 0) n.child[i] += base;
+      nodes.push_back(n);
+    }
+    std::vector<BankNode>().swap(own[p]);
+    out[p].node_end = static_cast<int>(nodes.size());
+    for (int c = pe_clusters[p].first; c < pe_clusters[p].second; ++c) clusters[c].root += base;
+  }
+  return out;
 }
 
 void build_route_bvh(std::vector<BankNode>& nodes, int root, const std::vector<Box>& boxes,
@@ -280,8 +336,8 @@ void build_route_bvh(std::vector<BankNode>& nodes, int root, const std::vector<B
   Builder b;
   std::vector<int> order(boxes.size());
   std::iota(order.begin(), order.end(), 0);
-  std::vector<float> unit(boxes.size(), 1.0f);
-  int top = b.build(order, 0, static_cast<int>(boxes.size()), boxes, unit, 1, 1, nullptr);
+  const std::vector<float> unit(boxes.size(), 1.0f);
+  int top = b.build(order, 0, static_cast<int>(boxes.size()), boxes.data(), unit.data(), 1, 1, nullptr);
   std::vector<int> leaf_child(boxes.size());
   for (std::size_t i = 0; i < boxes.size(); ++i) leaf_child[i] = cluster_ids[order[i]];
   std::vector<int> wide_of(b.bin.size(), -1);

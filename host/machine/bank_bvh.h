@@ -26,6 +26,18 @@ int build_bank_bvh(std::vector<BankNode>& nodes, std::vector<BankTriangle>& tris
                    std::vector<Cluster>& clusters, int c_begin, int c_end,
                    const std::vector<std::pair<int, int>>& ranges, std::vector<int>* source = nullptr);
 
+// Every PE's bank BVH at once, on the host threads (core/parallel.h):
+// pe_clusters[p] is PE p's cluster range; its nodes are appended to `nodes`
+// in PE order, exactly as successive build_bank_bvh calls would lay them
+// out (a stage of its own, core/stage_clock.h).
+struct BankBvh {
+  int node_begin = 0, node_end = 0, depth = 0;
+};
+std::vector<BankBvh> build_bank_bvhs(std::vector<BankNode>& nodes, std::vector<BankTriangle>& tris,
+                                     std::vector<Box>& tri_boxes, std::vector<Cluster>& clusters,
+                                     const std::vector<std::pair<int, int>>& pe_clusters,
+                                     const std::vector<std::pair<int, int>>& ranges, std::vector<int>* source);
+
 // Builds the routing BVH of one PE over `boxes` (one per cluster, ids in
 // `cluster_ids`) into nodes[root] (already allocated; an empty PE keeps a
 // root with only empty slots). Children are appended to `nodes`.

@@ -36,6 +36,7 @@ struct PreparedBanks {
   Balance balance = Balance::facets;
   int pilot_frames = 0;      // --balance measured: pilot frames run to prepare these banks
   double pilot_seconds = 0;  // and their time
+  PrepareTimes prepare;      // the stages that prepared them: partition, bank build, pilots (core/stage_clock.h)
   // The cluster of every scene facet (every rank's): the pilot frames'
   // per-cluster counts are spread over these (machine/pilot.h).
   std::vector<int> facet_cluster;

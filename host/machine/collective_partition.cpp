@@ -7,6 +7,7 @@
 #include <stdexcept>
 #include <type_traits>
 
+#include "core/stage_clock.h"
 #include "machine/partition_steps.h"
 
 namespace opsila {
@@ -300,6 +301,7 @@ PreparedBanks bank_share(const Scene& share, int num_pes, int routing, const PeG
   if (share.share.ranks != ranks.size() || share.share.rank != ranks.rank() || group.rank != ranks.rank())
     throw std::invalid_argument("bank_share: one share per rank, read for this rank");
   ranks.begin_collective();  // from here a failure on one rank ends them all
+  StageClock clock(PrepareStage::partition);  // the exchange and the tables too; the bank BVHs are their own stage
   const bool split_flat = routing == OPSILA_ROUTING_SPHERES;
   PreparedBanks out;
   out.group = group;

@@ -10,6 +10,7 @@
 #include <string>
 
 #include "core/camera.h"
+#include "core/stage_clock.h"
 #include "core/util.h"
 #include "machine/ranks.h"
 
@@ -77,8 +78,16 @@ Renderer::Machine::Machine(const Scene& scene, PreparedBanks banks, const Render
   prepared.replicated_bytes = bs.replicated_bytes;
   prepared.texture_bytes = bs.texture_bytes;
   prepared.texture_replicated_bytes = bs.texture_replicated_bytes;
-  upload_scene(scene, bs);
-  allocate_frame_buffers();
+  const PrepareTimes before_upload = prepare_times();
+  {
+    StageClock clock(PrepareStage::upload);
+    upload_scene(scene, bs);
+    clock.progress(0.9);
+    allocate_frame_buffers();
+  }
+  prepared.prepare = banks.prepare;
+  prepared.prepare[PrepareStage::upload] = stages_since(before_upload)[PrepareStage::upload];
+  prepared.prepare.peak_host_bytes = host_peak_bytes();
   if (!group.all()) rank_exchange = std::make_unique<RankExchange>(rt, ranks, group, P);
 }
 

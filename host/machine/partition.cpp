@@ -5,9 +5,14 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <numeric>
+#include <utility>
+#include <vector>
 
 #include "core/camera.h"
+#include "core/parallel.h"
+#include "core/stage_clock.h"
 
 namespace opsila {
 namespace partition_steps {
@@ -48,10 +53,14 @@ bool cut_at_median(const Scene& scene, std::vector<int>& tris, const Box& cbox, 
   const int axis = cbox.longest();
   if (tris.size() < 2 || !(cbox.extent(axis) > 0)) return false;
   const std::size_t mid = tris.size() / 2;
-  std::nth_element(tris.begin(), tris.begin() + mid, tris.end(), [&](int a, int b) {
-    float ca = centroid(scene.triangles[a], axis), cb = centroid(scene.triangles[b], axis);
-    return ca < cb || (ca == cb && a < b);
+  // Each centre computed once, next to its index (the same comparisons in
+  // the same order as on the facets themselves, so the same halves).
+  std::vector<std::pair<float, int>> keyed(tris.size());
+  for (std::size_t i = 0; i < tris.size(); ++i) keyed[i] = {centroid(scene.triangles[tris[i]], axis), tris[i]};
+  std::nth_element(keyed.begin(), keyed.begin() + mid, keyed.end(), [](const auto& a, const auto& b) {
+    return a.first < b.first || (a.first == b.first && a.second < b.second);
   });
+  for (std::size_t i = 0; i < tris.size(); ++i) tris[i] = keyed[i].second;
   upper.assign(tris.begin() + mid, tris.end());
   tris.resize(mid);
   return true;
@@ -67,27 +76,37 @@ ClusterBuild make_cluster(std::vector<int> tris, const Box& box) {
 }
 
 // Splits a list of triangles at the median centroid of its longest axis
-// until every piece is small enough (facet count and spatial extent).
-void split_object(const Scene& scene, std::vector<int> tris, std::size_t max_tris, float max_extent,
-                  bool split_flat, std::vector<ClusterBuild>& out) {
-  std::vector<std::vector<int>> work;
-  work.push_back(std::move(tris));
-  while (!work.empty()) {
-    std::vector<int> cur = std::move(work.back());
-    work.pop_back();
-    Box box, cbox;
-    bounds_of(scene, cur, box, cbox);
-    bool too_many = cur.size() > max_tris;
-    const float limit = split_flat && is_flat(box) ? kFlatShare * max_extent : max_extent;
-    bool too_big = cur.size() > 1 && box.diagonal() > limit;
-    std::vector<int> upper;
-    if ((too_many || too_big) && cut_at_median(scene, cur, cbox, upper)) {
-      work.push_back(std::move(cur));
-      work.push_back(std::move(upper));
-      continue;
-    }
+// until every piece is small enough (facet count and spatial extent). The
+// upper half's clusters are listed before the lower half's. Large halves
+// are split side by side on the host threads (`spread` levels deep).
+void split_object(const Scene& scene, std::vector<int> cur, std::size_t max_tris, float max_extent,
+                  bool split_flat, std::vector<ClusterBuild>& out, int spread) {
+  Box box, cbox;
+  bounds_of(scene, cur, box, cbox);
+  bool too_many = cur.size() > max_tris;
+  const float limit = split_flat && is_flat(box) ? kFlatShare * max_extent : max_extent;
+  bool too_big = cur.size() > 1 && box.diagonal() > limit;
+  std::vector<int> upper;
+  if (!((too_many || too_big) && cut_at_median(scene, cur, cbox, upper))) {
     out.push_back(make_cluster(std::move(cur), box));
+    return;
   }
+  constexpr std::size_t kSpreadFacets = 1 << 16;  // smaller halves are not worth a thread
+  if (spread <= 0 || upper.size() < kSpreadFacets) {
+    split_object(scene, std::move(upper), max_tris, max_extent, split_flat, out, 0);
+    split_object(scene, std::move(cur), max_tris, max_extent, split_flat, out, 0);
+    return;
+  }
+  std::vector<ClusterBuild> halves[2];
+  std::vector<int>* pieces[2] = {&upper, &cur};
+  parallel_for(
+      2,
+      [&](std::size_t k) {
+        split_object(scene, std::move(*pieces[k]), max_tris, max_extent, split_flat, halves[k], spread - 1);
+      },
+      2);
+  for (std::vector<ClusterBuild>& h : halves) out.insert(out.end(), std::make_move_iterator(h.begin()),
+                                                          std::make_move_iterator(h.end()));
 }
 
 // Recursive bisection of the cluster centres, weighted by expected work
@@ -398,8 +417,10 @@ std::vector<ClusterBuild> split_clusters(const Scene& scene, std::size_t total, 
     by_object[o].push_back(static_cast<int>(i));
   }
   std::vector<ClusterBuild> cb;
+  int spread = 0;  // levels of halves split side by side: enough for every host thread
+  while ((1 << spread) < host_threads() && spread < 6) ++spread;
   for (auto& tris : by_object)
-    if (!tris.empty()) split_object(scene, std::move(tris), max_tris, max_extent, split_flat, cb);
+    if (!tris.empty()) split_object(scene, std::move(tris), max_tris, max_extent, split_flat, cb, spread);
   return cb;
 }
 
@@ -488,20 +509,25 @@ void describe_pes(const std::vector<ClusterBuild>& cb, std::vector<Box>& tri_box
                   std::size_t total, BankedScene& bs) {
   const int num_pes = bs.num_pes;
   bs.pes.resize(num_pes);
-  std::size_t c = 0;
+  std::vector<std::pair<int, int>> pe_clusters(static_cast<std::size_t>(num_pes));
+  for (std::size_t p = 0, c = 0; p < pe_clusters.size(); ++p) {
+    const std::size_t c_begin = c;
+    while (c < cb.size() && cb[c].pe == static_cast<int>(p)) ++c;
+    pe_clusters[p] = {static_cast<int>(c_begin), static_cast<int>(c)};
+  }
+  const std::vector<BankBvh> built =
+      build_bank_bvhs(bs.nodes, bs.triangles, tri_boxes, bs.clusters, pe_clusters, ranges, &source);
   for (int p = 0; p < num_pes; ++p) {
     PeInfo& pe = bs.pes[p];
-    std::size_t c_begin = c;
-    while (c < cb.size() && cb[c].pe == p) ++c;
+    const std::size_t c_begin = static_cast<std::size_t>(pe_clusters[p].first);
+    const std::size_t c = static_cast<std::size_t>(pe_clusters[p].second);
     pe.cluster_begin = static_cast<int>(c_begin);
     pe.cluster_end = static_cast<int>(c);
     pe.tri_begin = c_begin < c ? ranges[c_begin].first : (c_begin < ranges.size() ? ranges[c_begin].first
                                                                                     : static_cast<int>(total));
     pe.tri_end = c_begin < c ? ranges[c - 1].second : pe.tri_begin;
-    pe.node_begin = static_cast<int>(bs.nodes.size());
-    build_bank_bvh(bs.nodes, bs.triangles, tri_boxes, bs.clusters, static_cast<int>(c_begin), static_cast<int>(c),
-                   ranges, &source);
-    pe.node_end = static_cast<int>(bs.nodes.size());
+    pe.node_begin = built[p].node_begin;
+    pe.node_end = built[p].node_end;
     pe_bounds(bs.clusters, pe);
     std::uint64_t bytes = std::uint64_t(pe.tri_end - pe.tri_begin) * sizeof(BankTriangle) +
                           std::uint64_t(pe.node_end - pe.node_begin) * sizeof(BankNode);
@@ -574,11 +600,14 @@ BankedScene partition_scene(const Scene& scene, int num_pes, bool split_flat, co
   sbox.grow(slo.data());
   sbox.grow(shi.data());
 
+  StageClock clock(PrepareStage::partition);
   const std::vector<ClusterBuild> cb = form_clusters(scene, sbox, num_pes, split_flat, sample, measured);
+  clock.progress(0.6);  // roughly: the clusters and regions are most of it
   std::vector<Box> tri_boxes;
   std::vector<int> source;
   std::vector<std::pair<int, int>> ranges;
   fill_banks(scene, sbox, cb, bs, tri_boxes, source, ranges);
+  clock.progress(0.8);
   describe_pes(cb, tri_boxes, ranges, source, scene.triangles.size(), bs);
 
   build_routing(bs, sbox);

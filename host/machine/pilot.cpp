@@ -2,6 +2,7 @@
 
 #include <chrono>
 
+#include "core/stage_clock.h"
 #include "machine/banks.h"
 #include "machine/ranks.h"
 #include "machine/renderer.h"
@@ -68,6 +69,7 @@ MeasuredWork spread_cluster_work(const std::vector<std::uint64_t>& work, int lev
 MeasuredWork pilot_work(const Scene& scene, const RenderSettings& settings, ClRuntime& runtime, int* frames,
                         double* seconds) {
   const auto t0 = std::chrono::steady_clock::now();
+  StageClock clock(PrepareStage::pilots);
   const Scene view = pilot_scene(scene);
   RenderSettings ps;
   ps.num_pes = settings.num_pes;
@@ -82,6 +84,7 @@ MeasuredWork pilot_work(const Scene& scene, const RenderSettings& settings, ClRu
   double best_occupancy = -1;
   int k = 0;
   for (; k < kPilotFrames; ++k) {
+    clock.progress(double(k) / kPilotFrames);
     BalancePolicy policy;
     if (k > 0) policy = BalancePolicy{Balance::measured, nullptr, &mean};
     PreparedBanks banks = bank_scene(view, ps.num_pes, ps.routing, policy, group);

@@ -10,6 +10,7 @@ namespace opsila {
 
 PreparedBanks prepare_banks(const Scene& scene, const RenderSettings& settings, ClRuntime& runtime) {
   check_machine_request(scene, settings.num_pes);
+  const PrepareTimes before = prepare_times();
   Ranks& ranks = Ranks::world();
   const PeGroup group = pe_group(settings.num_pes, ranks.size(), ranks.rank());
   if (scene.is_share()) {  // read in shares: the ranks partition it together
@@ -30,6 +31,7 @@ PreparedBanks prepare_banks(const Scene& scene, const RenderSettings& settings, 
   PreparedBanks banks = bank_scene(scene, settings.num_pes, settings.routing, policy, group);
   banks.pilot_frames = frames;
   banks.pilot_seconds = seconds;
+  banks.prepare = stages_since(before);
   return banks;
 }
 

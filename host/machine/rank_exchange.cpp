@@ -1,7 +1,5 @@
 #include "machine/rank_exchange.h"
 
-#include <sys/resource.h>
-
 #include <algorithm>
 #include <chrono>
 #include <cstring>
@@ -170,11 +168,5 @@ std::size_t RankExchange::finish(const DescriptorSet& next, DescriptorSet& into,
 }
 
 void reduce_to_root(Ranks& ranks, std::vector<std::uint64_t>& values) { ranks.reduce_sum(values, 0); }
-
-std::uint64_t host_peak_bytes() {
-  struct rusage usage {};
-  if (getrusage(RUSAGE_SELF, &usage) != 0) return 0;
-  return std::uint64_t(usage.ru_maxrss) * 1024;  // Linux: KiB
-}
 
 }  // namespace opsila

@@ -75,7 +75,4 @@ class RankExchange {
 // Sums every rank's values on rank 0 (pixel sums, counters, traffic).
 void reduce_to_root(Ranks& ranks, std::vector<std::uint64_t>& values);
 
-// Peak resident memory of this process, in bytes.
-std::uint64_t host_peak_bytes();
-
 }  // namespace opsila

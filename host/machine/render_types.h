@@ -13,6 +13,7 @@
 
 #include "core/image.h"
 #include "core/ray_sample.h"
+#include "core/stage_clock.h"
 #include "opsila_shared.h"
 
 namespace opsila {
@@ -103,6 +104,7 @@ struct RenderStats {
   Balance balance = Balance::facets;  // how the partition shared the scene (--balance)
   int pilot_frames = 0;               // --balance measured: pilot frames run while preparing
   double pilot_seconds = 0;           // their time (part of the prepare step, not of the frame)
+  PrepareTimes prepare;               // the preparation's stages (core/stage_clock.h)
   std::size_t work_group_size = 0;
   std::vector<RankReport> ranks;  // several MPI ranks: one report each (rank 0's result only)
 };

@@ -115,6 +115,14 @@ nlohmann::json traffic_json(const RenderStats& s) {
 
 }  // namespace
 
+nlohmann::json prepare_json(const PrepareTimes& t) {
+  nlohmann::json j = nlohmann::json::object();
+  for (int k = 0; k < kPrepareStages; ++k)
+    j[std::string(stage_key(static_cast<PrepareStage>(k))) + "_seconds"] = t.seconds[k];
+  j["peak_host_bytes"] = t.peak_host_bytes;
+  return j;
+}
+
 nlohmann::json stats_json(const RenderResult& result, const Scene& scene,
                           const RenderSettings& settings, const std::string& device_description) {
   const RenderStats& s = result.stats;
@@ -146,6 +154,7 @@ nlohmann::json stats_json(const RenderResult& result, const Scene& scene,
                {"total", total_rays}};
   j["render_seconds"] = s.render_seconds;
   j["mrays_per_s"] = s.render_seconds > 0 ? static_cast<double>(total_rays) / s.render_seconds / 1e6 : 0.0;
+  j["prepare"] = prepare_json(s.prepare);
 
   j["levels"] = levels_json(s);
 

@@ -16,6 +16,8 @@ namespace opsila {
 // Keys: version, device, width, height, depth, pes, bank_capacity, clusters,
 // work_group_size, rounds, scene {triangles, facets, objects, lights},
 // rays {primary, primary_hits, secondary, shadow, total}, render_seconds,
+// prepare {read_seconds, parse_seconds, partition_seconds, bank_build_seconds,
+// upload_seconds, pilot_seconds, peak_host_bytes} (prepare_json),
 // mrays_per_s, levels [{level, totals{...}, pes[{...}]}],
 // descriptors {spawned, finished, forwards, overflow_deferrals},
 // balanced (spawned == finished), launches [{name, round, seconds}],
@@ -24,6 +26,9 @@ namespace opsila {
 // traffic [level][src][dst]; with several MPI ranks, mpi {...} (ranks_json).
 nlohmann::json stats_json(const RenderResult& result, const Scene& scene,
                           const RenderSettings& settings, const std::string& device_description);
+
+// The preparation's stages (core/stage_clock.h) as the --stats "prepare" section.
+nlohmann::json prepare_json(const PrepareTimes& t);
 
 // Several MPI ranks: the descriptors between ranks, from what each rank
 // says it sent and received. A rank's own PEs count on the diagonal.

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstdlib>
 #include <string>
 #include <vector>
 
@@ -168,6 +169,30 @@ TEST(Partition, FlatPiecesAreCutFinerForSphereRouting) {
   for (const Cluster& c : plain.clusters) largest_plain = std::max(largest_plain, c.radius);
   for (const Cluster& c : fine.clusters) largest_fine = std::max(largest_fine, c.radius);
   EXPECT_LT(largest_fine, largest_plain);
+}
+
+// The banks are built side by side on the host threads: the same bytes
+// whatever the number of threads (OPSILA_THREADS), as one after another.
+TEST(BankBvh, BanksBuiltInParallelAreTheSameBytes) {
+  const Scene s = test::mirror_glass_scene(40);
+  auto banked = [&](const char* threads) {
+    ::setenv("OPSILA_THREADS", threads, 1);
+    BankedScene bs = partition_scene(s, 13);
+    ::unsetenv("OPSILA_THREADS");
+    return bs;
+  };
+  const BankedScene one = banked("1"), many = banked("5");
+  auto bytes = [](const auto& v) {
+    const auto* p = reinterpret_cast<const unsigned char*>(v.data());
+    return std::vector<unsigned char>(p, p + v.size() * sizeof(v[0]));
+  };
+  ASSERT_GT(one.nodes.size(), 13u);
+  EXPECT_EQ(bytes(one.nodes), bytes(many.nodes));
+  EXPECT_EQ(bytes(one.triangles), bytes(many.triangles));
+  EXPECT_EQ(bytes(one.clusters), bytes(many.clusters));
+  EXPECT_EQ(bytes(one.pes), bytes(many.pes));
+  EXPECT_EQ(one.source, many.source);
+  EXPECT_EQ(one.max_bvh_depth, many.max_bvh_depth);
 }
 
 }  // namespace

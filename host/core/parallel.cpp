@@ -1,0 +1,53 @@
+#include "core/parallel.h"
+
+#include <algorithm>
+#include <atomic>
+#include <cstdlib>
+#include <exception>
+#include <mutex>
+#include <thread>
+#include <vector>
+
+namespace opsila {
+
+int host_threads() {
+  if (const char* env = std::getenv("OPSILA_THREADS"); env && *env) {
+    char* end = nullptr;
+    const long v = std::strtol(env, &end, 10);
+    if (*end == '\0' && v > 0 && v <= 1024) return static_cast<int>(v);
+  }
+  return static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+}
+
+void parallel_for(std::size_t n, const std::function<void(std::size_t)>& task, int threads) {
+  const std::size_t workers = std::min<std::size_t>(n, static_cast<std::size_t>(std::max(1, threads)));
+  if (workers <= 1) {
+    for (std::size_t i = 0; i < n; ++i) task(i);
+    return;
+  }
+  std::atomic<std::size_t> next{0};
+  std::mutex lock;
+  std::size_t failed_task = n;  // lowest failing task so far (under `lock`)
+  std::exception_ptr error;
+  auto work = [&] {
+    for (std::size_t i = next++; i < n; i = next++) {
+      {
+        std::lock_guard<std::mutex> hold(lock);
+        if (i > failed_task) return;  // a lower task failed: later ones cannot matter
+      }
+      try {
+        task(i);
+      } catch (...) {
+        std::lock_guard<std::mutex> hold(lock);
+        if (i < failed_task) failed_task = i, error = std::current_exception();
+      }
+    }
+  };
+  std::vector<std::thread> pool;
+  for (std::size_t w = 1; w < workers; ++w) pool.emplace_back(work);
+  work();
+  for (std::thread& t : pool) t.join();
+  if (error) std::rethrow_exception(error);
+}
+
+}  // namespace opsila

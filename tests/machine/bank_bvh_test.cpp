@@ -192,7 +192,6 @@ TEST(BankBvh, BanksBuiltInParallelAreTheSameBytes) {
   EXPECT_EQ(bytes(one.clusters), bytes(many.clusters));
   EXPECT_EQ(bytes(one.pes), bytes(many.pes));
   EXPECT_EQ(one.source, many.source);
-  EXPECT_EQ(one.max_bvh_depth, many.max_bvh_depth);
 }
 
 }  // namespace

@@ -125,10 +125,17 @@ void check_ply_header(const std::string& head, std::size_t file_bytes, const std
       format = a;
     } else if (keyword == "element") {
       judge();
+      // Two elements of one name: the importer frees what it did not
+      // allocate on such a header (fuzz_model).
+      for (const PlyElement& e : elements)
+        if (e.name == a)
+          throw InputError(name + ": PLY header declares the element '" + a.substr(0, 20) + "' twice");
       elements.push_back(PlyElement{a, 0, {}});
       if (!b.empty() && b.find_first_not_of("0123456789") == std::string::npos)  // else the importer judges
         elements.back().count = b.size() <= 19 ? std::stoull(b) : std::numeric_limits<unsigned long long>::max();
-    } else if (keyword == "property" && !elements.empty()) {
+    } else if (keyword == "property" && elements.empty()) {
+      throw InputError(name + ": PLY header has a property before any element");
+    } else if (keyword == "property") {
       elements.back().properties.push_back(a == "list" ? PlyProperty{ply_type_bytes(b) > 0 ? ply_type_bytes(b) : -1, ply_type_bytes(c)}
                                                        : PlyProperty{0, ply_type_bytes(a)});
     }

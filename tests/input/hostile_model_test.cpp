@@ -265,6 +265,12 @@ TEST(HostileModel, TruncatedDataIsRefusedInEveryFormat) {
          "PLY header without an 'end_header' line");
   expect("type.ply", "ply\nformat ascii 1.0\nelement face 1\nproperty list uc| int v\nend_header\n3 0 1 2\n",
          "PLY 'face' element: a property of unknown type");
+  expect("twice.ply",
+         "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nelement vertex 1\nproperty float x\n"
+         "end_header\n0\n0\n",
+         "PLY header declares the element 'vertex' twice");
+  expect("early.ply", "ply\nformat ascii 1.0\nproperty float x\nelement vertex 1\nend_header\n0\n",
+         "PLY header has a property before any element");
   std::string stl(80, ' ');
   stl += le32(2) + std::string(50, '\0');
   expect("bin.stl", stl, "binary STL header counts 2 facets; the file holds 1 (truncated file)");

@@ -84,6 +84,8 @@ class ObjParser {
   void parse_lines();
   void statement(std::string_view line);
   void vertex(std::string_view rest);
+  // Value n (0-based) of a 'v', 'vt' or 'vn' line, or one error naming it.
+  float value(std::string_view tok, const char* key, int n);
   void attribute(std::string_view rest, IndexedList& list, const char* key, int min_n, int max_n);
   std::uint32_t index_into(IndexedList& list, long long i, std::string_view tok);
   void vertex_ref(std::string_view tok, std::uint32_t& v, std::uint32_t& vt, std::uint32_t& vn);

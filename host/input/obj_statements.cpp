@@ -95,16 +95,21 @@ void ObjParser::statement(std::string_view line) {
   }
 }
 
+float ObjParser::value(std::string_view tok, const char* key, int n) {
+  float x;
+  const Num s = parse_float(tok, x);
+  if (s != Num::ok)
+    fail(name_, line_, std::string("'") + key + "' value " + std::to_string(n + 1) + " " + quote(tok) + " " +
+                           describe(s));
+  return x;
+}
+
 void ObjParser::vertex(std::string_view rest) {
   float xyz[3] = {0, 0, 0};
   int n = 0;
   for (std::string_view tok = next_token(rest); !tok.empty(); tok = next_token(rest)) {
     if (tok[0] == '#') break;
-    float x;
-    const Num s = parse_float(tok, x);
-    if (s != Num::ok)
-      fail(name_, line_, "'v' value " + std::to_string(n + 1) + " " + quote(tok) + " " +
-                             describe(s));
+    const float x = value(tok, "v", n);
     if (n < 3) xyz[n] = x;
     ++n;
   }
@@ -123,11 +128,7 @@ void ObjParser::attribute(std::string_view rest, IndexedList& list, const char* 
   int n = 0;
   for (std::string_view tok = next_token(rest); !tok.empty(); tok = next_token(rest)) {
     if (tok[0] == '#') break;
-    float x;
-    const Num s = parse_float(tok, x);
-    if (s != Num::ok)
-      fail(name_, line_, std::string("'") + key + "' value " + std::to_string(n + 1) + " " + quote(tok) + " " +
-                             describe(s));
+    const float x = value(tok, key, n);
     if (n == max_n)
       fail(name_, line_, std::string("'") + key + "' line has more than " + std::to_string(max_n) + " values");
     xyz[n++] = x;

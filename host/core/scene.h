@@ -5,6 +5,7 @@
 
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -107,6 +108,17 @@ struct SceneShare {
   std::size_t total_triangles = 0;  // every rank's, together
   Vec3 lo{0, 0, 0}, hi{0, 0, 0};    // bounds of every rank's triangles
   double read_seconds = 0;          // this rank's time to read its share
+  // Objects made in windows (a terrain: each rank makes only its slice of
+  // its triangles) whose triangles lie on several ranks, in id order; the
+  // partition cuts them collectively (machine/collective_cut.h).
+  std::vector<int> spread;
+  // This rank's triangles of windowed objects: counted in total_triangles
+  // and the bounds above until `combine` adds up every rank's.
+  std::size_t window_triangles = 0;
+  // Set by whoever knows the ranks: sums window_triangles and joins the
+  // bounds over every rank (a collective call, made by the reader once
+  // every entry is built). Unset: the figures stay this rank's.
+  std::function<void(SceneShare&)> combine;
 };
 
 struct Scene {

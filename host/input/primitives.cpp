@@ -255,31 +255,50 @@ double terrain_noise(const TerrainDesc& desc, int i, int j) {
 
 int add_terrain(std::vector<Triangle>& out, const TerrainDesc& desc, int object_id,
                 int material_a, int material_b, int facet) {
+  const std::size_t all = terrain_triangles(desc);
+  add_terrain_window(out, desc, object_id, material_a, material_b, facet, 0, all);
+  return facet + static_cast<int>(all);
+}
+
+std::size_t terrain_triangles(const TerrainDesc& desc) { return std::size_t(2) * desc.quads_x * desc.quads_z; }
+
+// Two rows of lattice points at a time: each point is computed once, by the
+// same expression whatever the window, so a window's triangles are bit for
+// bit those of the whole terrain.
+void add_terrain_window(std::vector<Triangle>& out, const TerrainDesc& desc, int object_id, int material_a,
+                        int material_b, int facet, std::size_t begin, std::size_t end) {
   const int nx = desc.quads_x, nz = desc.quads_z;
-  const std::size_t w = std::size_t(nx) + 1;
-  std::vector<Vec3> grid(w * (std::size_t(nz) + 1));
+  end = std::min(end, terrain_triangles(desc));
+  if (begin >= end) return;
   const double x0 = double(desc.center[0]) - 0.5 * desc.size_x;
   const double z0 = double(desc.center[2]) - 0.5 * desc.size_z;
-  for (int j = 0; j <= nz; ++j) {
-    for (int i = 0; i <= nx; ++i) {
-      grid[j * w + i] = {static_cast<float>(x0 + double(desc.size_x) * i / nx),
-                         static_cast<float>(desc.center[1] + desc.height * terrain_noise(desc, i, j)),
-                         static_cast<float>(z0 + double(desc.size_z) * j / nz)};
-    }
-  }
-  reserve_more(out, std::size_t(2) * nx * nz);
-  for (int j = 0; j < nz; ++j) {
-    for (int i = 0; i < nx; ++i) {
+  const auto row = [&](int j, std::vector<Vec3>& r) {
+    r.resize(std::size_t(nx) + 1);
+    for (int i = 0; i <= nx; ++i)
+      r[std::size_t(i)] = {static_cast<float>(x0 + double(desc.size_x) * i / nx),
+                           static_cast<float>(desc.center[1] + desc.height * terrain_noise(desc, i, j)),
+                           static_cast<float>(z0 + double(desc.size_z) * j / nz)};
+  };
+  reserve_more(out, end - begin);
+  const std::size_t per_row = std::size_t(2) * nx;
+  std::vector<Vec3> near, far;
+  const int j_first = static_cast<int>(begin / per_row), j_last = static_cast<int>((end - 1) / per_row);
+  row(j_first, far);
+  for (int j = j_first; j <= j_last; ++j) {
+    std::swap(near, far);
+    row(j + 1, far);
+    const std::size_t row_first = std::size_t(j) * per_row;
+    const int i_first = j == j_first ? static_cast<int>((begin - row_first) / 2) : 0;
+    const int i_end = j == j_last ? static_cast<int>((end - 1 - row_first) / 2) + 1 : nx;
+    for (int i = i_first; i < i_end; ++i) {
       const FacetTag tag{object_id, (i + j) % 2 == 0 ? material_a : material_b};
-      const Vec3& a = grid[j * w + i];
-      const Vec3& b = grid[j * w + i + 1];
-      const Vec3& c = grid[(j + 1) * w + i + 1];
-      const Vec3& d = grid[(j + 1) * w + i];
-      push(out, a, d, c, tag, facet++);
-      push(out, a, c, b, tag, facet++);
+      const Vec3 &a = near[std::size_t(i)], &b = near[std::size_t(i) + 1];
+      const Vec3 &c = far[std::size_t(i) + 1], &d = far[std::size_t(i)];
+      const std::size_t k = row_first + std::size_t(2) * i;  // the quad's first triangle
+      if (k >= begin) push(out, a, d, c, tag, facet + static_cast<int>(k));
+      if (k + 1 < end) push(out, a, c, b, tag, facet + static_cast<int>(k + 1));
     }
   }
-  return facet;
 }
 
 Pcg32::Pcg32(std::uint64_t seed, std::uint64_t stream) : inc_((stream << 1u) | 1u) {

@@ -85,6 +85,16 @@ struct TerrainDesc {
 int add_terrain(std::vector<Triangle>& out, const TerrainDesc& desc, int object_id,
                 int material_a, int material_b, int facet);
 
+// The terrain's triangle count, 2 * quads_x * quads_z.
+std::size_t terrain_triangles(const TerrainDesc& desc);
+
+// Only the terrain's triangles [begin, end) in add_terrain's order (quad by
+// quad, row by row), computing only the lattice rows they touch: a rank of
+// a scene read in shares makes only its window. Facet ids are
+// `facet` + the triangle's index, as in the whole terrain.
+void add_terrain_window(std::vector<Triangle>& out, const TerrainDesc& desc, int object_id, int material_a,
+                        int material_b, int facet, std::size_t begin, std::size_t end);
+
 // Terrain height at lattice point (i, j) in [0, 1]: fractal value noise from
 // integer hashing only, so every platform gets the same numbers.
 double terrain_noise(const TerrainDesc& desc, int i, int j);

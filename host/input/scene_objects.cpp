@@ -13,7 +13,7 @@ namespace scene_json {
 // Counts an object's triangles (and facets, an upper bound for generated
 // shapes) against the scene's limits before anything is built.
 void SceneReader::budget(std::size_t triangles, std::size_t facets, std::size_t objects,
-                         const std::string& path) {
+                         const std::string& path, bool windowed) {
   const std::string on_ranks = share_.ranks > 1 ? " on " + std::to_string(share_.ranks) + " ranks (" +
                                                      std::to_string(entry_limit_) + " per rank)"
                                                : std::string();
@@ -21,9 +21,10 @@ void SceneReader::budget(std::size_t triangles, std::size_t facets, std::size_t 
     fail(path, "would make " + std::to_string(triangles) + " more triangles (" +
                    std::to_string(planned_triangles_) + " so far); a scene may have at most " +
                    std::to_string(max_triangles_) + on_ranks + " (scenes/FORMAT.md, Limits)");
-  if (triangles > entry_limit_)  // every rank builds an entry whole
+  if (triangles > entry_limit_ && !(windowed && share_.ranks > 1))  // every rank builds an entry whole
     fail(path, "would make " + std::to_string(triangles) + " triangles; one entry of objects may have at most " +
-                   std::to_string(entry_limit_) + " on any number of ranks (scenes/FORMAT.md, Limits)");
+                   std::to_string(entry_limit_) + (windowed ? "" : " on any number of ranks") +
+                   " (scenes/FORMAT.md, Limits)");
   if (facets > std::size_t(INT_MAX) - planned_facets_)
     fail(path, "too many facets for 32-bit ids");
   if (objects > std::size_t(INT_MAX) - planned_objects_) fail(path, "too many objects");
@@ -157,7 +158,10 @@ void SceneReader::flush_entry() {
     transform_normals(scene_.attributes, first_attribute, *entry_.placed);
   }
   entry_.dropped += settle(first, entry_.path);
-  if (share_.ranks > 1) deal(first, first_attribute);
+  if (share_.ranks > 1 && entry_.windowed)
+    count_window(first);
+  else if (share_.ranks > 1)
+    deal(first, first_attribute);
   entry_.first = tris.size();
   entry_.first_attribute = scene_.attributes.size();
 }
@@ -245,9 +249,18 @@ std::function<void(std::vector<Triangle>&)> SceneReader::terrain(const Json& v, 
   } else {
     a = b = material_ref(find(v, "material"), key("material"));
   }
-  budget(std::size_t(2) * d.quads_x * d.quads_z, path);
-  return [this, d, a, b](std::vector<Triangle>& tris) {
-    next_facet_ = add_terrain(tris, d, next_object_++, a, b, next_facet_);
+  const std::size_t all = terrain_triangles(d);
+  budget(all, all, 1, path, true);
+  return [this, d, a, b, all](std::vector<Triangle>& tris) {
+    const int object = next_object_++;
+    if (share_.ranks == 1) {
+      next_facet_ = add_terrain(tris, d, object, a, b, next_facet_);
+      return;
+    }
+    std::size_t begin = 0, end = 0;  // this rank's window (scene_share.cpp)
+    window(all, object, begin, end);
+    add_terrain_window(tris, d, object, a, b, next_facet_, begin, end);
+    next_facet_ += static_cast<int>(all);
   };
 }
 

@@ -127,8 +127,10 @@ class SceneReader {
   Transform transform(const Json& v, const std::string& path);
 
   // Objects (scene_objects.cpp).
+  // windowed: an entry each rank makes only its window of (a terrain), so
+  // not limited to one rank's triangles on several ranks.
   void budget(std::size_t triangles, std::size_t facets, std::size_t objects,
-              const std::string& path);
+              const std::string& path, bool windowed = false);
   void budget(std::size_t triangles, const std::string& path);
   void objects(const Json& v, const std::string& path);
   void object(const Json& v, const std::string& path);
@@ -147,6 +149,9 @@ class SceneReader {
                                                           bool any_format);
   // Shares (scene_share.cpp).
   void deal(std::size_t first, std::size_t first_attribute);
+  void window(std::size_t all, int object, std::size_t& begin, std::size_t& end);
+  void count_window(std::size_t first);
+  void grow_bounds(const Triangle& t);
   void settle_share();
 
   const std::string& text_;
@@ -165,7 +170,9 @@ class SceneReader {
     std::size_t planned_begin = 0, planned_end = 0;  // its part of the plan
     std::size_t expected = 0;  // its exact triangle count when known before it is built (generators)
     std::size_t dealt = 0;
+    bool windowed = false;  // each rank made only its window (window())
   } entry_;
+  bool bounded_ = false;  // share_.lo/hi hold a triangle
   static constexpr long long kFlushItems = 4096;  // generator items between flushes
   std::unique_ptr<JsonLines> lines_;
   Scene scene_;

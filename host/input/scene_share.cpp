@@ -5,8 +5,11 @@
 // whole to the rank whose equal slice of the planned triangles holds its
 // first triangle (each entry's built triangles spread evenly over its part
 // of the plan): ranks hold about equal shares, and a rank's peak is its
-// share plus the largest entry.
+// share plus the largest entry. A terrain is made in windows instead: each
+// rank makes only its slice of the plan's triangles (window()).
 #include "input/scene_reader.h"
+
+#include <limits>
 
 namespace opsila {
 namespace scene_json {
@@ -26,13 +29,8 @@ void SceneReader::deal(std::size_t first, std::size_t first_attribute) {
   std::vector<VertexAttributes> kept;
   for (std::size_t k = first; k < tris.size(); ++k) {
     Triangle t = tris[k];
-    const std::size_t g = share_.total_triangles++;
-    if (g == 0) share_.lo = share_.hi = t.v0;
-    for (const Vec3* v : {&t.v0, &t.v1, &t.v2})
-      for (int a = 0; a < 3; ++a) {
-        share_.lo[a] = std::min(share_.lo[a], (*v)[a]);
-        share_.hi[a] = std::max(share_.hi[a], (*v)[a]);
-      }
+    ++share_.total_triangles;
+    grow_bounds(t);
     if (std::size_t(t.object_id) >= owner_.size()) owner_.resize(std::size_t(t.object_id) + 1, -1);
     int& owner = owner_[std::size_t(t.object_id)];
     // The entry's triangles spread evenly over its part of the plan (a plan
@@ -55,7 +53,47 @@ void SceneReader::deal(std::size_t first, std::size_t first_attribute) {
   attributes.insert(attributes.end(), kept.begin(), kept.end());
 }
 
+void SceneReader::grow_bounds(const Triangle& t) {
+  if (!bounded_) share_.lo = share_.hi = t.v0;
+  bounded_ = true;
+  for (const Vec3* v : {&t.v0, &t.v1, &t.v2})
+    for (int a = 0; a < 3; ++a) {
+      share_.lo[a] = std::min(share_.lo[a], (*v)[a]);
+      share_.hi[a] = std::max(share_.hi[a], (*v)[a]);
+    }
+}
+
+// A windowed entry of `all` triangles (its part of the plan): this rank
+// makes the ones in its slice of the plan, the same slice deal() gives
+// whole objects, [ceil(r N / R), ceil((r + 1) N / R)). An object whose
+// triangles fall in several slices is spread.
+void SceneReader::window(std::size_t all, int object, std::size_t& begin, std::size_t& end) {
+  const std::uint64_t N = std::max<std::size_t>(planned_triangles_, 1), R = std::uint64_t(share_.ranks);
+  const std::uint64_t pb = entry_.planned_begin;
+  const auto slice_start = [&](std::uint64_t r) { return (r * N + R - 1) / R; };
+  const auto local = [&](std::uint64_t at) { return std::size_t(std::clamp<std::uint64_t>(at, pb, pb + all) - pb); };
+  begin = local(slice_start(std::uint64_t(share_.rank)));
+  end = local(slice_start(std::uint64_t(share_.rank) + 1));
+  entry_.windowed = true;
+  const auto owner = [&](std::uint64_t at) { return std::min(at * R / N, R - 1); };
+  if (all > 0 && owner(pb) != owner(pb + all - 1)) share_.spread.push_back(object);
+}
+
+// A window's triangles, all this rank's: counted into the figures here,
+// added up over the ranks by share_.combine.
+void SceneReader::count_window(std::size_t first) {
+  const auto& tris = scene_.triangles;
+  for (std::size_t k = first; k < tris.size(); ++k) grow_bounds(tris[k]);
+  share_.total_triangles += tris.size() - first;
+  share_.window_triangles += tris.size() - first;
+}
+
 void SceneReader::settle_share() {
+  if (share_.combine) {
+    const float inf = std::numeric_limits<float>::infinity();
+    if (!bounded_) share_.lo = splat(inf), share_.hi = splat(-inf);  // nothing here: no part in the bounds
+    share_.combine(share_);
+  }
   scene_.share = share_;
   scene_.triangles.shrink_to_fit();
   scene_.attributes.shrink_to_fit();

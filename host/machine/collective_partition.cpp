@@ -8,6 +8,7 @@
 #include <type_traits>
 
 #include "core/stage_clock.h"
+#include "machine/collective_cut.h"
 #include "machine/partition_steps.h"
 
 namespace opsila {
@@ -18,7 +19,8 @@ using namespace partition_steps;
 // One cluster as every rank learns it: enough to place it in a region and
 // to find its facets (rank, index in that rank's list).
 struct ClusterSummary {
-  std::int32_t object = 0, rank = 0, local = 0, pad = 0;
+  std::int32_t object = 0, rank = 0, local = 0;  // a spread cluster: rank 0, local its index among them
+  std::int32_t spread = 0;                        // 1: its facets lie on several ranks
   std::uint64_t facets = 0;
   float c[3] = {0, 0, 0}, lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0};
 };
@@ -73,16 +75,26 @@ struct Placement {
   std::vector<int> global_of_local;      // this rank's clusters -> global index
 };
 
-Placement place_clusters(const Scene& scene, const std::vector<ClusterBuild>& local, int num_pes, Ranks& ranks) {
-  std::vector<ClusterSummary> mine(local.size());
+// A spread cluster is the same on every rank (its box, its count over all
+// ranks): rank 0 alone puts it in the table.
+Placement place_clusters(const Scene& scene, const ShareClusters& split, int num_pes, Ranks& ranks) {
+  const std::vector<ClusterBuild>& local = split.clusters;
+  std::vector<ClusterSummary> mine;
+  std::vector<int> spread_of(local.size(), -1);
+  for (std::size_t k = 0; k < split.spread.size(); ++k) spread_of[std::size_t(split.spread[k].local)] = int(k);
   const int last_object = std::max(scene.num_objects, 1) - 1;
   for (std::size_t i = 0; i < local.size(); ++i) {
-    ClusterSummary& s = mine[i];
-    s.object = std::clamp(scene.triangles[std::size_t(local[i].tris[0])].object_id, 0, last_object);
-    s.rank = ranks.rank();
-    s.local = static_cast<int>(i);
-    s.facets = local[i].tris.size();
+    ClusterSummary s;
+    const int k = spread_of[i];
+    if (k >= 0 && ranks.rank() != 0) continue;
+    s.object = k >= 0 ? split.spread[std::size_t(k)].object
+                      : std::clamp(scene.triangles[std::size_t(local[i].tris[0])].object_id, 0, last_object);
+    s.rank = k >= 0 ? 0 : ranks.rank();
+    s.local = k >= 0 ? k : static_cast<int>(i);
+    s.spread = k >= 0 ? 1 : 0;
+    s.facets = k >= 0 ? split.spread[std::size_t(k)].facets : local[i].tris.size();
     for (int a = 0; a < 3; ++a) s.c[a] = local[i].c[a], s.lo[a] = local[i].box.lo[a], s.hi[a] = local[i].box.hi[a];
+    mine.push_back(s);
   }
   std::vector<ClusterSummary> all = records_of<ClusterSummary>(ranks.all_gather(bytes_of(mine)));
   std::stable_sort(all.begin(), all.end(), [](const ClusterSummary& a, const ClusterSummary& b) {
@@ -103,7 +115,10 @@ Placement place_clusters(const Scene& scene, const std::vector<ClusterBuild>& lo
     const ClusterSummary& s = all[std::size_t(idx[g])];
     out.clusters.push_back(s);
     out.pe.push_back(table[std::size_t(idx[g])].pe);
-    if (s.rank == ranks.rank()) out.global_of_local[std::size_t(s.local)] = static_cast<int>(g);
+    if (s.spread)
+      out.global_of_local[std::size_t(split.spread[std::size_t(s.local)].local)] = static_cast<int>(g);
+    else if (s.rank == ranks.rank())
+      out.global_of_local[std::size_t(s.local)] = static_cast<int>(g);
   }
   return out;
 }
@@ -203,6 +218,13 @@ OwnPart own_part(const Scene& share, Received received, const Placement& pl, con
     own.scene.triangles.push_back(t);
   }
   received.facets = std::vector<Shipped>();
+  // A spread cluster's facets came from several ranks, round by round: in
+  // one process's order (make_cluster's), which is the facet ids' order.
+  const auto& tris = own.scene.triangles;
+  for (std::size_t c = 0; c < own.clusters.size(); ++c)
+    if (pl.clusters[std::size_t(g0) + c].spread)
+      std::sort(own.clusters[c].tris.begin(), own.clusters[c].tris.end(),
+                [&](int a, int b) { return tris[std::size_t(a)].facet_id < tris[std::size_t(b)].facet_id; });
   return own;
 }
 
@@ -315,12 +337,12 @@ PreparedBanks bank_share(const Scene& share, int num_pes, int routing, const PeG
   Box sbox;
   sbox.grow(slo.data());
   sbox.grow(shi.data());
-  const std::vector<ClusterBuild> local = split_clusters(share, share.total_triangles(), sbox, num_pes, split_flat);
-  const Placement pl = place_clusters(share, local, num_pes, ranks);
+  const ShareClusters split = split_share(share, sbox, num_pes, split_flat, ranks);
+  const Placement pl = place_clusters(share, split, num_pes, ranks);
   figures.partition_seconds = seconds_since(t0);
 
   t0 = std::chrono::steady_clock::now();
-  OwnPart own = own_part(share, exchange_facets(share, local, pl, num_pes, ranks), pl, group);
+  OwnPart own = own_part(share, exchange_facets(share, split.clusters, pl, num_pes, ranks), pl, group);
   figures.exchange_seconds = seconds_since(t0);
   figures.facets_held = own.scene.triangles.size();
 

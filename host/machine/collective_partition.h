@@ -1,8 +1,10 @@
 // The collective partition of a scene read in shares (Scene::share,
 // docs/DISTRIBUTED.md). Every rank holds
-// whole objects of the scene; together the ranks build exactly the banks
-// partition_scene builds from the whole scene, each rank only its group's:
-//  1. each rank cuts its own objects into clusters (machine/partition.cpp);
+// whole objects of the scene and its windows of the spread ones; together
+// the ranks build exactly the banks partition_scene builds from the whole
+// scene, each rank only its group's:
+//  1. each rank cuts its own objects into clusters (machine/partition_split.cpp),
+//     the spread ones together (machine/collective_cut.cpp);
 //  2. the clusters' centres, boxes and sizes (a small table) go to every
 //     rank, which runs the same bisection into PE regions on it;
 //  3. each cluster's facets move to the rank that holds its PE, in chunks

@@ -23,6 +23,29 @@ struct ClusterBuild {
   int pe = 0;
 };
 
+// How far objects are cut: into pieces of at most max_tris facets and (for
+// more than one facet) a box diagonal of at most max_extent (half that for a
+// flat piece with split_flat), from the whole scene's count and bounds.
+struct SplitLimits {
+  std::size_t max_tris = 0;
+  float max_extent = 0;
+};
+SplitLimits split_limits(std::size_t total, const Box& sbox, int num_pes);
+bool needs_cut(std::size_t facets, const Box& box, const SplitLimits& limits, bool split_flat);
+Box tri_box(const Triangle& t);
+float centroid(const Triangle& t, int a);
+void bounds_of(const Scene& scene, const std::vector<int>& tris, Box& box, Box& cbox);
+ClusterBuild make_cluster(std::vector<int> tris, const Box& box);
+// Cuts `tris` at the median centroid on the longest axis of `cbox` (ties by
+// index); `tris` keeps the lower half. False when it cannot be cut.
+bool cut_at_median(const Scene& scene, std::vector<int>& tris, const Box& cbox, std::vector<int>& upper);
+// An object's triangles cut at median centroids (upper half first) into
+// clusters appended to `out`; halves split side by side `spread` levels deep.
+void split_object(const Scene& scene, std::vector<int> cur, std::size_t max_tris, float max_extent,
+                  bool split_flat, std::vector<ClusterBuild>& out, int spread);
+std::vector<std::vector<int>> triangles_by_object(const Scene& scene);
+int split_threads();  // levels of split_object's halves to split side by side
+
 // 1. Objects cut into clusters, in object order; `total` is the whole
 // scene's triangle count (the pieces' size follows it).
 std::vector<ClusterBuild> split_clusters(const Scene& scene, std::size_t total, const Box& sbox, int num_pes,

@@ -114,6 +114,13 @@ void Ranks::max(std::vector<std::uint64_t>& values) {
                 MPI_COMM_WORLD);
 }
 
+void Ranks::sum(std::vector<std::uint64_t>& values) {
+  if (size_ == 1 || values.empty()) return;
+  RanksTimer t(*this);
+  MPI_Allreduce(MPI_IN_PLACE, values.data(), checked_int(values.size(), "values"), MPI_UINT64_T, MPI_SUM,
+                MPI_COMM_WORLD);
+}
+
 std::vector<std::uint64_t> Ranks::all_to_all(const std::vector<unsigned char>& send,
                                              const std::vector<std::uint64_t>& send_counts, std::size_t record_bytes,
                                              std::vector<unsigned char>& recv) {
@@ -244,6 +251,7 @@ void Ranks::finish() {}
 void Ranks::barrier() {}
 std::uint64_t Ranks::sum(std::uint64_t value) { return value; }
 void Ranks::max(std::vector<std::uint64_t>&) {}
+void Ranks::sum(std::vector<std::uint64_t>&) {}
 std::vector<std::uint64_t> Ranks::all_to_all(const std::vector<unsigned char>& send,
                                              const std::vector<std::uint64_t>& send_counts, std::size_t,
                                              std::vector<unsigned char>& recv) {

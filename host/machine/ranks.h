@@ -45,6 +45,7 @@ class Ranks {
   void barrier();
   std::uint64_t sum(std::uint64_t value);        // over all ranks, result on all
   void max(std::vector<std::uint64_t>& values);  // element-wise over all ranks, in place, on all
+  void sum(std::vector<std::uint64_t>& values);  // element-wise over all ranks, in place, on all
   // send[d] records of `record_bytes` bytes for rank d (laid out in rank
   // order); returns the counts received from each rank and fills `recv`
   // (also in rank order, then in the order each source sent them).

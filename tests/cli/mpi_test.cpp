@@ -219,30 +219,55 @@ TEST_F(MpiFixture, ScenesReadInSharesAreTheSameAsOneProcess) {
   }
 }
 
-// One object is dealt whole: a terrain is read by one rank (the others read
-// nothing of it, one reads nothing at all), then its clusters are shared
-// out like any others; the same image and item buffer as one process.
-TEST_F(MpiFixture, OneBigObjectIsReadByOneRankAndSharedOut) {
+// A terrain is made in windows: each rank makes only the triangles of its
+// slice of the scene (so reads N / R of them, give or take the sphere), the
+// ranks cut it into clusters together (collective median cuts), and the
+// image, item buffer, clusters and banks are those of one process.
+TEST_F(MpiFixture, ATerrainSpreadOverRanksIsTheSameAsOneProcess) {
   const std::string path = dir.write("terrain.json", R"({"objects": [
-    {"type": "terrain", "size": [20, 20], "quads": [60, 60], "height": 3},
-    {"type": "sphere", "center": [0, 4, 0], "radius": 1, "subdivisions": 2}]})");
+    {"type": "sphere", "center": [0, 4, 0], "radius": 1, "subdivisions": 2},
+    {"type": "terrain", "size": [20, 20], "quads": [60, 60], "height": 3, "transform": {"rotate": [0, 30, 0]}},
+    {"type": "terrain", "size": [6, 6], "quads": [9, 7], "height": 0, "center": [0, 6, 0]}]})");
   auto with = [&](const std::string& tag) {
     return std::vector<std::string>{path, "--size", "48x36", "--pes", "6", "-q", "-o", dir.file(tag + ".pfm"),
                                     "--item-buffer", dir.file(tag + ".npy"), "--stats", dir.file(tag + ".json")};
   };
   ASSERT_EQ(one(with("one")).exit_code, 0);
-  const RunResult r = ranks(3, with("three"));
-  ASSERT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_TRUE(test::read_file(dir.file("three.pfm")) == test::read_file(dir.file("one.pfm")));
-  EXPECT_TRUE(test::read_file(dir.file("three.npy")) == test::read_file(dir.file("one.npy")));
-  const nlohmann::json s = stats(dir.file("three.json"));
-  std::vector<std::uint64_t> read, held;
-  for (const auto& rank : s.at("mpi").at("per_rank")) {
-    read.push_back(rank.at("share").at("facets_read"));
-    held.push_back(rank.at("share").at("facets_held"));
+  const nlohmann::json base = stats(dir.file("one.json"));
+  const std::uint64_t N = base.at("scene").at("triangles");
+  ASSERT_EQ(N, 320u + 7200 + 126);
+  for (int R : {3, 4}) {
+    SCOPED_TRACE(std::to_string(R) + " ranks");
+    const std::string tag = "r" + std::to_string(R);
+    const RunResult r = ranks(R, with(tag));
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_TRUE(test::read_file(dir.file(tag + ".pfm")) == test::read_file(dir.file("one.pfm")));
+    EXPECT_TRUE(test::read_file(dir.file(tag + ".npy")) == test::read_file(dir.file("one.npy")));
+    const nlohmann::json s = stats(dir.file(tag + ".json"));
+    for (const char* key : {"scene", "clusters", "rays", "levels", "memory"}) EXPECT_EQ(s.at(key), base.at(key)) << key;
+    std::uint64_t read = 0;
+    for (const auto& rank : s.at("mpi").at("per_rank")) {
+      const std::uint64_t mine = rank.at("share").at("facets_read");
+      EXPECT_LE(mine, N / R + 320) << "a slice of the terrain, and at most the sphere more";
+      EXPECT_GT(rank.at("share").at("facets_held").get<std::uint64_t>(), 0u);
+      read += mine;
+    }
+    EXPECT_EQ(read, N);
   }
-  EXPECT_EQ(read, (std::vector<std::uint64_t>{7200, 0, 320}));  // the terrain, nothing, the sphere
-  for (std::uint64_t h : held) EXPECT_GT(h, 0u) << "every rank holds banks of the terrain";
+  // One rank's limit (OPSILA_RANK_TRIANGLE_LIMIT): the terrain alone is over
+  // it, so one process refuses the scene, naming the file, the key and the
+  // figures, and leaves nothing; two ranks render it, the same image.
+  env["OPSILA_RANK_TRIANGLE_LIMIT"] = "5000";
+  const RunResult alone = one(with("alone"));
+  EXPECT_EQ(alone.exit_code, 2) << alone.err;
+  ASSERT_EQ(alone.error_lines().size(), 1u) << alone.err;
+  EXPECT_NE(alone.error_lines()[0].find("terrain.json:"), std::string::npos) << alone.err;
+  EXPECT_NE(alone.error_lines()[0].find("objects[1]"), std::string::npos) << alone.err;
+  EXPECT_NE(alone.error_lines()[0].find("at most 5000"), std::string::npos) << alone.err;
+  EXPECT_FALSE(test::file_exists(dir.file("alone.pfm")));
+  const RunResult two = ranks(2, with("two"));
+  ASSERT_EQ(two.exit_code, 0) << two.err;
+  EXPECT_TRUE(test::read_file(dir.file("two.pfm")) == test::read_file(dir.file("one.pfm")));
 }
 
 // The whole scene's bounds (so epsilon) come from every facet read, the

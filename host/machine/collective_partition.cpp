@@ -32,13 +32,6 @@ struct Shipped {
   std::int32_t cluster = 0;  // global cluster index
 };
 
-// The facets a rank received, and the attributes of those that have them,
-// in the same order.
-struct Received {
-  std::vector<Shipped> facets;
-  std::vector<VertexAttributes> attributes;
-};
-
 static_assert(std::is_trivially_copyable<ClusterSummary>::value && std::is_trivially_copyable<Shipped>::value &&
                   std::is_trivially_copyable<VertexAttributes>::value && std::is_trivially_copyable<Cluster>::value,
               "sent as bytes");
@@ -136,23 +129,43 @@ std::vector<std::uint64_t> lay_out(const std::vector<std::vector<T>>& to, std::v
 }
 
 template <typename T>
-void exchange_records(Ranks& ranks, const std::vector<std::vector<T>>& to, std::vector<T>& received) {
+std::vector<T> exchange_records(Ranks& ranks, const std::vector<std::vector<T>>& to) {
   std::vector<unsigned char> send, recv;
   const std::vector<std::uint64_t> counts = lay_out(to, send);
   ranks.all_to_all(send, counts, sizeof(T), recv);
-  const std::vector<T> got = records_of<T>(recv);
-  received.insert(received.end(), got.begin(), got.end());
+  return records_of<T>(recv);
 }
 
-// Each local cluster's facets to the rank of its PE, kChunk at a time;
-// returns this rank's clusters' facets as they came: each cluster's from
-// one rank, in the order that rank held them.
-Received exchange_facets(const Scene& scene, const std::vector<ClusterBuild>& local, const Placement& pl,
-                         int num_pes, Ranks& ranks) {
+// The rank's own part of the scene: its clusters' facets (and their
+// attributes) with the scene's materials and textures, and the clusters as
+// the bank build wants them (PEs numbered in the group). Filled round by
+// round as the facets arrive, so the records are never held all at once.
+struct OwnPart {
+  Scene scene;
+  std::vector<ClusterBuild> clusters;
+  int first_cluster = 0;  // global index of the first
+  void add(const std::vector<Shipped>& facets, const std::vector<VertexAttributes>& attributes) {
+    std::size_t next = 0;
+    for (const Shipped& s : facets) {
+      Triangle t = s.t;
+      if (t.attributes >= 0) {
+        t.attributes = static_cast<int>(scene.attributes.size());
+        scene.attributes.push_back(attributes[next++]);
+      }
+      clusters[std::size_t(s.cluster - first_cluster)].tris.push_back(static_cast<int>(scene.triangles.size()));
+      scene.triangles.push_back(t);
+    }
+  }
+};
+
+// Each local cluster's facets to the rank of its PE, kChunk at a time,
+// into `own` as they come: each cluster's from one rank in the order that
+// rank held them (a spread cluster's from several: see own_part).
+void exchange_facets(const Scene& scene, const std::vector<ClusterBuild>& local, const Placement& pl,
+                     int num_pes, Ranks& ranks, OwnPart& own) {
   const int R = ranks.size();
   std::vector<std::uint64_t> any{scene.attributes.empty() ? 0u : 1u};  // a second stream only when needed
   ranks.max(any);
-  Received received;
   std::size_t cluster = 0, facet = 0;  // the next facet to send
   for (;;) {
     std::vector<std::vector<Shipped>> to(static_cast<std::size_t>(R));
@@ -173,32 +186,22 @@ Received exchange_facets(const Scene& scene, const std::vector<ClusterBuild>& lo
       if (facet < tris.size()) break;  // the chunk is full inside this cluster
     }
     if (ranks.sum(n) == 0) break;
-    exchange_records(ranks, to, received.facets);
-    if (any[0]) exchange_records(ranks, to_attributes, received.attributes);
+    const std::vector<Shipped> got = exchange_records(ranks, to);
+    own.add(got, any[0] ? exchange_records(ranks, to_attributes) : std::vector<VertexAttributes>());
   }
-  return received;
 }
 
 }  // namespace
 
 namespace {
 
-// The rank's own part of the scene after the exchange: its clusters' facets
-// (and their attributes) with the scene's materials and textures, and the
-// clusters as the bank build wants them (PEs numbered in the group).
-struct OwnPart {
-  Scene scene;
-  std::vector<ClusterBuild> clusters;
-  int first_cluster = 0;  // global index of the first
-};
-
-OwnPart own_part(const Scene& share, Received received, const Placement& pl, const PeGroup& group) {
+// The group's clusters, empty, ready for their facets.
+OwnPart own_part(const Scene& share, const Placement& pl, const PeGroup& group) {
   OwnPart own;
   own.scene.materials = share.materials;
   own.scene.textures = share.textures;
   own.scene.smooth = share.smooth;
-  own.scene.triangles.reserve(received.facets.size());
-  own.scene.attributes = std::move(received.attributes);  // in the order of the facets that have them
+  std::uint64_t facets = 0;
   int g0 = 0;
   while (g0 < int(pl.pe.size()) && pl.pe[std::size_t(g0)] < group.begin) ++g0;
   own.first_cluster = g0;
@@ -208,24 +211,22 @@ OwnPart own_part(const Scene& share, Received received, const Placement& pl, con
     for (int a = 0; a < 3; ++a) cb.c[a] = s.c[a], cb.box.lo[a] = s.lo[a], cb.box.hi[a] = s.hi[a];
     cb.pe = pl.pe[std::size_t(g)] - group.begin;
     cb.weight = double(s.facets);
+    cb.tris.reserve(s.facets);
+    facets += s.facets;
     own.clusters.push_back(std::move(cb));
   }
-  int next_attributes = 0;
-  for (const Shipped& s : received.facets) {
-    Triangle t = s.t;
-    if (t.attributes >= 0) t.attributes = next_attributes++;
-    own.clusters[std::size_t(s.cluster - g0)].tris.push_back(static_cast<int>(own.scene.triangles.size()));
-    own.scene.triangles.push_back(t);
-  }
-  received.facets = std::vector<Shipped>();
-  // A spread cluster's facets came from several ranks, round by round: in
-  // one process's order (make_cluster's), which is the facet ids' order.
+  own.scene.triangles.reserve(facets);
+  return own;
+}
+
+// A spread cluster's facets came from several ranks, round by round: put in
+// one process's order (make_cluster's), which is the facet ids' order.
+void order_spread(OwnPart& own, const Placement& pl) {
   const auto& tris = own.scene.triangles;
   for (std::size_t c = 0; c < own.clusters.size(); ++c)
-    if (pl.clusters[std::size_t(g0) + c].spread)
+    if (pl.clusters[std::size_t(own.first_cluster) + c].spread)
       std::sort(own.clusters[c].tris.begin(), own.clusters[c].tris.end(),
                 [&](int a, int b) { return tris[std::size_t(a)].facet_id < tris[std::size_t(b)].facet_id; });
-  return own;
 }
 
 // The group's banks from its own part: partition_scene's steps 3-4 on the
@@ -319,7 +320,7 @@ BankedScene share_tables(const Scene& share, const Box& sbox, const Placement& p
 
 }  // namespace
 
-PreparedBanks bank_share(const Scene& share, int num_pes, int routing, const PeGroup& group, Ranks& ranks) {
+PreparedBanks bank_share(Scene& share, int num_pes, int routing, const PeGroup& group, Ranks& ranks) {
   if (share.share.ranks != ranks.size() || share.share.rank != ranks.rank() || group.rank != ranks.rank())
     throw std::invalid_argument("bank_share: one share per rank, read for this rank");
   ranks.begin_collective();  // from here a failure on one rank ends them all
@@ -337,12 +338,19 @@ PreparedBanks bank_share(const Scene& share, int num_pes, int routing, const PeG
   Box sbox;
   sbox.grow(slo.data());
   sbox.grow(shi.data());
-  const ShareClusters split = split_share(share, sbox, num_pes, split_flat, ranks);
+  ShareClusters split = split_share(share, sbox, num_pes, split_flat, ranks);
   const Placement pl = place_clusters(share, split, num_pes, ranks);
   figures.partition_seconds = seconds_since(t0);
 
   t0 = std::chrono::steady_clock::now();
-  OwnPart own = own_part(share, exchange_facets(share, split.clusters, pl, num_pes, ranks), pl, group);
+  OwnPart own = own_part(share, pl, group);
+  exchange_facets(share, split.clusters, pl, num_pes, ranks, own);
+  // Sent: the share as read is no longer needed (its materials, textures
+  // and figures stay).
+  split = ShareClusters();
+  share.triangles = std::vector<Triangle>();
+  share.attributes = std::vector<VertexAttributes>();
+  order_spread(own, pl);
   figures.exchange_seconds = seconds_since(t0);
   figures.facets_held = own.scene.triangles.size();
 

@@ -24,6 +24,8 @@ namespace opsila {
 // shares (a collective call: a failure inside it ends every rank). The ray
 // sample and the pilot frames of the other balance modes need the whole
 // scene, so the command line reads it whole for them.
-PreparedBanks bank_share(const Scene& share, int num_pes, int routing, const PeGroup& group, Ranks& ranks);
+// The share's facets (triangles and vertex attributes) are given up once
+// they are sent: the banks are built from what the rank received.
+PreparedBanks bank_share(Scene& share, int num_pes, int routing, const PeGroup& group, Ranks& ranks);
 
 }  // namespace opsila

@@ -8,16 +8,26 @@
 
 namespace opsila {
 
+PreparedBanks prepare_banks(Scene& scene, const RenderSettings& settings, ClRuntime& runtime) {
+  if (!scene.is_share()) return prepare_banks(static_cast<const Scene&>(scene), settings, runtime);
+  // Read in shares: the ranks partition it together, and it gives up its facets once they are sent.
+  check_machine_request(scene, settings.num_pes);
+  if (settings.balance != Balance::facets)
+    throw std::invalid_argument("prepare_banks: a scene read in shares is balanced by facets");
+  Ranks& ranks = Ranks::world();
+  return bank_share(scene, settings.num_pes, settings.routing, pe_group(settings.num_pes, ranks.size(), ranks.rank()),
+                    ranks);
+}
+
 PreparedBanks prepare_banks(const Scene& scene, const RenderSettings& settings, ClRuntime& runtime) {
+  if (scene.is_share()) {  // kept whole by the caller: partitioned from a copy
+    Scene copy = scene;
+    return prepare_banks(copy, settings, runtime);
+  }
   check_machine_request(scene, settings.num_pes);
   const PrepareTimes before = prepare_times();
   Ranks& ranks = Ranks::world();
   const PeGroup group = pe_group(settings.num_pes, ranks.size(), ranks.rank());
-  if (scene.is_share()) {  // read in shares: the ranks partition it together
-    if (settings.balance != Balance::facets)
-      throw std::invalid_argument("prepare_banks: a scene read in shares is balanced by facets");
-    return bank_share(scene, settings.num_pes, settings.routing, group, ranks);
-  }
   BalancePolicy policy;
   policy.balance = settings.balance;
   policy.sample = settings.ray_sample;

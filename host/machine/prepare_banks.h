@@ -14,5 +14,8 @@ namespace opsila {
 // measured, from pilot frames run on `runtime` first. Throws InputError for
 // a machine the kernels cannot run (check_machine_request).
 PreparedBanks prepare_banks(const Scene& scene, const RenderSettings& settings, ClRuntime& runtime);
+// The same; a scene read in shares gives up its facets (triangles and vertex
+// attributes) to the partition once they are sent (docs/DISTRIBUTED.md).
+PreparedBanks prepare_banks(Scene& scene, const RenderSettings& settings, ClRuntime& runtime);
 
 }  // namespace opsila

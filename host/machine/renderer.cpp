@@ -99,4 +99,9 @@ RenderResult render(const Scene& scene, const RenderSettings& settings, ClRuntim
   return Renderer(scene, std::move(banks), settings, runtime).render();
 }
 
+RenderResult render(Scene& scene, const RenderSettings& settings, ClRuntime& runtime) {
+  PreparedBanks banks = prepare_banks(scene, settings, runtime);
+  return Renderer(scene, std::move(banks), settings, runtime).render();
+}
+
 }  // namespace opsila

@@ -60,5 +60,8 @@ class Renderer {
 
 // One frame with banks and a Renderer prepared for it (the command line's path).
 RenderResult render(const Scene& scene, const RenderSettings& settings, ClRuntime& runtime);
+// The same; a scene read in shares gives up its facets once the ranks have
+// partitioned it (prepare_banks).
+RenderResult render(Scene& scene, const RenderSettings& settings, ClRuntime& runtime);
 
 }  // namespace opsila

@@ -238,7 +238,13 @@ BankedScene group_banks(OwnPart& own, const Box& sbox, int group_size, std::vect
   std::vector<int> source;
   std::vector<std::pair<int, int>> ranges;
   fill_banks(own.scene, sbox, own.clusters, loc, tri_boxes, source, ranges);
-  describe_pes(own.clusters, tri_boxes, ranges, source, own.scene.triangles.size(), loc);
+  const std::size_t facets = own.scene.triangles.size();
+  // The bank facets are copies: without vertex attributes (which
+  // bank_attributes reads through the facets) the received ones can go
+  // before the BVHs are built.
+  for (ClusterBuild& c : own.clusters) c.tris = std::vector<int>();
+  if (own.scene.attributes.empty()) own.scene.triangles = std::vector<Triangle>();
+  describe_pes(own.clusters, tri_boxes, ranges, source, facets, loc);
   node_clusters(loc);
   bank_attributes(own.scene, source, loc, &used);
   loc.source = std::move(source);

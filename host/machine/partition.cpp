@@ -167,7 +167,8 @@ std::uint64_t bank_attributes(const Scene& scene, const std::vector<int>& source
   };
   bs.texture_bytes.assign(bs.pes.size(), 0);
   bool any = false;
-  for (int i : source) any = any || flags_of(scene.triangles[i]) != 0;
+  if (!scene.attributes.empty())  // none: no facet has any (a scene read in shares may have let its facets go)
+    for (int i : source) any = any || flags_of(scene.triangles[i]) != 0;
   if (!any) {
     if (used_out) used_out->assign(scene.textures.size(), 0);
     return 0;

@@ -45,7 +45,7 @@ void join_boxes(std::vector<Box*> boxes, Ranks& ranks) {
 // in step: the same boxes, counts and decisions everywhere, each rank
 // cutting its own facets at the key every rank agreed on.
 void split_spread(const Scene& share, std::vector<int> cur, const SplitLimits& limits, bool split_flat, int object,
-                  ShareClusters& out, Ranks& ranks) {
+                  ShareClusters& out, Ranks& ranks, const std::function<void(double)>& progress) {
   Box box, cbox;
   bounds_of(share, cur, box, cbox);
   join_boxes({&box, &cbox}, ranks);
@@ -54,6 +54,8 @@ void split_spread(const Scene& share, std::vector<int> cur, const SplitLimits& l
   if (!(needs_cut(n, box, limits, split_flat) && n >= 2 && cbox.extent(axis) > 0)) {
     out.spread.push_back({static_cast<int>(out.clusters.size()), object, n});
     out.clusters.push_back(make_cluster(std::move(cur), box));
+    out.spread_done += n;
+    if (progress) progress(double(out.spread_done) / double(std::max<std::size_t>(share.total_triangles(), 1)));
     return;
   }
   std::vector<std::uint64_t> keys(cur.size());
@@ -67,8 +69,8 @@ void split_spread(const Scene& share, std::vector<int> cur, const SplitLimits& l
   for (std::size_t i = 0; i < cur.size(); ++i) (keys[i] < median ? lower : upper).push_back(cur[i]);
   cur = std::vector<int>();
   keys = std::vector<std::uint64_t>();
-  split_spread(share, std::move(upper), limits, split_flat, object, out, ranks);
-  split_spread(share, std::move(lower), limits, split_flat, object, out, ranks);
+  split_spread(share, std::move(upper), limits, split_flat, object, out, ranks, progress);
+  split_spread(share, std::move(lower), limits, split_flat, object, out, ranks, progress);
 }
 
 }  // namespace
@@ -108,7 +110,8 @@ std::uint64_t select_key(std::vector<std::uint64_t> keys, std::uint64_t k,
   return select.key();
 }
 
-ShareClusters split_share(const Scene& share, const Box& sbox, int num_pes, bool split_flat, Ranks& ranks) {
+ShareClusters split_share(const Scene& share, const Box& sbox, int num_pes, bool split_flat, Ranks& ranks,
+                          const std::function<void(double)>& progress) {
   const SplitLimits limits = split_limits(share.total_triangles(), sbox, num_pes);
   std::vector<std::vector<int>> by_object = triangles_by_object(share);
   std::vector<char> spread(by_object.size(), 0);
@@ -119,7 +122,7 @@ ShareClusters split_share(const Scene& share, const Box& sbox, int num_pes, bool
       split_object(share, std::move(by_object[o]), limits.max_tris, limits.max_extent, split_flat, out.clusters,
                    split_threads());
   for (int o : share.share.spread)
-    split_spread(share, std::move(by_object[std::size_t(o)]), limits, split_flat, o, out, ranks);
+    split_spread(share, std::move(by_object[std::size_t(o)]), limits, split_flat, o, out, ranks, progress);
   return out;
 }
 

@@ -60,8 +60,12 @@ struct ShareClusters {
     std::uint64_t facets = 0;  // on every rank together
   };
   std::vector<Spread> spread;  // in the order every rank made them
+  std::uint64_t spread_done = 0;  // facets of the spread objects in clusters so far (every rank's)
 };
-ShareClusters split_share(const Scene& share, const Box& sbox, int num_pes, bool split_flat, Ranks& ranks);
+// `progress` (may be empty) hears the fraction of the scene's facets in
+// clusters so far.
+ShareClusters split_share(const Scene& share, const Box& sbox, int num_pes, bool split_flat, Ranks& ranks,
+                          const std::function<void(double)>& progress);
 
 // The whole scene's figures from every rank's (SceneShare::combine): the
 // windowed triangles added up, the bounds joined. A collective call, made

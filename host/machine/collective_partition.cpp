@@ -344,9 +344,12 @@ PreparedBanks bank_share(Scene& share, int num_pes, int routing, const PeGroup& 
   Box sbox;
   sbox.grow(slo.data());
   sbox.grow(shi.data());
-  ShareClusters split = split_share(share, sbox, num_pes, split_flat, ranks);
+  // Progress: the cuts are about half of the stage, the exchange the rest.
+  ShareClusters split =
+      split_share(share, sbox, num_pes, split_flat, ranks, [&clock](double f) { clock.progress(0.5 * f); });
   const Placement pl = place_clusters(share, split, num_pes, ranks);
   figures.partition_seconds = seconds_since(t0);
+  clock.progress(0.5);
 
   t0 = std::chrono::steady_clock::now();
   OwnPart own = own_part(share, pl, group);
@@ -358,6 +361,7 @@ PreparedBanks bank_share(Scene& share, int num_pes, int routing, const PeGroup& 
   share.attributes = std::vector<VertexAttributes>();
   order_spread(own, pl);
   figures.exchange_seconds = seconds_since(t0);
+  clock.progress(0.9);
   figures.facets_held = own.scene.triangles.size();
 
   t0 = std::chrono::steady_clock::now();

@@ -14,9 +14,12 @@ PreparedBanks prepare_banks(Scene& scene, const RenderSettings& settings, ClRunt
   check_machine_request(scene, settings.num_pes);
   if (settings.balance != Balance::facets)
     throw std::invalid_argument("prepare_banks: a scene read in shares is balanced by facets");
+  const PrepareTimes before = prepare_times();
   Ranks& ranks = Ranks::world();
-  return bank_share(scene, settings.num_pes, settings.routing, pe_group(settings.num_pes, ranks.size(), ranks.rank()),
-                    ranks);
+  PreparedBanks banks = bank_share(scene, settings.num_pes, settings.routing,
+                                   pe_group(settings.num_pes, ranks.size(), ranks.rank()), ranks);
+  banks.prepare = stages_since(before);
+  return banks;
 }
 
 PreparedBanks prepare_banks(const Scene& scene, const RenderSettings& settings, ClRuntime& runtime) {

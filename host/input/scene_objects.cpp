@@ -356,7 +356,10 @@ std::function<void(std::vector<Triangle>&)> SceneReader::generator(const Json& v
   if (per_item > 0 && std::size_t(items) > max_triangles_ / per_item)
     fail(path, std::to_string(items) + " items would make more than " +
                    std::to_string(max_triangles_) + " triangles (scenes/FORMAT.md, Limits)");
-  budget(std::size_t(items) * per_item, std::size_t(items) * per_item, std::size_t(items), path);
+  // On several ranks each item is dealt whole as it is made (a few thousand
+  // at a time): the entry is limited by the scene, an item by one rank.
+  budget(std::size_t(items) * per_item, std::size_t(items) * per_item, std::size_t(items), path,
+         per_item <= entry_limit_);
   return [=](std::vector<Triangle>& tris) {
     build_items(tris, grid, items, counts, lo, hi, jitter, shape_is_box, rmin, rmax, sub, mats,
                 cumulative, total, seed);
@@ -381,7 +384,7 @@ void SceneReader::build_items(std::vector<Triangle>& tris, bool grid, long long 
   }
   Pcg32 rng(seed);
   for (long long n = 0; n < items; ++n) {
-    if (n % kFlushItems == 0 && n > 0) flush_entry();
+    if (n > 0 && (n % kFlushItems == 0 || tris.size() - entry_.first >= kFlushTriangles)) flush_entry();
     const double u_shape = rng.uniform(), u_radius = rng.uniform();
     const double ux = rng.uniform(), uy = rng.uniform(), uz = rng.uniform();
     const double u_mat = rng.uniform(), u_angle = rng.uniform();

@@ -127,8 +127,9 @@ class SceneReader {
   Transform transform(const Json& v, const std::string& path);
 
   // Objects (scene_objects.cpp).
-  // windowed: an entry each rank makes only its window of (a terrain), so
-  // not limited to one rank's triangles on several ranks.
+  // windowed: an entry no rank holds whole (a terrain made in windows, a
+  // generator's items dealt as they are made), so not limited to one rank's
+  // triangles on several ranks.
   void budget(std::size_t triangles, std::size_t facets, std::size_t objects,
               const std::string& path, bool windowed = false);
   void budget(std::size_t triangles, const std::string& path);
@@ -173,7 +174,8 @@ class SceneReader {
     bool windowed = false;  // each rank made only its window (window())
   } entry_;
   bool bounded_ = false;  // share_.lo/hi hold a triangle
-  static constexpr long long kFlushItems = 4096;  // generator items between flushes
+  static constexpr long long kFlushItems = 4096;  // generator items between flushes, at most
+  static constexpr std::size_t kFlushTriangles = std::size_t(1) << 18;  // and about this many triangles
   std::unique_ptr<JsonLines> lines_;
   Scene scene_;
   std::vector<std::function<void()>> builds_;  // one per object, in order

@@ -295,6 +295,8 @@ TEST_F(MpiFixture, TwoRanksAcceptTwiceOneRanksTriangles) {
     return std::vector<std::string>{path, "--size", "48x36", "--pes", "4", "-q", "-o", dir.file(out)};
   };
   ASSERT_EQ(one(with("unlimited.pfm")).exit_code, 0);
+  const std::vector<std::string> on_five = {path, "--size", "48x36", "--pes", "5", "-q", "-o", dir.file("unlimited5.pfm")};
+  ASSERT_EQ(one(on_five).exit_code, 0);
   env["OPSILA_RANK_TRIANGLE_LIMIT"] = "15000";
   const RunResult alone = one(with("alone.pfm"));
   EXPECT_EQ(alone.exit_code, 2) << alone.err;
@@ -306,12 +308,21 @@ TEST_F(MpiFixture, TwoRanksAcceptTwiceOneRanksTriangles) {
   const RunResult two = ranks(2, with("two.pfm"));
   ASSERT_EQ(two.exit_code, 0) << two.err;
   EXPECT_TRUE(test::read_file(dir.file("two.pfm")) == test::read_file(dir.file("unlimited.pfm")));
-  // One entry is built whole by every rank: it must fit one rank's limit.
+  // A generator's items are dealt as they are made: an entry may be over
+  // one rank's limit (each grid here has 5760 triangles).
   env["OPSILA_RANK_TRIANGLE_LIMIT"] = "5000";
-  const RunResult entry = ranks(4, with("entry.pfm"));
+  const RunResult five = ranks(5, {path, "--size", "48x36", "--pes", "5", "-q", "-o", dir.file("five.pfm")});
+  ASSERT_EQ(five.exit_code, 0) << five.err;
+  EXPECT_TRUE(test::read_file(dir.file("five.pfm")) == test::read_file(dir.file("unlimited5.pfm")));
+  // Any other entry is built whole by every rank: it must fit one rank's limit.
+  const std::string ball =
+      dir.write("ball.json", R"({"objects": [{"type": "sphere", "center": [0,0,0], "radius": 1, "subdivisions": 4}]})");
+  const RunResult entry = ranks(4, {ball, "--size", "32x24", "--pes", "4", "-q", "-o", dir.file("entry.pfm")});
   EXPECT_EQ(entry.exit_code, 2) << entry.err;
   ASSERT_EQ(entry.error_lines().size(), 1u) << entry.err;
+  EXPECT_NE(entry.error_lines()[0].find("ball.json:1: objects[0]"), std::string::npos) << entry.err;
   EXPECT_NE(entry.error_lines()[0].find("one entry of objects may have at most 5000"), std::string::npos) << entry.err;
+  EXPECT_FALSE(test::file_exists(dir.file("entry.pfm")));
 }
 
 // A broken file among many, which one rank reads (its scene names it) and

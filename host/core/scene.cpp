@@ -85,6 +85,10 @@ void Scene::bounds(Vec3& lo, Vec3& hi) const {
 double Scene::diagonal() const {
   Vec3 lo, hi;
   bounds(lo, hi);
+  return box_diagonal(lo, hi);
+}
+
+double box_diagonal(const Vec3& lo, const Vec3& hi) {
   double sum = 0;
   for (int a = 0; a < 3; ++a) {
     const double d = double(hi[a]) - double(lo[a]);
@@ -93,7 +97,7 @@ double Scene::diagonal() const {
   return std::sqrt(sum);
 }
 
-float Scene::epsilon() const { return static_cast<float>(1e-4 * diagonal()); }
+float Scene::epsilon() const { return epsilon_for(diagonal()); }
 
 CameraDesc frame_bounds(const Vec3& lo, const Vec3& hi, float fov_deg, float aspect) {
   CameraDesc cam;
@@ -122,7 +126,9 @@ CameraDesc frame_bounds(const Vec3& lo, const Vec3& hi, float fov_deg, float asp
 
 void check_scene_extent(const Scene& scene, const std::string& where) {
   if (scene.total_triangles() == 0) throw InputError(where + ": no facets");
-  const double diag = scene.diagonal();
+  Vec3 lo, hi;
+  scene.bounds(lo, hi);
+  const double diag = box_diagonal(lo, hi);
   const float diag_f = static_cast<float>(diag);
   if (!std::isfinite(diag_f))
     throw InputError(where + ": scene extent overflows float (bounding-box diagonal " +
@@ -131,7 +137,7 @@ void check_scene_extent(const Scene& scene, const std::string& where) {
     throw InputError(where + ": scene extent too large (bounding-box diagonal " +
                      short_number(diag) + ", the limit is " + short_number(kMaxSceneExtent) +
                      ")");
-  const float eps = scene.epsilon();
+  const float eps = epsilon_for(diag);
   if (!(diag_f > 0) || !(eps > 0) || !std::isfinite(eps))
     throw InputError(where + ": scene has no extent (bounding-box diagonal " +
                      short_number(diag) + ", so epsilon is not positive)");

@@ -157,6 +157,12 @@ struct Scene {
   double diagonal() const;
 };
 
+// The diagonal of the box [lo, hi] in double, and SPEC's epsilon for it:
+// one home for both, so that code that already holds the bounds (a scan of
+// every facet) need not scan again.
+double box_diagonal(const Vec3& lo, const Vec3& hi);
+inline float epsilon_for(double diagonal) { return static_cast<float>(1e-4 * diagonal); }
+
 // Samples per pixel (SPEC "Camera"): N = k*k with 1 <= N <= kMaxSpp. The
 // bound (k <= 32) keeps every pixel's 64-bit fixed-point sum of N samples far
 // from overflow and a render's cost (N times the rays of N = 1) sane.

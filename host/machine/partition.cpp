@@ -533,16 +533,17 @@ FrameParams frame_params(const Scene& scene, const BankedScene& bs, int bank_cap
   }
   fp.tan_half_fov = cam.tan_half_fov;
   fp.aspect = cam.aspect;
-  fp.epsilon = scene.epsilon();
   {
+    Vec3 lo, hi;
+    scene.bounds(lo, hi);
+    const double diagonal = box_diagonal(lo, hi);
+    fp.epsilon = epsilon_for(diagonal);
     // The facet test's rounding follows the coordinates' magnitude (the
     // vertices are taken relative to the ray's origin): 2^-20 of it is some
     // 16 ulp, far above what was measured (2e-7 at coordinates of 10).
-    Vec3 lo, hi;
-    scene.bounds(lo, hi);
     float magnitude = 0;
     for (int a = 0; a < 3; ++a) magnitude = std::max({magnitude, std::fabs(lo[a]), std::fabs(hi[a])});
-    fp.box_slack = std::ldexp(magnitude + static_cast<float>(scene.diagonal()), -20);
+    fp.box_slack = std::ldexp(magnitude + static_cast<float>(diagonal), -20);
   }
   fp.width = scene.width;
   fp.height = scene.height;

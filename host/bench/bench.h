@@ -80,6 +80,24 @@ struct BaselineImage : ImageResult {
 // as the OPSILA renderer. `tile` bounds the pixels of one launch.
 BaselineImage render_megakernel(const Scene& scene, ClRuntime& runtime, int tile = 1 << 16);
 
+// Traversal alone: the rays of one megakernel frame (every primary,
+// secondary and shadow ray it counts, in its order), traced again through
+// the megakernel's BVH by batch kernels that do nothing else
+// (kernels/baselines/traversal.cl): no camera, shading, accumulation or
+// output. Kernel times, OpenCL-profiled: `warmup` untimed runs, then the
+// run of median total of `repeats`. Not present (with the reason) when the
+// device cannot hold the rays.
+struct TraversalAlone {
+  bool present = false;
+  std::string skipped;
+  std::size_t nearest_rays = 0, any_rays = 0;  // primary and secondary rays; shadow rays
+  std::vector<double> seconds_all, nearest_seconds_all, any_seconds_all;
+  double seconds = 0, nearest_seconds = 0, any_seconds = 0;  // of the median run
+  std::size_t rays() const { return nearest_rays + any_rays; }
+};
+TraversalAlone measure_traversal_alone(const Scene& scene, ClRuntime& runtime, int warmup, int repeats,
+                                       int tile = 1 << 16);
+
 // True when the binary was built with Embree (CMake found it).
 bool embree_available();
 std::string embree_version();

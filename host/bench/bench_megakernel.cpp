@@ -1,8 +1,11 @@
-// The replicated-scene megakernel baseline: host side of kernels/baselines/megakernel.cl.
+// The replicated-scene megakernel baseline (host side of
+// kernels/baselines/megakernel.cl), and the traversal alone over its rays
+// (kernels/baselines/traversal.cl).
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <string>
+#include <tuple>
 
 #include "bench/bench.h"
 #include "core/camera.h"
@@ -14,68 +17,113 @@
 
 namespace opsila {
 
+namespace {
+
+using Buf = cl::Buffer;
+// kernels/baselines/megakernel.cl: frame, bank nodes and facets, materials,
+// lights, surface, root node, sample grid side and offsets, pixels, pixel
+// sums, ray counts, item buffer; megakernel_rays adds where each pixel's
+// rays go and the ray log.
+using MegaKernel = KernelBinding<FrameParams, Buf, Buf, Buf, Buf, SurfaceBuffers, int, int, Buf, int, int, Buf, Buf, Buf>;
+using MegaRaysKernel =
+    KernelBinding<FrameParams, Buf, Buf, Buf, Buf, SurfaceBuffers, int, int, Buf, int, int, Buf, Buf, Buf, Buf, Buf>;
+
+// The whole scene on one PE: bank 0 under one BVH (clusters on top).
+struct MegaScene {
+  BankedScene bs;
+  FrameParams fp{};
+  double build_seconds = 0;
+};
+
+MegaScene mega_scene(const Scene& scene) {
+  auto t_build = std::chrono::steady_clock::now();
+  MegaScene m;
+  m.bs = partition_scene(scene, 1);
+  m.fp = frame_params(scene, m.bs, 0);
+  m.build_seconds = seconds_since(t_build);
+  return m;
+}
+
+// The megakernel's inputs and outputs on the device.
+struct MegaBuffers {
+  Buf tris, nodes, mats, lights, offsets, accum, counts, items;
+  SurfaceBuffers surface;
+};
+
+MegaBuffers mega_buffers(ClRuntime& rt, const Scene& scene, const BankedScene& bs) {
+  const std::size_t npix = std::size_t(scene.width) * scene.height;
+  MegaBuffers b;
+  b.tris = upload(rt, bs.triangles, "facets");
+  b.nodes = upload(rt, bs.nodes, "BVH nodes");
+  b.mats = upload(rt, bs.materials, "materials");
+  std::vector<Light> lights = bs.lights;
+  if (lights.empty()) lights.push_back(Light{});
+  b.lights = upload(rt, lights, "lights");
+  b.surface = upload_surface(rt, bs);
+  b.accum = device_buffer(rt, npix * 3 * sizeof(cl_long), "pixel sums");
+  b.counts = device_buffer(rt, npix * sizeof(cl_uint4), "ray counts");
+  b.items = device_buffer(rt, npix * sizeof(cl_int2), "item buffer");
+  b.offsets = upload(rt, sample_offsets(scene.spp), "sample offsets");
+  return b;
+}
+
+// One fixed work-group size, so a driver that specialises kernels per size
+// (PoCL) compiles each kernel once: a power of two up to 64, dividing the
+// rounded global size.
+std::size_t fixed_local(ClRuntime& rt, cl::Kernel& k) {
+  std::size_t local = k.getWorkGroupInfo<CL_KERNEL_WORK_GROUP_SIZE>(rt.device().device);
+  local = std::min<std::size_t>(local, 64);
+  while (local & (local - 1)) local &= local - 1;
+  return std::max<std::size_t>(local, 1);
+}
+
+// Launches `k` over the pixels in tiles of `tile`; bind(begin, count) sets its arguments.
+template <typename Bind>
+void launch_tiles(ClRuntime& rt, Launcher& launch, cl::Kernel& k, const char* name, std::size_t npix, int tile,
+                  Bind&& bind) {
+  const std::size_t local = fixed_local(rt, k);
+  tile = std::max(1, tile);
+  for (std::size_t begin = 0; begin < npix; begin += std::size_t(tile)) {
+    const int count = static_cast<int>(std::min<std::size_t>(std::size_t(tile), npix - begin));
+    bind(static_cast<int>(begin), count);
+    launch.run(k, name, round_up(count, 64), local, -1);
+  }
+}
+
+}  // namespace
+
 BaselineImage render_megakernel(const Scene& scene, ClRuntime& rt, int tile) {
   check_kernel_limits(scene);
   const std::size_t npix = std::size_t(scene.width) * scene.height;
   BaselineImage out;
   out.width = scene.width;
   out.height = scene.height;
+  const MegaScene ms = mega_scene(scene);
+  out.build_seconds = ms.build_seconds;
 
-  // One PE: bank 0 is the whole scene under one BVH (clusters on top).
-  auto t_build = std::chrono::steady_clock::now();
-  BankedScene bs = partition_scene(scene, 1);
-  FrameParams fp = frame_params(scene, bs, 0);
-  out.build_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_build).count();
-
-  rt.program();  // compile before timing
-  // kernels/baselines/megakernel.cl: frame, bank nodes and facets,
-  // materials, lights, surface, root node, sample grid side and offsets,
-  // pixels, pixel sums, ray counts, item buffer.
-  using Buf = cl::Buffer;
-  KernelBinding<FrameParams, Buf, Buf, Buf, Buf, SurfaceBuffers, int, int, Buf, int, int, Buf, Buf, Buf> mega(
-      rt, "megakernel", KernelProgram::baselines);
-  cl::Kernel& k = mega.kernel();
+  rt.program(KernelProgram::baselines);  // compile before timing
+  MegaKernel mega(rt, "megakernel", KernelProgram::baselines);
   cl::CommandQueue& q = rt.queue();
 
   auto t0 = std::chrono::steady_clock::now();
-  cl::Buffer b_tris = upload(rt, bs.triangles, "facets");
-  cl::Buffer b_nodes = upload(rt, bs.nodes, "BVH nodes");
-  cl::Buffer b_mats = upload(rt, bs.materials, "materials");
-  std::vector<Light> lights = bs.lights;
-  if (lights.empty()) lights.push_back(Light{});
-  cl::Buffer b_lights = upload(rt, lights, "lights");
-  const SurfaceBuffers surface = upload_surface(rt, bs);
-  cl::Buffer b_accum = device_buffer(rt, npix * 3 * sizeof(cl_long), "pixel sums");
-  cl::Buffer b_counts = device_buffer(rt, npix * sizeof(cl_uint4), "ray counts");
-  cl::Buffer b_items = device_buffer(rt, npix * sizeof(cl_int2), "item buffer");
-  cl::Buffer b_offsets = upload(rt, sample_offsets(scene.spp), "sample offsets");
-
+  const MegaBuffers b = mega_buffers(rt, scene, ms.bs);
   std::vector<LaunchRecord> launches;
   Launcher launch(rt, launches);
-  // One fixed work-group size, so a driver that specialises kernels per size
-  // (PoCL) compiles this one once.
-  std::size_t local = k.getWorkGroupInfo<CL_KERNEL_WORK_GROUP_SIZE>(rt.device().device);
-  local = std::min<std::size_t>(local, 64);
-  while (local & (local - 1)) local &= local - 1;  // a power of two, dividing the rounded global size
-  local = std::max<std::size_t>(local, 1);
-  tile = std::max(1, tile);
-  for (std::size_t begin = 0; begin < npix; begin += tile) {
-    int count = static_cast<int>(std::min<std::size_t>(tile, npix - begin));
-    mega.bind(fp, b_nodes, b_tris, b_mats, b_lights, surface, bs.pes[0].node_begin, spp_side(scene.spp), b_offsets,
-              static_cast<int>(begin), count, b_accum, b_counts, b_items);
-    launch.run(k, "megakernel", round_up(count, 64), local, -1);
-  }
+  launch_tiles(rt, launch, mega.kernel(), "megakernel", npix, tile, [&](int begin, int count) {
+    mega.bind(ms.fp, b.nodes, b.tris, b.mats, b.lights, b.surface, ms.bs.pes[0].node_begin, spp_side(scene.spp),
+              b.offsets, begin, count, b.accum, b.counts, b.items);
+  });
   std::vector<cl_long> accum(npix * 3);
   std::vector<cl_uint4> counts(npix);
   out.item_buffer.resize(npix * 2);
-  launch.check(q.enqueueReadBuffer(b_accum, CL_TRUE, 0, accum.size() * sizeof(cl_long), accum.data()),
+  launch.check(q.enqueueReadBuffer(b.accum, CL_TRUE, 0, accum.size() * sizeof(cl_long), accum.data()),
                "clEnqueueReadBuffer(megakernel pixel sums)");
-  launch.check(q.enqueueReadBuffer(b_counts, CL_TRUE, 0, counts.size() * sizeof(cl_uint4), counts.data()),
+  launch.check(q.enqueueReadBuffer(b.counts, CL_TRUE, 0, counts.size() * sizeof(cl_uint4), counts.data()),
                "clEnqueueReadBuffer(megakernel ray counts)");
-  launch.check(q.enqueueReadBuffer(b_items, CL_TRUE, 0, npix * sizeof(cl_int2), out.item_buffer.data()),
+  launch.check(q.enqueueReadBuffer(b.items, CL_TRUE, 0, npix * sizeof(cl_int2), out.item_buffer.data()),
                "clEnqueueReadBuffer(megakernel item buffer)");
   launch.check(q.finish(), "clFinish");
-  out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  out.seconds = seconds_since(t0);
   launch.harvest();
   for (const LaunchRecord& r : launches) out.kernel_seconds += r.seconds;
 
@@ -90,6 +138,108 @@ BaselineImage render_megakernel(const Scene& scene, ClRuntime& rt, int tile) {
     out.triangle_tests += c.s[2];
     out.box_tests += c.s[3];
   }
+  return out;
+}
+
+namespace {
+
+// The rays one megakernel frame traces, in its order: a first run counts
+// each pixel's rays, a second (megakernel_rays) writes them from each
+// pixel's prefix sum on. Split into nearest-hit and any-hit rays. Returns
+// false, with the reason, when the device cannot hold them.
+struct RayLog {
+  std::vector<cl_float4> nearest, any;  // two float4 per ray
+};
+
+bool log_megakernel_rays(const Scene& scene, ClRuntime& rt, const MegaScene& ms, const MegaBuffers& b, int tile,
+                         RayLog& log, std::string& why) {
+  const std::size_t npix = std::size_t(scene.width) * scene.height;
+  MegaKernel mega(rt, "megakernel", KernelProgram::baselines);
+  MegaRaysKernel rays(rt, "megakernel_rays", KernelProgram::baselines);
+  const int root = ms.bs.pes[0].node_begin, side = spp_side(scene.spp);
+  std::vector<LaunchRecord> launches;
+  Launcher launch(rt, launches);
+  launch_tiles(rt, launch, mega.kernel(), "megakernel", npix, tile, [&](int begin, int count) {
+    mega.bind(ms.fp, b.nodes, b.tris, b.mats, b.lights, b.surface, root, side, b.offsets, begin, count, b.accum,
+              b.counts, b.items);
+  });
+  std::vector<cl_uint4> counts(npix);
+  launch.check(rt.queue().enqueueReadBuffer(b.counts, CL_TRUE, 0, npix * sizeof(cl_uint4), counts.data()),
+               "clEnqueueReadBuffer(megakernel ray counts)");
+  std::vector<cl_uint> first(npix);
+  std::uint64_t total = 0;
+  for (std::size_t p = 0; p < npix; ++p) {
+    first[p] = static_cast<cl_uint>(std::min<std::uint64_t>(total, 0xffffffffu));
+    total += std::uint64_t(scene.spp) + counts[p].s[0] + counts[p].s[1];
+  }
+  const std::uint64_t bytes = total * 2 * sizeof(cl_float4);
+  if (total >= 0x7fffffffu || bytes > rt.max_alloc()) {
+    why = std::to_string(total) + " rays need a log of " + format_size(bytes) + ", the device allows " +
+          format_size(rt.max_alloc());
+    return false;
+  }
+  const Buf b_first = upload(rt, first, "ray log offsets");
+  const Buf b_log = device_buffer(rt, std::max<std::uint64_t>(bytes, 1), "ray log");
+  launch_tiles(rt, launch, rays.kernel(), "megakernel_rays", npix, tile, [&](int begin, int count) {
+    rays.bind(ms.fp, b.nodes, b.tris, b.mats, b.lights, b.surface, root, side, b.offsets, begin, count, b.accum,
+              b.counts, b.items, b_first, b_log);
+  });
+  std::vector<cl_float4> all(total * 2);
+  if (total > 0)
+    launch.check(rt.queue().enqueueReadBuffer(b_log, CL_TRUE, 0, bytes, all.data()),
+                 "clEnqueueReadBuffer(ray log)");
+  launch.harvest();
+  for (std::size_t i = 0; i < all.size(); i += 2) {
+    std::vector<cl_float4>& to = all[i + 1].s[3] < 0 ? log.nearest : log.any;
+    to.push_back(all[i]);
+    to.push_back(all[i + 1]);
+  }
+  return true;
+}
+
+}  // namespace
+
+TraversalAlone measure_traversal_alone(const Scene& scene, ClRuntime& rt, int warmup, int repeats, int tile) {
+  check_kernel_limits(scene);
+  TraversalAlone out;
+  const MegaScene ms = mega_scene(scene);
+  rt.program(KernelProgram::baselines);
+  const MegaBuffers b = mega_buffers(rt, scene, ms.bs);
+  RayLog log;
+  if (!log_megakernel_rays(scene, rt, ms, b, tile, log, out.skipped)) return out;
+  out.present = true;
+  out.nearest_rays = log.nearest.size() / 2;
+  out.any_rays = log.any.size() / 2;
+  // kernels/baselines/traversal.cl: nodes, facets, root, slack, rays, count, one word per ray.
+  using Batch = KernelBinding<Buf, Buf, int, float, Buf, int, Buf>;
+  Batch nearest(rt, "traversal_nearest", KernelProgram::baselines), any(rt, "traversal_any", KernelProgram::baselines);
+  const Buf b_nearest = upload(rt, log.nearest, "nearest-hit rays");
+  const Buf b_any = upload(rt, log.any, "any-hit rays");
+  const Buf b_hits = device_buffer(rt, std::max<std::size_t>(out.nearest_rays, out.any_rays) * sizeof(cl_int) + 4,
+                                   "traversal answers");
+  const int root = ms.bs.pes[0].node_begin;
+  for (int r = 0; r < warmup + repeats; ++r) {
+    std::vector<LaunchRecord> launches;
+    Launcher launch(rt, launches);
+    for (auto [k, rays, count] : {std::tuple{&nearest, &b_nearest, out.nearest_rays},
+                                  std::tuple{&any, &b_any, out.any_rays}}) {
+      if (count == 0) continue;
+      cl::Kernel& kk = k->bind(b.nodes, b.tris, root, ms.fp.box_slack, *rays, static_cast<int>(count), b_hits);
+      launch.run(kk, k->name().c_str(), round_up(static_cast<int>(count), 64), fixed_local(rt, kk), -1);
+    }
+    launch.check(rt.queue().finish(), "clFinish");
+    launch.harvest();
+    if (r < warmup) continue;
+    double n = 0, a = 0;
+    for (const LaunchRecord& l : launches) (l.name == "traversal_nearest" ? n : a) += l.seconds;
+    out.nearest_seconds_all.push_back(n);
+    out.any_seconds_all.push_back(a);
+    out.seconds_all.push_back(n + a);
+  }
+  const std::size_t m = median_index(out.seconds_all);
+  out.seconds = out.seconds_all[m];
+  out.nearest_seconds = out.nearest_seconds_all[m];
+  out.any_seconds = out.any_seconds_all[m];
   return out;
 }
 

@@ -139,6 +139,9 @@ void measure_baselines(BenchReport& report, const Scene& scene, ClRuntime& rt, c
   progress("replicated megakernel: %d warm-up + %d timed runs", warmup, repeats);
   report.megakernel = measure_baseline("replicated_megakernel", "replicated megakernel (same device)", 0, warmup,
                                        repeats, [&] { return render_megakernel(scene, rt); });
+  progress("traversal alone: the megakernel's rays through its BVH, %d warm-up + %d timed runs", warmup, repeats);
+  report.traversal = measure_traversal_alone(scene, rt, warmup, repeats);
+  if (!report.traversal.present) progress("traversal alone: not measured: %s", report.traversal.skipped.c_str());
   progress("sequential host reference, 1 thread: %d timed runs", host_repeats);
   report.sequential = measure_baseline("sequential_host", "host reference, 1 thread", 1, 0, host_repeats,
                                        [&] {

@@ -116,6 +116,11 @@ std::vector<const BaselineRun*> BenchReport::baselines() const {
   return out;
 }
 
+std::optional<double> BenchReport::over_traversal(double seconds, std::uint64_t rays) const {
+  if (!traversal.present || traversal.rays() == 0 || !(traversal.seconds > 0) || rays == 0) return std::nullopt;
+  return (seconds / double(rays)) / (traversal.seconds / double(traversal.rays()));
+}
+
 std::optional<double> BenchReport::vs_embree(double mrays_per_s) const {
   if (!embree.present) return std::nullopt;
   const double e = mrays(embree.median_run.rays.total(), embree.seconds);

@@ -99,6 +99,9 @@ struct BenchReport {
 
   // 2. baselines on the same rays.
   BaselineRun megakernel, sequential, threads, embree;
+  // The megakernel's rays through its BVH with nothing else: what the
+  // renders spend per ray beyond it is shading, accumulation and exchange.
+  TraversalAlone traversal;
 
   // 3. the scatter curve, and one length over several PE counts.
   int scatter_pes = 0;
@@ -133,6 +136,9 @@ struct BenchReport {
   // balance), to set beside the baselines' builds (build_seconds).
   double prepare_seconds() const;
   double replicated_over_bank_max() const;
+  // Seconds per ray of a render over those of the traversal alone (none
+  // when it was not measured).
+  std::optional<double> over_traversal(double seconds, std::uint64_t rays) const;
 };
 
 // Several MPI ranks: what the exchange between them costs, from the

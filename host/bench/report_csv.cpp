@@ -97,6 +97,9 @@ std::string baselines_csv(const BenchReport& r) {
   for (const BaselineRun* b : r.baselines())
     bl << b->name << ',' << num(b->seconds) << ',' << b->median_run.rays.total() << ','
        << num(mrays(b->median_run.rays.total(), b->seconds)) << '\n';
+  if (r.traversal.present)
+    bl << "traversal_alone," << num(r.traversal.seconds) << ',' << r.traversal.rays() << ','
+       << num(mrays(r.traversal.rays(), r.traversal.seconds)) << '\n';
   return bl.str();
 }
 

@@ -307,6 +307,29 @@ json baselines_json(const BenchReport& r) {
   return baselines;
 }
 
+// The traversal alone (null when not measured), and each render's seconds
+// per ray over its seconds per ray.
+json traversal_json(const BenchReport& r) {
+  const TraversalAlone& t = r.traversal;
+  if (!t.present) return nullptr;
+  const BaselineImage& mk = r.megakernel.median_run;
+  return {{"bvh", "megakernel"},
+          {"seconds", t.seconds},
+          {"seconds_all", t.seconds_all},
+          {"seconds_spread", spread_json(spread_of(t.seconds_all))},
+          {"rays", t.rays()},
+          {"nearest_rays", t.nearest_rays},
+          {"any_rays", t.any_rays},
+          {"nearest_seconds", t.nearest_seconds},
+          {"any_seconds", t.any_seconds},
+          {"mrays_per_s", mrays(t.rays(), t.seconds)},
+          {"rays_match_megakernel", t.rays() == mk.rays.total()},
+          {"megakernel_kernels_over_traversal", optional_value(r.over_traversal(r.megakernel.kernel_seconds,
+                                                                                mk.rays.total()))},
+          {"megakernel_over_traversal", optional_value(r.over_traversal(r.megakernel.seconds, mk.rays.total()))},
+          {"opsila_over_traversal", optional_value(r.over_traversal(r.render_seconds, r.rays_total()))}};
+}
+
 // Several MPI ranks: the --stats "mpi" section (per-rank reports, the rank x
 // rank traffic) and what the exchange between ranks costs.
 json mpi_json(const BenchReport& r) {
@@ -393,6 +416,7 @@ nlohmann::json bench_json(const BenchReport& r) {
   j["memory"] = memory_json(r);
   j["prepare"] = prepare_bench_json(r);
   j["baselines"] = baselines_json(r);
+  j["traversal_alone"] = traversal_json(r);
   j["targets"] = targets_json(r);
   return j;
 }

@@ -87,6 +87,29 @@ void renders_text(std::string& out, const BenchReport& r) {
           ull(r.opsila.rays.shadow));
 }
 
+// The traversal alone, and each render's time per ray beside it.
+void traversal_text(std::string& out, const BenchReport& r) {
+  const TraversalAlone& t = r.traversal;
+  if (!r.megakernel.present) return;
+  if (!t.present) {
+    appendf(out, "traversal alone: not measured (%s)\n\n", t.skipped.c_str());
+    return;
+  }
+  appendf(out, "traversal alone (the megakernel's BVH and rays, nothing else): %.4f s, %.3f Mrays/s "
+               "(nearest hit %zu rays %.4f s, any hit %zu rays %.4f s)\n",
+          t.seconds, mrays(t.rays(), t.seconds), t.nearest_rays, t.nearest_seconds, t.any_rays, t.any_seconds);
+  const double ns = 1e9 * t.seconds / double(std::max<std::size_t>(t.rays(), 1));
+  auto per_ray = [&](const char* what, double seconds, std::uint64_t rays) {
+    const auto x = r.over_traversal(seconds, rays);
+    if (!x) return;
+    appendf(out, "  %-34s %8.1f ns per ray = traversal %.1f + %.1f (%.2fx)\n", what, ns * *x, ns, ns * (*x - 1), *x);
+  };
+  per_ray("megakernel, kernels", r.megakernel.kernel_seconds, r.megakernel.median_run.rays.total());
+  per_ray("megakernel, frame", r.megakernel.seconds, r.megakernel.median_run.rays.total());
+  per_ray("OPSILA, frame", r.render_seconds, r.rays_total());
+  appendf(out, "\n");
+}
+
 // OPSILA's preparation beside the baselines' builds of the same scene.
 void prepare_text(std::string& out, const BenchReport& r) {
   const PrepareTimes& t = r.stats().prepare;
@@ -219,6 +242,7 @@ std::string bench_text(const BenchReport& r) {
   std::string out;
   header_text(out, r);
   renders_text(out, r);
+  traversal_text(out, r);
   prepare_text(out, r);
   phases_text(out, r);
   ranks_text(out, r);

@@ -23,13 +23,21 @@
  * ray_counts: per pixel (secondary rays spawned, shadow rays spawned, as
  * RenderStats counts them; ray-facet tests, ray-box tests).
  * items: (object, facet) of the centre ray's primary hit. */
-__kernel void megakernel(FrameParams fp, __global const BankNode *nodes, __global const BankTriangle *tris,
-                         __global const Material *materials, __global const Light *lights, SURFACE_PARAMS, int root,
-                         int spp_k, __global const float *offsets, int pixel_begin, int pixel_count,
-                         __global long *accum, __global uint4 *ray_counts, __global int2 *items) {
-  int k = get_global_id(0);
-  if (k >= pixel_count) return;
-  int pixel = pixel_begin + k;
+/* ray_log: 0, or where this pixel's rays go, from ray_log[2 * log_at] on
+ * (megakernel_rays below): each ray traced, in the order traced (the centre
+ * ray of an even sample grid apart, which is not counted as a ray), as
+ * (origin, tmin) and (direction, tmax), tmax < 0 for a nearest-hit ray. */
+#define MEGA_LOG(o, dir, tmin, tmax)                  \
+  if (ray_log) {                                      \
+    ray_log[2 * log_at] = (float4)((o), (tmin));      \
+    ray_log[2 * log_at + 1] = (float4)((dir), (tmax)); \
+    ++log_at;                                         \
+  }
+
+inline void mega_pixel(FrameParams fp, __global const BankNode *nodes, __global const BankTriangle *tris,
+                       __global const Material *materials, __global const Light *lights, SURFACE_PARAMS, int root,
+                       int spp_k, __global const float *offsets, int pixel, __global long *accum,
+                       __global uint4 *ray_counts, __global int2 *items, __global float4 *ray_log, uint log_at) {
   int x = pixel % fp.width, y = pixel / fp.width;
   float eps = fp.epsilon;
 
@@ -66,6 +74,7 @@ __kernel void megakernel(FrameParams fp, __global const BankNode *nodes, __globa
       int level = s_level[sp];
       /* Primary rays accept any t > 0 (the item buffer's rule); others t > eps. */
       float tmin = level == 0 ? 0.0f : eps;
+      MEGA_LOG(org, d, tmin, -1.0f);
       RayPre r = make_ray(org, d);
       float t = OPSILA_INF;
       int hit = -1, facet = INT_MAX;
@@ -90,6 +99,7 @@ __kernel void megakernel(FrameParams fp, __global const BankNode *nodes, __globa
         float3 contrib = light_term(m, &lights[l], surf, d, weight, &lv, &dist);
         if (all(contrib == (float3)(0.0f))) continue;
         ++shadow;
+        MEGA_LOG(p, lv, eps, dist);
         RayPre sr = make_ray(p, lv);
         if (!traverse_any(&sr, nodes, tris, root, eps, dist, fp.box_slack, &tri_tests, &box_tests, &no_probe))
           sum = add_sat(sum, fixed3(contrib)); /* >= 0: saturates as add_fixed does */
@@ -122,4 +132,28 @@ __kernel void megakernel(FrameParams fp, __global const BankNode *nodes, __globa
   accum[pixel * 3 + 2] = sum.z;
   ray_counts[pixel] = (uint4)(secondary, shadow, tri_tests, box_tests);
   items[pixel] = item;
+}
+
+__kernel void megakernel(FrameParams fp, __global const BankNode *nodes, __global const BankTriangle *tris,
+                         __global const Material *materials, __global const Light *lights, SURFACE_PARAMS, int root,
+                         int spp_k, __global const float *offsets, int pixel_begin, int pixel_count,
+                         __global long *accum, __global uint4 *ray_counts, __global int2 *items) {
+  int k = get_global_id(0);
+  if (k >= pixel_count) return;
+  mega_pixel(fp, nodes, tris, materials, lights, SURFACE_ARGS, root, spp_k, offsets, pixel_begin + k, accum,
+             ray_counts, items, 0, 0u);
+}
+
+/* The same frame, every ray also written to ray_log from ray_log[2 *
+ * log_first[pixel]] on (the prefix sums of the rays counted by a megakernel
+ * run), for the bench's traversal-alone figure (baselines/traversal.cl). */
+__kernel void megakernel_rays(FrameParams fp, __global const BankNode *nodes, __global const BankTriangle *tris,
+                              __global const Material *materials, __global const Light *lights, SURFACE_PARAMS,
+                              int root, int spp_k, __global const float *offsets, int pixel_begin, int pixel_count,
+                              __global long *accum, __global uint4 *ray_counts, __global int2 *items,
+                              __global const uint *log_first, __global float4 *ray_log) {
+  int k = get_global_id(0);
+  if (k >= pixel_count) return;
+  mega_pixel(fp, nodes, tris, materials, lights, SURFACE_ARGS, root, spp_k, offsets, pixel_begin + k, accum,
+             ray_counts, items, ray_log, log_first[pixel_begin + k]);
 }

@@ -58,6 +58,24 @@ TEST(Bench, MegakernelTilesDoNotChangeTheImage) {
   EXPECT_EQ(whole.rays.total(), tiled.rays.total());
 }
 
+// The traversal alone traces exactly the megakernel's rays: its primary and
+// secondary rays as nearest-hit rays, its shadow rays as any-hit rays (an
+// even sample grid's centre ray, not counted as a ray, is left out).
+TEST(Bench, TraversalAloneTracesTheMegakernelsRays) {
+  for (int spp : {1, 4}) {
+    Scene s = test::mirror_glass_scene(40, 4);
+    s.spp = spp;
+    const BaselineImage mega = render_megakernel(s, runtime());
+    const TraversalAlone t = measure_traversal_alone(s, runtime(), 0, 2, 500);
+    ASSERT_TRUE(t.present) << t.skipped;
+    ASSERT_GT(mega.rays.secondary, 0u);
+    EXPECT_EQ(t.nearest_rays, mega.rays.primary + mega.rays.secondary) << spp;
+    EXPECT_EQ(t.any_rays, mega.rays.shadow) << spp;
+    EXPECT_EQ(t.seconds_all.size(), 2u);
+    EXPECT_DOUBLE_EQ(t.seconds, t.nearest_seconds + t.any_seconds);
+  }
+}
+
 TEST(Bench, RayCountsAgreeAcrossImplementations) {
   const Scene s = test::mirror_glass_scene(80, 5);
   const RayCounts st = render_opsila(s, 8).rays;
@@ -313,6 +331,23 @@ TEST(Bench, QuickRunWritesEveryJsonKey) {
 
   for (const char* name : {"scatter.csv", "phases.csv", "levels.csv", "occupancy.csv", "traffic.csv", "baselines.csv"})
     EXPECT_TRUE(test::file_exists(csv + "/" + name)) << name;
+
+  // The traversal alone: the megakernel's rays, and every render per ray beside it.
+  const nlohmann::json& t = j["traversal_alone"];
+  ASSERT_TRUE(t.is_object()) << t.dump();
+  const nlohmann::json& mk = b["replicated_megakernel"];
+  EXPECT_EQ(t["rays"], mk["rays"]);
+  EXPECT_TRUE(t["rays_match_megakernel"].get<bool>());
+  EXPECT_EQ(t["nearest_rays"].get<std::uint64_t>(), mk["rays_by_kind"]["primary"].get<std::uint64_t>() +
+                                                        mk["rays_by_kind"]["secondary"].get<std::uint64_t>());
+  EXPECT_EQ(t["any_rays"], mk["rays_by_kind"]["shadow"]);
+  EXPECT_GT(t["seconds"].get<double>(), 0.0);
+  EXPECT_GT(t["mrays_per_s"].get<double>(), 0.0);
+  for (const char* key : {"megakernel_kernels_over_traversal", "megakernel_over_traversal", "opsila_over_traversal"})
+    EXPECT_GT(t[key].get<double>(), 0.0) << key;
+  EXPECT_NE(r.out.find("traversal alone (the megakernel's BVH and rays"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("OPSILA, frame"), std::string::npos) << r.out;
+  EXPECT_NE(test::read_file(csv + "/baselines.csv").find("\ntraversal_alone,"), std::string::npos);
 }
 
 

@@ -125,6 +125,22 @@ typedef std::uint32_t opsila_u32;
 enum { OPSILA_STAT_COUNTERS(OPSILA_STAT_INDEX) OPSILA_STAT_COUNT };
 #undef OPSILA_STAT_INDEX
 
+/* The counters whose SUM is NONE measure the work (tests, forwards, kinds
+ * processed): only --stats and the bench read them. A program built with
+ * OPSILA_COUNT_WORK=0 (the render program when neither asks) leaves them,
+ * the ray-box, ray-facet and destination tests and the PE x PE traffic out;
+ * the spawned and finished counts (ray counts, progress) stay. Other
+ * programs count everything. OPSILA_STAT_WORK_name is 1 for a work counter. */
+#ifndef OPSILA_COUNT_WORK
+#define OPSILA_COUNT_WORK 1
+#endif
+#define OPSILA_STAT_SUM_IS_WORK_NONE 1
+#define OPSILA_STAT_SUM_IS_WORK_SPAWNED 0
+#define OPSILA_STAT_SUM_IS_WORK_FINISHED 0
+#define OPSILA_STAT_WORK_FLAG(name, json, sum) OPSILA_STAT_WORK_##name = OPSILA_STAT_SUM_IS_WORK_##sum,
+enum { OPSILA_STAT_COUNTERS(OPSILA_STAT_WORK_FLAG) OPSILA_STAT_WORK_END };
+#undef OPSILA_STAT_WORK_FLAG
+
 /* Every counter the device accumulates over a frame (statistics, PE x PE
  * traffic, primary hits) is 64 bits wide, stored as two 32-bit words (low,
  * high) and added with add_fixed (kernels/lib/accum.cl): enough for the

@@ -69,17 +69,17 @@ inline int shadow_visit(const Routing *rt, const Bank *bank, const RayPre *r, fl
   bool blocked = !bank->empty && traverse_any(r, bank->nodes, bank->tris, bank->root, eps, tmax, bank->slack,
                                               &st->v[OPSILA_STAT_TRI_TESTS], &st->v[OPSILA_STAT_BOX_TESTS], probe);
   if (blocked) {
-    ++st->v[OPSILA_STAT_OCCLUDED];
+    STAT_INC(st, OCCLUDED);
     return VISIT_DONE;
   }
   int dest = next_shadow_destination(rt, r, eps, tmax, after_pe, home, &st->v[OPSILA_STAT_SPHERE_TESTS],
                                      &st->v[OPSILA_STAT_ROUTE_TESTS]);
   if (dest < 0) {
-    ++st->v[OPSILA_STAT_LIT];
+    STAT_INC(st, LIT);
     accumulate(accum, pixel, contrib);
     return VISIT_DONE;
   }
-  ++st->v[OPSILA_STAT_FORWARD];
+  STAT_INC(st, FORWARD);
   *next = make_descriptor(r->org, tmax, r->dir, 0.0f, contrib, pixel, meta, home, dest);
   return VISIT_SEND;
 }
@@ -101,20 +101,20 @@ inline int trace_visit(FrameParams fp, const Routing *rt, const Bank *bank, cons
   int dest = next_destination(rt, r, eps, tie_limit(*t_best), cursor_entry, bank->pe, &entry,
                               &st->v[OPSILA_STAT_SPHERE_TESTS], &st->v[OPSILA_STAT_ROUTE_TESTS]);
   if (dest >= 0) { /* a nearer hit (or a tie with a lower facet id) may wait in another bank */
-    ++st->v[OPSILA_STAT_FORWARD];
+    STAT_INC(st, FORWARD);
     *next = make_descriptor(r->org, *t_best, r->dir, entry, w, pixel, meta, *hit, dest);
     DESC_BEST_FACET(*next) = as_float(best_facet);
     return VISIT_SEND;
   }
   if (*hit < 0) {
-    ++st->v[OPSILA_STAT_MISS];
+    STAT_INC(st, MISS);
     accumulate(accum, pixel, w * load3(fp.background));
     return VISIT_DONE;
   }
   int owner = owner_pe(rt->pes, fp.num_pes, *hit);
   if (owner == bank->pe) return VISIT_SHADE;
   /* nearest hit known; its facet lives in another bank */
-  ++st->v[OPSILA_STAT_FORWARD];
+  STAT_INC(st, FORWARD);
   *next = make_descriptor(r->org, *t_best, r->dir, 0.0f, w, pixel, OPSILA_META(OPSILA_KIND_RESOLVED,
                                                                                OPSILA_META_LEVEL(meta)), *hit, owner);
   return VISIT_SEND;
@@ -143,8 +143,8 @@ inline void shade(FrameParams fp, const Routing *rt, const Bank *bank, __global 
     float dist;
     float3 contrib = light_term(m, &lights[l], sp, d, weight, &lv, &dist);
     if (all(contrib == (float3)(0.0f))) continue;
-    ++st->v[OPSILA_STAT_SPAWN_SHADOW];
-    ++st->v[OPSILA_STAT_LOCAL];
+    STAT_INC(st, SPAWN_SHADOW);
+    STAT_INC(st, LOCAL);
     RayPre sr = make_ray(p, lv);
     if (shadow_visit(rt, bank, &sr, eps, dist, -1, bank->pe, contrib, pixel, OPSILA_META(OPSILA_KIND_SHADOW, level),
                      accum, st, probe, &next) == VISIT_SEND)
@@ -169,14 +169,14 @@ inline void shade(FrameParams fp, const Routing *rt, const Bank *bank, __global 
   int child_meta = OPSILA_META(OPSILA_KIND_TRACE, level + 1);
   for (int j = 0; j < 2; ++j) {
     if (!child_ok[j]) continue;
-    ++st->v[OPSILA_STAT_SPAWN_RADIANCE];
+    STAT_INC(st, SPAWN_RADIANCE);
     RayPre cr = make_ray(p, child_d[j]);
     float entry;
     int dest = next_destination(rt, &cr, eps, OPSILA_INF, -1.0f, -1, &entry, &st->v[OPSILA_STAT_SPHERE_TESTS],
                                 &st->v[OPSILA_STAT_ROUTE_TESTS]);
     if (dest < 0) { /* meets no box or sphere: a miss, finished here */
       accumulate(accum, pixel, child_w[j] * load3(fp.background));
-      ++st_child->v[OPSILA_STAT_MISS];
+      STAT_INC(st_child, MISS);
       continue;
     }
     if (dest != bank->pe) {
@@ -185,13 +185,13 @@ inline void shade(FrameParams fp, const Routing *rt, const Bank *bank, __global 
     }
     /* Its first PE is this one: visit it now. A hit here that no other bank
      * can beat is shaded next round, by this PE, like any resolved hit. */
-    ++st_child->v[OPSILA_STAT_LOCAL];
+    STAT_INC(st_child, LOCAL);
     float t_best = OPSILA_INF;
     int hit = -1;
     int v = trace_visit(fp, rt, bank, &cr, child_w[j], pixel, child_meta, entry, &t_best, &hit, INT_MAX, accum,
                         st_child, probe_child, &next);
     if (v == VISIT_SHADE) {
-      ++st_child->v[OPSILA_STAT_FORWARD];
+      STAT_INC(st_child, FORWARD);
       next = make_descriptor(p, t_best, child_d[j], 0.0f, child_w[j], pixel,
                              OPSILA_META(OPSILA_KIND_RESOLVED, level + 1), hit, bank->pe);
       v = VISIT_SEND;
@@ -212,12 +212,12 @@ inline void process(FrameParams fp, const Routing *rt, const Bank *bank, __globa
   int kind = OPSILA_META_KIND(meta), level = OPSILA_META_LEVEL(meta);
   int pixel = DESC_PIXEL(ds);
   float3 org = DESC_ORIGIN(ds), d = DESC_DIRECTION(ds), w = DESC_WEIGHT(ds);
-  ++st->v[OPSILA_STAT_TRACED];
+  STAT_INC(st, TRACED);
   RayPre r = make_ray(org, d);
   Descriptor next;
 
   if (kind == OPSILA_KIND_SHADOW) {
-    ++st->v[OPSILA_STAT_SHADOW];
+    STAT_INC(st, SHADOW);
     if (shadow_visit(rt, bank, &r, eps, DESC_T_MAX(ds), bank->pe, DESC_SHADOW_HOME(ds), w, pixel, meta, accum, st,
                      probe, &next) == VISIT_SEND)
       emit(out, next);
@@ -226,14 +226,14 @@ inline void process(FrameParams fp, const Routing *rt, const Bank *bank, __globa
   float t_best = DESC_T_BEST(ds);
   int hit = DESC_HIT(ds);
   if (kind == OPSILA_KIND_TRACE) {
-    ++st->v[OPSILA_STAT_RADIANCE];
+    STAT_INC(st, RADIANCE);
     int best_facet = hit >= 0 ? as_int(DESC_BEST_FACET(ds)) : INT_MAX;
     int v = trace_visit(fp, rt, bank, &r, w, pixel, meta, DESC_CURSOR_ENTRY(ds), &t_best, &hit, best_facet, accum,
                         st, probe, &next);
     if (v == VISIT_SEND) emit(out, next);
     if (v != VISIT_SHADE) return;
   }
-  ++st->v[OPSILA_STAT_RESOLVED];
+  STAT_INC(st, RESOLVED);
   shade(fp, rt, bank, materials, lights, SURFACE_ARGS, org, d, t_best, hit - fp.tri_base, w, pixel, level, out,
         accum, st, st_child, probe, probe_child);
 }

@@ -234,6 +234,7 @@ int run_render(const std::vector<std::string>& args) {
     if (const std::string note = large_work_note(scene); !note.empty()) print_line("note", note);
   Progress progress("render", !o.quiet && writer);
   settings.progress = &progress;
+  settings.count_work = !o.stats_path.empty();  // only --stats reads the work counters
 
   RenderResult result;
   std::string device;

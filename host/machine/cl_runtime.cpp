@@ -376,8 +376,9 @@ cl::Program& ClRuntime::program(KernelProgram which) {
   program = cl::Program(context_, source, false, &err);
   cl_check(err, "clCreateProgramWithSource");
   // No fast-math: every device must reproduce the reference's arithmetic.
-  err = program.build({device_.device}, which == KernelProgram::measure ? "-cl-std=CL1.2 -DOPSILA_MEASURE_COST=1"
-                                                                        : "-cl-std=CL1.2");
+  err = program.build({device_.device}, which == KernelProgram::measure            ? "-cl-std=CL1.2 -DOPSILA_MEASURE_COST=1"
+                                       : which == KernelProgram::render_uncounted ? "-cl-std=CL1.2 -DOPSILA_COUNT_WORK=0"
+                                                                                  : "-cl-std=CL1.2");
   if (err != CL_SUCCESS) {
     std::string log;
     program.getBuildInfo(device_.device, CL_PROGRAM_BUILD_LOG, &log);

@@ -71,11 +71,13 @@ struct ClRuntimeOptions {
   bool read_environment = true;
 };
 
-// The OpenCL programs: the renderer's stages, the bench's baselines
-// (megakernel, copy), built only when a baseline runs, and the renderer's
-// stages counting each cluster's tests (OPSILA_MEASURE_COST), built only for
-// the pilot frames of --balance measured.
-enum class KernelProgram { render = 0, baselines = 1, measure = 2 };
+// The OpenCL programs, each built on first use: the renderer's stages, the
+// bench's baselines (megakernel, copy, traversal alone), the renderer's
+// stages counting each cluster's tests (OPSILA_MEASURE_COST) for the pilot
+// frames of --balance measured, and the renderer's stages without the work
+// counters (OPSILA_COUNT_WORK=0) for a render that neither --stats nor the
+// bench reads them from.
+enum class KernelProgram { render = 0, baselines = 1, measure = 2, render_uncounted = 3 };
 
 class ClRuntime {
  public:
@@ -110,8 +112,8 @@ class ClRuntime {
   DeviceEntry device_;
   cl::Context context_;
   cl::CommandQueue queue_;
-  cl::Program programs_[3];
-  bool built_[3] = {false, false, false};
+  cl::Program programs_[4];
+  bool built_[4] = {false, false, false, false};
   std::size_t group_size_ = 64;
   cl_ulong max_alloc_ = 0, global_mem_ = 0, limit_ = 0;
   std::uint64_t allocated_ = 0;

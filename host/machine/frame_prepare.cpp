@@ -41,7 +41,10 @@ Renderer::Machine::Machine(const Scene& scene, PreparedBanks banks, const Render
   }
 
   measure = settings.measure_cost;
-  const KernelProgram program = measure ? KernelProgram::measure : KernelProgram::render;
+  // --stats and the bench count the work; a plain render counts only rays.
+  const KernelProgram program = measure                ? KernelProgram::measure
+                                : settings.count_work ? KernelProgram::render
+                                                      : KernelProgram::render_uncounted;
   rt.program(program);  // compile before anything is timed
   k_item = decltype(k_item)(rt, "item_buffer", program);
   k_primary = decltype(k_primary)(rt, "build_primary", program);
@@ -63,7 +66,7 @@ Renderer::Machine::Machine(const Scene& scene, PreparedBanks banks, const Render
   fp.group_begin = group.begin;
   fp.group_end = group.end;
   fp.tri_base = banks.tri_base;
-  traffic_levels = P <= OPSILA_TRAFFIC_MAX_PES ? depth : 0;
+  traffic_levels = settings.count_work && P <= OPSILA_TRAFFIC_MAX_PES ? depth : 0;
 
   prepared.num_pes = P;
   prepared.bank_capacity = n;

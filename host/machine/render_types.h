@@ -45,6 +45,11 @@ struct RenderSettings {
   const RaySample* ray_sample = nullptr;
   // The pilot frames' program, which counts each cluster's tests (machine/pilot.h).
   bool measure_cost = false;
+  // Count the work (tests, forwards, PE x PE traffic: RenderStats::counters
+  // and traffic) as --stats and the bench read it. false: a program that
+  // leaves it out (OPSILA_COUNT_WORK=0); the image, the ray counts and the
+  // spawned and finished descriptors are the same.
+  bool count_work = true;
 };
 
 // One kernel launch, named, with its OpenCL-profiled time.

@@ -37,6 +37,14 @@ inline void count_add(volatile __global uint *counters, long index, uint amount)
   if (amount != 0u) add_fixed(&counters[index * OPSILA_COUNTER_WORDS], (long)amount);
 }
 
+/* One more of counter NAME in a work-item's counts (PrivStats-like: a
+ * member v[OPSILA_STAT_COUNT]); nothing for a work counter in a program
+ * that does not count the work (OPSILA_COUNT_WORK). */
+#define STAT_INC(st, NAME)                                                      \
+  do {                                                                          \
+    if (OPSILA_COUNT_WORK || !OPSILA_STAT_WORK_##NAME) ++(st)->v[OPSILA_STAT_##NAME]; \
+  } while (0)
+
 inline void count_stat(volatile __global uint *stats, int num_pes, int level, int pe, int which, uint amount) {
   count_add(stats, ((long)level * num_pes + pe) * OPSILA_STAT_COUNT + which, amount);
 }

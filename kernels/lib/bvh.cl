@@ -92,7 +92,7 @@ OPSILA_INLINE void bank_node(BankWalk *w, __global const BankNode *nd, float *te
 /* Every child box is a test, met or not. */
 OPSILA_INLINE bool bank_child(BankWalk *w, __global const BankNode *nd, int k, int cnt, int met, float entry) {
   if (cnt < 0) return false;
-  ++*w->box_tests;
+  COUNT_TEST(w->box_tests);
   COST_CHILD(w->probe, nd, k);
   return met;
 }
@@ -107,7 +107,7 @@ OPSILA_INLINE bool nearest_pop(BankWalk *w, float entry) {
 
 OPSILA_INLINE bool nearest_leaf(BankWalk *w, int first, int count, float entry) {
   for (int i = first; i < first + count; ++i) {
-    ++*w->tri_tests;
+    COUNT_TEST(w->tri_tests);
     COST_TRI(w->probe, i);
     float t = intersect_triangle(w->r, &w->tris[i], w->tmin, OPSILA_INF);
     if (t < OPSILA_INF && closer(t, w->tris[i].facet_id, w->best_t, w->best_facet)) {
@@ -121,7 +121,7 @@ OPSILA_INLINE bool nearest_leaf(BankWalk *w, int first, int count, float entry) 
 
 OPSILA_INLINE bool any_leaf(BankWalk *w, int first, int count, float entry) {
   for (int i = first; i < first + count; ++i) {
-    ++*w->tri_tests;
+    COUNT_TEST(w->tri_tests);
     COST_TRI(w->probe, i);
     if (intersect_triangle(w->r, &w->tris[i], w->tmin, w->tmax) < OPSILA_INF) return true;
   }

@@ -37,7 +37,7 @@ inline int next_destination_spheres(const RayPre *r, __global const PeInfo *pes,
     if (pe->cluster_begin == pe->cluster_end) continue;
     if (q == cursor_pe) continue; /* (entry, q) == cursor: visited */
     float te, tl;
-    ++*route_tests;
+    COUNT_TEST(route_tests);
     if (!ray_box_span(r, load3g(pe->bmin), load3g(pe->bmax), tmin, tmax, &te, &tl)) continue;
     /* The box holds every sphere of the PE, so its entry bounds theirs from
      * below and its exit from above: a PE that cannot beat the current
@@ -46,7 +46,7 @@ inline int next_destination_spheres(const RayPre *r, __global const PeInfo *pes,
     if (tl < cursor_t) continue;
     float entry = OPSILA_INF;
     for (int c = pe->cluster_begin; c < pe->cluster_end; ++c) {
-      ++*sphere_tests;
+      COUNT_TEST(sphere_tests);
       entry = fmin(entry, sphere_entry(r, &clusters[c], tmin, tmax));
     }
     if (!(entry < tmax)) continue;
@@ -71,10 +71,10 @@ inline int next_shadow_destination_spheres(const RayPre *r, __global const PeInf
     __global const PeInfo *pe = &pes[q];
     if (pe->cluster_begin == pe->cluster_end || q == home) continue;
     float te;
-    ++*route_tests;
+    COUNT_TEST(route_tests);
     if (!ray_box(r, load3g(pe->bmin), load3g(pe->bmax), tmin, tmax, &te)) continue;
     for (int c = pe->cluster_begin; c < pe->cluster_end; ++c) {
-      ++*sphere_tests;
+      COUNT_TEST(sphere_tests);
       if (sphere_entry(r, &clusters[c], tmin, tmax) < OPSILA_INF) return q;
     }
   }
@@ -106,7 +106,7 @@ typedef struct {
 
 /* route_hits into per-child arrays: entries and whether each child is met. */
 OPSILA_INLINE void route_node(RouteWalk *w, __global const BankNode *nd, float *te, int *hm) {
-  ++*w->route_tests;
+  COUNT_TEST(w->route_tests);
   floatW ent;
   intW met = route_hits(w->r, nd, w->tmin, w->tmax, &ent);
   vstoreW(ent, 0, te);

@@ -23,6 +23,14 @@
  * enough. */
 #include "geometry.cl"
 
+/* One more test (ray-box, ray-facet, destination) in *counter; nothing in a
+ * program that does not count the work (OPSILA_COUNT_WORK,
+ * kernels/opsila_shared.h). */
+#define COUNT_TEST(counter) \
+  do {                           \
+    if (OPSILA_COUNT_WORK) ++*(counter); \
+  } while (0)
+
 #if OPSILA_BVH_WIDTH == 8
 typedef float8 floatW;
 typedef int8 intW;

@@ -12,8 +12,10 @@
 #include "core/scene.h"
 #include "machine/counters.h"
 #include "machine/descriptors.h"
+#include "machine/renderer.h"
 #include "opsila_shared.h"
 #include "test_device.h"
+#include "test_scenes.h"
 
 namespace opsila {
 
@@ -72,6 +74,40 @@ TEST(Counters, SumsFollowTheCounterTable) {
   EXPECT_EQ(counter_sums(two_pes).spawned, 2 * s.spawned);
   EXPECT_EQ(std::string(stat_name(OPSILA_STAT_TRI_TESTS)), "triangle_tests");
   EXPECT_EQ(std::string(stat_name(OPSILA_STAT_LOCAL)), "local");
+}
+
+// A render that nobody reads the work counters of uses a program without
+// them (OPSILA_COUNT_WORK=0): the same image, item buffer, ray counts and
+// descriptors spawned and finished; the work counters and the traffic are
+// left out, not merely unread.
+TEST(Counters, WorkCountersLeftOutChangeNothingElse) {
+  const Scene s = test::mirror_glass_scene(64, 5);
+  for (int pes : {1, 16, 64}) {
+    RenderSettings counted;
+    counted.num_pes = pes;
+    RenderSettings plain = counted;
+    plain.count_work = false;
+    const RenderResult a = render(s, counted, test::shared_runtime());
+    const RenderResult b = render(s, plain, test::shared_runtime());
+    EXPECT_EQ(a.rgb, b.rgb) << pes;
+    EXPECT_EQ(a.item_buffer, b.item_buffer) << pes;
+    EXPECT_TRUE(a.rays.same_rays(b.rays)) << pes;
+    EXPECT_EQ(a.rays.primary_hits, b.rays.primary_hits) << pes;
+    EXPECT_EQ(a.stats.descriptors_spawned, b.stats.descriptors_spawned) << pes;
+    EXPECT_EQ(a.stats.descriptors_finished, b.stats.descriptors_finished) << pes;
+    std::uint64_t work_a = 0, work_b = 0;
+    for (int l = 0; l < int(a.stats.counters.size()); ++l)
+      for (int p = 0; p < pes; ++p)
+        for (int c : {OPSILA_STAT_TRI_TESTS, OPSILA_STAT_BOX_TESTS, OPSILA_STAT_ROUTE_TESTS, OPSILA_STAT_TRACED,
+                      OPSILA_STAT_FORWARD}) {
+          work_a += a.stats.counters[l][p][c];
+          work_b += b.stats.counters[l][p][c];
+        }
+    EXPECT_GT(work_a, 0u) << pes;
+    EXPECT_EQ(work_b, 0u) << pes;
+    EXPECT_FALSE(a.stats.traffic.empty()) << pes;
+    EXPECT_TRUE(b.stats.traffic.empty()) << pes;
+  }
 }
 
 }  // namespace

@@ -65,11 +65,13 @@ inline float3 light_term(__global const Material *m, __global const Light *light
   if (!(ndl > 0.0f)) return (float3)(0.0f);
   float3 rl = 2.0f * ndl * sp.n - *lv;
   float spec = fmax(0.0f, dot(rl, -d));
-  /* pow (a log and an exp) only where Ks is not zero: spec^Ns is finite
-   * (spec in [0, 1]), so the term is exactly zero without it. */
+  /* pow (a log and an exp) only where Ks is not zero and spec is: spec^Ns
+   * is finite (spec in [0, 1]), so the term is exactly zero without it,
+   * and pow(+0, Ns) is exactly +0 for Ns > 0 (C99 F.9.4.4; the light
+   * points away from the mirror direction about half the time). */
   float3 ks = load3g(m->ks);
   float3 term = sp.kd * ndl;
-  if (any(ks != (float3)(0.0f))) term = term + ks * pow(spec, m->ns);
+  if (any(ks != (float3)(0.0f)) && (spec > 0.0f || !(m->ns > 0.0f))) term = term + ks * pow(spec, m->ns);
   return weight * load3g(light->intensity) * term;
 }
 

@@ -11,8 +11,33 @@
 
 namespace opsila {
 
+namespace {
+
+// A rectangle that overlaps no tile: the cluster is never listed.
+const cl_int4 kNeverListed{{1 << 30, 1 << 30, -(1 << 30), -(1 << 30)}};
+
+// Every corner of the cluster's box lies behind the eye, clear of its plane
+// by a margin far above rounding: no primary ray (t > 0 along a direction
+// in front of the eye) can meet the box, so no pixel need test it. Without
+// this such a box got the whole screen, and every pixel paid a root test
+// for it (all of a pass when the view looks away from the scene).
+bool entirely_behind(const CameraFrame& frame, const Cluster& cl) {
+  for (int k = 0; k < 8; ++k) {
+    const double d[3] = {double((k & 1) ? cl.bmax[0] : cl.bmin[0]) - frame.eye[0],
+                         double((k & 2) ? cl.bmax[1] : cl.bmin[1]) - frame.eye[1],
+                         double((k & 4) ? cl.bmax[2] : cl.bmin[2]) - frame.eye[2]};
+    const double cz = double(frame.forward[0]) * d[0] + double(frame.forward[1]) * d[1] +
+                      double(frame.forward[2]) * d[2];
+    if (!(cz < -1e-4 * std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]))) return false;
+  }
+  return true;
+}
+
+}  // namespace
+
 // "Projected object boxes": each cluster box as a conservative pixel
-// rectangle (x0, y0, x1, y1), the whole screen when a corner is behind the eye.
+// rectangle (x0, y0, x1, y1), the whole screen when a corner is behind the
+// eye, none when all of them are.
 std::vector<cl_int4> cluster_rects(const Scene& scene, const BankedScene& bs) {
   const CameraFrame frame = camera_frame(scene.camera, scene.width, scene.height);
   int W = scene.width, H = scene.height;
@@ -30,7 +55,9 @@ std::vector<cl_int4> cluster_rects(const Scene& scene, const BankedScene& bs) {
       x0 = std::min(x0, px), x1 = std::max(x1, px), y0 = std::min(y0, py), y1 = std::max(y1, py);
     }
     cl_int4 rc;
-    if (behind || !std::isfinite(x0 + x1 + y0 + y1)) {
+    if (entirely_behind(frame, cl)) {
+      rc = kNeverListed;
+    } else if (behind || !std::isfinite(x0 + x1 + y0 + y1)) {
       rc.s[0] = 0, rc.s[1] = 0, rc.s[2] = W - 1, rc.s[3] = H - 1;
     } else {
       // One pixel of margin: the rectangle only culls, the ray test decides.
@@ -68,7 +95,7 @@ void Renderer::Machine::upload_scene(const Scene& scene, const BankedScene& bs) 
   surface = upload_surface(rt, bs);
   std::vector<cl_int4> rects = cluster_rects(scene, bs);
   for (std::size_t c = 0; c < rects.size(); ++c)  // another rank's cluster: never listed here
-    if (bs.clusters[c].root < 0) rects[c] = cl_int4{{1 << 30, 1 << 30, -(1 << 30), -(1 << 30)}};
+    if (bs.clusters[c].root < 0) rects[c] = kNeverListed;
   b_rects = upload(rt, rects, "projected cluster boxes");
   // Only the pilot's program reads these; others get one-entry stand-ins.
   b_node_cluster = upload(rt, measure ? bs.node_cluster : std::vector<int>{-1}, "node clusters");

@@ -11,6 +11,8 @@
 #include "opsila_shared.h"
 #include "reference/reference.h"
 #include "machine/renderer.h"
+#include "machine/frame.h"
+#include "machine/partition.h"
 #include "machine/pilot.h"
 #include "machine/prepare_banks.h"
 #include "machine/stats.h"
@@ -47,6 +49,31 @@ TEST(Renderer, MatchesReferenceOnMirrorsGlassAndShadows) {
   expect_balanced(r.stats);
   EXPECT_GT(r.rays.secondary, 0u);
   EXPECT_GT(r.rays.shadow, 0u);
+}
+
+// The item buffer lists no cluster whose box lies wholly behind the eye (no
+// primary ray can meet it), and the image stays the reference's: turned
+// away from the scene, every pixel is background and no pixel tests a box.
+TEST(Renderer, ClustersBehindTheEyeAreNeverListed) {
+  Scene s = test::mirror_glass_scene(48);
+  auto listed = [](const Scene& sc) {
+    const BankedScene bs = partition_scene(sc, 4);
+    int n = 0;
+    for (const cl_int4& r : cluster_rects(sc, bs)) n += r.s[0] <= r.s[2] && r.s[1] <= r.s[3];
+    return std::make_pair(n, int(bs.clusters.size()));
+  };
+  const auto facing = listed(s);
+  EXPECT_EQ(facing.first, facing.second);
+  for (int i = 0; i < 3; ++i) s.camera.look_at[i] = 2 * s.camera.eye[i] - s.camera.look_at[i];
+  EXPECT_EQ(listed(s).first, 0);
+  const ImageResult ref = render_reference(s);
+  for (int pes : {1, 16}) {
+    const RenderResult r = render_with(s, pes);
+    EXPECT_GE(test::clamped_psnr(r.rgb, ref.rgb), 40.0) << pes;
+    for (std::size_t i = 3; i < r.rgb.size(); ++i) ASSERT_EQ(r.rgb[i], r.rgb[i % 3]) << pes;  // all background
+    EXPECT_EQ(r.item_buffer, ref.item_buffer) << pes;
+    EXPECT_EQ(r.rays.primary_hits, 0u) << pes;
+  }
 }
 
 TEST(Renderer, DepthOneIsLocalShadingOnly) {

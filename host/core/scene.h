@@ -115,6 +115,9 @@ struct SceneShare {
   // This rank's triangles of windowed objects: counted in total_triangles
   // and the bounds above until `combine` adds up every rank's.
   std::size_t window_triangles = 0;
+  // Zero-area triangles each windowed entry dropped here, in entry order
+  // (summed by `combine`, then warned about once).
+  std::vector<std::uint64_t> window_dropped;
   // Set by whoever knows the ranks: sums window_triangles and joins the
   // bounds over every rank (a collective call, made by the reader once
   // every entry is built). Unset: the figures stay this rank's.

@@ -141,10 +141,18 @@ void SceneReader::object(const Json& v, const std::string& path) {
     entry_.planned_end = planned_after;
     make(scene_.triangles);
     flush_entry();
-    if (entry_.dropped > 0)
-      warn(path, std::to_string(entry_.dropped) +
-                     " zero-area triangle(s) left out (too small for float); facet ids kept");
+    if (entry_.windowed && share_.ranks > 1) {  // this rank's window only: warned about once summed (settle_share)
+      share_.window_dropped.push_back(entry_.dropped);
+      window_paths_.push_back(path);
+    } else {
+      warn_dropped(path, entry_.dropped);
+    }
   });
+}
+
+void SceneReader::warn_dropped(const std::string& path, std::size_t dropped) {
+  if (dropped > 0)
+    warn(path, std::to_string(dropped) + " zero-area triangle(s) left out (too small for float); facet ids kept");
 }
 
 // What the entry has made since the last flush: placed, settled and, on

@@ -137,6 +137,7 @@ class SceneReader {
   void object(const Json& v, const std::string& path);
   std::size_t settle(std::size_t first, const std::string& path);  // returns the triangles dropped
   void flush_entry();
+  void warn_dropped(const std::string& path, std::size_t dropped);
   void box_extent(const Json& v, const std::string& path, Vec3& lo, Vec3& hi) const;
   std::function<void(std::vector<Triangle>&)> terrain(const Json& v, const std::string& path);
   std::function<void(std::vector<Triangle>&)> generator(const Json& v, const std::string& path,
@@ -174,6 +175,7 @@ class SceneReader {
     bool windowed = false;  // each rank made only its window (window())
   } entry_;
   bool bounded_ = false;  // share_.lo/hi hold a triangle
+  std::vector<std::string> window_paths_;  // the windowed entries, as share_.window_dropped
   static constexpr long long kFlushItems = 4096;  // generator items between flushes, at most
   static constexpr std::size_t kFlushTriangles = std::size_t(1) << 18;  // and about this many triangles
   std::unique_ptr<JsonLines> lines_;

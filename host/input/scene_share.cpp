@@ -94,6 +94,7 @@ void SceneReader::settle_share() {
     if (!bounded_) share_.lo = splat(inf), share_.hi = splat(-inf);  // nothing here: no part in the bounds
     share_.combine(share_);
   }
+  for (std::size_t k = 0; k < window_paths_.size(); ++k) warn_dropped(window_paths_[k], share_.window_dropped[k]);
   scene_.share = share_;
   scene_.triangles.shrink_to_fit();
   scene_.attributes.shrink_to_fit();

@@ -129,6 +129,7 @@ ShareClusters split_share(const Scene& share, const Box& sbox, int num_pes, bool
 void combine_share(SceneShare& share, Ranks& ranks) {
   ranks.checkpoint();  // a rank that failed reading its share is waiting there
   share.total_triangles = share.total_triangles - share.window_triangles + ranks.sum(share.window_triangles);
+  ranks.sum(share.window_dropped);  // as many entries on every rank
   Box b;
   b.lo = share.lo;
   b.hi = share.hi;

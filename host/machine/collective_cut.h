@@ -68,7 +68,7 @@ ShareClusters split_share(const Scene& share, const Box& sbox, int num_pes, bool
                           const std::function<void(double)>& progress);
 
 // The whole scene's figures from every rank's (SceneShare::combine): the
-// windowed triangles added up, the bounds joined. A collective call, made
+// windowed triangles and their dropped ones added up, the bounds joined. A collective call, made
 // when every rank has read its share; a rank that failed before stops them all.
 void combine_share(SceneShare& share, Ranks& ranks);
 

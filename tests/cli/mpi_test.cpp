@@ -270,6 +270,29 @@ TEST_F(MpiFixture, ATerrainSpreadOverRanksIsTheSameAsOneProcess) {
   EXPECT_TRUE(test::read_file(dir.file("two.pfm")) == test::read_file(dir.file("one.pfm")));
 }
 
+// A terrain's zero-area triangles (a patch too small for float at its
+// place) are dropped by the ranks whose windows hold them: the warning
+// counts every rank's, as one process's does, and the image is the same.
+TEST_F(MpiFixture, ATerrainsDroppedTrianglesAreCountedOverEveryRank) {
+  const std::string path = dir.write("drop.json", R"({"objects": [
+    {"type": "sphere", "center": [1000, 0.5, 1000], "radius": 0.3, "subdivisions": 1},
+    {"type": "terrain", "center": [1000, 0, 1000], "size": [0.0004, 0.0004], "quads": [16, 30], "height": 0.2}]})");
+  auto with = [&](const std::string& tag) {
+    return std::vector<std::string>{path, "--size", "32x24", "--pes", "4", "-o", dir.file(tag + ".pfm")};
+  };
+  const auto warning = [](const RunResult& r) {
+    const std::size_t at = r.err.find("zero-area");
+    return at == std::string::npos ? std::string() : r.err.substr(r.err.rfind("objects[1]", at), 40);
+  };
+  const RunResult single = one(with("one"));
+  ASSERT_EQ(single.exit_code, 0) << single.err;
+  ASSERT_NE(warning(single), "") << single.err;
+  const RunResult three = ranks(3, with("three"));
+  ASSERT_EQ(three.exit_code, 0) << three.err;
+  EXPECT_EQ(warning(three), warning(single)) << three.err;
+  EXPECT_TRUE(test::read_file(dir.file("three.pfm")) == test::read_file(dir.file("one.pfm")));
+}
+
 // The whole scene's bounds (so epsilon) come from every facet read, the
 // first one's included: a one-facet scene on four ranks, three of which
 // read and hold nothing, is the same as on one process.

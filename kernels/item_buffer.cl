@@ -15,7 +15,6 @@
 #include "lib/camera.cl"
 
 #define ITEM_TILE_MAX (OPSILA_ITEM_TILE_SIDE * OPSILA_ITEM_TILE_SIDE) /* pixels per tile, at most */
-#define ITEM_LIST_CAP 512  /* clusters listed per tile before they are traced */
 
 /* One work-group = one square tile of tile_w x tile_w pixels. The group
  * first lists, in cluster order, the clusters whose projected box overlaps
@@ -26,7 +25,7 @@ __kernel void item_buffer(FrameParams fp, __global const Cluster *clusters, __gl
                           int tiles_x, int tile_begin, float ox, float oy, int mode, __global int2 *items,
                           __global int *item_tri, __global float *item_t, __global int *item_facet) {
   __local int flags[ITEM_TILE_MAX];
-  __local int list[ITEM_LIST_CAP];
+  __local int list[OPSILA_ITEM_LIST_CAP];
   __local int listed;
   int lid = get_local_id(0), lsz = get_local_size(0);
   int tile = tile_begin + get_group_id(0);
@@ -66,7 +65,7 @@ __kernel void item_buffer(FrameParams fp, __global const Cluster *clusters, __gl
     }
     barrier(CLK_LOCAL_MEM_FENCE);
     int n = listed;
-    if (n > ITEM_LIST_CAP - lsz || base + lsz >= fp.num_clusters) {
+    if (n > OPSILA_ITEM_LIST_CAP - lsz || base + lsz >= fp.num_clusters) {
       for (int i = 0; i < n && inside; ++i) {
         int cl = list[i];
         int4 pr = cluster_rects[cl]; /* x0, y0, x1, y1 inclusive */

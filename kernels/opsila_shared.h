@@ -44,9 +44,18 @@ typedef std::uint32_t opsila_u32;
 /* Scatter: pool entries per block of the count kernel (one work-item ranks
  * a block in order, which keeps the sort stable). */
 #define OPSILA_SCATTER_BLOCK 256
+/* Scatter: work-items per work-group of the scan and the plan at most;
+ * their local arrays (scatter_scan's sums, scatter_plan's partial) hold one
+ * entry per work-item. The host caps both work-groups at this. */
+#define OPSILA_SCATTER_GROUP_MAX 256
+/* Local memory of scatter_plan, in ints: partial, level_found, group_base. */
+#define OPSILA_SCATTER_PLAN_LOCAL_INTS (OPSILA_SCATTER_GROUP_MAX + 1 + OPSILA_MAX_PES)
 /* Item buffer: square tiles of at most this many pixels a side (one
  * work-group per tile; smaller when the device allows fewer work-items). */
 #define OPSILA_ITEM_TILE_SIDE 8
+/* Item buffer: clusters a tile lists (local array) before it traces them;
+ * a work-group adds at most one per work-item before the list is traced. */
+#define OPSILA_ITEM_LIST_CAP 512
 
 /* SPMD output: each work-item owns OPSILA_SPAWN_SLOTS(lights) output
  * places (fixed, so the output order is deterministic), enough for its most:
@@ -296,6 +305,10 @@ typedef struct {
 
 #ifndef __OPENCL_C_VERSION__
 static_assert(sizeof(BankTriangle) == 48, "BankTriangle layout");
+static_assert(OPSILA_ITEM_LIST_CAP > OPSILA_ITEM_TILE_SIDE * OPSILA_ITEM_TILE_SIDE,
+              "a tile's work-items can each list a cluster before the list is traced");
+static_assert(OPSILA_SCATTER_GROUP_MAX >= 1 && (OPSILA_SCATTER_GROUP_MAX & (OPSILA_SCATTER_GROUP_MAX - 1)) == 0,
+              "the scatter's work-group cap is a power of two (queried sizes are rounded down to one)");
 static_assert(offsetof(BankTriangle, facet_id) == 12, "BankTriangle layout");
 static_assert(offsetof(BankTriangle, material) == 44, "BankTriangle layout");
 static_assert(OPSILA_BVH_WIDTH == 4 || OPSILA_BVH_WIDTH == 8, "vector width of the node tests");

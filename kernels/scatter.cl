@@ -105,7 +105,7 @@ __kernel void scatter_count(int pool_len, int pool_blocks, int num_blocks, int i
  * one block share a cache line (each write would steal it from the other
  * core: 1.3 ms instead of 0.1 ms at 2^20 descriptors). */
 __kernel void scatter_scan(int num_blocks, int num_pes, __global int *hist, __global int *pe_total) {
-  __local int sums[256];
+  __local int sums[OPSILA_SCATTER_GROUP_MAX];
   int lid = get_local_id(0), lsz = get_local_size(0);
   int run = (num_blocks + lsz - 1) / lsz;
   int begin = min(lid * run, num_blocks), end = min(begin + run, num_blocks);
@@ -151,7 +151,7 @@ __kernel void scatter_plan(int num_pes, int group_begin, int group_end, int slot
                            __global const int *pe_total,
                            __global int *bank_begin, __global int *bank_count, __global int *overflow_base,
                            __global int *group_pe, __global int *group_first, __global int *counts) {
-  __local int partial[256];
+  __local int partial[OPSILA_SCATTER_GROUP_MAX];
   __local int level_found;
   __local int group_base[OPSILA_MAX_PES];
   int lid = get_local_id(0), lsz = get_local_size(0);

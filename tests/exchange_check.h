@@ -102,7 +102,8 @@ inline std::vector<cl_int> check_exchange(ClRuntime& rt, const ExchangeCase& c) 
   };
   const auto counts = read_ints(scatter.counts, 3);
   const auto begin = read_ints(scatter.bank_begin, c.pes), fill = read_ints(scatter.bank_count, c.pes);
-  const auto group_pe = read_ints(scatter.group_pe, counts[2]), group_first = read_ints(scatter.group_first, counts[2]);
+  const auto group_pe = read_ints(scatter.group_pe.buffer, counts[2]),
+             group_first = read_ints(scatter.group_first.buffer, counts[2]);
   const auto bank = banks.read(rt, banks.capacity), waiting = next.read(rt, counts[0]);
 
   // The plan: demand, cap, budget, water-filling levels within one, alignment.

@@ -265,7 +265,7 @@ DeviceCapabilities query_capabilities(const cl::Device& d) {
 // per-PE work-group bases, whichever is larger.
 std::size_t required_local_mem() {
   return std::max(std::size_t(OPSILA_MAX_DEPTH) * (OPSILA_STAT_COUNT + OPSILA_TRAFFIC_MAX_PES) * sizeof(cl_uint),
-                  (std::size_t(OPSILA_MAX_PES) + 258) * sizeof(cl_int));
+                  std::size_t(OPSILA_SCATTER_PLAN_LOCAL_INTS) * sizeof(cl_int));
 }
 
 std::vector<std::string> missing_capabilities(const DeviceCapabilities& c) {

@@ -3,6 +3,7 @@
 
 #include <CL/opencl.hpp>
 
+#include <map>
 #include <stdexcept>
 #include <cstdint>
 #include <string>
@@ -100,7 +101,12 @@ class ClRuntime {
   // Device bytes asked for through device_buffer (machine/descriptors.h)
   // since the runtime was made: what the memory plan is checked against.
   std::uint64_t allocated_bytes() const { return allocated_; }
-  void count_allocation(std::size_t bytes) { allocated_ += bytes; }
+  // The same, by the name each buffer was given (several buffers may share one).
+  const std::map<std::string, std::uint64_t>& allocations() const { return by_name_; }
+  void count_allocation(std::size_t bytes, const std::string& what) {
+    allocated_ += bytes;
+    by_name_[what] += bytes;
+  }
   cl_ulong global_mem() const { return global_mem_; }
   cl_ulong memory_limit() const { return limit_; }  // 0, or the limit that lowered the two above
   std::string description() const;  // "device (platform, driver)"
@@ -117,6 +123,7 @@ class ClRuntime {
   std::size_t group_size_ = 64;
   cl_ulong max_alloc_ = 0, global_mem_ = 0, limit_ = 0;
   std::uint64_t allocated_ = 0;
+  std::map<std::string, std::uint64_t> by_name_;
   std::string source_, source_origin_;  // source_ empty: the embedded kernels
 };
 

@@ -4,32 +4,7 @@
 #include <cstring>
 #include <vector>
 
-#include "machine/render_types.h"
-
 namespace opsila {
-
-cl::Buffer device_buffer(ClRuntime& rt, std::size_t bytes, const char* what) {
-  if (bytes > rt.max_alloc())
-    throw ClError(std::string("buffer '") + what + "' needs " + std::to_string(bytes) +
-                  " bytes, more than the device's CL_DEVICE_MAX_MEM_ALLOC_SIZE (" + std::to_string(rt.max_alloc()) +
-                  " bytes" + (rt.memory_limit() ? ", as lowered by OPSILA_DEVICE_MEMORY_LIMIT" : "") +
-                  "): use a smaller --size, --depth or --bank-capacity");
-  cl_int err = CL_SUCCESS;
-  cl::Buffer b(rt.context(), CL_MEM_READ_WRITE, std::max<std::size_t>(bytes, 16), nullptr, &err);
-  cl_check(err, (std::string("clCreateBuffer(") + what + ", " + std::to_string(bytes) + " bytes)").c_str());
-  rt.count_allocation(bytes);
-  return b;
-}
-
-void zero_buffer(ClRuntime& rt, const cl::Buffer& b, std::size_t bytes, const char* what) {
-  // Static and never written: non-blocking writes may read it at any time.
-  static const unsigned char zeros[1 << 16] = {};
-  for (std::size_t at = 0; at < bytes; at += sizeof zeros) {
-    const std::size_t chunk = std::min(sizeof zeros, bytes - at);
-    cl_check(rt.queue().enqueueWriteBuffer(b, CL_FALSE, at, chunk, zeros),
-             (std::string("clEnqueueWriteBuffer(") + what + ", zeros)").c_str());
-  }
-}
 
 void DescriptorSet::allocate(ClRuntime& rt, std::size_t n, const char* what) {
   n = std::max<std::size_t>(n, 1);
@@ -71,63 +46,6 @@ std::vector<HostDescriptor> DescriptorSet::read(ClRuntime& rt, std::size_t count
   return v;
 }
 
-void Launcher::run(cl::Kernel& k, const char* name, std::size_t global, std::size_t local, int round,
-                   const std::vector<cl::Event>* wait) {
-  if (local == 0) {
-    // A fixed work-group size per kernel, from what the kernel allows: drivers
-    // that compile per work-group size (PoCL) then compile each kernel once.
-    std::size_t allowed = 0;
-    cl_check(k.getWorkGroupInfo(rt_.device().device, CL_KERNEL_WORK_GROUP_SIZE, &allowed),
-             "clGetKernelWorkGroupInfo(CL_KERNEL_WORK_GROUP_SIZE)");
-    local = rt_.group_size();
-    while (local > 1 && local > allowed) local /= 2;
-  }
-  global = round_up(std::max<std::size_t>(global, 1), local);
-  cl::Event ev;
-  cl_int err = rt_.queue().enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(global), cl::NDRange(local), wait,
-                                                &ev);
-  cl_check(err, (std::string("clEnqueueNDRangeKernel(") + name + ")").c_str());
-  pending_.push_back({name, round, ev});
-}
-
-void Launcher::check(cl_int err, const char* what) {
-  auto describe = [](const Pending& p) {
-    return std::string(p.name) + (p.round >= 0 ? " (round " + std::to_string(p.round) + ")" : std::string());
-  };
-  for (std::size_t i = checked_; i < pending_.size(); ++i) {
-    cl_int status = CL_COMPLETE;
-    if (pending_[i].ev.getInfo(CL_EVENT_COMMAND_EXECUTION_STATUS, &status) != CL_SUCCESS) break;
-    if (status < 0)
-      throw ClError("kernel " + describe(pending_[i]) + " failed on the device: " + cl_error_name(status) + " (" +
-                    std::to_string(status) + "), seen at " + what);
-    if (status != CL_COMPLETE) break;  // in-order queue: nothing later has finished either
-    checked_ = i + 1;
-  }
-  if (err != CL_SUCCESS)
-    throw ClError(std::string(what) + ": " + cl_error_name(err) + " (" + std::to_string(err) + ")" +
-                  (pending_.empty() ? std::string() : " after kernel " + describe(pending_.back())));
-}
-
-void Launcher::harvest() {
-  check(CL_SUCCESS, "collecting kernel timings");
-  // Launches still running (and, in an in-order queue, all after them) stay
-  // pending for a later harvest.
-  std::size_t done = 0;
-  for (; done < pending_.size(); ++done) {
-    const Pending& p = pending_[done];
-    cl_int status = CL_COMPLETE;
-    cl_check(p.ev.getInfo(CL_EVENT_COMMAND_EXECUTION_STATUS, &status), "clGetEventInfo(execution status)");
-    if (status != CL_COMPLETE) break;
-    cl_ulong t0 = 0, t1 = 0;
-    if (p.ev.getProfilingInfo(CL_PROFILING_COMMAND_START, &t0) == CL_SUCCESS &&
-        p.ev.getProfilingInfo(CL_PROFILING_COMMAND_END, &t1) == CL_SUCCESS)
-      sink_.push_back({p.name, p.round, (t1 - t0) * 1e-9});
-  }
-  std::vector<Pending> running(pending_.begin() + done, pending_.end());
-  pending_ = std::move(running);
-  checked_ = 0;
-}
-
 namespace {
 
 // A kernel's work-group size: what it allows, at most `cap`, a power of two.
@@ -150,15 +68,22 @@ ScatterPass::ScatterPass(ClRuntime& rt, int num_pes) : rt_(rt), num_pes_(num_pes
   move_out_ = decltype(move_out_)(rt, "scatter_move_outputs");
   move_blocks_ = decltype(move_blocks_)(rt, "scatter_move_blocks");
   by_block_ = !rt.device().is_gpu;
-  // At most 256: scatter.cl's work-group arrays hold 256 entries.
-  wg_scan_ = queried_group_size(rt, scan_.kernel(), std::min<std::size_t>(rt.group_size(), 256));
-  wg_plan_ = queried_group_size(rt, plan_.kernel(), std::min<std::size_t>(rt.group_size(), 256));
+  // scatter.cl's work-group arrays hold OPSILA_SCATTER_GROUP_MAX entries.
+  const std::size_t cap = std::min<std::size_t>(rt.group_size(), OPSILA_SCATTER_GROUP_MAX);
+  wg_scan_ = queried_group_size(rt, scan_.kernel(), cap);
+  wg_plan_ = queried_group_size(rt, plan_.kernel(), cap);
   bank_begin = device_buffer(rt, num_pes * sizeof(cl_int), "bank offsets");
   bank_count = device_buffer(rt, num_pes * sizeof(cl_int), "bank counts");
   pe_total = device_buffer(rt, num_pes * sizeof(cl_int), "scatter totals");
   overflow_base = device_buffer(rt, num_pes * sizeof(cl_int), "scatter overflow bases");
   counts = device_buffer(rt, 3 * sizeof(cl_int), "scatter counts");
   dummy_ = device_buffer(rt, sizeof(cl_int), "no SPMD outputs");
+}
+
+void ScatterPass::grow(Grown& g, std::size_t need, std::size_t size, const char* what) {
+  if (g.capacity >= need) return;
+  g.capacity = size;
+  g.buffer = device_buffer(rt_, size * sizeof(cl_int), what);
 }
 
 int ScatterPass::blocks(const Args& a) const {
@@ -169,34 +94,28 @@ void ScatterPass::plan(Launcher& launch, const Args& a, int round) {
   const int P = num_pes_;
   const int pool_blocks = (a.pool_len + kBlock - 1) / kBlock, nblocks = blocks(a);
   const std::size_t sources = std::size_t(a.pool_len) + std::size_t(a.out_groups) * a.group_size * a.spawn_slots;
-  if (rank_cap_ < sources) {
-    rank_cap_ = sources + sources / 2;
-    rank_ = device_buffer(rt_, rank_cap_ * sizeof(cl_int), "scatter ranks");
-  }
-  if (hist_cap_ < std::size_t(nblocks) + 1) {
-    hist_cap_ = nblocks + nblocks / 2 + 1;
-    hist_ = device_buffer(rt_, hist_cap_ * P * sizeof(cl_int), "scatter block counts");
-  }
+  // Grown by half again, so that a frame's slowly rising needs do not
+  // reallocate every round.
+  grow(ranks, sources, sources + sources / 2, "scatter ranks");
+  grow(block_counts, (std::size_t(nblocks) + 1) * P, (std::size_t(nblocks) + nblocks / 2 + 1) * P,
+       "scatter block counts");
   const std::size_t groups = std::size_t(a.slots) / a.group_size + P + 1;
-  if (group_cap_ < groups) {
-    group_cap_ = groups;
-    group_pe = device_buffer(rt_, groups * sizeof(cl_int), "SPMD work-group PEs");
-    group_first = device_buffer(rt_, groups * sizeof(cl_int), "SPMD work-group slots");
-  }
+  grow(group_pe, groups, groups, "SPMD work-group PEs");
+  grow(group_first, groups, groups, "SPMD work-group slots");
   const cl::Buffer& out = a.outputs ? a.outputs->records : dummy_;
   const cl::Buffer& out_dest = a.outputs ? a.outputs->dests : dummy_;
   const cl::Buffer& out_count = a.out_item_count ? *a.out_item_count : dummy_;
-  count_.bind(a.pool_len, pool_blocks, nblocks, a.group_size, a.spawn_slots, P, *a.pool, out, out_dest, out_count, hist_,
-              rank_, by_block_ ? 0 : 1);
+  count_.bind(a.pool_len, pool_blocks, nblocks, a.group_size, a.spawn_slots, P, *a.pool, out, out_dest, out_count, block_counts.buffer,
+              ranks.buffer, by_block_ ? 0 : 1);
   launch.run(count_.kernel(), "scatter_count", std::max(nblocks, 1), 0, round);
-  scan_.bind(nblocks, P, hist_, pe_total);
+  scan_.bind(nblocks, P, block_counts.buffer, pe_total);
   // One work-group per PE on a GPU, one in all on a CPU (see scatter_scan).
   const std::size_t scan_groups = by_block_ ? 1 : std::size_t(P);
   launch.run(scan_.kernel(), "scatter_scan", scan_groups * wg_scan_, wg_scan_, round);
   const int cap = a.cap > 0 ? a.cap : a.slots;
   const int group_end = a.group_end < 0 ? P : a.group_end;
   plan_.bind(P, a.group_begin, group_end, a.slots, cap, a.group_size, pe_total, bank_begin, bank_count, overflow_base,
-             group_pe, group_first, counts);
+             group_pe.buffer, group_first.buffer, counts);
   launch.run(plan_.kernel(), "scatter_plan", wg_plan_, wg_plan_, round);
 }
 
@@ -208,19 +127,19 @@ void ScatterPass::move(Launcher& launch, const Args& a, int round) {
     const cl::Buffer& out_dest = a.outputs ? a.outputs->dests : dummy_;
     const cl::Buffer& out_count = a.out_item_count ? *a.out_item_count : dummy_;
     move_blocks_.bind(a.pool_len, pool_blocks, blocks(a), a.group_size, a.spawn_slots, P, *a.pool, out, out_dest,
-                      out_count, hist_, bank_begin, bank_count, overflow_base, *a.banks, *a.next_pool);
+                      out_count, block_counts.buffer, bank_begin, bank_count, overflow_base, *a.banks, *a.next_pool);
     if (blocks(a) > 0) launch.run(move_blocks_.kernel(), "scatter_move", std::size_t(blocks(a)), 0, round);
     return;
   }
   if (a.pool_len > 0) {
-    move_pool_.bind(a.pool_len, P, *a.pool, rank_, hist_, bank_begin, bank_count, overflow_base, *a.banks,
+    move_pool_.bind(a.pool_len, P, *a.pool, ranks.buffer, block_counts.buffer, bank_begin, bank_count, overflow_base, *a.banks,
                     *a.next_pool);
     launch.run(move_pool_.kernel(), "scatter_move", std::size_t(a.pool_len), 0, round);
   }
   if (a.out_groups > 0) {
     const int items = a.out_groups * a.group_size;
-    move_out_.bind(items, a.group_size, a.spawn_slots, a.pool_len, pool_blocks, P, *a.outputs, *a.out_item_count, rank_,
-                   hist_, bank_begin, bank_count, overflow_base, *a.banks, *a.next_pool);
+    move_out_.bind(items, a.group_size, a.spawn_slots, a.pool_len, pool_blocks, P, *a.outputs, *a.out_item_count, ranks.buffer,
+                   block_counts.buffer, bank_begin, bank_count, overflow_base, *a.banks, *a.next_pool);
     launch.run(move_out_.kernel(), "scatter_move", std::size_t(items), 0, round);
   }
 }

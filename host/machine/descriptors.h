@@ -8,30 +8,12 @@
 #include <vector>
 
 #include "machine/cl_runtime.h"
+#include "machine/device_buffers.h"
 #include "machine/kernel_args.h"
+#include "machine/launcher.h"
 #include "opsila_shared.h"
 
 namespace opsila {
-
-struct LaunchRecord;
-
-// Checked buffer creation: refuses (with the numbers) what the device cannot hold.
-cl::Buffer device_buffer(ClRuntime& rt, std::size_t bytes, const char* what);
-
-// Sets the first `bytes` of a buffer to zero with plain writes (enqueued, not
-// waited for). Not clEnqueueFillBuffer: Oclgrind's uninitialized-value check
-// does not count a fill as a write, and the kernels must stay checkable
-// (docs/RELIABILITY.md).
-void zero_buffer(ClRuntime& rt, const cl::Buffer& b, std::size_t bytes, const char* what);
-
-template <typename T>
-cl::Buffer upload(ClRuntime& rt, const std::vector<T>& v, const char* what) {
-  cl::Buffer b = device_buffer(rt, std::max<std::size_t>(1, v.size()) * sizeof(T), what);
-  if (!v.empty())
-    cl_check(rt.queue().enqueueWriteBuffer(b, CL_TRUE, 0, v.size() * sizeof(T), v.data()),
-             (std::string("clEnqueueWriteBuffer(") + what + ")").c_str());
-  return b;
-}
 
 // One descriptor as the host sees it, generated from the same field table as
 // the kernels' (OPSILA_DESCRIPTOR_LANES in kernels/opsila_shared.h).
@@ -69,35 +51,6 @@ struct DescriptorSet {
   std::vector<HostDescriptor> read(ClRuntime& rt, std::size_t count, std::size_t at = 0) const;
 };
 
-// Enqueues kernels, keeps their events, and turns them into named,
-// OpenCL-profiled launch records once the queue has drained.
-class Launcher {
- public:
-  Launcher(ClRuntime& rt, std::vector<LaunchRecord>& sink) : rt_(rt), sink_(sink) {}
-  // Enqueues `k`, after the events in `wait` when given.
-  void run(cl::Kernel& k, const char* name, std::size_t global, std::size_t local, int round,
-           const std::vector<cl::Event>* wait = nullptr);
-  // Call with the result of anything that waited for the launches (a blocking
-  // read, clFinish) before trusting what it returned. A kernel can fail on
-  // the device after its enqueue succeeded (CL_OUT_OF_RESOURCES, a GPU
-  // watchdog reset), and some drivers still answer the read with CL_SUCCESS:
-  // throws ClError naming the kernel and round whose command failed, or, when
-  // `err` is an error, naming `what` and the last kernel launched.
-  void check(cl_int err, const char* what);
-  void harvest();  // also checks, as check(CL_SUCCESS, ...)
-
- private:
-  struct Pending {
-    const char* name;
-    int round;
-    cl::Event ev;
-  };
-  ClRuntime& rt_;
-  std::vector<LaunchRecord>& sink_;
-  std::vector<Pending> pending_;
-  std::size_t checked_ = 0;  // pending_[0, checked_) are known to have completed
-};
-
 // The exchange Vd(I'(i)) = Vs(i) over source = [waiting pool | SPMD outputs]
 // (kernels/scatter.cl). plan() ranks every entry and decides the banks of
 // the next SPMD phase; move() puts each record in place. Between the two,
@@ -131,7 +84,15 @@ class ScatterPass {
   void move(Launcher& launch, const Args& a, int round);
   // Results of plan(): per PE, and the SPMD work-group table.
   cl::Buffer bank_begin, bank_count, overflow_base, pe_total, counts;  // counts = {waiting, placed, groups}
-  cl::Buffer group_pe, group_first;
+  // Buffers plan() sizes by the pass (capacity in ints) and grows when a
+  // pass needs more; a frame allocates them ahead, at the sizes its memory
+  // plan counts (the buffer table, machine/frame_buffers.cpp).
+  struct Grown {
+    cl::Buffer buffer;
+    std::size_t capacity = 0;
+  };
+  Grown ranks, block_counts;    // each source entry's rank; per block and PE, its count, then its offset
+  Grown group_pe, group_first;  // the SPMD work-group table: each group's PE and first bank slot
 
  private:
   ClRuntime& rt_;
@@ -149,11 +110,9 @@ class ScatterPass {
   // Move by block (one work-item walks a block in order: CPUs) or by entry
   // (one work-item per record, ranks stored by the count: GPUs).
   bool by_block_ = false;
-  cl::Buffer rank_, hist_, dummy_;
-  std::size_t rank_cap_ = 0, hist_cap_ = 0, group_cap_ = 0;
+  cl::Buffer dummy_;
   int blocks(const Args& a) const;
+  void grow(Grown& g, std::size_t need, std::size_t size, const char* what);
 };
-
-inline std::size_t round_up(std::size_t x, std::size_t m) { return (x + m - 1) / m * m; }
 
 }  // namespace opsila

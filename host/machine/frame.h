@@ -3,7 +3,7 @@
 // named after the kernel file it drives:
 //   frame_prepare.cpp      the machine for one scene and view (bank size n,
 //                          work-group sizes, the program's kernels)
-//   frame_buffers.cpp      device buffers: scene uploads, frame buffers, clearing
+//   frame_buffers.cpp      the buffer table: scene uploads, frame buffers, clearing
 //   frame_item_buffer.cpp  kernels/item_buffer.cl
 //   frame_primary.cpp      kernels/primary.cl
 //   frame_scatter.cpp      kernels/scatter.cl (the exchange, and the ranks' part of it)
@@ -87,6 +87,18 @@ struct Renderer::Machine {
   std::size_t ncost = 1;
   DescriptorSet banks, outputs, pool, next_pool;
 
+  // Host arrays the uploads read. The bank arrays stay as long as the
+  // machine where the device reads them in place (machine/device_buffers.h,
+  // HostArray), and are freed once copied elsewhere; the small tables are
+  // made for the upload and freed with the machine.
+  HostArray host_tris, host_nodes, host_attributes, host_texels;
+  std::vector<Light> lights;     // at least one (a stand-in never lit)
+  std::vector<cl_int4> rects;    // projected cluster boxes
+  std::vector<float> srgb;       // sRGB decode table
+  std::vector<int> no_cluster{-1};
+  std::vector<BufferSpec> buffers;  // the buffer table, as allocated (frame_buffers.cpp)
+  std::uint64_t in_place_bytes = 0;  // of the uploads, read by the device in place
+
   // Where a frame stands between rounds.
   struct Frame {
     int sample = 0;              // the sample pass whose hits the item buffer holds
@@ -98,10 +110,11 @@ struct Renderer::Machine {
   };
 
   Machine(const Scene& scene, PreparedBanks banks, const RenderSettings& settings, ClRuntime& runtime);
-  int choose_bank_capacity(const BankedScene& bs, const RenderSettings& settings) const;
+  int choose_bank_capacity(const BankedScene& bs, const RenderSettings& settings);
   void choose_work_groups();
-  void upload_scene(const Scene& scene, const BankedScene& bs);
-  void allocate_frame_buffers();
+  void host_tables(const Scene& scene, BankedScene& bs);
+  std::vector<BufferSpec> buffer_table(const BankedScene& bs, const FlightPlan& f);
+  void allocate();
 
   void clear_frame();
   void item_buffer(Launcher& launch, int sample);

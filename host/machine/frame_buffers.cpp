@@ -1,5 +1,6 @@
-// Device buffers of the frame machine: the scene's banks and global tables
-// (uploaded once), the frame's buffers, and their clearing between frames.
+// Device buffers of the frame machine, declared once in its buffer table:
+// the scene's banks and global tables (uploaded once), the frame's buffers,
+// and those cleared between frames.
 #include "machine/frame.h"
 
 #include <algorithm>
@@ -71,6 +72,7 @@ std::vector<cl_int4> cluster_rects(const Scene& scene, const BankedScene& bs) {
   return rects;
 }
 
+// The bench's megakernel reads the same surface tables (its own uploads).
 SurfaceBuffers upload_surface(ClRuntime& rt, const BankedScene& bs) {
   SurfaceBuffers b;
   b.attributes = upload(rt, bs.attributes, "vertex attributes");
@@ -81,57 +83,115 @@ SurfaceBuffers upload_surface(ClRuntime& rt, const BankedScene& bs) {
   return b;
 }
 
-// Scene: banks and the global (every-PE) tables, uploaded once.
-void Renderer::Machine::upload_scene(const Scene& scene, const BankedScene& bs) {
-  b_tris = upload(rt, bs.triangles, "bank facets");
-  b_nodes = upload(rt, bs.nodes, "bank BVH nodes");
-  b_clusters = upload(rt, bs.clusters, "cluster spheres");
-  b_route = upload(rt, bs.route_nodes, "routing boxes");
-  b_pes = upload(rt, bs.pes, "PE table");
-  b_mats = upload(rt, bs.materials, "materials");
-  std::vector<Light> lights = bs.lights;
+// The host side of the uploads: the tables made for the device, and the
+// bank arrays taken from the prepared banks (aligned for use in place where
+// the device shares host memory).
+void Renderer::Machine::host_tables(const Scene& scene, BankedScene& bs) {
+  lights = bs.lights;
   if (lights.empty()) lights.push_back(Light{});
-  b_lights = upload(rt, lights, "lights");
-  surface = upload_surface(rt, bs);
-  std::vector<cl_int4> rects = cluster_rects(scene, bs);
+  rects = cluster_rects(scene, bs);
   for (std::size_t c = 0; c < rects.size(); ++c)  // another rank's cluster: never listed here
     if (bs.clusters[c].root < 0) rects[c] = kNeverListed;
-  b_rects = upload(rt, rects, "projected cluster boxes");
-  // Only the pilot's program reads these; others get one-entry stand-ins.
-  b_node_cluster = upload(rt, measure ? bs.node_cluster : std::vector<int>{-1}, "node clusters");
-  b_tri_cluster = upload(rt, measure ? bs.tri_cluster : std::vector<int>{-1}, "facet clusters");
+  const std::array<float, 256>& table = srgb_decode_table();
+  srgb.assign(table.begin(), table.end());
+  const HostSharing sharing = host_sharing(rt);
+  const std::size_t align = sharing.in_place ? sharing.alignment : 1;
+  host_tris = HostArray::adopt(std::move(bs.triangles), align);
+  host_nodes = HostArray::adopt(std::move(bs.nodes), align);
+  host_attributes = HostArray::adopt(std::move(bs.attributes), align);
+  host_texels = HostArray::adopt(std::move(bs.texels), align);
 }
 
-// Item buffer, pixel sums, statistics and descriptor vectors: banks (the
-// slots in flight, each bank padded to whole work-groups), SPMD output
-// places, and the waiting pool (ping-pong).
-void Renderer::Machine::allocate_frame_buffers() {
-  b_items = device_buffer(rt, npix * sizeof(cl_int2), "item buffer");
-  b_item_tri = device_buffer(rt, npix * sizeof(cl_int), "item buffer hits");
-  b_item_t = device_buffer(rt, npix * sizeof(cl_float), "item buffer distances");
-  b_item_facet = device_buffer(rt, npix * sizeof(cl_int), "item buffer facets");
-  b_accum = device_buffer(rt, npix * OPSILA_ACCUM_WORDS * sizeof(cl_uint), "pixel sums");
-  nstats = std::size_t(OPSILA_MAX_DEPTH) * P * OPSILA_STAT_COUNT;
-  b_stats = device_buffer(rt, counter_bytes(nstats), "stats");
-  ntraffic = std::max<std::size_t>(1, std::size_t(traffic_levels) * P * P);
-  b_traffic = device_buffer(rt, counter_bytes(ntraffic), "traffic");
-  b_hits = device_buffer(rt, counter_bytes(1), "primary hit count");
-  b_cost = device_buffer(rt, ncost * sizeof(cl_uint), "cluster work");
-  b_out_count = device_buffer(rt, flight.groups * flight.group_size * sizeof(cl_int), "SPMD output counts");
-  banks.allocate(rt, flight.slots + std::size_t(P) * flight.group_size, "descriptor banks");
-  outputs.allocate(rt, flight.outputs, "SPMD output places");
-  pool.allocate(rt, flight.pool, "descriptor pool");
-  next_pool.allocate(rt, flight.pool, "descriptor pool");
+// Creates and fills the table's buffers. Copies are written without
+// waiting; once they are done, the bank arrays the device does not read in
+// place are freed, and the host pointers of the freed tables forgotten.
+void Renderer::Machine::allocate() {
+  in_place_bytes = allocate_buffers(rt, buffers);
+  cl_check(rt.queue().finish(), "clFinish(uploads)");
+  for (HostArray* a : {&host_tris, &host_nodes, &host_attributes, &host_texels})
+    if (!in_place_bytes) *a = HostArray();
+  for (BufferSpec& s : buffers)
+    if (!s.host_kept || !in_place_bytes) s.host = nullptr;
 }
 
-// Every frame starts from zero pixel sums, statistics and traffic.
+// The frame's buffer table: every device buffer of the frame, once, in the
+// order they are allocated. The memory plan is its sum (plan_of), the
+// allocation and uploads follow it (allocate_buffers), and the Fill::zero
+// ones are cleared before every frame.
+std::vector<BufferSpec> Renderer::Machine::buffer_table(const BankedScene& bs, const FlightPlan& f) {
+  using P_ = PlanPart;
+  const std::size_t sint = sizeof(cl_int);
+  std::vector<BufferSpec> t = {
+      // Scene: the banks (read in place where the device shares host memory)
+      // and the global (every-PE) tables, uploaded once.
+      kept_host_buffer("bank facets", P_::scene, host_tris, &b_tris),
+      kept_host_buffer("bank BVH nodes", P_::scene, host_nodes, &b_nodes),
+      host_buffer("cluster spheres", P_::scene, bs.clusters, &b_clusters),
+      host_buffer("routing boxes", P_::scene, bs.route_nodes, &b_route),
+      host_buffer("PE table", P_::scene, bs.pes, &b_pes),
+      host_buffer("materials", P_::scene, bs.materials, &b_mats),
+      host_buffer("lights", P_::scene, lights, &b_lights),
+      kept_host_buffer("vertex attributes", P_::scene, host_attributes, &surface.attributes),
+      host_buffer("texture copies", P_::scene, bs.textures, &surface.textures),
+      kept_host_buffer("texels", P_::scene, host_texels, &surface.texels),
+      host_buffer("sRGB decode table", P_::scene, srgb, &surface.srgb),
+      host_buffer("projected cluster boxes", P_::scene, rects, &b_rects),
+      // Only the pilot's program reads these; others get one-entry stand-ins.
+      host_buffer("node clusters", P_::scene, measure ? bs.node_cluster : no_cluster, &b_node_cluster),
+      host_buffer("facet clusters", P_::scene, measure ? bs.tri_cluster : no_cluster, &b_tri_cluster),
+      // Item buffer (pair, triangle, distance, facet) and 64-bit fixed-point
+      // RGB sums.
+      frame_buffer("item buffer", P_::image, sizeof(cl_int2), npix, Fill::device, &b_items),
+      frame_buffer("item buffer hits", P_::image, sint, npix, Fill::device, &b_item_tri),
+      frame_buffer("item buffer distances", P_::image, sizeof(cl_float), npix, Fill::device, &b_item_t),
+      frame_buffer("item buffer facets", P_::image, sint, npix, Fill::device, &b_item_facet),
+      frame_buffer("pixel sums", P_::image, OPSILA_ACCUM_WORDS * sizeof(cl_uint), npix, Fill::zero, &b_accum),
+      // Counters: statistics, PE x PE traffic, primary hits; the pilots'
+      // cluster work; the SPMD phase's output counts.
+      frame_buffer("stats", P_::other, 1, counter_bytes(nstats), Fill::zero, &b_stats),
+      frame_buffer("traffic", P_::other, 1, counter_bytes(ntraffic), Fill::zero, &b_traffic),
+      frame_buffer("primary hit count", P_::other, 1, counter_bytes(1), Fill::zero, &b_hits),
+      frame_buffer("cluster work", P_::other, sizeof(cl_uint), ncost, Fill::zero, &b_cost),
+      frame_buffer("SPMD output counts", P_::other, sint, f.groups * f.group_size, Fill::device, &b_out_count),
+  };
+  // Descriptor vectors: banks (the slots in flight, each bank padded to
+  // whole work-groups), SPMD output places, the waiting pool (ping-pong).
+  auto descriptors = [&](const char* name, std::size_t count, DescriptorSet* set) {
+    BufferSpec d = frame_buffer(name, P_::descriptors, DescriptorSet::kSlotBytes, count, Fill::device, nullptr);
+    d.set = set;
+    t.push_back(d);
+  };
+  descriptors("descriptor banks", f.slots + std::size_t(P) * f.group_size, &banks);
+  descriptors("SPMD output places", f.outputs, &outputs);
+  descriptors("descriptor pool", f.pool, &pool);
+  descriptors("descriptor pool", f.pool, &next_pool);
+  // The exchange (ScatterPass): what plan() would grow to, allocated ahead
+  // (a pass ranks at most the pool and the outputs, in at most this many
+  // blocks, for at most this many SPMD work-groups of all P PEs) ...
+  const std::size_t sources = f.pool + f.outputs;
+  const std::size_t blocks = (f.pool + ScatterPass::kBlock - 1) / ScatterPass::kBlock + f.groups;
+  const std::size_t groups = f.slots / f.group_size + P + 1;
+  auto grown = [&](const char* name, std::size_t count, ScatterPass::Grown* g) {
+    BufferSpec d = frame_buffer(name, P_::other, sint, count, Fill::device, &g->buffer);
+    d.capacity = &g->capacity;
+    t.push_back(d);
+  };
+  grown("scatter ranks", sources, &scatter->ranks);
+  grown("scatter block counts", (blocks + 1) * P, &scatter->block_counts);
+  grown("SPMD work-group PEs", groups, &scatter->group_pe);
+  grown("SPMD work-group slots", groups, &scatter->group_first);
+  // ... and its per-PE tables, which it allocates when it is made.
+  for (const char* name : {"bank offsets", "bank counts", "scatter totals", "scatter overflow bases"})
+    t.push_back(frame_buffer(name, P_::other, sint, P, Fill::device, nullptr));
+  t.push_back(frame_buffer("scatter counts", P_::other, sint, 3, Fill::device, nullptr));
+  t.push_back(frame_buffer("no SPMD outputs", P_::other, sint, 1, Fill::device, nullptr));
+  return t;
+}
+
+// Every frame starts from zero pixel sums, statistics, traffic and work.
 void Renderer::Machine::clear_frame() {
   if (rank_exchange) rank_exchange->reset();
-  zero_buffer(rt, b_accum, npix * OPSILA_ACCUM_WORDS * sizeof(cl_uint), "pixel sums");
-  zero_buffer(rt, b_stats, counter_bytes(nstats), "stats");
-  zero_buffer(rt, b_traffic, counter_bytes(ntraffic), "traffic");
-  zero_buffer(rt, b_hits, counter_bytes(1), "primary hit count");
-  zero_buffer(rt, b_cost, ncost * sizeof(cl_uint), "cluster work");
+  zero_frame_buffers(rt, buffers);
 }
 
 }  // namespace opsila

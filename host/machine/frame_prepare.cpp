@@ -56,17 +56,22 @@ Renderer::Machine::Machine(const Scene& scene, PreparedBanks banks, const Render
   // This device's PEs and their banks, prepared before (machine/banks.h).
   group = banks.group;
   G = group.size();
-  const BankedScene& bs = banks.scene;
+  BankedScene& bs = banks.scene;
   if (measure) ncost = std::size_t(depth) * bs.clusters.size();
   S = OPSILA_SPAWN_SLOTS(static_cast<int>(bs.lights.size()));
-  n = choose_bank_capacity(bs, settings);
-  flight = FlightPlan(G, n, spmd_wg, S);
-  plan = plan_device_memory(bs, npix, P, flight, depth);
-  fp = frame_params(scene, bs, n);
+  traffic_levels = settings.count_work && P <= OPSILA_TRAFFIC_MAX_PES ? depth : 0;
+  nstats = std::size_t(OPSILA_MAX_DEPTH) * P * OPSILA_STAT_COUNT;
+  ntraffic = std::max<std::size_t>(1, std::size_t(traffic_levels) * P * P);
+  fp = frame_params(scene, bs, 0);
   fp.group_begin = group.begin;
   fp.group_end = group.end;
   fp.tri_base = banks.tri_base;
-  traffic_levels = settings.count_work && P <= OPSILA_TRAFFIC_MAX_PES ? depth : 0;
+  host_tables(scene, bs);  // takes the bank arrays: bs keeps the global tables
+  n = choose_bank_capacity(bs, settings);
+  fp.bank_capacity = n;
+  flight = FlightPlan(G, n, spmd_wg, S);
+  buffers = buffer_table(bs, flight);
+  plan = plan_of(buffers);
 
   prepared.num_pes = P;
   prepared.bank_capacity = n;
@@ -84,9 +89,7 @@ Renderer::Machine::Machine(const Scene& scene, PreparedBanks banks, const Render
   const PrepareTimes before_upload = prepare_times();
   {
     StageClock clock(PrepareStage::upload);
-    upload_scene(scene, bs);
-    clock.progress(0.9);
-    allocate_frame_buffers();
+    allocate();
   }
   prepared.prepare = banks.prepare;
   prepared.prepare[PrepareStage::upload] = stages_since(before_upload)[PrepareStage::upload];
@@ -100,7 +103,7 @@ Renderer::Machine::Machine(const Scene& scene, PreparedBanks banks, const Render
 // checks each buffer against the largest single allocation). An automatic n
 // halves until it fits; an explicit --bank-capacity, or an image that does
 // not fit even with n = 1, is refused.
-int Renderer::Machine::choose_bank_capacity(const BankedScene& bs, const RenderSettings& settings) const {
+int Renderer::Machine::choose_bank_capacity(const BankedScene& bs, const RenderSettings& settings) {
   int bank = settings.bank_capacity;
   if (bank <= 0) {
     std::size_t target = rt.device().is_gpu ? (1u << 18) : (1u << 16);
@@ -110,7 +113,7 @@ int Renderer::Machine::choose_bank_capacity(const BankedScene& bs, const RenderS
   if (std::size_t(G) * bank * S > (1u << 30))
     throw InputError("--bank-capacity " + std::to_string(bank) + " is too large for " + std::to_string(P) +
                      " PEs and " + std::to_string(S - 2) + " lights");
-  auto plan = [&](int b) { return plan_device_memory(bs, npix, P, FlightPlan(G, b, spmd_wg, S), depth); };
+  auto plan = [&](int b) { return plan_of(buffer_table(bs, FlightPlan(G, b, spmd_wg, S))); };
   if (settings.bank_capacity <= 0)
     while (bank > 1 && plan(bank).total() > rt.global_mem()) bank /= 2;
   if (const DevicePlan need = plan(bank); need.total() > rt.global_mem())

@@ -1,16 +1,20 @@
 // The memory plan of a frame: how many descriptors are in flight, and
-// what the device must hold before the first launch. The renderer sizes its
-// banks with it, halving n until the plan fits the device.
+// what the device must hold before the first launch: the sum of the
+// frame's buffer table (machine/device_buffers.h, the table itself in
+// frame_buffers.cpp). The renderer sizes its banks with it, halving n until
+// the plan fits the device.
 #pragma once
 
 #include <cstddef>
 #include <cstdint>
 
-#include "machine/partition.h"
+#include <vector>
+
+#include "machine/device_buffers.h"
 
 namespace opsila {
 
-// Device memory that a frame allocates before the first launch.
+// Device memory that a frame allocates before the first launch, by part.
 struct DevicePlan {
   std::uint64_t scene = 0, image = 0, descriptors = 0, other = 0;
   std::uint64_t total() const { return scene + image + descriptors + other; }
@@ -24,6 +28,6 @@ struct FlightPlan {
   FlightPlan(int P, int n, std::size_t wg, int S);
 };
 
-DevicePlan plan_device_memory(const BankedScene& bs, std::size_t npix, int P, const FlightPlan& f, int depth);
+DevicePlan plan_of(const std::vector<BufferSpec>& table);
 
 }  // namespace opsila

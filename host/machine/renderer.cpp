@@ -94,6 +94,14 @@ std::vector<std::uint64_t> Renderer::cluster_work() {
 
 std::uint64_t Renderer::planned_device_bytes() const { return m_->plan.total(); }
 
+std::map<std::string, std::uint64_t> Renderer::planned_buffers() const {
+  std::map<std::string, std::uint64_t> by_name;
+  for (const BufferSpec& s : m_->buffers) by_name[s.name] += s.bytes();
+  return by_name;
+}
+
+std::uint64_t Renderer::in_place_bytes() const { return m_->in_place_bytes; }
+
 RenderResult render(const Scene& scene, const RenderSettings& settings, ClRuntime& runtime) {
   PreparedBanks banks = prepare_banks(scene, settings, runtime);
   return Renderer(scene, std::move(banks), settings, runtime).render();

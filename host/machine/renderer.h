@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdint>
+#include <map>
 #include <memory>
 #include <string>
 #include <tuple>
@@ -50,8 +51,13 @@ class Renderer {
   // tests per level, [level * clusters + cluster], summed over the ranks
   // (machine/pilot.h spreads them over the facets); empty otherwise.
   std::vector<std::uint64_t> cluster_work();
-  // The device memory the memory plan gave this machine (machine/memory_plan.h).
+  // The device memory the memory plan gave this machine (machine/memory_plan.h),
+  // in all and by buffer name (the frame's buffer table, summed by name).
   std::uint64_t planned_device_bytes() const;
+  std::map<std::string, std::uint64_t> planned_buffers() const;
+  // Of the scene's uploads, the bytes the device reads in host memory in
+  // place (CL_MEM_USE_HOST_PTR), not copied.
+  std::uint64_t in_place_bytes() const;
 
  private:
   struct Machine;

@@ -16,6 +16,7 @@
 #include "bench/measure.h"
 #include "bench/options.h"
 #include "bench/report.h"
+#include "cli/startup.h"
 #include "core/progress.h"
 #include "core/stage_clock.h"
 #include "core/image_io.h"
@@ -97,20 +98,15 @@ int run_bench(const std::vector<std::string>& args) {
   const BenchProgress progress{o.quiet || !writer};
 
   ClRuntime rt(choose_device_flag(o.device_spec));
+  // Every rank names its device (as render does), each on its own line.
+  const std::string device = device_text(ranks, o.pes.value_or(RenderSettings().num_pes), rt.description());
   if (ranks.size() > 1) {
-    // Every rank names its device (as render does), each on its own line.
-    const PeGroup g = pe_group(o.pes.value_or(RenderSettings().num_pes), ranks.size(), ranks.rank());
-    if (!o.quiet)
-      std::fprintf(stderr, "opsila: bench: device: rank %d of %d (%s), PEs %d..%d: %s\n", g.rank, g.ranks,
-                   ranks.host().c_str(), g.begin, g.end - 1, rt.description().c_str());
+    if (!o.quiet) std::fprintf(stderr, "opsila: bench: device: %s\n", device.c_str());
   } else {
-    progress("device: %s", rt.description().c_str());
+    progress("device: %s", device.c_str());
   }
-  show_prepare_progress(!o.quiet && writer);
-  Scene scene = load_scene_or_explain(o.scene_path, o.quiet || !writer);
-  outputs.refuse_inputs(scene.input_files);
-  apply_view_options(scene, o);
-  if (const std::string note = large_work_note(scene); !note.empty()) progress("note: %s", note.c_str());
+  const Scene scene = load_view_scene(o.scene_path, o, o.quiet || !writer, outputs,
+                                      [&](const std::string& note) { progress("note: %s", note.c_str()); });
   // The bench measures the scheme with its PEs balanced by measured work
   // unless told otherwise (render's default, facets, skips the pilots).
   ViewOptions view = static_cast<const ViewOptions&>(o);

@@ -1,4 +1,5 @@
 #include "cli/cli.h"
+#include "cli/startup.h"
 
 #include <sys/stat.h>
 #include <unistd.h>
@@ -176,6 +177,47 @@ RenderOptions parse_render_options(const std::vector<std::string>& args) {
 
 // ------------------------------------------------------------------ render
 
+namespace {
+
+// --reference: the sequential host renderer. One processor: every primary
+// hit and spawned ray is a "descriptor" that finishes at once, as
+// RenderStats counts them.
+RenderResult render_on_host(const Scene& scene, bool quiet, Progress& progress, std::string& device) {
+  const int threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  device = "host reference (" + std::to_string(threads) + " threads)";
+  if (!quiet) print_line("device", device);
+  const auto start = std::chrono::steady_clock::now();
+  RenderResult result;
+  static_cast<ImageResult&>(result) = render_reference(scene, threads, &progress);
+  RenderStats& s = result.stats;
+  s.render_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  s.prepare = prepare_times();  // reading and parsing: nothing else to prepare
+  s.descriptors_spawned = result.rays.primary_hits + result.rays.secondary + result.rays.shadow;
+  s.descriptors_finished = s.descriptors_spawned;
+  s.num_pes = 1;
+  return result;
+}
+
+// The image, item buffer and statistics, all together or none; then the
+// summary line.
+void write_render_outputs(const RenderOptions& o, OutputFiles& outputs, const RenderResult& result,
+                          const Scene& scene, const RenderSettings& settings, const std::string& device) {
+  outputs.write(o.output_path, encode_output(o, result));
+  if (!o.item_buffer_path.empty())
+    outputs.write(o.item_buffer_path, encode_npy_item_buffer(result.height, result.width, result.item_buffer));
+  if (!o.stats_path.empty())
+    outputs.write(o.stats_path, stats_json(result, scene, settings, device).dump(2) + "\n");
+  outputs.commit();
+  if (o.quiet) return;
+  char line[256];
+  std::snprintf(line, sizeof line, "%s (%dx%d, depth %d, %llu rays in %.3f s)", o.output_path.c_str(), result.width,
+                result.height, scene.max_depth, static_cast<unsigned long long>(result.rays.total()),
+                result.stats.render_seconds);
+  std::fprintf(stderr, "opsila: wrote %s\n", line);
+}
+
+}  // namespace
+
 int run_render(const std::vector<std::string>& args) {
   const RenderOptions o = parse_render_options(args);
   if (o.help) {
@@ -213,25 +255,16 @@ int run_render(const std::vector<std::string>& args) {
   // the pilots of the other balance modes need the whole scene on every rank.
   SceneShare share;
   const Balance balance = o.balance.value_or(kDefaultBalance);
-  if (ranks.size() > 1 && balance == Balance::facets) {
-    share.rank = ranks.rank(), share.ranks = ranks.size();
-    share.combine = [&ranks](SceneShare& s) { combine_share(s, ranks); };  // a terrain's windows, added up
-  }
+  if (ranks.size() > 1 && balance == Balance::facets) share.rank = ranks.rank(), share.ranks = ranks.size();
   if (ranks.size() > 1 && balance != Balance::facets && writer && !o.quiet)
     print_line("note", std::string("--balance ") + balance_name(balance) +
                            ": every rank reads the whole scene (--balance facets reads a share per rank)");
-  show_prepare_progress(!o.quiet && writer);
-  Scene scene = load_scene_or_explain(o.scene_path, o.quiet || !writer, share);
-  outputs.refuse_inputs(scene.input_files);
-  apply_view_options(scene, o);
-
+  const Scene scene = load_view_scene(o.scene_path, o, o.quiet || !writer, outputs,
+                                      [](const std::string& note) { print_line("note", note); }, share);
   ViewOptions machine = o;
   if (o.reference) machine.balance = Balance::facets;  // one processor, no banks to balance
   RaySample sample;
   RenderSettings settings = render_settings(machine, scene, sample);
-
-  if (!o.quiet && writer)
-    if (const std::string note = large_work_note(scene); !note.empty()) print_line("note", note);
   Progress progress("render", !o.quiet && writer);
   settings.progress = &progress;
   settings.count_work = !o.stats_path.empty();  // only --stats reads the work counters
@@ -239,58 +272,17 @@ int run_render(const std::vector<std::string>& args) {
   RenderResult result;
   std::string device;
   if (o.reference) {
-    const int threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-    device = "host reference (" + std::to_string(threads) + " threads)";
-    if (!o.quiet) print_line("device", device);
-    const auto start = std::chrono::steady_clock::now();
-    static_cast<ImageResult&>(result) = render_reference(scene, threads, &progress);
-    result.stats.render_seconds =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    result.stats.prepare = prepare_times();  // reading and parsing: nothing else to prepare
-    RenderStats& s = result.stats;
-    // One processor: every primary hit and spawned ray is a "descriptor"
-    // that finishes at once, as RenderStats counts them.
-    s.descriptors_spawned = result.rays.primary_hits + result.rays.secondary + result.rays.shadow;
-    s.descriptors_finished = s.descriptors_spawned;
-    s.num_pes = 1;
+    result = render_on_host(scene, o.quiet, progress, device);
     settings.num_pes = 1;
   } else {
     device = runtime->description();
-    if (ranks.size() > 1) {
-      const PeGroup g = pe_group(settings.num_pes, ranks.size(), ranks.rank());
-      const std::string where = "rank " + std::to_string(g.rank) + " of " + std::to_string(g.ranks) + " (" +
-                                ranks.host() + "), PEs " + std::to_string(g.begin) + ".." + std::to_string(g.end - 1);
-      if (!o.quiet) print_line("device", where + ": " + device);
-      if (writer) device = std::to_string(ranks.size()) + " MPI ranks; rank 0: " + device;
-    } else if (!o.quiet) {
-      print_line("device", device);
-    }
+    if (!o.quiet) print_line("device", device_text(ranks, settings.num_pes, device));
+    if (ranks.size() > 1 && writer) device = std::to_string(ranks.size()) + " MPI ranks; rank 0: " + device;
     result = render(scene, settings, *runtime);
   }
   progress.finish();
-  if (!writer) {
-    ranks.checkpoint();  // rank 0 writes the outputs; a failure there ends every rank alike
-    return kExitOk;
-  }
-
-  outputs.write(o.output_path, encode_output(o, result));
-  if (!o.item_buffer_path.empty())
-    outputs.write(o.item_buffer_path,
-                  encode_npy_item_buffer(result.height, result.width, result.item_buffer));
-  if (!o.stats_path.empty())
-    outputs.write(o.stats_path, stats_json(result, scene, settings, device).dump(2) + "\n");
-  outputs.commit();
-
-  if (!o.quiet) {
-    const RenderStats& s = result.stats;
-    char line[256];
-    std::snprintf(line, sizeof line, "%s (%dx%d, depth %d, %llu rays in %.3f s)", o.output_path.c_str(),
-                  result.width, result.height, scene.max_depth,
-                  static_cast<unsigned long long>(result.rays.total()),
-                  s.render_seconds);
-    std::fprintf(stderr, "opsila: wrote %s\n", line);
-  }
-  ranks.checkpoint();
+  if (writer) write_render_outputs(o, outputs, result, scene, settings, device);
+  ranks.checkpoint();  // rank 0 writes the outputs; a failure there ends every rank alike
   return kExitOk;
 }
 

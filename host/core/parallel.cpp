@@ -8,10 +8,12 @@
 #include <thread>
 #include <vector>
 
+#include "core/env_hooks.h"
+
 namespace opsila {
 
 int host_threads() {
-  if (const char* env = std::getenv("OPSILA_THREADS"); env && *env) {
+  if (const char* env = env_hook(EnvHook::threads)) {
     char* end = nullptr;
     const long v = std::strtol(env, &end, 10);
     if (*end == '\0' && v > 0 && v <= 1024) return static_cast<int>(v);

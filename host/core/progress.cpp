@@ -8,6 +8,8 @@
 #include <cstdlib>
 #include <vector>
 
+#include "core/env_hooks.h"
+
 namespace opsila {
 
 namespace {
@@ -49,7 +51,7 @@ std::string count_text(double n) {
 Progress::Progress(std::string label, bool enabled) : label_(std::move(label)), enabled_(enabled) {
   tty_ = ::isatty(STDERR_FILENO) == 1;
   every_ = tty_ ? 0.25 : 5.0;
-  if (const char* env = std::getenv("OPSILA_PROGRESS_AFTER")) {
+  if (const char* env = env_hook(EnvHook::progress_after)) {
     char* end = nullptr;
     const double v = std::strtod(env, &end);
     if (end != env && *end == '\0' && v >= 0 && std::isfinite(v)) after_ = v;

@@ -11,18 +11,10 @@
 #include <string>
 #include <vector>
 
+#include "core/errors.h"
 #include "core/vec.h"
 
 namespace opsila {
-
-// Any bad input (file, flag, scene value). what() is the one-line message the
-// user sees: it names the file, the line (and key) and the problem.
-// `warnings` are those the reader had gathered before the error: printed
-// before it, so that a misspelt key still shows up.
-struct InputError : std::runtime_error {
-  using std::runtime_error::runtime_error;
-  std::vector<std::string> warnings;
-};
 
 // SPEC "Materials": an illumination model reflects (kr = Ks) for illum
 // 3..7 and transmits (kt = Tf) for illum 4, 6 and 7.

@@ -20,6 +20,7 @@
 #include <thread>
 #include <vector>
 
+#include "core/env_hooks.h"
 #include "core/util.h"
 #include "input/model_checks.h"
 #include "input/model_files.h"
@@ -199,7 +200,7 @@ class ImportWatchdog {
  public:
   ImportWatchdog(const std::string& name, std::uintmax_t bytes) {
     double budget = 60.0 + double(bytes) / (1024.0 * 1024.0);
-    if (const char* env = std::getenv("OPSILA_IMPORT_TIMEOUT")) {
+    if (const char* env = env_hook(EnvHook::import_timeout)) {
       char* end = nullptr;
       const double v = std::strtod(env, &end);
       if (end != env && v >= 0) budget = v;

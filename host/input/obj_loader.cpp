@@ -109,22 +109,9 @@ int ObjParser::add_attributes(Scene& scene, const Polygon& poly, std::uint32_t k
   return static_cast<int>(scene.attributes.size()) - 1;
 }
 
-
-Scene ObjParser::finish() {
-  check_range(verts_, index_, "vertices");
-  check_range(uvs_, uv_index_, "texture coordinates");
-  check_range(normals_, normal_index_, "normals");
-  Scene scene;
-  scene.has_camera = false;
-  scene.has_lights = false;
-  if (polys_.empty()) {
-    std::string why = name_ + ": no facets";
-    if (short_faces_ > 0)
-      why += " (" + std::to_string(short_faces_) + " faces with fewer than 3 vertices)";
-    throw InputError(why);
-  }
-
-  // Materials: 0 is the SPEC default, then the MTL ones in definition order.
+// Materials: 0 is the SPEC default, then the MTL ones in definition order;
+// a slot whose name no library defines gets the default (and a warning).
+std::vector<int> ObjParser::resolve_materials(Scene& scene) {
   scene.materials.push_back(MaterialDesc::default_material());
   for (const MaterialDesc& m : library_) scene.materials.push_back(m);
   std::vector<int> slot_material(slot_names_.size(), 0);
@@ -147,12 +134,15 @@ Scene ObjParser::finish() {
     warnings_.push_back(name_ + ": " + std::to_string(unknown - kListedWarnings) +
                         " more unknown material names; their faces get the default material");
 
-  const bool by_o = o_count_ > 0;
-  scene.num_objects = by_o ? o_count_ : (g_count_ > 0 ? g_count_ : 1);
-  scene.num_facets = static_cast<int>(polys_.size());
+  return slot_material;
+}
 
+// Each face fanned into triangles from its first vertex; a zero-area
+// triangle is skipped (a face with none left is degenerate, its id kept).
+std::pair<int, int> ObjParser::triangulate(Scene& scene, const std::vector<int>& slot_material) {
   scene.triangles.reserve(triangle_total_);
   int degenerate = 0, degenerate_line = 0;
+  const bool by_o = o_count_ > 0;
   const auto vtx = [&](std::uint32_t i) {
     const float* p = &verts_.values[3 * static_cast<std::size_t>(i)];
     return Vec3{p[0], p[1], p[2]};
@@ -188,6 +178,27 @@ Scene ObjParser::finish() {
     }
     if (!any && degenerate++ == 0) degenerate_line = poly.line;
   }
+  return {degenerate, degenerate_line};
+}
+
+Scene ObjParser::finish() {
+  check_range(verts_, index_, "vertices");
+  check_range(uvs_, uv_index_, "texture coordinates");
+  check_range(normals_, normal_index_, "normals");
+  Scene scene;
+  scene.has_camera = false;
+  scene.has_lights = false;
+  if (polys_.empty()) {
+    std::string why = name_ + ": no facets";
+    if (short_faces_ > 0)
+      why += " (" + std::to_string(short_faces_) + " faces with fewer than 3 vertices)";
+    throw InputError(why);
+  }
+
+  const std::vector<int> slot_material = resolve_materials(scene);
+  scene.num_objects = o_count_ > 0 ? o_count_ : (g_count_ > 0 ? g_count_ : 1);
+  scene.num_facets = static_cast<int>(polys_.size());
+  const auto [degenerate, degenerate_line] = triangulate(scene, slot_material);
   if (scene.triangles.empty())
     throw InputError(name_ + ": no facets (all " + std::to_string(polys_.size()) +
                      " faces are degenerate)");

@@ -94,6 +94,11 @@ class ObjParser {
   void mtllib(std::string_view rest);
   void check_range(IndexedList& list, const std::vector<std::uint32_t>& index, const char* plural);
   void load_maps(Scene& scene, const std::vector<int>& slot_material);
+  // finish()'s steps: the scene's materials (returns each slot's), and the
+  // faces fanned into triangles (returns the degenerate faces and the line
+  // of the first).
+  std::vector<int> resolve_materials(Scene& scene);
+  std::pair<int, int> triangulate(Scene& scene, const std::vector<int>& slot_material);
   int add_attributes(Scene& scene, const Polygon& poly, std::uint32_t k) const;
   void merge_chunk(ObjParser& c, int line_base, int& slot, std::vector<std::pair<int, std::string>>& libs);
   bool resolve_fixups(ObjParser& c, int line_base);

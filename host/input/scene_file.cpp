@@ -7,6 +7,7 @@
 #include "input/scene_file.h"
 
 #include "input/scene_reader.h"
+#include "core/env_hooks.h"
 #include "core/stage_clock.h"
 
 #include <chrono>
@@ -271,14 +272,8 @@ Scene load_scene_from_string(const std::string& text, const std::string& name,
 }
 
 std::size_t rank_triangle_limit() {
-  const char* text = std::getenv("OPSILA_RANK_TRIANGLE_LIMIT");
-  if (!text || !*text) return kMaxTriangles;
-  const std::string value = text;
-  if (value.size() > 9 || !std::all_of(value.begin(), value.end(), [](unsigned char c) { return std::isdigit(c); }) ||
-      std::stoul(value) == 0 || std::stoul(value) > kMaxTriangles)
-    throw InputError("OPSILA_RANK_TRIANGLE_LIMIT=" + value + ": expected a number of triangles, 1.." +
-                     std::to_string(kMaxTriangles));
-  return std::stoul(value);
+  const std::string expected = "a number of triangles, 1.." + std::to_string(kMaxTriangles);
+  return env_hook_number(EnvHook::rank_triangle_limit, 1, kMaxTriangles, expected.c_str()).value_or(kMaxTriangles);
 }
 
 Scene load_scene(const std::string& path, const SceneShare& share) {

@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "opsila_shared.h"
+#include "core/env_hooks.h"
 #include "core/scene.h"
 #include "core/util.h"
 
@@ -321,12 +322,12 @@ ClRuntime::ClRuntime(const DeviceEntry& device, const ClRuntimeOptions& options)
   if (options.group_size) group_size_ = checked_group_size(std::to_string(options.group_size), "group size");
   if (options.read_environment) {
     // OPSILA_GROUP_SIZE=N: work-groups of N (capped by each kernel's limit).
-    const char* group = std::getenv("OPSILA_GROUP_SIZE");
+    const char* group = env_hook(EnvHook::group_size);
     if (group && *group && options.group_size == 0) group_size_ = checked_group_size(group, "OPSILA_GROUP_SIZE");
     // OPSILA_KERNEL_SOURCE=path: build this file instead of the embedded
     // kernels (to try a kernel change without rebuilding, or to test faults).
-    const char* path = std::getenv("OPSILA_KERNEL_SOURCE");
-    if (path && *path && source_.empty()) {
+    const char* path = env_hook(EnvHook::kernel_source);
+    if (path && source_.empty()) {
       std::ifstream in(path, std::ios::binary);
       std::ostringstream text;
       text << in.rdbuf();
@@ -336,14 +337,8 @@ ClRuntime::ClRuntime(const DeviceEntry& device, const ClRuntimeOptions& options)
       source_origin_ = std::string("OPSILA_KERNEL_SOURCE=") + path;
     }
     // OPSILA_DEVICE_MEMORY_LIMIT=bytes: plan as if the device had no more.
-    const char* mem = std::getenv("OPSILA_DEVICE_MEMORY_LIMIT");
-    if (mem && *mem && limit == 0) {
-      const std::string text = mem;
-      if (!std::all_of(text.begin(), text.end(), [](unsigned char c) { return std::isdigit(c); }) ||
-          text.size() > 19 || std::stoull(text) == 0)
-        throw InputError("OPSILA_DEVICE_MEMORY_LIMIT=" + text + ": expected a positive number of bytes");
-      limit = std::stoull(text);
-    }
+    if (limit == 0)
+      limit = env_hook_number(EnvHook::device_memory_limit, 1, UINT64_MAX, "a positive number of bytes").value_or(0);
   }
 
   cl_int err = CL_SUCCESS;

@@ -10,6 +10,7 @@
 #include <string>
 
 #include "core/camera.h"
+#include "core/env_hooks.h"
 #include "core/stage_clock.h"
 #include "core/util.h"
 #include "machine/ranks.h"
@@ -33,12 +34,8 @@ Renderer::Machine::Machine(const Scene& scene, PreparedBanks banks, const Render
   spp_k = spp_side(spp);
   offsets = sample_offsets(spp);
   progress = settings.progress;
-  if (const char* k = std::getenv("OPSILA_FAULT_ROUND"); k && *k) {
-    const std::string text = k;
-    if (!std::all_of(text.begin(), text.end(), [](unsigned char c) { return std::isdigit(c); }) || text.size() > 9)
-      throw InputError("OPSILA_FAULT_ROUND=" + text + ": expected a round number");
-    fault_round = std::stoi(text);
-  }
+  if (const auto k = env_hook_number(EnvHook::fault_round, 0, 999999999, "a round number"))
+    fault_round = static_cast<int>(*k);
 
   measure = settings.measure_cost;
   // --stats and the bench count the work; a plain render counts only rays.

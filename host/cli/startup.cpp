@@ -1,0 +1,27 @@
+#include "cli/startup.h"
+
+#include "core/progress.h"
+#include "core/stage_clock.h"
+#include "machine/pe_group.h"
+
+namespace opsila {
+
+std::string device_text(Ranks& ranks, int num_pes, const std::string& description) {
+  if (ranks.size() <= 1) return description;
+  const PeGroup g = pe_group(num_pes, ranks.size(), ranks.rank());
+  return "rank " + std::to_string(g.rank) + " of " + std::to_string(g.ranks) + " (" + ranks.host() + "), PEs " +
+         std::to_string(g.begin) + ".." + std::to_string(g.end - 1) + ": " + description;
+}
+
+Scene load_view_scene(const std::string& path, const ViewOptions& view, bool quiet, OutputFiles& outputs,
+                      const std::function<void(const std::string&)>& note, const SceneShare& share) {
+  show_prepare_progress(!quiet);
+  Scene scene = load_scene_or_explain(path, quiet, share);
+  outputs.refuse_inputs(scene.input_files);
+  apply_view_options(scene, view);
+  if (!quiet)
+    if (const std::string text = large_work_note(scene); !text.empty()) note(text);
+  return scene;
+}
+
+}  // namespace opsila

@@ -1,0 +1,21 @@
+// The errors a run ends with, by whose fault: bad input here (exit 2); a
+// failed OpenCL call or driver fault is ClError (machine/cl_runtime.h, exit
+// 3); the exit codes themselves are in cli/args.h.
+#pragma once
+
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace opsila {
+
+// Any bad input (file, flag, scene value, OPSILA_* variable). what() is the
+// one-line message the user sees: it names the file, the line (and key) and
+// the problem. `warnings` are those the reader had gathered before the
+// error: printed before it, so that a misspelt key still shows up.
+struct InputError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+  std::vector<std::string> warnings;
+};
+
+}  // namespace opsila

@@ -255,7 +255,10 @@ int run_render(const std::vector<std::string>& args) {
   // the pilots of the other balance modes need the whole scene on every rank.
   SceneShare share;
   const Balance balance = o.balance.value_or(kDefaultBalance);
-  if (ranks.size() > 1 && balance == Balance::facets) share.rank = ranks.rank(), share.ranks = ranks.size();
+  if (ranks.size() > 1 && balance == Balance::facets) {
+    share.rank = ranks.rank(), share.ranks = ranks.size();
+    share.combine = [&ranks](SceneShare& s) { combine_share(s, ranks); };  // a terrain's windows, added up
+  }
   if (ranks.size() > 1 && balance != Balance::facets && writer && !o.quiet)
     print_line("note", std::string("--balance ") + balance_name(balance) +
                            ": every rank reads the whole scene (--balance facets reads a share per rank)");

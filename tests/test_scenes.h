@@ -66,6 +66,20 @@ inline void add_sphere(Scene& s, Vec3 c, float r, int level, int object, int mat
   }
 }
 
+// The view and two lights the mirror-glass and textured scenes share: a 4:3
+// image `width` pixels wide, looking down at the floor from the front.
+inline void two_lights_and_view(Scene& s, int width) {
+  s.lights.push_back({{3, 7, 5}, {0.7f, 0.7f, 0.7f}});
+  s.lights.push_back({{-4, 5, 3}, {0.35f, 0.35f, 0.45f}});
+  s.camera.eye = {0, 3, 8};
+  s.camera.look_at = {0, 1, 0};
+  s.camera.fov_deg = 55;
+  s.width = width;
+  s.height = width * 3 / 4;
+  s.background = {0.25f, 0.35f, 0.55f};
+  s.has_camera = s.has_lights = true;
+}
+
 // Checkerboard floor, a mirror wall, a glass sphere, a mirror sphere and a
 // row of diffuse blocks casting shadows; two lights.
 inline Scene mirror_glass_scene(int width, int depth = 5) {
@@ -92,17 +106,9 @@ inline Scene mirror_glass_scene(int width, int depth = 5) {
     add_quad(s, {x, 0.0f, z}, {x + 0.6f, 0.0f, z}, {x + 0.6f, 1.2f, z}, {x, 1.2f, z}, obj++, red);
   }
   s.num_objects = obj;
-  s.lights.push_back({{3, 7, 5}, {0.7f, 0.7f, 0.7f}});
-  s.lights.push_back({{-4, 5, 3}, {0.35f, 0.35f, 0.45f}});
-  s.camera.eye = {0, 3, 8};
-  s.camera.look_at = {0, 1, 0};
-  s.camera.fov_deg = 55;
-  s.width = width;
-  s.height = width * 3 / 4;
+  two_lights_and_view(s, width);
   s.max_depth = depth;
   s.ambient = {0.1f, 0.1f, 0.1f};
-  s.background = {0.25f, 0.35f, 0.55f};
-  s.has_camera = s.has_lights = true;
   return s;
 }
 
@@ -190,17 +196,9 @@ inline Scene textured_smooth_scene(int width, bool smooth) {
   plain.attributes = add_attributes(s, {up, up, up}, {{{0, 0}, {1, 0}, {1, 1}}}, false, true);
   s.triangles.push_back(plain);
   s.num_objects = obj;
-  s.lights.push_back({{3, 7, 5}, {0.7f, 0.7f, 0.7f}});
-  s.lights.push_back({{-4, 5, 3}, {0.35f, 0.35f, 0.45f}});
-  s.camera.eye = {0, 3, 8};
-  s.camera.look_at = {0, 1, 0};
-  s.camera.fov_deg = 55;
-  s.width = width;
-  s.height = width * 3 / 4;
+  two_lights_and_view(s, width);
   s.max_depth = 4;
   s.ambient = {0.15f, 0.15f, 0.15f};
-  s.background = {0.25f, 0.35f, 0.55f};
-  s.has_camera = s.has_lights = true;
   s.smooth = smooth;
   return s;
 }

@@ -220,11 +220,12 @@ inline double item_agreement(const std::vector<std::int32_t>& a, const std::vect
   return double(same) / double(a.size() / 2);
 }
 
-// The InputError message `f` throws, or "<no error>".
-inline std::string error_of(const std::function<void()>& f) {
+// The message of the `Error` that `f` throws, or "<no error>".
+template <class Error = InputError>
+std::string error_of(const std::function<void()>& f) {
   try {
     f();
-  } catch (const InputError& e) {
+  } catch (const Error& e) {
     return e.what();
   }
   return "<no error>";

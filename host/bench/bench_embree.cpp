@@ -40,6 +40,25 @@ std::string embree_version() { return RTC_VERSION_STRING; }
 
 namespace {
 
+// Embree 4 dropped the intersect context argument; Debian 12 ships 3.
+#if RTC_VERSION_MAJOR >= 4
+void intersect_one(RTCScene scene, RTCRayHit& rh) { rtcIntersect1(scene, &rh); }
+void occluded_one(RTCScene scene, RTCRay& ray) { rtcOccluded1(scene, &ray); }
+#else
+RTCIntersectContext* fresh(RTCIntersectContext& ctx) {
+  rtcInitIntersectContext(&ctx);
+  return &ctx;
+}
+void intersect_one(RTCScene scene, RTCRayHit& rh) {
+  RTCIntersectContext ctx;
+  rtcIntersect1(scene, fresh(ctx), &rh);
+}
+void occluded_one(RTCScene scene, RTCRay& ray) {
+  RTCIntersectContext ctx;
+  rtcOccluded1(scene, fresh(ctx), &ray);
+}
+#endif
+
 struct EmbreeScene {
   RTCDevice device = nullptr;
   RTCScene scene = nullptr;
@@ -93,13 +112,7 @@ class EmbreeQueries : public FacetQueries {
     set_ray(rh.ray, org, dir, t_min, std::numeric_limits<float>::infinity());
     rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
     rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-#if RTC_VERSION_MAJOR >= 4
-    rtcIntersect1(es_.scene, &rh);
-#else
-    RTCIntersectContext ctx;
-    rtcInitIntersectContext(&ctx);
-    rtcIntersect1(es_.scene, &ctx, &rh);
-#endif
+    intersect_one(es_.scene, rh);
     if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return false;
     hit.t = rh.ray.tfar;
     hit.tri = facet_of_[rh.hit.primID];
@@ -111,13 +124,7 @@ class EmbreeQueries : public FacetQueries {
   bool occluded(const Vec3& org, const Vec3& dir, float t_min, float t_max) const override {
     RTCRay ray;
     set_ray(ray, org, dir, t_min, t_max);
-#if RTC_VERSION_MAJOR >= 4
-    rtcOccluded1(es_.scene, &ray);
-#else
-    RTCIntersectContext ctx;
-    rtcInitIntersectContext(&ctx);
-    rtcOccluded1(es_.scene, &ctx, &ray);
-#endif
+    occluded_one(es_.scene, ray);
     return ray.tfar < 0.0f;  // -inf when something was hit
   }
 

@@ -28,6 +28,12 @@ double event_seconds(const cl::Event& ev) {
   return (t1 - t0) * 1e-9;
 }
 
+// The timed runs' median and spread.
+void settle(const std::vector<double>& times, double& seconds, Spread& spread) {
+  seconds = median(times);
+  spread = spread_of(times);
+}
+
 // A kernel's work-group size: what it allows, at most 64, a power of two.
 std::size_t group_size_for(ClRuntime& rt, cl::Kernel& k) {
   std::size_t local = k.getWorkGroupInfo<CL_KERNEL_WORK_GROUP_SIZE>(rt.device().device);
@@ -93,14 +99,10 @@ void measure_paper_scatter(ClRuntime& rt, const HostDescriptors& src, const std:
                                              &e1),
              "clEnqueueNDRangeKernel(scatter_one_record)");
     cl_check(rt.queue().finish(), "clFinish(paper scatter)");
-    if (r < warmup) continue;
-    t6.push_back(event_seconds(e6));
-    t1.push_back(event_seconds(e1));
+    if (r >= warmup) t6.push_back(event_seconds(e6)), t1.push_back(event_seconds(e1));
   }
-  pt.six_vectors_seconds = median(t6);
-  pt.one_record_seconds = median(t1);
-  pt.six_vectors_spread = spread_of(t6);
-  pt.one_record_spread = spread_of(t1);
+  settle(t6, pt.six_vectors_seconds, pt.six_vectors_spread);
+  settle(t1, pt.one_record_seconds, pt.one_record_spread);
 }
 
 // Host: the same counting sort, plainly (one thread, steady_clock).
@@ -200,14 +202,10 @@ void measure_copy_ceiling(ClRuntime& rt, int warmup, ScatterPoint& pt) {
         "clEnqueueNDRangeKernel(copy_float4)");
     cl_check(q.enqueueCopyBuffer(from, to, 0, 0, n4 * sizeof(cl_float4), nullptr, &eb), "clEnqueueCopyBuffer");
     cl_check(q.finish(), "clFinish(copy bench)");
-    if (r < warmup) continue;
-    kt.push_back(event_seconds(ek));
-    bt.push_back(event_seconds(eb));
+    if (r >= warmup) kt.push_back(event_seconds(ek)), bt.push_back(event_seconds(eb));
   }
-  pt.copy_kernel_seconds = median(kt);
-  pt.copy_buffer_seconds = median(bt);
-  pt.copy_kernel_spread = spread_of(kt);
-  pt.copy_buffer_spread = spread_of(bt);
+  settle(kt, pt.copy_kernel_seconds, pt.copy_kernel_spread);
+  settle(bt, pt.copy_buffer_seconds, pt.copy_buffer_spread);
 }
 
 }  // namespace

@@ -42,12 +42,8 @@ BenchOptions parse_bench_options(const std::vector<std::string>& args) {
   BenchOptions o;
   o.scene_path = walk_args(args, bench_syntax(), [&](const std::string& flag, const std::string& name,
                                                       const std::string& value) {
-    if (parse_view_flag(flag, value, o)) return;
-    if (flag == "--help") {
-      o.help = true;
-    } else if (flag == "-q") {
-      o.quiet = true;
-    } else if (flag == "--quick") {
+    if (parse_view_flag(flag, value, o) || parse_common_flag(flag, o)) return;
+    if (flag == "--quick") {
       o.quick = true;
     } else if (flag == "--json") {
       if (extension_of(value) != ".json") bad_flag(name, value, "must end in .json");

@@ -97,6 +97,17 @@ const std::vector<FlagSpec>& view_flags();
 // Parses one view flag (canonical name) into `o`; false when `name` is not a
 // view flag.
 bool parse_view_flag(const std::string& name, const std::string& value, ViewOptions& o);
+// --help and -q, which every command takes; false for any other flag.
+template <class Options>
+bool parse_common_flag(const std::string& name, Options& o) {
+  if (name == "--help")
+    o.help = true;
+  else if (name == "-q")
+    o.quiet = true;
+  else
+    return false;
+  return true;
+}
 // Camera flags that contradict each other on their own (the rest is checked
 // against the scene's camera after loading).
 void check_view_flags(const ViewOptions& o);

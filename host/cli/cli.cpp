@@ -142,12 +142,8 @@ RenderOptions parse_render_options(const std::vector<std::string>& args) {
   RenderOptions o;
   o.scene_path = walk_args(args, render_syntax(), [&](const std::string& flag, const std::string& name,
                                                        const std::string& value) {
-    if (parse_view_flag(flag, value, o)) return;
-    if (flag == "--help") {
-      o.help = true;
-    } else if (flag == "-q") {
-      o.quiet = true;
-    } else if (flag == "--reference") {
+    if (parse_view_flag(flag, value, o) || parse_common_flag(flag, o)) return;
+    if (flag == "--reference") {
       o.reference = true;
     } else if (flag == "--exr-half") {
       o.exr_half = true;

@@ -14,31 +14,7 @@
 
 #include "core/scene.h"
 #include "input/model_import.h"
-
-namespace {
-
-void require(bool ok) {
-  if (!ok) std::abort();
-}
-
-void check(const opsila::Scene& s) {
-  require(!s.triangles.empty() && !s.materials.empty());
-  for (const opsila::Triangle& t : s.triangles) {
-    require(t.facet_id >= 0 && t.facet_id < s.num_facets);
-    require(t.object_id >= 0 && t.object_id < s.num_objects);
-    require(t.material >= 0 && static_cast<std::size_t>(t.material) < s.materials.size());
-    require(t.attributes < 0 || static_cast<std::size_t>(t.attributes) < s.attributes.size());
-    for (const opsila::Vec3* v : {&t.v0, &t.v1, &t.v2})
-      for (float x : *v) require(std::isfinite(x));
-  }
-  for (const opsila::MaterialDesc& m : s.materials) {
-    require(m.map_kd < static_cast<int>(s.textures.size()));
-    require(m.map_ka < static_cast<int>(s.textures.size()));
-  }
-  require(std::isfinite(s.epsilon()) && s.epsilon() > 0);
-}
-
-}  // namespace
+#include "fuzz_checks.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   if (size < 1) return 0;
@@ -51,7 +27,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     bytes.resize(cut);
   }
   try {
-    check(opsila::load_model_from_memory(bytes, std::string("fuzz.") + hint, hint, other));
+    fuzz::check_scene(opsila::load_model_from_memory(bytes, std::string("fuzz.") + hint, hint, other));
   } catch (const opsila::InputError&) {
   }
   return 0;

@@ -23,12 +23,7 @@ namespace {
 Scene from_text(const std::string& text) { return load_obj_from_string(text, "t.obj", ""); }
 
 std::string error_of(const std::string& text) {
-  try {
-    from_text(text);
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "<no error>";
+  return test::error_of([&] { from_text(text); });
 }
 
 bool has_warning(const Scene& s, const std::string& a, const std::string& b = "") {

@@ -27,12 +27,7 @@ const fs::path kModels = "/usr/share/assimp/models";
                                                   "(tools/setup.sh installs it)"
 
 std::string error_of(const std::string& path) {
-  try {
-    load_scene(path);
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "<no error>";
+  return test::error_of([&] { load_scene(path); });
 }
 
 void expect_framed(const Scene& s) {

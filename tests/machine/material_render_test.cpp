@@ -14,6 +14,7 @@
 #include "machine/renderer.h"
 #include "reference/reference.h"
 #include "test_device.h"
+#include "test_render.h"
 #include "test_util.h"
 
 namespace opsila {
@@ -45,16 +46,7 @@ Look look_of(const ImageResult& r) {
 }
 
 // A bare model as the command line shows it: framed, lit from the eye.
-Scene bare_model(const std::string& path) {
-  Scene s = load_scene(path);
-  s.width = 48;
-  s.height = 36;
-  Vec3 lo, hi;
-  s.bounds(lo, hi);
-  s.camera = frame_bounds(lo, hi, 45.0f, 48.0f / 36.0f);
-  s.lights.push_back({s.camera.eye, {1, 1, 1}});
-  return s;
-}
+Scene bare_model(const std::string& path) { return test::framed_model(path, 48, 36); }
 
 // The OpenCL image on 1 and 16 PEs agrees with the reference; returns the
 // reference's look.
@@ -62,12 +54,8 @@ Look render_and_compare(const Scene& s) {
   const ImageResult ref = render_reference(s);
   for (int pes : {1, 16}) {
     SCOPED_TRACE(std::to_string(pes) + " PEs");
-    RenderSettings rs;
-    rs.num_pes = pes;
-    const RenderResult r = render(s, rs, test::shared_runtime());
-    EXPECT_GE(test::clamped_psnr(r.rgb, ref.rgb), 40.0);
-    EXPECT_LE(test::fraction_off(r.rgb, ref.rgb, 2), 0.01);
-    EXPECT_GE(test::item_agreement(r.item_buffer, ref.item_buffer), 0.995);
+    const RenderResult r = test::render_on_pes(s, pes);
+    test::expect_near_reference(r, ref, 0.01, 0.995);
     const Look cl = look_of(r), want = look_of(ref);
     EXPECT_NEAR(cl.lit, want.lit, 0.02);
     EXPECT_NEAR(cl.coloured, want.coloured, 0.02);

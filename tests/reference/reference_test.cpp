@@ -104,13 +104,19 @@ TEST(ReferenceCamera, TiltedUpVectorIsOrthogonalised) {
   EXPECT_NEAR(frame.tan_half_fov, std::tan(22.5 * M_PI / 180.0), 1e-6);
 }
 
+// A 3 x 3 image of the plane z = 0 (a square of material `m`) lit by one
+// light: the hand-computed cases below.
+ImageResult lit_plane(Scene s, const MaterialDesc& m, const LightDesc& light) {
+  add_square(s, -10, 10, -10, 10, 0, add_material(s, m), 0, 0);
+  s.lights.push_back(light);
+  return render_reference(s);
+}
+
 TEST(Reference, DiffusePlaneMatchesHandComputedLocalIntensity) {
   Scene s = base_scene();
   s.ambient = {0.1f, 0.2f, 0.3f};
-  const int m = add_material(s, material({0.2f, 0.3f, 0.4f}, {0.5f, 0.6f, 0.7f}));
-  add_square(s, -10, 10, -10, 10, 0, m, 0, 0);
-  s.lights.push_back({{3, 0, 4}, {1.0f, 0.5f, 0.25f}});  // n.Lv = 4/5
-  const ImageResult img = render_reference(s);
+  // n.Lv = 4/5
+  const ImageResult img = lit_plane(s, material({0.2f, 0.3f, 0.4f}, {0.5f, 0.6f, 0.7f}), {{3, 0, 4}, {1.0f, 0.5f, 0.25f}});
   // The centre ray hits (0,0,0), on the quad's diagonal (a tie between its
   // two triangles, both facet 0). L = Ia*Ka + Il*Kd*0.8.
   expect_rgb(pixel(img, 1, 1), 0.1f * 0.2f + 1.0f * 0.5f * 0.8f, 0.2f * 0.3f + 0.5f * 0.6f * 0.8f,
@@ -123,11 +129,8 @@ TEST(Reference, DiffusePlaneMatchesHandComputedLocalIntensity) {
 }
 
 TEST(Reference, SpecularTermUsesReflectedLightVector) {
-  Scene s = base_scene();
-  const int m = add_material(s, material({0, 0, 0}, {0, 0, 0}, {0.5f, 0.25f, 1.0f}, 10));
-  add_square(s, -10, 10, -10, 10, 0, m, 0, 0);
-  s.lights.push_back({{3, 0, 4}, {1, 1, 1}});
-  const ImageResult img = render_reference(s);
+  const ImageResult img =
+      lit_plane(base_scene(), material({0, 0, 0}, {0, 0, 0}, {0.5f, 0.25f, 1.0f}, 10), {{3, 0, 4}, {1, 1, 1}});
   // Rl = 2(n.Lv)n - Lv = (-0.6, 0, 0.8); Rl.(-D) = 0.8; Ks * 0.8^10.
   const float h = std::pow(0.8f, 10.0f);
   expect_rgb(pixel(img, 1, 1), 0.5f * h, 0.25f * h, 1.0f * h);
@@ -135,21 +138,15 @@ TEST(Reference, SpecularTermUsesReflectedLightVector) {
 
 TEST(Reference, ShininessZeroGivesFullSpecular) {
   // powf(x, 0) = 1, so Ns = 0 adds Ks whenever the light is in front.
-  Scene s = base_scene();
-  const int m = add_material(s, material({0, 0, 0}, {0, 0, 0}, {0.3f, 0.3f, 0.3f}, 0));
-  add_square(s, -10, 10, -10, 10, 0, m, 0, 0);
-  s.lights.push_back({{3, 0, 4}, {2, 2, 2}});
-  const ImageResult img = render_reference(s);
+  const ImageResult img =
+      lit_plane(base_scene(), material({0, 0, 0}, {0, 0, 0}, {0.3f, 0.3f, 0.3f}, 0), {{3, 0, 4}, {2, 2, 2}});
   expect_rgb(pixel(img, 1, 1), 0.6f, 0.6f, 0.6f);
 }
 
 TEST(Reference, LightBehindSurfaceGivesAmbientOnly) {
   Scene s = base_scene();
   s.ambient = {0.5f, 0.5f, 0.5f};
-  const int m = add_material(s, material({0.2f, 0.4f, 0.6f}, {1, 1, 1}, {1, 1, 1}, 1));
-  add_square(s, -10, 10, -10, 10, 0, m, 0, 0);
-  s.lights.push_back({{0, 0, -4}, {1, 1, 1}});
-  const ImageResult img = render_reference(s);
+  const ImageResult img = lit_plane(s, material({0.2f, 0.4f, 0.6f}, {1, 1, 1}, {1, 1, 1}, 1), {{0, 0, -4}, {1, 1, 1}});
   expect_rgb(pixel(img, 1, 1), 0.1f, 0.2f, 0.3f);
   EXPECT_EQ(img.rays.shadow, 0u);  // n.Lv <= 0: no shadow ray is needed
 }

@@ -51,72 +51,10 @@ void SceneReader::object(const Json& v, const std::string& path) {
   const auto key = [&](const char* k) { return join_key(path, k); };
   std::function<void(std::vector<Triangle>&)> make;
 
-  if (type == "sphere") {
-    check_keys(v, path, {"type", "name", "center", "radius", "subdivisions", "material",
-                         "transform"});
-    const Vec3 c = vec3(require(v, path, "center"), key("center"));
-    const float r = positive(require(v, path, "radius"), key("radius"));
-    int sub = 3;
-    if (const Json* s = find(v, "subdivisions")) sub = integer(*s, key("subdivisions"), 0, 10);
-    const int mat = material_ref(find(v, "material"), key("material"));
-    budget(icosphere_triangles(sub), path);
-    make = [this, c, r, sub, mat](std::vector<Triangle>& tris) {
-      next_facet_ = add_icosphere(tris, c, r, sub, FacetTag{next_object_++, mat}, next_facet_);
-    };
-  } else if (type == "box") {
-    check_keys(v, path, {"type", "name", "min", "max", "center", "size", "material",
-                         "transform"});
-    Vec3 lo, hi;
-    box_extent(v, path, lo, hi);
-    const int mat = material_ref(find(v, "material"), key("material"));
-    budget(12, 6, 1, path);
-    make = [this, lo, hi, mat](std::vector<Triangle>& tris) {
-      next_facet_ = add_box(tris, lo, hi, FacetTag{next_object_++, mat}, next_facet_);
-    };
+  if (type == "sphere" || type == "box" || type == "polygon") {
+    make = solid(v, path, type);
   } else if (type == "plane" || type == "checkerboard") {
-    const bool checker = type == "checkerboard";
-    if (checker)
-      check_keys(v, path, {"type", "name", "center", "size", "squares", "materials",
-                           "transform"});
-    else
-      check_keys(v, path, {"type", "name", "center", "size", "material", "transform"});
-    Vec3 c{0, 0, 0};
-    if (const Json* x = find(v, "center")) c = vec3(*x, key("center"));
-    float sx, sz;
-    size2(require(v, path, "size"), key("size"), sx, sz);
-    if (checker) {
-      int nx = 8, nz = 8;
-      if (const Json* s = find(v, "squares")) count2(*s, key("squares"), 100000, nx, nz);
-      const std::vector<int> mats = material_list(require(v, path, "materials"), key("materials"));
-      if (mats.size() != 2) fail(key("materials"), "expected exactly 2 materials");
-      budget(std::size_t(2) * nx * nz, std::size_t(nx) * nz, 1, path);
-      make = [this, c, sx, sz, nx, nz, mats](std::vector<Triangle>& tris) {
-        next_facet_ = add_checkerboard(tris, c, sx, sz, nx, nz, next_object_++, mats[0], mats[1],
-                                       next_facet_);
-      };
-    } else {
-      const int mat = material_ref(find(v, "material"), key("material"));
-      budget(2, 1, 1, path);
-      make = [this, c, sx, sz, mat](std::vector<Triangle>& tris) {
-        next_facet_ = add_plane(tris, c, sx, sz, FacetTag{next_object_++, mat}, next_facet_);
-      };
-    }
-  } else if (type == "polygon") {
-    check_keys(v, path, {"type", "name", "vertices", "material", "transform"});
-    const Json& vs = require(v, path, "vertices");
-    expect_array(vs, key("vertices"));
-    if (vs.size() < 3) fail(key("vertices"), "a polygon needs at least 3 vertices");
-    std::vector<Vec3> pts;
-    for (std::size_t k = 0; k < vs.size(); ++k)
-      pts.push_back(vec3(vs[k], join_index(key("vertices"), k)));
-    const int mat = material_ref(find(v, "material"), key("material"));
-    budget(pts.size() - 2, 1, 1, path);
-    const std::string where_vertices = key("vertices");
-    make = [this, pts, mat, where_vertices](std::vector<Triangle>& tris) {
-      const std::size_t before = tris.size();
-      next_facet_ = add_polygon(tris, pts, FacetTag{next_object_++, mat}, next_facet_);
-      if (tris.size() == before) fail(where_vertices, "the polygon has zero area");
-    };
+    make = plane(v, path, type == "checkerboard");
   } else if (type == "terrain") {
     make = terrain(v, path);
   } else if (type == "scatter" || type == "grid") {
@@ -148,6 +86,84 @@ void SceneReader::object(const Json& v, const std::string& path) {
       warn_dropped(path, entry_.dropped);
     }
   });
+}
+
+// A sphere, a box or a polygon entry: one object of one material.
+std::function<void(std::vector<Triangle>&)> SceneReader::solid(const Json& v, const std::string& path,
+                                                               const std::string& type) {
+  const auto key = [&](const char* k) { return join_key(path, k); };
+  std::function<void(std::vector<Triangle>&)> make;
+  if (type == "sphere") {
+    check_keys(v, path, {"type", "name", "center", "radius", "subdivisions", "material",
+                         "transform"});
+    const Vec3 c = vec3(require(v, path, "center"), key("center"));
+    const float r = positive(require(v, path, "radius"), key("radius"));
+    int sub = 3;
+    if (const Json* s = find(v, "subdivisions")) sub = integer(*s, key("subdivisions"), 0, 10);
+    const int mat = material_ref(find(v, "material"), key("material"));
+    budget(icosphere_triangles(sub), path);
+    make = [this, c, r, sub, mat](std::vector<Triangle>& tris) {
+      next_facet_ = add_icosphere(tris, c, r, sub, FacetTag{next_object_++, mat}, next_facet_);
+    };
+  } else if (type == "box") {
+    check_keys(v, path, {"type", "name", "min", "max", "center", "size", "material",
+                         "transform"});
+    Vec3 lo, hi;
+    box_extent(v, path, lo, hi);
+    const int mat = material_ref(find(v, "material"), key("material"));
+    budget(12, 6, 1, path);
+    make = [this, lo, hi, mat](std::vector<Triangle>& tris) {
+      next_facet_ = add_box(tris, lo, hi, FacetTag{next_object_++, mat}, next_facet_);
+    };
+  } else {  // polygon
+    check_keys(v, path, {"type", "name", "vertices", "material", "transform"});
+    const Json& vs = require(v, path, "vertices");
+    expect_array(vs, key("vertices"));
+    if (vs.size() < 3) fail(key("vertices"), "a polygon needs at least 3 vertices");
+    std::vector<Vec3> pts;
+    for (std::size_t k = 0; k < vs.size(); ++k)
+      pts.push_back(vec3(vs[k], join_index(key("vertices"), k)));
+    const int mat = material_ref(find(v, "material"), key("material"));
+    budget(pts.size() - 2, 1, 1, path);
+    const std::string where_vertices = key("vertices");
+    make = [this, pts, mat, where_vertices](std::vector<Triangle>& tris) {
+      const std::size_t before = tris.size();
+      next_facet_ = add_polygon(tris, pts, FacetTag{next_object_++, mat}, next_facet_);
+      if (tris.size() == before) fail(where_vertices, "the polygon has zero area");
+    };
+  }
+  return make;
+}
+
+// A plane, or a checkerboard of two materials.
+std::function<void(std::vector<Triangle>&)> SceneReader::plane(const Json& v, const std::string& path, bool checker) {
+  const auto key = [&](const char* k) { return join_key(path, k); };
+  if (checker)
+    check_keys(v, path, {"type", "name", "center", "size", "squares", "materials",
+                         "transform"});
+  else
+    check_keys(v, path, {"type", "name", "center", "size", "material", "transform"});
+  Vec3 c{0, 0, 0};
+  if (const Json* x = find(v, "center")) c = vec3(*x, key("center"));
+  float sx, sz;
+  size2(require(v, path, "size"), key("size"), sx, sz);
+  if (checker) {
+    int nx = 8, nz = 8;
+    if (const Json* s = find(v, "squares")) count2(*s, key("squares"), 100000, nx, nz);
+    const std::vector<int> mats = material_list(require(v, path, "materials"), key("materials"));
+    if (mats.size() != 2) fail(key("materials"), "expected exactly 2 materials");
+    budget(std::size_t(2) * nx * nz, std::size_t(nx) * nz, 1, path);
+    return [this, c, sx, sz, nx, nz, mats](std::vector<Triangle>& tris) {
+      next_facet_ = add_checkerboard(tris, c, sx, sz, nx, nz, next_object_++, mats[0], mats[1],
+                                     next_facet_);
+    };
+  } else {
+    const int mat = material_ref(find(v, "material"), key("material"));
+    budget(2, 1, 1, path);
+    return [this, c, sx, sz, mat](std::vector<Triangle>& tris) {
+      next_facet_ = add_plane(tris, c, sx, sz, FacetTag{next_object_++, mat}, next_facet_);
+    };
+  }
 }
 
 void SceneReader::warn_dropped(const std::string& path, std::size_t dropped) {
@@ -270,164 +286,6 @@ std::function<void(std::vector<Triangle>&)> SceneReader::terrain(const Json& v, 
     add_terrain_window(tris, d, object, a, b, next_facet_, begin, end);
     next_facet_ += static_cast<int>(all);
   };
-}
-
-// Many spheres/boxes, each its own object, from a fixed-seed PCG32. Per item
-// seven numbers are drawn in a fixed order: shape, radius, x, y, z,
-// material, angle (see FORMAT.md), so a scene is the same everywhere.
-std::function<void(std::vector<Triangle>&)> SceneReader::generator(const Json& v, const std::string& path,
-                                                                   bool grid) {
-  if (grid)
-    check_keys(v, path, {"type", "name", "counts", "min", "max", "jitter", "shapes", "radius",
-                         "subdivisions", "materials", "weights", "seed", "transform"});
-  else
-    check_keys(v, path, {"type", "name", "count", "min", "max", "shapes", "radius",
-                         "subdivisions", "materials", "weights", "seed", "transform"});
-  const auto key = [&](const char* k) { return join_key(path, k); };
-  const Vec3 lo = vec3(require(v, path, "min"), key("min"));
-  const Vec3 hi = vec3(require(v, path, "max"), key("max"));
-  for (int a = 0; a < 3; ++a)
-    if (!(hi[a] >= lo[a])) fail(key("max"), "must not be less than min on any axis");
-  const int kMaxItems = kMaxGeneratorItems;
-  int counts[3] = {1, 1, 1};
-  long long items = 0;
-  if (grid) {
-    const Json& c = require(v, path, "counts");
-    if (c.is_number()) {
-      counts[0] = counts[1] = counts[2] = integer(c, key("counts"), 1, 1000);
-    } else if (c.is_array() && c.size() == 3) {
-      for (int a = 0; a < 3; ++a) counts[a] = integer(c[a], join_index(key("counts"), a), 1, 100000);
-    } else {
-      fail(key("counts"), std::string("expected an integer or [nx, ny, nz], not ") + kind(c));
-    }
-    items = 1LL * counts[0] * counts[1] * counts[2];
-    if (items > kMaxItems) fail(key("counts"), "more than " + std::to_string(kMaxItems) + " items");
-  } else {
-    items = integer(require(v, path, "count"), key("count"), 1, kMaxItems);
-  }
-  float jitter = 0;
-  if (const Json* j = find(v, "jitter")) {
-    jitter = real(*j, key("jitter"));
-    if (!(jitter >= 0 && jitter <= 1)) fail(key("jitter"), "must be in [0, 1]");
-  }
-  bool want_sphere = true, want_box = false;
-  std::vector<bool> shape_is_box{false};
-  if (const Json* s = find(v, "shapes")) {
-    expect_array(*s, key("shapes"));
-    if (s->empty()) fail(key("shapes"), "needs at least one shape");
-    shape_is_box.clear();
-    want_sphere = false;
-    for (std::size_t k = 0; k < s->size(); ++k) {
-      const std::string n = string((*s)[k], join_index(key("shapes"), k));
-      if (n != "sphere" && n != "box")
-        fail(join_index(key("shapes"), k), "unknown shape '" + n + "' (expected sphere or box)");
-      shape_is_box.push_back(n == "box");
-      want_sphere = want_sphere || n == "sphere";
-      want_box = want_box || n == "box";
-    }
-  }
-  float rmin = 0.5f, rmax = 0.5f;
-  if (const Json* r = find(v, "radius")) {
-    if (r->is_array() && r->size() == 2) {
-      rmin = positive((*r)[0], join_index(key("radius"), 0));
-      rmax = positive((*r)[1], join_index(key("radius"), 1));
-      if (rmax < rmin) fail(key("radius"), "[min, max] with max < min");
-    } else {
-      rmin = rmax = positive(*r, key("radius"));
-    }
-  }
-  int sub = 2;
-  if (const Json* s = find(v, "subdivisions")) sub = integer(*s, key("subdivisions"), 0, 10);
-  std::vector<int> mats{0};
-  if (const Json* m = find(v, "materials")) mats = material_list(*m, key("materials"));
-  std::vector<double> cumulative;
-  double total = 0;
-  if (const Json* w = find(v, "weights")) {
-    expect_array(*w, key("weights"));
-    if (w->size() != mats.size())
-      fail(key("weights"), "needs one weight per material (" + std::to_string(mats.size()) + ")");
-    for (std::size_t k = 0; k < w->size(); ++k) {
-      const double x = number((*w)[k], join_index(key("weights"), k));
-      if (x < 0) fail(join_index(key("weights"), k), "must not be negative");
-      total += x;
-      cumulative.push_back(total);
-    }
-    if (!(total > 0)) fail(key("weights"), "must not all be zero");
-  } else {
-    for (std::size_t k = 0; k < mats.size(); ++k) cumulative.push_back(total += 1.0);
-  }
-  std::uint64_t seed = 1;
-  if (const Json* s = find(v, "seed")) seed = std::uint64_t(integer(*s, key("seed"), 0, INT_MAX));
-
-  const std::size_t per_item =
-      std::max(want_sphere ? icosphere_triangles(sub) : 0, want_box ? std::size_t(12) : 0);
-  if (per_item > 0 && std::size_t(items) > max_triangles_ / per_item)
-    fail(path, std::to_string(items) + " items would make more than " +
-                   std::to_string(max_triangles_) + " triangles (scenes/FORMAT.md, Limits)");
-  // On several ranks each item is dealt whole as it is made (a few thousand
-  // at a time): the entry is limited by the scene, an item by one rank.
-  budget(std::size_t(items) * per_item, std::size_t(items) * per_item, std::size_t(items), path,
-         per_item <= entry_limit_);
-  return [=](std::vector<Triangle>& tris) {
-    build_items(tris, grid, items, counts, lo, hi, jitter, shape_is_box, rmin, rmax, sub, mats,
-                cumulative, total, seed);
-  };
-}
-
-void SceneReader::build_items(std::vector<Triangle>& tris, bool grid, long long items, const int counts[3],
-                              const Vec3& lo, const Vec3& hi, float jitter,
-                              const std::vector<bool>& shape_is_box, float rmin, float rmax, int sub,
-                              const std::vector<int>& mats, const std::vector<double>& cumulative,
-                              double total, std::uint64_t seed) {
-  const auto is_box = [&](double u_shape) {
-    return shape_is_box[std::min<std::size_t>(std::size_t(u_shape * shape_is_box.size()), shape_is_box.size() - 1)];
-  };
-  if (share_.ranks > 1) {  // the items' exact triangle count, for dealing them evenly: the shapes drawn alone
-    Pcg32 dry(seed);
-    entry_.expected = 0;
-    for (long long n = 0; n < items; ++n) {
-      entry_.expected += is_box(dry.uniform()) ? 12 : icosphere_triangles(sub);
-      for (int k = 0; k < 6; ++k) dry.next();
-    }
-  }
-  Pcg32 rng(seed);
-  for (long long n = 0; n < items; ++n) {
-    if (n > 0 && (n % kFlushItems == 0 || tris.size() - entry_.first >= kFlushTriangles)) flush_entry();
-    const double u_shape = rng.uniform(), u_radius = rng.uniform();
-    const double ux = rng.uniform(), uy = rng.uniform(), uz = rng.uniform();
-    const double u_mat = rng.uniform(), u_angle = rng.uniform();
-    const bool box = is_box(u_shape);
-    const double r = rmin + (double(rmax) - rmin) * u_radius;
-    double centre[3];
-    const double u[3] = {ux, uy, uz};
-    if (grid) {
-      const long long cell[3] = {n % counts[0], (n / counts[0]) % counts[1],
-                                 n / (1LL * counts[0] * counts[1])};
-      for (int a = 0; a < 3; ++a) {
-        const double step = (double(hi[a]) - lo[a]) / counts[a];
-        centre[a] = lo[a] + step * (cell[a] + 0.5) + jitter * 0.5 * step * (2.0 * u[a] - 1.0);
-      }
-    } else {
-      for (int a = 0; a < 3; ++a) centre[a] = lo[a] + (double(hi[a]) - lo[a]) * u[a];
-    }
-    std::size_t m = 0;
-    const double pick = u_mat * total;
-    while (m + 1 < cumulative.size() && pick >= cumulative[m]) ++m;
-    const FacetTag tag{next_object_++, mats[m]};
-    const Vec3 c{static_cast<float>(centre[0]), static_cast<float>(centre[1]),
-                 static_cast<float>(centre[2])};
-    const float rf = static_cast<float>(r);
-    if (box) {
-      const std::size_t start = tris.size();
-      next_facet_ = add_box(tris, {-rf, -rf, -rf}, {rf, rf, rf}, tag, next_facet_);
-      Transform place;
-      place.rotate_deg = {0, static_cast<float>(90.0 * u_angle), 0};
-      place.translate = c;
-      transform_triangles(tris, start, place);
-    } else {
-      next_facet_ = add_icosphere(tris, c, rf, sub, tag, next_facet_);
-    }
-  }
 }
 
 // An OBJ file ("obj"), or a model in any format ("model": OBJ by the strict

@@ -139,6 +139,11 @@ class SceneReader {
   void flush_entry();
   void warn_dropped(const std::string& path, std::size_t dropped);
   void box_extent(const Json& v, const std::string& path, Vec3& lo, Vec3& hi) const;
+  std::function<void(std::vector<Triangle>&)> solid(const Json& v, const std::string& path, const std::string& type);
+  std::function<void(std::vector<Triangle>&)> plane(const Json& v, const std::string& path, bool checker);
+  long long generator_items(const Json& v, const std::string& path, bool grid, int counts[3]);
+  double material_weights(const Json& v, const std::string& path, std::size_t materials,
+                          std::vector<double>& cumulative);
   std::function<void(std::vector<Triangle>&)> terrain(const Json& v, const std::string& path);
   std::function<void(std::vector<Triangle>&)> generator(const Json& v, const std::string& path,
                                                         bool grid);

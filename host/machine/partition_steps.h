@@ -53,6 +53,10 @@ std::vector<ClusterBuild> split_clusters(const Scene& scene, std::size_t total, 
 // 2. Recursive bisection of the clusters' centres by weight into PEs
 // [first, first + count); ties broken by the clusters' order.
 void assign_regions(std::vector<ClusterBuild>& cl, std::vector<int> idx, int first, int count);
+// 1-2. Clusters, weighted by expected work, bisected into PE regions; sorted
+// by PE (partition_regions.cpp).
+std::vector<ClusterBuild> form_clusters(const Scene& scene, const Box& sbox, int num_pes, bool split_flat,
+                                        const RaySample* sample, const MeasuredWork* measured);
 // 3. The banks of clusters `cb` (sorted by PE, PEs 0 .. bs.num_pes - 1).
 void fill_banks(const Scene& scene, const Box& sbox, const std::vector<ClusterBuild>& cb, BankedScene& bs,
                 std::vector<Box>& tri_boxes, std::vector<int>& source, std::vector<std::pair<int, int>>& ranges);

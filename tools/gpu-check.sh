@@ -5,7 +5,7 @@
 #
 #   tools/gpu-check.sh pack [KIT]   on a machine set up by tools/setup.sh
 #       (PoCL): copies the header-only dependencies (OpenCL C and C++
-#       headers, glm, nlohmann/json, stb_image(_write), tinyobjloader) into
+#       headers, nlohmann/json, stb_image(_write), tinyobjloader) into
 #       KIT/include and renders the gallery with PoCL into KIT/pocl/*.pfm.
 #   tools/gpu-check.sh run [KIT]    on the GPU machine, with KIT copied along:
 #       builds opsila in build-gpu against KIT (tests, Embree and other
@@ -35,7 +35,7 @@ die() {
 pack() {
   [ -x build/opsila ] || die "build opsila first (tools/setup.sh)"
   rm -rf "$kit" && mkdir -p "$kit/include/stb" "$kit/pocl"
-  cp -r /usr/include/CL /usr/include/glm /usr/include/nlohmann "$kit/include/" || die "missing Debian headers"
+  cp -r /usr/include/CL /usr/include/nlohmann "$kit/include/" || die "missing Debian headers"
   cp /usr/include/stb/stb_image_write.h /usr/include/stb/stb_image.h "$kit/include/stb/" || die "missing libstb-dev"
   cp /usr/include/tiny_obj_loader.h "$kit/include/" || die "missing libtinyobjloader-dev"
   for entry in "${gallery[@]}"; do
@@ -100,7 +100,7 @@ run() {
   register_icd
   cmake -S . -B build-gpu -DCMAKE_BUILD_TYPE=Release -DOPSILA_BUILD_TESTS=OFF -DOPSILA_DEPS_DIR="$kit" \
     -DOpenCL_INCLUDE_DIR="$kit/include" -DOpenCL_LIBRARY="$lib" -DCMAKE_DISABLE_FIND_PACKAGE_embree=ON \
-    -DCMAKE_DISABLE_FIND_PACKAGE_MPI=ON -DCMAKE_DISABLE_FIND_PACKAGE_assimp=ON -DCMAKE_DISABLE_FIND_PACKAGE_glm=ON \
+    -DCMAKE_DISABLE_FIND_PACKAGE_MPI=ON -DCMAKE_DISABLE_FIND_PACKAGE_assimp=ON \
     -DCMAKE_DISABLE_FIND_PACKAGE_nlohmann_json=ON >"$out/cmake.txt" ||
     die "cmake failed (see $out/cmake.txt)"
   timeout 240 cmake --build build-gpu -j"$(nproc)" --target opsila >"$out/build.txt" 2>&1 ||

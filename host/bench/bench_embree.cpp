@@ -10,7 +10,6 @@
 #include <stdexcept>
 #include <vector>
 
-#include <glm/glm.hpp>
 
 #include "bench/bench.h"
 #include "reference/reference.h"
@@ -79,9 +78,7 @@ class EmbreeQueries : public FacetQueries {
     es_.scene = rtcNewScene(es_.device);
     for (std::size_t i = 0; i < s.triangles.size(); ++i) {
       const Triangle& t = s.triangles[i];
-      const glm::vec3 v0(t.v0[0], t.v0[1], t.v0[2]);
-      const float area = glm::length(glm::cross(glm::vec3(t.v1[0], t.v1[1], t.v1[2]) - v0,
-                                                glm::vec3(t.v2[0], t.v2[1], t.v2[2]) - v0));
+      const float area = length(cross(t.v1 - t.v0, t.v2 - t.v0));
       if (area > 0.0f && std::isfinite(area)) facet_of_.push_back(static_cast<int>(i));
     }
     RTCGeometry geom = rtcNewGeometry(es_.device, RTC_GEOMETRY_TYPE_TRIANGLE);

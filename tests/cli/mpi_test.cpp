@@ -85,7 +85,28 @@ struct MpiFixture : ::testing::Test {
   }
   std::string scene(const std::string& name) const { return std::string(OPSILA_SOURCE_DIR) + "/scenes/" + name; }
   static nlohmann::json stats(const std::string& path) { return nlohmann::json::parse(test::read_file(path)); }
+  // Renders on R ranks with the arguments with("rN") gives and compares
+  // with the one-process run "one": PFM, item buffer and the stats that do
+  // not depend on R. `s` gets the ranks' stats.
+  template <class With>
+  void expect_ranks_as_one(int R, const With& with, nlohmann::json& s) {
+    const std::string tag = "r" + std::to_string(R);
+    const RunResult r = ranks(R, with(tag));
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_TRUE(test::read_file(dir.file(tag + ".pfm")) == test::read_file(dir.file("one.pfm")));
+    EXPECT_TRUE(test::read_file(dir.file(tag + ".npy")) == test::read_file(dir.file("one.npy")));
+    s = stats(dir.file(tag + ".json"));
+    const nlohmann::json base = stats(dir.file("one.json"));
+    for (const char* key : {"scene", "clusters", "rays", "levels", "memory"}) EXPECT_EQ(s.at(key), base.at(key)) << key;
+  }
 };
+
+// Refused as bad input: exit 2 and one error line naming every fragment.
+void expect_refused(const RunResult& r, const std::vector<std::string>& fragments) {
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  ASSERT_EQ(r.error_lines().size(), 1u) << r.err;
+  for (const std::string& f : fragments) EXPECT_NE(r.error_lines()[0].find(f), std::string::npos) << f << ": " << r.err;
+}
 
 // Renders `name` on one process and on R = 1..4 ranks: same PFM, same item
 // buffer, the same work per level and PE, every descriptor sent received.
@@ -194,13 +215,9 @@ TEST_F(MpiFixture, ScenesReadInSharesAreTheSameAsOneProcess) {
   ASSERT_EQ(N, 6u * 72 * 80 + 5 * 4);
   for (int R : {2, 3, 4}) {
     SCOPED_TRACE(std::to_string(R) + " ranks");
-    const std::string tag = "r" + std::to_string(R);
-    const RunResult r = ranks(R, with(tag));
-    ASSERT_EQ(r.exit_code, 0) << r.err;
-    EXPECT_TRUE(test::read_file(dir.file(tag + ".pfm")) == test::read_file(dir.file("one.pfm")));
-    EXPECT_TRUE(test::read_file(dir.file(tag + ".npy")) == test::read_file(dir.file("one.npy")));
-    const nlohmann::json s = stats(dir.file(tag + ".json"));
-    for (const char* key : {"scene", "clusters", "rays", "levels", "memory"}) EXPECT_EQ(s.at(key), base.at(key)) << key;
+    nlohmann::json s;
+    expect_ranks_as_one(R, with, s);
+    if (HasFatalFailure()) return;
     std::uint64_t read = 0, held = 0;
     for (const auto& rank : s.at("mpi").at("per_rank")) {
       const nlohmann::json& share = rank.at("share");
@@ -238,13 +255,9 @@ TEST_F(MpiFixture, ATerrainSpreadOverRanksIsTheSameAsOneProcess) {
   ASSERT_EQ(N, 320u + 7200 + 126);
   for (int R : {3, 4}) {
     SCOPED_TRACE(std::to_string(R) + " ranks");
-    const std::string tag = "r" + std::to_string(R);
-    const RunResult r = ranks(R, with(tag));
-    ASSERT_EQ(r.exit_code, 0) << r.err;
-    EXPECT_TRUE(test::read_file(dir.file(tag + ".pfm")) == test::read_file(dir.file("one.pfm")));
-    EXPECT_TRUE(test::read_file(dir.file(tag + ".npy")) == test::read_file(dir.file("one.npy")));
-    const nlohmann::json s = stats(dir.file(tag + ".json"));
-    for (const char* key : {"scene", "clusters", "rays", "levels", "memory"}) EXPECT_EQ(s.at(key), base.at(key)) << key;
+    nlohmann::json s;
+    expect_ranks_as_one(R, with, s);
+    if (HasFatalFailure()) return;
     std::uint64_t read = 0;
     for (const auto& rank : s.at("mpi").at("per_rank")) {
       const std::uint64_t mine = rank.at("share").at("facets_read");
@@ -258,12 +271,7 @@ TEST_F(MpiFixture, ATerrainSpreadOverRanksIsTheSameAsOneProcess) {
   // it, so one process refuses the scene, naming the file, the key and the
   // figures, and leaves nothing; two ranks render it, the same image.
   env["OPSILA_RANK_TRIANGLE_LIMIT"] = "5000";
-  const RunResult alone = one(with("alone"));
-  EXPECT_EQ(alone.exit_code, 2) << alone.err;
-  ASSERT_EQ(alone.error_lines().size(), 1u) << alone.err;
-  EXPECT_NE(alone.error_lines()[0].find("terrain.json:"), std::string::npos) << alone.err;
-  EXPECT_NE(alone.error_lines()[0].find("objects[1]"), std::string::npos) << alone.err;
-  EXPECT_NE(alone.error_lines()[0].find("at most 5000"), std::string::npos) << alone.err;
+  expect_refused(one(with("alone")), {"terrain.json:", "objects[1]", "at most 5000"});
   EXPECT_FALSE(test::file_exists(dir.file("alone.pfm")));
   const RunResult two = ranks(2, with("two"));
   ASSERT_EQ(two.exit_code, 0) << two.err;
@@ -321,12 +329,7 @@ TEST_F(MpiFixture, TwoRanksAcceptTwiceOneRanksTriangles) {
   const std::vector<std::string> on_five = {path, "--size", "48x36", "--pes", "5", "-q", "-o", dir.file("unlimited5.pfm")};
   ASSERT_EQ(one(on_five).exit_code, 0);
   env["OPSILA_RANK_TRIANGLE_LIMIT"] = "15000";
-  const RunResult alone = one(with("alone.pfm"));
-  EXPECT_EQ(alone.exit_code, 2) << alone.err;
-  ASSERT_EQ(alone.error_lines().size(), 1u) << alone.err;
-  EXPECT_NE(alone.error_lines()[0].find("share.json:"), std::string::npos) << alone.err;
-  EXPECT_NE(alone.error_lines()[0].find("objects[2]"), std::string::npos) << alone.err;
-  EXPECT_NE(alone.error_lines()[0].find("at most 15000"), std::string::npos) << alone.err;
+  expect_refused(one(with("alone.pfm")), {"share.json:", "objects[2]", "at most 15000"});
   EXPECT_FALSE(test::file_exists(dir.file("alone.pfm")));
   const RunResult two = ranks(2, with("two.pfm"));
   ASSERT_EQ(two.exit_code, 0) << two.err;
@@ -340,11 +343,8 @@ TEST_F(MpiFixture, TwoRanksAcceptTwiceOneRanksTriangles) {
   // Any other entry is built whole by every rank: it must fit one rank's limit.
   const std::string ball =
       dir.write("ball.json", R"({"objects": [{"type": "sphere", "center": [0,0,0], "radius": 1, "subdivisions": 4}]})");
-  const RunResult entry = ranks(4, {ball, "--size", "32x24", "--pes", "4", "-q", "-o", dir.file("entry.pfm")});
-  EXPECT_EQ(entry.exit_code, 2) << entry.err;
-  ASSERT_EQ(entry.error_lines().size(), 1u) << entry.err;
-  EXPECT_NE(entry.error_lines()[0].find("ball.json:1: objects[0]"), std::string::npos) << entry.err;
-  EXPECT_NE(entry.error_lines()[0].find("one entry of objects may have at most 5000"), std::string::npos) << entry.err;
+  expect_refused(ranks(4, {ball, "--size", "32x24", "--pes", "4", "-q", "-o", dir.file("entry.pfm")}),
+                 {"ball.json:1: objects[0]", "one entry of objects may have at most 5000"});
   EXPECT_FALSE(test::file_exists(dir.file("entry.pfm")));
 }
 

@@ -47,6 +47,12 @@ DeviceFacts device_facts(ClRuntime& rt) {
 }
 
 // What was asked and what the scene is, before anything is measured.
+// Why a run under mpirun leaves out stages 2 and 3 (said in every report).
+constexpr const char* kSingleProcessOnly =
+    "the baselines (megakernel, host reference, Embree) trace the whole scene in one process, and under mpirun "
+    "(--balance facets, its default there) a rank reads only its share of it; the scatter curve measures one "
+    "device alone: run `opsila bench` without mpirun for them";
+
 BenchReport start_report(const BenchOptions& o, const Scene& scene, int pes) {
   BenchReport r;
   r.scene_path = o.scene_path;
@@ -56,7 +62,7 @@ BenchReport start_report(const BenchOptions& o, const Scene& scene, int pes) {
   r.host_repeats = o.host_repeats();
   r.host_threads = o.host_threads();
   r.scatter_max_log2 = o.scatter_max();
-  r.triangles = scene.triangles.size();
+  r.triangles = scene.total_triangles();  // every rank's, for a share
   r.lights = scene.lights.size();
   r.facets = scene.num_facets;
   r.objects = scene.num_objects;
@@ -78,8 +84,8 @@ int run_bench(const std::vector<std::string>& args) {
   }
   // Under mpirun every rank drives its device and its group of PEs through
   // the OPSILA render; rank 0 alone reports and writes. The baselines and the
-  // scatter curve measure one device alone: with several ranks they are left
-  // out (said in the report), as a single-process bench measures them.
+  // scatter curve need one process: with several ranks they are left out
+  // (kSingleProcessOnly says why in the report).
   Ranks& ranks = Ranks::world();
   if (launched_by_mpi()) ranks.start();
   const bool writer = ranks.rank() == 0;
@@ -105,12 +111,14 @@ int run_bench(const std::vector<std::string>& args) {
   } else {
     progress("device: %s", device.c_str());
   }
-  const Scene scene = load_view_scene(o.scene_path, o, o.quiet || !writer, outputs,
-                                      [&](const std::string& note) { progress("note: %s", note.c_str()); });
   // The bench measures the scheme with its PEs balanced by measured work
-  // unless told otherwise (render's default, facets, skips the pilots).
+  // unless told otherwise; under mpirun its default is render's, facets, so
+  // that each rank reads only its share of the scene (docs/DISTRIBUTED.md).
   ViewOptions view = static_cast<const ViewOptions&>(o);
-  view.balance = o.balance.value_or(kBenchBalance);
+  view.balance = o.balance.value_or(ranks.size() > 1 ? kDefaultBalance : kBenchBalance);
+  const auto note = [&](const std::string& text) { progress("note: %s", text.c_str()); };
+  Scene scene = load_view_scene(o.scene_path, o, o.quiet || !writer, outputs, note,
+                                scene_share_for(ranks, *view.balance, note));
   if (view.balance == Balance::work) progress("sampling the frame's rays for --balance work");
   if (view.balance == Balance::measured) progress("pilot frames for --balance measured");
   RaySample sample;
@@ -127,8 +135,8 @@ int run_bench(const std::vector<std::string>& args) {
     measure_baselines(report, scene, rt, progress);
     measure_scatter_curve(report, rt, progress);
   } else {
-    progress("%d MPI ranks: the baselines and the scatter curve are single-device measurements "
-             "(run `opsila bench` without mpirun for them)", ranks.size());
+    report.single_process_only = kSingleProcessOnly;
+    progress("%d MPI ranks: %s", ranks.size(), kSingleProcessOnly);
   }
   report.load_after = load_average();
   if (!writer) {

@@ -104,7 +104,7 @@ void build_program(BenchReport& report, ClRuntime& rt, const BenchProgress& prog
   report.compile_seconds = seconds_since(tc);
 }
 
-void measure_opsila(BenchReport& report, const Scene& scene, const RenderSettings& settings, ClRuntime& rt,
+void measure_opsila(BenchReport& report, Scene& scene, const RenderSettings& settings, ClRuntime& rt,
                     const BenchProgress& progress) {
   const int warmup = report.warmup, repeats = report.repeats;
   progress("OPSILA render %dx%d, depth %d, %d PEs: %d warm-up + %d timed runs", scene.width, scene.height,

@@ -20,8 +20,9 @@ double load_average();
 
 // 0. Compiles the program (never timed) and records the compile time.
 void build_program(BenchReport& report, ClRuntime& runtime, const BenchProgress& progress);
-// 1. The OPSILA render: warm-up, then the median of the timed runs.
-void measure_opsila(BenchReport& report, const Scene& scene, const RenderSettings& settings, ClRuntime& runtime,
+// 1. The OPSILA render: warm-up, then the median of the timed runs. A
+//    scene read in shares gives up its facets to the partition.
+void measure_opsila(BenchReport& report, Scene& scene, const RenderSettings& settings, ClRuntime& runtime,
                     const BenchProgress& progress);
 // 2. Baselines on the same rays: megakernel, host reference on 1 and all
 //    threads, Embree when built in.

@@ -97,6 +97,8 @@ struct BenchReport {
   // (from the PE x PE traffic and the PE groups); empty with one rank.
   std::vector<std::uint64_t> cross_rank_by_level;
 
+  // Why stages 2 and 3 were not run (several ranks), or empty.
+  std::string single_process_only;
   // 2. baselines on the same rays.
   BaselineRun megakernel, sequential, threads, embree;
   // The megakernel's rays through its BVH with nothing else: what the

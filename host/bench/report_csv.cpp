@@ -108,12 +108,21 @@ std::string ranks_csv(const BenchReport& r) {
   const RankTraffic t = rank_traffic(r.stats().ranks);
   std::ostringstream out;
   out << "rank,pe_begin,pe_end,device_bytes,scene_bytes,host_peak_bytes,render_seconds,exchange_seconds,"
-         "exposed_seconds,mpi_seconds,sent,received\n";
-  for (const RankReport& k : r.stats().ranks)
+         "exposed_seconds,mpi_seconds,sent,received,facets_read,facets_held,texture_bytes,read_seconds,partition_seconds,"
+         "share_exchange_seconds,bank_seconds\n";
+  for (const RankReport& k : r.stats().ranks) {
     out << k.rank << ',' << k.pe_begin << ',' << k.pe_end << ',' << k.device_bytes << ',' << k.scene_bytes << ','
         << k.host_peak_bytes << ',' << num(k.render_seconds) << ',' << num(k.exchange_seconds) << ','
         << num(k.exposed_seconds) << ',' << num(k.mpi_seconds) << ',' << t.sent_by_rank[std::size_t(k.rank)] << ','
-        << t.received_by_rank[std::size_t(k.rank)] << '\n';
+        << t.received_by_rank[std::size_t(k.rank)];
+    // A scene read in shares: what the rank read and held, and its preparation; empty otherwise.
+    const ShareFigures& s = k.share;
+    if (s.active)
+      out << ',' << s.facets_read << ',' << s.facets_held << ',' << s.texture_bytes << ',' << num(s.read_seconds) << ','
+          << num(s.partition_seconds) << ',' << num(s.exchange_seconds) << ',' << num(s.bank_seconds) << '\n';
+    else
+      out << ",,,,,,,\n";
+  }
   return out.str();
 }
 

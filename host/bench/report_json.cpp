@@ -416,6 +416,7 @@ nlohmann::json bench_json(const BenchReport& r) {
   j["memory"] = memory_json(r);
   j["prepare"] = prepare_bench_json(r);
   j["baselines"] = baselines_json(r);
+  j["baselines_left_out"] = r.single_process_only.empty() ? json(nullptr) : json(r.single_process_only);
   j["traversal_alone"] = traversal_json(r);
   j["targets"] = targets_json(r);
   return j;

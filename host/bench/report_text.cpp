@@ -173,6 +173,20 @@ void memory_text(std::string& out, const BenchReport& r) {
   }
 }
 
+// A scene read in shares: what each rank read, held and spent preparing it
+// (frame times and host peaks are in the table above).
+void shares_text(std::string& out, const std::vector<RankReport>& ranks) {
+  if (!ranks.front().share.active) return;
+  appendf(out, "  scene read in shares (textures: texels the rank decoded; seconds: reading the share, partition, "
+          "facet exchange, bank build):\n");
+  appendf(out, "  %4s %12s %12s %10s %9s %11s %10s %9s\n", "rank", "facets read", "facets held", "textures",
+          "read s", "partition s", "exchange s", "banks s");
+  for (const RankReport& k : ranks)
+    appendf(out, "  %4d %12llu %12llu %10s %9.4f %11.4f %10.4f %9.4f\n", k.rank, ull(k.share.facets_read),
+            ull(k.share.facets_held), bench_bytes(double(k.share.texture_bytes)).c_str(), k.share.read_seconds,
+            k.share.partition_seconds, k.share.exchange_seconds, k.share.bank_seconds);
+}
+
 // Several MPI ranks: what each did, the rank x rank traffic, and what the
 // exchange between ranks costs.
 void ranks_text(std::string& out, const BenchReport& r) {
@@ -191,6 +205,7 @@ void ranks_text(std::string& out, const BenchReport& r) {
             k.exposed_seconds, k.mpi_seconds, ull(f.traffic.sent_by_rank[std::size_t(k.rank)]),
             ull(f.traffic.received_by_rank[std::size_t(k.rank)]));
   }
+  shares_text(out, ranks);
   appendf(out, "  descriptors between ranks (row: from, column: to), all rounds:\n");
   for (std::size_t src = 0; src < f.traffic.total.size(); ++src) {
     appendf(out, "    %2zu:", src);
@@ -210,7 +225,7 @@ void ranks_text(std::string& out, const BenchReport& r) {
           "%.2f us per descriptor sent, %.3f us per ray (slowest rank)\n",
           100.0 * f.exchange_share, 100.0 * f.exposed_share, 100.0 * f.mpi_share, 1e6 * f.seconds_per_descriptor,
           1e6 * f.seconds_per_ray);
-  appendf(out, "  (baselines and the scatter curve measure one device alone: run `opsila bench` without mpirun)\n\n");
+  appendf(out, "  not measured: %s\n\n", r.single_process_only.c_str());
 }
 
 void scatter_text(std::string& out, const BenchReport& r) {

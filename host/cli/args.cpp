@@ -15,6 +15,8 @@
 #include "core/camera.h"
 #include "core/util.h"
 #include "input/scene_file.h"
+#include "input/texture_file.h"
+#include "cli/map_checks.h"
 #include "machine/ranks.h"
 #include "opsila_shared.h"
 #include "reference/reference.h"
@@ -365,12 +367,18 @@ void print_warnings(const std::vector<std::string>& warnings, bool quiet) {
 
 Scene load_scene_or_explain(const std::string& path, bool quiet, const SceneShare& share) {
   Scene scene;
+  // Read in shares: texture images are checked once over the ranks, then
+  // decoded only where used (settle_maps, docs/DISTRIBUTED.md).
+  const bool shares = share.ranks > 1;
   try {
+    const MapsDecidedLater later(shares);
     scene = load_scene(path, share);
-  } catch (const InputError& e) {
+  } catch (InputError& e) {
+    if (shares && !quiet) settle_map_warnings(e.warnings);
     print_warnings(e.warnings, quiet);  // a misspelt key explains many errors
     throw;
   }
+  if (shares) settle_maps(scene, Ranks::world());
   print_warnings(scene.warnings, quiet);
   return scene;
 }

@@ -17,7 +17,6 @@
 #include <thread>
 
 #include "machine/cl_runtime.h"
-#include "machine/collective_cut.h"
 #include "core/image_io.h"
 #include "core/progress.h"
 #include "core/stage_clock.h"
@@ -246,19 +245,11 @@ int run_render(const std::vector<std::string>& args) {
     if (o.balance) print_line("warning", "--balance is ignored with --reference (one processor, no banks)");
   }
 
-  // Under mpirun each rank reads only its share of a JSON scene and the
-  // ranks partition it together (docs/DISTRIBUTED.md); the ray sample and
-  // the pilots of the other balance modes need the whole scene on every rank.
-  SceneShare share;
-  const Balance balance = o.balance.value_or(kDefaultBalance);
-  if (ranks.size() > 1 && balance == Balance::facets) {
-    share.rank = ranks.rank(), share.ranks = ranks.size();
-    share.combine = [&ranks](SceneShare& s) { combine_share(s, ranks); };  // a terrain's windows, added up
-  }
-  if (ranks.size() > 1 && balance != Balance::facets && writer && !o.quiet)
-    print_line("note", std::string("--balance ") + balance_name(balance) +
-                           ": every rank reads the whole scene (--balance facets reads a share per rank)");
-  const Scene scene = load_view_scene(o.scene_path, o, o.quiet || !writer, outputs,
+  const SceneShare share = scene_share_for(ranks, o.balance.value_or(kDefaultBalance), [&](const std::string& note) {
+    if (writer && !o.quiet) print_line("note", note);
+  });
+  // Not const: a share gives up its facets to the partition (render(Scene&)).
+  Scene scene = load_view_scene(o.scene_path, o, o.quiet || !writer, outputs,
                                       [](const std::string& note) { print_line("note", note); }, share);
   ViewOptions machine = o;
   if (o.reference) machine.balance = Balance::facets;  // one processor, no banks to balance

@@ -2,6 +2,8 @@
 
 #include "core/progress.h"
 #include "core/stage_clock.h"
+#include "input/texture_file.h"
+#include "machine/collective_cut.h"
 #include "machine/pe_group.h"
 
 namespace opsila {
@@ -11,6 +13,20 @@ std::string device_text(Ranks& ranks, int num_pes, const std::string& descriptio
   const PeGroup g = pe_group(num_pes, ranks.size(), ranks.rank());
   return "rank " + std::to_string(g.rank) + " of " + std::to_string(g.ranks) + " (" + ranks.host() + "), PEs " +
          std::to_string(g.begin) + ".." + std::to_string(g.end - 1) + ": " + description;
+}
+
+SceneShare scene_share_for(Ranks& ranks, Balance balance, const std::function<void(const std::string&)>& note) {
+  SceneShare share;
+  if (ranks.size() <= 1) return share;
+  if (balance != Balance::facets) {
+    note(std::string("--balance ") + balance_name(balance) +
+         ": every rank reads the whole scene (--balance facets reads a share per rank)");
+    return share;
+  }
+  share.rank = ranks.rank(), share.ranks = ranks.size();
+  share.combine = [&ranks](SceneShare& s) { combine_share(s, ranks); };  // a terrain's windows, added up
+  share.decode_maps = decode_used_maps;  // texture images: only where the banks use them
+  return share;
 }
 
 Scene load_view_scene(const std::string& path, const ViewOptions& view, bool quiet, OutputFiles& outputs,

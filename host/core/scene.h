@@ -80,6 +80,9 @@ struct Texture {
   std::string path;  // as found on disk (or "file#name" for an embedded one)
   int width = 0, height = 0;
   std::vector<std::uint32_t> texels;
+  // A scene read in shares: the image was checked, but its texels are
+  // decoded only by the ranks whose facets use it (docs/DISTRIBUTED.md).
+  bool pixels_later = false;
 };
 
 struct LightDesc {
@@ -95,6 +98,8 @@ struct CameraDesc {
 // A rank's share of a scene read by several MPI ranks (docs/DISTRIBUTED.md):
 // Scene::triangles then holds only the objects dealt to this rank, and
 // these figures describe the whole scene.
+struct Scene;
+
 struct SceneShare {
   int rank = 0, ranks = 1;         // ranks == 1: the scene is whole
   std::size_t total_triangles = 0;  // every rank's, together
@@ -114,6 +119,11 @@ struct SceneShare {
   // bounds over every rank (a collective call, made by the reader once
   // every entry is built). Unset: the figures stay this rank's.
   std::function<void(SceneShare&)> combine;
+  // Set with it: decodes the texture maps the given facets use (their
+  // images were checked while reading, input/texture_file.h) and returns
+  // the texel bytes held; the partition calls it on the facets a rank's
+  // banks received. Unset: every map is decoded already.
+  std::function<std::uint64_t(Scene&)> decode_maps;
 };
 
 struct Scene {

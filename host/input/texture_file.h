@@ -3,7 +3,9 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <string>
+#include <vector>
 
 #include "core/scene.h"
 
@@ -33,5 +35,48 @@ std::string resolve_texture_path(const std::string& written, const std::string& 
 // `where`) when the image cannot be read. Either way the file is one of
 // scene.input_files (no output may overwrite it).
 int add_texture_file(Scene& scene, const std::string& path, const std::string& where);
+
+// Texture maps of a scene read in shares (docs/DISTRIBUTED.md). While a
+// MapsDecidedLater is alive, add_texture_file reads no image: it lists the
+// map (path only, pixels_later) and leaves a placeholder where its warning
+// would go. The ranks then check each image once between them
+// (check_texture_map), and settle_texture_maps gives every rank the scene
+// one process reads: the same warnings in the same places, the same maps
+// ignored, the same texture table; only the texels wait for the ranks
+// whose facets use them (decode_used_maps).
+class MapsDecidedLater {
+ public:
+  explicit MapsDecidedLater(bool active);
+  ~MapsDecidedLater();
+  MapsDecidedLater(const MapsDecidedLater&) = delete;
+  MapsDecidedLater& operator=(const MapsDecidedLater&) = delete;
+};
+
+// add_texture_file's part while a MapsDecidedLater is alive: lists the map
+// in `index` and returns true; false otherwise.
+bool list_map_for_later(Scene& scene, const std::string& path, const std::string& where, int& index);
+
+// What checking one image found: its size, or why it is ignored.
+struct MapCheck {
+  bool ok = false;
+  int width = 0, height = 0;
+  std::string problem;
+};
+// The images the placeholders in `warnings` name, each once, in order.
+std::vector<std::string> maps_to_check(const std::vector<std::string>& warnings);
+// Decodes the image to check it (the texels are not kept).
+MapCheck check_texture_map(const std::string& path);
+// Placeholders become the warnings one process gives (or go); maps whose
+// image failed are ignored; the table keeps the others, sizes filled in.
+// `checks[k]` is maps_to_check(scene.warnings)[k]'s.
+void settle_texture_maps(Scene& scene, const std::vector<MapCheck>& checks);
+// A read that failed: its placeholders, checked here, as warnings.
+void settle_map_warnings(std::vector<std::string>& warnings);
+
+// Decodes the maps that `scene`'s facets with texture coordinates use and
+// that are not decoded yet; returns the bytes of texels it holds. Throws
+// InputError naming the file if an image checked while reading no longer
+// decodes.
+std::uint64_t decode_used_maps(Scene& scene);
 
 }  // namespace opsila

@@ -229,6 +229,18 @@ void order_spread(OwnPart& own, const Placement& pl) {
                 [&](int a, int b) { return tris[std::size_t(a)].facet_id < tris[std::size_t(b)].facet_id; });
 }
 
+// The texels of the maps the group's facets use, decoded now if the share
+// was read without them; the bytes of texels held.
+std::uint64_t decode_maps(const SceneShare& share, Scene& own) {
+  if (share.decode_maps) return share.decode_maps(own);
+  std::uint64_t bytes = 0;
+  for (const Texture& t : own.textures) {
+    if (t.pixels_later) throw std::logic_error("bank_share: texture maps read for later without a decoder");
+    bytes += t.texels.size() * sizeof(std::uint32_t);
+  }
+  return bytes;
+}
+
 // The group's banks from its own part: partition_scene's steps 3-4 on the
 // group's PEs only (numbered from 0, as keep_group_banks leaves them).
 BankedScene group_banks(OwnPart& own, const Box& sbox, int group_size, std::vector<char>& used) {
@@ -365,6 +377,7 @@ PreparedBanks bank_share(Scene& share, int num_pes, int routing, const PeGroup& 
   figures.facets_held = own.scene.triangles.size();
 
   t0 = std::chrono::steady_clock::now();
+  figures.texture_bytes = decode_maps(share.share, own.scene);  // the maps its facets use, no others
   std::vector<char> used;
   BankedScene loc = group_banks(own, sbox, group.size(), used);
   own.scene = Scene();

@@ -159,7 +159,9 @@ std::uint64_t bank_attributes(const Scene& scene, const std::vector<int>& source
 std::uint64_t texture_once(const Scene& scene, const std::vector<char>& used) {
   std::uint64_t once = 0;
   for (std::size_t t = 0; t < scene.textures.size() && t < used.size(); ++t)
-    if (used[t]) once += scene.textures[t].texels.size() * sizeof(std::uint32_t) + sizeof(BankTexture);
+    if (used[t])  // by its size: a rank of a scene read in shares decodes only the maps its facets use
+      once += std::uint64_t(scene.textures[t].width) * std::uint64_t(scene.textures[t].height) *
+                  sizeof(std::uint32_t) + sizeof(BankTexture);
   return once;
 }
 

@@ -65,6 +65,7 @@ struct ShareFigures {
   bool active = false;            // the scene was read in shares
   std::uint64_t facets_read = 0;  // triangles of this rank's share of the scene
   std::uint64_t facets_held = 0;  // triangles of its group's banks
+  std::uint64_t texture_bytes = 0;  // texels it decoded: the maps its facets use
   double read_seconds = 0, partition_seconds = 0, exchange_seconds = 0, bank_seconds = 0;
 };
 

@@ -257,6 +257,7 @@ std::string rank_report_json(const RankReport& r) {
   if (r.share.active)  // a scene read in shares: what this rank read, held and spent on it
     j["share"] = {{"facets_read", r.share.facets_read},
                   {"facets_held", r.share.facets_held},
+                  {"texture_bytes", r.share.texture_bytes},
                   {"read_seconds", r.share.read_seconds},
                   {"partition_seconds", r.share.partition_seconds},
                   {"exchange_seconds", r.share.exchange_seconds},
@@ -286,6 +287,7 @@ RankReport rank_report_from_json(const std::string& text) {
     r.share.active = true;
     r.share.facets_read = s->at("facets_read");
     r.share.facets_held = s->at("facets_held");
+    r.share.texture_bytes = s->at("texture_bytes");
     r.share.read_seconds = s->at("read_seconds");
     r.share.partition_seconds = s->at("partition_seconds");
     r.share.exchange_seconds = s->at("exchange_seconds");

@@ -7,6 +7,7 @@
 #include <unistd.h>
 
 #include <cstdlib>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -348,6 +349,81 @@ TEST_F(MpiFixture, TwoRanksAcceptTwiceOneRanksTriangles) {
   EXPECT_FALSE(test::file_exists(dir.file("entry.pfm")));
 }
 
+// An uncompressed 24-bit TGA of w x h texels of one colour.
+std::string tga(int w, int h, unsigned char r, unsigned char g, unsigned char b) {
+  std::string t(18, '\0');
+  t[2] = 2, t[12] = char(w & 255), t[13] = char(w >> 8), t[14] = char(h & 255), t[15] = char(h >> 8), t[16] = 24;
+  for (int i = 0; i < w * h; ++i) t += {char(b), char(g), char(r)};
+  return t;
+}
+
+// A scene of `n` textured squares side by side, each an OBJ file whose
+// material maps an image of its own (of a size of its own); then one whose
+// map is not an image and one whose map is missing.
+std::string textured_scene(TempDir& dir, int n) {
+  std::string objects;
+  for (int k = 0; k < n + 2; ++k) {
+    const std::string name = "sq" + std::to_string(k);
+    const std::string image = k < n ? name + ".tga" : k == n ? "broken.tga" : "missing.png";
+    if (k < n) dir.write(image, tga(8 + 4 * k, 8, (unsigned char)(40 * k), 200, (unsigned char)(255 - 40 * k)));
+    if (k == n) dir.write(image, "not an image");
+    dir.write(name + ".mtl", "newmtl m\nKd 1 1 1\nKa 0.2 0.2 0.2\nmap_Kd " + image + "\n");
+    dir.write(name + ".obj", "mtllib " + name + ".mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n"
+                             "vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nusemtl m\nf 1/1 2/2 3/3 4/4\n");
+    objects += std::string(k ? ",\n" : "") + R"({"type": "obj", "file": ")" + name + R"(.obj", "transform": {"translate": [)" +
+               std::to_string(1.5 * k) + ", 0, 0]}}";
+  }
+  return dir.write("maps.json", R"({"camera": {"eye": [5, 0.5, 9], "look_at": [5, 0.5, 0]}, "objects": [
+)" + objects + "]}\n");
+}
+
+// Textures are decoded only by the ranks whose banks use them: each rank
+// holds no more texel bytes than its banks copy (and the ranks together
+// hold each map about once, not R times); every image is checked once
+// over the ranks, so the warnings for an image that is not one, and for a
+// missing one, are those of one process, as are the image and item buffer.
+TEST_F(MpiFixture, TexturesAreDecodedOnlyWhereUsed) {
+  const int n = 4;
+  const std::string path = textured_scene(dir, n);
+  auto with = [&](const std::string& tag) {
+    return std::vector<std::string>{path, "--size", "64x32", "--pes", "6", "-o", dir.file(tag + ".pfm"),
+                                    "--item-buffer", dir.file(tag + ".npy"), "--stats", dir.file(tag + ".json")};
+  };
+  const auto warnings = [](const RunResult& r) {
+    std::vector<std::string> lines;
+    std::istringstream s(r.err);
+    for (std::string line; std::getline(s, line);)
+      if (line.find("warning:") != std::string::npos) lines.push_back(line);
+    return lines;
+  };
+  const RunResult single = one(with("one"));
+  ASSERT_EQ(single.exit_code, 0) << single.err;
+  ASSERT_EQ(warnings(single).size(), 2u) << single.err;
+  EXPECT_NE(warnings(single)[0].find("broken.tga' ignored"), std::string::npos) << single.err;
+  EXPECT_NE(warnings(single)[1].find("missing.png' ignored"), std::string::npos) << single.err;
+  std::uint64_t all_maps = 0;
+  for (int k = 0; k < n; ++k) all_maps += std::uint64_t(8 + 4 * k) * 8 * 4;
+  for (int R : {2, 3, 6}) {
+    SCOPED_TRACE(std::to_string(R) + " ranks");
+    nlohmann::json s;
+    expect_ranks_as_one(R, with, s);
+    if (HasFatalFailure()) return;
+    const RunResult again = ranks(R, with("again"));
+    EXPECT_EQ(warnings(again), warnings(single)) << again.err;
+    const auto bank_textures = s.at("memory").at("texture_bytes").get<std::vector<std::uint64_t>>();
+    std::uint64_t held = 0;
+    for (const auto& rank : s.at("mpi").at("per_rank")) {
+      const std::uint64_t mine = rank.at("share").at("texture_bytes");
+      std::uint64_t copied = 0;  // what its banks copy of the maps (texels and a record each)
+      for (int p = rank.at("pes").at(0); p < rank.at("pes").at(1).get<int>(); ++p) copied += bank_textures[p];
+      EXPECT_LE(mine, copied) << "rank " << rank.at("rank") << " decoded a map its banks do not use";
+      held += mine;
+    }
+    EXPECT_GE(held, all_maps) << "a map used by some bank was decoded by no rank";
+    EXPECT_LT(held, std::uint64_t(R) * all_maps) << "every rank decoded every map";
+  }
+}
+
 // A broken file among many, which one rank reads (its scene names it) and
 // the others do not: one error line naming the file, every rank ended, no
 // output left behind.
@@ -461,6 +537,62 @@ TEST_F(MpiFixture, BenchOnSeveralRanksReportsEveryRank) {
   EXPECT_EQ(test::count_of(test::read_file(dir.file("csv/ranks.csv")), "\n"), 4u);  // header + 3 ranks
   EXPECT_TRUE(test::file_exists(dir.file("csv/rank_traffic.csv")));
   EXPECT_FALSE(test::file_exists(dir.file("csv/scatter.csv")));
+}
+
+// `mpirun -np R opsila bench` reads a JSON scene in shares, as render does
+// (its default --balance is facets under mpirun): every rank's report says
+// what it read (about 1/R of the facets) and held, and its preparation
+// times; the banks, rays and per-rank shares are those `opsila render`
+// builds on as many ranks; the whole-scene baselines are left out, saying why.
+TEST_F(MpiFixture, BenchReadsSharesAndReportsEveryRank) {
+  const std::string path = share_scene(dir, 6, 5);
+  const std::vector<std::string> view = {path, "--size", "64x48", "--pes", "12", "-q"};
+  std::vector<std::string> render_args = view;
+  render_args.insert(render_args.end(), {"-o", dir.file("r.pfm"), "--stats", dir.file("r.json")});
+  const int R = 3;
+  const RunResult rendered = ranks(R, render_args);
+  ASSERT_EQ(rendered.exit_code, 0) << rendered.err;
+  std::vector<std::string> a = launch(R);
+  a.insert(a.end(), {OPSILA_BINARY, "bench"});
+  a.insert(a.end(), view.begin(), view.end());
+  a.insert(a.end(), {"--quick", "--json", dir.file("b.json"), "--csv", dir.file("csv")});
+  const RunResult r = test::run_program("/usr/bin/timeout", a, env);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("scene read in shares"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("not measured: the baselines"), std::string::npos) << r.out;
+  const nlohmann::json j = stats(dir.file("b.json")), s = stats(dir.file("r.json"));
+  const std::uint64_t N = s.at("scene").at("triangles");
+  EXPECT_EQ(j.at("balance"), "facets");
+  EXPECT_EQ(j.at("scene").at("triangles"), N) << "the whole scene's count, not rank 0's share";
+  EXPECT_EQ(j.at("scene").at("clusters"), s.at("clusters"));
+  for (const char* key : {"bank_bytes", "texture_bytes", "global_bytes", "replicated_bytes"})
+    EXPECT_EQ(j.at("memory").at(key), s.at("memory").at(key)) << key;
+  for (const char* kind : {"primary", "secondary", "shadow"})
+    EXPECT_EQ(j.at("render").at("rays_by_kind").at(kind), s.at("rays").at(kind)) << kind;
+  EXPECT_TRUE(j.at("render").at("deterministic").get<bool>());
+  const nlohmann::json& per_rank = j.at("mpi").at("per_rank");
+  ASSERT_EQ(per_rank.size(), std::size_t(R));
+  std::uint64_t read = 0;
+  for (int k = 0; k < R; ++k) {
+    const nlohmann::json& share = per_rank.at(k).at("share");
+    const nlohmann::json& rendered_share = s.at("mpi").at("per_rank").at(k).at("share");
+    EXPECT_LE(share.at("facets_read").get<std::uint64_t>(), N / R + 80) << "rank " << k;
+    EXPECT_EQ(share.at("facets_read"), rendered_share.at("facets_read")) << "rank " << k;
+    EXPECT_EQ(share.at("facets_held"), rendered_share.at("facets_held")) << "rank " << k;
+    for (const char* stage : {"read_seconds", "partition_seconds", "exchange_seconds", "bank_seconds"})
+      EXPECT_GE(share.at(stage).get<double>(), 0.0) << stage;
+    EXPECT_GT(per_rank.at(k).at("host_peak_bytes").get<std::uint64_t>(), 0u);
+    EXPECT_GT(per_rank.at(k).at("render_seconds").get<double>(), 0.0);
+    read += share.at("facets_read").get<std::uint64_t>();
+  }
+  EXPECT_EQ(read, N);
+  EXPECT_TRUE(j.at("baselines").empty());
+  EXPECT_NE(j.at("baselines_left_out").get<std::string>().find("whole scene"), std::string::npos);
+  // ranks.csv: a header and one row per rank, with the share's figures.
+  const std::string csv = test::read_file(dir.file("csv/ranks.csv"));
+  EXPECT_NE(csv.find(",facets_read,facets_held,"), std::string::npos) << csv;
+  EXPECT_EQ(test::count_of(csv, "\n"), std::size_t(R) + 1);
+  EXPECT_EQ(test::count_of(csv, ",,"), 0u) << "a rank's share figures are missing: " << csv;
 }
 
 // More ranks than PEs: one error line, nothing written.

@@ -42,10 +42,9 @@ void settle_maps(Scene& scene, Ranks& ranks) {
   ranks.checkpoint();  // a rank that failed reading is waiting there
   const std::vector<std::string> paths = maps_to_check(scene.warnings);
   std::vector<MapCheck> checks(paths.size());
-  if (!scene.is_share()) {  // every rank holds the whole scene: every map, decoded here
-    for (std::size_t k = 0; k < paths.size(); ++k) checks[k] = check_texture_map(paths[k]);
+  if (!scene.is_share()) {  // every rank holds the whole scene: every map, decoded here, as one process does
+    for (std::size_t k = 0; k < paths.size(); ++k) checks[k] = check_texture_map(paths[k], true);
     settle_texture_maps(scene, checks);
-    decode_used_maps(scene);
     return;
   }
   std::vector<unsigned char> mine;

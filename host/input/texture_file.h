@@ -61,15 +61,17 @@ struct MapCheck {
   bool ok = false;
   int width = 0, height = 0;
   std::string problem;
+  std::vector<std::uint32_t> texels;  // kept only when asked
 };
 // The images the placeholders in `warnings` name, each once, in order.
 std::vector<std::string> maps_to_check(const std::vector<std::string>& warnings);
-// Decodes the image to check it (the texels are not kept).
-MapCheck check_texture_map(const std::string& path);
+// Decodes the image to check it, keeping its texels only if asked.
+MapCheck check_texture_map(const std::string& path, bool keep_texels = false);
 // Placeholders become the warnings one process gives (or go); maps whose
-// image failed are ignored; the table keeps the others, sizes filled in.
+// image failed are ignored; the table keeps the others, sizes filled in
+// (and texels, where a check kept them).
 // `checks[k]` is maps_to_check(scene.warnings)[k]'s.
-void settle_texture_maps(Scene& scene, const std::vector<MapCheck>& checks);
+void settle_texture_maps(Scene& scene, std::vector<MapCheck>& checks);
 // A read that failed: its placeholders, checked here, as warnings.
 void settle_map_warnings(std::vector<std::string>& warnings);
 

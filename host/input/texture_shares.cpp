@@ -21,7 +21,7 @@ std::string placeholder_where(const std::string& w) { return w.substr(1, w.find(
 
 // Each placeholder becomes the warning one process gives (its image was
 // ignored) or goes (its image is fine).
-void resolve_placeholders(std::vector<std::string>& warnings, const std::map<std::string, const MapCheck*>& by_path) {
+void resolve_placeholders(std::vector<std::string>& warnings, const std::map<std::string, MapCheck*>& by_path) {
   std::vector<std::string> kept;
   for (std::string& w : warnings) {
     if (!is_placeholder(w)) {
@@ -35,11 +35,11 @@ void resolve_placeholders(std::vector<std::string>& warnings, const std::map<std
   warnings = std::move(kept);
 }
 
-std::map<std::string, const MapCheck*> checks_by_path(const std::vector<std::string>& warnings,
-                                                      const std::vector<MapCheck>& checks) {
+std::map<std::string, MapCheck*> checks_by_path(const std::vector<std::string>& warnings,
+                                                std::vector<MapCheck>& checks) {
   const std::vector<std::string> paths = maps_to_check(warnings);
   if (paths.size() != checks.size()) throw std::logic_error("settle_texture_maps: one check per image");
-  std::map<std::string, const MapCheck*> by_path;
+  std::map<std::string, MapCheck*> by_path;
   for (std::size_t k = 0; k < paths.size(); ++k) by_path[paths[k]] = &checks[k];
   return by_path;
 }
@@ -76,26 +76,33 @@ std::vector<std::string> maps_to_check(const std::vector<std::string>& warnings)
   return paths;
 }
 
-MapCheck check_texture_map(const std::string& path) {
+MapCheck check_texture_map(const std::string& path, bool keep_texels) {
   MapCheck c;
   Texture t;
   c.ok = decode_texture_file(path, t, c.problem);
   c.width = t.width, c.height = t.height;
+  if (keep_texels) c.texels = std::move(t.texels);
   return c;
 }
 
-void settle_texture_maps(Scene& scene, const std::vector<MapCheck>& checks) {
-  const std::map<std::string, const MapCheck*> by_path = checks_by_path(scene.warnings, checks);
+void settle_texture_maps(Scene& scene, std::vector<MapCheck>& checks) {
+  const std::map<std::string, MapCheck*> by_path = checks_by_path(scene.warnings, checks);
   resolve_placeholders(scene.warnings, by_path);
   // The table one process builds: an image that failed is not in it.
   std::vector<int> index(scene.textures.size(), -1);
   std::vector<Texture> table;
+  std::map<std::string, int> uses;  // entries of a path (two included files may name one image)
+  for (const Texture& t : scene.textures) uses[t.path] += t.pixels_later;
   for (std::size_t i = 0; i < scene.textures.size(); ++i) {
     Texture& t = scene.textures[i];
     if (t.pixels_later) {
-      const MapCheck& c = *by_path.at(t.path);
+      MapCheck& c = *by_path.at(t.path);
       if (!c.ok) continue;
       t.width = c.width, t.height = c.height;
+      if (!c.texels.empty()) {  // kept by the check: the last entry of its path takes them
+        t.texels = --uses[t.path] == 0 ? std::move(c.texels) : c.texels;
+        t.pixels_later = false;
+      }
     }
     index[i] = static_cast<int>(table.size());
     table.push_back(std::move(t));

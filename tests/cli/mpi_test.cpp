@@ -422,6 +422,19 @@ TEST_F(MpiFixture, TexturesAreDecodedOnlyWhereUsed) {
     EXPECT_GE(held, all_maps) << "a map used by some bank was decoded by no rank";
     EXPECT_LT(held, std::uint64_t(R) * all_maps) << "every rank decoded every map";
   }
+  // A bare OBJ file is read whole by every rank: its maps are decided and
+  // decoded on each, with one process's warning and image.
+  for (const char* bare : {"sq2.obj", "sq4.obj"}) {
+    const std::vector<std::string> args = {dir.file(bare), "--size", "32x32", "--pes", "4", "-o"};
+    std::vector<std::string> a1 = args, a2 = args;
+    a1.push_back(dir.file("bare1.pfm"));
+    a2.push_back(dir.file("bare2.pfm"));
+    const RunResult r1 = one(a1), r2 = ranks(2, a2);
+    ASSERT_EQ(r1.exit_code, 0) << r1.err;
+    ASSERT_EQ(r2.exit_code, 0) << r2.err;
+    EXPECT_TRUE(test::read_file(dir.file("bare2.pfm")) == test::read_file(dir.file("bare1.pfm"))) << bare;
+    EXPECT_EQ(warnings(r2), warnings(r1)) << bare << ": " << r2.err;
+  }
 }
 
 // A broken file among many, which one rank reads (its scene names it) and

@@ -37,22 +37,78 @@ void bounds_of(const Scene& scene, const std::vector<int>& tris, Box& box, Box& 
   }
 }
 
+namespace {
+
+// A facet as the cuts see it: its box, its centroid and its index, computed
+// once and carried through the cuts (reading the scene's triangles again at
+// every level, in the order the cuts leave them, is mostly cache misses).
+struct CutItem {
+  Box box;
+  float c[3];
+  int tri;
+};
+using CutItems = std::vector<CutItem>;
+
+constexpr std::size_t kSpreadFacets = 1 << 16;  // fewer facets are not worth a thread
+
+CutItems cut_items(const Scene& scene, const std::vector<int>& tris) {
+  CutItems items(tris.size());
+  const std::size_t chunks = tris.size() < kSpreadFacets ? 1 : std::size_t(host_threads());
+  parallel_for(chunks, [&](std::size_t k) {
+    for (std::size_t i = tris.size() * k / chunks, e = tris.size() * (k + 1) / chunks; i < e; ++i) {
+      const Triangle& t = scene.triangles[std::size_t(tris[i])];
+      items[i].box = tri_box(t);
+      for (int a = 0; a < 3; ++a) items[i].c[a] = centroid(t, a);
+      items[i].tri = tris[i];
+    }
+  });
+  return items;
+}
+
+// A run of items: the cuts reorder them in place, each half a run of its own.
+struct Run {
+  CutItem* first;
+  std::size_t n;
+};
+
+// bounds_of on items: the same boxes (a tie between -0 and +0 keeps the
+// first met, so the items' order matters only there, and chunks joined in
+// order keep it).
+void item_bounds(Run run, Box& box, Box& cbox) {
+  const std::size_t chunks = run.n < kSpreadFacets ? 1 : std::size_t(host_threads());
+  std::vector<Box> part(2 * chunks);
+  parallel_for(chunks, [&](std::size_t k) {
+    for (std::size_t i = run.n * k / chunks, e = run.n * (k + 1) / chunks; i < e; ++i) {
+      part[2 * k].grow(run.first[i].box);
+      part[2 * k + 1].grow(run.first[i].c);
+    }
+  });
+  for (std::size_t k = 0; k < chunks; ++k) box.grow(part[2 * k]), cbox.grow(part[2 * k + 1]);
+}
+
+// cut_at_median on items: the same halves (the n / 2 lowest (centroid,
+// index) pairs come first). False when it cannot be cut.
+bool cut_items_at_median(Run run, const Box& cbox) {
+  const int axis = cbox.longest();
+  if (run.n < 2 || !(cbox.extent(axis) > 0)) return false;
+  const std::size_t mid = run.n / 2;
+  std::nth_element(run.first, run.first + mid, run.first + run.n, [axis](const CutItem& a, const CutItem& b) {
+    return a.c[axis] < b.c[axis] || (a.c[axis] == b.c[axis] && a.tri < b.tri);
+  });
+  return true;
+}
+
+}  // namespace
+
 // Cuts `tris` in two at the median centroid of the centroids' longest axis
 // (ties by index); `tris` keeps the lower half. False when it cannot be cut.
 bool cut_at_median(const Scene& scene, std::vector<int>& tris, const Box& cbox, std::vector<int>& upper) {
-  const int axis = cbox.longest();
-  if (tris.size() < 2 || !(cbox.extent(axis) > 0)) return false;
-  const std::size_t mid = tris.size() / 2;
-  // Each centre computed once, next to its index (the same comparisons in
-  // the same order as on the facets themselves, so the same halves).
-  std::vector<std::pair<float, int>> keyed(tris.size());
-  for (std::size_t i = 0; i < tris.size(); ++i) keyed[i] = {centroid(scene.triangles[tris[i]], axis), tris[i]};
-  std::nth_element(keyed.begin(), keyed.begin() + mid, keyed.end(), [](const auto& a, const auto& b) {
-    return a.first < b.first || (a.first == b.first && a.second < b.second);
-  });
-  for (std::size_t i = 0; i < tris.size(); ++i) tris[i] = keyed[i].second;
-  upper.assign(tris.begin() + mid, tris.end());
+  CutItems items = cut_items(scene, tris);
+  if (!cut_items_at_median(Run{items.data(), items.size()}, cbox)) return false;
+  const std::size_t mid = items.size() / 2;
+  upper.resize(items.size() - mid);
   tris.resize(mid);
+  for (std::size_t i = 0; i < items.size(); ++i) (i < mid ? tris[i] : upper[i - mid]) = items[i].tri;
   return true;
 }
 
@@ -65,41 +121,50 @@ ClusterBuild make_cluster(std::vector<int> tris, const Box& box) {
   return cb;
 }
 
-// Splits a list of triangles at the median centroid of its longest axis
-// until every piece is small enough (facet count and spatial extent). The
-// upper half's clusters are listed before the lower half's. Large halves
-// are split side by side on the host threads (`spread` levels deep).
 bool needs_cut(std::size_t facets, const Box& box, const SplitLimits& limits, bool split_flat) {
   const float limit = split_flat && is_flat(box) ? kFlatShare * limits.max_extent : limits.max_extent;
   return facets > limits.max_tris || (facets > 1 && box.diagonal() > limit);
 }
 
-void split_object(const Scene& scene, std::vector<int> cur, std::size_t max_tris, float max_extent,
-                  bool split_flat, std::vector<ClusterBuild>& out, int spread) {
+namespace {
+
+ClusterBuild item_cluster(Run run, const Box& box) {
+  std::vector<int> tris(run.n);
+  for (std::size_t i = 0; i < run.n; ++i) tris[i] = run.first[i].tri;
+  return make_cluster(std::move(tris), box);
+}
+
+// Splits a list of triangles at the median centroid of its longest axis
+// until every piece is small enough (facet count and spatial extent). The
+// upper half's clusters are listed before the lower half's. Large halves
+// are split side by side on the host threads (`spread` levels deep).
+void split_items(Run cur, const SplitLimits& limits, bool split_flat, std::vector<ClusterBuild>& out, int spread) {
   Box box, cbox;
-  bounds_of(scene, cur, box, cbox);
-  std::vector<int> upper;
-  if (!(needs_cut(cur.size(), box, SplitLimits{max_tris, max_extent}, split_flat) &&
-        cut_at_median(scene, cur, cbox, upper))) {
-    out.push_back(make_cluster(std::move(cur), box));
+  item_bounds(cur, box, cbox);
+  if (!(needs_cut(cur.n, box, limits, split_flat) && cut_items_at_median(cur, cbox))) {
+    out.push_back(item_cluster(cur, box));
     return;
   }
-  constexpr std::size_t kSpreadFacets = 1 << 16;  // smaller halves are not worth a thread
-  if (spread <= 0 || upper.size() < kSpreadFacets) {
-    split_object(scene, std::move(upper), max_tris, max_extent, split_flat, out, 0);
-    split_object(scene, std::move(cur), max_tris, max_extent, split_flat, out, 0);
+  const std::size_t mid = cur.n / 2;
+  const Run pieces[2] = {{cur.first + mid, cur.n - mid}, {cur.first, mid}};  // upper half first
+  if (spread <= 0 || pieces[0].n < kSpreadFacets) {
+    for (const Run& piece : pieces) split_items(piece, limits, split_flat, out, 0);
     return;
   }
   std::vector<ClusterBuild> halves[2];
-  std::vector<int>* pieces[2] = {&upper, &cur};
   parallel_for(
-      2,
-      [&](std::size_t k) {
-        split_object(scene, std::move(*pieces[k]), max_tris, max_extent, split_flat, halves[k], spread - 1);
-      },
-      2);
+      2, [&](std::size_t k) { split_items(pieces[k], limits, split_flat, halves[k], spread - 1); }, 2);
   for (std::vector<ClusterBuild>& h : halves) out.insert(out.end(), std::make_move_iterator(h.begin()),
                                                           std::make_move_iterator(h.end()));
+}
+
+}  // namespace
+
+void split_object(const Scene& scene, std::vector<int> cur, std::size_t max_tris, float max_extent,
+                  bool split_flat, std::vector<ClusterBuild>& out, int spread) {
+  CutItems items = cut_items(scene, cur);
+  cur = std::vector<int>();
+  split_items(Run{items.data(), items.size()}, SplitLimits{max_tris, max_extent}, split_flat, out, spread);
 }
 
 // Several clusters per PE so that bisection can balance; regions are about

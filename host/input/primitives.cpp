@@ -6,6 +6,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "core/parallel.h"
+
 namespace opsila {
 
 namespace {
@@ -262,9 +264,11 @@ int add_terrain(std::vector<Triangle>& out, const TerrainDesc& desc, int object_
 
 std::size_t terrain_triangles(const TerrainDesc& desc) { return std::size_t(2) * desc.quads_x * desc.quads_z; }
 
-// Two rows of lattice points at a time: each point is computed once, by the
-// same expression whatever the window, so a window's triangles are bit for
-// bit those of the whole terrain.
+// Every lattice point the window needs is computed once, by the same
+// expression whatever the window, so a window's triangles are bit for bit
+// those of the whole terrain. The heights (the noise: most of the work) are
+// computed first, rows side by side on the host threads; the triangles then
+// follow in order.
 void add_terrain_window(std::vector<Triangle>& out, const TerrainDesc& desc, int object_id, int material_a,
                         int material_b, int facet, std::size_t begin, std::size_t end) {
   const int nx = desc.quads_x, nz = desc.quads_z;
@@ -272,28 +276,30 @@ void add_terrain_window(std::vector<Triangle>& out, const TerrainDesc& desc, int
   if (begin >= end) return;
   const double x0 = double(desc.center[0]) - 0.5 * desc.size_x;
   const double z0 = double(desc.center[2]) - 0.5 * desc.size_z;
-  const auto row = [&](int j, std::vector<Vec3>& r) {
-    r.resize(std::size_t(nx) + 1);
-    for (int i = 0; i <= nx; ++i)
-      r[std::size_t(i)] = {static_cast<float>(x0 + double(desc.size_x) * i / nx),
-                           static_cast<float>(desc.center[1] + desc.height * terrain_noise(desc, i, j)),
-                           static_cast<float>(z0 + double(desc.size_z) * j / nz)};
+  const std::size_t per_row = std::size_t(2) * nx, width = std::size_t(nx) + 1;
+  const int j_first = static_cast<int>(begin / per_row), j_last = static_cast<int>((end - 1) / per_row);
+  const std::size_t rows = std::size_t(j_last - j_first) + 2;  // j_first .. j_last + 1
+  std::vector<float> height(rows * width);
+  const std::size_t chunks = std::min<std::size_t>(rows, 8 * std::size_t(host_threads()));
+  parallel_for(chunks, [&](std::size_t k) {
+    for (std::size_t r = rows * k / chunks; r < rows * (k + 1) / chunks; ++r)
+      for (int i = 0; i <= nx; ++i)
+        height[r * width + std::size_t(i)] = static_cast<float>(
+            desc.center[1] + desc.height * terrain_noise(desc, i, j_first + static_cast<int>(r)));
+  });
+  const auto point = [&](int i, int j) {
+    return Vec3{static_cast<float>(x0 + double(desc.size_x) * i / nx),
+                height[std::size_t(j - j_first) * width + std::size_t(i)],
+                static_cast<float>(z0 + double(desc.size_z) * j / nz)};
   };
   reserve_more(out, end - begin);
-  const std::size_t per_row = std::size_t(2) * nx;
-  std::vector<Vec3> near, far;
-  const int j_first = static_cast<int>(begin / per_row), j_last = static_cast<int>((end - 1) / per_row);
-  row(j_first, far);
   for (int j = j_first; j <= j_last; ++j) {
-    std::swap(near, far);
-    row(j + 1, far);
     const std::size_t row_first = std::size_t(j) * per_row;
     const int i_first = j == j_first ? static_cast<int>((begin - row_first) / 2) : 0;
     const int i_end = j == j_last ? static_cast<int>((end - 1 - row_first) / 2) + 1 : nx;
     for (int i = i_first; i < i_end; ++i) {
       const FacetTag tag{object_id, (i + j) % 2 == 0 ? material_a : material_b};
-      const Vec3 &a = near[std::size_t(i)], &b = near[std::size_t(i) + 1];
-      const Vec3 &c = far[std::size_t(i) + 1], &d = far[std::size_t(i)];
+      const Vec3 a = point(i, j), b = point(i + 1, j), c = point(i + 1, j + 1), d = point(i, j + 1);
       const std::size_t k = row_first + std::size_t(2) * i;  // the quad's first triangle
       if (k >= begin) push(out, a, d, c, tag, facet + static_cast<int>(k));
       if (k + 1 < end) push(out, a, c, b, tag, facet + static_cast<int>(k + 1));

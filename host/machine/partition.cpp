@@ -167,20 +167,27 @@ std::uint64_t texture_once(const Scene& scene, const std::vector<char>& used) {
 
 // 3. Banks: triangles of each PE contiguous, cluster by cluster, and each
 // cluster's bounding sphere. ranges[c] is cluster c's triangle range, source[k]
-// the scene triangle of bank triangle k.
+// the scene triangle of bank triangle k (all four start empty). Clusters are
+// filled side by side on the host threads, each into its own range.
 void fill_banks(const Scene& scene, const Box& sbox, const std::vector<ClusterBuild>& cb, BankedScene& bs,
                 std::vector<Box>& tri_boxes, std::vector<int>& source,
                 std::vector<std::pair<int, int>>& ranges) {
-  const std::size_t total = scene.triangles.size();
-  bs.triangles.reserve(total);
-  tri_boxes.reserve(total);
-  source.reserve(total);
   ranges.resize(cb.size());
-  bs.clusters.resize(cb.size());
+  int next = 0;
   for (std::size_t c = 0; c < cb.size(); ++c) {
-    int begin = static_cast<int>(bs.triangles.size());
+    ranges[c] = {next, next + static_cast<int>(cb[c].tris.size())};
+    next = ranges[c].second;
+  }
+  const std::size_t total = std::size_t(next);
+  bs.triangles.resize(total);
+  tri_boxes.resize(total);
+  source.resize(total);
+  bs.tri_cluster.resize(total);
+  bs.clusters.resize(cb.size());
+  parallel_for(cb.size(), [&](std::size_t c) {
     const Vec3 ctr = cb[c].box.center();
     double r2 = 0;
+    std::size_t k = std::size_t(ranges[c].first);
     for (int i : cb[c].tris) {
       const Triangle& t = scene.triangles[i];
       BankTriangle bt{};
@@ -190,17 +197,16 @@ void fill_banks(const Scene& scene, const Box& sbox, const std::vector<ClusterBu
       bt.facet_id = t.facet_id;
       bt.object_id = t.object_id;
       bt.material = t.material;
-      bs.triangles.push_back(bt);
-      tri_boxes.push_back(tri_box(t));
-      source.push_back(i);
+      bs.triangles[k] = bt;
+      tri_boxes[k] = tri_box(t);
+      source[k] = i;
+      bs.tri_cluster[k++] = static_cast<int>(c);
       for (const Vec3* v : {&t.v0, &t.v1, &t.v2}) {
         double d2 = 0;
         for (int a = 0; a < 3; ++a) d2 += double((*v)[a] - ctr[a]) * double((*v)[a] - ctr[a]);
         r2 = std::max(r2, d2);
       }
     }
-    ranges[c] = {begin, static_cast<int>(bs.triangles.size())};
-    bs.tri_cluster.insert(bs.tri_cluster.end(), cb[c].tris.size(), static_cast<int>(c));
     Cluster& cl = bs.clusters[c];
     put3(cl.center, ctr);
     // Padded so that float rounding in the sphere test never culls a facet.
@@ -211,7 +217,7 @@ void fill_banks(const Scene& scene, const Box& sbox, const std::vector<ClusterBu
     }
     cl.pe = cb[c].pe;
     cl.root = -1;
-  }
+  });
 }
 
 void pe_bounds(const std::vector<Cluster>& clusters, PeInfo& pe) {

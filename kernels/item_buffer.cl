@@ -19,10 +19,14 @@
 /* One work-group = one square tile of tile_w x tile_w pixels. The group
  * first lists, in cluster order, the clusters whose projected box overlaps
  * the tile (one rectangle test per cluster per tile instead of per pixel);
- * each pixel then tests only those rectangles and traces their facets. */
+ * each pixel then tests only those rectangles and traces their facets.
+ * listed_rect, the union of the rectangles (the host's), skips the listing
+ * of a tile that no cluster can overlap: where the scene covers a small
+ * part of the screen, most tiles; their pixels make no camera ray and only
+ * write their misses. */
 __kernel void item_buffer(FrameParams fp, __global const Cluster *clusters, __global const int4 *cluster_rects,
-                          __global const BankNode *nodes, __global const BankTriangle *tris, int tile_w,
-                          int tiles_x, int tile_begin, float ox, float oy, int mode, __global int2 *items,
+                          int4 listed_rect, __global const BankNode *nodes, __global const BankTriangle *tris,
+                          int tile_w, int tiles_x, int tile_begin, float ox, float oy, int mode, __global int2 *items,
                           __global int *item_tri, __global float *item_t, __global int *item_facet) {
   __local int flags[ITEM_TILE_MAX];
   __local int list[OPSILA_ITEM_LIST_CAP];
@@ -33,8 +37,6 @@ __kernel void item_buffer(FrameParams fp, __global const Cluster *clusters, __gl
   int x1 = x0 + tile_w - 1, y1 = y0 + tile_w - 1;
   int x = x0 + lid % tile_w, y = y0 + lid / tile_w;
   bool inside = lid < tile_w * tile_w && x < fp.width && y < fp.height;
-  RayPre r = make_ray(load3(fp.eye), primary_direction_at(fp, (float)min(x, fp.width - 1) + ox,
-                                                          (float)min(y, fp.height - 1) + oy));
   int pixel = y * fp.width + x;
   /* A group of PEs after the first (an MPI rank) continues the nearest-hit
    * search from the state the groups before it left (with hits kept), cluster
@@ -48,7 +50,13 @@ __kernel void item_buffer(FrameParams fp, __global const Cluster *clusters, __gl
   CostProbe no_probe = no_cost_probe();
   if (lid == 0) listed = 0;
   barrier(CLK_LOCAL_MEM_FENCE);
-  for (int base = 0; base < fp.num_clusters; base += lsz) {
+  /* The same for every work-item of the group: the barriers below stay uniform. */
+  bool tile_listed = !(x1 < listed_rect.x || x0 > listed_rect.z || y1 < listed_rect.y || y0 > listed_rect.w);
+  RayPre r;
+  if (tile_listed)
+    r = make_ray(load3(fp.eye), primary_direction_at(fp, (float)min(x, fp.width - 1) + ox,
+                                                     (float)min(y, fp.height - 1) + oy));
+  for (int base = 0; tile_listed && base < fp.num_clusters; base += lsz) {
     int c = base + lid;
     if (c < fp.num_clusters) {
       int4 rect = cluster_rects[c];

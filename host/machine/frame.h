@@ -30,11 +30,11 @@ namespace opsila {
 namespace frame_kernels {
 using Buf = cl::Buffer;
 // The three kernels of the frame, their parameters as the host passes them.
-// kernels/item_buffer.cl: frame, clusters, projected boxes, bank nodes and
-// facets, tile side, tiles per row, first tile, sample offsets, mode, and
-// the item buffer with its hits, distances and facets.
+// kernels/item_buffer.cl: frame, clusters, projected boxes and their union,
+// bank nodes and facets, tile side, tiles per row, first tile, sample
+// offsets, mode, and the item buffer with its hits, distances and facets.
 using ItemBufferKernel =
-    KernelBinding<FrameParams, Buf, Buf, Buf, Buf, int, int, int, float, float, int, Buf, Buf, Buf, Buf>;
+    KernelBinding<FrameParams, Buf, Buf, cl_int4, Buf, Buf, int, int, int, float, float, int, Buf, Buf, Buf, Buf>;
 // kernels/primary.cl: frame, PE table, item hits and distances, pixels,
 // sample offsets, pool offset, the pool, pixel sums, primary hit count.
 using PrimaryKernel = KernelBinding<FrameParams, Buf, Buf, Buf, int, int, float, float, int, DescriptorSet, Buf, Buf>;
@@ -94,6 +94,7 @@ struct Renderer::Machine {
   HostArray host_tris, host_nodes, host_attributes, host_texels;
   std::vector<Light> lights;     // at least one (a stand-in never lit)
   std::vector<cl_int4> rects;    // projected cluster boxes
+  cl_int4 listed_rect{};         // their union: a tile outside it lists no cluster
   std::vector<float> srgb;       // sRGB decode table
   std::vector<int> no_cluster{-1};
   std::vector<BufferSpec> buffers;  // the buffer table, as allocated (frame_buffers.cpp)
@@ -131,5 +132,6 @@ struct Renderer::Machine {
 
 // "Projected object boxes" of the item buffer (frame_buffers.cpp).
 std::vector<cl_int4> cluster_rects(const Scene& scene, const BankedScene& bs);
+cl_int4 rects_union(const std::vector<cl_int4>& rects);
 
 }  // namespace opsila

@@ -72,6 +72,16 @@ std::vector<cl_int4> cluster_rects(const Scene& scene, const BankedScene& bs) {
   return rects;
 }
 
+// The union of the rectangles (empty, kNeverListed, when there are none).
+cl_int4 rects_union(const std::vector<cl_int4>& rects) {
+  cl_int4 u = kNeverListed;
+  for (const cl_int4& r : rects) {
+    u.s[0] = std::min(u.s[0], r.s[0]), u.s[1] = std::min(u.s[1], r.s[1]);
+    u.s[2] = std::max(u.s[2], r.s[2]), u.s[3] = std::max(u.s[3], r.s[3]);
+  }
+  return u;
+}
+
 // The bench's megakernel reads the same surface tables (its own uploads).
 SurfaceBuffers upload_surface(ClRuntime& rt, const BankedScene& bs) {
   SurfaceBuffers b;
@@ -92,6 +102,7 @@ void Renderer::Machine::host_tables(const Scene& scene, BankedScene& bs) {
   rects = cluster_rects(scene, bs);
   for (std::size_t c = 0; c < rects.size(); ++c)  // another rank's cluster: never listed here
     if (bs.clusters[c].root < 0) rects[c] = kNeverListed;
+  listed_rect = rects_union(rects);
   const std::array<float, 256>& table = srgb_decode_table();
   srgb.assign(table.begin(), table.end());
   const HostSharing sharing = host_sharing(rt);

@@ -76,6 +76,38 @@ TEST(Renderer, ClustersBehindTheEyeAreNeverListed) {
   }
 }
 
+// Seen from far, the scene covers the middle of the screen: the union of
+// the projected cluster boxes, which lets the item buffer skip the tiles
+// outside it, holds every box and leaves the screen's edges out, and the
+// image and item buffer stay the reference's.
+TEST(Renderer, TilesOutsideEveryClusterBoxListNothing) {
+  Scene s = test::mirror_glass_scene(64);
+  for (int i = 0; i < 3; ++i) s.camera.eye[i] = s.camera.look_at[i] + 4 * (s.camera.eye[i] - s.camera.look_at[i]);
+  const BankedScene bs = partition_scene(s, 4);
+  const std::vector<cl_int4> rects = cluster_rects(s, bs);
+  const cl_int4 u = rects_union(rects);
+  for (const cl_int4& r : rects) {
+    EXPECT_LE(u.s[0], r.s[0]);
+    EXPECT_LE(u.s[1], r.s[1]);
+    EXPECT_GE(u.s[2], r.s[2]);
+    EXPECT_GE(u.s[3], r.s[3]);
+  }
+  EXPECT_GT(u.s[0], 8);  // at least one tile of each edge lies outside
+  EXPECT_GT(u.s[1], 8);
+  EXPECT_LT(u.s[2], s.width - 9);
+  EXPECT_LT(u.s[3], s.height - 9);
+  const cl_int4 none = rects_union({});
+  EXPECT_TRUE(none.s[0] > none.s[2] && none.s[1] > none.s[3]);  // no box: no tile lists anything
+  const ImageResult ref = render_reference(s);
+  for (int pes : {1, 16}) {
+    const RenderResult r = render_with(s, pes);
+    EXPECT_GE(test::clamped_psnr(r.rgb, ref.rgb), 40.0) << pes;
+    EXPECT_GE(item_agreement(r.item_buffer, ref.item_buffer), 0.999) << pes;
+    EXPECT_GT(r.rays.primary_hits, 0u) << pes;
+    EXPECT_LT(r.rays.primary_hits, std::uint64_t(s.width) * s.height / 2) << pes;
+  }
+}
+
 TEST(Renderer, DepthOneIsLocalShadingOnly) {
   Scene s = test::mirror_glass_scene(64, 1);
   RenderResult r = render_with(s, 4);

@@ -29,35 +29,81 @@ struct BinNode {
 };
 
 class Builder {
+  typedef float F4 __attribute__((vector_size(16)));
+  typedef int I4 __attribute__((vector_size(16)));
+  // A box's lo and hi in lanes 0-2 (hi read from lo[2] on, so that no read
+  // passes the box's end).
+  static void load(const Box& b, F4& lo, F4& hi) {
+    static_assert(sizeof(Box) == 6 * sizeof(float), "Box: lo then hi, packed");
+    std::memcpy(&lo, &b.lo[0], sizeof lo);
+    F4 tail;
+    std::memcpy(&tail, &b.lo[2], sizeof tail);
+    hi = __builtin_shuffle(tail, I4{1, 2, 3, 0});
+  }
+  // Box::grow lane by lane: std::min(lo, b) is (b < lo ? b : lo) and
+  // std::max(hi, b) is (hi < b ? b : hi), so the same bits.
+  static void grow(F4& lo, F4& hi, F4 blo, F4 bhi) {
+    lo = blo < lo ? blo : lo;
+    hi = hi < bhi ? bhi : hi;
+  }
+  // Items' box and centre box, grown item by item in the items' order.
+  struct Bounds {
+    F4 lo, hi, clo, chi;
+    static Bounds empty() {
+      Bounds b;
+      b.lo = b.clo = F4{INFINITY, INFINITY, INFINITY, INFINITY};
+      b.hi = b.chi = -b.lo;
+      return b;
+    }
+    void grow(F4 blo, F4 bhi) {
+      Builder::grow(lo, hi, blo, bhi);
+      const F4 c = 0.5f * (blo + bhi);  // Box::center's expression
+      Builder::grow(clo, chi, c, c);
+    }
+    void grow(const Box& b) {
+      F4 blo, bhi;
+      load(b, blo, bhi);
+      grow(blo, bhi);
+    }
+    void get(Box& box, Box& cbox) const {
+      for (int a = 0; a < 3; ++a) box.lo[a] = lo[a], box.hi[a] = hi[a], cbox.lo[a] = clo[a], cbox.hi[a] = chi[a];
+    }
+  };
+
  public:
   std::vector<BinNode> bin;
 
   // Binned SAH over items order[begin, end) (boxes and weights by item id),
   // reordering them; leaves of at most leaf_size items. `single` (when not
   // null) turns a one-item leaf into an existing binary node (a cluster's
-  // facet tree). Returns the node.
+  // facet tree). `known` (when not null): the items' bounds, found by the
+  // parent's split. Returns the node.
   int build(std::vector<int>& order, int begin, int end, const Box* boxes, const float* weight, int leaf_size,
-            int depth, const std::vector<int>* single) {
+            int depth, const std::vector<int>* single, const Bounds* known = nullptr) {
     if (end - begin == 1 && single) return (*single)[order[begin]];
     int node = static_cast<int>(bin.size());
     bin.emplace_back();
     // The node's box and its items' centre box, in one pass over the items.
-    Box box, cbox;
-    for (int i = begin; i < end; ++i) {
-      const Box& b = boxes[order[i]];
-      box.grow(b);
-      const float c[3] = {center(b, 0), center(b, 1), center(b, 2)};
-      cbox.grow(c);
+    Bounds bounds;
+    if (known) {
+      bounds = *known;
+    } else {
+      bounds = Bounds::empty();
+      for (int i = begin; i < end; ++i) bounds.grow(boxes[order[i]]);
     }
+    Box box, cbox;
+    bounds.get(box, cbox);
     bin[node].box = box;
     if ((end - begin <= leaf_size && !single) || (depth >= kMaxBinaryDepth && !single)) {
       bin[node].first = begin;
       bin[node].count = end - begin;
       return node;
     }
-    int mid = split(order, begin, end, boxes, weight, depth, cbox);
-    int l = build(order, begin, mid, boxes, weight, leaf_size, depth + 1, single);
-    int r = build(order, mid, end, boxes, weight, leaf_size, depth + 1, single);
+    Bounds halves[2];
+    bool found = false;
+    int mid = split(order, begin, end, boxes, weight, depth, cbox, halves, found);
+    int l = build(order, begin, mid, boxes, weight, leaf_size, depth + 1, single, found ? &halves[0] : nullptr);
+    int r = build(order, mid, end, boxes, weight, leaf_size, depth + 1, single, found ? &halves[1] : nullptr);
     bin[node].kid[0] = l;
     bin[node].kid[1] = r;
     bin[node].height = 1 + std::max(bin[l].height, bin[r].height);
@@ -78,8 +124,6 @@ class Builder {
   // each bin's min and max are the scalar operations lane by lane, so the
   // same bits, in a third of the instructions.
   static constexpr int kBins = 16;
-  typedef float F4 __attribute__((vector_size(16)));
-  typedef int I4 __attribute__((vector_size(16)));
   struct Bin {  // no initialisers: a node clears only the bins it uses
     F4 lo, hi;
     double w;
@@ -90,10 +134,8 @@ class Builder {
       b.w = 0;
       return b;
     }
-    // std::min(lo, b) is (b < lo ? b : lo), std::max(hi, b) is (hi < b ? b : hi).
     void grow(F4 blo, F4 bhi, double bw) {
-      lo = blo < lo ? blo : lo;
-      hi = hi < bhi ? bhi : hi;
+      Builder::grow(lo, hi, blo, bhi);
       w += bw;
     }
     void grow(const Bin& b) { grow(b.lo, b.hi, b.w); }
@@ -103,15 +145,6 @@ class Builder {
       return box.area();
     }
   };
-  // A box's lo and hi in lanes 0-2 (hi read from lo[2] on, so that no read
-  // passes the box's end).
-  static void load(const Box& b, F4& lo, F4& hi) {
-    static_assert(sizeof(Box) == 6 * sizeof(float), "Box: lo then hi, packed");
-    std::memcpy(&lo, &b.lo[0], sizeof lo);
-    F4 tail;
-    std::memcpy(&tail, &b.lo[2], sizeof tail);
-    hi = __builtin_shuffle(tail, I4{1, 2, 3, 0});
-  }
   static int bin_of(float c, float lo, float scale, int bins) {
     return std::clamp(static_cast<int>((c - lo) * scale), 0, bins - 1);
   }
@@ -149,8 +182,10 @@ class Builder {
     }
   }
 
+  // Splits order[begin, end) and returns where the right half starts; on a
+  // SAH plane also each half's bounds, found in the same pass (found).
   int split(std::vector<int>& order, int begin, int end, const Box* boxes, const float* weight, int depth,
-            const Box& cbox) {
+            const Box& cbox, Bounds (&halves)[2], bool& found) {
     int best_axis = -1, best_bin = -1;
     const int nb = std::clamp(end - begin, 2, kBins);
     float scale[3];
@@ -161,20 +196,26 @@ class Builder {
     if (depth < kSahDepth) best_plane(order, begin, end, boxes, weight, cbox, nb, scale, best_axis, best_bin);
     if (best_axis >= 0) {
       const float lo = cbox.lo[best_axis], sc = scale[best_axis];
-      auto side = [&](int id) { return bin_of(center(boxes[id], best_axis), lo, sc, nb) < best_bin; };
       // Stable, so the layout does not depend on the sort implementation
       // (as std::stable_partition, without its allocation at every node).
       int m = begin;
       scratch_.clear();
+      halves[0] = halves[1] = Bounds::empty();
       for (int i = begin; i < end; ++i) {
         const int id = order[i];
-        if (side(id))
+        F4 blo, bhi;
+        load(boxes[id], blo, bhi);
+        if (bin_of(center(boxes[id], best_axis), lo, sc, nb) < best_bin) {
           order[m++] = id;
-        else
+          halves[0].grow(blo, bhi);
+        } else {
           scratch_.push_back(id);
+          halves[1].grow(blo, bhi);
+        }
       }
       std::copy(scratch_.begin(), scratch_.end(), order.begin() + m);
-      if (m > begin && m < end) return m;
+      found = m > begin && m < end;
+      if (found) return m;
     }
     int axis = cbox.longest();
     std::stable_sort(order.begin() + begin, order.begin() + end, [&](int a, int b) {
@@ -284,7 +325,7 @@ void check_stack(const std::vector<BankNode>& nodes, int root) {
 
 }  // namespace
 
-int build_bank_bvh(std::vector<BankNode>& nodes, std::vector<BankTriangle>& tris, std::vector<Box>& tri_boxes,
+int build_bank_bvh(std::vector<BankNode>& nodes, std::vector<BankTriangle>& tris, const std::vector<Box>& tri_boxes,
                    std::vector<Cluster>& clusters, int c_begin, int c_end,
                    const std::vector<std::pair<int, int>>& ranges, std::vector<int>* source) {
   if (c_begin == c_end) return 0;
@@ -321,10 +362,6 @@ int build_bank_bvh(std::vector<BankNode>& nodes, std::vector<BankTriangle>& tris
   // Facets in their new order; leaves name global facet indices.
   const std::vector<BankTriangle> t(tris.begin() + t_begin, tris.begin() + t_end);
   for (int i = 0; i < nt; ++i) tris[t_begin + i] = t[order[i]];
-  {
-    const std::vector<Box> tb(tri_boxes.begin() + t_begin, tri_boxes.begin() + t_end);
-    for (int i = 0; i < nt; ++i) tri_boxes[t_begin + i] = tb[order[i]];
-  }
   if (source) {
     const std::vector<int> s(source->begin() + t_begin, source->begin() + t_end);
     for (int i = 0; i < nt; ++i) (*source)[t_begin + i] = s[order[i]];
@@ -342,7 +379,7 @@ int build_bank_bvh(std::vector<BankNode>& nodes, std::vector<BankTriangle>& tris
 }
 
 std::vector<BankBvh> build_bank_bvhs(std::vector<BankNode>& nodes, std::vector<BankTriangle>& tris,
-                                     std::vector<Box>& tri_boxes, std::vector<Cluster>& clusters,
+                                     const std::vector<Box>& tri_boxes, std::vector<Cluster>& clusters,
                                      const std::vector<std::pair<int, int>>& pe_clusters,
                                      const std::vector<std::pair<int, int>>& ranges, std::vector<int>* source) {
   const std::size_t P = pe_clusters.size();

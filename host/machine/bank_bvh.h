@@ -17,12 +17,13 @@
 namespace opsila {
 
 // Builds the BVH of one bank whose clusters [c_begin, c_end) own the facets
-// tris[ranges[c].first, ranges[c].second). Facets are reordered inside each
-// cluster's range (with their boxes); clusters[c].root is set. The bank's
+// tris[ranges[c].first, ranges[c].second), with boxes tri_boxes (left as they
+// are: nothing reads them after the build). Facets are reordered inside each
+// cluster's range; clusters[c].root is set. The bank's
 // root is appended first, so it is the first node added. Returns the depth
 // of the wide tree (0 when the bank is empty). `source`, when given, is
 // reordered with the facets (so per-facet data elsewhere can follow them).
-int build_bank_bvh(std::vector<BankNode>& nodes, std::vector<BankTriangle>& tris, std::vector<Box>& tri_boxes,
+int build_bank_bvh(std::vector<BankNode>& nodes, std::vector<BankTriangle>& tris, const std::vector<Box>& tri_boxes,
                    std::vector<Cluster>& clusters, int c_begin, int c_end,
                    const std::vector<std::pair<int, int>>& ranges, std::vector<int>* source = nullptr);
 
@@ -34,7 +35,7 @@ struct BankBvh {
   int node_begin = 0, node_end = 0, depth = 0;
 };
 std::vector<BankBvh> build_bank_bvhs(std::vector<BankNode>& nodes, std::vector<BankTriangle>& tris,
-                                     std::vector<Box>& tri_boxes, std::vector<Cluster>& clusters,
+                                     const std::vector<Box>& tri_boxes, std::vector<Cluster>& clusters,
                                      const std::vector<std::pair<int, int>>& pe_clusters,
                                      const std::vector<std::pair<int, int>>& ranges, std::vector<int>* source);
 

@@ -237,7 +237,7 @@ void pe_bounds(const std::vector<Cluster>& clusters, PeInfo& pe) {
 
 // Each PE's range of clusters, triangles and bank BVH nodes, its bounds and
 // its bank's size.
-void describe_pes(const std::vector<ClusterBuild>& cb, std::vector<Box>& tri_boxes,
+void describe_pes(const std::vector<ClusterBuild>& cb, const std::vector<Box>& tri_boxes,
                   const std::vector<std::pair<int, int>>& ranges, std::vector<int>& source,
                   std::size_t total, BankedScene& bs) {
   const int num_pes = bs.num_pes;

@@ -60,7 +60,7 @@ std::vector<ClusterBuild> form_clusters(const Scene& scene, const Box& sbox, int
 // 3. The banks of clusters `cb` (sorted by PE, PEs 0 .. bs.num_pes - 1).
 void fill_banks(const Scene& scene, const Box& sbox, const std::vector<ClusterBuild>& cb, BankedScene& bs,
                 std::vector<Box>& tri_boxes, std::vector<int>& source, std::vector<std::pair<int, int>>& ranges);
-void describe_pes(const std::vector<ClusterBuild>& cb, std::vector<Box>& tri_boxes,
+void describe_pes(const std::vector<ClusterBuild>& cb, const std::vector<Box>& tri_boxes,
                   const std::vector<std::pair<int, int>>& ranges, std::vector<int>& source, std::size_t total,
                   BankedScene& bs);
 // A PE's box: around its clusters' spheres (zero when it has none).

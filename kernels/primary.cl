@@ -26,11 +26,12 @@ __kernel void build_primary(FrameParams fp, __global const PeInfo *pes, __global
     int tri = item_tri[pixel];
     int owner = tri >= 0 ? owner_pe(pes, fp.num_pes, tri) : -1;
     if (tri < 0 || owner < fp.group_begin || owner >= fp.group_end) {
-      /* A miss adds the background once over all groups of PEs; a hit is
-       * built by the device that holds its owner PE. */
-      if (tri < 0 && fp.group_begin == 0) accumulate(accum, pixel, load3(fp.background));
-      desc_store(q, q_dest, slot, make_descriptor((float3)(0.0f), 0.0f, (float3)(0.0f), 0.0f, (float3)(0.0f), pixel,
-                                          OPSILA_META(OPSILA_KIND_NIL, 0), -1, -1));
+      /* A miss adds the background once over all groups of PEs (this
+       * work-item alone adds to its pixel in this launch); a hit is built by
+       * the device that holds its owner PE. A NIL hole is its destination
+       * alone: the exchange reads no record of a hole. */
+      if (tri < 0 && fp.group_begin == 0) accumulate_owned(accum, pixel, load3(fp.background));
+      q_dest[slot] = -1;
     } else {
       int x = pixel % fp.width, y = pixel / fp.width;
       float3 d = primary_direction_at(fp, (float)x + ox, (float)y + oy);

@@ -24,6 +24,26 @@ inline void add_fixed(volatile __global uint *cell, long value) {
  * mirror is to_fixed in host/core/fixed_point.h). */
 inline long3 fixed3(float3 value) { return convert_long3_sat_rte(value * OPSILA_FIXED_SCALE); }
 
+/* add_fixed where no other work-item adds to `cell` during the launch (the
+ * queue runs launches in order): one 64-bit read and write, no atomics, the
+ * same sum and the same saturation bit. */
+inline void add_fixed_owned(volatile __global uint *cell, long value) {
+  ulong old = ((ulong)cell[1] << 32) | (ulong)cell[0];
+  ulong sum = old + (ulong)value;
+  uint hi = (uint)(sum >> 32);
+  if (sum < old) hi |= 0x80000000u; /* carried out of the high word */
+  cell[0] = (uint)sum;
+  cell[1] = hi;
+}
+
+/* accumulate() into a pixel that no other work-item adds to during the launch. */
+inline void accumulate_owned(volatile __global uint *accum, int pixel, float3 value) {
+  long3 q = fixed3(value);
+  add_fixed_owned(&accum[pixel * OPSILA_ACCUM_WORDS + 0], q.x);
+  add_fixed_owned(&accum[pixel * OPSILA_ACCUM_WORDS + 2], q.y);
+  add_fixed_owned(&accum[pixel * OPSILA_ACCUM_WORDS + 4], q.z);
+}
+
 inline void accumulate(volatile __global uint *accum, int pixel, float3 value) {
   long3 q = fixed3(value);
   if (q.x != 0) add_fixed(&accum[pixel * OPSILA_ACCUM_WORDS + 0], q.x);

@@ -101,6 +101,26 @@ TEST(HugeValues, SumsBeyondTheFixedPointSaturateNotWrap) {
             30);
 }
 
+// Misses add the background without atomics (each pixel's own work-item):
+// four samples of 3.3e11 each fit the fixed point, and their sum carries
+// out of 64 bits; four of 2e11 reach 2^63; both saturate.
+// Four of 1e11 fit, and their mean is the background.
+TEST(HugeValues, BackgroundSumsOfMissesSaturateNotWrap) {
+  for (const char* bg : {"3.3e11", "2e11", "1e11"}) {
+    Scene s = scene_of(std::string(R"({"image": {"size": [16, 8]}, "spp": 4, "background": )") + bg +
+                       R"(, "camera": {"eye": [0, 0, 5], "look_at": [0, 0, 0]},
+      "objects": [{"type": "sphere", "center": [0, 0, 9], "radius": 1, "material": {"Kd": 1}}]})");
+    const float expect = std::string(bg) != "1e11" ? kMaxPixelValue / 4 : from_fixed(4 * to_fixed(1e11f), 4);
+    for (int pes : {1, 4}) {
+      RenderSettings settings;
+      settings.num_pes = pes;
+      const RenderResult cl = render(s, settings, runtime());
+      ASSERT_EQ(cl.rgb.size(), std::size_t(16 * 8 * 3));
+      for (float v : cl.rgb) ASSERT_EQ(v, expect) << bg << ", " << pes << " PEs";
+    }
+  }
+}
+
 TEST(HugeValues, DecodeSaturatesAtTheLargestSum) {
   EXPECT_EQ(from_fixed(0), 0.0f);
   EXPECT_EQ(from_fixed(std::uint64_t(3) << OPSILA_FIXED_SHIFT), 3.0f);

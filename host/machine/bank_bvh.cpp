@@ -73,10 +73,10 @@ class Builder {
  public:
   std::vector<BinNode> bin;
 
-  // Binned SAH over items order[begin, end) (boxes and weights by item id),
-  // reordering them; leaves of at most leaf_size items. `single` (when not
-  // null) turns a one-item leaf into an existing binary node (a cluster's
-  // facet tree). `known` (when not null): the items' bounds, found by the
+  // Binned SAH over items order[begin, end) (boxes and weights by item id;
+  // null weights weigh 1 each), reordering them; leaves of at most
+  // leaf_size items. `single` (when not null) turns a one-item leaf into an
+  // existing binary node (a cluster's facet tree). `known` (when not null): the items' bounds, found by the
   // parent's split. Returns the node.
   int build(std::vector<int>& order, int begin, int end, const Box* boxes, const float* weight, int leaf_size,
             int depth, const std::vector<int>* single, const Bounds* known = nullptr) {
@@ -160,7 +160,7 @@ class Builder {
     for (int i = begin; i < end; ++i) {
       F4 lo, hi;
       load(boxes[order[i]], lo, hi);
-      const double w = weight[order[i]];
+      const double w = weight ? weight[order[i]] : 1.0;
       I4 k = __builtin_convertvector((0.5f * (lo + hi) - clo) * sc, I4);  // truncated, as static_cast<int>
       k = k < 0 ? 0 : k;
       k = k > nb - 1 ? nb - 1 : k;
@@ -335,15 +335,14 @@ int build_bank_bvh(std::vector<BankNode>& nodes, std::vector<BankTriangle>& tris
   const int nt = t_end - t_begin, nc = c_end - c_begin;
   const Box* boxes = tri_boxes.data() + t_begin;
   Builder b;
-  b.bin.reserve(static_cast<std::size_t>(nt) + static_cast<std::size_t>(nc));  // leaves of two: about nt nodes
+  b.bin.reserve(2 * static_cast<std::size_t>(nt) + static_cast<std::size_t>(nc));  // at most 2 nt - 1 facet nodes
   // Facets: one binary tree per cluster, over positions of the bank's order.
   std::vector<int> order(static_cast<std::size_t>(nt));
   std::iota(order.begin(), order.end(), 0);
-  const std::vector<float> unit(static_cast<std::size_t>(nt), 1.0f);
   std::vector<int> cluster_root(static_cast<std::size_t>(nc), -1);
   for (int c = 0; c < nc; ++c) {
     const std::pair<int, int>& r = ranges[c_begin + c];
-    cluster_root[c] = b.build(order, r.first - t_begin, r.second - t_begin, boxes, unit.data(), kFacetsPerLeaf, 1,
+    cluster_root[c] = b.build(order, r.first - t_begin, r.second - t_begin, boxes, nullptr, kFacetsPerLeaf, 1,
                               nullptr);
     b.bin[cluster_root[c]].keep = true;
   }
@@ -419,8 +418,7 @@ void build_route_bvh(std::vector<BankNode>& nodes, int root, const std::vector<B
   Builder b;
   std::vector<int> order(boxes.size());
   std::iota(order.begin(), order.end(), 0);
-  const std::vector<float> unit(boxes.size(), 1.0f);
-  int top = b.build(order, 0, static_cast<int>(boxes.size()), boxes.data(), unit.data(), 1, 1, nullptr);
+  int top = b.build(order, 0, static_cast<int>(boxes.size()), boxes.data(), nullptr, 1, 1, nullptr);
   std::vector<int> leaf_child(boxes.size());
   for (std::size_t i = 0; i < boxes.size(); ++i) leaf_child[i] = cluster_ids[order[i]];
   std::vector<int> wide_of(b.bin.size(), -1);

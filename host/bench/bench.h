@@ -7,6 +7,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -69,7 +70,7 @@ ScatterFootprint scatter_footprint(std::size_t length, int pes);
 
 // A baseline's image and rays, with its timings.
 struct BaselineImage : ImageResult {
-  double seconds = 0;         // wall time of the render (scene build excluded)
+  double seconds = 0;         // wall time of the frame (scene build excluded; the megakernel's uploads too)
   double kernel_seconds = 0;  // device time (megakernel only)
   double build_seconds = 0;   // acceleration structure / upload preparation
   std::uint64_t triangle_tests = 0, box_tests = 0;  // megakernel only: ray-facet and ray-box tests
@@ -77,7 +78,22 @@ struct BaselineImage : ImageResult {
 
 // The replicated-scene megakernel (kernels/baselines/megakernel.cl): one work-item per
 // pixel, one BVH over the whole scene, the same shading and fixed-point sums
-// as the OPSILA renderer. `tile` bounds the pixels of one launch.
+// as the OPSILA renderer. `tile` bounds the pixels of one launch. Prepared
+// once, as OPSILA's renderer is (its BVH, uploads and output buffers): a
+// frame is its kernels and the read-back, and its output pages are not
+// mapped afresh every frame.
+class Megakernel {
+ public:
+  Megakernel(const Scene& scene, ClRuntime& runtime, int tile = 1 << 16);
+  ~Megakernel();
+  BaselineImage frame();
+
+ private:
+  struct State;
+  std::unique_ptr<State> s_;
+};
+
+// One frame of a megakernel prepared for it.
 BaselineImage render_megakernel(const Scene& scene, ClRuntime& runtime, int tile = 1 << 16);
 
 // Traversal alone: the rays of one megakernel frame (every primary,

@@ -92,26 +92,45 @@ void launch_tiles(ClRuntime& rt, Launcher& launch, cl::Kernel& k, const char* na
 
 }  // namespace
 
-BaselineImage render_megakernel(const Scene& scene, ClRuntime& rt, int tile) {
+// The scene is read, not copied: it outlives the megakernel.
+struct Megakernel::State {
+  const Scene& scene;
+  ClRuntime& rt;
+  int tile;
+  MegaScene ms;
+  MegaKernel mega;
+  MegaBuffers b;
+  State(const Scene& s, ClRuntime& runtime, int t)
+      : scene(s), rt(runtime), tile(t), ms(mega_scene(s)),
+        mega(runtime, "megakernel", KernelProgram::baselines),  // the program is built here, before any timing
+        b(mega_buffers(runtime, s, ms.bs)) {}
+};
+
+Megakernel::Megakernel(const Scene& scene, ClRuntime& rt, int tile) {
   check_kernel_limits(scene);
+  s_ = std::make_unique<State>(scene, rt, tile);
+}
+
+Megakernel::~Megakernel() = default;
+
+BaselineImage Megakernel::frame() {
+  const Scene& scene = s_->scene;
+  ClRuntime& rt = s_->rt;
+  const MegaScene& ms = s_->ms;
+  const MegaBuffers& b = s_->b;
   const std::size_t npix = std::size_t(scene.width) * scene.height;
   BaselineImage out;
   out.width = scene.width;
   out.height = scene.height;
-  const MegaScene ms = mega_scene(scene);
   out.build_seconds = ms.build_seconds;
-
-  rt.program(KernelProgram::baselines);  // compile before timing
-  MegaKernel mega(rt, "megakernel", KernelProgram::baselines);
   cl::CommandQueue& q = rt.queue();
 
   auto t0 = std::chrono::steady_clock::now();
-  const MegaBuffers b = mega_buffers(rt, scene, ms.bs);
   std::vector<LaunchRecord> launches;
   Launcher launch(rt, launches);
-  launch_tiles(rt, launch, mega.kernel(), "megakernel", npix, tile, [&](int begin, int count) {
-    mega.bind(ms.fp, b.nodes, b.tris, b.mats, b.lights, b.surface, ms.bs.pes[0].node_begin, spp_side(scene.spp),
-              b.offsets, begin, count, b.accum, b.counts, b.items);
+  launch_tiles(rt, launch, s_->mega.kernel(), "megakernel", npix, s_->tile, [&](int begin, int count) {
+    s_->mega.bind(ms.fp, b.nodes, b.tris, b.mats, b.lights, b.surface, ms.bs.pes[0].node_begin,
+                  spp_side(scene.spp), b.offsets, begin, count, b.accum, b.counts, b.items);
   });
   std::vector<cl_long> accum(npix * 3);
   std::vector<cl_uint4> counts(npix);
@@ -139,6 +158,10 @@ BaselineImage render_megakernel(const Scene& scene, ClRuntime& rt, int tile) {
     out.box_tests += c.s[3];
   }
   return out;
+}
+
+BaselineImage render_megakernel(const Scene& scene, ClRuntime& rt, int tile) {
+  return Megakernel(scene, rt, tile).frame();
 }
 
 namespace {

@@ -137,8 +137,9 @@ void measure_baselines(BenchReport& report, const Scene& scene, ClRuntime& rt, c
   const int host_threads = report.host_threads;
   Progress live("bench", !progress.quiet);
   progress("replicated megakernel: %d warm-up + %d timed runs", warmup, repeats);
+  Megakernel mega(scene, rt);
   report.megakernel = measure_baseline("replicated_megakernel", "replicated megakernel (same device)", 0, warmup,
-                                       repeats, [&] { return render_megakernel(scene, rt); });
+                                       repeats, [&] { return mega.frame(); });
   progress("traversal alone: the megakernel's rays through its BVH, %d warm-up + %d timed runs", warmup, repeats);
   report.traversal = measure_traversal_alone(scene, rt, warmup, repeats);
   if (!report.traversal.present) progress("traversal alone: not measured: %s", report.traversal.skipped.c_str());

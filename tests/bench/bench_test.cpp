@@ -58,6 +58,22 @@ TEST(Bench, MegakernelTilesDoNotChangeTheImage) {
   EXPECT_EQ(whole.rays.total(), tiled.rays.total());
 }
 
+// A megakernel prepared once renders every frame alike: its buffers, kept
+// between frames, are written whole by each.
+TEST(Bench, MegakernelFramesReuseItsBuffersAlike) {
+  const Scene s = test::mirror_glass_scene(48, 4);
+  const BaselineImage once = render_megakernel(s, runtime());
+  Megakernel mega(s, runtime(), 500);
+  for (int frame = 0; frame < 2; ++frame) {
+    const BaselineImage again = mega.frame();
+    EXPECT_EQ(again.rgb, once.rgb) << frame;
+    EXPECT_EQ(again.item_buffer, once.item_buffer) << frame;
+    EXPECT_EQ(again.rays.total(), once.rays.total()) << frame;
+    EXPECT_EQ(again.box_tests, once.box_tests) << frame;
+    EXPECT_GT(again.kernel_seconds, 0.0) << frame;
+  }
+}
+
 // The traversal alone traces exactly the megakernel's rays: its primary and
 // secondary rays as nearest-hit rays, its shadow rays as any-hit rays (an
 // even sample grid's centre ray, not counted as a ray, is left out).

@@ -139,10 +139,10 @@ class Builder {
       w += bw;
     }
     void grow(const Bin& b) { grow(b.lo, b.hi, b.w); }
-    float area() const {
-      Box box;
-      for (int a = 0; a < 3; ++a) box.lo[a] = lo[a], box.hi[a] = hi[a];
-      return box.area();
+    float area() const {  // Box::area's expression, the three products side by side
+      if (!(lo[0] <= hi[0])) return 0.0f;
+      const F4 e = hi - lo, p = e * __builtin_shuffle(e, I4{1, 2, 0, 3});  // x*y, y*z, z*x
+      return 2 * (p[0] + p[1] + p[2]);
     }
   };
   static int bin_of(float c, float lo, float scale, int bins) {

@@ -64,9 +64,10 @@ void split_spread(const Scene& share, std::vector<int> cur, const SplitLimits& l
     keys[i] = cut_key(centroid(t, axis), static_cast<std::uint32_t>(t.facet_id));
   }
   // The median, n / 2 from the bottom: the lower half is the n / 2 keys below it.
-  const std::uint64_t median = select_key(keys, n / 2, [&](std::vector<std::uint64_t>& h) { ranks.sum(h); });
+  const SelectedKey median = select_key(keys, n / 2, [&](std::vector<std::uint64_t>& h) { ranks.sum(h); });
+  const std::vector<char> below = lower_half(keys, median);
   std::vector<int> lower, upper;
-  for (std::size_t i = 0; i < cur.size(); ++i) (keys[i] < median ? lower : upper).push_back(cur[i]);
+  for (std::size_t i = 0; i < cur.size(); ++i) (below[i] ? lower : upper).push_back(cur[i]);
   cur = std::vector<int>();
   keys = std::vector<std::uint64_t>();
   split_spread(share, std::move(upper), limits, split_flat, object, out, ranks, progress);
@@ -99,15 +100,23 @@ void RadixSelect::narrow(const std::vector<std::uint64_t>& summed) {
   shift_ -= kDigitBits;
 }
 
-std::uint64_t select_key(std::vector<std::uint64_t> keys, std::uint64_t k,
-                         const std::function<void(std::vector<std::uint64_t>&)>& sum) {
+SelectedKey select_key(std::vector<std::uint64_t> keys, std::uint64_t k,
+                       const std::function<void(std::vector<std::uint64_t>&)>& sum) {
   RadixSelect select(std::move(keys), k);
   while (!select.done()) {
     std::vector<std::uint64_t> h = select.histogram();
     sum(h);
     select.narrow(h);
   }
-  return select.key();
+  return {select.key(), select.equal_below()};
+}
+
+std::vector<char> lower_half(const std::vector<std::uint64_t>& keys, const SelectedKey& at) {
+  std::vector<char> below(keys.size(), 0);
+  std::uint64_t ties = at.equal_below;
+  for (std::size_t i = 0; i < keys.size(); ++i)
+    below[i] = keys[i] < at.key || (keys[i] == at.key && ties > 0 && ties--);
+  return below;
 }
 
 ShareClusters split_share(const Scene& share, const Box& sbox, int num_pes, bool split_flat, Ranks& ranks,

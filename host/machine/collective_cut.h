@@ -35,6 +35,7 @@ class RadixSelect {
   std::vector<std::uint64_t> histogram() const;          // this holder's counts of the next digit
   void narrow(const std::vector<std::uint64_t>& summed);  // every holder's counts, added up
   std::uint64_t key() const { return prefix_; }          // once done: the k-th smallest key
+  std::uint64_t equal_below() const { return k_; }       // once done: keys equal to it that rank below it
 
  private:
   std::vector<std::uint64_t> candidates_;  // this holder's keys that share the prefix found so far
@@ -43,10 +44,22 @@ class RadixSelect {
   int shift_ = 64 - kDigitBits;
 };
 
-// The k-th smallest of every rank's keys; `sum` adds a histogram up over
-// the ranks in place (MPI_Allreduce, or a test's simulated ranks).
-std::uint64_t select_key(std::vector<std::uint64_t> keys, std::uint64_t k,
-                         const std::function<void(std::vector<std::uint64_t>&)>& sum);
+// The k-th smallest of every rank's keys, and how many keys equal to it
+// rank below it (ties: the triangles of one polygon with the same centroid
+// share a facet id); `sum` adds a histogram up over the ranks in place
+// (MPI_Allreduce, or a test's simulated ranks).
+struct SelectedKey {
+  std::uint64_t key = 0;
+  std::uint64_t equal_below = 0;
+};
+SelectedKey select_key(std::vector<std::uint64_t> keys, std::uint64_t k,
+                       const std::function<void(std::vector<std::uint64_t>&)>& sum);
+
+// Which of a rank's keys (listed in its triangles' order) fall in the lower
+// half of a cut at `at`: those below its key, and the first at.equal_below
+// equal to it. Equal keys name one facet, whose triangles one rank holds in
+// one process's order, so the halves are nth_element's on (centroid, index).
+std::vector<char> lower_half(const std::vector<std::uint64_t>& keys, const SelectedKey& at);
 
 // A scene read in shares cut into clusters: each rank's own objects alone
 // (split_object), the objects spread over ranks (SceneShare::spread)

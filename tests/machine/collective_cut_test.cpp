@@ -16,11 +16,22 @@
 namespace opsila {
 namespace {
 
-// Keys dealt at random to R simulated ranks, selected in step: each step
-// every rank's histogram, summed, narrows every rank.
-std::uint64_t select_on_ranks(const std::vector<std::uint64_t>& keys, std::uint64_t k, int R, std::mt19937& rng) {
-  std::vector<std::vector<std::uint64_t>> dealt(static_cast<std::size_t>(R));
-  for (std::uint64_t key : keys) dealt[rng() % std::size_t(R)].push_back(key);
+// One process's lower half of a median cut: the indices nth_element puts
+// below `mid` on (centroid, index), sorted; `median` gets the one at mid.
+std::vector<int> one_process_lower(std::vector<std::pair<float, int>> sorted, std::size_t mid, int* median = nullptr) {
+  std::nth_element(sorted.begin(), sorted.begin() + std::ptrdiff_t(mid), sorted.end(), [](const auto& a, const auto& b) {
+    return a.first < b.first || (a.first == b.first && a.second < b.second);
+  });
+  std::vector<int> lower;
+  for (std::size_t i = 0; i < mid; ++i) lower.push_back(sorted[i].second);
+  std::sort(lower.begin(), lower.end());
+  if (median) *median = sorted[mid].second;
+  return lower;
+}
+
+// Each simulated rank's keys selected in step: each step every rank's
+// histogram, summed, narrows every rank.
+SelectedKey select_in_step(const std::vector<std::vector<std::uint64_t>>& dealt, std::uint64_t k) {
   std::vector<RadixSelect> ranks;
   for (auto& d : dealt) ranks.emplace_back(std::move(d), k);
   while (!ranks[0].done()) {
@@ -31,8 +42,20 @@ std::uint64_t select_on_ranks(const std::vector<std::uint64_t>& keys, std::uint6
     }
     for (RadixSelect& r : ranks) r.narrow(sum);
   }
-  for (const RadixSelect& r : ranks) EXPECT_EQ(r.key(), ranks[0].key()) << "every rank agrees";
-  return ranks[0].key();
+  for (const RadixSelect& r : ranks) {
+    EXPECT_EQ(r.key(), ranks[0].key()) << "every rank agrees";
+    EXPECT_EQ(r.equal_below(), ranks[0].equal_below());
+  }
+  return {ranks[0].key(), ranks[0].equal_below()};
+}
+
+// Keys dealt at random to R simulated ranks.
+std::uint64_t select_on_ranks(const std::vector<std::uint64_t>& keys, std::uint64_t k, int R, std::mt19937& rng) {
+  std::vector<std::vector<std::uint64_t>> dealt(static_cast<std::size_t>(R));
+  for (std::uint64_t key : keys) dealt[rng() % std::size_t(R)].push_back(key);
+  const SelectedKey at = select_in_step(dealt, k);
+  EXPECT_EQ(at.equal_below, 0u) << "keys with distinct facet ids never tie";
+  return at.key;
 }
 
 TEST(CollectiveCut, RadixSelectMakesTheHalvesOfNthElement) {
@@ -49,13 +72,8 @@ TEST(CollectiveCut, RadixSelectMakesTheHalvesOfNthElement) {
       keys[i] = cut_key(c, static_cast<std::uint32_t>(facets[i].second));
     }
     const std::size_t mid = n / 2;
-    std::vector<std::pair<float, int>> sorted = facets;
-    std::nth_element(sorted.begin(), sorted.begin() + std::ptrdiff_t(mid), sorted.end(), [](const auto& a, const auto& b) {
-      return a.first < b.first || (a.first == b.first && a.second < b.second);
-    });
-    std::vector<int> lower;
-    for (std::size_t i = 0; i < mid; ++i) lower.push_back(sorted[i].second);
-    std::sort(lower.begin(), lower.end());
+    int median_facet = 0;
+    const std::vector<int> lower = one_process_lower(facets, mid, &median_facet);
     for (int R = 1; R <= 4; ++R) {
       SCOPED_TRACE("n " + std::to_string(n) + ", " + std::to_string(R) + " ranks");
       const std::uint64_t median = select_on_ranks(keys, mid, R, rng);
@@ -63,7 +81,7 @@ TEST(CollectiveCut, RadixSelectMakesTheHalvesOfNthElement) {
       for (std::size_t i = 0; i < n; ++i)
         if (keys[i] < median) below.push_back(facets[i].second);
       EXPECT_EQ(below, lower);
-      EXPECT_EQ(median & 0xffffffffu, std::uint64_t(sorted[mid].second)) << "the median facet itself";
+      EXPECT_EQ(median & 0xffffffffu, std::uint64_t(median_facet)) << "the median facet itself";
     }
   }
 }
@@ -75,8 +93,53 @@ TEST(CollectiveCut, SelectKeyAddsUpThroughItsCallback) {
     ++calls;
     EXPECT_EQ(h.size(), std::size_t(RadixSelect::kBuckets));
   };
-  for (std::uint64_t k = 0; k < keys.size(); ++k) EXPECT_EQ(select_key(keys, k, sum), 2 * k + 1);
+  for (std::uint64_t k = 0; k < keys.size(); ++k) EXPECT_EQ(select_key(keys, k, sum).key, 2 * k + 1);
   EXPECT_EQ(calls, 5 * 64 / RadixSelect::kDigitBits);
+}
+
+// An OBJ polygon fans into triangles that share its facet id, and often
+// its centroid on the cut axis (a flat quad's two halves): equal keys. The
+// ranks hold whole polygons in windows, in file order; the halves must
+// still be nth_element's on (centroid, index), the first of the tied
+// triangles below the cut.
+TEST(CollectiveCut, PolygonTiesSplitAsOneProcess) {
+  std::mt19937 rng(11);
+  const float values[] = {-2.0f, 0.0f, 0.5f, 3.0f};
+  for (int trial = 0; trial < 60; ++trial) {
+    std::vector<std::pair<float, int>> tris;  // centroid, one process's index
+    std::vector<std::uint64_t> keys;
+    std::vector<std::size_t> polygon_starts;
+    for (std::uint32_t facet = 0; tris.size() < 20 + std::size_t(trial) * 40; ++facet) {
+      polygon_starts.push_back(tris.size());
+      const int fan = 1 + int(rng() % 5);
+      const bool flat = rng() % 2;  // every triangle of the polygon at one centroid
+      const float shared = values[rng() % 4];
+      for (int k = 0; k < fan; ++k) {
+        const float c = flat ? shared : values[rng() % 4];
+        tris.push_back({c, static_cast<int>(tris.size())});
+        keys.push_back(cut_key(c, facet));
+      }
+    }
+    const std::size_t n = tris.size(), mid = n / 2;
+    const std::vector<int> lower = one_process_lower(tris, mid);
+    for (int R = 1; R <= 4; ++R) {
+      SCOPED_TRACE("n " + std::to_string(n) + ", " + std::to_string(R) + " ranks");
+      // Windows of whole polygons: cut points at polygon starts, maybe empty windows.
+      std::vector<std::size_t> cuts = {0, n};
+      for (int r = 1; r < R; ++r) cuts.push_back(polygon_starts[rng() % polygon_starts.size()]);
+      std::sort(cuts.begin(), cuts.end());
+      std::vector<std::vector<std::uint64_t>> dealt;
+      for (int r = 0; r < R; ++r) dealt.emplace_back(keys.begin() + std::ptrdiff_t(cuts[r]), keys.begin() + std::ptrdiff_t(cuts[r + 1]));
+      const SelectedKey at = select_in_step(dealt, mid);
+      std::vector<int> below;
+      for (int r = 0; r < R; ++r) {
+        const std::vector<char> mine = lower_half(dealt[std::size_t(r)], at);
+        for (std::size_t i = 0; i < mine.size(); ++i)
+          if (mine[i]) below.push_back(static_cast<int>(cuts[std::size_t(r)] + i));
+      }
+      EXPECT_EQ(below, lower);
+    }
+  }
 }
 
 TEST(CollectiveCut, KeysOrderAsCentroidsThenIndex) {

@@ -36,6 +36,13 @@ extern char** environ;
 
 namespace opsila::test {
 
+// A float's exact value as text (C99 hex), for comparing results as text.
+inline std::string hex(float f) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%a", double(f));
+  return text;
+}
+
 // PSNR of two linear RGB buffers (values clamped to [0,1] first, peak 1).
 inline double clamped_psnr(const std::vector<float>& a, const std::vector<float>& b) {
   auto clamp = [](std::vector<float> v) {

@@ -141,9 +141,13 @@ CameraDesc frame_bounds(const Vec3& lo, const Vec3& hi, float fov_deg, float asp
 }
 
 void check_scene_extent(const Scene& scene, const std::string& where) {
-  if (scene.total_triangles() == 0) throw InputError(where + ": no facets");
   Vec3 lo, hi;
   scene.bounds(lo, hi);
+  check_scene_extent(scene.total_triangles(), lo, hi, where);
+}
+
+void check_scene_extent(std::size_t triangles, const Vec3& lo, const Vec3& hi, const std::string& where) {
+  if (triangles == 0) throw InputError(where + ": no facets");
   const double diag = box_diagonal(lo, hi);
   const float diag_f = static_cast<float>(diag);
   if (!std::isfinite(diag_f))

@@ -197,5 +197,7 @@ constexpr double kMaxSceneExtent = 1e30;
 // bounding-box diagonal is positive, at most kMaxSceneExtent, and gives a
 // positive epsilon in float.
 void check_scene_extent(const Scene& scene, const std::string& where);
+// The same from the figures: triangle count and bounds.
+void check_scene_extent(std::size_t triangles, const Vec3& lo, const Vec3& hi, const std::string& where);
 
 }  // namespace opsila

@@ -34,7 +34,7 @@ std::vector<std::string_view> split_lines(std::string_view text, std::size_t chu
 
 bool parse_chunks(std::string_view text, const std::string& name, const std::string& base_dir,
                   std::size_t max_triangles, StageClock* clock, std::size_t chunk_bytes, int threads,
-                  std::vector<ObjParser>& chunks) {
+                  std::vector<ObjParser>& chunks, bool file_start) {
   const std::vector<std::string_view> parts = split_lines(text, chunk_bytes);
   ChunkShared shared;
   shared.total_bytes = text.size();
@@ -46,7 +46,7 @@ bool parse_chunks(std::string_view text, const std::string& name, const std::str
       parts.size(),
       [&](std::size_t k) {
         try {
-          chunks[k].parse_chunk(k == 0, shared);
+          chunks[k].parse_chunk(k == 0 && file_start, shared);
           parsed[k] = 1;
         } catch (const ChunkStopped&) {
         } catch (...) {  // an error (or no memory): the whole file is read again, for its message
@@ -146,14 +146,15 @@ void ObjParser::merge_chunk(ObjParser& c, int line_base, int& slot, std::vector<
 }
 
 bool ObjParser::merge(std::vector<ObjParser>& chunks) {
-  std::size_t corners = 0, polys = 0;
-  for (const ObjParser& c : chunks) corners += c.index_.size(), polys += c.polys_.size();
+  // A streamed file's blocks merge in turn: what this parser holds comes first.
+  std::size_t corners = index_.size(), polys = polygons(), kept = polys_.size();
+  for (const ObjParser& c : chunks) corners += c.index_.size(), polys += c.polys_.size(), kept += c.polys_.size();
   if (polys > static_cast<std::size_t>(INT_MAX) || corners >= kNoIndex) return false;
   index_.reserve(corners);
   uv_index_.reserve(corners);
   normal_index_.reserve(corners);
-  polys_.reserve(polys);
-  int line_base = 0, slot = -1;
+  polys_.reserve(kept);
+  int line_base = line_base_, slot = slot_;
   std::vector<std::pair<int, std::string>> libs;
   for (ObjParser& c : chunks) {
     // The first chunk's own missing attributes come first in the file.
@@ -169,6 +170,8 @@ bool ObjParser::merge(std::vector<ObjParser>& chunks) {
     line_base += c.lines_;
   }
   std::vector<ObjParser>().swap(chunks);
+  line_base_ = line_base;
+  slot_ = slot;
   if (triangle_total_ > max_triangles_) return false;
   // Material libraries last: reading them changes nothing above, and their
   // warnings come in file order before any later one.

@@ -75,9 +75,13 @@ void ObjParser::check_range(IndexedList& list, const std::vector<std::uint32_t>&
 // coordinates use (others could not show them), loaded once each; an image
 // that cannot be read is a warning and its map is ignored.
 void ObjParser::load_maps(Scene& scene, const std::vector<int>& slot_material) {
+  if (win_ && !win_->plan.load_maps) return;
   std::vector<char> mapped(library_.size() + 1, 0);
   for (const Polygon& poly : polys_)
     if (poly.has_uv && poly.slot >= 0) mapped[slot_material[poly.slot]] = 1;
+  if (win_)  // faces let go while streaming (their indices were all defined)
+    for (std::size_t s = 0; s < win_->mapped_slot.size(); ++s)
+      if (win_->mapped_slot[s]) mapped[slot_material[s]] = 1;
   for (std::size_t k = 0; k < library_.size(); ++k) {
     if (!mapped[k + 1]) continue;
     MaterialDesc& m = scene.materials[k + 1];
@@ -137,48 +141,69 @@ std::vector<int> ObjParser::resolve_materials(Scene& scene) {
   return slot_material;
 }
 
-// Each face fanned into triangles from its first vertex; a zero-area
-// triangle is skipped (a face with none left is degenerate, its id kept).
-std::pair<int, int> ObjParser::triangulate(Scene& scene, const std::vector<int>& slot_material) {
-  scene.triangles.reserve(triangle_total_);
-  int degenerate = 0, degenerate_line = 0;
-  const bool by_o = o_count_ > 0;
+// Polygon `id` fanned into triangles (0, k, k + 1) from its first vertex,
+// counted into `fig` and, unless `out` is null, appended to it. A zero-area
+// triangle is skipped (a face with none left is degenerate, its id kept);
+// one whose normal overflows float is noted (the file is refused). True
+// when the face has a triangle.
+bool ObjParser::fan(const Polygon& poly, int id, FanFigures& fig, Scene* out, int object, int material) const {
   const auto vtx = [&](std::uint32_t i) {
     const float* p = &verts_.values[3 * static_cast<std::size_t>(i)];
     return Vec3{p[0], p[1], p[2]};
   };
+  const Vec3 p0 = vtx(index_[poly.first]);
+  bool any = false;
+  for (std::uint32_t k = 1; k + 1 < poly.count; ++k) {
+    const Vec3 p1 = vtx(index_[poly.first + k]);
+    const Vec3 p2 = vtx(index_[poly.first + k + 1]);
+    // SPEC's geometric normal, in float: zero means no normal (skip it),
+    // overflow means the renderer could not shade it (refuse the file).
+    const float e1[3] = {p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]};
+    const float e2[3] = {p2[0] - p0[0], p2[1] - p0[1], p2[2] - p0[2]};
+    const float c[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
+                        e1[0] * e2[1] - e1[1] * e2[0]};
+    if (!std::isfinite(c[0]) || !std::isfinite(c[1]) || !std::isfinite(c[2])) {
+      if (fig.overflow_id < 0 || id < fig.overflow_id) fig.overflow_id = id, fig.overflow_line = poly.line;
+      continue;
+    }
+    if (c[0] == 0 && c[1] == 0 && c[2] == 0) continue;
+    ++fig.triangles;
+    for (int a = 0; a < 3; ++a) {
+      fig.lo[a] = std::min({fig.lo[a], p0[a], p1[a], p2[a]});
+      fig.hi[a] = std::max({fig.hi[a], p0[a], p1[a], p2[a]});
+    }
+    any = true;
+    if (!out) continue;
+    Triangle t;
+    t.v0 = p0;
+    t.v1 = p1;
+    t.v2 = p2;
+    t.facet_id = id;
+    t.object_id = object;
+    t.material = material;
+    t.attributes = add_attributes(*out, poly, k);
+    out->triangles.push_back(t);
+  }
+  if (!any && (fig.degenerate++ == 0 || poly.line < fig.degenerate_line)) fig.degenerate_line = poly.line;
+  return any;
+}
+
+// Each face (a window's: those kept) fanned into triangles; a window's
+// figures start from the faces it let go, and only its own are appended.
+FanFigures ObjParser::triangulate(Scene& scene, const std::vector<int>& slot_material) {
+  FanFigures fig = win_ ? win_->let_go : FanFigures{};
+  if (!win_) scene.triangles.reserve(triangle_total_);
+  const bool by_o = o_count_ > 0;
   for (std::size_t f = 0; f < polys_.size(); ++f) {
     const Polygon& poly = polys_[f];
     const int object = std::max(0, (by_o ? poly.o_seen : g_count_ > 0 ? poly.g_seen : 1) - 1);
     const int material = poly.slot < 0 ? 0 : slot_material[poly.slot];
-    const Vec3 p0 = vtx(index_[poly.first]);
-    bool any = false;
-    for (std::uint32_t k = 1; k + 1 < poly.count; ++k) {
-      const Vec3 p1 = vtx(index_[poly.first + k]);
-      const Vec3 p2 = vtx(index_[poly.first + k + 1]);
-      // SPEC's geometric normal, in float: zero means no normal (skip it),
-      // overflow means the renderer could not shade it (refuse the file).
-      const float e1[3] = {p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]};
-      const float e2[3] = {p2[0] - p0[0], p2[1] - p0[1], p2[2] - p0[2]};
-      const float c[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
-                          e1[0] * e2[1] - e1[1] * e2[0]};
-      if (!std::isfinite(c[0]) || !std::isfinite(c[1]) || !std::isfinite(c[2]))
-        fail(name_, poly.line, "facet too large: its edge vectors overflow float");
-      if (c[0] == 0 && c[1] == 0 && c[2] == 0) continue;
-      Triangle t;
-      t.v0 = p0;
-      t.v1 = p1;
-      t.v2 = p2;
-      t.facet_id = static_cast<int>(f);
-      t.object_id = object;
-      t.material = material;
-      t.attributes = add_attributes(scene, poly, k);
-      scene.triangles.push_back(t);
-      any = true;
-    }
-    if (!any && degenerate++ == 0) degenerate_line = poly.line;
+    const int owner = win_ ? win_->owner[f] : 0;
+    const bool mine = !win_ || (owner >= 0 && owner == win_->plan.rank);
+    const bool any = fan(poly, win_ ? win_->id[f] : static_cast<int>(f), fig, mine ? &scene : nullptr, object, material);
+    if (any && win_) win_->note(poly, owner);
   }
-  return {degenerate, degenerate_line};
+  return fig;
 }
 
 Scene ObjParser::finish() {
@@ -188,7 +213,8 @@ Scene ObjParser::finish() {
   Scene scene;
   scene.has_camera = false;
   scene.has_lights = false;
-  if (polys_.empty()) {
+  const std::size_t polygon_count = polygons();
+  if (polygon_count == 0) {
     std::string why = name_ + ": no facets";
     if (short_faces_ > 0)
       why += " (" + std::to_string(short_faces_) + " faces with fewer than 3 vertices)";
@@ -197,18 +223,18 @@ Scene ObjParser::finish() {
 
   const std::vector<int> slot_material = resolve_materials(scene);
   scene.num_objects = o_count_ > 0 ? o_count_ : (g_count_ > 0 ? g_count_ : 1);
-  scene.num_facets = static_cast<int>(polys_.size());
-  const auto [degenerate, degenerate_line] = triangulate(scene, slot_material);
-  if (scene.triangles.empty())
-    throw InputError(name_ + ": no facets (all " + std::to_string(polys_.size()) +
-                     " faces are degenerate)");
+  scene.num_facets = static_cast<int>(polygon_count);
+  const FanFigures fig = triangulate(scene, slot_material);
+  if (fig.overflow_id >= 0) fail(name_, fig.overflow_line, "facet too large: its edge vectors overflow float");
+  if (fig.triangles == 0)
+    throw InputError(name_ + ": no facets (all " + std::to_string(polygon_count) + " faces are degenerate)");
 
   if (short_faces_ > 0)
     warnings_.push_back(at(name_, short_line_) + "skipped " + std::to_string(short_faces_) +
                         " face(s) with fewer than 3 vertices (first on this line); they get "
                         "no facet id");
-  if (degenerate > 0)
-    warnings_.push_back(at(name_, degenerate_line) + std::to_string(degenerate) +
+  if (fig.degenerate > 0)
+    warnings_.push_back(at(name_, fig.degenerate_line) + std::to_string(fig.degenerate) +
                         " degenerate (zero-area) facet(s) not rendered (first on this line); "
                         "they keep their facet ids");
   if (unknown_count_ > 0)
@@ -216,9 +242,11 @@ Scene ObjParser::finish() {
                         std::to_string(unknown_count_) + " line(s) with unknown statements "
                         "(first: " + quote(unknown_first_) + ")");
 
-  check_scene_extent(scene, name_);
-  Vec3 lo, hi;
-  scene.bounds(lo, hi);
+  // A window's extent is the whole file's, which every rank has counted.
+  Vec3 lo = fig.lo, hi = fig.hi;
+  if (win_) window_share(scene, fig);
+  else scene.bounds(lo, hi);
+  check_scene_extent(win_ ? fig.triangles : scene.triangles.size(), lo, hi, name_);
   scene.camera = frame_bounds(lo, hi, 45.0f, float(scene.width) / float(scene.height));
   for (std::string& w : scene.warnings) warnings_.push_back(std::move(w));
   scene.warnings = std::move(warnings_);

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <functional>
 #include <string>
 #include <vector>
@@ -25,6 +26,12 @@ constexpr std::size_t kMaxInputFileBytes = std::size_t(1) << 31;
 // first byte); throws InputError to refuse the file there.
 using ChunkCheck = std::function<void(const char*, std::size_t, std::size_t)>;
 
+// Reads a regular file of at most max_bytes a chunk at a time: `sized`
+// hears its size once it is open, and each chunk is checked, then taken,
+// before the next is read.
+using ChunkTake = std::function<void(const char*, std::size_t)>;
+void read_file_chunks(const std::string& path, std::size_t max_bytes, const ChunkCheck& check,
+                      const std::function<void(std::uintmax_t)>& sized, const ChunkTake& take);
 // Reads a whole regular file of at most max_bytes, a chunk at a time, each
 // chunk checked before the next is read. Directories, devices, unreadable or
 // oversized files give an InputError naming the path.
@@ -35,6 +42,8 @@ std::string read_input_file(const std::string& path);
 // A text file (OBJ, MTL) of at most kMaxInputFileBytes: a NUL byte (a binary
 // file) is refused as soon as it is read, not after gigabytes.
 std::string read_text_file(const std::string& path);
+// That check, for a file read in chunks: UTF-16 and NUL bytes, by line.
+ChunkCheck text_check(const std::string& path);
 
 // Loads an OBJ file; its mtllib files are looked up in the OBJ's folder.
 // Sets has_camera = has_lights = false; the camera frames the model. More
@@ -57,6 +66,35 @@ struct ObjChunking {
 };
 Scene load_obj_from_string(const std::string& text, const std::string& name, const std::string& base_dir,
                            const ObjChunking& chunking, std::size_t max_triangles = kMaxTriangles);
+
+// One rank's window of an OBJ read as a stream (docs/DISTRIBUTED.md): the
+// file's fan triangles take [plan_begin, plan_begin + plan_all) of a plan
+// of plan_total triangles dealt over `ranks` in equal slices, and this rank
+// keeps the polygons whose first fan triangle falls in its slice (a polygon
+// is never cut). fans: the file's fan triangles, counted by a first read; 0
+// keeps no polygon (that first read: counts, materials, warnings, errors).
+struct ObjWindow {
+  int rank = 0, ranks = 1;
+  std::uint64_t plan_begin = 0, plan_all = 0, plan_total = 0;
+  std::uint64_t fans = 0;
+  bool load_maps = true;  // the materials' texture maps (the read that keeps the materials)
+};
+// How an OBJ is streamed: blocks of about block_bytes, cut at line ends,
+// each parsed in chunks. Tests force both small.
+struct ObjStreaming {
+  std::size_t block_bytes = std::size_t(32) << 20;
+  ObjChunking chunking;
+};
+// Reads an OBJ as a stream, keeping every v, vt and vn (small next to the
+// facets) but only the window's polygons. Every statement is parsed, so
+// ids, counts, warnings and errors are one process's. The scene holds the
+// window's triangles with the whole file's facet and object ids; its share
+// (rank, ranks) has the whole file's triangle count and bounds (every rank
+// sees every polygon, so no message is needed) and the objects whose
+// triangles lie in several windows (spread). `fans` gets the file's fan
+// triangles.
+Scene load_obj_window(const std::string& path, std::size_t max_triangles, const ObjWindow& window,
+                      std::uint64_t& fans, const ObjStreaming& streaming = ObjStreaming{});
 
 // Parses MTL text (`name` for messages). Materials come back in definition
 // order; a key a material leaves out keeps the SPEC default (colours 0,

@@ -4,7 +4,11 @@
 // (obj_chunks.cpp).
 #pragma once
 
+#include <array>
 #include <atomic>
+#include <climits>
+#include <limits>
+#include <memory>
 #include <cstddef>
 #include <cstdint>
 #include <string>
@@ -15,6 +19,7 @@
 #include <vector>
 
 #include "core/scene.h"
+#include "input/obj_loader.h"
 
 namespace opsila {
 
@@ -45,6 +50,35 @@ struct IndexedList {
   bool strict;           // a bad index is an error (v), else a warning (vt, vn)
   int missing = 0, missing_line = 0;  // corners whose index names nothing (not strict)
   long long size() const { return static_cast<long long>(values.size() / width); }
+};
+
+// The whole file's figures of polygons fanned into triangles (every one, or
+// those a window lets go): triangles kept (not zero-area), their bounds,
+// degenerate faces and the first face whose edges overflow float.
+struct FanFigures {
+  std::uint64_t triangles = 0;
+  int degenerate = 0, degenerate_line = 0;  // the first one's line (lines grow with ids)
+  long long overflow_id = -1;
+  int overflow_line = 0;
+  Vec3 lo = splat(std::numeric_limits<float>::infinity()), hi = splat(-std::numeric_limits<float>::infinity());
+};
+
+// A window's reading (obj_stream.cpp): the polygons kept, in file order,
+// and what the polygons let go leave behind.
+struct WindowState {
+  ObjWindow plan;
+  std::size_t examined = 0;               // polys_[0, examined) were examined (and kept)
+  std::uint64_t polygons = 0, fans = 0;  // the file's polygons and fan triangles examined
+  std::vector<int> id, owner;             // of each kept polygon: its facet id and owner rank
+  FanFigures let_go;
+  std::vector<char> mapped_slot;          // usemtl slots of let-go faces with uv
+  // The ranks holding an object's triangles (lowest, highest), by 'o'
+  // section, by 'g' section and for the file as one object: which counts is
+  // known at the end.
+  std::vector<std::array<int, 2>> by_o, by_g;
+  std::array<int, 2> all{{INT_MAX, -1}};
+  int owner_of(std::uint64_t fan) const;  // -1: no window (counting)
+  void note(const Polygon& poly, int owner);
 };
 
 // What the parsers of one file's chunks share while they run.
@@ -80,6 +114,14 @@ class ObjParser {
   bool merge(std::vector<ObjParser>& chunks);
   Scene finish();
 
+  // Streaming (obj_stream.cpp): the file in blocks, each parsed in chunks
+  // and merged (fast; false when a block has an error, the caller then
+  // reads again with fast off) or line after line, and the polygons outside
+  // the window let go after each block.
+  void set_window(const ObjWindow& plan);
+  bool stream(const std::string& path, const ObjStreaming& how, bool fast);
+  std::uint64_t fans() const { return triangle_total_; }
+
  private:
   void parse_lines();
   void statement(std::string_view line);
@@ -98,7 +140,11 @@ class ObjParser {
   // faces fanned into triangles (returns the degenerate faces and the line
   // of the first).
   std::vector<int> resolve_materials(Scene& scene);
-  std::pair<int, int> triangulate(Scene& scene, const std::vector<int>& slot_material);
+  FanFigures triangulate(Scene& scene, const std::vector<int>& slot_material);
+  bool fan(const Polygon& poly, int id, FanFigures& fig, Scene* out, int object, int material) const;
+  void let_go();
+  void window_share(Scene& scene, const FanFigures& fig) const;
+  std::size_t polygons() const { return (win_ ? win_->polygons - win_->examined : 0) + polys_.size(); }
   int add_attributes(Scene& scene, const Polygon& poly, std::uint32_t k) const;
   void merge_chunk(ObjParser& c, int line_base, int& slot, std::vector<std::pair<int, std::string>>& libs);
   bool resolve_fixups(ObjParser& c, int line_base);
@@ -109,6 +155,8 @@ class ObjParser {
   std::size_t max_triangles_;
   StageClock* clock_;
   int line_ = 0;
+  int line_base_ = 0;  // lines of the blocks before this one (streaming)
+  std::unique_ptr<WindowState> win_;
 
   IndexedList verts_{"vertex", {}, 3, 0, 0, true};
   IndexedList uvs_{"texture coordinate", {}, 2, 0, 0, false};
@@ -162,9 +210,10 @@ std::vector<std::string_view> split_lines(std::string_view text, std::size_t chu
 // Parses each chunk of the text on up to `threads` threads into `chunks`
 // (one parser each, in file order). False when a chunk met an error or the
 // chunks together pass max_triangles: the caller then reads the text whole.
+// file_start: the text is the file's start (else a later block of it).
 bool parse_chunks(std::string_view text, const std::string& name, const std::string& base_dir,
                   std::size_t max_triangles, StageClock* clock, std::size_t chunk_bytes, int threads,
-                  std::vector<ObjParser>& chunks);
+                  std::vector<ObjParser>& chunks, bool file_start = true);
 
 }  // namespace obj_parse
 }  // namespace opsila

@@ -42,12 +42,12 @@ Scene ObjParser::run() {
 
 void ObjParser::parse_lines() {
   // A chunk other than the first starts mid-file: no byte-order mark there.
-  LineScanner sc(text_, name_, !chunk_ || first_chunk_);
+  LineScanner sc(text_, name_, chunk_ ? first_chunk_ : line_base_ == 0);
   std::string_view line;
   std::size_t reported = 0;
   while (sc.next(line)) {
-    line_ = sc.line_no();
-    if ((line_ & 0xffff) == 0) {
+    line_ = line_base_ + sc.line_no();
+    if ((sc.line_no() & 0xffff) == 0) {
       const std::size_t at = static_cast<std::size_t>(line.data() - text_.data());
       if (shared_) {
         if (shared_->stop.load(std::memory_order_relaxed)) throw ChunkStopped{};
@@ -229,7 +229,7 @@ void ObjParser::face(std::string_view rest) {
     if (short_faces_++ == 0) short_line_ = line_;
     return;
   }
-  if (polys_.size() >= static_cast<std::size_t>(INT_MAX))
+  if (polygons() >= static_cast<std::size_t>(INT_MAX))
     fail(name_, line_, "too many facets (more than " + std::to_string(INT_MAX) + ")");
   triangle_total_ += n - 2;
   if (triangle_total_ > max_triangles_)

@@ -133,8 +133,8 @@ bool parse_int(std::string_view tok, long long& out) {
 
 }  // namespace obj_text
 
-std::string read_input_file(const std::string& path, std::size_t max_bytes,
-                            const ChunkCheck& check) {
+void read_file_chunks(const std::string& path, std::size_t max_bytes, const ChunkCheck& check,
+                      const std::function<void(std::uintmax_t)>& sized, const ChunkTake& take) {
   std::error_code ec;
   const fs::file_status st = fs::status(path, ec);
   if (ec || !fs::exists(st)) {
@@ -152,28 +152,37 @@ std::string read_input_file(const std::string& path, std::size_t max_bytes,
   if (size > max_bytes) too_large(size);
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(path + ": cannot open: " + std::strerror(errno));
+  sized(size);
   // Read and checked a chunk at a time: a binary file is refused at its
   // first bad byte, not after gigabytes, and a file that grows while it is
   // read is still held to the limit.
-  std::string text;
-  try {
-    text.reserve(static_cast<std::size_t>(size));
-  } catch (const std::bad_alloc&) {
-    throw InputError(path + ": out of memory reading the file");
-  }
   const std::size_t kChunk = std::size_t(1) << 20;
   std::vector<char> chunk(kChunk);
   StageClock clock(PrepareStage::read);
-  for (;;) {
-    if (size > 0) clock.progress(double(text.size()) / double(size));
+  for (std::size_t done = 0;;) {
+    if (size > 0) clock.progress(double(done) / double(size));
     in.read(chunk.data(), static_cast<std::streamsize>(chunk.size()));
     const std::size_t got = static_cast<std::size_t>(in.gcount());
     if (got == 0) break;
-    if (text.size() + got > max_bytes) too_large(text.size() + got);
-    check(chunk.data(), got, text.size());
-    text.append(chunk.data(), got);
+    if (done + got > max_bytes) too_large(done + got);
+    check(chunk.data(), got, done);
+    take(chunk.data(), got);
+    done += got;
   }
   if (in.bad()) throw InputError(path + ": read error");
+}
+
+std::string read_input_file(const std::string& path, std::size_t max_bytes,
+                            const ChunkCheck& check) {
+  std::string text;
+  const auto reserve = [&](std::uintmax_t size) {
+    try {
+      text.reserve(static_cast<std::size_t>(size));
+    } catch (const std::bad_alloc&) {
+      throw InputError(path + ": out of memory reading the file");
+    }
+  };
+  read_file_chunks(path, max_bytes, check, reserve, [&](const char* data, std::size_t n) { text.append(data, n); });
   return text;
 }
 
@@ -181,9 +190,8 @@ std::string read_input_file(const std::string& path) {
   return read_input_file(path, kMaxInputFileBytes, [](const char*, std::size_t, std::size_t) {});
 }
 
-std::string read_text_file(const std::string& path) {
-  int line = 1;
-  return read_input_file(path, kMaxInputFileBytes, [&](const char* data, std::size_t n, std::size_t at) {
+ChunkCheck text_check(const std::string& path) {
+  return [path, line = 1](const char* data, std::size_t n, std::size_t at) mutable {
     if (at == 0 && n >= 2 && ((data[0] == '\xff' && data[1] == '\xfe') || (data[0] == '\xfe' && data[1] == '\xff')))
       throw InputError(path + ":1: UTF-16 text is not supported (save the file as UTF-8 or ASCII)");
     // Counted, not looped over byte by byte: this runs at memory speed.
@@ -192,7 +200,9 @@ std::string read_text_file(const std::string& path) {
       throw InputError(path + ":" + std::to_string(line) + ": NUL byte (binary file?)");
     }
     line += static_cast<int>(std::count(data, data + n, '\n'));
-  });
+  };
 }
+
+std::string read_text_file(const std::string& path) { return read_input_file(path, kMaxInputFileBytes, text_check(path)); }
 
 }  // namespace opsila

@@ -276,9 +276,43 @@ std::size_t rank_triangle_limit() {
   return env_hook_number(EnvHook::rank_triangle_limit, 1, kMaxTriangles, expected.c_str()).value_or(kMaxTriangles);
 }
 
+// A bare OBJ read by several ranks: streamed once for its counts, then
+// again keeping this rank's window of its triangles (obj_stream.cpp). Every
+// rank sees every polygon, so the figures need no joining; `combine` still
+// runs, the ranks' agreement that each has read its share.
+namespace {
+
+Scene load_obj_share(const std::string& path, const SceneShare& share) {
+  ObjWindow w;
+  w.rank = share.rank, w.ranks = share.ranks;
+  w.load_maps = false;
+  const std::size_t limit = rank_triangle_limit() * std::size_t(share.ranks);
+  std::uint64_t fans = 0;
+  const std::size_t all = load_obj_window(path, limit, w, fans).share.total_triangles;
+  w.plan_all = w.plan_total = all;
+  w.fans = fans;
+  w.load_maps = true;
+  Scene scene = load_obj_window(path, limit, w, fans);
+  SceneShare figures = share;
+  figures.total_triangles = scene.share.total_triangles;
+  figures.lo = scene.share.lo;
+  figures.hi = scene.share.hi;
+  figures.spread = std::move(scene.share.spread);
+  if (figures.combine) figures.combine(figures);
+  scene.share = std::move(figures);
+  return scene;
+}
+
+}  // namespace
+
 Scene load_scene(const std::string& path, const SceneShare& share) {
   const auto start = std::chrono::steady_clock::now();
   const std::string ext = lower(fs::path(path).extension().string());
+  if (ext == ".obj" && share.ranks > 1) {
+    Scene scene = load_obj_share(path, share);
+    scene.share.read_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    return scene;
+  }
   if (ext == ".obj") return load_obj(path);
   // Parsing, and the shapes and generators it builds (a read is its own stage).
   StageClock clock(PrepareStage::parse);

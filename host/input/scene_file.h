@@ -17,9 +17,9 @@ namespace opsila {
 constexpr std::size_t kMaxSceneFileBytes = std::size_t(4) << 20;
 
 // ".obj" (any case) goes to load_obj; anything else is read as a JSON scene.
-// With share.ranks > 1 a JSON scene is read as this rank's share
+// With share.ranks > 1 a JSON scene or an OBJ is read as this rank's share
 // (share.rank of share.ranks; Scene::share), and may have share.ranks times
-// one rank's triangles; other files are read whole.
+// one rank's triangles; other model files are read whole.
 Scene load_scene(const std::string& path, const SceneShare& share = SceneShare{});
 
 // One rank's triangle limit: kMaxTriangles, or lower where the environment

@@ -291,7 +291,9 @@ std::function<void(std::vector<Triangle>&)> SceneReader::terrain(const Json& v, 
 // An OBJ file ("obj"), or a model in any format ("model": OBJ by the strict
 // reader, the others through the importer). The file is read now (an OBJ's
 // triangles count against the scene's limit as they are read), its
-// triangles appended when the scene is built.
+// triangles appended when the scene is built. A scene read in shares
+// streams an OBJ instead: now for its counts, materials and warnings only,
+// and again when it is built, keeping this rank's window (obj_window()).
 std::function<void(std::vector<Triangle>&)> SceneReader::include_obj(const Json& v, const std::string& path,
                                                                      bool any_format) {
   check_keys(v, path, {"type", "name", "file", "material", "transform"});
@@ -307,11 +309,17 @@ std::function<void(std::vector<Triangle>&)> SceneReader::include_obj(const Json&
                                ? material_ref(find(v, "material"), join_key(path, "material"))
                                : -1;
   auto sub = std::make_shared<Scene>();
+  const bool obj = lower(fs::path(full).extension().string()) == ".obj";
+  const bool windowed = share_.ranks > 1 && (obj || !any_format);
+  std::uint64_t fans = 0;
   try {
-    const bool obj = lower(fs::path(full).extension().string()) == ".obj";
     if (!obj && any_format && !is_imported_model(full))
       throw InputError(full + ": not a model format the importer reads (see scenes/FORMAT.md)");
-    if (obj || !any_format) {
+    if (windowed) {
+      ObjWindow counting;  // keeps no polygon
+      counting.rank = share_.rank, counting.ranks = share_.ranks;
+      *sub = load_obj_window(full, max_triangles_ - planned_triangles_, counting, fans);
+    } else if (obj || !any_format) {
       *sub = load_obj(full, std::min(entry_limit_, max_triangles_ - planned_triangles_));
     } else {
       *sub = load_model(full);
@@ -321,8 +329,8 @@ std::function<void(std::vector<Triangle>&)> SceneReader::include_obj(const Json&
     scene_.warnings.insert(scene_.warnings.end(), e.warnings.begin(), e.warnings.end());
     fail(fkey, e.what());
   }
-  budget(sub->triangles.size(), std::size_t(sub->num_facets), std::size_t(sub->num_objects),
-         path);
+  budget(windowed ? sub->share.total_triangles : sub->triangles.size(), std::size_t(sub->num_facets),
+         std::size_t(sub->num_objects), path, windowed);
   const int mat_offset = static_cast<int>(scene_.materials.size()) - 1;
   const int tex_offset = static_cast<int>(scene_.textures.size());
   if (override_mat < 0) {
@@ -336,7 +344,9 @@ std::function<void(std::vector<Triangle>&)> SceneReader::include_obj(const Json&
   }
   for (std::string& w : sub->warnings) scene_.warnings.push_back(std::move(w));
   for (std::string& f : sub->input_files) scene_.input_files.push_back(std::move(f));
-  return [this, sub, override_mat, mat_offset](std::vector<Triangle>& tris) {
+  return [this, sub, override_mat, mat_offset, windowed, full, fans, fkey](std::vector<Triangle>& tris) {
+    if (windowed) obj_window(*sub, full, fans, fkey);
+    for (int o : sub->share.spread) share_.spread.push_back(next_object_ + o);
     const int attr_offset = static_cast<int>(scene_.attributes.size());
     for (const VertexAttributes& a : sub->attributes) scene_.attributes.push_back(a);
     for (Triangle t : sub->triangles) {

@@ -158,6 +158,7 @@ class SceneReader {
   void deal(std::size_t first, std::size_t first_attribute);
   void window(std::size_t all, int object, std::size_t& begin, std::size_t& end);
   void count_window(std::size_t first);
+  void obj_window(Scene& sub, const std::string& file, std::uint64_t fans, const std::string& fkey);
   void grow_bounds(const Triangle& t);
   void settle_share();
 

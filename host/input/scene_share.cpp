@@ -79,6 +79,30 @@ void SceneReader::window(std::size_t all, int object, std::size_t& begin, std::s
   if (all > 0 && owner(pb) != owner(pb + all - 1)) share_.spread.push_back(object);
 }
 
+// An OBJ entry read as a stream again, keeping this rank's window: the
+// polygons whose first fan triangle falls in its slice of the plan, the
+// file's fan triangles spread evenly over the entry's part of it
+// (ObjWindow). The file's objects that fall in several slices are spread.
+void SceneReader::obj_window(Scene& sub, const std::string& file, std::uint64_t fans, const std::string& fkey) {
+  ObjWindow w;
+  w.rank = share_.rank, w.ranks = share_.ranks;
+  w.plan_begin = entry_.planned_begin;
+  w.plan_all = entry_.planned_end - entry_.planned_begin;
+  w.plan_total = planned_triangles_;
+  w.fans = fans;
+  w.load_maps = false;  // the first read loaded them
+  entry_.windowed = true;
+  try {
+    std::uint64_t again = 0;
+    Scene part = load_obj_window(file, max_triangles_, w, again);
+    sub.triangles = std::move(part.triangles);
+    sub.attributes = std::move(part.attributes);
+    sub.share.spread = std::move(part.share.spread);
+  } catch (const InputError& e) {  // the file changed since it was first read
+    fail(fkey, e.what());
+  }
+}
+
 // A window's triangles, all this rank's: counted into the figures here,
 // added up over the ranks by share_.combine.
 void SceneReader::count_window(std::size_t first) {

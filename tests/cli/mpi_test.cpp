@@ -102,6 +102,20 @@ struct MpiFixture : ::testing::Test {
   }
 };
 
+// The facets every rank read (each at most `most`: its share), added up;
+// each rank holds banks and says its peak memory.
+std::uint64_t facets_read(const nlohmann::json& s, std::uint64_t most, const char* why) {
+  std::uint64_t read = 0;
+  for (const auto& rank : s.at("mpi").at("per_rank")) {
+    const std::uint64_t mine = rank.at("share").at("facets_read");
+    EXPECT_LE(mine, most) << why;
+    EXPECT_GT(rank.at("share").at("facets_held").get<std::uint64_t>(), 0u);
+    EXPECT_GT(rank.at("host_peak_bytes").get<std::uint64_t>(), 0u);
+    read += mine;
+  }
+  return read;
+}
+
 // Refused as bad input: exit 2 and one error line naming every fragment.
 void expect_refused(const RunResult& r, const std::vector<std::string>& fragments) {
   EXPECT_EQ(r.exit_code, 2) << r.err;
@@ -259,14 +273,7 @@ TEST_F(MpiFixture, ATerrainSpreadOverRanksIsTheSameAsOneProcess) {
     nlohmann::json s;
     expect_ranks_as_one(R, with, s);
     if (HasFatalFailure()) return;
-    std::uint64_t read = 0;
-    for (const auto& rank : s.at("mpi").at("per_rank")) {
-      const std::uint64_t mine = rank.at("share").at("facets_read");
-      EXPECT_LE(mine, N / R + 320) << "a slice of the terrain, and at most the sphere more";
-      EXPECT_GT(rank.at("share").at("facets_held").get<std::uint64_t>(), 0u);
-      read += mine;
-    }
-    EXPECT_EQ(read, N);
+    EXPECT_EQ(facets_read(s, N / R + 320, "a slice of the terrain, and at most the sphere more"), N);
   }
   // One rank's limit (OPSILA_RANK_TRIANGLE_LIMIT): the terrain alone is over
   // it, so one process refuses the scene, naming the file, the key and the
@@ -455,6 +462,105 @@ TEST_F(MpiFixture, ABrokenFileOnOneRankEndsEveryRank) {
   EXPECT_EQ(errors[0].rfind("opsila: error: rank 2: ", 0), 0u) << errors[0];
   EXPECT_NE(errors[0].find("part3.obj"), std::string::npos) << errors[0];
   EXPECT_EQ(dir.entries().size(), 5u) << "an output file was left behind (the folder held the scene and 4 OBJ files)";
+}
+
+// A wavy grid of nx x nz hexagons as one OBJ file: `sections` 'o' sections
+// of rows, two materials by usemtl, vt and vn on every corner, the second
+// half of the rows by negative indices, one degenerate face; `bad_row` (if
+// any) has a broken face at its end. Each hexagon fans from its left corner
+// into two pairs of triangles mirrored across its row, so with the same
+// centroid on x: polygon ties for the median cuts. Returns its path.
+std::string grid_obj(TempDir& dir, const std::string& name, int nx, int nz, int sections, int bad_row = -1) {
+  dir.write("grid.mtl", "newmtl red\nKd 0.8 0.2 0.2\nnewmtl green\nKd 0.2 0.8 0.3\nKs 0.3 0.3 0.3\nNs 20\n");
+  std::string t = "mtllib grid.mtl\n";
+  const int columns = 4 * nx + 1, rows = 2 * nz + 1, verts = columns * rows;
+  for (int b = 0; b < rows; ++b)
+    for (int a = 0; a < columns; ++a) {
+      t += "v " + std::to_string(a * 0.0625) + " " + std::to_string(0.1 * ((a * 7 + b * 3) % 5)) + " " +
+           std::to_string(b * 0.125) + "\n";
+      t += "vt " + std::to_string(double(a) / (columns - 1)) + " " + std::to_string(double(b) / (rows - 1)) + "\n";
+    }
+  t += "vn 0 1 0\nf 1 1 2\n";
+  const auto at = [&](int a, int b, bool negative) {
+    const int k = b * columns + a + 1;
+    const std::string n = std::to_string(negative ? k - verts - 1 : k);
+    return " " + n + "/" + n + "/" + (negative ? "-1" : "1");
+  };
+  for (int j = 0; j < nz; ++j) {
+    if (j * sections % nz < sections) t += "o rows" + std::to_string(j) + "\n";
+    t += j % 2 ? "usemtl green\n" : "usemtl red\n";
+    const bool neg = j >= nz / 2;
+    for (int i = 0; i < nx; ++i)
+      t += "f" + at(4 * i, 2 * j + 1, neg) + at(4 * i + 1, 2 * j, neg) + at(4 * i + 3, 2 * j, neg) +
+           at(4 * i + 4, 2 * j + 1, neg) + at(4 * i + 3, 2 * j + 2, neg) + at(4 * i + 1, 2 * j + 2, neg) + "\n";
+    if (j == bad_row) t += "f 1 2 x\n";
+  }
+  return dir.write(name, t);
+}
+
+// One big OBJ, bare: every rank streams the file and keeps only its window
+// of the polygons; the ranks cut its sections together. The same image,
+// item buffer and banks as one process; each rank read about 1/R of the
+// facets.
+TEST_F(MpiFixture, ABareObjReadInWindowsIsTheSameAsOneProcess) {
+  const std::string path = grid_obj(dir, "grid.obj", 40, 20, 5);
+  auto with = [&](const std::string& tag) {
+    return std::vector<std::string>{path, "--size", "48x36", "--pes", "8", "-q", "-o", dir.file(tag + ".pfm"),
+                                    "--item-buffer", dir.file(tag + ".npy"), "--stats", dir.file(tag + ".json")};
+  };
+  const RunResult single = one(with("one"));
+  ASSERT_EQ(single.exit_code, 0) << single.err;
+  const std::uint64_t N = stats(dir.file("one.json")).at("scene").at("triangles");
+  ASSERT_EQ(N, 4u * 40 * 20);
+  for (int R : {2, 3, 4}) {
+    SCOPED_TRACE(std::to_string(R) + " ranks");
+    nlohmann::json s;
+    expect_ranks_as_one(R, with, s);
+    if (HasFatalFailure()) return;
+    EXPECT_EQ(facets_read(s, N / R + 4, "a window is 1/R of the fan triangles, give or take a polygon"), N);
+  }
+}
+
+// A scene of several OBJ files, each streamed in windows: the same as one
+// process on 3 and 4 ranks.
+TEST_F(MpiFixture, ObjFilesReadInWindowsAreTheSameAsOneProcess) {
+  std::string objects;
+  for (int k = 0; k < 4; ++k) {
+    grid_obj(dir, "g" + std::to_string(k) + ".obj", 8 + 5 * k, 4 + 3 * k, 1 + k);
+    objects += std::string(k ? ",\n" : "") + R"({"type": "obj", "file": "g)" + std::to_string(k) +
+               R"(.obj", "transform": {"translate": [)" + std::to_string(3 * k) + ", 0, " + std::to_string(k) + "]}}";
+  }
+  const std::string path = dir.write("files.json", "{\"objects\": [\n" + objects + "\n]}\n");
+  auto with = [&](const std::string& tag) {
+    return std::vector<std::string>{path, "--size", "48x36", "--pes", "6", "-q", "-o", dir.file(tag + ".pfm"),
+                                    "--item-buffer", dir.file(tag + ".npy"), "--stats", dir.file(tag + ".json")};
+  };
+  ASSERT_EQ(one(with("one")).exit_code, 0);
+  for (int R : {3, 4}) {
+    SCOPED_TRACE(std::to_string(R) + " ranks");
+    nlohmann::json s;
+    expect_ranks_as_one(R, with, s);
+    if (HasFatalFailure()) return;
+  }
+}
+
+// A broken face near the end of a big OBJ, in the last rank's window: every
+// rank reads every line, so every rank stops on it; one error line, one
+// process's FILE:LINE, nothing written.
+TEST_F(MpiFixture, ABrokenObjEndsEveryRankWithOneProcesssLine) {
+  const std::string path = grid_obj(dir, "broken.obj", 30, 20, 3, 18);
+  auto with = [&](const std::string& tag) {
+    return std::vector<std::string>{path, "--size", "32x24", "--pes", "4", "-o", dir.file(tag + ".pfm")};
+  };
+  const RunResult single = one(with("one"));
+  ASSERT_EQ(single.error_lines().size(), 1u) << single.err;
+  const std::string line = single.error_lines()[0];
+  const std::string message = line.substr(line.find("broken.obj:"));
+  for (int R : {3, 4}) {
+    const RunResult r = ranks(R, with("r" + std::to_string(R)));
+    expect_refused(r, {message});
+    EXPECT_FALSE(test::file_exists(dir.file("r" + std::to_string(R) + ".pfm")));
+  }
 }
 
 // --balance work: every rank samples the same rays and builds the same

@@ -23,11 +23,7 @@ namespace fs = std::filesystem;
 
 const std::string kData = std::string(OPSILA_SOURCE_DIR) + "/tests/data";
 
-std::string hex(float f) {
-  char text[32];
-  std::snprintf(text, sizeof text, "%a", double(f));
-  return text;
-}
+using test::hex;
 
 // Everything the loader hands on, as text (or the error and its warnings).
 std::string outcome(const std::string& text, const std::string& base_dir, const ObjChunking& chunking,

@@ -429,8 +429,9 @@ TEST_F(MpiFixture, TexturesAreDecodedOnlyWhereUsed) {
     EXPECT_GE(held, all_maps) << "a map used by some bank was decoded by no rank";
     EXPECT_LT(held, std::uint64_t(R) * all_maps) << "every rank decoded every map";
   }
-  // A bare OBJ file is read whole by every rank: its maps are decided and
-  // decoded on each, with one process's warning and image.
+  // A bare OBJ file is streamed by every rank, each keeping its window of
+  // the facets: its maps are checked once over the ranks and decoded where
+  // used, with one process's warning and image.
   for (const char* bare : {"sq2.obj", "sq4.obj"}) {
     const std::vector<std::string> args = {dir.file(bare), "--size", "32x32", "--pes", "4", "-o"};
     std::vector<std::string> a1 = args, a2 = args;

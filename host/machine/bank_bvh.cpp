@@ -31,14 +31,13 @@ struct BinNode {
 class Builder {
   typedef float F4 __attribute__((vector_size(16)));
   typedef int I4 __attribute__((vector_size(16)));
-  // A box's lo and hi in lanes 0-2 (hi read from lo[2] on, so that no read
-  // passes the box's end).
+  // A box's lo and hi in lanes 0-2 (no read passes the box's end).
   static void load(const Box& b, F4& lo, F4& hi) {
     static_assert(sizeof(Box) == 6 * sizeof(float), "Box: lo then hi, packed");
-    std::memcpy(&lo, &b.lo[0], sizeof lo);
-    F4 tail;
+    std::memcpy(&lo, &b.lo[0], sizeof lo);  // lane 3: hi[0], unused
+    F4 tail;                                 // lo[2], hi[0], hi[1], hi[2]
     std::memcpy(&tail, &b.lo[2], sizeof tail);
-    hi = __builtin_shuffle(tail, I4{1, 2, 3, 0});
+    hi = F4{tail[1], tail[2], tail[3], tail[0]};
   }
   // Box::grow lane by lane: std::min(lo, b) is (b < lo ? b : lo) and
   // std::max(hi, b) is (hi < b ? b : hi), so the same bits.
@@ -141,7 +140,7 @@ class Builder {
     void grow(const Bin& b) { grow(b.lo, b.hi, b.w); }
     float area() const {  // Box::area's expression, the three products side by side
       if (!(lo[0] <= hi[0])) return 0.0f;
-      const F4 e = hi - lo, p = e * __builtin_shuffle(e, I4{1, 2, 0, 3});  // x*y, y*z, z*x
+      const F4 e = hi - lo, p = e * F4{e[1], e[2], e[0], 0};  // x*y, y*z, z*x
       return 2 * (p[0] + p[1] + p[2]);
     }
   };

@@ -545,6 +545,24 @@ TEST_F(MpiFixture, ObjFilesReadInWindowsAreTheSameAsOneProcess) {
   }
 }
 
+// An OBJ entry is streamed in windows, so it is held to the scene's limit
+// (R times one rank's), not one rank's: over one rank's limit it is refused
+// on one process, naming the file, and renders on two ranks, the same image.
+TEST_F(MpiFixture, AnObjOverOneRanksLimitRendersOnTwoRanks) {
+  grid_obj(dir, "big.obj", 40, 20, 3);  // 3200 triangles
+  const std::string path = dir.write("big.json", R"({"objects": [{"type": "obj", "file": "big.obj"}]})");
+  auto with = [&](const std::string& out) {
+    return std::vector<std::string>{path, "--size", "32x24", "--pes", "4", "-q", "-o", dir.file(out)};
+  };
+  ASSERT_EQ(one(with("unlimited.pfm")).exit_code, 0);
+  env["OPSILA_RANK_TRIANGLE_LIMIT"] = "2000";
+  expect_refused(one(with("alone.pfm")), {"big.json:", "objects[0].file", "big.obj:", "more than 2000"});
+  EXPECT_FALSE(test::file_exists(dir.file("alone.pfm")));
+  const RunResult two = ranks(2, with("two.pfm"));
+  ASSERT_EQ(two.exit_code, 0) << two.err;
+  EXPECT_TRUE(test::read_file(dir.file("two.pfm")) == test::read_file(dir.file("unlimited.pfm")));
+}
+
 // A broken face near the end of a big OBJ, in the last rank's window: every
 // rank reads every line, so every rank stops on it; one error line, one
 // process's FILE:LINE, nothing written.

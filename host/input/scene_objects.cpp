@@ -344,8 +344,15 @@ std::function<void(std::vector<Triangle>&)> SceneReader::include_obj(const Json&
   }
   for (std::string& w : sub->warnings) scene_.warnings.push_back(std::move(w));
   for (std::string& f : sub->input_files) scene_.input_files.push_back(std::move(f));
-  return [this, sub, override_mat, mat_offset, windowed, full, fans, fkey](std::vector<Triangle>& tris) {
+  // A share does not hold an imported model from now until it is built:
+  // it is read again then, and deal() keeps this rank's objects of it.
+  const bool reread = share_.ranks > 1 && !windowed;
+  const std::size_t model_triangles = sub->triangles.size();
+  if (reread) sub->triangles = std::vector<Triangle>(), sub->attributes = std::vector<VertexAttributes>();
+  return [this, sub, override_mat, mat_offset, windowed, reread, model_triangles, full, fans,
+          fkey](std::vector<Triangle>& tris) {
     if (windowed) obj_window(*sub, full, fans, fkey);
+    if (reread) model_again(*sub, full, model_triangles, fkey);
     for (int o : sub->share.spread) share_.spread.push_back(next_object_ + o);
     const int attr_offset = static_cast<int>(scene_.attributes.size());
     for (const VertexAttributes& a : sub->attributes) scene_.attributes.push_back(a);

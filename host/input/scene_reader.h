@@ -159,6 +159,7 @@ class SceneReader {
   void window(std::size_t all, int object, std::size_t& begin, std::size_t& end);
   void count_window(std::size_t first);
   void obj_window(Scene& sub, const std::string& file, std::uint64_t fans, const std::string& fkey);
+  void model_again(Scene& sub, const std::string& file, std::size_t triangles, const std::string& fkey);
   void grow_bounds(const Triangle& t);
   void settle_share();
 

@@ -79,6 +79,24 @@ void SceneReader::window(std::size_t all, int object, std::size_t& begin, std::s
   if (all > 0 && owner(pb) != owner(pb + all - 1)) share_.spread.push_back(object);
 }
 
+// An imported model of a share, read again when its entry is built (the
+// plan kept only its counts, materials and maps): its triangles and
+// attributes, which must be those the plan counted.
+void SceneReader::model_again(Scene& sub, const std::string& file, std::size_t triangles,
+                              const std::string& fkey) {
+  Scene again;
+  try {
+    again = load_model(file);
+  } catch (const InputError& e) {
+    fail(fkey, e.what());
+  }
+  if (again.triangles.size() != triangles)
+    fail(fkey, file + ": the file changed while the scene was read (" + std::to_string(triangles) +
+                   " triangles, then " + std::to_string(again.triangles.size()) + ")");
+  sub.triangles = std::move(again.triangles);
+  sub.attributes = std::move(again.attributes);
+}
+
 // An OBJ entry read as a stream again, keeping this rank's window: the
 // polygons whose first fan triangle falls in its slice of the plan, the
 // file's fan triangles spread evenly over the entry's part of it

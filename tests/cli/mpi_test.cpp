@@ -545,6 +545,53 @@ TEST_F(MpiFixture, ObjFilesReadInWindowsAreTheSameAsOneProcess) {
   }
 }
 
+#ifdef OPSILA_HAVE_ASSIMP
+// A scene of several imported model files (ASCII STL): a share keeps only
+// their counts, materials and maps while the scene is planned, and reads
+// each again when it is built, keeping the objects dealt to it: the same as
+// one process on 2 and 3 ranks, each rank reading at most its share and one
+// model.
+TEST_F(MpiFixture, ModelFilesReadAgainAreTheSameAsOneProcess) {
+  std::string objects;
+  std::uint64_t all = 0, largest = 0;
+  for (int k = 0; k < 4; ++k) {
+    const int n = 6 + 4 * k;  // an n x n grid of quads, two triangles each, on a wave
+    std::string t = "solid s" + std::to_string(k) + "\n";
+    const auto vertex = [&](int a, int b) {
+      return "vertex " + std::to_string(a * 0.125) + " " + std::to_string(0.05 * ((a * 5 + b * 3 + k) % 4)) + " " +
+             std::to_string(b * 0.125) + "\n";
+    };
+    for (int b = 0; b < n; ++b)
+      for (int a = 0; a < n; ++a)
+        for (int half = 0; half < 2; ++half) {
+          t += "facet normal 0 1 0\nouter loop\n";
+          t += half ? vertex(a, b) + vertex(a + 1, b + 1) + vertex(a + 1, b)
+                    : vertex(a, b) + vertex(a, b + 1) + vertex(a + 1, b + 1);
+          t += "endloop\nendfacet\n";
+        }
+    t += "endsolid s" + std::to_string(k) + "\n";
+    dir.write("m" + std::to_string(k) + ".stl", t);
+    all += std::uint64_t(2 * n * n);
+    largest = std::max<std::uint64_t>(largest, 2 * n * n);
+    objects += std::string(k ? ",\n" : "") + R"({"type": "model", "file": "m)" + std::to_string(k) +
+               R"(.stl", "transform": {"translate": [)" + std::to_string(2 * k) + ", 0, " + std::to_string(k) + "]}}";
+  }
+  const std::string path = dir.write("models.json", "{\"objects\": [\n" + objects + "\n]}\n");
+  auto with = [&](const std::string& tag) {
+    return std::vector<std::string>{path, "--size", "48x36", "--pes", "6", "-q", "-o", dir.file(tag + ".pfm"),
+                                    "--item-buffer", dir.file(tag + ".npy"), "--stats", dir.file(tag + ".json")};
+  };
+  ASSERT_EQ(one(with("one")).exit_code, 0);
+  for (int R : {2, 3}) {
+    SCOPED_TRACE(std::to_string(R) + " ranks");
+    nlohmann::json s;
+    expect_ranks_as_one(R, with, s);
+    if (HasFatalFailure()) return;
+    EXPECT_EQ(facets_read(s, all / std::uint64_t(R) + largest, "its share of the models and at most one more"), all);
+  }
+}
+#endif
+
 // An OBJ entry is streamed in windows, so it is held to the scene's limit
 // (R times one rank's), not one rank's: over one rank's limit it is refused
 // on one process, naming the file, and renders on two ranks, the same image.

@@ -255,6 +255,46 @@ double terrain_noise(const TerrainDesc& desc, int i, int j) {
   return total > 0 ? sum / total : 0.0;
 }
 
+// The same sums as terrain_noise at every point of row j, octave by octave
+// in the same order, so each height is bit for bit terrain_noise's. Along a
+// row a cell's index never decreases, so each of its four lattice values is
+// hashed once per cell met instead of once per point (a 708-quad row of the
+// lowest octave, 4 cells: 8 hashes instead of 2,836).
+void terrain_noise_row(const TerrainDesc& desc, int j, std::vector<double>& out) {
+  const int n = desc.quads_x + 1;
+  out.assign(std::size_t(n), 0.0);
+  double total = 0, amp = 1, freq = desc.features;
+  for (int o = 0; o < desc.octaves; ++o) {
+    const double v = freq * j / desc.quads_z, fv = std::floor(v);
+    const long long cv = static_cast<long long>(fv);
+    const double sv = smooth(v - fv);
+    long long cell = 0;
+    double h00 = 0, h10 = 0, h01 = 0, h11 = 0;
+    bool have = false;
+    for (int i = 0; i < n; ++i) {
+      const double u = freq * i / desc.quads_x, fu = std::floor(u);
+      const long long cu = static_cast<long long>(fu);
+      if (!have || cu != cell) {
+        if (have && cu == cell + 1) {
+          h00 = h10, h01 = h11;  // the next cell shares this one's right edge
+        } else {
+          h00 = lattice(desc.seed, cu, cv, o), h01 = lattice(desc.seed, cu, cv + 1, o);
+        }
+        h10 = lattice(desc.seed, cu + 1, cv, o), h11 = lattice(desc.seed, cu + 1, cv + 1, o);
+        cell = cu, have = true;
+      }
+      const double su = smooth(u - fu);
+      const double top = h00 + (h10 - h00) * su, bottom = h01 + (h11 - h01) * su;
+      out[std::size_t(i)] += amp * (top + (bottom - top) * sv);
+    }
+    total += amp;
+    amp *= 0.5;
+    freq *= 2.0;
+  }
+  if (total > 0)
+    for (double& h : out) h /= total;
+}
+
 int add_terrain(std::vector<Triangle>& out, const TerrainDesc& desc, int object_id,
                 int material_a, int material_b, int facet) {
   const std::size_t all = terrain_triangles(desc);
@@ -282,10 +322,13 @@ void add_terrain_window(std::vector<Triangle>& out, const TerrainDesc& desc, int
   std::vector<float> height(rows * width);
   const std::size_t chunks = std::min<std::size_t>(rows, 8 * std::size_t(host_threads()));
   parallel_for(chunks, [&](std::size_t k) {
-    for (std::size_t r = rows * k / chunks; r < rows * (k + 1) / chunks; ++r)
+    std::vector<double> noise;
+    for (std::size_t r = rows * k / chunks; r < rows * (k + 1) / chunks; ++r) {
+      terrain_noise_row(desc, j_first + static_cast<int>(r), noise);
       for (int i = 0; i <= nx; ++i)
-        height[r * width + std::size_t(i)] = static_cast<float>(
-            desc.center[1] + desc.height * terrain_noise(desc, i, j_first + static_cast<int>(r)));
+        height[r * width + std::size_t(i)] =
+            static_cast<float>(desc.center[1] + desc.height * noise[std::size_t(i)]);
+    }
   });
   const auto point = [&](int i, int j) {
     return Vec3{static_cast<float>(x0 + double(desc.size_x) * i / nx),

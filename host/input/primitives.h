@@ -99,6 +99,10 @@ void add_terrain_window(std::vector<Triangle>& out, const TerrainDesc& desc, int
 // integer hashing only, so every platform gets the same numbers.
 double terrain_noise(const TerrainDesc& desc, int i, int j);
 
+// terrain_noise at every point (0..quads_x, j) of row j, into out: the same
+// numbers, each lattice value hashed once per cell the row crosses.
+void terrain_noise_row(const TerrainDesc& desc, int j, std::vector<double>& out);
+
 // PCG32 (O'Neill): the same sequence on every compiler and library, unlike
 // the std:: distributions.
 class Pcg32 {

@@ -65,12 +65,13 @@ Scene SceneReader::read() {
   scene_.num_facets = next_facet_;
   if (share_.ranks > 1) settle_share();
   if (scene_.total_triangles() == 0) fail("objects", "no facets: the scene has no visible objects");
-  check_scene_extent(scene_, name_);
   Vec3 lo, hi;
-  scene_.bounds(lo, hi);
-  scene_.camera =
-      frame_bounds(lo, hi, 45.0f, float(scene_.width) / float(scene_.height));
-  if (const Json* c = find(root, "camera")) camera(*c, "camera");
+  scene_.bounds(lo, hi);  // one scan of the facets for the check and the framing
+  check_scene_extent(scene_.total_triangles(), lo, hi, name_);
+  if (const Json* c = find(root, "camera"))
+    camera(*c, "camera");  // the whole camera: nothing of the framing is kept
+  else
+    scene_.camera = frame_bounds(lo, hi, 45.0f, float(scene_.width) / float(scene_.height));
   return std::move(scene_);
 }
 

@@ -205,6 +205,27 @@ TEST(Primitives, CheckerboardAndTerrainFaceUp) {
   EXPECT_NE(terrain_noise(d, 3, 4), terrain_noise(d, 4, 3));
 }
 
+// The row generator hashes each lattice value once per cell; its heights
+// must still be terrain_noise's, bit for bit, whatever the cell size (cells
+// wider than a quad, a quad wide, narrower than a quad, fractional counts).
+TEST(Primitives, TerrainNoiseRowIsThePointwiseNoise) {
+  for (const float features : {0.5f, 1.0f, 3.7f, 4.0f, 40.0f, 900.0f}) {
+    TerrainDesc d;
+    d.quads_x = 37;
+    d.quads_z = 11;
+    d.features = features;
+    d.octaves = 6;
+    d.seed = 12345;
+    std::vector<double> row;
+    for (int j = 0; j <= d.quads_z; ++j) {
+      terrain_noise_row(d, j, row);
+      ASSERT_EQ(row.size(), std::size_t(d.quads_x) + 1);
+      for (int i = 0; i <= d.quads_x; ++i)
+        ASSERT_EQ(row[std::size_t(i)], terrain_noise(d, i, j)) << "features " << features << " at " << i << "," << j;
+    }
+  }
+}
+
 TEST(Primitives, TransformScalesThenRotatesXYZThenTranslates) {
   Transform t;
   t.scale = {2, 2, 2};

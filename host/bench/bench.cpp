@@ -50,7 +50,7 @@ DeviceFacts device_facts(ClRuntime& rt) {
 // Why a run under mpirun leaves out stages 2 and 3 (said in every report).
 constexpr const char* kSingleProcessOnly =
     "the baselines (megakernel, host reference, Embree) trace the whole scene in one process, and under mpirun "
-    "(--balance facets, its default there) a rank reads only its share of it; the scatter curve measures one "
+    "(--balance facets or measured) a rank reads only its share of it; the scatter curve measures one "
     "device alone: run `opsila bench` without mpirun for them";
 
 BenchReport start_report(const BenchOptions& o, const Scene& scene, int pes) {
@@ -112,10 +112,10 @@ int run_bench(const std::vector<std::string>& args) {
     progress("device: %s", device.c_str());
   }
   // The bench measures the scheme with its PEs balanced by measured work
-  // unless told otherwise; under mpirun its default is render's, facets, so
-  // that each rank reads only its share of the scene (docs/DISTRIBUTED.md).
+  // unless told otherwise, on one process or on ranks that each read only
+  // their share of the scene (docs/DISTRIBUTED.md).
   ViewOptions view = static_cast<const ViewOptions&>(o);
-  view.balance = o.balance.value_or(ranks.size() > 1 ? kDefaultBalance : kBenchBalance);
+  view.balance = o.balance.value_or(kBenchBalance);
   const auto note = [&](const std::string& text) { progress("note: %s", text.c_str()); };
   Scene scene = load_view_scene(o.scene_path, o, o.quiet || !writer, outputs, note,
                                 scene_share_for(ranks, *view.balance, note));

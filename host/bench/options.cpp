@@ -98,9 +98,9 @@ std::string bench_usage() {
          "The bench's --balance is measured unless given (render's is facets): five small\n"
          "pilot frames measure each cluster's work first, outside the timed runs.\n"
          "\n"
-         "Under mpirun every rank drives its device and its group of PEs; its default\n"
-         "--balance is then facets, so that each rank reads only its share of a JSON\n"
-         "scene. The report gives every rank's figures (facets read and held, peak host\n"
+         "Under mpirun every rank drives its device and its group of PEs, and reads only\n"
+         "its share of a JSON scene (--balance work reads it whole on every rank: the\n"
+         "ray sample needs it). The report gives every rank's figures (facets read and held, peak host\n"
          "memory, reading, partition, exchange, bank-build and frame times); the\n"
          "baselines and the scatter curve, which need one process, are left out.\n";
 }

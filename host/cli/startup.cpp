@@ -18,9 +18,8 @@ std::string device_text(Ranks& ranks, int num_pes, const std::string& descriptio
 SceneShare scene_share_for(Ranks& ranks, Balance balance, const std::function<void(const std::string&)>& note) {
   SceneShare share;
   if (ranks.size() <= 1) return share;
-  if (balance != Balance::facets) {
-    note(std::string("--balance ") + balance_name(balance) +
-         ": every rank reads the whole scene (--balance facets reads a share per rank)");
+  if (balance == Balance::work) {
+    note("--balance work: every rank reads the whole scene (--balance facets or measured reads a share per rank)");
     return share;
   }
   share.rank = ranks.rank(), share.ranks = ranks.size();

@@ -44,6 +44,8 @@ PreparedBanks bank_scene(const Scene& scene, int num_pes, int routing, const Bal
   b.facet_cluster.assign(scene.triangles.size(), -1);
   for (std::size_t k = 0; k < b.scene.source.size(); ++k)
     b.facet_cluster[std::size_t(b.scene.source[k])] = b.scene.tri_cluster[k];
+  b.cluster_facets.assign(b.scene.clusters.size(), 0);
+  for (int c : b.scene.tri_cluster) ++b.cluster_facets[std::size_t(c)];
   b.tri_base = keep_group_banks(b.scene, group);
   return b;
 }

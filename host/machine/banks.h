@@ -5,6 +5,7 @@
 // only its own PEs' banks and the small tables every PE knows.
 #pragma once
 
+#include <cstdint>
 #include <vector>
 
 #include "core/ray_sample.h"
@@ -37,9 +38,11 @@ struct PreparedBanks {
   int pilot_frames = 0;      // --balance measured: pilot frames run to prepare these banks
   double pilot_seconds = 0;  // and their time
   PrepareTimes prepare;      // the stages that prepared them: partition, bank build, pilots (core/stage_clock.h)
-  // The cluster of every scene facet (every rank's): the pilot frames'
-  // per-cluster counts are spread over these (machine/pilot.h).
+  // The cluster of every scene facet (of this rank's share, for a scene read
+  // in shares): the pilot frames' per-cluster counts are spread over these
+  // (machine/pilot.h).
   std::vector<int> facet_cluster;
+  std::vector<std::uint64_t> cluster_facets;  // and the facets of every cluster (every rank's)
   ShareFigures share;  // a scene read in shares: what the collective partition did here
 };
 

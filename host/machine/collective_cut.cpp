@@ -47,31 +47,18 @@ void join_boxes(std::vector<Box*> boxes, Ranks& ranks) {
 void split_spread(const Scene& share, std::vector<int> cur, const SplitLimits& limits, bool split_flat, int object,
                   ShareClusters& out, Ranks& ranks, const std::function<void(double)>& progress) {
   Box box, cbox;
-  bounds_of(share, cur, box, cbox);
-  join_boxes({&box, &cbox}, ranks);
+  spread_bounds(share, cur, box, cbox, ranks);
   const std::uint64_t n = ranks.sum(cur.size());
-  const int axis = cbox.longest();
-  if (!(needs_cut(n, box, limits, split_flat) && n >= 2 && cbox.extent(axis) > 0)) {
+  std::vector<int> upper;
+  if (!needs_cut(n, box, limits, split_flat) || !cut_spread_at_median(share, cur, cbox, n, upper, ranks)) {
     out.spread.push_back({static_cast<int>(out.clusters.size()), object, n});
     out.clusters.push_back(make_cluster(std::move(cur), box));
     out.spread_done += n;
     if (progress) progress(double(out.spread_done) / double(std::max<std::size_t>(share.total_triangles(), 1)));
     return;
   }
-  std::vector<std::uint64_t> keys(cur.size());
-  for (std::size_t i = 0; i < cur.size(); ++i) {
-    const Triangle& t = share.triangles[std::size_t(cur[i])];
-    keys[i] = cut_key(centroid(t, axis), static_cast<std::uint32_t>(t.facet_id));
-  }
-  // The median, n / 2 from the bottom: the lower half is the n / 2 keys below it.
-  const SelectedKey median = select_key(keys, n / 2, [&](std::vector<std::uint64_t>& h) { ranks.sum(h); });
-  const std::vector<char> below = lower_half(keys, median);
-  std::vector<int> lower, upper;
-  for (std::size_t i = 0; i < cur.size(); ++i) (below[i] ? lower : upper).push_back(cur[i]);
-  cur = std::vector<int>();
-  keys = std::vector<std::uint64_t>();
   split_spread(share, std::move(upper), limits, split_flat, object, out, ranks, progress);
-  split_spread(share, std::move(lower), limits, split_flat, object, out, ranks, progress);
+  split_spread(share, std::move(cur), limits, split_flat, object, out, ranks, progress);
 }
 
 }  // namespace
@@ -117,6 +104,30 @@ std::vector<char> lower_half(const std::vector<std::uint64_t>& keys, const Selec
   for (std::size_t i = 0; i < keys.size(); ++i)
     below[i] = keys[i] < at.key || (keys[i] == at.key && ties > 0 && ties--);
   return below;
+}
+
+void spread_bounds(const Scene& share, const std::vector<int>& tris, Box& box, Box& cbox, Ranks& ranks) {
+  bounds_of(share, tris, box, cbox);
+  join_boxes({&box, &cbox}, ranks);
+}
+
+bool cut_spread_at_median(const Scene& share, std::vector<int>& tris, const Box& cbox, std::uint64_t n,
+                          std::vector<int>& upper, Ranks& ranks) {
+  const int axis = cbox.longest();
+  if (n < 2 || !(cbox.extent(axis) > 0)) return false;
+  std::vector<std::uint64_t> keys(tris.size());
+  for (std::size_t i = 0; i < tris.size(); ++i) {
+    const Triangle& t = share.triangles[std::size_t(tris[i])];
+    keys[i] = cut_key(centroid(t, axis), static_cast<std::uint32_t>(t.facet_id));
+  }
+  // The median, n / 2 from the bottom: the lower half is the n / 2 keys below it.
+  const SelectedKey median = select_key(keys, n / 2, [&](std::vector<std::uint64_t>& h) { ranks.sum(h); });
+  const std::vector<char> below = lower_half(keys, median);
+  std::vector<int> lower;
+  upper.clear();
+  for (std::size_t i = 0; i < tris.size(); ++i) (below[i] ? lower : upper).push_back(tris[i]);
+  tris = std::move(lower);
+  return true;
 }
 
 ShareClusters split_share(const Scene& share, const Box& sbox, int num_pes, bool split_flat, Ranks& ranks,

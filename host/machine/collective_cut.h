@@ -61,6 +61,16 @@ SelectedKey select_key(std::vector<std::uint64_t> keys, std::uint64_t k,
 // one process's order, so the halves are nth_element's on (centroid, index).
 std::vector<char> lower_half(const std::vector<std::uint64_t>& keys, const SelectedKey& at);
 
+// A piece of a spread object over every rank: its box and its centroids'
+// box, joined (collective).
+void spread_bounds(const Scene& share, const std::vector<int>& tris, Box& box, Box& cbox, Ranks& ranks);
+// cut_at_median on a spread piece, by every rank together: `tris` (this
+// rank's facets of it) keeps its part of the lower half, `upper` gets the
+// rest; `cbox` and `n` are the piece's over every rank. False (nothing
+// moved) when it cannot be cut.
+bool cut_spread_at_median(const Scene& share, std::vector<int>& tris, const Box& cbox, std::uint64_t n,
+                          std::vector<int>& upper, Ranks& ranks);
+
 // A scene read in shares cut into clusters: each rank's own objects alone
 // (split_object), the objects spread over ranks (SceneShare::spread)
 // together. A spread object's clusters are made in the same order on every

@@ -8,22 +8,13 @@
 #include <type_traits>
 
 #include "core/stage_clock.h"
-#include "machine/collective_cut.h"
+#include "machine/collective_balance.h"
 #include "machine/partition_steps.h"
 
 namespace opsila {
 namespace {
 
 using namespace partition_steps;
-
-// One cluster as every rank learns it: enough to place it in a region and
-// to find its facets (rank, index in that rank's list).
-struct ClusterSummary {
-  std::int32_t object = 0, rank = 0, local = 0;  // a spread cluster: rank 0, local its index among them
-  std::int32_t spread = 0;                        // 1: its facets lie on several ranks
-  std::uint64_t facets = 0;
-  float c[3] = {0, 0, 0}, lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0};
-};
 
 // One facet on its way to the rank of its PE (Triangle::attributes: -1, or
 // 0 when its vertex attributes follow in the attribute stream).
@@ -32,23 +23,9 @@ struct Shipped {
   std::int32_t cluster = 0;  // global cluster index
 };
 
-static_assert(std::is_trivially_copyable<ClusterSummary>::value && std::is_trivially_copyable<Shipped>::value &&
+static_assert(std::is_trivially_copyable<Shipped>::value &&
                   std::is_trivially_copyable<VertexAttributes>::value && std::is_trivially_copyable<Cluster>::value,
               "sent as bytes");
-
-template <typename T>
-std::vector<unsigned char> bytes_of(const std::vector<T>& v) {
-  std::vector<unsigned char> b(v.size() * sizeof(T));
-  if (!v.empty()) std::memcpy(b.data(), v.data(), b.size());
-  return b;
-}
-
-template <typename T>
-std::vector<T> records_of(const std::vector<unsigned char>& b) {
-  std::vector<T> v(b.size() / sizeof(T));
-  if (!v.empty()) std::memcpy(v.data(), b.data(), v.size() * sizeof(T));
-  return v;
-}
 
 // Facets in flight per rank and round: the exchange's buffer stays bounded
 // (2^16 records of 56 bytes, and 64 more for a facet with attributes: at
@@ -68,42 +45,32 @@ struct Placement {
   std::vector<int> global_of_local;      // this rank's clusters -> global index
 };
 
-// A spread cluster is the same on every rank (its box, its count over all
-// ranks): rank 0 alone puts it in the table.
-Placement place_clusters(const Scene& scene, const ShareClusters& split, int num_pes, Ranks& ranks) {
-  const std::vector<ClusterBuild>& local = split.clusters;
-  std::vector<ClusterSummary> mine;
-  std::vector<int> spread_of(local.size(), -1);
-  for (std::size_t k = 0; k < split.spread.size(); ++k) spread_of[std::size_t(split.spread[k].local)] = int(k);
-  const int last_object = std::max(scene.num_objects, 1) - 1;
-  for (std::size_t i = 0; i < local.size(); ++i) {
-    ClusterSummary s;
-    const int k = spread_of[i];
-    if (k >= 0 && ranks.rank() != 0) continue;
-    s.object = k >= 0 ? split.spread[std::size_t(k)].object
-                      : std::clamp(scene.triangles[std::size_t(local[i].tris[0])].object_id, 0, last_object);
-    s.rank = k >= 0 ? 0 : ranks.rank();
-    s.local = k >= 0 ? k : static_cast<int>(i);
-    s.spread = k >= 0 ? 1 : 0;
-    s.facets = k >= 0 ? split.spread[std::size_t(k)].facets : local[i].tris.size();
-    for (int a = 0; a < 3; ++a) s.c[a] = local[i].c[a], s.lo[a] = local[i].box.lo[a], s.hi[a] = local[i].box.hi[a];
-    mine.push_back(s);
+// The table bisected as partition_scene bisects its clusters: by facets,
+// or (measured work) by each level's work and a tenth on the facets.
+Placement place_clusters(const ClusterTable& t, const ShareClusters& split, int num_pes, Ranks& ranks) {
+  const std::vector<ClusterSummary>& all = t.clusters;
+  const std::size_t L = std::size_t(t.levels);
+  std::int64_t heat = 0;
+  std::size_t facets = 0;
+  for (std::size_t k = 0; k < all.size(); ++k) {
+    heat += heat_of(t.work.data() + k * L, t.levels);
+    facets += all[k].facets;
   }
-  std::vector<ClusterSummary> all = records_of<ClusterSummary>(ranks.all_gather(bytes_of(mine)));
-  std::stable_sort(all.begin(), all.end(), [](const ClusterSummary& a, const ClusterSummary& b) {
-    return a.object < b.object || (a.object == b.object && (a.rank < b.rank || (a.rank == b.rank && a.local < b.local)));
-  });
   std::vector<ClusterBuild> table(all.size());
   for (std::size_t k = 0; k < all.size(); ++k) {
     for (int a = 0; a < 3; ++a) table[k].c[a] = all[k].c[a];
     table[k].weight = double(all[k].facets);
+    if (heat > 0) table[k].work = measured_weights(t.work.data() + k * L, t.levels, heat, all[k].facets, facets);
   }
   std::vector<int> idx(all.size());
   std::iota(idx.begin(), idx.end(), 0);
-  assign_regions(table, idx, 0, num_pes);
+  if (heat > 0)
+    assign_regions_measured(table, idx, 0, num_pes);
+  else
+    assign_regions(table, idx, 0, num_pes);
   std::stable_sort(idx.begin(), idx.end(), [&](int a, int b) { return table[a].pe < table[b].pe; });
   Placement out;
-  out.global_of_local.assign(local.size(), -1);
+  out.global_of_local.assign(split.clusters.size(), -1);
   for (std::size_t g = 0; g < idx.size(); ++g) {
     const ClusterSummary& s = all[std::size_t(idx[g])];
     out.clusters.push_back(s);
@@ -336,9 +303,19 @@ BankedScene share_tables(const Scene& share, const Box& sbox, const Placement& p
   return bs;
 }
 
+// For the pilots (machine/pilot.h): the cluster of each facet of the share
+// and the facets of every cluster.
+void note_clusters(const ShareClusters& split, const Placement& pl, std::size_t facets, PreparedBanks& out) {
+  out.facet_cluster.assign(facets, -1);
+  for (std::size_t i = 0; i < split.clusters.size(); ++i)
+    for (int t : split.clusters[i].tris) out.facet_cluster[std::size_t(t)] = pl.global_of_local[i];
+  for (const ClusterSummary& s : pl.clusters) out.cluster_facets.push_back(s.facets);
+}
+
 }  // namespace
 
-PreparedBanks bank_share(Scene& share, int num_pes, int routing, const PeGroup& group, Ranks& ranks) {
+PreparedBanks bank_share(Scene& share, int num_pes, int routing, const PeGroup& group, Ranks& ranks,
+                         const ShareBalance& how) {
   if (share.share.ranks != ranks.size() || share.share.rank != ranks.rank() || group.rank != ranks.rank())
     throw std::invalid_argument("bank_share: one share per rank, read for this rank");
   ranks.begin_collective();  // from here a failure on one rank ends them all
@@ -346,6 +323,7 @@ PreparedBanks bank_share(Scene& share, int num_pes, int routing, const PeGroup& 
   const bool split_flat = routing == OPSILA_ROUTING_SPHERES;
   PreparedBanks out;
   out.group = group;
+  out.balance = how.measured ? Balance::measured : Balance::facets;
   ShareFigures& figures = out.share;
   auto t0 = std::chrono::steady_clock::now();
   figures.active = true;
@@ -359,7 +337,11 @@ PreparedBanks bank_share(Scene& share, int num_pes, int routing, const PeGroup& 
   // Progress: the cuts are about half of the stage, the exchange the rest.
   ShareClusters split =
       split_share(share, sbox, num_pes, split_flat, ranks, [&clock](double f) { clock.progress(0.5 * f); });
-  const Placement pl = place_clusters(share, split, num_pes, ranks);
+  ClusterTable table = gather_clusters(share, split, how.measured, ranks);
+  if (how.measured) cut_hot_clusters(share, *how.measured, num_pes, split, table, ranks);
+  const Placement pl = place_clusters(table, split, num_pes, ranks);
+  table = ClusterTable();
+  if (how.keep_share) note_clusters(split, pl, share.triangles.size(), out);
   figures.partition_seconds = seconds_since(t0);
   clock.progress(0.5);
 
@@ -369,8 +351,10 @@ PreparedBanks bank_share(Scene& share, int num_pes, int routing, const PeGroup& 
   // Sent: the share as read is no longer needed (its materials, textures
   // and figures stay).
   split = ShareClusters();
-  share.triangles = std::vector<Triangle>();
-  share.attributes = std::vector<VertexAttributes>();
+  if (!how.keep_share) {
+    share.triangles = std::vector<Triangle>();
+    share.attributes = std::vector<VertexAttributes>();
+  }
   order_spread(own, pl);
   figures.exchange_seconds = seconds_since(t0);
   clock.progress(0.9);

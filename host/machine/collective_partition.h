@@ -19,13 +19,26 @@
 
 namespace opsila {
 
-// The banks of `group`, as bank_scene(whole scene) prepares them with
-// --balance facets, built by every rank of `ranks` together from their
-// shares (a collective call: a failure inside it ends every rank). The ray
-// sample and the pilot frames of the other balance modes need the whole
-// scene, so the command line reads it whole for them.
+// How the partition shares the scene: by facets (--balance facets), or by
+// the work pilot frames measured (--balance measured, per facet of this
+// rank's share, machine/pilot.h).
+struct ShareBalance {
+  const MeasuredWork* measured = nullptr;
+  // The pilots partition the share again and again: it keeps its facets
+  // (held beside the banks while the pilots run, about twice the rank's
+  // facets), and PreparedBanks::facet_cluster gets each one's cluster.
+  bool keep_share = false;
+};
+
+// The banks of `group`, as bank_scene(whole scene) prepares them with the
+// same balance, built by every rank of `ranks` together from their shares
+// (a collective call: a failure inside it ends every rank). The ray sample
+// of --balance work needs the whole scene, so the command line reads it
+// whole for that mode.
 // The share's facets (triangles and vertex attributes) are given up once
-// they are sent: the banks are built from what the rank received.
-PreparedBanks bank_share(Scene& share, int num_pes, int routing, const PeGroup& group, Ranks& ranks);
+// they are sent (unless `how` keeps them): the banks are built from what
+// the rank received.
+PreparedBanks bank_share(Scene& share, int num_pes, int routing, const PeGroup& group, Ranks& ranks,
+                         const ShareBalance& how = ShareBalance{});
 
 }  // namespace opsila

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <numeric>
 #include <utility>
 #include <vector>
@@ -106,10 +107,29 @@ std::uint64_t crossings(const Box& b, const RaySample& sample) {
 // load by itself. Measured in docs/BENCHMARKS.md.
 constexpr double kFacetShare = 0.1;
 
-std::vector<double> measured_work_of(const MeasuredWork& m, const std::vector<int>& tris) {
-  std::vector<double> w(std::size_t(m.levels), 0.0);
+std::vector<std::int64_t> measured_sums(const MeasuredWork& m, const std::vector<int>& tris) {
+  std::vector<std::int64_t> w(std::size_t(m.levels), 0);
   for (int t : tris)
-    for (int l = 0; l < m.levels; ++l) w[std::size_t(l)] += m.per_facet[std::size_t(t) * m.levels + l];
+    for (int l = 0; l < m.levels; ++l)
+      w[std::size_t(l)] += std::llround(
+          std::ldexp(double(m.per_facet[std::size_t(t) * std::size_t(m.levels) + std::size_t(l)]), kWorkFractionBits));
+  return w;
+}
+
+std::int64_t heat_of(const std::int64_t* sums, int levels) {
+  return std::accumulate(sums, sums + levels, std::int64_t(0));
+}
+
+bool too_hot(std::int64_t heat, std::int64_t all, int num_pes) {
+  return double(heat) > double(all) / (2.0 * num_pes);
+}
+
+std::vector<double> measured_weights(const std::int64_t* sums, int levels, std::int64_t all, std::size_t facets,
+                                     std::size_t total_facets) {
+  std::vector<double> w(std::size_t(levels) + 1);
+  for (int l = 0; l < levels; ++l) w[std::size_t(l)] = std::ldexp(double(sums[l]), -kWorkFractionBits);
+  w[std::size_t(levels)] = kFacetShare * std::ldexp(double(all), -kWorkFractionBits) * double(facets) /
+                           std::max(double(total_facets), 1.0);
   return w;
 }
 
@@ -117,22 +137,19 @@ void region_weights(const Scene& scene, std::vector<ClusterBuild>& cb, const Ray
                     const MeasuredWork* measured, int num_pes) {
   if (measured && measured->empty()) measured = nullptr;
   if (sample && sample->rays.empty()) sample = nullptr;
-  const auto heat_of = [&](const ClusterBuild& c) {
-    if (measured) {
-      const std::vector<double> w = measured_work_of(*measured, c.tris);
-      return std::accumulate(w.begin(), w.end(), 0.0);
-    }
-    return sample ? double(crossings(c.box, *sample)) : 0.0;
+  const auto heat_of_cluster = [&](const ClusterBuild& c) -> std::int64_t {
+    if (measured) return heat_of(measured_sums(*measured, c.tris).data(), measured->levels);
+    return sample ? std::int64_t(crossings(c.box, *sample)) : 0;
   };
-  std::vector<double> heat(cb.size(), 0.0);
-  double all = 0;
+  std::vector<std::int64_t> heat(cb.size(), 0);
+  std::int64_t all = 0;  // exact: the order of the cuts does not change it
   if (sample || measured) {
-    for (std::size_t i = 0; i < cb.size(); ++i) all += heat[i] = heat_of(cb[i]);
+    for (std::size_t i = 0; i < cb.size(); ++i) all += heat[i] = heat_of_cluster(cb[i]);
     for (bool cut = all > 0; cut;) {
       cut = false;
-      const double limit = all / (2.0 * num_pes);
+      const std::int64_t pass_all = all;  // the limit holds for the whole pass
       for (std::size_t i = 0, n = cb.size(); i < n; ++i) {
-        if (heat[i] <= limit) continue;
+        if (!too_hot(heat[i], pass_all, num_pes)) continue;
         Box unused, cbox;
         bounds_of(scene, cb[i].tris, unused, cbox);
         std::vector<int> lower = cb[i].tris, upper;
@@ -141,7 +158,7 @@ void region_weights(const Scene& scene, std::vector<ClusterBuild>& cb, const Ray
           Box box, ignored;
           bounds_of(scene, *half, box, ignored);
           ClusterBuild piece = make_cluster(std::move(*half), box);
-          const double h = heat_of(piece);
+          const std::int64_t h = heat_of_cluster(piece);
           all += h;
           if (half == &lower) {
             all -= heat[i];
@@ -156,18 +173,18 @@ void region_weights(const Scene& scene, std::vector<ClusterBuild>& cb, const Ray
       }
     }
   }
-  double facets = 0;
-  for (const ClusterBuild& c : cb) facets += double(c.tris.size());
+  std::size_t facets = 0;
+  for (const ClusterBuild& c : cb) facets += c.tris.size();
   if (!(all > 0)) {  // facets alone (nothing measured or sampled, or nothing crosses a cluster)
     for (ClusterBuild& c : cb) c.weight = double(c.tris.size());
     return;
   }
   for (std::size_t i = 0; i < cb.size(); ++i) {
-    if (measured) {
-      cb[i].work = measured_work_of(*measured, cb[i].tris);
-      cb[i].work.push_back(kFacetShare * all * double(cb[i].tris.size()) / std::max(facets, 1.0));
-    }
-    cb[i].weight = kFacetShare * double(cb[i].tris.size()) / std::max(facets, 1.0) + (1.0 - kFacetShare) * heat[i] / all;
+    if (measured)
+      cb[i].work = measured_weights(measured_sums(*measured, cb[i].tris).data(), measured->levels, all,
+                                    cb[i].tris.size(), facets);
+    cb[i].weight = kFacetShare * double(cb[i].tris.size()) / std::max(double(facets), 1.0) +
+                   (1.0 - kFacetShare) * double(heat[i]) / double(all);
   }
 }
 

@@ -53,6 +53,24 @@ std::vector<ClusterBuild> split_clusters(const Scene& scene, std::size_t total, 
 // 2. Recursive bisection of the clusters' centres by weight into PEs
 // [first, first + count); ties broken by the clusters' order.
 void assign_regions(std::vector<ClusterBuild>& cl, std::vector<int> idx, int first, int count);
+// Measured work (--balance measured) summed in fixed point, 2^-16 of a
+// test: integer sums are the same in any order, so a cluster's work does
+// not depend on the order of its facets nor on which rank holds which (a
+// scene read in shares, machine/collective_balance.cpp). A pilot counts at
+// most 2^32 tests per cluster and level, so a level's sum stays far below
+// 2^63 while a pilot frame makes fewer than 2^47 tests at that level.
+constexpr int kWorkFractionBits = 16;
+// Per level, the measured work of facets `tris` (MeasuredWork::per_facet).
+std::vector<std::int64_t> measured_sums(const MeasuredWork& m, const std::vector<int>& tris);
+std::int64_t heat_of(const std::int64_t* sums, int levels);  // all levels' work
+// Whether a cluster of `heat` is cut before the bisection (region_weights):
+// hotter than half a PE's share of `all`.
+bool too_hot(std::int64_t heat, std::int64_t all, int num_pes);
+// A cluster's weights for assign_regions_measured: its work per level, then
+// a tenth of the whole heat `all` in proportion to its facets.
+std::vector<double> measured_weights(const std::int64_t* sums, int levels, std::int64_t all, std::size_t facets,
+                                     std::size_t total_facets);
+void assign_regions_measured(std::vector<ClusterBuild>& cl, std::vector<int> idx, int first, int count);
 // 1-2. Clusters, weighted by expected work, bisected into PE regions; sorted
 // by PE (partition_regions.cpp).
 std::vector<ClusterBuild> form_clusters(const Scene& scene, const Box& sbox, int num_pes, bool split_flat,

@@ -1,9 +1,12 @@
 #include "machine/pilot.h"
 
+#include <algorithm>
 #include <chrono>
+#include <functional>
 
 #include "core/stage_clock.h"
 #include "machine/banks.h"
+#include "machine/collective_partition.h"
 #include "machine/ranks.h"
 #include "machine/renderer.h"
 #include "machine/stats.h"
@@ -44,40 +47,52 @@ Scene pilot_scene(const Scene& scene) {
 
 MeasuredWork spread_cluster_work(const std::vector<std::uint64_t>& work, int levels,
                                  const std::vector<int>& facet_cluster) {
+  std::vector<std::uint64_t> facets(levels < 1 ? 0 : work.size() / std::size_t(levels), 0);
+  for (int c : facet_cluster)
+    if (c >= 0) ++facets[std::size_t(c)];
+  return spread_cluster_work(work, levels, facet_cluster, facets);
+}
+
+MeasuredWork spread_cluster_work(const std::vector<std::uint64_t>& work, int levels,
+                                 const std::vector<int>& facet_cluster, const std::vector<std::uint64_t>& facets) {
   MeasuredWork w;
   if (work.empty() || levels < 1) return w;
   const std::size_t C = work.size() / std::size_t(levels);
-  std::vector<std::size_t> facets(C, 0);
-  for (int c : facet_cluster)
-    if (c >= 0) ++facets[std::size_t(c)];
+  bool any = false;  // over every cluster: the same answer on every rank of a share
+  for (std::uint64_t v : work) any = any || v != 0;
+  if (!any) return w;
   w.levels = levels;
   w.per_facet.assign(facet_cluster.size() * std::size_t(levels), 0.0f);
-  bool any = false;
   for (std::size_t t = 0; t < facet_cluster.size(); ++t) {
     if (facet_cluster[t] < 0) continue;  // a facet no bank holds (none today)
     const std::size_t c = std::size_t(facet_cluster[t]);
-    for (int l = 0; l < levels; ++l) {
-      const std::uint64_t v = work[std::size_t(l) * C + c];
-      any = any || v != 0;
-      w.per_facet[t * std::size_t(levels) + std::size_t(l)] = float(double(v) / double(facets[c]));
-    }
+    for (int l = 0; l < levels; ++l)
+      w.per_facet[t * std::size_t(levels) + std::size_t(l)] =
+          float(double(work[std::size_t(l) * C + c]) / double(facets[c]));
   }
-  if (!any) w = MeasuredWork{};
   return w;
 }
 
-MeasuredWork pilot_work(const Scene& scene, const RenderSettings& settings, ClRuntime& runtime, int* frames,
-                        double* seconds) {
-  const auto t0 = std::chrono::steady_clock::now();
-  StageClock clock(PrepareStage::pilots);
-  const Scene view = pilot_scene(scene);
+namespace {
+
+// The pilots' settings: the frame's PEs, routing and work-groups, counting.
+RenderSettings pilot_settings(const RenderSettings& settings) {
   RenderSettings ps;
   ps.num_pes = settings.num_pes;
   ps.work_groups_per_pe = settings.work_groups_per_pe;
   ps.routing = settings.routing;
   ps.measure_cost = true;
-  Ranks& ranks = Ranks::world();
-  const PeGroup group = pe_group(ps.num_pes, ranks.size(), ranks.rank());
+  return ps;
+}
+
+// The pilot frames on `view`, each on the banks `partition` makes of the
+// mean measured so far (null: the facets' partition).
+using PilotPartition = std::function<PreparedBanks(const MeasuredWork* measured)>;
+
+MeasuredWork run_pilots(const Scene& view, const RenderSettings& ps, const PilotPartition& partition,
+                        ClRuntime& runtime, PilotFigures& figures) {
+  const auto t0 = std::chrono::steady_clock::now();
+  StageClock clock(PrepareStage::pilots);
   // mean: the mean of the measurements so far, the partition of the next
   // pilot; best: the input whose partition measured the best occupancy.
   MeasuredWork mean, best;
@@ -85,18 +100,18 @@ MeasuredWork pilot_work(const Scene& scene, const RenderSettings& settings, ClRu
   int k = 0;
   for (; k < kPilotFrames; ++k) {
     clock.progress(double(k) / kPilotFrames);
-    BalancePolicy policy;
-    if (k > 0) policy = BalancePolicy{Balance::measured, nullptr, &mean};
-    PreparedBanks banks = bank_scene(view, ps.num_pes, ps.routing, policy, group);
-    const std::vector<int> facet_cluster = banks.facet_cluster;
+    PreparedBanks banks = partition(k > 0 ? &mean : nullptr);
+    figures.facets_held = std::max<std::uint64_t>(figures.facets_held, banks.share.facets_held);
+    const std::vector<int> facet_cluster = std::move(banks.facet_cluster);
+    const std::vector<std::uint64_t> cluster_facets = std::move(banks.cluster_facets);
     Renderer pilot(view, std::move(banks), ps, runtime);
     const RenderResult r = pilot.render();
     if (const double occ = shared_occupancy(r.stats); occ > best_occupancy) {
       best_occupancy = occ;
       best = k == 0 ? MeasuredWork{} : mean;  // k = 0: the facets' partition
     }
-    const MeasuredWork w = spread_cluster_work(pilot.cluster_work(), view.max_depth, facet_cluster);
-    if (w.empty()) break;  // nothing to measure (no descriptor reached a bank)
+    const MeasuredWork w = spread_cluster_work(pilot.cluster_work(), view.max_depth, facet_cluster, cluster_facets);
+    if (w.levels == 0) break;  // nothing measured (no descriptor reached a bank; a rank's share may be empty)
     if (k == 0) {
       mean = w;
       continue;
@@ -104,8 +119,54 @@ MeasuredWork pilot_work(const Scene& scene, const RenderSettings& settings, ClRu
     for (std::size_t i = 0; i < mean.per_facet.size(); ++i)
       mean.per_facet[i] = (float(k) * mean.per_facet[i] + w.per_facet[i]) / float(k + 1);
   }
-  if (frames) *frames = std::min(k + 1, kPilotFrames);
-  if (seconds) *seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  figures.frames = std::min(k + 1, kPilotFrames);
+  figures.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return best;
+}
+
+}  // namespace
+
+MeasuredWork pilot_work(const Scene& scene, const RenderSettings& settings, ClRuntime& runtime,
+                        PilotFigures& figures) {
+  const Scene view = pilot_scene(scene);
+  const RenderSettings ps = pilot_settings(settings);
+  Ranks& ranks = Ranks::world();
+  const PeGroup group = pe_group(ps.num_pes, ranks.size(), ranks.rank());
+  return run_pilots(
+      view, ps,
+      [&](const MeasuredWork* measured) {
+        BalancePolicy policy;
+        if (measured) policy = BalancePolicy{Balance::measured, nullptr, measured};
+        return bank_scene(view, ps.num_pes, ps.routing, policy, group);
+      },
+      runtime, figures);
+}
+
+MeasuredWork pilot_work(Scene& share, const RenderSettings& settings, ClRuntime& runtime, PilotFigures& figures) {
+  if (!share.is_share()) return pilot_work(static_cast<const Scene&>(share), settings, runtime, figures);
+  // The view without the facets: the renderer reads only the banks, and the
+  // share keeps its own (for every pilot's partition).
+  Scene view;
+  {
+    std::vector<Triangle> facets = std::move(share.triangles);
+    std::vector<VertexAttributes> attributes = std::move(share.attributes);
+    view = pilot_scene(share);
+    share.triangles = std::move(facets);
+    share.attributes = std::move(attributes);
+  }
+  const RenderSettings ps = pilot_settings(settings);
+  Ranks& ranks = Ranks::world();
+  const PeGroup group = pe_group(ps.num_pes, ranks.size(), ranks.rank());
+  ShareBalance how;
+  how.keep_share = true;
+  const MeasuredWork best = run_pilots(
+      view, ps,
+      [&](const MeasuredWork* measured) {
+        how.measured = measured;
+        return bank_share(share, ps.num_pes, ps.routing, group, ranks, how);
+      },
+      runtime, figures);
+  figures.facets_held += share.triangles.size();  // the share beside a pilot's banks
   return best;
 }
 

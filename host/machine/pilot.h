@@ -33,18 +33,37 @@ constexpr int kPilotPixels = 1 << 14;
 // choice of the best one.
 constexpr int kPilotFrames = 5;
 
-// The work measured by the pilot frames for `settings` (its PE count,
-// routing and work-groups; one sample per pixel); *frames and *seconds get
-// how many ran and how long they took. The pilots' view is a copy of the
-// scene (host memory for a second copy of its facets while they run).
+// What the pilot frames cost.
+struct PilotFigures {
+  int frames = 0;       // run
+  double seconds = 0;   // their time
+  // A scene read in shares: the most facets this rank held at once while
+  // they ran, its share beside a pilot's banks (0 for a whole scene).
+  std::uint64_t facets_held = 0;
+};
+
 // A pilot's per-cluster counts (Renderer::cluster_work, [level * C +
-// cluster]) spread evenly over each cluster's facets; facet_cluster holds
-// the cluster of every scene facet (PreparedBanks). Empty when nothing was
-// counted.
+// cluster]) spread evenly over each cluster's facets: facet_cluster holds
+// the cluster of every facet (PreparedBanks), facets (when given) every
+// cluster's facet count over the whole scene, else counted from
+// facet_cluster. Empty when nothing was counted. Each facet's figure
+// depends only on its cluster's counts, so a rank holding part of the
+// scene gets the figures one process gets for the same facets.
 MeasuredWork spread_cluster_work(const std::vector<std::uint64_t>& work, int levels,
                                  const std::vector<int>& facet_cluster);
+MeasuredWork spread_cluster_work(const std::vector<std::uint64_t>& work, int levels,
+                                 const std::vector<int>& facet_cluster, const std::vector<std::uint64_t>& facets);
 
-MeasuredWork pilot_work(const Scene& scene, const RenderSettings& settings, ClRuntime& runtime, int* frames,
-                        double* seconds);
+// The work measured by the pilot frames for `settings` (its PEs, routing
+// and work-groups; one sample per pixel), per facet of `scene`. The pilots'
+// view of a whole scene is a copy of it (host memory for a second copy of
+// its facets while they run).
+MeasuredWork pilot_work(const Scene& scene, const RenderSettings& settings, ClRuntime& runtime,
+                        PilotFigures& figures);
+// A scene read in shares: every rank runs the pilots together, each
+// partition made collectively from the shares (machine/collective_partition.h),
+// which keep their facets until the last pilot; the work is per facet of
+// this rank's share. A whole scene: as above.
+MeasuredWork pilot_work(Scene& share, const RenderSettings& settings, ClRuntime& runtime, PilotFigures& figures);
 
 }  // namespace opsila

@@ -12,12 +12,23 @@ PreparedBanks prepare_banks(Scene& scene, const RenderSettings& settings, ClRunt
   if (!scene.is_share()) return prepare_banks(static_cast<const Scene&>(scene), settings, runtime);
   // Read in shares: the ranks partition it together, and it gives up its facets once they are sent.
   check_machine_request(scene, settings.num_pes);
-  if (settings.balance != Balance::facets)
-    throw std::invalid_argument("prepare_banks: a scene read in shares is balanced by facets");
+  if (settings.balance == Balance::work)
+    throw std::invalid_argument("prepare_banks: a scene read in shares is balanced by facets or measured work");
   const PrepareTimes before = prepare_times();
   Ranks& ranks = Ranks::world();
+  ShareBalance how;
+  MeasuredWork measured;
+  PilotFigures pilots;
+  if (settings.balance == Balance::measured) {
+    measured = pilot_work(scene, settings, runtime, pilots);
+    how.measured = &measured;
+  }
   PreparedBanks banks = bank_share(scene, settings.num_pes, settings.routing,
-                                   pe_group(settings.num_pes, ranks.size(), ranks.rank()), ranks);
+                                   pe_group(settings.num_pes, ranks.size(), ranks.rank()), ranks, how);
+  banks.balance = settings.balance;
+  banks.pilot_frames = pilots.frames;
+  banks.pilot_seconds = pilots.seconds;
+  banks.share.pilot_facets_held = pilots.facets_held;
   banks.prepare = stages_since(before);
   return banks;
 }
@@ -35,15 +46,14 @@ PreparedBanks prepare_banks(const Scene& scene, const RenderSettings& settings, 
   policy.balance = settings.balance;
   policy.sample = settings.ray_sample;
   MeasuredWork measured;
-  int frames = 0;
-  double seconds = 0;
+  PilotFigures pilots;
   if (settings.balance == Balance::measured) {
-    measured = pilot_work(scene, settings, runtime, &frames, &seconds);
+    measured = pilot_work(scene, settings, runtime, pilots);
     policy.measured = &measured;
   }
   PreparedBanks banks = bank_scene(scene, settings.num_pes, settings.routing, policy, group);
-  banks.pilot_frames = frames;
-  banks.pilot_seconds = seconds;
+  banks.pilot_frames = pilots.frames;
+  banks.pilot_seconds = pilots.seconds;
   banks.prepare = stages_since(before);
   return banks;
 }

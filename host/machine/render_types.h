@@ -66,6 +66,7 @@ struct ShareFigures {
   std::uint64_t facets_read = 0;  // triangles of this rank's share of the scene
   std::uint64_t facets_held = 0;  // triangles of its group's banks
   std::uint64_t texture_bytes = 0;  // texels it decoded: the maps its facets use
+  std::uint64_t pilot_facets_held = 0;  // --balance measured: the most facets held while the pilots ran
   double read_seconds = 0, partition_seconds = 0, exchange_seconds = 0, bank_seconds = 0;
 };
 

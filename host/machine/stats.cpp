@@ -261,7 +261,8 @@ std::string rank_report_json(const RankReport& r) {
                   {"read_seconds", r.share.read_seconds},
                   {"partition_seconds", r.share.partition_seconds},
                   {"exchange_seconds", r.share.exchange_seconds},
-                  {"bank_seconds", r.share.bank_seconds}};
+                  {"bank_seconds", r.share.bank_seconds},
+                  {"pilot_facets_held", r.share.pilot_facets_held}};
   return j.dump();
 }
 
@@ -292,6 +293,7 @@ RankReport rank_report_from_json(const std::string& text) {
     r.share.partition_seconds = s->at("partition_seconds");
     r.share.exchange_seconds = s->at("exchange_seconds");
     r.share.bank_seconds = s->at("bank_seconds");
+    r.share.pilot_facets_held = s->at("pilot_facets_held");
   }
   return r;
 }

@@ -656,6 +656,59 @@ TEST_F(MpiFixture, BalancedPartitionsAreTheSameOnThreeRanks) {
   }
 }
 
+// --balance measured on shares: the pilot frames run on the ranks' shares,
+// each pilot's partition made collectively from them (the share kept beside
+// the pilot's banks until the last), and the frame's partition is one
+// process's: the same image, item buffer, work per level and PE, and banks,
+// on a scene of many objects and files and on a terrain spread over the
+// ranks. No rank reads the whole scene (and no note says one does).
+TEST_F(MpiFixture, MeasuredBalanceOnSharesIsTheSameAsOneProcess) {
+  const std::string terrain = dir.write("terrain.json", R"({"objects": [
+    {"type": "sphere", "center": [0, 4, 0], "radius": 1, "subdivisions": 2},
+    {"type": "terrain", "size": [20, 20], "quads": [60, 60], "height": 3, "transform": {"rotate": [0, 30, 0]}},
+    {"type": "terrain", "size": [6, 6], "quads": [9, 7], "height": 0, "center": [0, 6, 0]}]})");
+  const std::string many = share_scene(dir, 6, 5);
+  for (const std::string& path : {many, terrain}) {
+    SCOPED_TRACE(path);
+    auto with = [&](const std::string& tag) {
+      return std::vector<std::string>{path, "--size", "48x36", "--pes", "64", "--balance", "measured", "-q",
+                                      "-o", dir.file(tag + ".pfm"), "--item-buffer", dir.file(tag + ".npy"),
+                                      "--stats", dir.file(tag + ".json")};
+    };
+    ASSERT_EQ(one(with("one")).exit_code, 0);
+    const nlohmann::json base = stats(dir.file("one.json"));
+    ASSERT_EQ(base.at("balance"), "measured");
+    // At 64 PEs the pilots find clusters hotter than half a PE's share, and
+    // they are cut (the terrain's collectively, the small objects' by their
+    // rank): more clusters than the facets' partition makes.
+    std::vector<std::string> facets = with("facets");
+    facets[6] = "facets";
+    ASSERT_EQ(one(facets).exit_code, 0);
+    EXPECT_GT(base.at("clusters").get<int>(), stats(dir.file("facets.json")).at("clusters").get<int>());
+    const std::uint64_t N = base.at("scene").at("triangles");
+    for (int R : {2, 3, 4}) {
+      SCOPED_TRACE(std::to_string(R) + " ranks");
+      nlohmann::json s;
+      expect_ranks_as_one(R, with, s);
+      if (HasFatalFailure()) return;
+      EXPECT_EQ(s.at("balance"), "measured");
+      EXPECT_EQ(s.at("pilot").at("frames"), base.at("pilot").at("frames"));
+      EXPECT_EQ(facets_read(s, N / R + 320, "a share: 1/R of the facets, and at most one object more"), N);
+      for (const auto& rank : s.at("mpi").at("per_rank")) {
+        const nlohmann::json& share = rank.at("share");
+        // While the pilots ran: its share, and a pilot's banks beside it (about 2N/R, never the whole scene).
+        EXPECT_GT(share.at("pilot_facets_held").get<std::uint64_t>(), share.at("facets_read").get<std::uint64_t>());
+        EXPECT_LE(share.at("pilot_facets_held").get<std::uint64_t>(), 3 * N / R + 320);
+      }
+    }
+  }
+  // Not quiet: no rank says it reads the whole scene.
+  const RunResult loud = ranks(2, {many, "--size", "32x24", "--pes", "4", "--balance", "measured", "-o",
+                                   dir.file("loud.pfm")});
+  ASSERT_EQ(loud.exit_code, 0) << loud.err;
+  EXPECT_EQ(loud.err.find("whole scene"), std::string::npos) << loud.err;
+}
+
 // A bad flag is the same on every rank: one line, from the lowest, once.
 TEST_F(MpiFixture, ABadFlagOnEveryRankIsOneLine) {
   for (const char* command : {"render", "bench"}) {
@@ -725,7 +778,7 @@ TEST_F(MpiFixture, BenchOnSeveralRanksReportsEveryRank) {
 }
 
 // `mpirun -np R opsila bench` reads a JSON scene in shares, as render does
-// (its default --balance is facets under mpirun): every rank's report says
+// (with its default --balance, measured, as on one process): every rank's report says
 // what it read (about 1/R of the facets) and held, and its preparation
 // times; the banks, rays and per-rank shares are those `opsila render`
 // builds on as many ranks; the whole-scene baselines are left out, saying why.
@@ -733,7 +786,7 @@ TEST_F(MpiFixture, BenchReadsSharesAndReportsEveryRank) {
   const std::string path = share_scene(dir, 6, 5);
   const std::vector<std::string> view = {path, "--size", "64x48", "--pes", "12", "-q"};
   std::vector<std::string> render_args = view;
-  render_args.insert(render_args.end(), {"-o", dir.file("r.pfm"), "--stats", dir.file("r.json")});
+  render_args.insert(render_args.end(), {"--balance", "measured", "-o", dir.file("r.pfm"), "--stats", dir.file("r.json")});
   const int R = 3;
   const RunResult rendered = ranks(R, render_args);
   ASSERT_EQ(rendered.exit_code, 0) << rendered.err;
@@ -747,7 +800,7 @@ TEST_F(MpiFixture, BenchReadsSharesAndReportsEveryRank) {
   EXPECT_NE(r.out.find("not measured: the baselines"), std::string::npos) << r.out;
   const nlohmann::json j = stats(dir.file("b.json")), s = stats(dir.file("r.json"));
   const std::uint64_t N = s.at("scene").at("triangles");
-  EXPECT_EQ(j.at("balance"), "facets");
+  EXPECT_EQ(j.at("balance"), "measured") << "the bench's default, on ranks as on one process";
   EXPECT_EQ(j.at("scene").at("triangles"), N) << "the whole scene's count, not rank 0's share";
   EXPECT_EQ(j.at("scene").at("clusters"), s.at("clusters"));
   for (const char* key : {"bank_bytes", "texture_bytes", "global_bytes", "replicated_bytes"})

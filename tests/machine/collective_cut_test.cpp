@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <random>
 #include <utility>
@@ -173,6 +174,51 @@ TEST(TerrainWindow, WindowsMakeTheWholeTerrainBitForBit) {
       add_terrain_window(pieces, d, 4, 1, 2, 100, cuts[k], cuts[k + 1]);
     ASSERT_EQ(pieces.size(), whole.size());
     for (std::size_t i = 0; i < whole.size(); ++i) ASSERT_TRUE(same_bits(pieces[i], whole[i])) << "triangle " << i;
+  }
+}
+
+
+// --balance measured sums each cluster's measured work per level in fixed
+// point: the sum over a cluster's facets is the same in any order and when
+// its facets are dealt to 1..4 ranks and the parts added up, which is what
+// lets ranks holding parts of a cluster find one process's figure. (Summed
+// in double, as before, these figures depend on the order: checked first,
+// so the test would catch a return to it.)
+TEST(MeasuredWork, SumsAreTheSameInAnyOrderAndOverAnyRanks) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> exponent(-12.0f, 24.0f);
+  MeasuredWork m;
+  m.levels = 3;
+  const int n = 5000;
+  for (int i = 0; i < n * m.levels; ++i) m.per_facet.push_back(std::exp2(exponent(rng)) * 1.37f);
+  std::vector<int> tris(n);
+  for (int i = 0; i < n; ++i) tris[std::size_t(i)] = i;
+  std::vector<int> shuffled = tris;
+  std::shuffle(shuffled.begin(), shuffled.end(), rng);
+  const auto in_double = [&](const std::vector<int>& order) {
+    double w = 0;
+    for (int t : order) w += m.per_facet[std::size_t(t) * 3];
+    return w;
+  };
+  ASSERT_NE(in_double(tris), in_double(shuffled)) << "figures whose double sum depends on the order";
+  const std::vector<std::int64_t> whole = partition_steps::measured_sums(m, tris);
+  EXPECT_EQ(partition_steps::measured_sums(m, shuffled), whole);
+  for (int R = 1; R <= 4; ++R) {
+    std::vector<std::vector<int>> dealt(static_cast<std::size_t>(R));
+    for (int t : shuffled) dealt[std::size_t(rng() % unsigned(R))].push_back(t);
+    std::vector<std::int64_t> added(3, 0);
+    for (const std::vector<int>& part : dealt) {
+      const std::vector<std::int64_t> s = partition_steps::measured_sums(m, part);
+      for (int l = 0; l < 3; ++l) added[std::size_t(l)] += s[std::size_t(l)];
+    }
+    EXPECT_EQ(added, whole) << R << " ranks";
+  }
+  // The fixed point keeps the figures: 2^-16 of a test per facet at most.
+  for (int l = 0; l < 3; ++l) {
+    double exact = 0;
+    for (int t : tris) exact += m.per_facet[std::size_t(t) * 3 + std::size_t(l)];
+    EXPECT_NEAR(std::ldexp(double(whole[std::size_t(l)]), -partition_steps::kWorkFractionBits), exact,
+                exact * 1e-12 + n * std::ldexp(1.0, -partition_steps::kWorkFractionBits));
   }
 }
 

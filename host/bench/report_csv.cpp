@@ -109,7 +109,7 @@ std::string ranks_csv(const BenchReport& r) {
   std::ostringstream out;
   out << "rank,pe_begin,pe_end,device_bytes,scene_bytes,host_peak_bytes,render_seconds,exchange_seconds,"
          "exposed_seconds,mpi_seconds,sent,received,facets_read,facets_held,texture_bytes,read_seconds,partition_seconds,"
-         "share_exchange_seconds,bank_seconds\n";
+         "share_exchange_seconds,bank_seconds,pilot_facets_held\n";
   for (const RankReport& k : r.stats().ranks) {
     out << k.rank << ',' << k.pe_begin << ',' << k.pe_end << ',' << k.device_bytes << ',' << k.scene_bytes << ','
         << k.host_peak_bytes << ',' << num(k.render_seconds) << ',' << num(k.exchange_seconds) << ','
@@ -119,9 +119,10 @@ std::string ranks_csv(const BenchReport& r) {
     const ShareFigures& s = k.share;
     if (s.active)
       out << ',' << s.facets_read << ',' << s.facets_held << ',' << s.texture_bytes << ',' << num(s.read_seconds) << ','
-          << num(s.partition_seconds) << ',' << num(s.exchange_seconds) << ',' << num(s.bank_seconds) << '\n';
+          << num(s.partition_seconds) << ',' << num(s.exchange_seconds) << ',' << num(s.bank_seconds) << ','
+          << s.pilot_facets_held << '\n';
     else
-      out << ",,,,,,,\n";
+      out << ",,,,,,,,\n";
   }
   return out.str();
 }

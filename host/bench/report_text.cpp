@@ -178,13 +178,14 @@ void memory_text(std::string& out, const BenchReport& r) {
 void shares_text(std::string& out, const std::vector<RankReport>& ranks) {
   if (!ranks.front().share.active) return;
   appendf(out, "  scene read in shares (textures: texels the rank decoded; seconds: reading the share, partition, "
-          "facet exchange, bank build):\n");
-  appendf(out, "  %4s %12s %12s %10s %9s %11s %10s %9s\n", "rank", "facets read", "facets held", "textures",
-          "read s", "partition s", "exchange s", "banks s");
+          "facet exchange, bank build; pilots: the most facets held while the pilot frames ran):\n");
+  appendf(out, "  %4s %12s %12s %10s %9s %11s %10s %9s %12s\n", "rank", "facets read", "facets held", "textures",
+          "read s", "partition s", "exchange s", "banks s", "pilots");
   for (const RankReport& k : ranks)
-    appendf(out, "  %4d %12llu %12llu %10s %9.4f %11.4f %10.4f %9.4f\n", k.rank, ull(k.share.facets_read),
+    appendf(out, "  %4d %12llu %12llu %10s %9.4f %11.4f %10.4f %9.4f %12llu\n", k.rank, ull(k.share.facets_read),
             ull(k.share.facets_held), bench_bytes(double(k.share.texture_bytes)).c_str(), k.share.read_seconds,
-            k.share.partition_seconds, k.share.exchange_seconds, k.share.bank_seconds);
+            k.share.partition_seconds, k.share.exchange_seconds, k.share.bank_seconds,
+            ull(k.share.pilot_facets_held));
 }
 
 // Several MPI ranks: what each did, the rank x rank traffic, and what the

@@ -817,6 +817,8 @@ TEST_F(MpiFixture, BenchReadsSharesAndReportsEveryRank) {
     EXPECT_LE(share.at("facets_read").get<std::uint64_t>(), N / R + 80) << "rank " << k;
     EXPECT_EQ(share.at("facets_read"), rendered_share.at("facets_read")) << "rank " << k;
     EXPECT_EQ(share.at("facets_held"), rendered_share.at("facets_held")) << "rank " << k;
+    // The pilots ran on the shares: the share kept beside a pilot's banks.
+    EXPECT_GT(share.at("pilot_facets_held").get<std::uint64_t>(), share.at("facets_read").get<std::uint64_t>());
     for (const char* stage : {"read_seconds", "partition_seconds", "exchange_seconds", "bank_seconds"})
       EXPECT_GE(share.at(stage).get<double>(), 0.0) << stage;
     EXPECT_GT(per_rank.at(k).at("host_peak_bytes").get<std::uint64_t>(), 0u);
@@ -829,6 +831,7 @@ TEST_F(MpiFixture, BenchReadsSharesAndReportsEveryRank) {
   // ranks.csv: a header and one row per rank, with the share's figures.
   const std::string csv = test::read_file(dir.file("csv/ranks.csv"));
   EXPECT_NE(csv.find(",facets_read,facets_held,"), std::string::npos) << csv;
+  EXPECT_NE(csv.find(",pilot_facets_held\n"), std::string::npos) << csv;
   EXPECT_EQ(test::count_of(csv, "\n"), std::size_t(R) + 1);
   EXPECT_EQ(test::count_of(csv, ",,"), 0u) << "a rank's share figures are missing: " << csv;
 }

@@ -116,7 +116,8 @@ bool apply_cuts(ClusterTable& t, const std::vector<CutRecord>& mine, const std::
   }
   for (std::size_t i : order) {
     t.clusters.push_back(got[i].upper);
-    t.work.insert(t.work.end(), work.begin() + std::ptrdiff_t(2 * L * i + L), work.begin() + std::ptrdiff_t(2 * L * (i + 1)));
+    const auto upper = work.begin() + std::ptrdiff_t(2 * L * i + L);
+    t.work.insert(t.work.end(), upper, upper + std::ptrdiff_t(L));
   }
   return !got.empty();
 }

@@ -701,6 +701,14 @@ TEST_F(MpiFixture, MeasuredBalanceOnSharesIsTheSameAsOneProcess) {
         EXPECT_LE(share.at("pilot_facets_held").get<std::uint64_t>(), 3 * N / R + 320);
       }
     }
+    if (path != terrain) continue;
+    // Over one rank's limit (OPSILA_RANK_TRIANGLE_LIMIT), under two ranks':
+    // the pilots run on two ranks' shares, the same image.
+    env["OPSILA_RANK_TRIANGLE_LIMIT"] = "5000";
+    const RunResult two = ranks(2, with("two"));
+    env.erase("OPSILA_RANK_TRIANGLE_LIMIT");
+    ASSERT_EQ(two.exit_code, 0) << two.err;
+    EXPECT_TRUE(test::read_file(dir.file("two.pfm")) == test::read_file(dir.file("one.pfm")));
   }
   // Not quiet: no rank says it reads the whole scene.
   const RunResult loud = ranks(2, {many, "--size", "32x24", "--pes", "4", "--balance", "measured", "-o",

@@ -6,6 +6,7 @@
 #include <numeric>
 #include <stdexcept>
 #include <type_traits>
+#include <utility>
 
 #include "core/stage_clock.h"
 #include "machine/collective_balance.h"
@@ -335,8 +336,16 @@ PreparedBanks bank_share(Scene& share, int num_pes, int routing, const PeGroup& 
   sbox.grow(slo.data());
   sbox.grow(shi.data());
   // Progress: the cuts are about half of the stage, the exchange the rest.
-  ShareClusters split =
-      split_share(share, sbox, num_pes, split_flat, ranks, [&clock](double f) { clock.progress(0.5 * f); });
+  ShareClusters split;
+  if (how.clusters && how.reuse) {
+    if (how.keep_share)
+      split = *how.clusters;
+    else
+      split = std::move(*how.clusters);  // the last partition
+  } else {
+    split = split_share(share, sbox, num_pes, split_flat, ranks, [&clock](double f) { clock.progress(0.5 * f); });
+    if (how.clusters) *how.clusters = split;
+  }
   ClusterTable table = gather_clusters(share, split, how.measured, ranks);
   if (how.measured) cut_hot_clusters(share, *how.measured, num_pes, split, table, ranks);
   const Placement pl = place_clusters(table, split, num_pes, ranks);

@@ -15,6 +15,7 @@
 #pragma once
 
 #include "machine/banks.h"
+#include "machine/collective_cut.h"
 #include "machine/ranks.h"
 
 namespace opsila {
@@ -28,6 +29,13 @@ struct ShareBalance {
   // (held beside the banks while the pilots run, about twice the rank's
   // facets), and PreparedBanks::facet_cluster gets each one's cluster.
   bool keep_share = false;
+  // The same: the clusters the objects are cut into before the balance's
+  // cuts depend on the geometry alone, so the first call makes them into
+  // *clusters (when given) and the next ones, with `reuse`, copy them (the
+  // last, which does not keep the share, takes them); every rank alike:
+  // the cuts of a spread object are collective.
+  ShareClusters* clusters = nullptr;
+  bool reuse = false;
 };
 
 // The banks of `group`, as bank_scene(whole scene) prepares them with the

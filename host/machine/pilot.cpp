@@ -142,7 +142,8 @@ MeasuredWork pilot_work(const Scene& scene, const RenderSettings& settings, ClRu
       runtime, figures);
 }
 
-MeasuredWork pilot_work(Scene& share, const RenderSettings& settings, ClRuntime& runtime, PilotFigures& figures) {
+MeasuredWork pilot_work(Scene& share, const RenderSettings& settings, ClRuntime& runtime, PilotFigures& figures,
+                        ShareClusters& clusters) {
   if (!share.is_share()) return pilot_work(static_cast<const Scene&>(share), settings, runtime, figures);
   // The view without the facets: the renderer reads only the banks, and the
   // share keeps its own (for every pilot's partition).
@@ -159,11 +160,14 @@ MeasuredWork pilot_work(Scene& share, const RenderSettings& settings, ClRuntime&
   const PeGroup group = pe_group(ps.num_pes, ranks.size(), ranks.rank());
   ShareBalance how;
   how.keep_share = true;
+  how.clusters = &clusters;
   const MeasuredWork best = run_pilots(
       view, ps,
       [&](const MeasuredWork* measured) {
         how.measured = measured;
-        return bank_share(share, ps.num_pes, ps.routing, group, ranks, how);
+        PreparedBanks banks = bank_share(share, ps.num_pes, ps.routing, group, ranks, how);
+        how.reuse = true;  // the clusters are made: the next pilots copy them
+        return banks;
       },
       runtime, figures);
   figures.facets_held += share.triangles.size();  // the share beside a pilot's banks

@@ -19,6 +19,7 @@
 #include "core/ray_sample.h"
 #include "core/scene.h"
 #include "machine/cl_runtime.h"
+#include "machine/collective_cut.h"
 #include "machine/render_types.h"
 
 namespace opsila {
@@ -64,6 +65,9 @@ MeasuredWork pilot_work(const Scene& scene, const RenderSettings& settings, ClRu
 // partition made collectively from the shares (machine/collective_partition.h),
 // which keep their facets until the last pilot; the work is per facet of
 // this rank's share. A whole scene: as above.
-MeasuredWork pilot_work(Scene& share, const RenderSettings& settings, ClRuntime& runtime, PilotFigures& figures);
+// `clusters` gets the share's clusters before the balance's cuts (the
+// same for the frame's partition: ShareBalance::clusters).
+MeasuredWork pilot_work(Scene& share, const RenderSettings& settings, ClRuntime& runtime, PilotFigures& figures,
+                        ShareClusters& clusters);
 
 }  // namespace opsila

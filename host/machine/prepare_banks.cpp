@@ -3,6 +3,7 @@
 #include <stdexcept>
 
 #include "machine/collective_partition.h"
+#include "machine/collective_cut.h"
 #include "machine/pilot.h"
 #include "machine/ranks.h"
 
@@ -19,9 +20,12 @@ PreparedBanks prepare_banks(Scene& scene, const RenderSettings& settings, ClRunt
   ShareBalance how;
   MeasuredWork measured;
   PilotFigures pilots;
+  ShareClusters clusters;  // the pilots' clusters before the balance's cuts, for the frame's partition too
   if (settings.balance == Balance::measured) {
-    measured = pilot_work(scene, settings, runtime, pilots);
+    measured = pilot_work(scene, settings, runtime, pilots, clusters);
     how.measured = &measured;
+    how.clusters = &clusters;
+    how.reuse = pilots.frames > 0;
   }
   PreparedBanks banks = bank_share(scene, settings.num_pes, settings.routing,
                                    pe_group(settings.num_pes, ranks.size(), ranks.rank()), ranks, how);

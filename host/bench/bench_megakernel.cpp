@@ -11,6 +11,7 @@
 #include "core/camera.h"
 #include "core/fixed_point.h"
 #include "opsila_shared.h"
+#include "machine/bank_bvh.h"
 #include "machine/partition.h"
 #include "machine/kernel_args.h"
 #include "machine/renderer.h"
@@ -21,17 +22,20 @@ namespace {
 
 using Buf = cl::Buffer;
 // kernels/baselines/megakernel.cl: frame, bank nodes and facets, materials,
-// lights, surface, root node, sample grid side and offsets, pixels, pixel
-// sums, ray counts, item buffer; megakernel_rays adds where each pixel's
-// rays go and the ray log.
-using MegaKernel = KernelBinding<FrameParams, Buf, Buf, Buf, Buf, SurfaceBuffers, int, int, Buf, int, int, Buf, Buf, Buf>;
-using MegaRaysKernel =
-    KernelBinding<FrameParams, Buf, Buf, Buf, Buf, SurfaceBuffers, int, int, Buf, int, int, Buf, Buf, Buf, Buf, Buf>;
+// lights, surface, root node and its children's box, sample grid side and
+// offsets, pixels, pixel sums, ray counts, item buffer; megakernel_rays adds
+// where each pixel's rays go and the ray log.
+using MegaKernel = KernelBinding<FrameParams, Buf, Buf, Buf, Buf, SurfaceBuffers, int, cl_float4, cl_float4, int, Buf,
+                                 int, int, Buf, Buf, Buf>;
+using MegaRaysKernel = KernelBinding<FrameParams, Buf, Buf, Buf, Buf, SurfaceBuffers, int, cl_float4, cl_float4, int,
+                                     Buf, int, int, Buf, Buf, Buf, Buf, Buf>;
 
 // The whole scene on one PE: bank 0 under one BVH (clusters on top).
 struct MegaScene {
   BankedScene bs;
   FrameParams fp{};
+  int root = 0;
+  cl_float4 root_lo{}, root_hi{};  // the union of the root's child boxes (kernels/lib/bvh.cl, scene_nearest)
   double build_seconds = 0;
 };
 
@@ -40,6 +44,10 @@ MegaScene mega_scene(const Scene& scene) {
   MegaScene m;
   m.bs = partition_scene(scene, 1);
   m.fp = frame_params(scene, m.bs, 0);
+  m.root = m.bs.pes[0].node_begin;
+  Box box;
+  if (children_box(m.bs.nodes[std::size_t(m.root)], box))
+    for (int a = 0; a < 3; ++a) m.root_lo.s[a] = box.lo[a], m.root_hi.s[a] = box.hi[a];
   m.build_seconds = seconds_since(t_build);
   return m;
 }
@@ -129,7 +137,7 @@ BaselineImage Megakernel::frame() {
   std::vector<LaunchRecord> launches;
   Launcher launch(rt, launches);
   launch_tiles(rt, launch, s_->mega.kernel(), "megakernel", npix, s_->tile, [&](int begin, int count) {
-    s_->mega.bind(ms.fp, b.nodes, b.tris, b.mats, b.lights, b.surface, ms.bs.pes[0].node_begin,
+    s_->mega.bind(ms.fp, b.nodes, b.tris, b.mats, b.lights, b.surface, ms.root, ms.root_lo, ms.root_hi,
                   spp_side(scene.spp), b.offsets, begin, count, b.accum, b.counts, b.items);
   });
   std::vector<cl_long> accum(npix * 3);
@@ -179,12 +187,12 @@ bool log_megakernel_rays(const Scene& scene, ClRuntime& rt, const MegaScene& ms,
   const std::size_t npix = std::size_t(scene.width) * scene.height;
   MegaKernel mega(rt, "megakernel", KernelProgram::baselines);
   MegaRaysKernel rays(rt, "megakernel_rays", KernelProgram::baselines);
-  const int root = ms.bs.pes[0].node_begin, side = spp_side(scene.spp);
+  const int side = spp_side(scene.spp);
   std::vector<LaunchRecord> launches;
   Launcher launch(rt, launches);
   launch_tiles(rt, launch, mega.kernel(), "megakernel", npix, tile, [&](int begin, int count) {
-    mega.bind(ms.fp, b.nodes, b.tris, b.mats, b.lights, b.surface, root, side, b.offsets, begin, count, b.accum,
-              b.counts, b.items);
+    mega.bind(ms.fp, b.nodes, b.tris, b.mats, b.lights, b.surface, ms.root, ms.root_lo, ms.root_hi, side, b.offsets,
+              begin, count, b.accum, b.counts, b.items);
   });
   std::vector<cl_uint4> counts(npix);
   launch.check(rt.queue().enqueueReadBuffer(b.counts, CL_TRUE, 0, npix * sizeof(cl_uint4), counts.data()),
@@ -204,8 +212,8 @@ bool log_megakernel_rays(const Scene& scene, ClRuntime& rt, const MegaScene& ms,
   const Buf b_first = upload(rt, first, "ray log offsets");
   const Buf b_log = device_buffer(rt, std::max<std::uint64_t>(bytes, 1), "ray log");
   launch_tiles(rt, launch, rays.kernel(), "megakernel_rays", npix, tile, [&](int begin, int count) {
-    rays.bind(ms.fp, b.nodes, b.tris, b.mats, b.lights, b.surface, root, side, b.offsets, begin, count, b.accum,
-              b.counts, b.items, b_first, b_log);
+    rays.bind(ms.fp, b.nodes, b.tris, b.mats, b.lights, b.surface, ms.root, ms.root_lo, ms.root_hi, side, b.offsets,
+              begin, count, b.accum, b.counts, b.items, b_first, b_log);
   });
   std::vector<cl_float4> all(total * 2);
   if (total > 0)
@@ -233,21 +241,21 @@ TraversalAlone measure_traversal_alone(const Scene& scene, ClRuntime& rt, int wa
   out.present = true;
   out.nearest_rays = log.nearest.size() / 2;
   out.any_rays = log.any.size() / 2;
-  // kernels/baselines/traversal.cl: nodes, facets, root, slack, rays, count, one word per ray.
-  using Batch = KernelBinding<Buf, Buf, int, float, Buf, int, Buf>;
+  // kernels/baselines/traversal.cl: nodes, facets, root and its children's box, slack, rays, count, one word per ray.
+  using Batch = KernelBinding<Buf, Buf, int, cl_float4, cl_float4, float, Buf, int, Buf>;
   Batch nearest(rt, "traversal_nearest", KernelProgram::baselines), any(rt, "traversal_any", KernelProgram::baselines);
   const Buf b_nearest = upload(rt, log.nearest, "nearest-hit rays");
   const Buf b_any = upload(rt, log.any, "any-hit rays");
   const Buf b_hits = device_buffer(rt, std::max<std::size_t>(out.nearest_rays, out.any_rays) * sizeof(cl_int) + 4,
                                    "traversal answers");
-  const int root = ms.bs.pes[0].node_begin;
   for (int r = 0; r < warmup + repeats; ++r) {
     std::vector<LaunchRecord> launches;
     Launcher launch(rt, launches);
     for (auto [k, rays, count] : {std::tuple{&nearest, &b_nearest, out.nearest_rays},
                                   std::tuple{&any, &b_any, out.any_rays}}) {
       if (count == 0) continue;
-      cl::Kernel& kk = k->bind(b.nodes, b.tris, root, ms.fp.box_slack, *rays, static_cast<int>(count), b_hits);
+      cl::Kernel &kk = k->bind(b.nodes, b.tris, ms.root, ms.root_lo, ms.root_hi, ms.fp.box_slack, *rays,
+                               static_cast<int>(count), b_hits);
       launch.run(kk, k->name().c_str(), round_up(static_cast<int>(count), 64), fixed_local(rt, kk), -1);
     }
     launch.check(rt.queue().finish(), "clFinish");

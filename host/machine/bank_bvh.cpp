@@ -425,4 +425,18 @@ void build_route_bvh(std::vector<BankNode>& nodes, int root, const std::vector<B
   check_stack(nodes, root);
 }
 
+bool children_box(const BankNode &node, Box &box) {
+  box = Box{};
+  bool any = false;
+  for (int k = 0; k < OPSILA_BVH_WIDTH; ++k) {
+    if (node.count[k] < 0) continue;
+    const float lo[3] = {node.lo_x[k], node.lo_y[k], node.lo_z[k]};
+    const float hi[3] = {node.hi_x[k], node.hi_y[k], node.hi_z[k]};
+    box.grow(lo);
+    box.grow(hi);
+    any = true;
+  }
+  return any;
+}
+
 }  // namespace opsila

@@ -45,4 +45,9 @@ std::vector<BankBvh> build_bank_bvhs(std::vector<BankNode>& nodes, std::vector<B
 void build_route_bvh(std::vector<BankNode>& nodes, int root, const std::vector<Box>& boxes,
                      const std::vector<int>& cluster_ids);
 
+// The union of a node's child boxes (its slots in use), in the nodes' own
+// floats: a box that a ray misses, under the same slab test, holds no child
+// box the ray meets. False when the node has no slot in use.
+bool children_box(const BankNode &node, Box &box);
+
 }  // namespace opsila

@@ -63,18 +63,8 @@ void build_routing(BankedScene& bs, const Box& sbox) {
       top.count[k] = -1;
       const int q = i * OPSILA_BVH_WIDTH + k;
       if (q >= bs.num_pes) continue;
-      const BankNode& root = bs.route_nodes[std::size_t(q)];
       Box box;
-      bool any = false;
-      for (int j = 0; j < OPSILA_BVH_WIDTH; ++j) {
-        if (root.count[j] < 0) continue;
-        const float lo[3] = {root.lo_x[j], root.lo_y[j], root.lo_z[j]};
-        const float hi[3] = {root.hi_x[j], root.hi_y[j], root.hi_z[j]};
-        box.grow(lo);
-        box.grow(hi);
-        any = true;
-      }
-      if (!any) continue;
+      if (!children_box(bs.route_nodes[std::size_t(q)], box)) continue;
       top.lo_x[k] = box.lo[0], top.lo_y[k] = box.lo[1], top.lo_z[k] = box.lo[2];
       top.hi_x[k] = box.hi[0], top.hi_y[k] = box.hi[1], top.hi_z[k] = box.hi[2];
       top.child[k] = q;

@@ -36,7 +36,7 @@
 
 inline void mega_pixel(FrameParams fp, __global const BankNode *nodes, __global const BankTriangle *tris,
                        __global const Material *materials, __global const Light *lights, SURFACE_PARAMS, int root,
-                       int spp_k, __global const float *offsets, int pixel, __global long *accum,
+                       float3 lo, float3 hi, int spp_k, __global const float *offsets, int pixel, __global long *accum,
                        __global uint4 *ray_counts, __global int2 *items, __global float4 *ray_log, uint log_at) {
   int x = pixel % fp.width, y = pixel / fp.width;
   float eps = fp.epsilon;
@@ -55,7 +55,8 @@ inline void mega_pixel(FrameParams fp, __global const BankNode *nodes, __global 
     RayPre cr = make_ray(load3(fp.eye), primary_direction(fp, x, y));
     float t = OPSILA_INF;
     int hit = -1, facet = INT_MAX;
-    traverse_nearest(&cr, nodes, tris, root, 0.0f, fp.box_slack, &t, &hit, &facet, &tri_tests, &box_tests, &no_probe);
+    scene_nearest(&cr, nodes, tris, root, lo, hi, 0.0f, fp.box_slack, &t, &hit, &facet, &tri_tests, &box_tests,
+                  &no_probe);
     if (hit >= 0) item = (int2)(tris[hit].object_id, tris[hit].facet_id);
   }
 
@@ -78,7 +79,8 @@ inline void mega_pixel(FrameParams fp, __global const BankNode *nodes, __global 
       RayPre r = make_ray(org, d);
       float t = OPSILA_INF;
       int hit = -1, facet = INT_MAX;
-      traverse_nearest(&r, nodes, tris, root, tmin, fp.box_slack, &t, &hit, &facet, &tri_tests, &box_tests, &no_probe);
+      scene_nearest(&r, nodes, tris, root, lo, hi, tmin, fp.box_slack, &t, &hit, &facet, &tri_tests, &box_tests,
+                    &no_probe);
       if (hit < 0) {
         sum = add_sat(sum, fixed3(weight * load3(fp.background)));
         continue;
@@ -101,7 +103,7 @@ inline void mega_pixel(FrameParams fp, __global const BankNode *nodes, __global 
         ++shadow;
         MEGA_LOG(p, lv, eps, dist);
         RayPre sr = make_ray(p, lv);
-        if (!traverse_any(&sr, nodes, tris, root, eps, dist, fp.box_slack, &tri_tests, &box_tests, &no_probe))
+        if (!scene_any(&sr, nodes, tris, root, lo, hi, eps, dist, fp.box_slack, &tri_tests, &box_tests, &no_probe))
           sum = add_sat(sum, fixed3(contrib)); /* >= 0: saturates as add_fixed does */
       }
 
@@ -136,12 +138,12 @@ inline void mega_pixel(FrameParams fp, __global const BankNode *nodes, __global 
 
 __kernel void megakernel(FrameParams fp, __global const BankNode *nodes, __global const BankTriangle *tris,
                          __global const Material *materials, __global const Light *lights, SURFACE_PARAMS, int root,
-                         int spp_k, __global const float *offsets, int pixel_begin, int pixel_count,
-                         __global long *accum, __global uint4 *ray_counts, __global int2 *items) {
+                         float4 root_lo, float4 root_hi, int spp_k, __global const float *offsets, int pixel_begin,
+                         int pixel_count, __global long *accum, __global uint4 *ray_counts, __global int2 *items) {
   int k = get_global_id(0);
   if (k >= pixel_count) return;
-  mega_pixel(fp, nodes, tris, materials, lights, SURFACE_ARGS, root, spp_k, offsets, pixel_begin + k, accum,
-             ray_counts, items, 0, 0u);
+  mega_pixel(fp, nodes, tris, materials, lights, SURFACE_ARGS, root, root_lo.xyz, root_hi.xyz, spp_k, offsets,
+             pixel_begin + k, accum, ray_counts, items, 0, 0u);
 }
 
 /* The same frame, every ray also written to ray_log from ray_log[2 *
@@ -149,11 +151,11 @@ __kernel void megakernel(FrameParams fp, __global const BankNode *nodes, __globa
  * run), for the bench's traversal-alone figure (baselines/traversal.cl). */
 __kernel void megakernel_rays(FrameParams fp, __global const BankNode *nodes, __global const BankTriangle *tris,
                               __global const Material *materials, __global const Light *lights, SURFACE_PARAMS,
-                              int root, int spp_k, __global const float *offsets, int pixel_begin, int pixel_count,
-                              __global long *accum, __global uint4 *ray_counts, __global int2 *items,
-                              __global const uint *log_first, __global float4 *ray_log) {
+                              int root, float4 root_lo, float4 root_hi, int spp_k, __global const float *offsets,
+                              int pixel_begin, int pixel_count, __global long *accum, __global uint4 *ray_counts,
+                              __global int2 *items, __global const uint *log_first, __global float4 *ray_log) {
   int k = get_global_id(0);
   if (k >= pixel_count) return;
-  mega_pixel(fp, nodes, tris, materials, lights, SURFACE_ARGS, root, spp_k, offsets, pixel_begin + k, accum,
-             ray_counts, items, ray_log, log_first[pixel_begin + k]);
+  mega_pixel(fp, nodes, tris, materials, lights, SURFACE_ARGS, root, root_lo.xyz, root_hi.xyz, spp_k, offsets,
+             pixel_begin + k, accum, ray_counts, items, ray_log, log_first[pixel_begin + k]);
 }

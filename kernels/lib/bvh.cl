@@ -152,3 +152,48 @@ OPSILA_INLINE bool traverse_any(const RayPre *r, __global const BankNode *nodes,
   BankWalk w = {r, tris, tmin, tmax, slack, OPSILA_INF, -1, INT_MAX, tri_tests, box_tests, probe};
   return walk_any(&w, nodes, root);
 }
+
+/* Miss-cheap root: one test of the union of the root's child boxes (lo, hi,
+ * from the host) before the root. Every child box lies inside it and the
+ * rounded slab distances are monotonic in the planes (no contraction,
+ * geometry.cl), so with node_hits' clamps and slack a ray that misses it
+ * misses every child; the root's tests are then counted as the walk counts
+ * them (one per slot in use), so the work counters do not see the shortcut.
+ * tmax: the root's bound. Returns whether the root must be walked. */
+OPSILA_INLINE bool root_box_met(const RayPre *r, __global const BankNode *nodes, int root, float3 lo, float3 hi,
+                                float tmin, float tmax, float slack, uint *box_tests, const CostProbe *probe) {
+  float3 near = (float3)(r->neg.x ? hi.x : lo.x, r->neg.y ? hi.y : lo.y, r->neg.z ? hi.z : lo.z);
+  float3 far = (float3)(r->neg.x ? lo.x : hi.x, r->neg.y ? lo.y : hi.y, r->neg.z ? lo.z : hi.z);
+  float3 tn = (near - r->org) * r->inv_dir, tf = (far - r->org) * r->inv_dir;
+  float enter = fmax(fmax(fmax(tn.x, tn.y), tn.z), tmin);
+  float leave = fmin(fmin(fmin(tf.x, tf.y), tf.z), tmax);
+  leave = leave + fabs(leave) * (4.0f * OPSILA_TIE_TOLERANCE) + slack;
+  if (enter <= leave) return true;
+  __global const BankNode *nd = &nodes[root];
+  for (int k = 0; k < OPSILA_BVH_WIDTH; ++k) {
+    if (nd->count[k] < 0) continue;
+    COUNT_TEST(box_tests);
+    COST_CHILD(probe, nd, k);
+  }
+  return false;
+}
+
+/* The walks of the baselines (megakernel, traversal alone) from the whole
+ * scene's root, behind root_box_met: a camera ray that misses the scene pays
+ * one box test. Not used where it does not pay (docs/BENCHMARKS.md, "Levers"):
+ * the SPMD phase's rays reach a bank because they meet one of its cluster
+ * boxes, and the item buffer tests a cluster only inside its projected
+ * rectangle. */
+OPSILA_INLINE void scene_nearest(const RayPre *r, __global const BankNode *nodes, __global const BankTriangle *tris,
+                                 int root, float3 lo, float3 hi, float tmin, float slack, float *best_t, int *best_tri,
+                                 int *best_facet, uint *tri_tests, uint *box_tests, const CostProbe *probe) {
+  if (root_box_met(r, nodes, root, lo, hi, tmin, tie_limit(*best_t), slack, box_tests, probe))
+    traverse_nearest(r, nodes, tris, root, tmin, slack, best_t, best_tri, best_facet, tri_tests, box_tests, probe);
+}
+
+OPSILA_INLINE bool scene_any(const RayPre *r, __global const BankNode *nodes, __global const BankTriangle *tris,
+                             int root, float3 lo, float3 hi, float tmin, float tmax, float slack, uint *tri_tests,
+                             uint *box_tests, const CostProbe *probe) {
+  return root_box_met(r, nodes, root, lo, hi, tmin, tmax, slack, box_tests, probe) &&
+         traverse_any(r, nodes, tris, root, tmin, tmax, slack, tri_tests, box_tests, probe);
+}

@@ -13,6 +13,7 @@
 #include "bench/bench.h"
 #include "bench/compare.h"
 #include "machine/host_scatter.h"
+#include "machine/partition.h"
 #include "input/scene_file.h"
 #include "reference/reference.h"
 #include "machine/renderer.h"
@@ -72,6 +73,24 @@ TEST(Bench, MegakernelFramesReuseItsBuffersAlike) {
     EXPECT_EQ(again.box_tests, once.box_tests) << frame;
     EXPECT_GT(again.kernel_seconds, 0.0) << frame;
   }
+}
+
+// The megakernel's miss-cheap root (kernels/lib/bvh.cl, scene_nearest): a
+// camera ray that misses the union of the root's child boxes is not walked,
+// and its root's box tests are counted as the walk counts them, one per slot
+// in use. Here every ray misses: the scene lies at z <= 6, behind the eye.
+TEST(Bench, MegakernelRaysMissingTheSceneCountTheRootsTests) {
+  Scene s = test::mirror_glass_scene(32, 4);
+  s.camera.look_at = {0, 3, 16};  // the eye is at z = 8
+  const BaselineImage mega = render_megakernel(s, runtime());
+  const BankedScene bs = partition_scene(s, 1);
+  const BankNode& root = bs.nodes[std::size_t(bs.pes[0].node_begin)];
+  std::uint64_t slots = 0;
+  for (int k = 0; k < OPSILA_BVH_WIDTH; ++k) slots += root.count[k] >= 0;
+  ASSERT_GT(slots, 1u);
+  EXPECT_EQ(mega.box_tests, std::uint64_t(s.width) * s.height * slots);
+  EXPECT_EQ(mega.triangle_tests, 0u);
+  EXPECT_EQ(mega.rgb, render_opsila(s, 16).rgb);
 }
 
 // The traversal alone traces exactly the megakernel's rays: its primary and

@@ -23,6 +23,7 @@
 #include "core/env_hooks.h"
 #include "core/util.h"
 #include "input/model_checks.h"
+#include "input/model_fan.h"
 #include "input/model_files.h"
 #include "input/obj_loader.h"
 #include "input/model_materials.h"
@@ -41,8 +42,6 @@ namespace fs = std::filesystem;
 
 #ifdef OPSILA_HAVE_ASSIMP
 namespace {
-
-bool finite3(const Vec3& v) { return std::isfinite(v[0]) && std::isfinite(v[1]) && std::isfinite(v[2]); }
 
 // Every placement of every mesh: the product of the node transforms from the
 // root down to each node that lists the mesh, in depth-first order. Without
@@ -84,6 +83,7 @@ class ModelReader {
     std::vector<std::vector<aiMatrix4x4>> placements(ai_.mNumMeshes);
     collect_placements(ai_.mRootNode, ai_.mNumMeshes, placements, name_);
     int unplaced = 0, facet = 0, skipped = 0;
+    FanTally tally;
     for (unsigned m = 0; m < ai_.mNumMeshes; ++m) {
       const aiMesh* mesh = ai_.mMeshes[m];
       if (placements[m].empty()) ++unplaced;
@@ -93,16 +93,11 @@ class ModelReader {
         else ++skipped;
         if (facet < 0) throw InputError(name_ + ": too many facets for 32-bit ids");
       }
-      for (const aiMatrix4x4& place : placements[m]) emit_mesh(*mesh, static_cast<int>(m), first_facet, place);
+      for (const aiMatrix4x4& place : placements[m]) emit_mesh(*mesh, static_cast<int>(m), first_facet, place, tally);
     }
     scene_.num_objects = std::max(1, static_cast<int>(ai_.mNumMeshes));
     scene_.num_facets = facet;
-    if (skipped > 0)
-      warn(std::to_string(skipped) + " point or line primitive(s) skipped; they are not facets and get no id");
-    if (unplaced > 0)
-      warn(std::to_string(unplaced) + " mesh(es) not placed by any node of the scene are not drawn (their ids are kept)");
-    if (degenerate_ > 0)
-      warn(std::to_string(degenerate_) + " degenerate (zero-area) triangle(s) not rendered; facet ids are kept");
+    for (std::string& w : fan_warnings(name_, skipped, unplaced, tally.degenerate)) scene_.warnings.push_back(std::move(w));
     if (scene_.triangles.empty()) throw InputError(name_ + ": no facets (the model has no drawable polygons)");
     check_scene_extent(scene_, name_);
     Vec3 lo, hi;
@@ -112,75 +107,15 @@ class ModelReader {
   }
 
  private:
-  void warn(const std::string& what) { scene_.warnings.push_back(name_ + ": " + what); }
-
-  // One placement of a mesh: its faces fanned from the first vertex, every
-  // fan triangle with the face's id; positions by the node transform,
-  // normals by its inverse transpose.
-  void emit_mesh(const aiMesh& mesh, int object, int facet, const aiMatrix4x4& place) {
-    aiMatrix3x3 normal_matrix(place);
-    normal_matrix.Inverse().Transpose();
-    const bool normals = mesh.HasNormals(), uvs = mesh.HasTextureCoords(0);
+  // One placement of a mesh (model_fan.h).
+  void emit_mesh(const aiMesh& mesh, int object, int facet, const aiMatrix4x4& place, FanTally& tally) {
     const int material = mesh.mMaterialIndex < material_index_.size() ? material_index_[mesh.mMaterialIndex] : 0;
-    const auto position = [&](unsigned i) {
-      const aiVector3D p = place * mesh.mVertices[i];
-      return Vec3{p.x, p.y, p.z};
-    };
+    MeshFan fan(name_, mesh, place, kMaxTriangles, tally);
     for (unsigned f = 0; f < mesh.mNumFaces; ++f) {
       const aiFace& face = mesh.mFaces[f];
       if (face.mNumIndices < 3) continue;
-      if (scene_.triangles.size() + face.mNumIndices > kMaxTriangles)
-        throw InputError(name_ + ": too many triangles (more than " + std::to_string(kMaxTriangles) + ")");
-      const Vec3 p0 = position(face.mIndices[0]);
-      for (unsigned k = 1; k + 1 < face.mNumIndices; ++k) {
-        const unsigned corner[3] = {face.mIndices[0], face.mIndices[k], face.mIndices[k + 1]};
-        Triangle t;
-        t.v0 = p0;
-        t.v1 = position(corner[1]);
-        t.v2 = position(corner[2]);
-        if (!finite3(t.v0) || !finite3(t.v1) || !finite3(t.v2))
-          throw InputError(name_ + ": mesh " + std::to_string(object) + " face " + std::to_string(f) +
-                           ": a vertex is not a finite number");
-        const double e1[3] = {double(t.v1[0]) - t.v0[0], double(t.v1[1]) - t.v0[1], double(t.v1[2]) - t.v0[2]};
-        const double e2[3] = {double(t.v2[0]) - t.v0[0], double(t.v2[1]) - t.v0[1], double(t.v2[2]) - t.v0[2]};
-        const float c[3] = {float(e1[1] * e2[2] - e1[2] * e2[1]), float(e1[2] * e2[0] - e1[0] * e2[2]),
-                            float(e1[0] * e2[1] - e1[1] * e2[0])};
-        if (!std::isfinite(c[0]) || !std::isfinite(c[1]) || !std::isfinite(c[2]))
-          throw InputError(name_ + ": mesh " + std::to_string(object) + " face " + std::to_string(f) +
-                           ": facet too large: its edge vectors overflow float");
-        if (c[0] == 0 && c[1] == 0 && c[2] == 0) {
-          ++degenerate_;
-          continue;
-        }
-        t.facet_id = facet;
-        t.object_id = object;
-        t.material = material;
-        if (normals || uvs) t.attributes = attributes(mesh, corner, normals, uvs, normal_matrix);
-        scene_.triangles.push_back(t);
-      }
-      ++facet;
+      fan.face(face.mIndices, face.mNumIndices, f, object, facet++, material, &scene_);
     }
-  }
-
-  int attributes(const aiMesh& mesh, const unsigned* corner, bool normals, bool uvs, const aiMatrix3x3& nm) {
-    VertexAttributes a;
-    a.has_normals = normals;
-    a.has_uv = uvs;
-    for (int c = 0; c < 3; ++c) {
-      if (normals) {
-        const aiVector3D n = nm * mesh.mNormals[corner[c]];
-        a.normal[c] = Vec3{n.x, n.y, n.z};
-        a.has_normals = a.has_normals && finite3(a.normal[c]);
-      }
-      if (uvs) {
-        const aiVector3D& t = mesh.mTextureCoords[0][corner[c]];
-        a.uv[c] = {t.x, t.y};
-        a.has_uv = a.has_uv && std::isfinite(t.x) && std::isfinite(t.y);
-      }
-    }
-    if (!a.has_normals && !a.has_uv) return -1;
-    scene_.attributes.push_back(a);
-    return static_cast<int>(scene_.attributes.size()) - 1;
   }
 
   const aiScene& ai_;
@@ -188,7 +123,6 @@ class ModelReader {
   std::string base_dir_;
   Scene scene_;
   std::vector<int> material_index_;  // importer material -> Scene::materials
-  long long degenerate_ = 0;
 };
 
 // The importer's readers are not ours and some loop forever on malformed

@@ -79,6 +79,10 @@ struct ObjWindow {
   std::uint64_t fans = 0;
   bool load_maps = true;  // the materials' texture maps (the read that keeps the materials)
 };
+// The rank whose slice of the plan holds the file's fan triangle `fan`
+// (-1 when the window keeps nothing: the counting read). The PLY stream's
+// rule too.
+int window_owner(const ObjWindow& plan, std::uint64_t fan);
 // How an OBJ is streamed: blocks of about block_bytes, cut at line ends,
 // each parsed in chunks. Tests force both small.
 struct ObjStreaming {

@@ -77,7 +77,6 @@ struct WindowState {
   // known at the end.
   std::vector<std::array<int, 2>> by_o, by_g;
   std::array<int, 2> all{{INT_MAX, -1}};
-  int owner_of(std::uint64_t fan) const;  // -1: no window (counting)
   void note(const Polygon& poly, int owner);
 };
 

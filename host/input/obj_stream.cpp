@@ -53,14 +53,6 @@ void stream_blocks(const std::string& path, std::size_t block_bytes,
 
 }  // namespace
 
-int WindowState::owner_of(std::uint64_t fan) const {
-  if (plan.fans == 0) return -1;
-  // The fan triangle's place in the plan, then the slice that holds it.
-  const std::uint64_t at = plan.plan_begin + std::uint64_t((unsigned __int128)fan * plan.plan_all / plan.fans);
-  const std::uint64_t N = std::max<std::uint64_t>(plan.plan_total, 1), R = std::uint64_t(plan.ranks);
-  return static_cast<int>(std::min<std::uint64_t>((unsigned __int128)at * R / N, R - 1));
-}
-
 void WindowState::note(const Polygon& poly, int owner) {
   if (owner < 0) return;
   const auto widen = [owner](std::array<int, 2>& span) {
@@ -95,7 +87,7 @@ void ObjParser::let_go() {
   for (std::size_t f = w.examined; f < polys_.size(); ++f) {
     Polygon p = polys_[f];
     const int id = static_cast<int>(w.polygons++);
-    const int owner = w.owner_of(w.fans);
+    const int owner = window_owner(w.plan, w.fans);
     w.fans += p.count - 2;
     const bool mine = owner >= 0 && owner == w.plan.rank;
     if (!mine && defined(index_, verts_, p) && defined(uv_index_, uvs_, p) && defined(normal_index_, normals_, p)) {
@@ -164,6 +156,14 @@ bool ObjParser::stream(const std::string& path, const ObjStreaming& how, bool fa
 }
 
 }  // namespace obj_parse
+
+int window_owner(const ObjWindow& plan, std::uint64_t fan) {
+  if (plan.fans == 0) return -1;
+  // The fan triangle's place in the plan, then the slice that holds it.
+  const std::uint64_t at = plan.plan_begin + std::uint64_t((unsigned __int128)fan * plan.plan_all / plan.fans);
+  const std::uint64_t N = std::max<std::uint64_t>(plan.plan_total, 1), R = std::uint64_t(plan.ranks);
+  return static_cast<int>(std::min<std::uint64_t>((unsigned __int128)at * R / N, R - 1));
+}
 
 Scene load_obj_window(const std::string& path, std::size_t max_triangles, const ObjWindow& window,
                       std::uint64_t& fans, const ObjStreaming& streaming) {

@@ -7,10 +7,12 @@
 #include "input/scene_file.h"
 
 #include "input/scene_reader.h"
+#include "input/ply_reader.h"
 #include "core/env_hooks.h"
 #include "core/stage_clock.h"
 
 #include <chrono>
+#include <functional>
 #include <cstdlib>
 
 namespace opsila {
@@ -277,23 +279,25 @@ std::size_t rank_triangle_limit() {
   return env_hook_number(EnvHook::rank_triangle_limit, 1, kMaxTriangles, expected.c_str()).value_or(kMaxTriangles);
 }
 
-// A bare OBJ read by several ranks: streamed once for its counts, then
-// again keeping this rank's window of its triangles (obj_stream.cpp). Every
-// rank sees every polygon, so the figures need no joining; `combine` still
-// runs, the ranks' agreement that each has read its share.
+// A bare OBJ or PLY read by several ranks: streamed once for its counts,
+// then again keeping this rank's window of its triangles (obj_stream.cpp,
+// ply_window.cpp). Every rank sees every polygon, so the figures need no
+// joining; `combine` still runs, the ranks' agreement that each has read
+// its share.
 namespace {
 
-Scene load_obj_share(const std::string& path, const SceneShare& share) {
+using WindowRead = std::function<Scene(const ObjWindow&, std::uint64_t& fans)>;
+
+Scene load_window_share(const WindowRead& read, const SceneShare& share) {
   ObjWindow w;
   w.rank = share.rank, w.ranks = share.ranks;
   w.load_maps = false;
-  const std::size_t limit = rank_triangle_limit() * std::size_t(share.ranks);
   std::uint64_t fans = 0;
-  const std::size_t all = load_obj_window(path, limit, w, fans).share.total_triangles;
+  const std::size_t all = read(w, fans).share.total_triangles;
   w.plan_all = w.plan_total = all;
   w.fans = fans;
   w.load_maps = true;
-  Scene scene = load_obj_window(path, limit, w, fans);
+  Scene scene = read(w, fans);
   SceneShare figures = share;
   figures.total_triangles = scene.share.total_triangles;
   figures.lo = scene.share.lo;
@@ -304,13 +308,25 @@ Scene load_obj_share(const std::string& path, const SceneShare& share) {
   return scene;
 }
 
+// The file as a stream in windows, when several ranks read it and the
+// stream reads it as one process does (an OBJ, or a PLY that
+// ply_stream_refusal accepts).
+bool windowed(const std::string& path, const std::string& ext, const SceneShare& share) {
+  return share.ranks > 1 && (ext == ".obj" || (ext == ".ply" && ply_stream_refusal(path).empty()));
+}
+
 }  // namespace
 
 Scene load_scene(const std::string& path, const SceneShare& share) {
   const auto start = std::chrono::steady_clock::now();
   const std::string ext = lower(fs::path(path).extension().string());
-  if (ext == ".obj" && share.ranks > 1) {
-    Scene scene = load_obj_share(path, share);
+  if (windowed(path, ext, share)) {
+    const std::size_t limit = rank_triangle_limit() * std::size_t(share.ranks);
+    Scene scene = load_window_share(
+        [&](const ObjWindow& w, std::uint64_t& fans) {
+          return ext == ".obj" ? load_obj_window(path, limit, w, fans) : load_ply_window(path, limit, w, fans);
+        },
+        share);
     scene.share.read_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     return scene;
   }

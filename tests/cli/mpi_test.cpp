@@ -13,6 +13,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "ply_file.h"
 #include "test_util.h"
 
 namespace opsila {
@@ -44,6 +45,8 @@ std::vector<std::string> launch(int R) {
   a.insert(a.end(), {"-np", std::to_string(R)});
   return a;
 }
+
+std::uint64_t facets_read(const nlohmann::json& s, std::uint64_t most, const char* why);
 
 struct MpiFixture : ::testing::Test {
   TempDir dir;
@@ -99,6 +102,25 @@ struct MpiFixture : ::testing::Test {
     s = stats(dir.file(tag + ".json"));
     const nlohmann::json base = stats(dir.file("one.json"));
     for (const char* key : {"scene", "clusters", "rays", "levels", "memory"}) EXPECT_EQ(s.at(key), base.at(key)) << key;
+  }
+  // A bare model file streamed in windows (an OBJ, a PLY) of N triangles,
+  // on 2, 3 and 4 ranks: the same image, item buffer and banks as one
+  // process; each rank read about 1/R of the facets.
+  void expect_windows_as_one(const std::string& path, std::uint64_t N) {
+    auto with = [&](const std::string& tag) {
+      return std::vector<std::string>{path, "--size", "48x36", "--pes", "8", "-q", "-o", dir.file(tag + ".pfm"),
+                                      "--item-buffer", dir.file(tag + ".npy"), "--stats", dir.file(tag + ".json")};
+    };
+    const RunResult single = one(with("one"));
+    ASSERT_EQ(single.exit_code, 0) << single.err;
+    ASSERT_EQ(stats(dir.file("one.json")).at("scene").at("triangles").get<std::uint64_t>(), N);
+    for (int R : {2, 3, 4}) {
+      SCOPED_TRACE(std::to_string(R) + " ranks");
+      nlohmann::json s;
+      expect_ranks_as_one(R, with, s);
+      if (HasFatalFailure()) return;
+      EXPECT_EQ(facets_read(s, N / R + 4, "a window is 1/R of the fan triangles, give or take a polygon"), N);
+    }
   }
 };
 
@@ -504,22 +526,7 @@ std::string grid_obj(TempDir& dir, const std::string& name, int nx, int nz, int 
 // item buffer and banks as one process; each rank read about 1/R of the
 // facets.
 TEST_F(MpiFixture, ABareObjReadInWindowsIsTheSameAsOneProcess) {
-  const std::string path = grid_obj(dir, "grid.obj", 40, 20, 5);
-  auto with = [&](const std::string& tag) {
-    return std::vector<std::string>{path, "--size", "48x36", "--pes", "8", "-q", "-o", dir.file(tag + ".pfm"),
-                                    "--item-buffer", dir.file(tag + ".npy"), "--stats", dir.file(tag + ".json")};
-  };
-  const RunResult single = one(with("one"));
-  ASSERT_EQ(single.exit_code, 0) << single.err;
-  const std::uint64_t N = stats(dir.file("one.json")).at("scene").at("triangles");
-  ASSERT_EQ(N, 4u * 40 * 20);
-  for (int R : {2, 3, 4}) {
-    SCOPED_TRACE(std::to_string(R) + " ranks");
-    nlohmann::json s;
-    expect_ranks_as_one(R, with, s);
-    if (HasFatalFailure()) return;
-    EXPECT_EQ(facets_read(s, N / R + 4, "a window is 1/R of the fan triangles, give or take a polygon"), N);
-  }
+  expect_windows_as_one(grid_obj(dir, "grid.obj", 40, 20, 5), 4u * 40 * 20);
 }
 
 // A scene of several OBJ files, each streamed in windows: the same as one
@@ -546,6 +553,38 @@ TEST_F(MpiFixture, ObjFilesReadInWindowsAreTheSameAsOneProcess) {
 }
 
 #ifdef OPSILA_HAVE_ASSIMP
+// One big binary PLY, bare: every rank reads its vertices and streams its
+// faces, keeping only its window (host/input/ply_window.cpp). The same
+// image, item buffer and banks as one process (which reads it through the
+// importer); each rank read about 1/R of the facets.
+TEST_F(MpiFixture, ABarePlyReadInWindowsIsTheSameAsOneProcess) {
+  test::PlyFile p = test::ply_grid(41, 21, 0);
+  for (auto& v : p.vertices) v[2] *= 0.3;
+  const std::string path = dir.file("grid.ply");
+  test::write_ply(path, p);
+  expect_windows_as_one(path, 2u * 40 * 20 + 4);  // the quads, a pentagon and a triangle
+}
+
+// A PLY whose last face names a vertex the file does not have: every rank
+// reads every face, so every rank stops on it with one line naming the
+// file, the element and the byte; nothing is written.
+TEST_F(MpiFixture, ABrokenPlyEndsEveryRankWithOneLine) {
+  test::PlyFile p = test::ply_grid(30, 20, 0);
+  p.faces.push_back({0, 1, 700});
+  const std::string path = dir.file("broken.ply");
+  test::write_ply(path, p);
+  auto with = [&](const std::string& tag) {
+    return std::vector<std::string>{path, "--size", "32x24", "--pes", "4", "-o", dir.file(tag + ".pfm")};
+  };
+  EXPECT_EQ(one(with("one")).exit_code, 2) << "one process refuses it too";
+  const std::string face = "'face' element " + std::to_string(p.faces.size()) + " of " + std::to_string(p.faces.size());
+  for (int R : {3, 4}) {
+    const RunResult r = ranks(R, with("r" + std::to_string(R)));
+    expect_refused(r, {"broken.ply: PLY " + face + " at byte ", "vertex index 700 out of range (the file has 600 vertices)"});
+    EXPECT_FALSE(test::file_exists(dir.file("r" + std::to_string(R) + ".pfm")));
+  }
+}
+
 // A scene of several imported model files (ASCII STL): a share keeps only
 // their counts, materials and maps while the scene is planned, and reads
 // each again when it is built, keeping the objects dealt to it: the same as

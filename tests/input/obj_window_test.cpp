@@ -17,6 +17,7 @@
 #include "core/scene.h"
 #include "input/obj_loader.h"
 #include "test_util.h"
+#include "window_text.h"
 
 namespace opsila {
 namespace {
@@ -25,41 +26,9 @@ namespace fs = std::filesystem;
 
 const std::string kData = std::string(OPSILA_SOURCE_DIR) + "/tests/data";
 
-using test::hex;
-
-// A triangle with its attributes' values (indices differ between scenes).
-std::string triangle_text(const Scene& s, const Triangle& t) {
-  std::ostringstream o;
-  for (const Vec3* v : {&t.v0, &t.v1, &t.v2}) o << hex((*v)[0]) << ' ' << hex((*v)[1]) << ' ' << hex((*v)[2]) << ' ';
-  o << t.facet_id << ' ' << t.object_id << ' ' << t.material;
-  if (t.attributes >= 0) {
-    const VertexAttributes& a = s.attributes.at(std::size_t(t.attributes));
-    o << " attr " << a.has_normals << a.has_uv;
-    for (int c = 0; c < 3; ++c)
-      o << ' ' << hex(a.normal[c][0]) << ' ' << hex(a.normal[c][1]) << ' ' << hex(a.normal[c][2]) << ' '
-        << hex(a.uv[c][0]) << ' ' << hex(a.uv[c][1]);
-  }
-  return o.str();
-}
-
-// What every rank (or the one process) has besides its triangles.
-std::string figures_text(const Scene& s, std::size_t triangles, const Vec3& lo, const Vec3& hi) {
-  std::ostringstream o;
-  o << "objects " << s.num_objects << " facets " << s.num_facets << " triangles " << triangles << "\n";
-  o << "bounds " << hex(lo[0]) << ' ' << hex(lo[1]) << ' ' << hex(lo[2]) << ' ' << hex(hi[0]) << ' ' << hex(hi[1])
-    << ' ' << hex(hi[2]) << "\n";
-  for (const MaterialDesc& m : s.materials) o << "material " << m.name << ' ' << hex(m.kd[0]) << ' ' << m.map_kd << "\n";
-  for (const std::string& w : s.warnings) o << "warning " << w << "\n";
-  for (const std::string& f : s.input_files) o << "input " << f << "\n";
-  o << "camera " << hex(s.camera.eye[0]) << ' ' << hex(s.camera.eye[1]) << ' ' << hex(s.camera.eye[2]) << "\n";
-  return o.str();
-}
-
-std::string error_text(const InputError& e) {
-  std::string o = "error " + std::string(e.what()) + "\n";
-  for (const std::string& w : e.warnings) o += "warning " + w + "\n";
-  return o;
-}
+using test::error_text;
+using test::figures_text;
+using test::triangle_text;
 
 // One process: the figures, then its triangles, then the objects it would
 // spread over R ranks' windows given which rank holds each triangle.
@@ -76,45 +45,11 @@ std::string one_process(const std::string& path) {
   }
 }
 
-// R ranks: each one's figures (which must agree), then the windows' triangles
-// in rank order; the spread objects each rank names must be those whose
-// triangles lie on several ranks.
+// R ranks, each reading its window with blocks of `how`.
 std::string on_ranks(const std::string& path, int R, const ObjStreaming& how) {
-  std::string figures, triangles;
-  std::vector<std::set<int>> holders;  // by object: ranks holding its triangles
-  std::vector<int> spread;
-  for (int r = 0; r < R; ++r) {
-    try {
-      ObjWindow w;
-      w.rank = r, w.ranks = R;
-      w.load_maps = false;
-      std::uint64_t fans = 0;
-      const Scene counted = load_obj_window(path, std::size_t(1) << 24, w, fans, how);
-      EXPECT_TRUE(counted.triangles.empty()) << "the counting read keeps nothing";
-      w.plan_all = w.plan_total = counted.share.total_triangles;
-      w.fans = fans;
-      w.load_maps = true;
-      const Scene s = load_obj_window(path, std::size_t(1) << 24, w, fans, how);
-      const std::string mine = figures_text(s, s.share.total_triangles, s.share.lo, s.share.hi);
-      if (r == 0) figures = mine, spread = s.share.spread;
-      EXPECT_EQ(mine, figures) << "rank " << r << " agrees with rank 0";
-      EXPECT_EQ(s.share.spread, spread) << "rank " << r;
-      for (const Triangle& t : s.triangles) {
-        triangles += triangle_text(s, t) + "\n";
-        if (holders.size() <= std::size_t(t.object_id)) holders.resize(std::size_t(t.object_id) + 1);
-        holders[std::size_t(t.object_id)].insert(r);
-      }
-    } catch (const InputError& e) {
-      const std::string mine = error_text(e);
-      if (r == 0) figures = mine;
-      EXPECT_EQ(mine, figures) << "rank " << r << " fails as rank 0 does";
-    }
-  }
-  std::vector<int> several;
-  for (std::size_t o = 0; o < holders.size(); ++o)
-    if (holders[o].size() > 1) several.push_back(static_cast<int>(o));
-  EXPECT_EQ(spread, several) << "spread: the objects whose triangles lie on several ranks";
-  return figures + triangles;
+  return test::windows_text(R, [&](const ObjWindow& w, std::uint64_t& fans) {
+    return load_obj_window(path, std::size_t(1) << 24, w, fans, how);
+  });
 }
 
 void expect_same_windows(const std::string& path, const std::string& what) {

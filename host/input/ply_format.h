@@ -1,0 +1,94 @@
+// A PLY file's header and the reading of its body in bounded blocks
+// (ply_header.cpp, ply_body.cpp), for the PLY stream (ply_window.cpp).
+#pragma once
+
+#include <cstdint>
+#include <cstdio>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace opsila {
+namespace ply {
+
+enum class Type { int8, uint8, int16, uint16, int32, uint32, float32, float64 };
+
+struct Property {
+  std::string name;
+  Type type = Type::float32;  // a list's items
+  bool list = false;
+  Type count = Type::uint8;   // a list's count
+};
+
+struct Element {
+  std::string name;
+  std::uint64_t count = 0;
+  std::vector<Property> properties;
+  int line = 0;  // of its 'element' line
+};
+
+enum class Format { ascii, little_endian, big_endian };
+
+struct Header {
+  Format format = Format::ascii;
+  std::vector<Element> elements;
+  std::vector<std::string> comments;  // 'comment' and 'obj_info' lines
+  std::uint64_t body = 0;             // byte offset of the body
+  int lines = 0;                      // of the header
+  std::uint64_t file_bytes = 0;
+};
+
+// The header, strictly: 'ply', 'format' (ascii, binary_little_endian,
+// binary_big_endian, 1.0), 'comment', 'obj_info', 'element', 'property'
+// (scalar or list), 'end_header'. Any other line is an error naming it.
+Header read_header(const std::string& path);
+
+// Why the stream cannot read `h` exactly as the importer does ("" when it
+// can): the importer path is then used.
+std::string stream_refusal(const Header& h);
+
+// A value as the importer holds it (a 32-bit integer, signed or not, or
+// the float or double read).
+struct Value {
+  std::int64_t i = 0;  // integer types
+  double d = 0;        // float types
+  Type type = Type::int32;
+  float as_float() const;
+  bool is_integer() const { return type != Type::float32 && type != Type::float64; }
+};
+
+// The body read in blocks of about block_bytes; every value is checked as
+// read (a truncated body, a word that is not a number), errors naming the
+// file and the element with its line (ascii) or byte offset (binary).
+class Body {
+ public:
+  Body(const std::string& path, const Header& h, std::size_t block_bytes);
+  ~Body();
+  Body(const Body&) = delete;
+  Body& operator=(const Body&) = delete;
+  // The next value of element `e`'s instance `i` (0-based), of type t.
+  Value next(Type t, const Element& e, std::uint64_t i);
+  // Ascii: the end of an element's line (nothing else may follow on it).
+  void end_of_instance(const Element& e, std::uint64_t i);
+  // Where the reading is, for messages: "line N" or "byte N".
+  std::string where() const;
+  // One error naming the file, the element and where it is read.
+  [[noreturn]] void fail(const Element& e, std::uint64_t i, const std::string& what) const;
+
+ private:
+  bool fill(std::size_t need);
+  std::string word(const Element& e, std::uint64_t i);
+
+  std::string path_;
+  Format format_;
+  std::FILE* file_ = nullptr;
+  std::size_t block_;
+  std::vector<char> buf_;
+  std::size_t at_ = 0, end_ = 0;  // buf_[at_, end_) not read yet
+  std::uint64_t consumed_ = 0;    // file offset of buf_[0]
+  long long line_ = 0;
+  bool eof_ = false;
+};
+
+}  // namespace ply
+}  // namespace opsila

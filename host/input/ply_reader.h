@@ -1,0 +1,30 @@
+// One rank's window of a PLY model read as a stream (docs/DISTRIBUTED.md,
+// "One big model file"): the vertex element is read whole by every rank,
+// the face element in bounded blocks, keeping only the faces of the
+// window (ObjWindow: the rule is the OBJ stream's). The triangles are
+// bit for bit those the importer path (model_import.cpp) makes of the
+// file, with the same ids, materials and attributes.
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+#include "core/scene.h"
+#include "input/obj_loader.h"
+
+namespace opsila {
+
+// Why the PLY stream does not read this file exactly as the importer does
+// (other elements than 'vertex' then 'face', face properties other than
+// one index list, a texture named in a comment, ...), "" when it does. The
+// importer path reads the others whole, and judges a file or header the
+// stream cannot read (the reason then says why).
+std::string ply_stream_refusal(const std::string& path);
+
+// As load_obj_window, for a PLY file the stream reads (ply_stream_refusal
+// is ""): `fans` gets the file's fan triangles; 0 in window.fans keeps no
+// face (the counting read).
+Scene load_ply_window(const std::string& path, std::size_t max_triangles, const ObjWindow& window,
+                      std::uint64_t& fans, std::size_t block_bytes = std::size_t(32) << 20);
+
+}  // namespace opsila

@@ -1,0 +1,192 @@
+// One rank's window of a PLY model read as a stream (ply_reader.h): the
+// vertex element is read whole, the face element face after face, each
+// face fanned as the importer path fans it (model_fan.h) and kept only
+// when its first fan triangle falls in this rank's slice of the plan
+// (window_owner, the OBJ stream's rule); the others are only counted into
+// the whole file's figures, so counts, warnings and errors are one
+// process's on every rank.
+#include "input/ply_reader.h"
+
+#ifdef OPSILA_HAVE_ASSIMP
+#include <algorithm>
+#include <array>
+#include <climits>
+#include <new>
+
+#include <assimp/mesh.h>
+
+#include "input/model_fan.h"
+#include "input/ply_format.h"
+
+namespace opsila {
+
+namespace {
+
+// The vertex arrays the importer path uses: positions, normals (nx, ny,
+// nz) and the first texture coordinates ((u, v), (s, t), ...), as floats.
+void read_vertices(ply::Body& body, const ply::Element& e, const ply::Header& h, aiMesh& mesh, const std::string& path) {
+  // Each vertex takes at least a byte a value: a count the file cannot
+  // hold is refused before anything is allocated.
+  const std::uint64_t per = h.format == ply::Format::ascii ? 2 * e.properties.size() - 1 : e.properties.size();
+  if (e.count > (h.file_bytes - h.body) / std::max<std::uint64_t>(per, 1) || e.count > UINT_MAX)
+    throw InputError(path + ":" + std::to_string(e.line) + ": PLY header asks for " + std::to_string(e.count) +
+                     " vertices, more than the file's " + std::to_string(h.file_bytes) + " bytes can hold");
+  enum Role { none, px, py, pz, nx, ny, nz, tu, tv };
+  std::vector<Role> role;
+  bool normals = false, uvs = false;
+  for (const ply::Property& p : e.properties) {
+    const std::string& n = p.name;
+    Role r = n == "x" ? px : n == "y" ? py : n == "z" ? pz : n == "nx" ? nx : n == "ny" ? ny : n == "nz" ? nz : none;
+    if (n == "u" || n == "s" || n == "texture_u" || n == "texture_s") r = tu;
+    if (n == "v" || n == "t" || n == "texture_v" || n == "texture_t") r = tv;
+    normals = normals || r == nx, uvs = uvs || r == tu;
+    role.push_back(r);
+  }
+  const unsigned count = static_cast<unsigned>(e.count);
+  mesh.mNumVertices = count;
+  mesh.mVertices = new aiVector3D[count];
+  if (normals) mesh.mNormals = new aiVector3D[count];
+  if (uvs) mesh.mTextureCoords[0] = new aiVector3D[count], mesh.mNumUVComponents[0] = 2;
+  for (unsigned i = 0; i < count; ++i) {
+    for (std::size_t k = 0; k < role.size(); ++k) {
+      const float f = body.next(e.properties[k].type, e, i).as_float();
+      switch (role[k]) {
+        case px: mesh.mVertices[i].x = f; break;
+        case py: mesh.mVertices[i].y = f; break;
+        case pz: mesh.mVertices[i].z = f; break;
+        case nx: mesh.mNormals[i].x = f; break;
+        case ny: mesh.mNormals[i].y = f; break;
+        case nz: mesh.mNormals[i].z = f; break;
+        case tu: mesh.mTextureCoords[0][i].x = f; break;
+        case tv: mesh.mTextureCoords[0][i].y = f; break;
+        default: break;
+      }
+    }
+    body.end_of_instance(e, i);
+  }
+}
+
+
+class PlyWindowReader {
+ public:
+  PlyWindowReader(const std::string& path, std::size_t max_triangles, const ObjWindow& window, std::size_t block)
+      : path_(path), max_triangles_(max_triangles), window_(window), block_(block) {}
+
+  Scene run(std::uint64_t& fans) {
+    try {
+      const ply::Header h = ply::read_header(path_);
+      const std::string why = ply::stream_refusal(h);
+      if (!why.empty()) throw InputError(path_ + ": the PLY stream cannot read this file: " + why);
+      ply::Body body(path_, h, block_);
+      aiMesh mesh;
+      read_vertices(body, h.elements[0], h, mesh, path_);
+      Scene scene;
+      scene.has_camera = false;
+      scene.has_lights = false;
+      scene.materials.push_back(MaterialDesc::default_material());
+      FanTally tally;
+      read_faces(body, h.elements[1], mesh, tally, scene);
+      finish(scene, tally);
+      fans = fans_;
+      return scene;
+    } catch (const std::bad_alloc&) {
+      throw InputError(path_ + ": out of memory while loading (model too large)");
+    } catch (const std::length_error&) {
+      throw InputError(path_ + ": model too large to load");
+    }
+  }
+
+ private:
+  // Every face read and checked; fanned into the figures, and into the
+  // scene when it is this rank's.
+  void read_faces(ply::Body& body, const ply::Element& e, const aiMesh& mesh, FanTally& tally, Scene& scene) {
+    MeshFan fan(path_, mesh, aiMatrix4x4(), max_triangles_, tally);
+    const ply::Property& list = e.properties[0];
+    std::vector<unsigned> corner;
+    for (std::uint64_t f = 0; f < e.count; ++f) {
+      const ply::Value count = body.next(list.count, e, f);
+      if (count.i < 0) body.fail(e, f, "a negative number of corners");
+      if (std::uint64_t(count.i) > max_triangles_ + 2)
+        throw InputError(path_ + ": too many triangles (more than " + std::to_string(max_triangles_) + ")");
+      const unsigned n = static_cast<unsigned>(count.i);
+      corner.resize(n);
+      for (unsigned k = 0; k < n; ++k) {
+        const ply::Value v = body.next(list.type, e, f);
+        if (v.i < 0 || v.i >= std::int64_t(mesh.mNumVertices))
+          body.fail(e, f, "vertex index " + std::to_string(v.i) + " out of range (the file has " +
+                              std::to_string(mesh.mNumVertices) + " vertices)");
+        corner[k] = static_cast<unsigned>(v.i);
+      }
+      body.end_of_instance(e, f);
+      if (n < 3) {  // the importer path skips points and lines (and empty faces), with no id
+        ++skipped_;
+        continue;
+      }
+      if (facets_ == INT_MAX) throw InputError(path_ + ": too many facets for 32-bit ids");
+      const int owner = window_.fans > 0 ? window_owner(window_, fans_) : -1;
+      fans_ += n - 2;
+      const bool mine = owner >= 0 && owner == window_.rank;
+      if (fan.face(corner.data(), n, static_cast<unsigned>(f), 0, facets_, 0, mine ? &scene : nullptr) && owner >= 0)
+        owners_[0] = std::min(owners_[0], owner), owners_[1] = std::max(owners_[1], owner);
+      ++facets_;
+    }
+  }
+
+  // The importer path's ending (model_import.cpp), on the whole file's
+  // figures, and the window's share of them.
+  void finish(Scene& scene, const FanTally& tally) const {
+    scene.num_objects = 1;
+    scene.num_facets = facets_;
+    scene.warnings = fan_warnings(path_, skipped_, 0, tally.degenerate);
+    if (tally.triangles == 0) throw InputError(path_ + ": no facets (the model has no drawable polygons)");
+    check_scene_extent(tally.triangles, tally.lo, tally.hi, path_);
+    scene.camera = frame_bounds(tally.lo, tally.hi, 45.0f, float(scene.width) / float(scene.height));
+    scene.share.rank = window_.rank;
+    scene.share.ranks = window_.ranks;
+    scene.share.total_triangles = tally.triangles;
+    scene.share.lo = tally.lo;
+    scene.share.hi = tally.hi;
+    if (owners_[0] < owners_[1]) scene.share.spread.push_back(0);
+    scene.input_files.push_back(path_);
+  }
+
+  const std::string& path_;
+  std::size_t max_triangles_;
+  ObjWindow window_;
+  std::size_t block_;
+  std::uint64_t fans_ = 0;
+  int facets_ = 0;
+  long long skipped_ = 0;
+  std::array<int, 2> owners_{{INT_MAX, -1}};  // the lowest and highest rank holding a triangle
+};
+
+}  // namespace
+
+std::string ply_stream_refusal(const std::string& path) {
+  try {
+    return ply::stream_refusal(ply::read_header(path));
+  } catch (const InputError& e) {  // the importer path judges it, with its own message
+    return std::string("its header: ") + e.what();
+  }
+}
+
+Scene load_ply_window(const std::string& path, std::size_t max_triangles, const ObjWindow& window,
+                      std::uint64_t& fans, std::size_t block_bytes) {
+  return PlyWindowReader(path, max_triangles, window, block_bytes).run(fans);
+}
+
+}  // namespace opsila
+
+#else  // built without the Open Asset Import Library: the importer path says so
+
+namespace opsila {
+
+std::string ply_stream_refusal(const std::string&) { return "this build has no Open Asset Import Library"; }
+
+Scene load_ply_window(const std::string& path, std::size_t, const ObjWindow&, std::uint64_t&, std::size_t) {
+  throw InputError(path + ": this build has no Open Asset Import Library (install libassimp-dev and rebuild)");
+}
+
+}  // namespace opsila
+
+#endif

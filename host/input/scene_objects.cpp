@@ -292,8 +292,9 @@ std::function<void(std::vector<Triangle>&)> SceneReader::terrain(const Json& v, 
 // reader, the others through the importer). The file is read now (an OBJ's
 // triangles count against the scene's limit as they are read), its
 // triangles appended when the scene is built. A scene read in shares
-// streams an OBJ instead: now for its counts, materials and warnings only,
-// and again when it is built, keeping this rank's window (obj_window()).
+// streams an OBJ (and a PLY the PLY stream reads as the importer does)
+// instead: now for its counts, materials and warnings only, and again when
+// it is built, keeping this rank's window (file_window()).
 std::function<void(std::vector<Triangle>&)> SceneReader::include_obj(const Json& v, const std::string& path,
                                                                      bool any_format) {
   check_keys(v, path, {"type", "name", "file", "material", "transform"});
@@ -309,8 +310,10 @@ std::function<void(std::vector<Triangle>&)> SceneReader::include_obj(const Json&
                                ? material_ref(find(v, "material"), join_key(path, "material"))
                                : -1;
   auto sub = std::make_shared<Scene>();
-  const bool obj = lower(fs::path(full).extension().string()) == ".obj";
-  const bool windowed = share_.ranks > 1 && (obj || !any_format);
+  const std::string ext = lower(fs::path(full).extension().string());
+  const bool obj = ext == ".obj";
+  const bool ply = share_.ranks > 1 && any_format && ext == ".ply" && ply_stream_refusal(full).empty();
+  const bool windowed = share_.ranks > 1 && (obj || !any_format || ply);
   std::uint64_t fans = 0;
   try {
     if (!obj && any_format && !is_imported_model(full))
@@ -318,7 +321,8 @@ std::function<void(std::vector<Triangle>&)> SceneReader::include_obj(const Json&
     if (windowed) {
       ObjWindow counting;  // keeps no polygon
       counting.rank = share_.rank, counting.ranks = share_.ranks;
-      *sub = load_obj_window(full, max_triangles_ - planned_triangles_, counting, fans);
+      *sub = ply ? load_ply_window(full, max_triangles_ - planned_triangles_, counting, fans)
+                 : load_obj_window(full, max_triangles_ - planned_triangles_, counting, fans);
     } else if (obj || !any_format) {
       *sub = load_obj(full, std::min(entry_limit_, max_triangles_ - planned_triangles_));
     } else {
@@ -351,7 +355,7 @@ std::function<void(std::vector<Triangle>&)> SceneReader::include_obj(const Json&
   if (reread) sub->triangles = std::vector<Triangle>(), sub->attributes = std::vector<VertexAttributes>();
   return [this, sub, override_mat, mat_offset, windowed, reread, model_triangles, full, fans,
           fkey](std::vector<Triangle>& tris) {
-    if (windowed) obj_window(*sub, full, fans, fkey);
+    if (windowed) file_window(*sub, full, fans, fkey);
     if (reread) model_again(*sub, full, model_triangles, fkey);
     for (int o : sub->share.spread) share_.spread.push_back(next_object_ + o);
     const int attr_offset = static_cast<int>(scene_.attributes.size());

@@ -29,6 +29,7 @@
 #include "core/util.h"
 #include "input/json_text.h"
 #include "input/model_import.h"
+#include "input/ply_reader.h"
 #include "input/primitives.h"
 
 namespace opsila {
@@ -158,7 +159,7 @@ class SceneReader {
   void deal(std::size_t first, std::size_t first_attribute);
   void window(std::size_t all, int object, std::size_t& begin, std::size_t& end);
   void count_window(std::size_t first);
-  void obj_window(Scene& sub, const std::string& file, std::uint64_t fans, const std::string& fkey);
+  void file_window(Scene& sub, const std::string& file, std::uint64_t fans, const std::string& fkey);
   void model_again(Scene& sub, const std::string& file, std::size_t triangles, const std::string& fkey);
   void grow_bounds(const Triangle& t);
   void settle_share();

@@ -565,6 +565,41 @@ TEST_F(MpiFixture, ABarePlyReadInWindowsIsTheSameAsOneProcess) {
   expect_windows_as_one(path, 2u * 40 * 20 + 4);  // the quads, a pentagon and a triangle
 }
 
+// A scene of PLY models (binary either way and ascii, with normals and uv),
+// each streamed in windows: the same as one process (which reads them
+// through the importer) on 2 and 3 ranks, each rank reading about 1/R of
+// every file's facets.
+TEST_F(MpiFixture, PlyModelsReadInWindowsAreTheSameAsOneProcess) {
+  std::string objects;
+  std::uint64_t all = 0;
+  for (int k = 0; k < 3; ++k) {
+    test::PlyFile p = test::ply_grid(12 + 6 * k, 8 + 3 * k, k == 0 ? 0 : 5);
+    p.format = k == 0 ? "binary_little_endian" : k == 1 ? "binary_big_endian" : "ascii";
+    if (k > 0)
+      p.props = {{"float", "x"}, {"float", "y"}, {"float", "z"}, {"float", "nx"}, {"float", "ny"}, {"float", "nz"},
+                 {"float", "u"}, {"float", "v"}};
+    for (auto& v : p.vertices) std::swap(v[1], v[2]);  // a terrain: y up
+    test::write_ply(dir.file("m" + std::to_string(k) + ".ply"), p);
+    all += 2 * (p.faces.size() - 4) + 4;
+    objects += std::string(k ? ",\n" : "") + R"({"type": "model", "file": "m)" + std::to_string(k) +
+               R"(.ply", "transform": {"translate": [)" + std::to_string(3 * k) + ", 0, " + std::to_string(k) + "]}}";
+  }
+  const std::string path = dir.write("models.json", "{\"objects\": [\n" + objects + "\n]}\n");
+  auto with = [&](const std::string& tag) {
+    return std::vector<std::string>{path, "--size", "48x36", "--pes", "6", "-q", "-o", dir.file(tag + ".pfm"),
+                                    "--item-buffer", dir.file(tag + ".npy"), "--stats", dir.file(tag + ".json")};
+  };
+  ASSERT_EQ(one(with("one")).exit_code, 0);
+  ASSERT_EQ(stats(dir.file("one.json")).at("scene").at("triangles").get<std::uint64_t>(), all);
+  for (int R : {2, 3}) {
+    SCOPED_TRACE(std::to_string(R) + " ranks");
+    nlohmann::json s;
+    expect_ranks_as_one(R, with, s);
+    if (HasFatalFailure()) return;
+    EXPECT_EQ(facets_read(s, all / std::uint64_t(R) + 3 * 4, "its window of each file, give or take a face"), all);
+  }
+}
+
 // A PLY whose last face names a vertex the file does not have: every rank
 // reads every face, so every rank stops on it with one line naming the
 // file, the element and the byte; nothing is written.

@@ -244,7 +244,7 @@ BankNode empty_node() {
 // child's height. Kept nodes (cluster roots) always get a wide node of their
 // own, even when they are a single leaf. leaf_child maps a leaf's first
 // position to the value stored in BankNode::child. Returns the wide depth.
-int collapse(const std::vector<BinNode>& bin, int b, int budget, std::vector<BankNode>& nodes, int slot,
+int collapse(const std::vector<BinNode>& bin, int b, int budget, BankArray<BankNode>& nodes, int slot,
              const std::vector<int>& leaf_child, std::vector<int>& wide_of) {
   wide_of[b] = slot;
   struct Kids {  // at most kWidth, kept on the stack (this runs once per wide node)
@@ -306,7 +306,7 @@ int collapse(const std::vector<BinNode>& bin, int b, int budget, std::vector<Ban
 }
 
 // Private-stack entries the traversal of nodes[n] can need at most.
-int stack_need(const std::vector<BankNode>& nodes, int n) {
+int stack_need(const BankArray<BankNode>& nodes, int n) {
   int k = 0, deeper = 0;
   for (int i = 0; i < kWidth; ++i) {
     if (nodes[n].count[i] < 0) continue;
@@ -316,7 +316,7 @@ int stack_need(const std::vector<BankNode>& nodes, int n) {
   return std::max(k, k - 1 + deeper);
 }
 
-void check_stack(const std::vector<BankNode>& nodes, int root) {
+void check_stack(const BankArray<BankNode>& nodes, int root) {
   if (stack_need(nodes, root) > OPSILA_BVH_STACK)
     throw InputError("the scene's bounding-volume hierarchy is deeper than the kernels' traversal stack (" +
                      std::to_string(OPSILA_BVH_STACK) + " entries)");
@@ -324,7 +324,7 @@ void check_stack(const std::vector<BankNode>& nodes, int root) {
 
 }  // namespace
 
-int build_bank_bvh(std::vector<BankNode>& nodes, std::vector<BankTriangle>& tris, const std::vector<Box>& tri_boxes,
+int build_bank_bvh(BankArray<BankNode>& nodes, BankArray<BankTriangle>& tris, const std::vector<Box>& tri_boxes,
                    std::vector<Cluster>& clusters, int c_begin, int c_end,
                    const std::vector<std::pair<int, int>>& ranges, std::vector<int>* source) {
   if (c_begin == c_end) return 0;
@@ -368,6 +368,9 @@ int build_bank_bvh(std::vector<BankNode>& nodes, std::vector<BankTriangle>& tris
   std::iota(leaf_child.begin(), leaf_child.end(), t_begin);
 
   int slot = static_cast<int>(nodes.size());
+  // Room for the wide nodes up front (a bank's tree measured 1 wide node to
+  // 6-8 binary ones): growing by doubling copied and faulted them in again.
+  nodes.reserve(nodes.size() + b.bin.size() / 4 + static_cast<std::size_t>(nc) + 1);
   nodes.emplace_back();
   std::vector<int> wide_of(b.bin.size(), -1);
   int depth = collapse(b.bin, root, OPSILA_BVH_STACK, nodes, slot, leaf_child, wide_of);
@@ -376,13 +379,13 @@ int build_bank_bvh(std::vector<BankNode>& nodes, std::vector<BankTriangle>& tris
   return depth;
 }
 
-std::vector<BankBvh> build_bank_bvhs(std::vector<BankNode>& nodes, std::vector<BankTriangle>& tris,
+std::vector<BankBvh> build_bank_bvhs(BankArray<BankNode>& nodes, BankArray<BankTriangle>& tris,
                                      const std::vector<Box>& tri_boxes, std::vector<Cluster>& clusters,
                                      const std::vector<std::pair<int, int>>& pe_clusters,
                                      const std::vector<std::pair<int, int>>& ranges, std::vector<int>* source) {
   const std::size_t P = pe_clusters.size();
   StageClock clock(PrepareStage::bank_build);
-  std::vector<std::vector<BankNode>> own(P);
+  std::vector<BankArray<BankNode>> own(P);
   std::vector<BankBvh> out(P);
   std::atomic<std::size_t> done{0};
   // Each task touches only its bank's facets, boxes, sources and clusters.
@@ -393,7 +396,7 @@ std::vector<BankBvh> build_bank_bvhs(std::vector<BankNode>& nodes, std::vector<B
   });
   // In PE order, as one build after another would have laid them out.
   std::size_t total = nodes.size();
-  for (const std::vector<BankNode>& v : own) total += v.size();
+  for (const BankArray<BankNode>& v : own) total += v.size();
   nodes.reserve(total);
   for (std::size_t p = 0; p < P; ++p) {
     const int base = static_cast<int>(nodes.size());
@@ -403,14 +406,14 @@ std::vector<BankBvh> build_bank_bvhs(std::vector<BankNode>& nodes, std::vector<B
         if (n.count[i] == 0) n.child[i] += base;
       nodes.push_back(n);
     }
-    std::vector<BankNode>().swap(own[p]);
+    BankArray<BankNode>().swap(own[p]);
     out[p].node_end = static_cast<int>(nodes.size());
     for (int c = pe_clusters[p].first; c < pe_clusters[p].second; ++c) clusters[c].root += base;
   }
   return out;
 }
 
-void build_route_bvh(std::vector<BankNode>& nodes, int root, const std::vector<Box>& boxes,
+void build_route_bvh(BankArray<BankNode>& nodes, int root, const std::vector<Box>& boxes,
                      const std::vector<int>& cluster_ids) {
   nodes[root] = empty_node();
   if (boxes.empty()) return;

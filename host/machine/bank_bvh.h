@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "core/vec.h"
+#include "machine/bank_array.h"
 #include "opsila_shared.h"
 
 namespace opsila {
@@ -23,7 +24,7 @@ namespace opsila {
 // root is appended first, so it is the first node added. Returns the depth
 // of the wide tree (0 when the bank is empty). `source`, when given, is
 // reordered with the facets (so per-facet data elsewhere can follow them).
-int build_bank_bvh(std::vector<BankNode>& nodes, std::vector<BankTriangle>& tris, const std::vector<Box>& tri_boxes,
+int build_bank_bvh(BankArray<BankNode>& nodes, BankArray<BankTriangle>& tris, const std::vector<Box>& tri_boxes,
                    std::vector<Cluster>& clusters, int c_begin, int c_end,
                    const std::vector<std::pair<int, int>>& ranges, std::vector<int>* source = nullptr);
 
@@ -34,7 +35,7 @@ int build_bank_bvh(std::vector<BankNode>& nodes, std::vector<BankTriangle>& tris
 struct BankBvh {
   int node_begin = 0, node_end = 0, depth = 0;
 };
-std::vector<BankBvh> build_bank_bvhs(std::vector<BankNode>& nodes, std::vector<BankTriangle>& tris,
+std::vector<BankBvh> build_bank_bvhs(BankArray<BankNode>& nodes, BankArray<BankTriangle>& tris,
                                      const std::vector<Box>& tri_boxes, std::vector<Cluster>& clusters,
                                      const std::vector<std::pair<int, int>>& pe_clusters,
                                      const std::vector<std::pair<int, int>>& ranges, std::vector<int>* source);
@@ -42,7 +43,7 @@ std::vector<BankBvh> build_bank_bvhs(std::vector<BankNode>& nodes, std::vector<B
 // Builds the routing BVH of one PE over `boxes` (one per cluster, ids in
 // `cluster_ids`) into nodes[root] (already allocated; an empty PE keeps a
 // root with only empty slots). Children are appended to `nodes`.
-void build_route_bvh(std::vector<BankNode>& nodes, int root, const std::vector<Box>& boxes,
+void build_route_bvh(BankArray<BankNode>& nodes, int root, const std::vector<Box>& boxes,
                      const std::vector<int>& cluster_ids);
 
 // The union of a node's child boxes (its slots in use), in the nodes' own

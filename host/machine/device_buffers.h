@@ -30,8 +30,8 @@ cl::Buffer device_buffer(ClRuntime& rt, std::size_t bytes, const char* what, cl_
 // (docs/RELIABILITY.md).
 void zero_buffer(ClRuntime& rt, const cl::Buffer& b, std::size_t bytes, const char* what);
 
-template <typename T>
-cl::Buffer upload(ClRuntime& rt, const std::vector<T>& v, const char* what) {
+template <typename T, typename A>
+cl::Buffer upload(ClRuntime& rt, const std::vector<T, A>& v, const char* what) {
   cl::Buffer b = device_buffer(rt, std::max<std::size_t>(1, v.size()) * sizeof(T), what);
   if (!v.empty())
     cl_check(rt.queue().enqueueWriteBuffer(b, CL_TRUE, 0, v.size() * sizeof(T), v.data()),
@@ -43,25 +43,26 @@ cl::Buffer upload(ClRuntime& rt, const std::vector<T>& v, const char* what) {
 // that shares host memory (CL_DEVICE_HOST_UNIFIED_MEMORY, PoCL on a CPU),
 // CL_MEM_USE_HOST_PTR spares a second copy of the bank arrays, but only at
 // the device's base-address alignment. adopt() takes the vector as it is
-// when it is aligned (or alignment is 1), else moves its bytes into an
-// aligned block and frees the vector at once. Whoever holds the HostArray
+// when it is aligned (or alignment is 1: the bank arrays are made aligned,
+// machine/bank_array.h), else moves its bytes into an aligned block and
+// frees the vector at once. Whoever holds the HostArray
 // must keep it as long as the buffer made from it.
 class HostArray {
  public:
   HostArray() = default;
-  template <typename T>
-  static HostArray adopt(std::vector<T>&& v, std::size_t alignment) {
+  template <typename T, typename A>
+  static HostArray adopt(std::vector<T, A>&& v, std::size_t alignment) {
     HostArray a;
     a.count_ = v.size();
     a.element_ = sizeof(T);
     if (alignment <= 1 || reinterpret_cast<std::uintptr_t>(v.data()) % alignment == 0) {
-      auto kept = std::make_shared<std::vector<T>>(std::move(v));
+      auto kept = std::make_shared<std::vector<T, A>>(std::move(v));
       a.data_ = kept->data();
       a.owner_ = std::move(kept);
     } else {
       a.owner_ = aligned_copy(v.data(), v.size() * sizeof(T), alignment);
       a.data_ = a.owner_.get();
-      std::vector<T>().swap(v);
+      std::vector<T, A>().swap(v);
     }
     return a;
   }
@@ -109,8 +110,8 @@ struct BufferSpec {
 };
 
 // An upload of a host vector (one element of placeholder when it is empty).
-template <typename T>
-BufferSpec host_buffer(const char* name, PlanPart part, const std::vector<T>& v, cl::Buffer* to) {
+template <typename T, typename A>
+BufferSpec host_buffer(const char* name, PlanPart part, const std::vector<T, A>& v, cl::Buffer* to) {
   BufferSpec s;
   s.name = name, s.part = part, s.element = sizeof(T), s.count = std::max<std::size_t>(1, v.size());
   s.fill = Fill::upload, s.host = v.data(), s.host_count = v.size(), s.buffer = to;

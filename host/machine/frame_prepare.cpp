@@ -54,6 +54,10 @@ Renderer::Machine::Machine(const Scene& scene, PreparedBanks banks, const Render
   group = banks.group;
   G = group.size();
   BankedScene& bs = banks.scene;
+  // The upload stage: the frame's tables, the bank arrays handed to the
+  // device (an aligned copy where it reads them in place) and the buffers.
+  const PrepareTimes before_upload = prepare_times();
+  auto upload = std::make_unique<StageClock>(PrepareStage::upload);
   if (measure) ncost = std::size_t(depth) * bs.clusters.size();
   S = OPSILA_SPAWN_SLOTS(static_cast<int>(bs.lights.size()));
   traffic_levels = settings.count_work && P <= OPSILA_TRAFFIC_MAX_PES ? depth : 0;
@@ -83,11 +87,8 @@ Renderer::Machine::Machine(const Scene& scene, PreparedBanks banks, const Render
   prepared.replicated_bytes = bs.replicated_bytes;
   prepared.texture_bytes = bs.texture_bytes;
   prepared.texture_replicated_bytes = bs.texture_replicated_bytes;
-  const PrepareTimes before_upload = prepare_times();
-  {
-    StageClock clock(PrepareStage::upload);
-    allocate();
-  }
+  allocate();
+  upload.reset();
   prepared.prepare = banks.prepare;
   prepared.prepare[PrepareStage::upload] = stages_since(before_upload)[PrepareStage::upload];
   prepared.prepare.peak_host_bytes = host_peak_bytes();

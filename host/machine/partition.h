@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "opsila_shared.h"
+#include "machine/bank_array.h"
 #include "core/ray_sample.h"
 #include "core/scene.h"
 
@@ -24,21 +25,21 @@ namespace opsila {
 
 struct BankedScene {
   int num_pes = 0;
-  std::vector<BankTriangle> triangles;  // bank p: [pes[p].tri_begin, tri_end)
-  std::vector<BankNode> nodes;          // bank p: [pes[p].node_begin, node_end), root first
+  BankArray<BankTriangle> triangles;    // bank p: [pes[p].tri_begin, tri_end)
+  BankArray<BankNode> nodes;            // bank p: [pes[p].node_begin, node_end), root first
   std::vector<Cluster> clusters;        // sorted by PE
   // Routing BVH over padded cluster boxes: PE p's root is node p; nodes
   // P .. P + ceil(P / W) - 1 are the top level, W PEs' boxes to a node in PE
   // order (child = the PE, count 1; absent for an empty PE).
-  std::vector<BankNode> route_nodes;
+  BankArray<BankNode> route_nodes;
   std::vector<PeInfo> pes;
   std::vector<Material> materials;
   std::vector<Light> lights;
   // Empty, or one per triangle (same index): vertex normals, texture
   // coordinates and the bank's texture copies (see bank_attributes).
-  std::vector<BankAttributes> attributes;
+  BankArray<BankAttributes> attributes;
   std::vector<BankTexture> textures;   // texture copies, grouped by bank
-  std::vector<std::uint32_t> texels;   // their texels, packed sRGB
+  BankArray<std::uint32_t> texels;     // their texels, packed sRGB
   std::vector<std::uint64_t> bank_bytes;  // facets + BVH nodes + attributes + textures of each bank
   std::vector<std::uint64_t> texture_bytes;  // texture copies of each bank (part of bank_bytes)
   std::uint64_t texture_replicated_bytes = 0;  // every texture the facets use, once

@@ -78,10 +78,14 @@ void item_bounds(Run run, Box& box, Box& cbox) {
   const std::size_t chunks = run.n < kSpreadFacets ? 1 : std::size_t(host_threads());
   std::vector<Box> part(2 * chunks);
   parallel_for(chunks, [&](std::size_t k) {
+    // Local boxes: grown through part[] itself, every item's min and max
+    // went to memory and back (the items' floats may alias part's).
+    Box b, c;
     for (std::size_t i = run.n * k / chunks, e = run.n * (k + 1) / chunks; i < e; ++i) {
-      part[2 * k].grow(run.first[i].box);
-      part[2 * k + 1].grow(run.first[i].c);
+      b.grow(run.first[i].box);
+      c.grow(run.first[i].c);
     }
+    part[2 * k] = b, part[2 * k + 1] = c;
   });
   for (std::size_t k = 0; k < chunks; ++k) box.grow(part[2 * k]), cbox.grow(part[2 * k + 1]);
 }

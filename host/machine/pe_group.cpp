@@ -37,15 +37,15 @@ int keep_group_banks(BankedScene& bs, const PeGroup& group) {
   const int t0 = first.tri_begin, t1 = last.tri_end;
   const int n0 = first.node_begin, n1 = last.node_end;
   if (t0 > t1 || n0 > n1) throw std::logic_error("keep_group_banks: banks are not contiguous in PE order");
-  bs.triangles = std::vector<BankTriangle>(bs.triangles.begin() + t0, bs.triangles.begin() + t1);
-  bs.nodes = std::vector<BankNode>(bs.nodes.begin() + n0, bs.nodes.begin() + n1);
+  bs.triangles = BankArray<BankTriangle>(bs.triangles.begin() + t0, bs.triangles.begin() + t1);
+  bs.nodes = BankArray<BankNode>(bs.nodes.begin() + n0, bs.nodes.begin() + n1);
   bs.tri_cluster = std::vector<int>(bs.tri_cluster.begin() + t0, bs.tri_cluster.begin() + t1);
   bs.source = std::vector<int>(bs.source.begin() + t0, bs.source.begin() + t1);
   bs.node_cluster = std::vector<int>(bs.node_cluster.begin() + n0, bs.node_cluster.begin() + n1);
   // Per-facet attributes follow the facets; the texture copies (grouped by
   // bank, in PE order) and their texels keep only this group's.
   if (!bs.attributes.empty())
-    bs.attributes = std::vector<BankAttributes>(bs.attributes.begin() + t0, bs.attributes.begin() + t1);
+    bs.attributes = BankArray<BankAttributes>(bs.attributes.begin() + t0, bs.attributes.begin() + t1);
   std::size_t k0 = bs.textures.size(), k1 = 0;
   for (std::size_t k = 0; k < bs.textures.size(); ++k)
     if (bs.textures[k].pe >= group.begin && bs.textures[k].pe < group.end) k0 = std::min(k0, k), k1 = k + 1;
@@ -57,7 +57,7 @@ int keep_group_banks(BankedScene& bs, const PeGroup& group) {
     x1 = std::max(x1, bs.textures[k].texel_begin + bs.textures[k].width * bs.textures[k].height);
   bs.textures = std::vector<BankTexture>(bs.textures.begin() + k0, bs.textures.begin() + k1);
   for (BankTexture& t : bs.textures) t.texel_begin -= x0;
-  bs.texels = std::vector<std::uint32_t>(bs.texels.begin() + x0, bs.texels.begin() + x1);
+  bs.texels = BankArray<std::uint32_t>(bs.texels.begin() + x0, bs.texels.begin() + x1);
   for (BankAttributes& a : bs.attributes) {
     if (a.map_kd >= 0) a.map_kd -= static_cast<int>(k0);
     if (a.map_ka >= 0) a.map_ka -= static_cast<int>(k0);

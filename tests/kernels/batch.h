@@ -45,11 +45,11 @@ class BatchRelease : public ::testing::Environment {
 };
 inline ::testing::Environment* const kBatchRelease = ::testing::AddGlobalTestEnvironment(new BatchRelease);
 
-template <typename T>
-cl::Buffer to_device(ClRuntime& rt, const std::vector<T>& v) {
+template <typename T, typename A>
+cl::Buffer to_device(ClRuntime& rt, const std::vector<T, A>& v) {
   cl_int err = CL_SUCCESS;
   // A zero-sized buffer is invalid: an empty table gets one unread element.
-  std::vector<T> data = v.empty() ? std::vector<T>(1) : v;
+  std::vector<T> data = v.empty() ? std::vector<T>(1) : std::vector<T>(v.begin(), v.end());
   cl::Buffer b(rt.context(), CL_MEM_READ_WRITE | CL_MEM_COPY_HOST_PTR, data.size() * sizeof(T), data.data(), &err);
   cl_check(err, "clCreateBuffer");
   return b;

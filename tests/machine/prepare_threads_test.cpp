@@ -23,8 +23,8 @@ auto with_threads(const char* threads, F f) {
   return result;
 }
 
-template <class T>
-std::vector<unsigned char> bytes(const std::vector<T>& v) {
+template <class T, class A>
+std::vector<unsigned char> bytes(const std::vector<T, A>& v) {
   const auto* p = reinterpret_cast<const unsigned char*>(v.data());
   return std::vector<unsigned char>(p, p + v.size() * sizeof(T));
 }

@@ -666,22 +666,34 @@ TEST_F(MpiFixture, ModelFilesReadAgainAreTheSameAsOneProcess) {
 }
 #endif
 
-// An OBJ entry is streamed in windows, so it is held to the scene's limit
-// (R times one rank's), not one rank's: over one rank's limit it is refused
-// on one process, naming the file, and renders on two ranks, the same image.
-TEST_F(MpiFixture, AnObjOverOneRanksLimitRendersOnTwoRanks) {
+// An OBJ entry (or a PLY model) is streamed in windows, so it is held to
+// the scene's limit (R times one rank's), not one rank's: over one rank's
+// limit it is refused on one process, naming the entry, and renders on two
+// ranks, the same image.
+TEST_F(MpiFixture, AModelFileOverOneRanksLimitRendersOnTwoRanks) {
   grid_obj(dir, "big.obj", 40, 20, 3);  // 3200 triangles
-  const std::string path = dir.write("big.json", R"({"objects": [{"type": "obj", "file": "big.obj"}]})");
-  auto with = [&](const std::string& out) {
-    return std::vector<std::string>{path, "--size", "32x24", "--pes", "4", "-q", "-o", dir.file(out)};
-  };
-  ASSERT_EQ(one(with("unlimited.pfm")).exit_code, 0);
-  env["OPSILA_RANK_TRIANGLE_LIMIT"] = "2000";
-  expect_refused(one(with("alone.pfm")), {"big.json:", "objects[0].file", "big.obj:", "more than 2000"});
-  EXPECT_FALSE(test::file_exists(dir.file("alone.pfm")));
-  const RunResult two = ranks(2, with("two.pfm"));
-  ASSERT_EQ(two.exit_code, 0) << two.err;
-  EXPECT_TRUE(test::read_file(dir.file("two.pfm")) == test::read_file(dir.file("unlimited.pfm")));
+  std::vector<std::pair<std::string, std::string>> entries = {{R"("type": "obj", "file": "big.obj")", "2000"}};
+#ifdef OPSILA_HAVE_ASSIMP
+  test::PlyFile ply = test::ply_grid(41, 21, 0);  // 1604 triangles
+  for (auto& v : ply.vertices) v[2] *= 0.2;
+  test::write_ply(dir.file("big.ply"), ply);
+  entries.push_back({R"("type": "model", "file": "big.ply")", "1000"});
+#endif
+  for (const auto& [entry, limit] : entries) {
+    SCOPED_TRACE(entry);
+    env.erase("OPSILA_RANK_TRIANGLE_LIMIT");
+    const std::string path = dir.write("big.json", R"({"objects": [{)" + entry + "}]}");
+    auto with = [&](const std::string& out) {
+      return std::vector<std::string>{path, "--size", "32x24", "--pes", "4", "-q", "-o", dir.file(out)};
+    };
+    ASSERT_EQ(one(with("unlimited.pfm")).exit_code, 0);
+    env["OPSILA_RANK_TRIANGLE_LIMIT"] = limit;
+    expect_refused(one(with("alone.pfm")), {"big.json:", "objects[0]", " " + limit});
+    EXPECT_FALSE(test::file_exists(dir.file("alone.pfm")));
+    const RunResult two = ranks(2, with("two.pfm"));
+    ASSERT_EQ(two.exit_code, 0) << two.err;
+    EXPECT_TRUE(test::read_file(dir.file("two.pfm")) == test::read_file(dir.file("unlimited.pfm")));
+  }
 }
 
 // A broken face near the end of a big OBJ, in the last rank's window: every

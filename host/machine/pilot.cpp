@@ -126,9 +126,11 @@ MeasuredWork run_pilots(const Scene& view, const RenderSettings& ps, const Pilot
 
 }  // namespace
 
-MeasuredWork pilot_work(const Scene& scene, const RenderSettings& settings, ClRuntime& runtime,
-                        PilotFigures& figures) {
-  const Scene view = pilot_scene(scene);
+namespace {
+
+// The pilots' partitions of a whole scene, rendered with `view`.
+MeasuredWork whole_scene_pilots(const Scene& scene, const Scene& view, const RenderSettings& settings,
+                                ClRuntime& runtime, PilotFigures& figures) {
   const RenderSettings ps = pilot_settings(settings);
   Ranks& ranks = Ranks::world();
   const PeGroup group = pe_group(ps.num_pes, ranks.size(), ranks.rank());
@@ -137,24 +139,47 @@ MeasuredWork pilot_work(const Scene& scene, const RenderSettings& settings, ClRu
       [&](const MeasuredWork* measured) {
         BalancePolicy policy;
         if (measured) policy = BalancePolicy{Balance::measured, nullptr, measured};
-        return bank_scene(view, ps.num_pes, ps.routing, policy, group);
+        return bank_scene(scene, ps.num_pes, ps.routing, policy, group);
       },
       runtime, figures);
 }
 
+// The pilots' view without a copy of the facets, their attributes and the
+// texture images: the renderer reads only the banks for those, and the
+// partitions are made from the scene itself. The facets are lent out while
+// the rest is copied. A whole scene's view keeps one facet spanning the
+// scene's box, so that its bounds (the frame's epsilon and box slack) are
+// the scene's; a share's bounds are its figures.
+Scene view_without_facets(Scene& scene) {
+  Vec3 lo, hi;
+  if (!scene.is_share()) scene.bounds(lo, hi);
+  std::vector<Triangle> facets = std::move(scene.triangles);
+  std::vector<VertexAttributes> attributes = std::move(scene.attributes);
+  std::vector<Texture> textures = std::move(scene.textures);
+  Scene view = pilot_scene(scene);
+  scene.triangles = std::move(facets);
+  scene.attributes = std::move(attributes);
+  scene.textures = std::move(textures);
+  if (!scene.is_share() && !scene.triangles.empty()) {
+    Triangle span = scene.triangles.front();
+    span.v0 = lo, span.v1 = hi, span.v2 = lo;
+    span.attributes = -1;
+    view.triangles.push_back(span);
+  }
+  return view;
+}
+
+}  // namespace
+
+MeasuredWork pilot_work(const Scene& scene, const RenderSettings& settings, ClRuntime& runtime,
+                        PilotFigures& figures) {
+  return whole_scene_pilots(scene, pilot_scene(scene), settings, runtime, figures);
+}
+
 MeasuredWork pilot_work(Scene& share, const RenderSettings& settings, ClRuntime& runtime, PilotFigures& figures,
                         ShareClusters& clusters) {
-  if (!share.is_share()) return pilot_work(static_cast<const Scene&>(share), settings, runtime, figures);
-  // The view without the facets: the renderer reads only the banks, and the
-  // share keeps its own (for every pilot's partition).
-  Scene view;
-  {
-    std::vector<Triangle> facets = std::move(share.triangles);
-    std::vector<VertexAttributes> attributes = std::move(share.attributes);
-    view = pilot_scene(share);
-    share.triangles = std::move(facets);
-    share.attributes = std::move(attributes);
-  }
+  const Scene view = view_without_facets(share);
+  if (!share.is_share()) return whole_scene_pilots(share, view, settings, runtime, figures);
   const RenderSettings ps = pilot_settings(settings);
   Ranks& ranks = Ranks::world();
   const PeGroup group = pe_group(ps.num_pes, ranks.size(), ranks.rank());

@@ -57,14 +57,15 @@ MeasuredWork spread_cluster_work(const std::vector<std::uint64_t>& work, int lev
 
 // The work measured by the pilot frames for `settings` (its PEs, routing
 // and work-groups; one sample per pixel), per facet of `scene`. The pilots'
-// view of a whole scene is a copy of it (host memory for a second copy of
-// its facets while they run).
+// view of a const scene is a copy of it (host memory for a second copy of
+// its facets while they run); the overload below lends them out instead.
 MeasuredWork pilot_work(const Scene& scene, const RenderSettings& settings, ClRuntime& runtime,
                         PilotFigures& figures);
 // A scene read in shares: every rank runs the pilots together, each
 // partition made collectively from the shares (machine/collective_partition.h),
 // which keep their facets until the last pilot; the work is per facet of
-// this rank's share. A whole scene: as above.
+// this rank's share. A whole scene: as above, its view copied without the
+// facets, their attributes and the texture images (lent out meanwhile).
 // `clusters` gets the share's clusters before the balance's cuts (the
 // same for the frame's partition: ShareBalance::clusters).
 MeasuredWork pilot_work(Scene& share, const RenderSettings& settings, ClRuntime& runtime, PilotFigures& figures,

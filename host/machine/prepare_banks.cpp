@@ -9,8 +9,38 @@
 
 namespace opsila {
 
+namespace {
+
+// A whole scene; `lendable` (null, or the scene itself) lends its facets
+// out while the pilots' view is copied, so the view costs no second copy.
+PreparedBanks prepare_whole(const Scene& scene, Scene* lendable, const RenderSettings& settings,
+                            ClRuntime& runtime) {
+  check_machine_request(scene, settings.num_pes);
+  const PrepareTimes before = prepare_times();
+  Ranks& ranks = Ranks::world();
+  const PeGroup group = pe_group(settings.num_pes, ranks.size(), ranks.rank());
+  BalancePolicy policy;
+  policy.balance = settings.balance;
+  policy.sample = settings.ray_sample;
+  MeasuredWork measured;
+  PilotFigures pilots;
+  if (settings.balance == Balance::measured) {
+    ShareClusters unused;  // a whole scene's clusters are made by its partition
+    measured = lendable ? pilot_work(*lendable, settings, runtime, pilots, unused)
+                        : pilot_work(scene, settings, runtime, pilots);
+    policy.measured = &measured;
+  }
+  PreparedBanks banks = bank_scene(scene, settings.num_pes, settings.routing, policy, group);
+  banks.pilot_frames = pilots.frames;
+  banks.pilot_seconds = pilots.seconds;
+  banks.prepare = stages_since(before);
+  return banks;
+}
+
+}  // namespace
+
 PreparedBanks prepare_banks(Scene& scene, const RenderSettings& settings, ClRuntime& runtime) {
-  if (!scene.is_share()) return prepare_banks(static_cast<const Scene&>(scene), settings, runtime);
+  if (!scene.is_share()) return prepare_whole(scene, &scene, settings, runtime);
   // Read in shares: the ranks partition it together, and it gives up its facets once they are sent.
   check_machine_request(scene, settings.num_pes);
   if (settings.balance == Balance::work)
@@ -42,24 +72,7 @@ PreparedBanks prepare_banks(const Scene& scene, const RenderSettings& settings, 
     Scene copy = scene;
     return prepare_banks(copy, settings, runtime);
   }
-  check_machine_request(scene, settings.num_pes);
-  const PrepareTimes before = prepare_times();
-  Ranks& ranks = Ranks::world();
-  const PeGroup group = pe_group(settings.num_pes, ranks.size(), ranks.rank());
-  BalancePolicy policy;
-  policy.balance = settings.balance;
-  policy.sample = settings.ray_sample;
-  MeasuredWork measured;
-  PilotFigures pilots;
-  if (settings.balance == Balance::measured) {
-    measured = pilot_work(scene, settings, runtime, pilots);
-    policy.measured = &measured;
-  }
-  PreparedBanks banks = bank_scene(scene, settings.num_pes, settings.routing, policy, group);
-  banks.pilot_frames = pilots.frames;
-  banks.pilot_seconds = pilots.seconds;
-  banks.prepare = stages_since(before);
-  return banks;
+  return prepare_whole(scene, nullptr, settings, runtime);
 }
 
 }  // namespace opsila

@@ -232,6 +232,36 @@ TEST(Renderer, BalancingByMeasuredWorkGivesTheSameImageAndEvenerPes) {
   }
 }
 
+// A whole scene the caller may change lends its facets out while the
+// pilots' view is copied (no second copy of them), and gets them back: the
+// same buffer, and the same banks as the pilots of a const scene, whose view
+// is a full copy. The view keeps the scene's bounds, so the pilot frames'
+// epsilon, and with it every count, are the copy's.
+TEST(Pilot, AWholeSceneLendsItsFacetsToThePilotsView) {
+  Scene s = load_scene(std::string(OPSILA_SOURCE_DIR) + "/scenes/hundreds.json");
+  s.width = 96;
+  s.height = 72;
+  RenderSettings rs;
+  rs.num_pes = 16;
+  rs.balance = Balance::measured;
+  const PreparedBanks copied = prepare_banks(static_cast<const Scene&>(s), rs, runtime());
+  const Triangle* facets = s.triangles.data();
+  const std::size_t count = s.triangles.size(), textures = s.textures.size();
+  const PreparedBanks lent = prepare_banks(s, rs, runtime());
+  EXPECT_EQ(s.triangles.data(), facets);
+  EXPECT_EQ(s.triangles.size(), count);
+  EXPECT_EQ(s.textures.size(), textures);
+  EXPECT_EQ(lent.pilot_frames, kPilotFrames);
+  ASSERT_EQ(lent.scene.triangles.size(), copied.scene.triangles.size());
+  EXPECT_EQ(0, std::memcmp(lent.scene.triangles.data(), copied.scene.triangles.data(),
+                           copied.scene.triangles.size() * sizeof(BankTriangle)));
+  ASSERT_EQ(lent.scene.pes.size(), copied.scene.pes.size());
+  for (std::size_t p = 0; p < copied.scene.pes.size(); ++p) {
+    EXPECT_EQ(lent.scene.pes[p].tri_begin, copied.scene.pes[p].tri_begin) << "PE " << p;
+    EXPECT_EQ(lent.scene.pes[p].tri_end, copied.scene.pes[p].tri_end) << "PE " << p;
+  }
+}
+
 // The pilot's counts: every test of the SPMD phase of a child box or facet
 // that belongs to a cluster is counted for it at the ray's level, so the
 // counted work is most of (and never above) the tests the PEs report. Small

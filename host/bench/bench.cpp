@@ -118,11 +118,10 @@ int run_bench(const std::vector<std::string>& args) {
   view.balance = o.balance.value_or(kBenchBalance);
   const auto note = [&](const std::string& text) { progress("note: %s", text.c_str()); };
   Scene scene = load_view_scene(o.scene_path, o, o.quiet || !writer, outputs, note,
-                                scene_share_for(ranks, *view.balance, note));
+                                scene_share_for(ranks));
   if (view.balance == Balance::work) progress("sampling the frame's rays for --balance work");
   if (view.balance == Balance::measured) progress("pilot frames for --balance measured");
-  RaySample sample;
-  const RenderSettings settings = render_settings(view, scene, sample);
+  const RenderSettings settings = render_settings(view);
 
   BenchReport report = start_report(o, scene, settings.num_pes);
   report.device = device_facts(rt);

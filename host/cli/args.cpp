@@ -266,17 +266,16 @@ void check_view_flags(const ViewOptions& o) {
   }
 }
 
-RenderSettings render_settings(const ViewOptions& o, const Scene& scene, RaySample& sample) {
+RenderSettings render_settings(const ViewOptions& o) {
   RenderSettings settings;
   settings.num_pes = o.pes.value_or(settings.num_pes);
   settings.bank_capacity = o.bank_capacity;
   settings.work_groups_per_pe = o.work_groups_per_pe;
   if (o.routing) settings.routing = *o.routing;
   settings.balance = o.balance.value_or(kDefaultBalance);
-  if (settings.balance == Balance::work) {
-    sample = ReferenceTracer(scene).sample_rays(kBalanceSampleRays);
-    settings.ray_sample = &sample;
-  }
+  settings.sampler = [](const Scene& scene, const SampleJoin* join) {
+    return ReferenceTracer(scene).sample_rays(kBalanceSampleRays, join);
+  };
   return settings;
 }
 

@@ -82,10 +82,6 @@ struct ViewOptions {
   bool smooth = false;            // --smooth: SPEC's smooth shading (else the scene's "smooth")
 };
 
-// Primary rays sampled for --balance work (core/ray_sample.h): about one in
-// 30 pixels at 800x600, a few percent of a frame's time on the host.
-constexpr int kBalanceSampleRays = 16000;
-
 // --balance when the flag is absent: render keeps equal banks (no pilot
 // frames to pay for before the frame); the bench measures the scheme with
 // its PEs balanced by measured work (docs/BENCHMARKS.md).
@@ -118,10 +114,10 @@ void check_view_flags(const ViewOptions& o);
 void apply_view_options(Scene& scene, const ViewOptions& options);
 
 // The machine the view flags ask for (--pes, --bank-capacity,
-// --work-groups-per-pe, --routing). With --balance work it also samples the
-// frame's rays into `sample` (which must outlive the settings) for the
-// partition.
-RenderSettings render_settings(const ViewOptions& options, const Scene& scene, RaySample& sample);
+// --work-groups-per-pe, --routing, --balance; the ray sample of --balance
+// work is traced when the banks are prepared, by the reference tracer it
+// hands down as settings.sampler).
+RenderSettings render_settings(const ViewOptions& options);
 
 // The device --device names (the default when empty: under mpirun, the
 // ranks of a machine take its GPUs in turn); a problem with the name

@@ -245,16 +245,13 @@ int run_render(const std::vector<std::string>& args) {
     if (o.balance) print_line("warning", "--balance is ignored with --reference (one processor, no banks)");
   }
 
-  const SceneShare share = scene_share_for(ranks, o.balance.value_or(kDefaultBalance), [&](const std::string& note) {
-    if (writer && !o.quiet) print_line("note", note);
-  });
+  const SceneShare share = scene_share_for(ranks);
   // Not const: a share gives up its facets to the partition (render(Scene&)).
   Scene scene = load_view_scene(o.scene_path, o, o.quiet || !writer, outputs,
                                       [](const std::string& note) { print_line("note", note); }, share);
   ViewOptions machine = o;
   if (o.reference) machine.balance = Balance::facets;  // one processor, no banks to balance
-  RaySample sample;
-  RenderSettings settings = render_settings(machine, scene, sample);
+  RenderSettings settings = render_settings(machine);
   Progress progress("render", !o.quiet && writer);
   settings.progress = &progress;
   settings.count_work = !o.stats_path.empty();  // only --stats reads the work counters

@@ -19,13 +19,9 @@ std::string device_text(Ranks& ranks, int num_pes, const std::string& descriptio
          std::to_string(g.begin) + ".." + std::to_string(g.end - 1) + ": " + description;
 }
 
-SceneShare scene_share_for(Ranks& ranks, Balance balance, const std::function<void(const std::string&)>& note) {
+SceneShare scene_share_for(Ranks& ranks) {
   SceneShare share;
   if (ranks.size() <= 1) return share;
-  if (balance == Balance::work) {
-    note("--balance work: every rank reads the whole scene (--balance facets or measured reads a share per rank)");
-    return share;
-  }
   share.rank = ranks.rank(), share.ranks = ranks.size();
   share.combine = [&ranks](SceneShare& s) { combine_share(s, ranks); };  // a terrain's windows, added up
   share.decode_maps = decode_used_maps;  // texture images: only where the banks use them

@@ -18,12 +18,11 @@ namespace opsila {
 // rank's group of num_pes PEs.
 std::string device_text(Ranks& ranks, int num_pes, const std::string& description);
 
-// Under mpirun with --balance facets or measured each rank reads only its
-// share of a JSON scene and the ranks partition it together, the pilots
-// included (docs/DISTRIBUTED.md); the ray sample of --balance work needs
-// the whole scene on every rank, which `note` is told (give a no-op when
-// quiet). One process: the scene is whole.
-SceneShare scene_share_for(Ranks& ranks, Balance balance, const std::function<void(const std::string&)>& note);
+// Under mpirun each rank reads only its share of the scene and the ranks
+// partition it together, with any --balance: the pilots of measured and the
+// ray sample of work included (docs/DISTRIBUTED.md). One process: the
+// scene is whole.
+SceneShare scene_share_for(Ranks& ranks);
 
 // Reads the scene (this rank's share when `share` asks), with the
 // preparation's progress unless quiet, refuses it as an output, applies the

@@ -6,6 +6,8 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
+#include <functional>
 #include <limits>
 #include <vector>
 
@@ -22,6 +24,29 @@ struct RaySample {
   std::vector<RaySegment> rays;
   int stride = 0;  // one primary ray every `stride` pixels in x and in y
 };
+
+// Primary rays sampled for --balance work: about one in 30 pixels at
+// 800x600, a few percent of a frame's time on the host.
+constexpr int kBalanceSampleRays = 16000;
+
+// How the holders of a scene read in shares (one per MPI rank) trace the
+// sample together (ReferenceTracer::sample_rays): each finds its own
+// facets' nearest hits, and these join the others' (machine/ranks.h).
+// Every holder makes the same calls in the same order.
+class SampleJoin {
+ public:
+  virtual ~SampleJoin() = default;
+  virtual int holder() const = 0;  // this holder's number, from 0
+  // The element-wise minimum over every holder, in place.
+  virtual void min(std::vector<std::uint64_t>& values) const = 0;
+  // Every holder's bytes, concatenated in holder order.
+  virtual std::vector<unsigned char> all_gather(const std::vector<unsigned char>& mine) const = 0;
+};
+
+// What traces the sample of a scene (whole, or a share with the join of the
+// other holders): ReferenceTracer::sample_rays, handed down by the command
+// line, since the machine does not include the reference tracer.
+using RaySampler = std::function<RaySample(const Scene& scene, const SampleJoin* join)>;
 
 // The work a pilot frame measured (--balance measured): the SPMD phase's
 // ray-box and ray-facet tests, counted per cluster and level on the device,

@@ -1,18 +1,35 @@
-// --balance measured on a scene read in shares: the cluster table with each
-// cluster's measured work, and region_weights' cuts of the hot clusters,
-// by every rank together (machine/collective_balance.h). The work is summed
+// --balance measured and work on a scene read in shares: the cluster table
+// with each cluster's heat, and region_weights' cuts of the hot clusters,
+// by every rank together (machine/collective_balance.h); and the ray sample
+// of --balance work, traced by the ranks together. Measured work is summed
 // in fixed point (partition_steps::measured_sums), so a spread cluster's
 // sum over the ranks is exactly one process's sum over its facets.
 #include "machine/collective_balance.h"
 
 #include <algorithm>
 #include <numeric>
+#include <stdexcept>
 #include <type_traits>
 #include <utility>
+
+#include "core/stage_clock.h"
 
 namespace opsila {
 
 using namespace partition_steps;
+
+// The same on every rank (a rank's share of the measured work may be
+// empty): every rank takes the same collective steps.
+int ShareHeat::levels() const {
+  if (measured) return measured->levels;
+  return sample && !sample->rays.empty() ? 1 : 0;
+}
+
+std::vector<std::int64_t> ShareHeat::of(const std::vector<int>& tris, const Box& box) const {
+  if (measured) return measured_sums(*measured, tris);
+  if (sample && !sample->rays.empty()) return {std::int64_t(crossings(box, *sample))};
+  return {};
+}
 
 namespace {
 
@@ -35,10 +52,6 @@ ClusterSummary summary_of(const ClusterBuild& c, const ClusterSummary& like, std
   return s;
 }
 
-std::vector<std::int64_t> sums_of(const MeasuredWork* m, const std::vector<int>& tris) {
-  return m ? measured_sums(*m, tris) : std::vector<std::int64_t>();
-}
-
 // Sums over every rank, in place (non-negative, so sent as unsigned).
 void sum_over_ranks(std::vector<std::int64_t>& v, Ranks& ranks) {
   std::vector<std::uint64_t> u(v.begin(), v.end());
@@ -47,7 +60,7 @@ void sum_over_ranks(std::vector<std::int64_t>& v, Ranks& ranks) {
 }
 
 // A cluster this rank holds alone, cut as region_weights cuts it.
-bool cut_own(const Scene& share, const MeasuredWork& m, ShareClusters& split, const ClusterSummary& s,
+bool cut_own(const Scene& share, const ShareHeat& heat, ShareClusters& split, const ClusterSummary& s,
              CutRecord& r, std::vector<std::int64_t>& work) {
   const std::vector<int>& tris = split.clusters[std::size_t(s.local)].tris;
   Box unused, cbox;
@@ -57,8 +70,8 @@ bool cut_own(const Scene& share, const MeasuredWork& m, ShareClusters& split, co
   Box lbox, ubox, ignored;
   bounds_of(share, lower, lbox, ignored);
   bounds_of(share, upper, ubox, ignored);
-  work = measured_sums(m, lower);
-  const std::vector<std::int64_t> up = measured_sums(m, upper);
+  work = heat.of(lower, lbox);
+  const std::vector<std::int64_t> up = heat.of(upper, ubox);
   work.insert(work.end(), up.begin(), up.end());
   ClusterBuild lo = make_cluster(std::move(lower), lbox), hi = make_cluster(std::move(upper), ubox);
   r.lower = summary_of(lo, s, s.local, lo.tris.size());
@@ -70,7 +83,7 @@ bool cut_own(const Scene& share, const MeasuredWork& m, ShareClusters& split, co
 
 // A spread cluster, cut by every rank together: the same decision, the
 // same halves, the pieces' boxes and work joined over the ranks.
-bool cut_spread(const Scene& share, const MeasuredWork& m, ShareClusters& split, const ClusterSummary& s,
+bool cut_spread(const Scene& share, const ShareHeat& heat, ShareClusters& split, const ClusterSummary& s,
                 CutRecord& r, std::vector<std::int64_t>& work, Ranks& ranks) {
   const ShareClusters::Spread sp = split.spread[std::size_t(s.local)];
   std::vector<int> lower = split.clusters[std::size_t(sp.local)].tris, upper;
@@ -80,10 +93,10 @@ bool cut_spread(const Scene& share, const MeasuredWork& m, ShareClusters& split,
   Box lbox, ubox, ignored;
   spread_bounds(share, lower, lbox, ignored, ranks);
   spread_bounds(share, upper, ubox, ignored, ranks);
-  work = measured_sums(m, lower);
-  const std::vector<std::int64_t> up = measured_sums(m, upper);
+  work = heat.of(lower, lbox);
+  const std::vector<std::int64_t> up = heat.of(upper, ubox);
   work.insert(work.end(), up.begin(), up.end());
-  sum_over_ranks(work, ranks);
+  if (heat.summed()) sum_over_ranks(work, ranks);
   const std::uint64_t n_lower = s.facets / 2;  // the median's rank: the lower half is the n / 2 lowest keys
   ClusterBuild lo = make_cluster(std::move(lower), lbox), hi = make_cluster(std::move(upper), ubox);
   r.lower = summary_of(lo, s, s.local, n_lower);
@@ -124,19 +137,19 @@ bool apply_cuts(ClusterTable& t, const std::vector<CutRecord>& mine, const std::
 
 }  // namespace
 
-ClusterTable gather_clusters(const Scene& share, const ShareClusters& split, const MeasuredWork* measured,
-                             Ranks& ranks) {
+ClusterTable gather_clusters(const Scene& share, const ShareClusters& split, const ShareHeat& heat, Ranks& ranks) {
   const std::vector<ClusterBuild>& local = split.clusters;
-  const std::size_t L = measured ? std::size_t(measured->levels) : 0;
+  const std::size_t L = std::size_t(heat.levels());
   std::vector<int> spread_of(local.size(), -1);
   for (std::size_t k = 0; k < split.spread.size(); ++k) spread_of[std::size_t(split.spread[k].local)] = int(k);
   // A spread cluster's work over every rank (each holds part of its facets).
   std::vector<std::int64_t> spread_work;
   for (const ShareClusters::Spread& sp : split.spread) {
-    const std::vector<std::int64_t> w = sums_of(measured, local[std::size_t(sp.local)].tris);
+    const ClusterBuild& c = local[std::size_t(sp.local)];
+    const std::vector<std::int64_t> w = heat.of(c.tris, c.box);
     spread_work.insert(spread_work.end(), w.begin(), w.end());
   }
-  sum_over_ranks(spread_work, ranks);
+  if (heat.summed()) sum_over_ranks(spread_work, ranks);
   std::vector<ClusterSummary> mine;
   std::vector<std::int64_t> mine_work;
   const int last_object = std::max(share.num_objects, 1) - 1;
@@ -153,7 +166,7 @@ ClusterTable gather_clusters(const Scene& share, const ShareClusters& split, con
     const std::vector<std::int64_t> w =
         k >= 0 ? std::vector<std::int64_t>(spread_work.begin() + std::ptrdiff_t(std::size_t(k) * L),
                                            spread_work.begin() + std::ptrdiff_t(std::size_t(k + 1) * L))
-               : sums_of(measured, local[i].tris);
+               : heat.of(local[i].tris, local[i].box);
     mine_work.insert(mine_work.end(), w.begin(), w.end());
   }
   const std::vector<ClusterSummary> all = records_of<ClusterSummary>(ranks.all_gather(bytes_of(mine)));
@@ -166,6 +179,7 @@ ClusterTable gather_clusters(const Scene& share, const ShareClusters& split, con
   });
   ClusterTable t;
   t.levels = static_cast<int>(L);
+  t.sampled = L > 0 && !heat.summed();
   for (std::size_t i : order) {
     t.clusters.push_back(all[i]);
     t.work.insert(t.work.end(), work.begin() + std::ptrdiff_t(i * L), work.begin() + std::ptrdiff_t((i + 1) * L));
@@ -173,7 +187,7 @@ ClusterTable gather_clusters(const Scene& share, const ShareClusters& split, con
   return t;
 }
 
-void cut_hot_clusters(const Scene& share, const MeasuredWork& measured, int num_pes, ShareClusters& split,
+void cut_hot_clusters(const Scene& share, const ShareHeat& heat, int num_pes, ShareClusters& split,
                       ClusterTable& t, Ranks& ranks) {
   std::int64_t all = 0;
   for (std::size_t k = 0; k < t.clusters.size(); ++k) all += table_heat(t, k);
@@ -186,8 +200,8 @@ void cut_hot_clusters(const Scene& share, const MeasuredWork& measured, int num_
       CutRecord r;
       r.parent = static_cast<std::int32_t>(k);
       std::vector<std::int64_t> work;
-      const bool done = s.spread ? cut_spread(share, measured, split, s, r, work, ranks)
-                                 : cut_own(share, measured, split, s, r, work);
+      const bool done = s.spread ? cut_spread(share, heat, split, s, r, work, ranks)
+                                 : cut_own(share, heat, split, s, r, work);
       if (!done || (s.spread && ranks.rank() != 0)) continue;  // a spread cluster's pieces: rank 0 reports them
       mine.push_back(r);
       mine_work.insert(mine_work.end(), work.begin(), work.end());
@@ -196,6 +210,36 @@ void cut_hot_clusters(const Scene& share, const MeasuredWork& measured, int num_
     all = 0;  // exact, so the same as one process's running total
     for (std::size_t k = 0; k < t.clusters.size(); ++k) all += table_heat(t, k);
   }
+}
+
+namespace {
+
+// The sample's joins over the ranks (core/ray_sample.h).
+class RanksJoin : public SampleJoin {
+ public:
+  explicit RanksJoin(Ranks& ranks) : ranks_(ranks) {}
+  int holder() const override { return ranks_.rank(); }
+  void min(std::vector<std::uint64_t>& v) const override {
+    for (std::uint64_t& x : v) x = ~x;  // the least is the greatest complement
+    ranks_.max(v);
+    for (std::uint64_t& x : v) x = ~x;
+  }
+  std::vector<unsigned char> all_gather(const std::vector<unsigned char>& mine) const override {
+    return ranks_.all_gather(mine);
+  }
+
+ private:
+  Ranks& ranks_;
+};
+
+}  // namespace
+
+RaySample balance_sample(const Scene& scene, const RaySampler& sampler, Ranks& ranks) {
+  if (!sampler) throw std::invalid_argument("--balance work: neither a ray sample nor a sampler");
+  const StageClock clock(PrepareStage::partition);  // the sample serves the partition alone
+  if (!scene.is_share()) return sampler(scene, nullptr);
+  const RanksJoin join(ranks);
+  return sampler(scene, &join);
 }
 
 }  // namespace opsila

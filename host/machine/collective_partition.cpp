@@ -47,7 +47,8 @@ struct Placement {
 };
 
 // The table bisected as partition_scene bisects its clusters: by facets,
-// or (measured work) by each level's work and a tenth on the facets.
+// by the sampled rays crossing them and a tenth on the facets (--balance
+// work), or by each level's measured work and a tenth on the facets.
 Placement place_clusters(const ClusterTable& t, const ShareClusters& split, int num_pes, Ranks& ranks) {
   const std::vector<ClusterSummary>& all = t.clusters;
   const std::size_t L = std::size_t(t.levels);
@@ -61,11 +62,14 @@ Placement place_clusters(const ClusterTable& t, const ShareClusters& split, int 
   for (std::size_t k = 0; k < all.size(); ++k) {
     for (int a = 0; a < 3; ++a) table[k].c[a] = all[k].c[a];
     table[k].weight = double(all[k].facets);
-    if (heat > 0) table[k].work = measured_weights(t.work.data() + k * L, t.levels, heat, all[k].facets, facets);
+    if (heat > 0 && t.sampled)
+      table[k].weight = sampled_weight(all[k].facets, facets, heat_of(t.work.data() + k * L, t.levels), heat);
+    else if (heat > 0)
+      table[k].work = measured_weights(t.work.data() + k * L, t.levels, heat, all[k].facets, facets);
   }
   std::vector<int> idx(all.size());
   std::iota(idx.begin(), idx.end(), 0);
-  if (heat > 0)
+  if (heat > 0 && !t.sampled)
     assign_regions_measured(table, idx, 0, num_pes);
   else
     assign_regions(table, idx, 0, num_pes);
@@ -324,7 +328,8 @@ PreparedBanks bank_share(Scene& share, int num_pes, int routing, const PeGroup& 
   const bool split_flat = routing == OPSILA_ROUTING_SPHERES;
   PreparedBanks out;
   out.group = group;
-  out.balance = how.measured ? Balance::measured : Balance::facets;
+  out.balance = how.measured ? Balance::measured : how.sample ? Balance::work : Balance::facets;
+  const ShareHeat heat{how.measured, how.sample};
   ShareFigures& figures = out.share;
   auto t0 = std::chrono::steady_clock::now();
   figures.active = true;
@@ -346,8 +351,8 @@ PreparedBanks bank_share(Scene& share, int num_pes, int routing, const PeGroup& 
     split = split_share(share, sbox, num_pes, split_flat, ranks, [&clock](double f) { clock.progress(0.5 * f); });
     if (how.clusters) *how.clusters = split;
   }
-  ClusterTable table = gather_clusters(share, split, how.measured, ranks);
-  if (how.measured) cut_hot_clusters(share, *how.measured, num_pes, split, table, ranks);
+  ClusterTable table = gather_clusters(share, split, heat, ranks);
+  if (heat.levels() > 0) cut_hot_clusters(share, heat, num_pes, split, table, ranks);
   const Placement pl = place_clusters(table, split, num_pes, ranks);
   table = ClusterTable();
   if (how.keep_share) note_clusters(split, pl, share.triangles.size(), out);

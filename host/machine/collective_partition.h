@@ -25,6 +25,9 @@ namespace opsila {
 // rank's share, machine/pilot.h).
 struct ShareBalance {
   const MeasuredWork* measured = nullptr;
+  // Or --balance work: the frame's rays, sampled by the ranks together
+  // (share_ray_sample, machine/collective_balance.h).
+  const RaySample* sample = nullptr;
   // The pilots partition the share again and again: it keeps its facets
   // (held beside the banks while the pilots run, about twice the rank's
   // facets), and PreparedBanks::facet_cluster gets each one's cluster.
@@ -40,9 +43,7 @@ struct ShareBalance {
 
 // The banks of `group`, as bank_scene(whole scene) prepares them with the
 // same balance, built by every rank of `ranks` together from their shares
-// (a collective call: a failure inside it ends every rank). The ray sample
-// of --balance work needs the whole scene, so the command line reads it
-// whole for that mode.
+// (a collective call: a failure inside it ends every rank).
 // The share's facets (triangles and vertex attributes) are given up once
 // they are sent (unless `how` keeps them): the banks are built from what
 // the rank received.

@@ -116,6 +116,11 @@ std::vector<std::int64_t> measured_sums(const MeasuredWork& m, const std::vector
   return w;
 }
 
+double sampled_weight(std::size_t facets, std::size_t total_facets, std::int64_t heat, std::int64_t all) {
+  return kFacetShare * double(facets) / std::max(double(total_facets), 1.0) +
+         (1.0 - kFacetShare) * double(heat) / double(all);
+}
+
 std::int64_t heat_of(const std::int64_t* sums, int levels) {
   return std::accumulate(sums, sums + levels, std::int64_t(0));
 }
@@ -183,8 +188,7 @@ void region_weights(const Scene& scene, std::vector<ClusterBuild>& cb, const Ray
     if (measured)
       cb[i].work = measured_weights(measured_sums(*measured, cb[i].tris).data(), measured->levels, all,
                                     cb[i].tris.size(), facets);
-    cb[i].weight = kFacetShare * double(cb[i].tris.size()) / std::max(double(facets), 1.0) +
-                   (1.0 - kFacetShare) * double(heat[i]) / double(all);
+    cb[i].weight = sampled_weight(cb[i].tris.size(), facets, heat[i], all);
   }
 }
 

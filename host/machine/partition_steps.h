@@ -70,6 +70,11 @@ bool too_hot(std::int64_t heat, std::int64_t all, int num_pes);
 // a tenth of the whole heat `all` in proportion to its facets.
 std::vector<double> measured_weights(const std::int64_t* sums, int levels, std::int64_t all, std::size_t facets,
                                      std::size_t total_facets);
+// Sampled rays (--balance work) whose segment crosses box b.
+std::uint64_t crossings(const Box& b, const RaySample& sample);
+// A cluster's weight for assign_regions with a ray sample: a tenth on its
+// share of the facets, the rest on its share of the crossings `all`.
+double sampled_weight(std::size_t facets, std::size_t total_facets, std::int64_t heat, std::int64_t all);
 void assign_regions_measured(std::vector<ClusterBuild>& cl, std::vector<int> idx, int first, int count);
 // 1-2. Clusters, weighted by expected work, bisected into PE regions; sorted
 // by PE (partition_regions.cpp).

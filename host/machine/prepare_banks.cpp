@@ -2,6 +2,7 @@
 
 #include <stdexcept>
 
+#include "machine/collective_balance.h"
 #include "machine/collective_partition.h"
 #include "machine/collective_cut.h"
 #include "machine/pilot.h"
@@ -22,6 +23,11 @@ PreparedBanks prepare_whole(const Scene& scene, Scene* lendable, const RenderSet
   BalancePolicy policy;
   policy.balance = settings.balance;
   policy.sample = settings.ray_sample;
+  RaySample sample;
+  if (settings.balance == Balance::work && !policy.sample) {
+    sample = balance_sample(scene, settings.sampler, ranks);
+    policy.sample = &sample;
+  }
   MeasuredWork measured;
   PilotFigures pilots;
   if (settings.balance == Balance::measured) {
@@ -43,15 +49,20 @@ PreparedBanks prepare_banks(Scene& scene, const RenderSettings& settings, ClRunt
   if (!scene.is_share()) return prepare_whole(scene, &scene, settings, runtime);
   // Read in shares: the ranks partition it together, and it gives up its facets once they are sent.
   check_machine_request(scene, settings.num_pes);
-  if (settings.balance == Balance::work)
-    throw std::invalid_argument("prepare_banks: a scene read in shares is balanced by facets or measured work");
   const PrepareTimes before = prepare_times();
   Ranks& ranks = Ranks::world();
   ShareBalance how;
   MeasuredWork measured;
   PilotFigures pilots;
   ShareClusters clusters;  // the pilots' clusters before the balance's cuts, for the frame's partition too
-  if (settings.balance == Balance::measured) {
+  RaySample sample;
+  if (settings.balance == Balance::work) {
+    // Traced by the ranks together (each through its own facets), so past
+    // the point where a rank that failed to read its share stops them all.
+    ranks.begin_collective();
+    if (!settings.ray_sample) sample = balance_sample(scene, settings.sampler, ranks);
+    how.sample = settings.ray_sample ? settings.ray_sample : &sample;
+  } else if (settings.balance == Balance::measured) {
     measured = pilot_work(scene, settings, runtime, pilots, clusters);
     how.measured = &measured;
     how.clusters = &clusters;

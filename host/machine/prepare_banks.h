@@ -10,8 +10,10 @@
 namespace opsila {
 
 // The banks of this rank's PE group (every PE's with one rank), partitioned
-// as settings.balance says: facets; work, with settings.ray_sample; or
-// measured, from pilot frames run on `runtime` first. Throws InputError for
+// as settings.balance says: facets; work, with settings.ray_sample or the
+// sample settings.sampler traces here (balance_sample, by the ranks
+// together for a scene read in shares); or measured, from pilot frames run
+// on `runtime` first. Throws InputError for
 // a machine the kernels cannot run (check_machine_request).
 PreparedBanks prepare_banks(const Scene& scene, const RenderSettings& settings, ClRuntime& runtime);
 // The same; a scene read in shares gives up its facets (triangles and vertex

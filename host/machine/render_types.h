@@ -41,8 +41,10 @@ struct RenderSettings {
   // measured: the prepare step runs the pilot frames first (machine/prepare_banks.h).
   Balance balance = Balance::facets;
   // --balance work: the frame's rays, sampled (core/ray_sample.h); the
-  // partition shares expected work as well as facets among the PEs.
+  // partition shares expected work as well as facets among the PEs. Without
+  // it, the prepare step traces them with `sampler` (machine/prepare_banks.h).
   const RaySample* ray_sample = nullptr;
+  RaySampler sampler;
   // The pilot frames' program, which counts each cluster's tests (machine/pilot.h).
   bool measure_cost = false;
   // Count the work (tests, forwards, PE x PE traffic: RenderStats::counters

@@ -12,6 +12,9 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <cstring>
+#include <stdexcept>
+#include <type_traits>
 #include <limits>
 #include <thread>
 
@@ -242,21 +245,29 @@ struct ReferenceTracer::Impl {
     return colour * sample_texture(scene.textures[map], u, v);
   }
 
-  // SPEC "Shading": local intensity at P with shading normal n, for a ray of
-  // unit direction d, with the (texture-mapped) ka and kd at P. Shadow rays
-  // are cast only where the light term can be non-zero (n.Lv > 0).
+  // SPEC "Shading": the shadow ray from P (shading normal n) to `light`,
+  // cast only where the light term can be non-zero (n.Lv > 0): false when
+  // there is none.
+  static bool shadow_ray(const Vec3& p, const Vec3& n, const LightDesc& light, Vec3& lv, float& distance,
+                         float& n_dot_l) {
+    const Vec3 to_light = light.position - p;
+    distance = length(to_light);
+    if (!(distance > 0.0f)) return false;  // light at P: no direction to it
+    lv = to_light / distance;
+    n_dot_l = dot(n, lv);
+    return n_dot_l > 0.0f;  // SPEC: else the whole light term is 0
+  }
+
+  // Local intensity at P with shading normal n, for a ray of unit direction
+  // d, with the (texture-mapped) ka and kd at P.
   Vec3 local_intensity(const Vec3& p, const Vec3& n, const Vec3& d, const MaterialDesc& m, const Vec3& ka,
-                       const Vec3& kd, RayCounts& counts, std::vector<RaySegment>* record) const {
+                       const Vec3& kd, RayCounts& counts) const {
     Vec3 result = scene.ambient * ka;
     for (const LightDesc& light : scene.lights) {
-      const Vec3 to_light = light.position - p;
-      const float distance = length(to_light);
-      if (!(distance > 0.0f)) continue;  // light at P: no direction to it
-      const Vec3 lv = to_light / distance;
-      const float n_dot_l = dot(n, lv);
-      if (!(n_dot_l > 0.0f)) continue;  // SPEC: the whole light term is 0
+      Vec3 lv;
+      float distance, n_dot_l;
+      if (!shadow_ray(p, n, light, lv, distance, n_dot_l)) continue;
       ++counts.shadow;
-      if (record && record->size() < kMaxSampleRays) record->push_back(segment(p, lv, distance));
       if (occluded(p, lv, epsilon, distance)) continue;  // vis = 0
       const Vec3 rl = 2.0f * n_dot_l * n - lv;
       const float r_dot_v = std::max(0.0f, dot(rl, -d));
@@ -267,12 +278,36 @@ struct ReferenceTracer::Impl {
     return result;
   }
 
-  static RaySegment segment(const Vec3& origin, const Vec3& d, float t_max) {
-    RaySegment r;
-    r.origin = origin;
-    r.direction = d;
-    r.t_max = t_max;
-    return r;
+  // What a ray meets at its hit (SPEC "Shading"): the point, the side and
+  // the shading normal there.
+  struct Surface {
+    Vec3 p, n;
+    bool entering;
+    const MaterialDesc* m;
+    const Triangle* source;
+  };
+  Surface surface(const Vec3& origin, const Vec3& d, const Hit& hit) const {
+    const Tri& tri = tris[hit.tri];
+    Surface s;
+    s.m = &materials[tri.material];
+    s.p = origin + hit.t * d;
+    s.entering = dot(tri.normal, d) < 0.0f;
+    s.source = &scene.triangles[hit.tri];
+    s.n = shading_normal(*s.source, hit, s.entering ? tri.normal : -tri.normal);
+    return s;
+  }
+
+  // SPEC "Materials": the reflected direction, renormalised (SPEC treats
+  // every ray direction as unit, and epsilon is a distance).
+  static Vec3 reflected(const Vec3& d, const Vec3& n) { return normalize(d - 2.0f * dot(d, n) * n); }
+  // The transmitted direction; false on total internal reflection (k < 0).
+  static bool transmitted(const Vec3& d, const Vec3& n, bool entering, float ni, Vec3& out) {
+    const float eta = entering ? 1.0f / ni : ni;
+    const float c = -dot(n, d);
+    const float k = 1.0f - eta * eta * (1.0f - c * c);
+    if (!(k >= 0.0f)) return false;
+    out = normalize(eta * d + (eta * c - std::sqrt(k)) * n);
+    return true;
   }
 
   // As the kernels' fixed point: a NaN term (0 x infinity, from values near
@@ -284,27 +319,17 @@ struct ReferenceTracer::Impl {
 
   // Adds weight x (radiance of the ray tree rooted at this ray) to `pixel`.
   // Returns the triangle hit (for the item buffer), or -1.
-  // With `record`, every ray of the tree is also appended to it as a segment,
-  // until it holds kMaxSampleRays: then the tree stops there (a sample of an
-  // endless ray tree stays bounded in time and memory).
   int trace(const Vec3& origin, const Vec3& d, float t_min, int level, const Vec3& weight,
-            Vec3& pixel, RayCounts& counts, std::vector<RaySegment>* record = nullptr) const {
-    if (record && record->size() >= kMaxSampleRays) return -1;
+            Vec3& pixel, RayCounts& counts) const {
     Hit hit;
-    const bool found = nearest(origin, d, t_min, hit);
-    if (record) record->push_back(segment(origin, d, found ? hit.t : std::numeric_limits<float>::infinity()));
-    if (!found) {
+    if (!nearest(origin, d, t_min, hit)) {
       add_contribution(pixel, weight * scene.background);
       return -1;
     }
-    const Tri& tri = tris[hit.tri];
-    const MaterialDesc& m = materials[tri.material];
-    const Vec3 p = origin + hit.t * d;
-    const bool entering = dot(tri.normal, d) < 0.0f;
-    const Triangle& source = scene.triangles[hit.tri];
-    const Vec3 n = shading_normal(source, hit, entering ? tri.normal : -tri.normal);
-    const Vec3 ka = mapped(source, hit, m.ka, m.map_ka), kd = mapped(source, hit, m.kd, m.map_kd);
-    add_contribution(pixel, weight * local_intensity(p, n, d, m, ka, kd, counts, record));
+    const Surface s = surface(origin, d, hit);
+    const MaterialDesc& m = *s.m;
+    const Vec3 ka = mapped(*s.source, hit, m.ka, m.map_ka), kd = mapped(*s.source, hit, m.kd, m.map_kd);
+    add_contribution(pixel, weight * local_intensity(s.p, s.n, d, m, ka, kd, counts));
 
     if (level + 1 >= scene.max_depth) return hit.tri;
     // SPEC "Materials": kr = Ks for illum 3..7, kt = Tf for illum 4, 6, 7.
@@ -312,22 +337,46 @@ struct ReferenceTracer::Impl {
     const Vec3 kt = m.kt();
     if (any_nonzero(kr)) {
       ++counts.secondary;
-      // Renormalised: SPEC treats every ray direction as unit, and epsilon
-      // is a distance.
-      const Vec3 reflected = normalize(d - 2.0f * dot(d, n) * n);
-      trace(p, reflected, epsilon, level + 1, weight * kr, pixel, counts, record);
+      trace(s.p, reflected(d, s.n), epsilon, level + 1, weight * kr, pixel, counts);
     }
-    if (any_nonzero(kt)) {
-      const float eta = entering ? 1.0f / m.ni : m.ni;
-      const float c = -dot(n, d);
-      const float k = 1.0f - eta * eta * (1.0f - c * c);
-      if (k >= 0.0f) {  // k < 0: total internal reflection, no transmitted ray
-        ++counts.secondary;
-        const Vec3 transmitted = normalize(eta * d + (eta * c - std::sqrt(k)) * n);
-        trace(p, transmitted, epsilon, level + 1, weight * kt, pixel, counts, record);
-      }
+    Vec3 t_dir;
+    if (any_nonzero(kt) && transmitted(d, s.n, s.entering, m.ni, t_dir)) {
+      ++counts.secondary;
+      trace(s.p, t_dir, epsilon, level + 1, weight * kt, pixel, counts);
     }
     return hit.tri;
+  }
+
+  // ------------------------------------------------ the ray sample's rules
+
+  // The facet's key in the sample's order on hits (sample_rays).
+  std::uint64_t sample_key(int index) const {
+    const Tri& t = tris[std::size_t(index)];
+    return std::uint64_t(std::uint32_t(t.object_id)) << 32 | std::uint32_t(t.facet_id);
+  }
+  // Is a hit at t on triangle `index` before `best` in the sample's order:
+  // t, then the facet's key, then the triangle's index (the triangles of one
+  // polygon share its ids, and one holder has them all, in one process's order)?
+  bool sample_before(float t, int index, const Hit& best) const {
+    if (best.tri < 0 || t < best.t) return true;
+    if (t > best.t) return false;
+    const std::uint64_t a = sample_key(index), b = sample_key(best.tri);
+    return a < b || (a == b && index < best.tri);
+  }
+  // The least hit in that order with t > t_min. Boxes are culled only
+  // beyond the best t (widened as in nearest), so an equal t is still found.
+  bool sample_nearest(const Vec3& origin, const Vec3& dir, float t_min, Hit& hit) const {
+    walk(origin, dir, t_min, [&] { return hit.t + hit.t * (2 * OPSILA_TIE_TOLERANCE); }, [&](int index) {
+      float t, b1, b2;
+      if (intersect(tris[index], origin, dir, t, &b1, &b2) && t > t_min && sample_before(t, index, hit)) {
+        hit.t = t;
+        hit.tri = index;
+        hit.b1 = b1;
+        hit.b2 = b2;
+      }
+      return false;
+    });
+    return hit.tri >= 0;
   }
 };
 
@@ -400,19 +449,122 @@ Vec3 ReferenceTracer::render_pixel(int x, int y, std::int32_t* object_facet,
   return mean;
 }
 
-RaySample ReferenceTracer::sample_rays(int target_primary) const {
+namespace {
+
+// A ray of the sample, waiting to be traced.
+struct SampleRay {
+  Vec3 origin, direction;
+  float t_min;
+};
+
+// What the holder of a ray's hit adds for it: a shadow segment (slot: the
+// light's index; t: the light's distance), or a reflected (slot: lights)
+// or transmitted (lights + 1) ray of the next level (t: its t_min).
+struct SampleSpawn {
+  std::uint32_t ray, slot;
+  Vec3 origin, direction;
+  float t;
+};
+static_assert(std::is_trivially_copyable<SampleSpawn>::value, "sent as bytes");
+
+constexpr std::uint64_t kNoHit = ~std::uint64_t(0);
+
+std::uint64_t bits_of(float t) {  // t > 0: ordered as the floats are
+  std::uint32_t b;
+  std::memcpy(&b, &t, sizeof b);
+  return b;
+}
+
+float float_of(std::uint64_t bits) {
+  const std::uint32_t b = static_cast<std::uint32_t>(bits);
+  float t;
+  std::memcpy(&t, &b, sizeof t);
+  return t;
+}
+
+}  // namespace
+
+RaySample ReferenceTracer::sample_rays(int target_primary, const SampleJoin* join) const {
+  if (impl_->queries) throw std::logic_error("sample_rays: the sample is traced through the tracer's own BVH");
   const Scene& scene = scene_;
+  const Impl& im = *impl_;
   RaySample out;
   const double pixels = double(scene.width) * double(scene.height);
   out.stride = std::max(1, static_cast<int>(std::sqrt(pixels / std::max(1, target_primary))));
-  const Vec3 eye = scene.camera.eye;
-  RayCounts counts;
+  std::vector<SampleRay> level;
   for (int y = out.stride / 2; y < scene.height; y += out.stride)
-    for (int x = out.stride / 2; x < scene.width && out.rays.size() < kMaxSampleRays; x += out.stride) {
-      const Vec3 dir = primary_direction(impl_->frame, scene.width, scene.height, x, y);
-      Vec3 ignored = splat(0.0f);
-      impl_->trace(eye, dir, 0.0f, 0, splat(1.0f), ignored, counts, &out.rays);
+    for (int x = out.stride / 2; x < scene.width && level.size() < kMaxSampleRays; x += out.stride)
+      level.push_back({scene.camera.eye, primary_direction(im.frame, scene.width, scene.height, x, y), 0.0f});
+  const std::uint32_t lights = static_cast<std::uint32_t>(scene.lights.size());
+  const std::uint64_t me = join ? std::uint64_t(join->holder()) : 0;
+  for (int depth = 0; !level.empty(); ++depth) {
+    // Each ray adds a segment: rays beyond the room left are not traced.
+    level.resize(std::min(level.size(), kMaxSampleRays - out.rays.size()));
+    const std::size_t n = level.size();
+    std::vector<Hit> hits(n);
+    for (std::size_t i = 0; i < n; ++i) im.sample_nearest(level[i].origin, level[i].direction, level[i].t_min, hits[i]);
+    // The least hit over every holder: the least t, then the least key at
+    // that t, then (should two holders share a facet) the lowest holder.
+    std::vector<std::uint64_t> t_bits(n, kNoHit), key(n, kNoHit), holder(n, kNoHit);
+    for (std::size_t i = 0; i < n; ++i)
+      if (hits[i].tri >= 0) t_bits[i] = bits_of(hits[i].t);
+    if (join) join->min(t_bits);
+    const auto least_t = [&](std::size_t i) { return hits[i].tri >= 0 && bits_of(hits[i].t) == t_bits[i]; };
+    for (std::size_t i = 0; i < n; ++i)
+      if (least_t(i)) key[i] = im.sample_key(hits[i].tri);
+    if (join) join->min(key);
+    for (std::size_t i = 0; i < n; ++i)
+      if (least_t(i) && im.sample_key(hits[i].tri) == key[i]) holder[i] = me;
+    if (join) join->min(holder);
+
+    // The segments and rays the hits this holder won spawn, then everyone's.
+    std::vector<SampleSpawn> spawned;
+    const bool children = depth + 1 < scene.max_depth;
+    for (std::size_t i = 0; i < n; ++i) {
+      if (holder[i] != me || hits[i].tri < 0) continue;
+      const SampleRay& r = level[i];
+      const Impl::Surface s = im.surface(r.origin, r.direction, hits[i]);
+      const std::uint32_t ray = static_cast<std::uint32_t>(i);
+      for (std::uint32_t l = 0; l < lights; ++l) {
+        SampleSpawn shadow{ray, l, s.p, {}, 0.0f};
+        float n_dot_l;
+        if (Impl::shadow_ray(s.p, s.n, scene.lights[l], shadow.direction, shadow.t, n_dot_l)) spawned.push_back(shadow);
+      }
+      if (!children) continue;
+      if (any_nonzero(s.m->kr()))
+        spawned.push_back({ray, lights, s.p, Impl::reflected(r.direction, s.n), im.epsilon});
+      SampleSpawn through{ray, lights + 1, s.p, {}, im.epsilon};
+      if (any_nonzero(s.m->kt()) && Impl::transmitted(r.direction, s.n, s.entering, s.m->ni, through.direction))
+        spawned.push_back(through);
     }
+    if (join) {
+      std::vector<unsigned char> mine(spawned.size() * sizeof(SampleSpawn));
+      if (!mine.empty()) std::memcpy(mine.data(), spawned.data(), mine.size());
+      const std::vector<unsigned char> all = join->all_gather(mine);
+      spawned.resize(all.size() / sizeof(SampleSpawn));
+      if (!spawned.empty()) std::memcpy(spawned.data(), all.data(), spawned.size() * sizeof(SampleSpawn));
+      std::stable_sort(spawned.begin(), spawned.end(), [](const SampleSpawn& a, const SampleSpawn& b) {
+        return a.ray < b.ray || (a.ray == b.ray && a.slot < b.slot);
+      });
+    }
+
+    // This level's segments in its rays' order, each ray's shadow segments
+    // after it; the next level's rays in the same order.
+    std::vector<SampleRay> next;
+    std::size_t k = 0;
+    for (std::size_t i = 0; i < n && out.rays.size() < kMaxSampleRays; ++i) {
+      const float t = t_bits[i] == kNoHit ? std::numeric_limits<float>::infinity() : float_of(t_bits[i]);
+      out.rays.push_back({level[i].origin, level[i].direction, t});
+      for (; k < spawned.size() && spawned[k].ray == i; ++k) {
+        const SampleSpawn& sp = spawned[k];
+        if (sp.slot >= lights)
+          next.push_back({sp.origin, sp.direction, sp.t});
+        else if (out.rays.size() < kMaxSampleRays)
+          out.rays.push_back({sp.origin, sp.direction, sp.t});
+      }
+    }
+    level = std::move(next);
+  }
   return out;
 }
 

@@ -63,9 +63,19 @@ class ReferenceTracer {
   float epsilon() const { return epsilon_; }
   // The ray trees of about `target_primary` centre rays on a regular pixel
   // lattice, every ray as a segment (core/ray_sample.h): what the partition
-  // weighs the clusters with. At most kMaxSampleRays segments (a deep tree of
-  // glass and mirrors is cut there).
-  RaySample sample_rays(int target_primary) const;
+  // weighs the clusters with. Traced a level at a time (the primary rays,
+  // then every ray they spawn, ...), each level's segments in its rays'
+  // order; at most kMaxSampleRays segments (a deep tree of glass and
+  // mirrors is cut there, its last level first).
+  //
+  // A ray ends at its least hit in (t, object id, facet id, triangle
+  // order): a total order, so on a scene read in shares each holder finds
+  // the least of its own facets and `join` (every holder calling it
+  // alike) picks the least of those, which is the whole scene's. The
+  // holder of that facet makes its segments' children. The answer is one
+  // process's for any number of holders (the image's nearest hit ties
+  // within a tolerance, which is not an order: SPEC's answer, not this).
+  RaySample sample_rays(int target_primary, const SampleJoin* join = nullptr) const;
   static constexpr std::size_t kMaxSampleRays = std::size_t(1) << 20;
 
  private:

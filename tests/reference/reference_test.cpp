@@ -6,7 +6,11 @@
 #include "input/scene_file.h"
 
 #include <cmath>
+#include <condition_variable>
+#include <cstring>
+#include <mutex>
 #include <random>
+#include <thread>
 
 namespace opsila {
 namespace {
@@ -449,6 +453,156 @@ TEST(Reference, RaySampleFollowsTheTreesAndStaysBounded) {
   for (const RaySegment& r : shallow.rays) primary += r.origin == s.camera.eye;
   EXPECT_GE(primary, 60);
   EXPECT_GT(shallow.rays.size(), std::size_t(3 * primary)) << "reflected, transmitted and shadow rays are kept";
+}
+
+// Holders of shares as threads of one process: the joins a level's hits
+// go through (the MPI ranks' in machine/collective_balance.cpp).
+class ThreadJoin {
+ public:
+  explicit ThreadJoin(int holders) : slots_(std::size_t(holders)) {}
+  struct Holder : SampleJoin {
+    ThreadJoin* all;
+    int me;
+    Holder(ThreadJoin* a, int h) : all(a), me(h) {}
+    int holder() const override { return me; }
+    void min(std::vector<std::uint64_t>& v) const override {
+      const std::vector<std::vector<unsigned char>> got = all->exchange(me, bytes(v));
+      for (const auto& b : got)
+        for (std::size_t i = 0; i < v.size(); ++i) {
+          std::uint64_t x;
+          std::memcpy(&x, b.data() + i * sizeof x, sizeof x);
+          v[i] = std::min(v[i], x);
+        }
+    }
+    std::vector<unsigned char> all_gather(const std::vector<unsigned char>& mine) const override {
+      std::vector<unsigned char> out;
+      for (const auto& b : all->exchange(me, mine)) out.insert(out.end(), b.begin(), b.end());
+      return out;
+    }
+    static std::vector<unsigned char> bytes(const std::vector<std::uint64_t>& v) {
+      std::vector<unsigned char> b(v.size() * sizeof(std::uint64_t));
+      if (!v.empty()) std::memcpy(b.data(), v.data(), b.size());
+      return b;
+    }
+  };
+
+  // Every holder's bytes, once each has given its own.
+  std::vector<std::vector<unsigned char>> exchange(int me, const std::vector<unsigned char>& mine) {
+    std::unique_lock<std::mutex> lock(m_);
+    slots_[std::size_t(me)] = mine;
+    wait(lock);
+    std::vector<std::vector<unsigned char>> got = slots_;
+    wait(lock);  // nobody gives the next round's bytes before all have read these
+    return got;
+  }
+
+ private:
+  void wait(std::unique_lock<std::mutex>& lock) {
+    const std::uint64_t round = round_;
+    if (++arrived_ == slots_.size()) {
+      arrived_ = 0;
+      ++round_;
+      cv_.notify_all();
+    } else {
+      cv_.wait(lock, [&] { return round_ != round; });
+    }
+  }
+  std::vector<std::vector<unsigned char>> slots_;
+  std::mutex m_;
+  std::condition_variable cv_;
+  std::size_t arrived_ = 0;
+  std::uint64_t round_ = 0;
+};
+
+bool same_segments(const RaySample& a, const RaySample& b) {
+  if (a.rays.size() != b.rays.size() || a.stride != b.stride) return false;
+  for (std::size_t i = 0; i < a.rays.size(); ++i)
+    if (a.rays[i].origin != b.rays[i].origin || a.rays[i].direction != b.rays[i].direction ||
+        std::memcmp(&a.rays[i].t_max, &b.rays[i].t_max, sizeof(float)) != 0)
+      return false;
+  return true;
+}
+
+// The sample on a scene split into shares, each traced by its own holder
+// and joined level by level, is the whole scene's, segment for segment:
+// the least hit in (t, object, facet, triangle) is found whatever holds
+// which facet. Shares are runs of the file order cut anywhere (even inside
+// a polygon), or objects dealt round (object o to holder o mod H, so a
+// lower object can lie on a higher holder). Two boxes lie on each other
+// with different materials, so their hits tie in t and the facets' keys
+// decide which material spawns the next rays.
+TEST(Reference, RaySampleOnSharesIsTheWholeScenes) {
+  const Scene whole = load_scene_from_string(R"({"image": {"size": [80, 60]}, "depth": 5, "smooth": true,
+    "camera": {"eye": [0, 3, 9], "look_at": [0, 0.5, 0]},
+    "lights": [{"position": [4, 8, 6]}, {"position": [-5, 6, -2]}],
+    "materials": {"mirror": {"kd": 0.1, "kr": 0.8}, "glass": {"kd": 0.05, "kr": 0.1, "kt": 0.9, "Ni": 1.5},
+                  "matte": {"kd": [0.7, 0.6, 0.5]}},
+    "objects": [{"type": "box", "min": [-6, -1, -6], "max": [6, -0.9, 6], "material": "matte"},
+                {"type": "box", "min": [1, -0.9, -1], "max": [2.5, 1, 0.5], "material": "glass"},
+                {"type": "box", "min": [1, -0.9, -1], "max": [2.5, 1, 0.5], "material": "mirror"},
+                {"type": "sphere", "center": [-1.5, 0.5, 0], "radius": 1.2, "subdivisions": 3, "material": "glass"},
+                {"type": "sphere", "center": [0.5, 0.2, 2], "radius": 0.6, "subdivisions": 2, "material": "mirror"}]})",
+                                          "shares.json", "");
+  const RaySample expected = ReferenceTracer(whole).sample_rays(1200);
+  ASSERT_GT(expected.rays.size(), 3000u) << "primary rays and their trees";
+  const std::size_t n = whole.triangles.size();
+  Vec3 lo, hi;
+  whole.bounds(lo, hi);
+  for (const bool dealt : {false, true})
+  for (int holders : {2, 3}) {
+    SCOPED_TRACE(std::to_string(holders) + (dealt ? " holders, objects dealt" : " holders, runs"));
+    std::vector<Scene> shares;
+    for (int h = 0; h < holders; ++h) {
+      Scene share = whole;
+      share.triangles.clear();
+      // Uneven runs: the cuts fall 7 facets off the even ones.
+      const std::size_t b = h == 0 ? 0 : n * std::size_t(h) / std::size_t(holders) + 7;
+      const std::size_t e = h + 1 == holders ? n : n * std::size_t(h + 1) / std::size_t(holders) + 7;
+      for (std::size_t i = 0; i < n; ++i)
+        if (dealt ? whole.triangles[i].object_id % holders == h : i >= b && i < e)
+          share.triangles.push_back(whole.triangles[i]);
+      share.share.rank = h;
+      share.share.ranks = holders;
+      share.share.total_triangles = n;
+      share.share.lo = lo;
+      share.share.hi = hi;
+      shares.push_back(std::move(share));
+    }
+    ThreadJoin join(holders);
+    std::vector<RaySample> got(static_cast<std::size_t>(holders));
+    std::vector<std::thread> threads;
+    for (int h = 0; h < holders; ++h)
+      threads.emplace_back([&, h] {
+        const ThreadJoin::Holder me(&join, h);
+        got[std::size_t(h)] = ReferenceTracer(shares[std::size_t(h)]).sample_rays(1200, &me);
+      });
+    for (std::thread& t : threads) t.join();
+    for (int h = 0; h < holders; ++h)
+      EXPECT_TRUE(same_segments(got[std::size_t(h)], expected)) << "holder " << h << " of " << holders;
+  }
+}
+
+// The sample's order on a tie: the facet of the lower object id wins, so
+// the box listed first decides whether the rays reflect (a mirror) or pass
+// (glass).
+TEST(Reference, RaySampleTiesGoToTheLowerObject) {
+  const auto sample_of = [](const char* first, const char* second) {
+    const std::string text = std::string(R"({"image": {"size": [32, 24]}, "depth": 2,
+      "camera": {"eye": [0, 0, 5], "look_at": [0, 0, 0]},
+      "materials": {"mirror": {"kd": 0.1, "kr": 0.8}, "glass": {"kd": 0.1, "kt": 0.9, "Ni": 1}},
+      "objects": [{"type": "box", "min": [-9, -9, -1], "max": [9, 9, 0], "material": ")") + first + R"("},
+                  {"type": "box", "min": [-9, -9, -1], "max": [9, 9, 0], "material": ")" + second + R"("}]})";
+    return ReferenceTracer(load_scene_from_string(text, "tie.json", "")).sample_rays(100);
+  };
+  const auto reflected = [](const RaySample& s) {
+    int n = 0;
+    // Back towards the eye, and on to the sky (a shadow segment ends at its light).
+    for (const RaySegment& r : s.rays) n += r.direction[2] > 0 && std::isinf(r.t_max);
+    return n;
+  };
+  const RaySample mirror_first = sample_of("mirror", "glass"), glass_first = sample_of("glass", "mirror");
+  EXPECT_GT(reflected(mirror_first), 50);
+  EXPECT_EQ(reflected(glass_first), 0);
 }
 
 }  // namespace

@@ -103,24 +103,38 @@ struct MpiFixture : ::testing::Test {
     const nlohmann::json base = stats(dir.file("one.json"));
     for (const char* key : {"scene", "clusters", "rays", "levels", "memory"}) EXPECT_EQ(s.at(key), base.at(key)) << key;
   }
-  // A bare model file streamed in windows (an OBJ, a PLY) of N triangles,
-  // on 2, 3 and 4 ranks: the same image, item buffer and banks as one
-  // process; each rank read about 1/R of the facets.
-  void expect_windows_as_one(const std::string& path, std::uint64_t N) {
-    auto with = [&](const std::string& tag) {
-      return std::vector<std::string>{path, "--size", "48x36", "--pes", "8", "-q", "-o", dir.file(tag + ".pfm"),
-                                      "--item-buffer", dir.file(tag + ".npy"), "--stats", dir.file(tag + ".json")};
+  // `render PATH` at 48x36 on `pes` PEs, quiet, writing TAG.pfm, TAG.npy
+  // and TAG.json: the arguments for a tag.
+  std::function<std::vector<std::string>(const std::string&)> every_output(const std::string& path, int pes) {
+    return [this, path, pes](const std::string& tag) {
+      return std::vector<std::string>{path, "--size", "48x36", "--pes", std::to_string(pes), "-q",
+                                      "-o", dir.file(tag + ".pfm"), "--item-buffer", dir.file(tag + ".npy"),
+                                      "--stats", dir.file(tag + ".json")};
     };
+  }
+  // `path` on one process, then on each count of ranks: the same image, item
+  // buffer and banks (expect_ranks_as_one); `each` looks at a run's stats.
+  void expect_scene_as_one(const std::string& path, int pes, const std::vector<int>& rank_counts,
+                           const std::function<void(int R, const nlohmann::json&)>& each) {
+    const auto with = every_output(path, pes);
     const RunResult single = one(with("one"));
     ASSERT_EQ(single.exit_code, 0) << single.err;
-    ASSERT_EQ(stats(dir.file("one.json")).at("scene").at("triangles").get<std::uint64_t>(), N);
-    for (int R : {2, 3, 4}) {
+    for (int R : rank_counts) {
       SCOPED_TRACE(std::to_string(R) + " ranks");
       nlohmann::json s;
       expect_ranks_as_one(R, with, s);
       if (HasFatalFailure()) return;
-      EXPECT_EQ(facets_read(s, N / R + 4, "a window is 1/R of the fan triangles, give or take a polygon"), N);
+      each(R, s);
     }
+  }
+  // A bare model file streamed in windows (an OBJ, a PLY) of N triangles,
+  // on 2, 3 and 4 ranks: the same image, item buffer and banks as one
+  // process; each rank read about 1/R of the facets.
+  void expect_windows_as_one(const std::string& path, std::uint64_t N) {
+    expect_scene_as_one(path, 8, {2, 3, 4}, [&](int R, const nlohmann::json& s) {
+      EXPECT_EQ(s.at("scene").at("triangles").get<std::uint64_t>(), N);
+      EXPECT_EQ(facets_read(s, N / R + 4, "a window is 1/R of the fan triangles, give or take a polygon"), N);
+    });
   }
 };
 
@@ -539,17 +553,7 @@ TEST_F(MpiFixture, ObjFilesReadInWindowsAreTheSameAsOneProcess) {
                R"(.obj", "transform": {"translate": [)" + std::to_string(3 * k) + ", 0, " + std::to_string(k) + "]}}";
   }
   const std::string path = dir.write("files.json", "{\"objects\": [\n" + objects + "\n]}\n");
-  auto with = [&](const std::string& tag) {
-    return std::vector<std::string>{path, "--size", "48x36", "--pes", "6", "-q", "-o", dir.file(tag + ".pfm"),
-                                    "--item-buffer", dir.file(tag + ".npy"), "--stats", dir.file(tag + ".json")};
-  };
-  ASSERT_EQ(one(with("one")).exit_code, 0);
-  for (int R : {3, 4}) {
-    SCOPED_TRACE(std::to_string(R) + " ranks");
-    nlohmann::json s;
-    expect_ranks_as_one(R, with, s);
-    if (HasFatalFailure()) return;
-  }
+  expect_scene_as_one(path, 6, {3, 4}, [](int, const nlohmann::json&) {});
 }
 
 #ifdef OPSILA_HAVE_ASSIMP
@@ -585,19 +589,10 @@ TEST_F(MpiFixture, PlyModelsReadInWindowsAreTheSameAsOneProcess) {
                R"(.ply", "transform": {"translate": [)" + std::to_string(3 * k) + ", 0, " + std::to_string(k) + "]}}";
   }
   const std::string path = dir.write("models.json", "{\"objects\": [\n" + objects + "\n]}\n");
-  auto with = [&](const std::string& tag) {
-    return std::vector<std::string>{path, "--size", "48x36", "--pes", "6", "-q", "-o", dir.file(tag + ".pfm"),
-                                    "--item-buffer", dir.file(tag + ".npy"), "--stats", dir.file(tag + ".json")};
-  };
-  ASSERT_EQ(one(with("one")).exit_code, 0);
-  ASSERT_EQ(stats(dir.file("one.json")).at("scene").at("triangles").get<std::uint64_t>(), all);
-  for (int R : {2, 3}) {
-    SCOPED_TRACE(std::to_string(R) + " ranks");
-    nlohmann::json s;
-    expect_ranks_as_one(R, with, s);
-    if (HasFatalFailure()) return;
+  expect_scene_as_one(path, 6, {2, 3}, [&](int R, const nlohmann::json& s) {
+    EXPECT_EQ(s.at("scene").at("triangles").get<std::uint64_t>(), all);
     EXPECT_EQ(facets_read(s, all / std::uint64_t(R) + 3 * 4, "its window of each file, give or take a face"), all);
-  }
+  });
 }
 
 // A PLY whose last face names a vertex the file does not have: every rank
@@ -651,18 +646,9 @@ TEST_F(MpiFixture, ModelFilesReadAgainAreTheSameAsOneProcess) {
                R"(.stl", "transform": {"translate": [)" + std::to_string(2 * k) + ", 0, " + std::to_string(k) + "]}}";
   }
   const std::string path = dir.write("models.json", "{\"objects\": [\n" + objects + "\n]}\n");
-  auto with = [&](const std::string& tag) {
-    return std::vector<std::string>{path, "--size", "48x36", "--pes", "6", "-q", "-o", dir.file(tag + ".pfm"),
-                                    "--item-buffer", dir.file(tag + ".npy"), "--stats", dir.file(tag + ".json")};
-  };
-  ASSERT_EQ(one(with("one")).exit_code, 0);
-  for (int R : {2, 3}) {
-    SCOPED_TRACE(std::to_string(R) + " ranks");
-    nlohmann::json s;
-    expect_ranks_as_one(R, with, s);
-    if (HasFatalFailure()) return;
+  expect_scene_as_one(path, 6, {2, 3}, [&](int R, const nlohmann::json& s) {
     EXPECT_EQ(facets_read(s, all / std::uint64_t(R) + largest, "its share of the models and at most one more"), all);
-  }
+  });
 }
 #endif
 
@@ -715,10 +701,10 @@ TEST_F(MpiFixture, ABrokenObjEndsEveryRankWithOneProcesssLine) {
   }
 }
 
-// --balance work: every rank samples the same rays and builds the same
-// partition; --balance measured: the ranks run the pilot frames together
-// and share each cluster's counts, so they build the same partition. Either
-// way the ranks agree with one process, byte for byte.
+// --balance work: the ranks trace the ray sample together, each through
+// its share; --balance measured: the ranks run the pilot frames together
+// and share each cluster's counts. Either way they build one process's
+// partition and agree with it, byte for byte.
 TEST_F(MpiFixture, BalancedPartitionsAreTheSameOnThreeRanks) {
   for (const std::string mode : {"work", "measured"}) {
     const std::vector<std::string> common = {scene("hundreds.json"), "--size", "64x48", "--pes", "16", "--balance",
@@ -798,6 +784,52 @@ TEST_F(MpiFixture, MeasuredBalanceOnSharesIsTheSameAsOneProcess) {
   }
   // Not quiet: no rank says it reads the whole scene.
   const RunResult loud = ranks(2, {many, "--size", "32x24", "--pes", "4", "--balance", "measured", "-o",
+                                   dir.file("loud.pfm")});
+  ASSERT_EQ(loud.exit_code, 0) << loud.err;
+  EXPECT_EQ(loud.err.find("whole scene"), std::string::npos) << loud.err;
+}
+
+// --balance work on shares: each rank traces the ray sample through its own
+// facets and the ranks join every level's nearest hits, so the sample, the
+// clusters cut for being too hot and the partition are one process's: the
+// same image, item buffer, work per level and PE, and banks, on a scene of
+// many objects and files and on a terrain spread over the ranks. No rank
+// reads the whole scene.
+TEST_F(MpiFixture, WorkBalanceOnSharesIsTheSameAsOneProcess) {
+  const std::string terrain = dir.write("terrain.json", R"({"objects": [
+    {"type": "sphere", "center": [0, 4, 0], "radius": 1, "subdivisions": 2, "material": "mirror"},
+    {"type": "terrain", "size": [20, 20], "quads": [60, 60], "height": 3, "transform": {"rotate": [0, 30, 0]}},
+    {"type": "terrain", "size": [6, 6], "quads": [9, 7], "height": 0, "center": [0, 6, 0]}],
+    "materials": {"mirror": {"kd": 0.2, "kr": 0.7}}})");
+  const std::string many = share_scene(dir, 6, 5);
+  for (const std::string& path : {many, terrain}) {
+    SCOPED_TRACE(path);
+    auto with = [&](const std::string& tag) {
+      return std::vector<std::string>{path, "--size", "48x36", "--pes", "64", "--balance", "work", "-q",
+                                      "-o", dir.file(tag + ".pfm"), "--item-buffer", dir.file(tag + ".npy"),
+                                      "--stats", dir.file(tag + ".json")};
+    };
+    ASSERT_EQ(one(with("one")).exit_code, 0);
+    const nlohmann::json base = stats(dir.file("one.json"));
+    ASSERT_EQ(base.at("balance"), "work");
+    // At 64 PEs the sample finds clusters crossed by more than half a PE's
+    // share of the rays, and they are cut: more clusters than by facets.
+    std::vector<std::string> facets = with("facets");
+    facets[6] = "facets";
+    ASSERT_EQ(one(facets).exit_code, 0);
+    EXPECT_GT(base.at("clusters").get<int>(), stats(dir.file("facets.json")).at("clusters").get<int>());
+    const std::uint64_t N = base.at("scene").at("triangles");
+    for (int R : {2, 3, 4}) {
+      SCOPED_TRACE(std::to_string(R) + " ranks");
+      nlohmann::json s;
+      expect_ranks_as_one(R, with, s);
+      if (HasFatalFailure()) return;
+      EXPECT_EQ(s.at("balance"), "work");
+      EXPECT_EQ(facets_read(s, N / R + 320, "a share: 1/R of the facets, and at most one object more"), N);
+    }
+  }
+  // Not quiet: no rank says it reads the whole scene.
+  const RunResult loud = ranks(2, {many, "--size", "32x24", "--pes", "4", "--balance", "work", "-o",
                                    dir.file("loud.pfm")});
   ASSERT_EQ(loud.exit_code, 0) << loud.err;
   EXPECT_EQ(loud.err.find("whole scene"), std::string::npos) << loud.err;

@@ -42,10 +42,11 @@ class FacetQueries {
 // Holds the scene (by reference: it must outlive the tracer), its epsilon and
 // a BVH, or the `queries` it is given instead (which must outlive it too).
 // Const after construction, so several threads may render row ranges of one
-// tracer at once.
+// tracer at once. The BVH is built on `build_threads` threads (0: every
+// hardware thread); it is the same tree for any number.
 class ReferenceTracer {
  public:
-  explicit ReferenceTracer(const Scene& scene, const FacetQueries* queries = nullptr);
+  explicit ReferenceTracer(const Scene& scene, const FacetQueries* queries = nullptr, int build_threads = 0);
   ~ReferenceTracer();
   ReferenceTracer(const ReferenceTracer&) = delete;
   ReferenceTracer& operator=(const ReferenceTracer&) = delete;

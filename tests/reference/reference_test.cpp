@@ -605,5 +605,32 @@ TEST(Reference, RaySampleTiesGoToTheLowerObject) {
   EXPECT_EQ(reflected(glass_first), 0);
 }
 
+// The BVH is built on several threads when a node is big enough, each half
+// apart and spliced in place: the same tree as one thread builds, so the
+// same image, item buffer, rays and sample.
+TEST(Reference, BvhBuiltOnThreadsIsTheSameTree) {
+  Scene s = load_scene_from_string(R"({"image": {"size": [48, 36]}, "depth": 3,
+    "camera": {"eye": [0, 30, 60], "look_at": [0, 0, 0]},
+    "materials": {"mirror": {"kd": 0.2, "kr": 0.7}},
+    "objects": [{"type": "terrain", "size": [100, 100], "quads": [300, 300], "height": 12},
+                {"type": "sphere", "center": [0, 18, 0], "radius": 8, "subdivisions": 3, "material": "mirror"}]})",
+                                    "threads.json", "");
+  ASSERT_GT(s.triangles.size(), std::size_t(1) << 17) << "big enough for the halves of the root to go apart";
+  const auto render_with = [&](int threads) {
+    ImageResult img = blank_image(s.width, s.height);
+    const ReferenceTracer tracer(s, nullptr, threads);
+    tracer.render_rows(0, s.height, img, img.rays);
+    return std::make_pair(img, tracer.sample_rays(300));
+  };
+  const auto [one, one_sample] = render_with(1);
+  for (int threads : {2, 3, 4}) {
+    const auto [many, many_sample] = render_with(threads);
+    EXPECT_TRUE(std::memcmp(one.rgb.data(), many.rgb.data(), one.rgb.size() * sizeof(float)) == 0) << threads;
+    EXPECT_EQ(one.item_buffer, many.item_buffer) << threads;
+    EXPECT_EQ(one.rays.total(), many.rays.total()) << threads;
+    EXPECT_TRUE(same_segments(one_sample, many_sample)) << threads;
+  }
+}
+
 }  // namespace
 }  // namespace opsila

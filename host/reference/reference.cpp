@@ -512,6 +512,8 @@ struct SampleSpawn {
 static_assert(std::is_trivially_copyable<SampleSpawn>::value, "sent as bytes");
 
 constexpr std::uint64_t kNoHit = ~std::uint64_t(0);
+// Rays of a level traced, joined and spawned at once (sample_rays).
+constexpr std::size_t kSampleChunk = std::size_t(1) << 14;
 
 std::uint64_t bits_of(float t) {  // t > 0: ordered as the floats are
   std::uint32_t b;
@@ -541,73 +543,80 @@ RaySample ReferenceTracer::sample_rays(int target_primary, const SampleJoin* joi
       level.push_back({scene.camera.eye, primary_direction(im.frame, scene.width, scene.height, x, y), 0.0f});
   const std::uint32_t lights = static_cast<std::uint32_t>(scene.lights.size());
   const std::uint64_t me = join ? std::uint64_t(join->holder()) : 0;
+  std::vector<SampleRay> next;
   for (int depth = 0; !level.empty(); ++depth) {
     // Each ray adds a segment: rays beyond the room left are not traced.
     level.resize(std::min(level.size(), kMaxSampleRays - out.rays.size()));
-    const std::size_t n = level.size();
-    std::vector<Hit> hits(n);
-    for (std::size_t i = 0; i < n; ++i) im.sample_nearest(level[i].origin, level[i].direction, level[i].t_min, hits[i]);
-    // The least hit over every holder: the least t, then the least key at
-    // that t, then (should two holders share a facet) the lowest holder.
-    std::vector<std::uint64_t> t_bits(n, kNoHit), key(n, kNoHit), holder(n, kNoHit);
-    for (std::size_t i = 0; i < n; ++i)
-      if (hits[i].tri >= 0) t_bits[i] = bits_of(hits[i].t);
-    if (join) join->min(t_bits);
-    const auto least_t = [&](std::size_t i) { return hits[i].tri >= 0 && bits_of(hits[i].t) == t_bits[i]; };
-    for (std::size_t i = 0; i < n; ++i)
-      if (least_t(i)) key[i] = im.sample_key(hits[i].tri);
-    if (join) join->min(key);
-    for (std::size_t i = 0; i < n; ++i)
-      if (least_t(i) && im.sample_key(hits[i].tri) == key[i]) holder[i] = me;
-    if (join) join->min(holder);
-
-    // The segments and rays the hits this holder won spawn, then everyone's.
-    std::vector<SampleSpawn> spawned;
     const bool children = depth + 1 < scene.max_depth;
-    for (std::size_t i = 0; i < n; ++i) {
-      if (holder[i] != me || hits[i].tri < 0) continue;
-      const SampleRay& r = level[i];
-      const Impl::Surface s = im.surface(r.origin, r.direction, hits[i]);
-      const std::uint32_t ray = static_cast<std::uint32_t>(i);
-      for (std::uint32_t l = 0; l < lights; ++l) {
-        SampleSpawn shadow{ray, l, s.p, {}, 0.0f};
-        float n_dot_l;
-        if (Impl::shadow_ray(s.p, s.n, scene.lights[l], shadow.direction, shadow.t, n_dot_l)) spawned.push_back(shadow);
-      }
-      if (!children) continue;
-      if (any_nonzero(s.m->kr()))
-        spawned.push_back({ray, lights, s.p, Impl::reflected(r.direction, s.n), im.epsilon});
-      SampleSpawn through{ray, lights + 1, s.p, {}, im.epsilon};
-      if (any_nonzero(s.m->kt()) && Impl::transmitted(r.direction, s.n, s.entering, s.m->ni, through.direction))
-        spawned.push_back(through);
-    }
-    if (join) {
-      std::vector<unsigned char> mine(spawned.size() * sizeof(SampleSpawn));
-      if (!mine.empty()) std::memcpy(mine.data(), spawned.data(), mine.size());
-      const std::vector<unsigned char> all = join->all_gather(mine);
-      spawned.resize(all.size() / sizeof(SampleSpawn));
-      if (!spawned.empty()) std::memcpy(spawned.data(), all.data(), spawned.size() * sizeof(SampleSpawn));
-      std::stable_sort(spawned.begin(), spawned.end(), [](const SampleSpawn& a, const SampleSpawn& b) {
-        return a.ray < b.ray || (a.ray == b.ray && a.slot < b.slot);
-      });
-    }
+    next.clear();
+    // A chunk of the level at a time, so what a holder spawns (a shadow
+    // segment per light, up to 64, and two rays per hit) stays bounded.
+    for (std::size_t c0 = 0; c0 < level.size() && out.rays.size() < kMaxSampleRays; c0 += kSampleChunk) {
+      const SampleRay* rays = level.data() + c0;
+      const std::size_t n = std::min(level.size() - c0, kSampleChunk);
+      std::vector<Hit> hits(n);
+      for (std::size_t i = 0; i < n; ++i) im.sample_nearest(rays[i].origin, rays[i].direction, rays[i].t_min, hits[i]);
+      // The least hit over every holder: the least t, then the least key at
+      // that t, then (should two holders share a facet) the lowest holder.
+      std::vector<std::uint64_t> t_bits(n, kNoHit), key(n, kNoHit), holder(n, kNoHit);
+      for (std::size_t i = 0; i < n; ++i)
+        if (hits[i].tri >= 0) t_bits[i] = bits_of(hits[i].t);
+      if (join) join->min(t_bits);
+      const auto least_t = [&](std::size_t i) { return hits[i].tri >= 0 && bits_of(hits[i].t) == t_bits[i]; };
+      for (std::size_t i = 0; i < n; ++i)
+        if (least_t(i)) key[i] = im.sample_key(hits[i].tri);
+      if (join) join->min(key);
+      for (std::size_t i = 0; i < n; ++i)
+        if (least_t(i) && im.sample_key(hits[i].tri) == key[i]) holder[i] = me;
+      if (join) join->min(holder);
 
-    // This level's segments in its rays' order, each ray's shadow segments
-    // after it; the next level's rays in the same order.
-    std::vector<SampleRay> next;
-    std::size_t k = 0;
-    for (std::size_t i = 0; i < n && out.rays.size() < kMaxSampleRays; ++i) {
-      const float t = t_bits[i] == kNoHit ? std::numeric_limits<float>::infinity() : float_of(t_bits[i]);
-      out.rays.push_back({level[i].origin, level[i].direction, t});
-      for (; k < spawned.size() && spawned[k].ray == i; ++k) {
-        const SampleSpawn& sp = spawned[k];
-        if (sp.slot >= lights)
-          next.push_back({sp.origin, sp.direction, sp.t});
-        else if (out.rays.size() < kMaxSampleRays)
-          out.rays.push_back({sp.origin, sp.direction, sp.t});
+      // The segments and rays the hits this holder won spawn, then everyone's.
+      std::vector<SampleSpawn> spawned;
+      for (std::size_t i = 0; i < n; ++i) {
+        if (holder[i] != me || hits[i].tri < 0) continue;
+        const SampleRay& r = rays[i];
+        const Impl::Surface s = im.surface(r.origin, r.direction, hits[i]);
+        const std::uint32_t ray = static_cast<std::uint32_t>(i);
+        for (std::uint32_t l = 0; l < lights; ++l) {
+          SampleSpawn shadow{ray, l, s.p, {}, 0.0f};
+          float n_dot_l;
+          if (Impl::shadow_ray(s.p, s.n, scene.lights[l], shadow.direction, shadow.t, n_dot_l))
+            spawned.push_back(shadow);
+        }
+        if (!children) continue;
+        if (any_nonzero(s.m->kr()))
+          spawned.push_back({ray, lights, s.p, Impl::reflected(r.direction, s.n), im.epsilon});
+        SampleSpawn through{ray, lights + 1, s.p, {}, im.epsilon};
+        if (any_nonzero(s.m->kt()) && Impl::transmitted(r.direction, s.n, s.entering, s.m->ni, through.direction))
+          spawned.push_back(through);
+      }
+      if (join) {
+        std::vector<unsigned char> mine(spawned.size() * sizeof(SampleSpawn));
+        if (!mine.empty()) std::memcpy(mine.data(), spawned.data(), mine.size());
+        const std::vector<unsigned char> all = join->all_gather(mine);
+        spawned.resize(all.size() / sizeof(SampleSpawn));
+        if (!spawned.empty()) std::memcpy(spawned.data(), all.data(), spawned.size() * sizeof(SampleSpawn));
+        std::stable_sort(spawned.begin(), spawned.end(), [](const SampleSpawn& a, const SampleSpawn& b) {
+          return a.ray < b.ray || (a.ray == b.ray && a.slot < b.slot);
+        });
+      }
+
+      // The chunk's segments in its rays' order, each ray's shadow segments
+      // after it; the next level's rays in the same order.
+      std::size_t k = 0;
+      for (std::size_t i = 0; i < n && out.rays.size() < kMaxSampleRays; ++i) {
+        const float t = t_bits[i] == kNoHit ? std::numeric_limits<float>::infinity() : float_of(t_bits[i]);
+        out.rays.push_back({rays[i].origin, rays[i].direction, t});
+        for (; k < spawned.size() && spawned[k].ray == i; ++k) {
+          const SampleSpawn& sp = spawned[k];
+          if (sp.slot >= lights)
+            next.push_back({sp.origin, sp.direction, sp.t});
+          else if (out.rays.size() < kMaxSampleRays)
+            out.rays.push_back({sp.origin, sp.direction, sp.t});
+        }
       }
     }
-    level = std::move(next);
+    level.swap(next);
   }
   return out;
 }

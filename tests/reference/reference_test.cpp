@@ -532,7 +532,7 @@ bool same_segments(const RaySample& a, const RaySample& b) {
 // with different materials, so their hits tie in t and the facets' keys
 // decide which material spawns the next rays.
 TEST(Reference, RaySampleOnSharesIsTheWholeScenes) {
-  const Scene whole = load_scene_from_string(R"({"image": {"size": [80, 60]}, "depth": 5, "smooth": true,
+  const Scene whole = load_scene_from_string(R"({"image": {"size": [160, 120]}, "depth": 5, "smooth": true,
     "camera": {"eye": [0, 3, 9], "look_at": [0, 0.5, 0]},
     "lights": [{"position": [4, 8, 6]}, {"position": [-5, 6, -2]}],
     "materials": {"mirror": {"kd": 0.1, "kr": 0.8}, "glass": {"kd": 0.05, "kr": 0.1, "kt": 0.9, "Ni": 1.5},
@@ -543,8 +543,9 @@ TEST(Reference, RaySampleOnSharesIsTheWholeScenes) {
                 {"type": "sphere", "center": [-1.5, 0.5, 0], "radius": 1.2, "subdivisions": 3, "material": "glass"},
                 {"type": "sphere", "center": [0.5, 0.2, 2], "radius": 0.6, "subdivisions": 2, "material": "mirror"}]})",
                                           "shares.json", "");
-  const RaySample expected = ReferenceTracer(whole).sample_rays(1200);
-  ASSERT_GT(expected.rays.size(), 3000u) << "primary rays and their trees";
+  // 19,200 primary rays: more than one chunk of a level is traced and joined.
+  const RaySample expected = ReferenceTracer(whole).sample_rays(160 * 120);
+  ASSERT_GT(expected.rays.size(), 40000u) << "primary rays and their trees";
   const std::size_t n = whole.triangles.size();
   Vec3 lo, hi;
   whole.bounds(lo, hi);
@@ -574,7 +575,7 @@ TEST(Reference, RaySampleOnSharesIsTheWholeScenes) {
     for (int h = 0; h < holders; ++h)
       threads.emplace_back([&, h] {
         const ThreadJoin::Holder me(&join, h);
-        got[std::size_t(h)] = ReferenceTracer(shares[std::size_t(h)]).sample_rays(1200, &me);
+        got[std::size_t(h)] = ReferenceTracer(shares[std::size_t(h)]).sample_rays(160 * 120, &me);
       });
     for (std::thread& t : threads) t.join();
     for (int h = 0; h < holders; ++h)

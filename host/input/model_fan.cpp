@@ -86,6 +86,41 @@ int MeshFan::attributes(const unsigned* corner, Scene& out) const {
   return static_cast<int>(out.attributes.size()) - 1;
 }
 
+WindowFan::WindowFan(const std::string& path, const aiMesh& mesh, std::size_t max_triangles, const ObjWindow& window,
+                     Scene& scene)
+    : path_(path), window_(window), scene_(scene), fan_(path, mesh, aiMatrix4x4(), max_triangles, tally_) {
+  scene_.has_camera = false;
+  scene_.has_lights = false;
+  scene_.materials.push_back(MaterialDesc::default_material());
+}
+
+void WindowFan::face(const unsigned* corner, unsigned n, unsigned f) {
+  if (facets_ == INT_MAX) throw InputError(path_ + ": too many facets for 32-bit ids");
+  const int owner = window_.fans > 0 ? window_owner(window_, fans_) : -1;
+  fans_ += n - 2;
+  const bool mine = owner >= 0 && owner == window_.rank;
+  if (fan_.face(corner, n, f, 0, facets_, 0, mine ? &scene_ : nullptr) && owner >= 0)
+    lowest_ = std::min(lowest_, owner), highest_ = std::max(highest_, owner);
+  ++facets_;
+}
+
+void WindowFan::finish(std::uint64_t& fans) {
+  scene_.num_objects = 1;
+  scene_.num_facets = facets_;
+  scene_.warnings = fan_warnings(path_, skipped_, 0, tally_.degenerate);
+  if (tally_.triangles == 0) throw InputError(path_ + ": no facets (the model has no drawable polygons)");
+  check_scene_extent(tally_.triangles, tally_.lo, tally_.hi, path_);
+  scene_.camera = frame_bounds(tally_.lo, tally_.hi, 45.0f, float(scene_.width) / float(scene_.height));
+  scene_.share.rank = window_.rank;
+  scene_.share.ranks = window_.ranks;
+  scene_.share.total_triangles = tally_.triangles;
+  scene_.share.lo = tally_.lo;
+  scene_.share.hi = tally_.hi;
+  if (lowest_ < highest_) scene_.share.spread.push_back(0);
+  scene_.input_files.push_back(path_);
+  fans = fans_;
+}
+
 std::vector<std::string> fan_warnings(const std::string& name, long long skipped, int unplaced,
                                       long long degenerate) {
   std::vector<std::string> out;

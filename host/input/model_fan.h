@@ -3,11 +3,13 @@
 // positions by the node transform, normals by its inverse transpose; a
 // zero-area triangle is dropped (and counted), a corner that is not a finite
 // number or a triangle whose edges overflow float refuses the file. One
-// home for the importer's meshes (model_import.cpp) and the PLY stream
-// (ply_window.cpp), so both give the same triangles bit for bit.
+// home for the importer's meshes (model_import.cpp) and the PLY
+// and STL streams (ply_window.cpp, stl_window.cpp), so they all give the
+// same triangles bit for bit.
 #pragma once
 
 #ifdef OPSILA_HAVE_ASSIMP
+#include <climits>
 #include <cstdint>
 #include <limits>
 #include <string>
@@ -18,6 +20,7 @@
 #include <assimp/mesh.h>
 
 #include "core/scene.h"
+#include "input/obj_loader.h"
 
 namespace opsila {
 
@@ -47,6 +50,40 @@ class MeshFan {
   aiMatrix3x3 normal_matrix_;
   std::size_t max_triangles_;
   FanTally& tally_;
+};
+
+// A model file of one mesh read as a stream by one rank of several (the
+// PLY and STL streams): its faces, in file order, are fanned into the whole
+// file's figures and kept only when their first fan triangle falls in the
+// rank's window (window_owner, the OBJ stream's rule). The scene is the
+// importer path's (model_import.cpp) for a file of one unplaced-free mesh
+// with the "no material" default material: one object, facet ids counted
+// over the faces of 3 corners or more, the same warnings and errors.
+class WindowFan {
+ public:
+  // `mesh` holds the vertices the faces name (it may be refilled between
+  // faces); `scene` gets the window's triangles.
+  WindowFan(const std::string& path, const aiMesh& mesh, std::size_t max_triangles, const ObjWindow& window,
+            Scene& scene);
+  // Face f of the file, of n >= 3 corners of the mesh's vertices.
+  void face(const unsigned* corner, unsigned n, unsigned f);
+  // A face of fewer than 3 corners: no facet, no id.
+  void skip() { ++skipped_; }
+  // The importer path's ending on the whole file's figures (warnings, no
+  // facets, extent, camera) and the window's share of them; `fans` gets the
+  // file's fan triangles.
+  void finish(std::uint64_t& fans);
+
+ private:
+  const std::string& path_;
+  ObjWindow window_;
+  Scene& scene_;
+  FanTally tally_;
+  MeshFan fan_;
+  std::uint64_t fans_ = 0;
+  int facets_ = 0;
+  long long skipped_ = 0;
+  int lowest_ = INT_MAX, highest_ = -1;  // the ranks holding a triangle
 };
 
 // The importer path's warnings about a model's faces, in its order.

@@ -9,7 +9,6 @@
 
 #ifdef OPSILA_HAVE_ASSIMP
 #include <algorithm>
-#include <array>
 #include <climits>
 #include <new>
 
@@ -81,13 +80,9 @@ class PlyWindowReader {
       aiMesh mesh;
       read_vertices(body, h.elements[0], h, mesh, path_);
       Scene scene;
-      scene.has_camera = false;
-      scene.has_lights = false;
-      scene.materials.push_back(MaterialDesc::default_material());
-      FanTally tally;
-      read_faces(body, h.elements[1], mesh, tally, scene);
-      finish(scene, tally);
-      fans = fans_;
+      WindowFan fan(path_, mesh, max_triangles_, window_, scene);
+      read_faces(body, h.elements[1], mesh, fan);
+      fan.finish(fans);
       return scene;
     } catch (const std::bad_alloc&) {
       throw InputError(path_ + ": out of memory while loading (model too large)");
@@ -98,9 +93,8 @@ class PlyWindowReader {
 
  private:
   // Every face read and checked; fanned into the figures, and into the
-  // scene when it is this rank's.
-  void read_faces(ply::Body& body, const ply::Element& e, const aiMesh& mesh, FanTally& tally, Scene& scene) {
-    MeshFan fan(path_, mesh, aiMatrix4x4(), max_triangles_, tally);
+  // scene when it is this rank's (WindowFan).
+  void read_faces(ply::Body& body, const ply::Element& e, const aiMesh& mesh, WindowFan& fan) {
     const ply::Property& list = e.properties[0];
     std::vector<unsigned> corner;
     for (std::uint64_t f = 0; f < e.count; ++f) {
@@ -118,46 +112,15 @@ class PlyWindowReader {
         corner[k] = static_cast<unsigned>(v.i);
       }
       body.end_of_instance(e, f);
-      if (n < 3) {  // the importer path skips points and lines (and empty faces), with no id
-        ++skipped_;
-        continue;
-      }
-      if (facets_ == INT_MAX) throw InputError(path_ + ": too many facets for 32-bit ids");
-      const int owner = window_.fans > 0 ? window_owner(window_, fans_) : -1;
-      fans_ += n - 2;
-      const bool mine = owner >= 0 && owner == window_.rank;
-      if (fan.face(corner.data(), n, static_cast<unsigned>(f), 0, facets_, 0, mine ? &scene : nullptr) && owner >= 0)
-        owners_[0] = std::min(owners_[0], owner), owners_[1] = std::max(owners_[1], owner);
-      ++facets_;
+      if (n < 3) fan.skip();  // the importer path skips points and lines (and empty faces), with no id
+      else fan.face(corner.data(), n, static_cast<unsigned>(f));
     }
-  }
-
-  // The importer path's ending (model_import.cpp), on the whole file's
-  // figures, and the window's share of them.
-  void finish(Scene& scene, const FanTally& tally) const {
-    scene.num_objects = 1;
-    scene.num_facets = facets_;
-    scene.warnings = fan_warnings(path_, skipped_, 0, tally.degenerate);
-    if (tally.triangles == 0) throw InputError(path_ + ": no facets (the model has no drawable polygons)");
-    check_scene_extent(tally.triangles, tally.lo, tally.hi, path_);
-    scene.camera = frame_bounds(tally.lo, tally.hi, 45.0f, float(scene.width) / float(scene.height));
-    scene.share.rank = window_.rank;
-    scene.share.ranks = window_.ranks;
-    scene.share.total_triangles = tally.triangles;
-    scene.share.lo = tally.lo;
-    scene.share.hi = tally.hi;
-    if (owners_[0] < owners_[1]) scene.share.spread.push_back(0);
-    scene.input_files.push_back(path_);
   }
 
   const std::string& path_;
   std::size_t max_triangles_;
   ObjWindow window_;
   std::size_t block_;
-  std::uint64_t fans_ = 0;
-  int facets_ = 0;
-  long long skipped_ = 0;
-  std::array<int, 2> owners_{{INT_MAX, -1}};  // the lowest and highest rank holding a triangle
 };
 
 }  // namespace

@@ -34,18 +34,7 @@ using test::write_ply;
 
 #ifdef OPSILA_HAVE_ASSIMP
 
-std::string one_process(const std::string& path) {
-  try {
-    const Scene s = load_model(path);
-    Vec3 lo, hi;
-    s.bounds(lo, hi);
-    std::string o = test::figures_text(s, s.triangles.size(), lo, hi);
-    for (const Triangle& t : s.triangles) o += test::triangle_text(s, t) + "\n";
-    return o;
-  } catch (const InputError& e) {
-    return test::error_text(e);
-  }
-}
+std::string one_process(const std::string& path) { return test::imported_text(path); }
 
 std::string on_ranks(const std::string& path, int R, std::size_t block) {
   return test::windows_text(R, [&](const ObjWindow& w, std::uint64_t& fans) {

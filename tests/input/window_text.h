@@ -1,4 +1,4 @@
-// A scene read in windows (the OBJ and PLY streams), as text to compare
+// A scene read in windows (the OBJ, PLY and STL streams), as text to compare
 // with one process's: each triangle bit for bit, the figures every rank
 // must agree on, or the error.
 #pragma once
@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "core/scene.h"
+#include "input/model_import.h"
 #include "input/obj_loader.h"
 #include "test_util.h"
 
@@ -50,6 +51,21 @@ inline std::string error_text(const InputError& e) {
   std::string o = "error " + std::string(e.what()) + "\n";
   for (const std::string& w : e.warnings) o += "warning " + w + "\n";
   return o;
+}
+
+// One process's import of a model file (model_import.cpp), as windows_text
+// gives the windows of the same file.
+inline std::string imported_text(const std::string& path) {
+  try {
+    const Scene s = load_model(path);
+    Vec3 lo, hi;
+    s.bounds(lo, hi);
+    std::string o = figures_text(s, s.triangles.size(), lo, hi);
+    for (const Triangle& t : s.triangles) o += triangle_text(s, t) + "\n";
+    return o;
+  } catch (const InputError& e) {
+    return error_text(e);
+  }
 }
 
 // R ranks, each reading the file twice with `load` (first counting, with no

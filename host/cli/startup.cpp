@@ -1,11 +1,9 @@
 #include "cli/startup.h"
 
-#include <filesystem>
-
 #include "core/progress.h"
 #include "core/stage_clock.h"
 #include "core/util.h"
-#include "input/ply_reader.h"
+#include "input/model_window.h"
 #include "input/texture_file.h"
 #include "machine/collective_cut.h"
 #include "machine/pe_group.h"
@@ -36,8 +34,8 @@ Scene load_view_scene(const std::string& path, const ViewOptions& view, bool qui
   apply_view_options(scene, view);
   if (!quiet)
     if (const std::string text = large_work_note(scene); !text.empty()) note(text);
-  if (!quiet && share.ranks > 1 && lower(std::filesystem::path(path).extension().string()) == ".ply")
-    if (const std::string why = ply_stream_refusal(path); !why.empty())
+  if (!quiet && share.ranks > 1 && is_streamed_model(path))
+    if (const std::string why = model_stream_refusal(path); !why.empty())
       note(path + ": read whole by every rank (not as a stream in windows: " + why + ")");
   return scene;
 }

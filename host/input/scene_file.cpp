@@ -7,7 +7,7 @@
 #include "input/scene_file.h"
 
 #include "input/scene_reader.h"
-#include "input/ply_reader.h"
+#include "input/model_window.h"
 #include "core/env_hooks.h"
 #include "core/stage_clock.h"
 
@@ -309,10 +309,10 @@ Scene load_window_share(const WindowRead& read, const SceneShare& share) {
 }
 
 // The file as a stream in windows, when several ranks read it and the
-// stream reads it as one process does (an OBJ, or a PLY that
-// ply_stream_refusal accepts).
+// stream reads it as one process does (an OBJ, or a PLY or binary STL that
+// model_stream_refusal accepts).
 bool windowed(const std::string& path, const std::string& ext, const SceneShare& share) {
-  return share.ranks > 1 && (ext == ".obj" || (ext == ".ply" && ply_stream_refusal(path).empty()));
+  return share.ranks > 1 && (ext == ".obj" || (is_streamed_model(path) && model_stream_refusal(path).empty()));
 }
 
 }  // namespace
@@ -324,7 +324,7 @@ Scene load_scene(const std::string& path, const SceneShare& share) {
     const std::size_t limit = rank_triangle_limit() * std::size_t(share.ranks);
     Scene scene = load_window_share(
         [&](const ObjWindow& w, std::uint64_t& fans) {
-          return ext == ".obj" ? load_obj_window(path, limit, w, fans) : load_ply_window(path, limit, w, fans);
+          return ext == ".obj" ? load_obj_window(path, limit, w, fans) : load_model_window(path, limit, w, fans);
         },
         share);
     scene.share.read_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

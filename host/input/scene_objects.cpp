@@ -292,7 +292,7 @@ std::function<void(std::vector<Triangle>&)> SceneReader::terrain(const Json& v, 
 // reader, the others through the importer). The file is read now (an OBJ's
 // triangles count against the scene's limit as they are read), its
 // triangles appended when the scene is built. A scene read in shares
-// streams an OBJ (and a PLY the PLY stream reads as the importer does)
+// streams an OBJ (and a PLY or binary STL its stream reads as the importer does)
 // instead: now for its counts, materials and warnings only, and again when
 // it is built, keeping this rank's window (file_window()).
 std::function<void(std::vector<Triangle>&)> SceneReader::include_obj(const Json& v, const std::string& path,
@@ -312,8 +312,9 @@ std::function<void(std::vector<Triangle>&)> SceneReader::include_obj(const Json&
   auto sub = std::make_shared<Scene>();
   const std::string ext = lower(fs::path(full).extension().string());
   const bool obj = ext == ".obj";
-  const bool ply = share_.ranks > 1 && any_format && ext == ".ply" && ply_stream_refusal(full).empty();
-  const bool windowed = share_.ranks > 1 && (obj || !any_format || ply);
+  const bool streamed =
+      share_.ranks > 1 && any_format && is_streamed_model(full) && model_stream_refusal(full).empty();
+  const bool windowed = share_.ranks > 1 && (obj || !any_format || streamed);
   std::uint64_t fans = 0;
   try {
     if (!obj && any_format && !is_imported_model(full))
@@ -321,8 +322,8 @@ std::function<void(std::vector<Triangle>&)> SceneReader::include_obj(const Json&
     if (windowed) {
       ObjWindow counting;  // keeps no polygon
       counting.rank = share_.rank, counting.ranks = share_.ranks;
-      *sub = ply ? load_ply_window(full, max_triangles_ - planned_triangles_, counting, fans)
-                 : load_obj_window(full, max_triangles_ - planned_triangles_, counting, fans);
+      *sub = streamed ? load_model_window(full, max_triangles_ - planned_triangles_, counting, fans)
+                      : load_obj_window(full, max_triangles_ - planned_triangles_, counting, fans);
     } else if (obj || !any_format) {
       *sub = load_obj(full, std::min(entry_limit_, max_triangles_ - planned_triangles_));
     } else {

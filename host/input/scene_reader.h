@@ -29,7 +29,7 @@
 #include "core/util.h"
 #include "input/json_text.h"
 #include "input/model_import.h"
-#include "input/ply_reader.h"
+#include "input/model_window.h"
 #include "input/primitives.h"
 
 namespace opsila {

@@ -97,7 +97,7 @@ void SceneReader::model_again(Scene& sub, const std::string& file, std::size_t t
   sub.attributes = std::move(again.attributes);
 }
 
-// An OBJ entry (or a PLY model the stream reads) read as a stream again,
+// An OBJ entry (or a PLY or STL model its stream reads) read as a stream again,
 // keeping this rank's window: the polygons whose first fan triangle falls
 // in its slice of the plan, the file's fan triangles spread evenly over the
 // entry's part of it (ObjWindow). The file's objects that fall in several
@@ -113,8 +113,8 @@ void SceneReader::file_window(Scene& sub, const std::string& file, std::uint64_t
   entry_.windowed = true;
   try {
     std::uint64_t again = 0;
-    const bool ply = lower(std::filesystem::path(file).extension().string()) == ".ply";
-    Scene part = ply ? load_ply_window(file, max_triangles_, w, again) : load_obj_window(file, max_triangles_, w, again);
+    Scene part = is_streamed_model(file) ? load_model_window(file, max_triangles_, w, again)
+                                         : load_obj_window(file, max_triangles_, w, again);
     sub.triangles = std::move(part.triangles);
     sub.attributes = std::move(part.attributes);
     sub.share.spread = std::move(part.share.spread);

@@ -6,7 +6,9 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdlib>
+#include <limits>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -14,6 +16,7 @@
 #include <nlohmann/json.hpp>
 
 #include "ply_file.h"
+#include "stl_file.h"
 #include "test_util.h"
 
 namespace opsila {
@@ -612,6 +615,96 @@ TEST_F(MpiFixture, ABrokenPlyEndsEveryRankWithOneLine) {
     const RunResult r = ranks(R, with("r" + std::to_string(R)));
     expect_refused(r, {"broken.ply: PLY " + face + " at byte ", "vertex index 700 out of range (the file has 600 vertices)"});
     EXPECT_FALSE(test::file_exists(dir.file("r" + std::to_string(R) + ".pfm")));
+  }
+}
+
+// One big binary STL, bare: every rank streams its records, keeping only
+// its window (host/input/stl_window.cpp). The same image, item buffer and
+// banks as one process (which reads it through the importer); each rank
+// read about 1/R of the facets.
+TEST_F(MpiFixture, ABareStlReadInWindowsIsTheSameAsOneProcess) {
+  test::StlFile s = test::stl_grid(41, 21);
+  for (auto& f : s.facets)
+    for (auto& c : f.corner) c[2] *= 0.3f;
+  const std::string path = dir.file("grid.stl");
+  test::write_stl(path, s);
+  expect_windows_as_one(path, 2u * 40 * 20 + 2);  // the grid's facets and two more (one has no area)
+}
+
+// A scene of binary STL models, each streamed in windows: the same as one
+// process on 2, 3 and 4 ranks, each rank reading about 1/R of every file's
+// facets.
+TEST_F(MpiFixture, StlModelsReadInWindowsAreTheSameAsOneProcess) {
+  std::string objects;
+  std::uint64_t all = 0;
+  for (int k = 0; k < 3; ++k) {
+    test::StlFile s = test::stl_grid(14 + 6 * k, 8 + 3 * k);
+    for (auto& f : s.facets) {
+      for (auto& c : f.corner) std::swap(c[1], c[2]);  // a terrain: y up
+      std::swap(f.normal[1], f.normal[2]);
+    }
+    test::write_stl(dir.file("m" + std::to_string(k) + ".stl"), s);
+    all += s.facets.size() - 1;  // one has no area
+    objects += std::string(k ? ",\n" : "") + R"({"type": "model", "file": "m)" + std::to_string(k) +
+               R"(.stl", "transform": {"translate": [)" + std::to_string(3 * k) + ", 0, " + std::to_string(k) + "]}}";
+  }
+  const std::string path = dir.write("models.json", "{\"objects\": [\n" + objects + "\n]}\n");
+  expect_scene_as_one(path, 8, {2, 3, 4}, [&](int R, const nlohmann::json& s) {
+    EXPECT_EQ(s.at("scene").at("triangles").get<std::uint64_t>(), all);
+    EXPECT_EQ(facets_read(s, all / std::uint64_t(R) + 3, "its window of each file, give or take a facet"), all);
+  });
+}
+
+// An STL the stream cannot read as the importer does (text, Materialise
+// colours) is read whole by every rank, with a note saying why, and gives
+// one process's image.
+TEST_F(MpiFixture, AnStlTheStreamCannotReadIsReadWholeWithANote) {
+  test::StlFile s = test::stl_grid(12, 9);
+  s.facets.back().attribute = 0;
+  s.header = std::string("COLOR=\x90\x30\x30\xff", 10);
+  const std::string path = dir.file("magics.stl");
+  test::write_stl(path, s);
+  auto with = [&](const std::string& tag) {
+    return std::vector<std::string>{path, "--size", "32x24", "--pes", "4", "-o", dir.file(tag + ".pfm")};
+  };
+  ASSERT_EQ(one(with("one")).exit_code, 0);
+  const RunResult r = ranks(2, with("r2"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("magics.stl: read whole by every rank (not as a stream in windows: its header names "
+                       "Materialise colours (COLOR=))"),
+            std::string::npos)
+      << r.err;
+  EXPECT_TRUE(test::read_file(dir.file("r2.pfm")) == test::read_file(dir.file("one.pfm")));
+}
+
+// A binary STL with a corner that is not a number near its end, and one cut
+// short: every rank stops with one process's one line naming the file and
+// the facet (the stream's, or the importer path's for the truncated file,
+// which the stream leaves to it); nothing is written.
+TEST_F(MpiFixture, ABrokenStlEndsEveryRankWithOneProcesssLine) {
+  test::StlFile s = test::stl_grid(30, 20);
+  s.facets[s.facets.size() - 5].corner[1][0] = std::numeric_limits<float>::quiet_NaN();
+  test::write_stl(dir.file("nan.stl"), s);
+  const std::string bytes = test::stl_bytes(test::stl_grid(30, 20));
+  dir.write("cut.stl", bytes.substr(0, bytes.size() - 30));
+  for (const std::string name : {"nan.stl", "cut.stl"}) {
+    SCOPED_TRACE(name);
+    auto with = [&](const std::string& tag) {
+      return std::vector<std::string>{dir.file(name), "--size", "32x24", "--pes", "4", "-o", dir.file(tag + ".pfm")};
+    };
+    const RunResult single = one(with("one"));
+    EXPECT_EQ(single.exit_code, 2);
+    ASSERT_EQ(single.error_lines().size(), 1u) << single.err;
+    const std::string line = single.error_lines()[0];
+    const std::string message = line.substr(line.find(name + ":"));
+    EXPECT_NE(message.find(name == "nan.stl" ? "face " + std::to_string(s.facets.size() - 5) : "(truncated file)"),
+              std::string::npos)
+        << message;
+    for (int R : {3, 4}) {
+      const RunResult r = ranks(R, with("r" + std::to_string(R)));
+      expect_refused(r, {message});
+      EXPECT_FALSE(test::file_exists(dir.file("r" + std::to_string(R) + ".pfm")));
+    }
   }
 }
 

@@ -32,7 +32,8 @@ Scene load_model_window(const std::string& path, std::size_t max_triangles, cons
 std::string stl_stream_refusal(const std::string& path);
 
 // As load_ply_window, for a binary STL the stream reads: the 50-byte
-// records are read in blocks of about block_bytes (a record at least).
+// records are read in blocks of about block_bytes (a record at least, 64 Ki
+// records at most).
 Scene load_stl_window(const std::string& path, std::size_t max_triangles, const ObjWindow& window,
                       std::uint64_t& fans, std::size_t block_bytes = std::size_t(32) << 20);
 

@@ -1,13 +1,14 @@
 // One rank's window of a binary STL read as a stream (model_window.h): an
 // 80-byte header, a little-endian uint32 facet count, then 50 bytes a facet
 // (a float32 normal, three float32 corners, a uint16 attribute). The
-// records are read in blocks into a mesh of the block's corners, each
-// corner with its facet's normal, as the importer's STL reader makes the
-// whole file's mesh, and fanned by WindowFan (model_fan.h): a facet is kept
-// only when it falls in this rank's slice of the plan; the others are only
-// counted into the whole file's figures, so counts, warnings and errors are
-// one process's on every rank. The attribute (a colour to some writers) is
-// read and let go: the importer path keeps no vertex colour.
+// records are read in blocks (64 Ki records at most) into a mesh of the
+// block's corners, each corner with its facet's normal, as the importer's
+// STL reader makes the whole file's mesh, and fanned by WindowFan
+// (model_fan.h): a facet is kept only when it falls in this rank's slice of
+// the plan; the others are only counted into the whole file's figures, so
+// counts, warnings and errors are one process's on every rank. The
+// attribute (a colour to some writers) is read and let go: the importer
+// path keeps no vertex colour.
 #include "input/model_window.h"
 
 #include <algorithm>
@@ -34,6 +35,7 @@ namespace {
 
 constexpr std::uint64_t kStlHeader = 84;  // 80 bytes of text, the facet count
 constexpr std::uint64_t kStlRecord = 50;
+constexpr std::uint64_t kBlockRecords = std::uint64_t(1) << 16;
 
 std::uint32_t le32(const unsigned char* b) {
   return std::uint32_t(b[0]) | std::uint32_t(b[1]) << 8 | std::uint32_t(b[2]) << 16 | std::uint32_t(b[3]) << 24;
@@ -110,9 +112,10 @@ Scene read_window(const std::string& path, std::size_t max_triangles, const ObjW
   if (!file || std::fseek(file.get(), long(kStlHeader), SEEK_SET) != 0)
     throw InputError(path + ": cannot read: " + std::strerror(errno));
   // A block of records, and the mesh of its corners (the importer's, for
-  // these facets: corner 3j + c of record j, each with the record's normal).
-  const std::size_t block = static_cast<std::size_t>(
-      std::min<std::uint64_t>(count, std::max<std::size_t>(block_bytes / kStlRecord, 1)));
+  // these facets: corner 3j + c of record j, each with the record's normal):
+  // 122 bytes a record, so at most kBlockRecords of them (8 MB).
+  const std::size_t block = static_cast<std::size_t>(std::min<std::uint64_t>(
+      {count, std::max<std::size_t>(block_bytes / kStlRecord, 1), kBlockRecords}));
   std::vector<unsigned char> bytes(block * kStlRecord);
   aiMesh mesh;
   mesh.mNumVertices = static_cast<unsigned>(3 * block);

@@ -745,10 +745,10 @@ TEST_F(MpiFixture, ModelFilesReadAgainAreTheSameAsOneProcess) {
 }
 #endif
 
-// An OBJ entry (or a PLY model) is streamed in windows, so it is held to
-// the scene's limit (R times one rank's), not one rank's: over one rank's
-// limit it is refused on one process, naming the entry, and renders on two
-// ranks, the same image.
+// An OBJ entry (or a PLY or binary STL model) is streamed in windows, so
+// it is held to the scene's limit (R times one rank's), not one rank's:
+// over one rank's limit it is refused on one process, naming the entry,
+// and renders on two ranks, the same image.
 TEST_F(MpiFixture, AModelFileOverOneRanksLimitRendersOnTwoRanks) {
   grid_obj(dir, "big.obj", 40, 20, 3);  // 3200 triangles
   std::vector<std::pair<std::string, std::string>> entries = {{R"("type": "obj", "file": "big.obj")", "2000"}};
@@ -757,6 +757,11 @@ TEST_F(MpiFixture, AModelFileOverOneRanksLimitRendersOnTwoRanks) {
   for (auto& v : ply.vertices) v[2] *= 0.2;
   test::write_ply(dir.file("big.ply"), ply);
   entries.push_back({R"("type": "model", "file": "big.ply")", "1000"});
+  test::StlFile stl = test::stl_grid(41, 21);  // 1602 triangles
+  for (auto& f : stl.facets)
+    for (auto& c : f.corner) c[2] *= 0.2f;
+  test::write_stl(dir.file("big.stl"), stl);
+  entries.push_back({R"("type": "model", "file": "big.stl")", "1000"});
 #endif
   for (const auto& [entry, limit] : entries) {
     SCOPED_TRACE(entry);

@@ -31,6 +31,8 @@
 
 namespace opsila {
 
+#ifdef OPSILA_HAVE_ASSIMP
+
 namespace {
 
 constexpr std::uint64_t kStlHeader = 84;  // 80 bytes of text, the facet count
@@ -73,22 +75,6 @@ std::string refusal(const std::string& path, std::uint64_t& count) {
   }
   return "";
 }
-
-}  // namespace
-
-std::string stl_stream_refusal(const std::string& path) {
-#ifdef OPSILA_HAVE_ASSIMP
-  std::uint64_t count = 0;
-  return refusal(path, count);
-#else
-  (void)path;
-  return "this build has no Open Asset Import Library";
-#endif
-}
-
-#ifdef OPSILA_HAVE_ASSIMP
-
-namespace {
 
 float le_float(const unsigned char* b) {
   const std::uint32_t bits = le32(b);
@@ -147,6 +133,11 @@ Scene read_window(const std::string& path, std::size_t max_triangles, const ObjW
 
 }  // namespace
 
+std::string stl_stream_refusal(const std::string& path) {
+  std::uint64_t count = 0;
+  return refusal(path, count);
+}
+
 Scene load_stl_window(const std::string& path, std::size_t max_triangles, const ObjWindow& window,
                       std::uint64_t& fans, std::size_t block_bytes) {
   try {
@@ -159,6 +150,8 @@ Scene load_stl_window(const std::string& path, std::size_t max_triangles, const 
 }
 
 #else  // built without the Open Asset Import Library: the importer path says so
+
+std::string stl_stream_refusal(const std::string&) { return "this build has no Open Asset Import Library"; }
 
 Scene load_stl_window(const std::string& path, std::size_t, const ObjWindow&, std::uint64_t&, std::size_t) {
   throw InputError(path + ": this build has no Open Asset Import Library (install libassimp-dev and rebuild)");

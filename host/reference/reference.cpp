@@ -232,22 +232,31 @@ struct ReferenceTracer::Impl {
     }
   }
 
+  // The hit with t > t_min that no other beats, `beats(t, index, best)`
+  // saying whether a hit at t on triangle `index` beats `best`. Boxes are
+  // culled only beyond the best t widened above the tie tolerance, so a hit
+  // that ties or nearly ties is still found.
+  template <typename Beats>
+  bool nearest_by(const Vec3& origin, const Vec3& dir, float t_min, Hit& hit, Beats beats) const {
+    walk(origin, dir, t_min, [&] { return hit.t + hit.t * (2 * OPSILA_TIE_TOLERANCE); }, [&](int index) {
+      float t, b1, b2;
+      if (intersect(tris[index], origin, dir, t, &b1, &b2) && t > t_min && beats(t, index, hit)) {
+        hit.t = t;
+        hit.tri = index;
+        hit.b1 = b1;
+        hit.b2 = b2;
+      }
+      return false;
+    });
+    return hit.tri >= 0;
+  }
+
   // Nearest hit with t > t_min. Ties go to the lower triangle index
   // (Scene::triangles order), whatever order the BVH visits them in.
   bool nearest(const Vec3& origin, const Vec3& dir, float t_min, Hit& hit) const {
     if (queries) return queries->nearest(origin, dir, t_min, hit);
-    walk(origin, dir, t_min, [&] { return hit.t + hit.t * (2 * OPSILA_TIE_TOLERANCE); },
-         [&](int index) {
-           float t, b1, b2;
-           if (intersect(tris[index], origin, dir, t, &b1, &b2) && t > t_min && closer(t, index, hit.t, hit.tri)) {
-             hit.t = t;
-             hit.tri = index;
-             hit.b1 = b1;
-             hit.b2 = b2;
-           }
-           return false;
-         });
-    return hit.tri >= 0;
+    return nearest_by(origin, dir, t_min, hit,
+                      [](float t, int index, const Hit& best) { return closer(t, index, best.t, best.tri); });
   }
 
   // Shadow test: is any triangle hit with t in (t_min, t_max)?
@@ -407,20 +416,10 @@ struct ReferenceTracer::Impl {
     const std::uint64_t a = sample_key(index), b = sample_key(best.tri);
     return a < b || (a == b && index < best.tri);
   }
-  // The least hit in that order with t > t_min. Boxes are culled only
-  // beyond the best t (widened as in nearest), so an equal t is still found.
+  // The least hit in that order with t > t_min.
   bool sample_nearest(const Vec3& origin, const Vec3& dir, float t_min, Hit& hit) const {
-    walk(origin, dir, t_min, [&] { return hit.t + hit.t * (2 * OPSILA_TIE_TOLERANCE); }, [&](int index) {
-      float t, b1, b2;
-      if (intersect(tris[index], origin, dir, t, &b1, &b2) && t > t_min && sample_before(t, index, hit)) {
-        hit.t = t;
-        hit.tri = index;
-        hit.b1 = b1;
-        hit.b2 = b2;
-      }
-      return false;
-    });
-    return hit.tri >= 0;
+    return nearest_by(origin, dir, t_min, hit,
+                      [this](float t, int index, const Hit& best) { return sample_before(t, index, best); });
   }
 };
 

@@ -130,6 +130,48 @@ struct MpiFixture : ::testing::Test {
       each(R, s);
     }
   }
+  // `render PATH --balance MODE` at 48x36 on 64 PEs, writing every output.
+  std::function<std::vector<std::string>(const std::string&)> balanced(const std::string& path,
+                                                                       const std::string& mode) {
+    return [this, path, mode](const std::string& tag) {
+      return std::vector<std::string>{path, "--size", "48x36", "--pes", "64", "--balance", mode, "-q",
+                                      "-o", dir.file(tag + ".pfm"), "--item-buffer", dir.file(tag + ".npy"),
+                                      "--stats", dir.file(tag + ".json")};
+    };
+  }
+  // --balance MODE on shares is one process's on 2, 3 and 4 ranks (image,
+  // item buffer, banks), each rank reading about 1/R of the facets; at 64
+  // PEs the balance finds clusters hotter than half a PE's share and cuts
+  // them (the terrain's collectively, small objects' by their rank): more
+  // clusters than by facets. `each(N, R, stats, one process's stats)` adds
+  // the mode's own checks.
+  void expect_balance_on_shares(
+      const std::string& path, const std::string& mode,
+      const std::function<void(std::uint64_t N, int R, const nlohmann::json&, const nlohmann::json&)>& each) {
+    const auto with = balanced(path, mode);
+    ASSERT_EQ(one(with("one")).exit_code, 0);
+    const nlohmann::json base = stats(dir.file("one.json"));
+    ASSERT_EQ(base.at("balance"), mode);
+    ASSERT_EQ(one(balanced(path, "facets")("facets")).exit_code, 0);
+    EXPECT_GT(base.at("clusters").get<int>(), stats(dir.file("facets.json")).at("clusters").get<int>());
+    const std::uint64_t N = base.at("scene").at("triangles");
+    for (int R : {2, 3, 4}) {
+      SCOPED_TRACE(std::to_string(R) + " ranks");
+      nlohmann::json s;
+      expect_ranks_as_one(R, with, s);
+      if (HasFatalFailure()) return;
+      EXPECT_EQ(s.at("balance"), mode);
+      EXPECT_EQ(facets_read(s, N / R + 320, "a share: 1/R of the facets, and at most one object more"), N);
+      each(N, R, s, base);
+    }
+  }
+  // Not quiet: no rank says it reads the whole scene.
+  void expect_no_whole_scene_note(const std::string& path, const std::string& mode) {
+    const RunResult loud = ranks(2, {path, "--size", "32x24", "--pes", "4", "--balance", mode, "-o",
+                                     dir.file("loud.pfm")});
+    ASSERT_EQ(loud.exit_code, 0) << loud.err;
+    EXPECT_EQ(loud.err.find("whole scene"), std::string::npos) << loud.err;
+  }
   // A bare model file streamed in windows (an OBJ, a PLY) of N triangles,
   // on 2, 3 and 4 ranks: the same image, item buffer and banks as one
   // process; each rank read about 1/R of the facets.
@@ -235,6 +277,17 @@ TEST_F(MpiFixture, TexturedAndSmoothAreTheSameOnThreeRanks) {
 // each), side by side, each grid one entry of "objects"; `files` adds that
 // many included OBJ files (a box each), the one named `broken` (if any)
 // with a face that names a missing vertex.
+// A terrain spread over the ranks (rotated), a second one and a sphere
+// (a mirror, with `mirror`) above them: the balance tests' scene.
+std::string balance_terrain(TempDir& dir, bool mirror) {
+  return dir.write("terrain.json", std::string(R"({"objects": [
+    {"type": "sphere", "center": [0, 4, 0], "radius": 1, "subdivisions": 2)") +
+                                       (mirror ? R"(, "material": "mirror")" : "") + R"(},
+    {"type": "terrain", "size": [20, 20], "quads": [60, 60], "height": 3, "transform": {"rotate": [0, 30, 0]}},
+    {"type": "terrain", "size": [6, 6], "quads": [9, 7], "height": 0, "center": [0, 6, 0]}],
+    "materials": {"mirror": {"kd": 0.2, "kr": 0.7}}})");
+}
+
 std::string share_scene(TempDir& dir, int entries, int files = 0, int broken = -1) {
   std::string objects;
   for (int e = 0; e < entries; ++e)
@@ -833,104 +886,46 @@ TEST_F(MpiFixture, BalancedPartitionsAreTheSameOnThreeRanks) {
 // on a scene of many objects and files and on a terrain spread over the
 // ranks. No rank reads the whole scene (and no note says one does).
 TEST_F(MpiFixture, MeasuredBalanceOnSharesIsTheSameAsOneProcess) {
-  const std::string terrain = dir.write("terrain.json", R"({"objects": [
-    {"type": "sphere", "center": [0, 4, 0], "radius": 1, "subdivisions": 2},
-    {"type": "terrain", "size": [20, 20], "quads": [60, 60], "height": 3, "transform": {"rotate": [0, 30, 0]}},
-    {"type": "terrain", "size": [6, 6], "quads": [9, 7], "height": 0, "center": [0, 6, 0]}]})");
+  const std::string terrain = balance_terrain(dir, false);
   const std::string many = share_scene(dir, 6, 5);
   for (const std::string& path : {many, terrain}) {
     SCOPED_TRACE(path);
-    auto with = [&](const std::string& tag) {
-      return std::vector<std::string>{path, "--size", "48x36", "--pes", "64", "--balance", "measured", "-q",
-                                      "-o", dir.file(tag + ".pfm"), "--item-buffer", dir.file(tag + ".npy"),
-                                      "--stats", dir.file(tag + ".json")};
-    };
-    ASSERT_EQ(one(with("one")).exit_code, 0);
-    const nlohmann::json base = stats(dir.file("one.json"));
-    ASSERT_EQ(base.at("balance"), "measured");
-    // At 64 PEs the pilots find clusters hotter than half a PE's share, and
-    // they are cut (the terrain's collectively, the small objects' by their
-    // rank): more clusters than the facets' partition makes.
-    std::vector<std::string> facets = with("facets");
-    facets[6] = "facets";
-    ASSERT_EQ(one(facets).exit_code, 0);
-    EXPECT_GT(base.at("clusters").get<int>(), stats(dir.file("facets.json")).at("clusters").get<int>());
-    const std::uint64_t N = base.at("scene").at("triangles");
-    for (int R : {2, 3, 4}) {
-      SCOPED_TRACE(std::to_string(R) + " ranks");
-      nlohmann::json s;
-      expect_ranks_as_one(R, with, s);
-      if (HasFatalFailure()) return;
-      EXPECT_EQ(s.at("balance"), "measured");
+    expect_balance_on_shares(path, "measured", [](std::uint64_t N, int R, const nlohmann::json& s,
+                                                  const nlohmann::json& base) {
       EXPECT_EQ(s.at("pilot").at("frames"), base.at("pilot").at("frames"));
-      EXPECT_EQ(facets_read(s, N / R + 320, "a share: 1/R of the facets, and at most one object more"), N);
       for (const auto& rank : s.at("mpi").at("per_rank")) {
         const nlohmann::json& share = rank.at("share");
         // While the pilots ran: its share, and a pilot's banks beside it (about 2N/R, never the whole scene).
         EXPECT_GT(share.at("pilot_facets_held").get<std::uint64_t>(), share.at("facets_read").get<std::uint64_t>());
         EXPECT_LE(share.at("pilot_facets_held").get<std::uint64_t>(), 3 * N / R + 320);
       }
-    }
-    if (path != terrain) continue;
+    });
+    if (HasFatalFailure() || path != terrain) continue;
     // Over one rank's limit (OPSILA_RANK_TRIANGLE_LIMIT), under two ranks':
     // the pilots run on two ranks' shares, the same image.
     env["OPSILA_RANK_TRIANGLE_LIMIT"] = "5000";
-    const RunResult two = ranks(2, with("two"));
+    const RunResult two = ranks(2, balanced(path, "measured")("two"));
     env.erase("OPSILA_RANK_TRIANGLE_LIMIT");
     ASSERT_EQ(two.exit_code, 0) << two.err;
     EXPECT_TRUE(test::read_file(dir.file("two.pfm")) == test::read_file(dir.file("one.pfm")));
   }
-  // Not quiet: no rank says it reads the whole scene.
-  const RunResult loud = ranks(2, {many, "--size", "32x24", "--pes", "4", "--balance", "measured", "-o",
-                                   dir.file("loud.pfm")});
-  ASSERT_EQ(loud.exit_code, 0) << loud.err;
-  EXPECT_EQ(loud.err.find("whole scene"), std::string::npos) << loud.err;
+  expect_no_whole_scene_note(many, "measured");
 }
 
 // --balance work on shares: each rank traces the ray sample through its own
 // facets and the ranks join every level's nearest hits, so the sample, the
 // clusters cut for being too hot and the partition are one process's: the
 // same image, item buffer, work per level and PE, and banks, on a scene of
-// many objects and files and on a terrain spread over the ranks. No rank
-// reads the whole scene.
+// many objects and files and on a terrain spread over the ranks (with a
+// mirror: the sample follows reflected rays). No rank reads the whole scene.
 TEST_F(MpiFixture, WorkBalanceOnSharesIsTheSameAsOneProcess) {
-  const std::string terrain = dir.write("terrain.json", R"({"objects": [
-    {"type": "sphere", "center": [0, 4, 0], "radius": 1, "subdivisions": 2, "material": "mirror"},
-    {"type": "terrain", "size": [20, 20], "quads": [60, 60], "height": 3, "transform": {"rotate": [0, 30, 0]}},
-    {"type": "terrain", "size": [6, 6], "quads": [9, 7], "height": 0, "center": [0, 6, 0]}],
-    "materials": {"mirror": {"kd": 0.2, "kr": 0.7}}})");
+  const std::string terrain = balance_terrain(dir, true);
   const std::string many = share_scene(dir, 6, 5);
   for (const std::string& path : {many, terrain}) {
     SCOPED_TRACE(path);
-    auto with = [&](const std::string& tag) {
-      return std::vector<std::string>{path, "--size", "48x36", "--pes", "64", "--balance", "work", "-q",
-                                      "-o", dir.file(tag + ".pfm"), "--item-buffer", dir.file(tag + ".npy"),
-                                      "--stats", dir.file(tag + ".json")};
-    };
-    ASSERT_EQ(one(with("one")).exit_code, 0);
-    const nlohmann::json base = stats(dir.file("one.json"));
-    ASSERT_EQ(base.at("balance"), "work");
-    // At 64 PEs the sample finds clusters crossed by more than half a PE's
-    // share of the rays, and they are cut: more clusters than by facets.
-    std::vector<std::string> facets = with("facets");
-    facets[6] = "facets";
-    ASSERT_EQ(one(facets).exit_code, 0);
-    EXPECT_GT(base.at("clusters").get<int>(), stats(dir.file("facets.json")).at("clusters").get<int>());
-    const std::uint64_t N = base.at("scene").at("triangles");
-    for (int R : {2, 3, 4}) {
-      SCOPED_TRACE(std::to_string(R) + " ranks");
-      nlohmann::json s;
-      expect_ranks_as_one(R, with, s);
-      if (HasFatalFailure()) return;
-      EXPECT_EQ(s.at("balance"), "work");
-      EXPECT_EQ(facets_read(s, N / R + 320, "a share: 1/R of the facets, and at most one object more"), N);
-    }
+    expect_balance_on_shares(path, "work", [](std::uint64_t, int, const nlohmann::json&, const nlohmann::json&) {});
   }
-  // Not quiet: no rank says it reads the whole scene.
-  const RunResult loud = ranks(2, {many, "--size", "32x24", "--pes", "4", "--balance", "work", "-o",
-                                   dir.file("loud.pfm")});
-  ASSERT_EQ(loud.exit_code, 0) << loud.err;
-  EXPECT_EQ(loud.err.find("whole scene"), std::string::npos) << loud.err;
+  expect_no_whole_scene_note(many, "work");
 }
 
 // A bad flag is the same on every rank: one line, from the lowest, once.

@@ -26,23 +26,11 @@ namespace fs = std::filesystem;
 
 const std::string kData = std::string(OPSILA_SOURCE_DIR) + "/tests/data";
 
-using test::error_text;
-using test::figures_text;
-using test::triangle_text;
 
 // One process: the figures, then its triangles, then the objects it would
 // spread over R ranks' windows given which rank holds each triangle.
 std::string one_process(const std::string& path) {
-  try {
-    const Scene s = load_obj(path);
-    Vec3 lo, hi;
-    s.bounds(lo, hi);
-    std::string o = figures_text(s, s.triangles.size(), lo, hi);
-    for (const Triangle& t : s.triangles) o += triangle_text(s, t) + "\n";
-    return o;
-  } catch (const InputError& e) {
-    return error_text(e);
-  }
+  return test::loaded_text([&] { return load_obj(path); });
 }
 
 // R ranks, each reading its window with blocks of `how`.

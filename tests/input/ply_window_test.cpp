@@ -216,23 +216,8 @@ TEST_F(PlyWindow, FilesItCannotReadAsTheImporterDoesAreLeftToIt) {
 // reads it as the importer path does, or leaves it to the importer path; a
 // file the importer refuses, the stream refuses too.
 TEST_F(PlyWindow, EveryTestFileIsTheImportersOrLeftToIt) {
-  std::vector<std::string> files;
-  for (const auto& entry : fs::directory_iterator(fs::path(OPSILA_SOURCE_DIR) / "tests/fuzz/corpus_model")) {
-    std::string bytes = test::read_file(entry.path().string());
-    if (bytes.empty() || static_cast<unsigned char>(bytes[0]) % 5 != 4) continue;  // fuzz_model.cpp's "ply"
-    bytes = bytes.substr(1, bytes.find("#EXTERNAL#") - 1);
-    const std::string path = (dir / (entry.path().filename().string() + ".ply")).string();
-    std::ofstream(path, std::ios::binary) << bytes;
-    files.push_back(path);
-  }
   const fs::path models = "/usr/share/assimp/models/PLY";
-  if (fs::is_directory(models))
-    for (const auto& entry : fs::directory_iterator(models)) {
-      const std::string path = (dir / entry.path().filename()).string();
-      fs::copy_file(entry.path(), path, fs::copy_options::overwrite_existing);
-      files.push_back(path);
-    }
-  std::sort(files.begin(), files.end());
+  const std::vector<std::string> files = test::corpus_models(dir, 4, "ply", models);  // fuzz_model.cpp's "ply"
   ASSERT_GE(files.size(), 5u) << "the corpus has PLY files";
   int streamed = 0;
   for (const std::string& path : files) {

@@ -185,24 +185,8 @@ TEST_F(StlWindow, FilesItCannotReadAsTheImporterDoesAreLeftToIt) {
 // the importer's test models (when installed): the stream reads it as the
 // importer path does, or leaves it to the importer path.
 TEST_F(StlWindow, EveryTestFileIsTheImportersOrLeftToIt) {
-  std::vector<std::string> files;
-  for (const auto& entry : fs::directory_iterator(fs::path(OPSILA_SOURCE_DIR) / "tests/fuzz/corpus_model")) {
-    std::string bytes = test::read_file(entry.path().string());
-    if (bytes.empty() || static_cast<unsigned char>(bytes[0]) % 5 != 0) continue;  // fuzz_model.cpp's "stl"
-    bytes = bytes.substr(1, bytes.find("#EXTERNAL#") - 1);
-    const std::string path = (dir / (entry.path().filename().string() + ".stl")).string();
-    std::ofstream(path, std::ios::binary) << bytes;
-    files.push_back(path);
-  }
   const fs::path models = "/usr/share/assimp/models/STL";
-  if (fs::is_directory(models))
-    for (const auto& entry : fs::directory_iterator(models)) {
-      if (!entry.is_regular_file()) continue;
-      const std::string path = (dir / entry.path().filename()).string();
-      fs::copy_file(entry.path(), path, fs::copy_options::overwrite_existing);
-      files.push_back(path);
-    }
-  std::sort(files.begin(), files.end());
+  const std::vector<std::string> files = test::corpus_models(dir, 0, "stl", models);  // fuzz_model.cpp's "stl"
   ASSERT_GE(files.size(), 2u) << "the corpus has STL files";
   int streamed = 0;
   for (const std::string& path : files) {

@@ -5,6 +5,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
 #include <functional>
 #include <set>
 #include <sstream>
@@ -53,11 +56,39 @@ inline std::string error_text(const InputError& e) {
   return o;
 }
 
-// One process's import of a model file (model_import.cpp), as windows_text
-// gives the windows of the same file.
-inline std::string imported_text(const std::string& path) {
+// The model files of one format to try a stream on, sorted: every input of
+// the fuzzing corpus whose first byte picks the format (fuzz_model.cpp: the
+// byte mod 5 is `pick`), its text up to "#EXTERNAL#" written into `dir` as
+// NAME.EXT; and the importer's test models of the format in `models` (when
+// installed), copied there.
+inline std::vector<std::string> corpus_models(const std::filesystem::path& dir, int pick, const std::string& ext,
+                                              const std::filesystem::path& models) {
+  namespace fs = std::filesystem;
+  std::vector<std::string> files;
+  for (const auto& entry : fs::directory_iterator(fs::path(OPSILA_SOURCE_DIR) / "tests/fuzz/corpus_model")) {
+    std::string bytes = read_file(entry.path().string());
+    if (bytes.empty() || static_cast<unsigned char>(bytes[0]) % 5 != pick) continue;
+    bytes = bytes.substr(1, bytes.find("#EXTERNAL#") - 1);
+    const std::string path = (dir / (entry.path().filename().string() + "." + ext)).string();
+    std::ofstream(path, std::ios::binary) << bytes;
+    files.push_back(path);
+  }
+  if (fs::is_directory(models))
+    for (const auto& entry : fs::directory_iterator(models)) {
+      if (!entry.is_regular_file()) continue;
+      const std::string path = (dir / entry.path().filename()).string();
+      fs::copy_file(entry.path(), path, fs::copy_options::overwrite_existing);
+      files.push_back(path);
+    }
+  std::sort(files.begin(), files.end());
+  return files;
+}
+
+// One process's scene as `load` reads it: its figures, then its
+// triangles; or its error.
+inline std::string loaded_text(const std::function<Scene()>& load) {
   try {
-    const Scene s = load_model(path);
+    const Scene s = load();
     Vec3 lo, hi;
     s.bounds(lo, hi);
     std::string o = figures_text(s, s.triangles.size(), lo, hi);
@@ -66,6 +97,12 @@ inline std::string imported_text(const std::string& path) {
   } catch (const InputError& e) {
     return error_text(e);
   }
+}
+
+// One process's import of a model file (model_import.cpp), as windows_text
+// gives the windows of the same file.
+inline std::string imported_text(const std::string& path) {
+  return loaded_text([&] { return load_model(path); });
 }
 
 // R ranks, each reading the file twice with `load` (first counting, with no

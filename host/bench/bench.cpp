@@ -50,7 +50,7 @@ DeviceFacts device_facts(ClRuntime& rt) {
 // Why a run under mpirun leaves out stages 2 and 3 (said in every report).
 constexpr const char* kSingleProcessOnly =
     "the baselines (megakernel, host reference, Embree) trace the whole scene in one process, and under mpirun "
-    "(--balance facets or measured) a rank reads only its share of it; the scatter curve measures one "
+    "a rank reads only its share of it; the scatter curve measures one "
     "device alone: run `opsila bench` without mpirun for them";
 
 BenchReport start_report(const BenchOptions& o, const Scene& scene, int pes) {

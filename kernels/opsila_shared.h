@@ -48,8 +48,9 @@ typedef std::uint32_t opsila_u32;
  * their local arrays (scatter_scan's sums, scatter_plan's partial) hold one
  * entry per work-item. The host caps both work-groups at this. */
 #define OPSILA_SCATTER_GROUP_MAX 256
-/* Local memory of scatter_plan, in ints: partial, level_found, group_base. */
-#define OPSILA_SCATTER_PLAN_LOCAL_INTS (OPSILA_SCATTER_GROUP_MAX + 1 + OPSILA_MAX_PES)
+/* Local memory of scatter_plan, in ints: partial, level_found, leaves_only,
+ * group_base. */
+#define OPSILA_SCATTER_PLAN_LOCAL_INTS (OPSILA_SCATTER_GROUP_MAX + 2 + OPSILA_MAX_PES)
 /* Item buffer: square tiles of at most this many pixels a side (one
  * work-group per tile; smaller when the device allows fewer work-items). */
 #define OPSILA_ITEM_TILE_SIDE 8
@@ -107,6 +108,17 @@ typedef std::uint32_t opsila_u32;
 #define OPSILA_META(kind, level) ((opsila_i32)((kind) | ((level) << 2)))
 #define OPSILA_META_KIND(meta) ((meta)&3)
 #define OPSILA_META_LEVEL(meta) (((meta) >> 2) & OPSILA_MAX_DEPTH)
+
+/* The exchange's sort key of a record, which the dense destination stream
+ * holds (DESC_PARAMS): 2 x its destination PE, plus 1 when the record can
+ * still spawn radiance rays (not a shadow ray, and children are made below
+ * its level: level + 1 < depth); -1 for a NIL hole. Per PE, the exchange
+ * places first the records that end their ray tree, and while too many
+ * wait only those (kernels/scatter.cl). */
+#define OPSILA_STREAM_KEY(dest, meta, depth)                                                        \
+  ((dest) < 0 ? -1                                                                                  \
+              : 2 * (dest) + ((OPSILA_META_KIND(meta) != OPSILA_KIND_SHADOW && OPSILA_META_LEVEL(meta) + 1 < (depth)) ? 1 : 0))
+#define OPSILA_STREAM_PE(key) ((key) >> 1)
 
 /* Statistics counters per (level, PE), declared once, in index order:
  * X(NAME, "JSON name", SUM). The kernels count OPSILA_STAT_NAME; SUM says

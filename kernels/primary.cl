@@ -36,7 +36,7 @@ __kernel void build_primary(FrameParams fp, __global const PeInfo *pes, __global
       int x = pixel % fp.width, y = pixel / fp.width;
       float3 d = primary_direction_at(fp, (float)x + ox, (float)y + oy);
       desc_store(q, q_dest, slot, make_descriptor(load3(fp.eye), item_t[pixel], d, -1.0f, (float3)(1.0f), pixel,
-                                          OPSILA_META(OPSILA_KIND_RESOLVED, 0), tri, owner));
+                                          OPSILA_META(OPSILA_KIND_RESOLVED, 0), tri, owner), fp.max_depth);
       atomic_inc(&hits);
     }
   }

@@ -1,117 +1,141 @@
-/* SIMD exchange: Vd(I'(i)) = Vs(i). The source vector is the waiting pool
- * (pool_len records, NIL holes allowed) followed by the SPMD outputs (one
- * run of out_item_count[t] records per SPMD work-item t, at t*S). The
+/* SIMD exchange: Vd(I'(i)) = Vs(i). The source vector is the SPMD outputs
+ * (one run of out_item_count[t] records per SPMD work-item t, at t*S)
+ * followed by the waiting pool (pool_len records, NIL holes allowed). The
  * destination field gives I; I' is made injective by a stable counting sort
- * on the destination PE: rank(i) = number of earlier valid entries bound for
- * the same PE. Entry i goes to bank slot bank_begin[d] + rank(i) when
- * rank(i) < bank_count[d], otherwise it waits in the next pool (no ray is
- * lost). Only the records that exist are read: empty output places never are.
- * The count reads only the dense destination stream (DESC_PARAMS), 4 bytes
- * a descriptor; the move reads and writes each record once.
+ * on the entry's key (OPSILA_STREAM_KEY: 2 x its destination PE, + 1 when it
+ * can still spawn radiance rays): rank(i) = number of earlier valid entries
+ * with the same key. Per PE, the entries of key 2d take the bank's first
+ * slots, then those of key 2d + 1; what finds no slot waits in the next pool
+ * (no ray is lost). Only the records that exist are read: empty output
+ * places never are. The count reads only the dense key stream (DESC_PARAMS),
+ * 4 bytes a descriptor; the move reads and writes each record once.
+ *
+ * The order bounds the records that wait. The sequential tracer holds one
+ * ray tree's path at a time; a wavefront that took the oldest records first
+ * would hold a whole level of every tree (2^depth records a pixel for two
+ * facing glass slabs). So:
+ *   - newest first: a bank takes what its PE's last phase spawned before
+ *     older records, and what waits keeps that order (per PE and key, the
+ *     outputs left over, then the older pool), so the trees are worked depth
+ *     first; new primary descriptors join the pool's end;
+ *   - what ends its tree first: shadow rays and rays of the last level
+ *     (key 2d) spawn no radiance ray, so they can only shrink what waits;
+ *   - throttle: while more than the frame's planned pool waits, a bank
+ *     takes only such records, as long as any PE of this device has one.
+ *     Depth first alone does not bound a PE that many others feed (its
+ *     records wait while theirs make more); the throttle holds the feeders
+ *     until it catches up. Rays that end their tree make every round
+ *     progress, and with none left the round is not throttled.
+ * None of this changes the image: the pixel sums are exact whatever the
+ * order (fixed point).
  *
  * With several devices (MPI ranks), a device has banks only for its PEs
  * [group_begin, group_end): what is bound for other PEs all waits in the
  * next pool, contiguous per destination PE in PE order, which is what the
- * rank exchange sends (host/machine/rank_exchange.cpp).
+ * rank exchange sends (host/machine/rank_exchange.cpp), and the records it
+ * receives lead the next pool.
  *
- * Blocks: the pool is cut into blocks of OPSILA_SCATTER_BLOCK entries, then
- * each SPMD work-group's outputs are one block (num_blocks in all).
- *   scatter_count: per block, per-PE counts and each entry's rank inside it;
- *   scatter_scan:  per PE, a work-group's exclusive scan over the blocks;
+ * Blocks: each SPMD work-group's outputs are one block, then the pool is cut
+ * into blocks of OPSILA_SCATTER_BLOCK entries (num_blocks in all, out_blocks
+ * of them outputs).
+ *   scatter_count: per block, per-key counts and each entry's rank inside it;
+ *   scatter_scan:  per key, a work-group's exclusive scan over the blocks;
  *   scatter_plan:  bank capacities that follow each PE's demand, bank
  *                  offsets, the SPMD work-groups of the next phase, and the
  *                  layout of what waits;
  *   scatter_move_pool, scatter_move_outputs: each record to I'(i). */
 #include "lib/descriptor.cl"
 
-/* Where an entry of global rank r for PE d goes: its bank slot, or its place
- * in the next pool (scatter_plan's layout). */
+/* Where an entry of global rank r with key y goes: its bank slot, or its
+ * place in the next pool (scatter_plan's layout, per key). */
 typedef struct {
-  __global const int *bank_begin, *bank_count, *overflow_base;
+  __global const int *key_begin, *key_count, *key_base;
   __global float4 *banks; /* bank slots: records only (see place) */
   __global float4 *next;
   __global int *next_dest;
 } Placement;
 
-/* Entry k of a source vector, of global rank r for PE d, to I'(k). */
-inline void place(__global const float4 *from, __global const int *from_dest, int k, int d, int r,
+/* Entry k of a source vector, of global rank r with key y, to I'(k). */
+inline void place(__global const float4 *from, __global const int *from_dest, int k, int y, int r,
                   const Placement *to) {
-  int c = to->bank_count[d];
-  if (r < c) /* a bank's slots all belong to its PE: no destination stream kept there */
-    desc_move_record(to->banks, to->bank_begin[d] + r, from, k);
+  int c = to->key_count[y];
+  if (r < c) /* a bank's slots all belong to its PE: no key kept there */
+    desc_move_record(to->banks, to->key_begin[y] + r, from, k);
   else
-    desc_move(to->next, to->next_dest, to->overflow_base[d] + (r - c), from, from_dest, k);
+    desc_move(to->next, to->next_dest, to->key_base[y] + (r - c), from, from_dest, k);
 }
 
 /* One entry of a block walk: entry k of a source vector, whose rank is
- * stored at rank[rank_at]. A valid entry takes the next rank of its PE in
- * the block (h[d]++); with `to`, it moves at once to the block's prefix plus
+ * stored at rank[rank_at]. A valid entry takes the next rank of its key in
+ * the block (h[y]++); with `to`, it moves at once to the block's prefix plus
  * that rank (h holds the prefix then); else, with write_rank, the rank (-1
  * for a NIL hole) is stored for the move by entry. */
 OPSILA_INLINE void block_entry(__global const float4 *from, __global const int *from_dest, int k, long rank_at,
-                               int num_pes, __global int *h, __global int *rank, int write_rank,
+                               int num_keys, __global int *h, __global int *rank, int write_rank,
                                const Placement *to) {
-  int d = from_dest[k];
-  bool valid = d >= 0 && d < num_pes;
+  int y = from_dest[k];
+  bool valid = y >= 0 && y < num_keys;
   if (to) {
-    if (valid) place(from, from_dest, k, d, h[d]++, to);
+    if (valid) place(from, from_dest, k, y, h[y]++, to);
     return;
   }
-  int r = valid ? h[d]++ : -1;
+  int r = valid ? h[y]++ : -1;
   if (write_rank) rank[rank_at] = r;
 }
 
-/* The block walk: block b's entries in source order, the pool's entries of
- * a pool block or the records of one SPMD work-group's items, each through
- * block_entry. scatter_count and scatter_move_blocks both walk this way, so
- * the ranks the count gives are the ones the move takes. */
-OPSILA_INLINE void walk_block(int b, int pool_len, int pool_blocks, int items_per_group, int S, int num_pes,
+/* The block walk: block b's entries in source order, the records of one
+ * SPMD work-group's items or the pool's entries of a pool block, each
+ * through block_entry. scatter_count and scatter_move_blocks both walk this
+ * way, so the ranks the count gives are the ones the move takes. */
+OPSILA_INLINE void walk_block(int b, int pool_len, int out_blocks, int items_per_group, int S, int num_keys,
                               DESC_PARAMS(pool), DESC_PARAMS(out), __global const int *out_item_count,
                               __global int *h, __global int *rank, int write_rank, const Placement *to) {
-  if (b < pool_blocks) {
-    int end = min((b + 1) * OPSILA_SCATTER_BLOCK, pool_len);
-    for (int k = b * OPSILA_SCATTER_BLOCK; k < end; ++k)
-      block_entry(pool, pool_dest, k, k, num_pes, h, rank, write_rank, to);
+  if (b >= out_blocks) {
+    int first = (b - out_blocks) * OPSILA_SCATTER_BLOCK;
+    int end = min(first + OPSILA_SCATTER_BLOCK, pool_len);
+    for (int k = first; k < end; ++k)
+      block_entry(pool, pool_dest, k, k, num_keys, h, rank, write_rank, to);
     return;
   }
-  int first_item = (b - pool_blocks) * items_per_group;
+  int first_item = b * items_per_group;
   for (int t = first_item; t < first_item + items_per_group; ++t) {
     int c = out_item_count[t];
     for (int j = 0; j < c; ++j) {
       int at = t * S + j;
-      block_entry(out, out_dest, at, (long)pool_len + at, num_pes, h, rank, write_rank, to);
+      block_entry(out, out_dest, at, (long)pool_len + at, num_keys, h, rank, write_rank, to);
     }
   }
 }
 
-/* Counts of block b; hist[b * P + q] = entries bound for PE q. With
- * write_rank, also each entry's rank inside its block (for the move by entry). */
-__kernel void scatter_count(int pool_len, int pool_blocks, int num_blocks, int items_per_group, int S, int num_pes,
+/* Counts of block b; hist[b * K + y] = entries with key y (K = num_keys, 2
+ * per PE). With write_rank, also each entry's rank inside its block (for the
+ * move by entry). */
+__kernel void scatter_count(int pool_len, int pool_blocks, int num_blocks, int items_per_group, int S, int num_keys,
                             DESC_PARAMS(pool), DESC_PARAMS(out), __global const int *out_item_count,
                             __global int *hist, __global int *rank, int write_rank) {
   int b = get_global_id(0);
   if (b >= num_blocks) return;
-  __global int *h = hist + (long)b * num_pes;
-  for (int q = 0; q < num_pes; ++q) h[q] = 0;
-  walk_block(b, pool_len, pool_blocks, items_per_group, S, num_pes, pool, pool_dest, out, out_dest, out_item_count,
-             h, rank, write_rank, 0);
+  __global int *h = hist + (long)b * num_keys;
+  for (int y = 0; y < num_keys; ++y) h[y] = 0;
+  walk_block(b, pool_len, num_blocks - pool_blocks, items_per_group, S, num_keys, pool, pool_dest, out, out_dest,
+             out_item_count, h, rank, write_rank, 0);
 }
 
-/* Per PE q: hist[b * P + q] becomes the exclusive prefix over blocks,
- * pe_total[q] the total. A work-group takes PEs q = group, group + groups,
+/* Per key q: hist[b * K + q] becomes the exclusive prefix over blocks,
+ * key_total[q] the total. A work-group takes keys q = group, group + groups,
  * ...: each work-item sums a run of blocks, the runs' sums are scanned, then
- * each work-item writes its run's prefixes. One work-group per PE on a GPU;
- * one in all on a CPU, where work-groups are threads and PEs q and q+1 of
+ * each work-item writes its run's prefixes. One work-group per key on a GPU;
+ * one in all on a CPU, where work-groups are threads and keys q and q+1 of
  * one block share a cache line (each write would steal it from the other
  * core: 1.3 ms instead of 0.1 ms at 2^20 descriptors). */
-__kernel void scatter_scan(int num_blocks, int num_pes, __global int *hist, __global int *pe_total) {
+__kernel void scatter_scan(int num_blocks, int num_keys, __global int *hist, __global int *key_total) {
   __local int sums[OPSILA_SCATTER_GROUP_MAX];
   int lid = get_local_id(0), lsz = get_local_size(0);
   int run = (num_blocks + lsz - 1) / lsz;
   int begin = min(lid * run, num_blocks), end = min(begin + run, num_blocks);
-  for (int q = get_group_id(0); q < num_pes; q += get_num_groups(0)) {
+  for (int q = get_group_id(0); q < num_keys; q += get_num_groups(0)) {
     int s = 0;
-    for (int b = begin; b < end; ++b) s += hist[(long)b * num_pes + q];
+    for (int b = begin; b < end; ++b) s += hist[(long)b * num_keys + q];
     sums[lid] = s;
     barrier(CLK_LOCAL_MEM_FENCE);
     if (lid == 0) {
@@ -121,23 +145,25 @@ __kernel void scatter_scan(int num_blocks, int num_pes, __global int *hist, __gl
         sums[i] = acc;
         acc += v;
       }
-      pe_total[q] = acc;
+      key_total[q] = acc;
     }
     barrier(CLK_LOCAL_MEM_FENCE);
     int acc = sums[lid];
     for (int b = begin; b < end; ++b) {
-      long at = (long)b * num_pes + q;
+      long at = (long)b * num_keys + q;
       int v = hist[at];
       hist[at] = acc;
       acc += v;
     }
-    barrier(CLK_LOCAL_MEM_FENCE); /* sums is reused by the next PE */
+    barrier(CLK_LOCAL_MEM_FENCE); /* sums is reused by the next key */
   }
 }
 
-/* Demand for bank slots on this device: none for PEs of another group. */
-inline int bank_demand(__global const int *pe_total, int q, int group_begin, int group_end) {
-  return q >= group_begin && q < group_end ? pe_total[q] : 0;
+/* Demand for bank slots on this device: none for PEs of another group;
+ * only the records that end their tree (key 2q) while throttled. */
+inline int bank_demand(__global const int *key_total, int q, int group_begin, int group_end, int leaves_only) {
+  if (q < group_begin || q >= group_end) return 0;
+  return key_total[2 * q] + (leaves_only ? 0 : key_total[2 * q + 1]);
 }
 
 /* Bank capacity that follows demand: `slots` bank slots this round, split
@@ -146,21 +172,35 @@ inline int bank_demand(__global const int *pe_total, int q, int group_begin, int
  * in PE order. So one hot PE no longer holds every other bank to its share,
  * and a round is full whenever enough descriptors wait. Each bank starts at
  * a multiple of the SPMD work-group size, so no work-group mixes banks.
- * counts = {waiting, placed, SPMD work-groups}. One work-group. */
+ * throttle (the host: more wait than the frame's plan holds): demand is the
+ * records that end their tree, if this device's PEs have any. Per PE q, key
+ * 2q takes the bank's first slots, key 2q + 1 the rest; what waits is laid
+ * out per PE in PE order, key 2q first. pe_total[q]: PE q's entries (the
+ * rank exchange reads it). counts = {waiting, placed, SPMD work-groups}.
+ * One work-group. */
 __kernel void scatter_plan(int num_pes, int group_begin, int group_end, int slots, int cap, int group_size,
-                           __global const int *pe_total,
-                           __global int *bank_begin, __global int *bank_count, __global int *overflow_base,
-                           __global int *group_pe, __global int *group_first, __global int *counts) {
+                           int throttle, __global const int *key_total, __global int *pe_total,
+                           __global int *bank_begin, __global int *bank_count, __global int *key_begin,
+                           __global int *key_count, __global int *key_base, __global int *group_pe,
+                           __global int *group_first, __global int *counts) {
   __local int partial[OPSILA_SCATTER_GROUP_MAX];
-  __local int level_found;
+  __local int level_found, leaves_only;
   __local int group_base[OPSILA_MAX_PES];
   int lid = get_local_id(0), lsz = get_local_size(0);
+  if (lid == 0) {
+    int leaves = 0;
+    for (int q = group_begin; q < group_end && throttle; ++q) leaves |= key_total[2 * q];
+    leaves_only = throttle && leaves > 0;
+  }
+  barrier(CLK_LOCAL_MEM_FENCE);
+  int lv = leaves_only;
   /* Binary search for the level (the sum is monotonic in it). */
   int lo = 0, hi = slots;
   while (lo < hi) {
     int mid = lo + (hi - lo + 1) / 2;
     long s = 0;
-    for (int q = lid; q < num_pes; q += lsz) s += min(min(bank_demand(pe_total, q, group_begin, group_end), mid), cap);
+    for (int q = lid; q < num_pes; q += lsz)
+      s += min(min(bank_demand(key_total, q, group_begin, group_end, lv), mid), cap);
     partial[lid] = (int)min(s, (long)slots + 1);
     barrier(CLK_LOCAL_MEM_FENCE);
     if (lid == 0) {
@@ -174,23 +214,31 @@ __kernel void scatter_plan(int num_pes, int group_begin, int group_end, int slot
   }
   if (lid == 0) {
     int used = 0;
-    for (int q = 0; q < num_pes; ++q) used += min(min(bank_demand(pe_total, q, group_begin, group_end), lo), cap);
+    for (int q = 0; q < num_pes; ++q) used += min(min(bank_demand(key_total, q, group_begin, group_end, lv), lo), cap);
     int spare = slots - used, waiting = 0, placed = 0, begin = 0, groups = 0;
     for (int q = 0; q < num_pes; ++q) {
-      int demand = bank_demand(pe_total, q, group_begin, group_end);
+      int demand = bank_demand(key_total, q, group_begin, group_end, lv);
       int c = min(min(demand, lo), cap);
       if (spare > 0 && c < demand && c < cap) {
         ++c;
         --spare;
       }
+      int ends = key_total[2 * q], more = key_total[2 * q + 1];
+      int c_ends = min(c, ends);
       bank_count[q] = c;
       bank_begin[q] = begin;
-      overflow_base[q] = waiting;
+      key_count[2 * q] = c_ends;
+      key_begin[2 * q] = begin;
+      key_base[2 * q] = waiting;
+      key_count[2 * q + 1] = c - c_ends;
+      key_begin[2 * q + 1] = begin + c_ends;
+      key_base[2 * q + 1] = waiting + (ends - c_ends);
+      pe_total[q] = ends + more;
       group_base[q] = groups;
       int g = (c + group_size - 1) / group_size;
       begin += g * group_size;
       groups += g;
-      waiting += pe_total[q] - c;
+      waiting += ends + more - c;
       placed += c;
     }
     counts[0] = waiting;
@@ -207,51 +255,51 @@ __kernel void scatter_plan(int num_pes, int group_begin, int group_end, int slot
   }
 }
 
-__kernel void scatter_move_pool(int pool_len, int num_pes, DESC_PARAMS(pool), __global const int *rank,
-                                __global const int *hist, __global const int *bank_begin,
-                                __global const int *bank_count, __global const int *overflow_base,
+__kernel void scatter_move_pool(int pool_len, int out_blocks, int num_keys, DESC_PARAMS(pool), __global const int *rank,
+                                __global const int *hist, __global const int *key_begin,
+                                __global const int *key_count, __global const int *key_base,
                                 DESC_PARAMS(banks), DESC_PARAMS(next)) {
   int k = get_global_id(0);
   if (k >= pool_len) return;
   int rk = rank[k];
   if (rk < 0) return;
-  int d = pool_dest[k];
-  int r = hist[(long)(k / OPSILA_SCATTER_BLOCK) * num_pes + d] + rk;
-  Placement to = {bank_begin, bank_count, overflow_base, banks, next, next_dest};
-  place(pool, pool_dest, k, d, r, &to);
+  int y = pool_dest[k];
+  int r = hist[(long)(out_blocks + k / OPSILA_SCATTER_BLOCK) * num_keys + y] + rk;
+  Placement to = {key_begin, key_count, key_base, banks, next, next_dest};
+  place(pool, pool_dest, k, y, r, &to);
 }
 
 /* One work-item per SPMD work-item t: its out_item_count[t] records. */
-__kernel void scatter_move_outputs(int out_items, int items_per_group, int S, int pool_len, int pool_blocks,
-                                   int num_pes, DESC_PARAMS(out), __global const int *out_item_count,
+__kernel void scatter_move_outputs(int out_items, int items_per_group, int S, int pool_len, int num_keys,
+                                   DESC_PARAMS(out), __global const int *out_item_count,
                                    __global const int *rank, __global const int *hist,
-                                   __global const int *bank_begin, __global const int *bank_count,
-                                   __global const int *overflow_base, DESC_PARAMS(banks), DESC_PARAMS(next)) {
+                                   __global const int *key_begin, __global const int *key_count,
+                                   __global const int *key_base, DESC_PARAMS(banks), DESC_PARAMS(next)) {
   int t = get_global_id(0);
   if (t >= out_items) return;
   int c = out_item_count[t];
-  __global const int *h = hist + (long)(pool_blocks + t / items_per_group) * num_pes;
-  Placement to = {bank_begin, bank_count, overflow_base, banks, next, next_dest};
+  __global const int *h = hist + (long)(t / items_per_group) * num_keys;
+  Placement to = {key_begin, key_count, key_base, banks, next, next_dest};
   for (int j = 0; j < c; ++j) {
     int at = t * S + j;
     int rk = rank[pool_len + at];
     if (rk < 0) continue;
-    int d = out_dest[at];
-    place(out, out_dest, at, d, h[d] + rk, &to);
+    int y = out_dest[at];
+    place(out, out_dest, at, y, h[y] + rk, &to);
   }
 }
 
 /* The move by block, for processors that run few work-items at a time (a
  * CPU core): one work-item walks a block as scatter_count did and takes each
  * entry's rank from the block's running prefix, so no rank is stored; each
- * core then writes P sequential streams. */
+ * core then writes one sequential stream per key. */
 __kernel void scatter_move_blocks(int pool_len, int pool_blocks, int num_blocks, int items_per_group, int S,
-                                  int num_pes, DESC_PARAMS(pool), DESC_PARAMS(out), __global const int *out_item_count,
-                                  __global int *hist, __global const int *bank_begin, __global const int *bank_count,
-                                  __global const int *overflow_base, DESC_PARAMS(banks), DESC_PARAMS(next)) {
+                                  int num_keys, DESC_PARAMS(pool), DESC_PARAMS(out), __global const int *out_item_count,
+                                  __global int *hist, __global const int *key_begin, __global const int *key_count,
+                                  __global const int *key_base, DESC_PARAMS(banks), DESC_PARAMS(next)) {
   int b = get_global_id(0);
   if (b >= num_blocks) return;
-  Placement to = {bank_begin, bank_count, overflow_base, banks, next, next_dest};
-  walk_block(b, pool_len, pool_blocks, items_per_group, S, num_pes, pool, pool_dest, out, out_dest, out_item_count,
-             hist + (long)b * num_pes, 0, 0, &to);
+  Placement to = {key_begin, key_count, key_base, banks, next, next_dest};
+  walk_block(b, pool_len, num_blocks - pool_blocks, items_per_group, S, num_keys, pool, pool_dest, out, out_dest,
+             out_item_count, hist + (long)b * num_keys, 0, 0, &to);
 }

@@ -34,12 +34,13 @@ typedef struct {
   __global float4 *v; /* the output records and their destinations (DESC_PARAMS) */
   __global int *v_dest;
   int base, count;
+  int depth;                   /* the frame's, for the records' sort keys */
   int num_pes, traffic_levels; /* traffic_levels = 0: not counted */
   __local uint *traffic;       /* [level][destination PE] from this work-group's PE */
 } Outputs;
 
 inline void emit(Outputs *o, Descriptor d) {
-  desc_store(o->v, o->v_dest, o->base + o->count, d);
+  desc_store(o->v, o->v_dest, o->base + o->count, d, o->depth);
   ++o->count;
   int level = OPSILA_META_LEVEL(DESC_META(d));
   if (level < o->traffic_levels) atomic_inc(&o->traffic[level * o->num_pes + DESC_DEST(d)]);
@@ -258,7 +259,7 @@ __kernel void spmd_phase(FrameParams fp, __global const PeInfo *pes, __global co
   int pe = group_pe[g];
   int slot = group_first[g] + lid;
   int item = g * lsz + lid;
-  Outputs out = {o, o_dest, item * fp.spawn_slots, 0, P, traffic_levels, ltraffic};
+  Outputs out = {o, o_dest, item * fp.spawn_slots, 0, depth, P, traffic_levels, ltraffic};
   Routing rt = {pes, clusters, route, P, routing};
   Bank bank = {nodes, tris, pe, pes[pe].node_begin, pes[pe].node_begin == pes[pe].node_end, fp.box_slack};
   if (slot < bank_begin[pe] + bank_count[pe]) {

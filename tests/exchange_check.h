@@ -1,11 +1,14 @@
 // One harness for the exchange (kernels/scatter.cl) on its own, shared by the
-// PoCL tests and the Oclgrind run: a waiting pool with NIL holes followed by
-// SPMD output places (only the first out_item_count[t] of each work-item's S
-// places hold records; the rest hold stale records that must be ignored).
-// Checks Vd(I'(i)) = Vs(i): every valid entry arrives once, whole (every
-// lane), in source order within its destination PE; banks follow the plan's
-// rules (demand, cap, slots, water-filling levels, work-group alignment);
-// what does not fit waits in the next pool, grouped by PE.
+// PoCL tests and the Oclgrind run: SPMD output places (only the first
+// out_item_count[t] of each work-item's S places hold records; the rest hold
+// stale records that must be ignored) followed by a waiting pool with NIL
+// holes. Checks Vd(I'(i)) = Vs(i): every valid entry arrives once, whole
+// (every lane); within its destination PE, the rays that end their tree
+// (OPSILA_STREAM_KEY) first, each kind in source order, the outputs before
+// the pool; banks follow the plan's rules
+// (demand, cap, slots, water-filling levels, work-group alignment, and
+// throttled only the rays that end their tree); what does not fit waits in
+// the next pool, grouped by PE.
 #pragma once
 
 #include <gtest/gtest.h>
@@ -26,6 +29,10 @@ struct ExchangeCase {
   int pool_len = 10, out_groups = 2;
   double hole_rate = 0.25, hot_share = 0.3;  // hot_share: entries bound for PE 0 (a hot bank)
   unsigned seed = 1;
+  // Entries are radiance rays of levels 0 to 4 (k % 5): at depth 3, those of
+  // levels 2 to 4 end their tree. throttle: ScatterPass::Args::throttle.
+  int depth = 3;
+  bool throttle = false;
 };
 
 inline HostDescriptor exchange_entry(int k, int dest) {
@@ -49,30 +56,42 @@ inline std::vector<cl_int> check_exchange(ClRuntime& rt, const ExchangeCase& c) 
   const int S = c.spawn_slots, items = c.out_groups * c.group_size;
   std::vector<HostDescriptor> pool(c.pool_len), out(std::size_t(std::max(items, 1)) * S);
   std::vector<cl_int> out_count(std::max(items, 1), 0);
-  std::vector<std::vector<HostDescriptor>> expected(c.pes);  // per PE, in source order
-  for (int k = 0; k < c.pool_len; ++k) {
-    pool[k] = exchange_entry(k, draw());
-    if (desc_dest(pool[k]) >= 0) expected[desc_dest(pool[k])].push_back(pool[k]);
-  }
+  // Per PE and sort key (what ends its tree, the rest), in source order.
+  std::vector<std::vector<HostDescriptor>> ends(c.pes), more(c.pes);
+  auto expect_entry = [&](const HostDescriptor& d) {
+    const int key = desc_key(d, c.depth);
+    (key % 2 == 0 ? ends : more)[key / 2].push_back(d);
+  };
+  for (int k = 0; k < c.pool_len; ++k) pool[k] = exchange_entry(k, draw());
   for (int t = 0; t < items; ++t) {
     out_count[t] = static_cast<int>(rng() % (S + 1));
     for (int j = 0; j < S; ++j) {
       const int k = c.pool_len + t * S + j;
       const bool used = j < out_count[t];
       out[std::size_t(t) * S + j] = exchange_entry(k, int(rng() % c.pes));  // unused places: stale records
-      if (used) expected[desc_dest(out[std::size_t(t) * S + j])].push_back(out[std::size_t(t) * S + j]);
+      if (used) expect_entry(out[std::size_t(t) * S + j]);
     }
   }
+  for (const HostDescriptor& d : pool)
+    if (desc_dest(d) >= 0) expect_entry(d);
+  std::vector<std::vector<HostDescriptor>> expected(c.pes);  // per PE, in the exchange's order
+  bool any_ends = false;
   std::size_t valid = 0;
-  for (const auto& e : expected) valid += e.size();
+  for (int q = 0; q < c.pes; ++q) {
+    expected[q] = ends[q];
+    expected[q].insert(expected[q].end(), more[q].begin(), more[q].end());
+    any_ends |= !ends[q].empty();
+    valid += expected[q].size();
+  }
+  const bool ends_only = c.throttle && any_ends;
 
   DescriptorSet d_pool, d_out, banks, next;
   d_pool.allocate(rt, pool.size(), "test pool");
   d_out.allocate(rt, out.size(), "test outputs");
   banks.allocate(rt, std::size_t(c.slots) + std::size_t(c.pes) * c.group_size, "test banks");
   next.allocate(rt, valid + 1, "test next pool");
-  d_pool.write(rt, pool);
-  d_out.write(rt, out);
+  d_pool.write(rt, pool, 0, c.depth);
+  d_out.write(rt, out, 0, c.depth);
   cl::Buffer counts_in = upload(rt, out_count, "test output counts");
   std::vector<LaunchRecord> records;
   Launcher launch(rt, records);
@@ -90,6 +109,7 @@ inline std::vector<cl_int> check_exchange(ClRuntime& rt, const ExchangeCase& c) 
   a.cap = c.cap;
   a.banks = &banks;
   a.next_pool = &next;
+  a.throttle = c.throttle;
   scatter.plan(launch, a, 0);
   scatter.move(launch, a, 0);
   launch.check(rt.queue().finish(), "clFinish(test exchange)");
@@ -113,7 +133,7 @@ inline std::vector<cl_int> check_exchange(ClRuntime& rt, const ExchangeCase& c) 
   for (int q = 0; q < c.pes; ++q) placed += fill[q];
   EXPECT_LE(placed, c.slots);
   for (int q = 0; q < c.pes; ++q) {
-    const int demand = static_cast<int>(expected[q].size());
+    const int demand = static_cast<int>(ends_only ? ends[q].size() : expected[q].size());
     EXPECT_LE(fill[q], std::min(demand, cap)) << "PE " << q;
     if (fill[q] < std::min(demand, cap)) {
       EXPECT_EQ(placed, c.slots) << "PE " << q << " waits while slots are free";
@@ -131,7 +151,7 @@ inline std::vector<cl_int> check_exchange(ClRuntime& rt, const ExchangeCase& c) 
   EXPECT_EQ(counts[2], groups);
   EXPECT_EQ(std::size_t(counts[0]) + std::size_t(counts[1]), valid);
 
-  // The moves: banks, then the next pool grouped by PE, in source order.
+  // The moves: banks, then the next pool grouped by PE, in the exchange's order.
   int w = 0;
   for (int q = 0; q < c.pes; ++q)
     for (std::size_t r = 0; r < expected[q].size(); ++r) {

@@ -42,6 +42,11 @@ std::size_t group_size_for(ClRuntime& rt, cl::Kernel& k) {
   return std::max<std::size_t>(local, 1);
 }
 
+// The scatter bench's descriptors are radiance rays of a frame this deep
+// (random_descriptors: level 1, none ends its ray tree), so each PE's
+// entries have one sort key and keep their source order.
+constexpr int kBenchDepth = 5;
+
 // I' as the exchange computes it, from the host scatter's plan: each
 // source entry's place in [banks | next pool], or -1 for a hole.
 std::vector<cl_int> placement_index(const HostDescriptors& src, const HostScatterResult& plan, int pes,
@@ -77,7 +82,7 @@ void measure_paper_scatter(ClRuntime& rt, const HostDescriptors& src, const std:
   DescriptorSet rec_from, rec_to;
   rec_from.allocate(rt, n, "paper scatter records");
   rec_to.allocate(rt, dest_len, "paper scatter records");
-  rec_from.write(rt, src);
+  rec_from.write(rt, src, 0, kBenchDepth);
   // kernels/baselines/copy.cl: count, index, then six source and six
   // destination vectors; or one source and one destination of records.
   using Buf = cl::Buffer;
@@ -114,7 +119,7 @@ HostScatterResult measure_host_scatter(const HostDescriptors& src, int pes, int 
   std::vector<double> times;
   for (int r = 0; r < warmup + pt.repeats; ++r) {
     auto t0 = std::chrono::steady_clock::now();
-    host_result = host_scatter(src, pes, slots, 0, group_size, banks, next, scratch);
+    host_result = host_scatter(src, pes, slots, 0, group_size, kBenchDepth, false, banks, next, scratch);
     double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     if (r >= warmup) times.push_back(s);
   }
@@ -136,15 +141,9 @@ void measure_device_scatter(ClRuntime& rt, const HostDescriptors& src, int pes, 
   pool.allocate(rt, length, "scatter bench source");
   banks.allocate(rt, bank_slots, "scatter bench banks");
   next.allocate(rt, length, "scatter bench next pool");
-  pool.write(rt, src);
+  pool.write(rt, src, 0, kBenchDepth);
   ScatterPass scatter(rt, pes);
-  ScatterPass::Args a;
-  a.pool_len = static_cast<int>(length);
-  a.pool = &pool;
-  a.slots = slots;
-  a.group_size = group_size;
-  a.banks = &banks;
-  a.next_pool = &next;
+  const ScatterPass::Args a = ScatterPass::pool_only(pool, length, banks, next, slots, group_size);
   std::vector<double> totals;
   std::vector<std::vector<LaunchRecord>> runs;
   for (int r = 0; r < warmup + pt.repeats; ++r) {

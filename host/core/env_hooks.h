@@ -28,7 +28,9 @@ namespace opsila {
   /* bytes of device memory to plan with, below what the device reports */                                         \
   X(device_memory_limit, "OPSILA_DEVICE_MEMORY_LIMIT")                                                             \
   /* a device fault injected at this round of every frame (reliability tests) */                                   \
-  X(fault_round, "OPSILA_FAULT_ROUND")
+  X(fault_round, "OPSILA_FAULT_ROUND")                                                                             \
+  /* descriptors that may wait before the exchange throttles (default: the planned pool x depth) */               \
+  X(waiting_limit, "OPSILA_WAITING_LIMIT")
 
 enum class EnvHook {
 #define OPSILA_ENV_ENUM(id, name) id,

@@ -20,22 +20,23 @@ void DescriptorSet::copy_prefix_to(ClRuntime& rt, DescriptorSet& to, std::size_t
            "clEnqueueCopyBuffer(descriptor destinations)");
 }
 
-void DescriptorSet::write_raw(ClRuntime& rt, const unsigned char* bytes, std::size_t count, std::size_t at) const {
+void DescriptorSet::write_raw(ClRuntime& rt, const unsigned char* bytes, std::size_t count, std::size_t at,
+                              int depth) const {
   if (count == 0) return;
   std::vector<cl_int> d(count);
   for (std::size_t i = 0; i < count; ++i) {
     HostDescriptor h;
     std::memcpy(&h, bytes + i * kBytes, kBytes);
-    d[i] = desc_dest(h);
+    d[i] = desc_key(h, depth);
   }
   cl_check(rt.queue().enqueueWriteBuffer(records, CL_TRUE, at * kBytes, count * kBytes, bytes),
            "clEnqueueWriteBuffer(descriptors)");
   cl_check(rt.queue().enqueueWriteBuffer(dests, CL_TRUE, at * sizeof(cl_int), count * sizeof(cl_int), d.data()),
-           "clEnqueueWriteBuffer(descriptor destinations)");
+           "clEnqueueWriteBuffer(descriptor sort keys)");
 }
 
-void DescriptorSet::write(ClRuntime& rt, const std::vector<HostDescriptor>& v, std::size_t at) const {
-  write_raw(rt, reinterpret_cast<const unsigned char*>(v.data()), v.size(), at);
+void DescriptorSet::write(ClRuntime& rt, const std::vector<HostDescriptor>& v, std::size_t at, int depth) const {
+  write_raw(rt, reinterpret_cast<const unsigned char*>(v.data()), v.size(), at, depth);
 }
 
 std::vector<HostDescriptor> DescriptorSet::read(ClRuntime& rt, std::size_t count, std::size_t at) const {
@@ -75,7 +76,10 @@ ScatterPass::ScatterPass(ClRuntime& rt, int num_pes) : rt_(rt), num_pes_(num_pes
   bank_begin = device_buffer(rt, num_pes * sizeof(cl_int), "bank offsets");
   bank_count = device_buffer(rt, num_pes * sizeof(cl_int), "bank counts");
   pe_total = device_buffer(rt, num_pes * sizeof(cl_int), "scatter totals");
-  overflow_base = device_buffer(rt, num_pes * sizeof(cl_int), "scatter overflow bases");
+  key_total = device_buffer(rt, 2 * num_pes * sizeof(cl_int), "scatter key totals");
+  key_begin = device_buffer(rt, 2 * num_pes * sizeof(cl_int), "scatter key offsets");
+  key_count = device_buffer(rt, 2 * num_pes * sizeof(cl_int), "scatter key counts");
+  key_base = device_buffer(rt, 2 * num_pes * sizeof(cl_int), "scatter overflow bases");
   counts = device_buffer(rt, 3 * sizeof(cl_int), "scatter counts");
   dummy_ = device_buffer(rt, sizeof(cl_int), "no SPMD outputs");
 }
@@ -86,18 +90,30 @@ void ScatterPass::grow(Grown& g, std::size_t need, std::size_t size, const char*
   g.buffer = device_buffer(rt_, size * sizeof(cl_int), what);
 }
 
+ScatterPass::Args ScatterPass::pool_only(const DescriptorSet& pool, std::size_t pool_len, const DescriptorSet& banks,
+                                         const DescriptorSet& next, int slots, int group_size) {
+  Args a;
+  a.pool_len = static_cast<int>(pool_len);
+  a.pool = &pool;
+  a.slots = slots;
+  a.group_size = group_size;
+  a.banks = &banks;
+  a.next_pool = &next;
+  return a;
+}
+
 int ScatterPass::blocks(const Args& a) const {
   return (a.pool_len + kBlock - 1) / kBlock + a.out_groups;
 }
 
 void ScatterPass::plan(Launcher& launch, const Args& a, int round) {
-  const int P = num_pes_;
+  const int P = num_pes_, K = 2 * P;  // two sort keys a PE (OPSILA_STREAM_KEY)
   const int pool_blocks = (a.pool_len + kBlock - 1) / kBlock, nblocks = blocks(a);
   const std::size_t sources = std::size_t(a.pool_len) + std::size_t(a.out_groups) * a.group_size * a.spawn_slots;
   // Grown by half again, so that a frame's slowly rising needs do not
   // reallocate every round.
   grow(ranks, sources, sources + sources / 2, "scatter ranks");
-  grow(block_counts, (std::size_t(nblocks) + 1) * P, (std::size_t(nblocks) + nblocks / 2 + 1) * P,
+  grow(block_counts, (std::size_t(nblocks) + 1) * K, (std::size_t(nblocks) + nblocks / 2 + 1) * K,
        "scatter block counts");
   const std::size_t groups = std::size_t(a.slots) / a.group_size + P + 1;
   grow(group_pe, groups, groups, "SPMD work-group PEs");
@@ -105,41 +121,41 @@ void ScatterPass::plan(Launcher& launch, const Args& a, int round) {
   const cl::Buffer& out = a.outputs ? a.outputs->records : dummy_;
   const cl::Buffer& out_dest = a.outputs ? a.outputs->dests : dummy_;
   const cl::Buffer& out_count = a.out_item_count ? *a.out_item_count : dummy_;
-  count_.bind(a.pool_len, pool_blocks, nblocks, a.group_size, a.spawn_slots, P, *a.pool, out, out_dest, out_count, block_counts.buffer,
+  count_.bind(a.pool_len, pool_blocks, nblocks, a.group_size, a.spawn_slots, K, *a.pool, out, out_dest, out_count, block_counts.buffer,
               ranks.buffer, by_block_ ? 0 : 1);
   launch.run(count_.kernel(), "scatter_count", std::max(nblocks, 1), 0, round);
-  scan_.bind(nblocks, P, block_counts.buffer, pe_total);
-  // One work-group per PE on a GPU, one in all on a CPU (see scatter_scan).
-  const std::size_t scan_groups = by_block_ ? 1 : std::size_t(P);
+  scan_.bind(nblocks, K, block_counts.buffer, key_total);
+  // One work-group per key on a GPU, one in all on a CPU (see scatter_scan).
+  const std::size_t scan_groups = by_block_ ? 1 : std::size_t(K);
   launch.run(scan_.kernel(), "scatter_scan", scan_groups * wg_scan_, wg_scan_, round);
   const int cap = a.cap > 0 ? a.cap : a.slots;
   const int group_end = a.group_end < 0 ? P : a.group_end;
-  plan_.bind(P, a.group_begin, group_end, a.slots, cap, a.group_size, pe_total, bank_begin, bank_count, overflow_base,
-             group_pe.buffer, group_first.buffer, counts);
+  plan_.bind(P, a.group_begin, group_end, a.slots, cap, a.group_size, a.throttle ? 1 : 0, key_total, pe_total,
+             bank_begin, bank_count, key_begin, key_count, key_base, group_pe.buffer, group_first.buffer, counts);
   launch.run(plan_.kernel(), "scatter_plan", wg_plan_, wg_plan_, round);
 }
 
 void ScatterPass::move(Launcher& launch, const Args& a, int round) {
-  const int P = num_pes_;
+  const int K = 2 * num_pes_;
   const int pool_blocks = (a.pool_len + kBlock - 1) / kBlock;
   if (by_block_) {
     const cl::Buffer& out = a.outputs ? a.outputs->records : dummy_;
     const cl::Buffer& out_dest = a.outputs ? a.outputs->dests : dummy_;
     const cl::Buffer& out_count = a.out_item_count ? *a.out_item_count : dummy_;
-    move_blocks_.bind(a.pool_len, pool_blocks, blocks(a), a.group_size, a.spawn_slots, P, *a.pool, out, out_dest,
-                      out_count, block_counts.buffer, bank_begin, bank_count, overflow_base, *a.banks, *a.next_pool);
+    move_blocks_.bind(a.pool_len, pool_blocks, blocks(a), a.group_size, a.spawn_slots, K, *a.pool, out, out_dest,
+                      out_count, block_counts.buffer, key_begin, key_count, key_base, *a.banks, *a.next_pool);
     if (blocks(a) > 0) launch.run(move_blocks_.kernel(), "scatter_move", std::size_t(blocks(a)), 0, round);
     return;
   }
   if (a.pool_len > 0) {
-    move_pool_.bind(a.pool_len, P, *a.pool, ranks.buffer, block_counts.buffer, bank_begin, bank_count, overflow_base, *a.banks,
-                    *a.next_pool);
+    move_pool_.bind(a.pool_len, a.out_groups, K, *a.pool, ranks.buffer, block_counts.buffer, key_begin, key_count,
+                    key_base, *a.banks, *a.next_pool);
     launch.run(move_pool_.kernel(), "scatter_move", std::size_t(a.pool_len), 0, round);
   }
   if (a.out_groups > 0) {
     const int items = a.out_groups * a.group_size;
-    move_out_.bind(items, a.group_size, a.spawn_slots, a.pool_len, pool_blocks, P, *a.outputs, *a.out_item_count, ranks.buffer,
-                   block_counts.buffer, bank_begin, bank_count, overflow_base, *a.banks, *a.next_pool);
+    move_out_.bind(items, a.group_size, a.spawn_slots, a.pool_len, K, *a.outputs, *a.out_item_count, ranks.buffer,
+                   block_counts.buffer, key_begin, key_count, key_base, *a.banks, *a.next_pool);
     launch.run(move_out_.kernel(), "scatter_move", std::size_t(items), 0, round);
   }
 }

@@ -31,10 +31,14 @@ static_assert(sizeof(HostDescriptor) == OPSILA_DESCRIPTOR_BYTES, "HostDescriptor
 
 // Named slots, as kernels/lib/descriptor.cl names them.
 inline int desc_dest(const HostDescriptor& d) { return d.ids.s[3]; }  // destination PE, -1 NIL
+inline int desc_meta(const HostDescriptor& d) { return d.ids.s[1]; }  // kind | level << 2
+// The exchange's sort key of a record in a frame of this depth
+// (OPSILA_STREAM_KEY): what the dense stream holds.
+inline int desc_key(const HostDescriptor& d, int depth) { return OPSILA_STREAM_KEY(desc_dest(d), desc_meta(d), depth); }
 inline int desc_pixel(const HostDescriptor& d) { return d.ids.s[0]; }
 
 // One descriptor vector on the device: `capacity` records of kBytes, and
-// the dense stream of their destination PEs (kernels/lib/descriptor.cl,
+// the dense stream of their sort keys (kernels/lib/descriptor.cl,
 // DESC_PARAMS): a kernel parameter pair, written together.
 struct DescriptorSet {
   cl::Buffer records;
@@ -42,16 +46,17 @@ struct DescriptorSet {
   std::size_t capacity = 0;
   static constexpr std::size_t kBytes = OPSILA_DESCRIPTOR_BYTES;           // one record
   static constexpr std::size_t kSlotBytes = kBytes + sizeof(cl_int);       // device memory per slot
-  // Writes count records from host memory at slot `at` (and their destinations).
-  void write_raw(ClRuntime& rt, const unsigned char* bytes, std::size_t count, std::size_t at) const;
+  // Writes count records from host memory at slot `at`, and their sort keys
+  // for a frame of this depth.
+  void write_raw(ClRuntime& rt, const unsigned char* bytes, std::size_t count, std::size_t at, int depth) const;
   void allocate(ClRuntime& rt, std::size_t n, const char* what);
   auto kernel_args() const { return std::tie(records, dests); }  // DESC_PARAMS (machine/kernel_args.h)
   void copy_prefix_to(ClRuntime& rt, DescriptorSet& to, std::size_t count) const;
-  void write(ClRuntime& rt, const std::vector<HostDescriptor>& v, std::size_t at = 0) const;
+  void write(ClRuntime& rt, const std::vector<HostDescriptor>& v, std::size_t at, int depth) const;
   std::vector<HostDescriptor> read(ClRuntime& rt, std::size_t count, std::size_t at = 0) const;
 };
 
-// The exchange Vd(I'(i)) = Vs(i) over source = [waiting pool | SPMD outputs]
+// The exchange Vd(I'(i)) = Vs(i) over source = [SPMD outputs | waiting pool]
 // (kernels/scatter.cl). plan() ranks every entry and decides the banks of
 // the next SPMD phase; move() puts each record in place. Between the two,
 // `counts` = {waiting, placed, SPMD work-groups} may be read.
@@ -76,14 +81,22 @@ class ScatterPass {
     // bank slots here; what is bound elsewhere waits in next_pool, per PE in
     // PE order, for the rank exchange.
     int group_begin = 0, group_end = -1;
+    // More wait than the frame planned for: banks take only the records
+    // that end their ray tree, while there are any (kernels/scatter.cl).
+    bool throttle = false;
   };
+  // A pass over a pool alone, no SPMD outputs (the bench and the tests).
+  static Args pool_only(const DescriptorSet& pool, std::size_t pool_len, const DescriptorSet& banks,
+                        const DescriptorSet& next, int slots, int group_size);
   // The move by entry (GPUs) or by block (CPUs) is chosen from the device;
   // tests run both on any device.
   void set_move_by_block(bool by_block) { by_block_ = by_block; }
   void plan(Launcher& launch, const Args& a, int round);
   void move(Launcher& launch, const Args& a, int round);
-  // Results of plan(): per PE, and the SPMD work-group table.
-  cl::Buffer bank_begin, bank_count, overflow_base, pe_total, counts;  // counts = {waiting, placed, groups}
+  // Results of plan(): per PE, per sort key (two a PE), and the SPMD
+  // work-group table; pe_total: each PE's entries (placed or not).
+  cl::Buffer bank_begin, bank_count, pe_total, counts;  // counts = {waiting, placed, groups}
+  cl::Buffer key_total, key_begin, key_count, key_base;
   // Buffers plan() sizes by the pass (capacity in ints) and grows when a
   // pass needs more; a frame allocates them ahead, at the sizes its memory
   // plan counts (the buffer table, machine/frame_buffers.cpp).
@@ -91,7 +104,7 @@ class ScatterPass {
     cl::Buffer buffer;
     std::size_t capacity = 0;
   };
-  Grown ranks, block_counts;    // each source entry's rank; per block and PE, its count, then its offset
+  Grown ranks, block_counts;    // each source entry's rank; per block and key, its count, then its offset
   Grown group_pe, group_first;  // the SPMD work-group table: each group's PE and first bank slot
 
  private:
@@ -103,9 +116,9 @@ class ScatterPass {
   using Set = DescriptorSet;
   KernelBinding<int, int, int, int, int, int, Set, Buf, Buf, Buf, Buf, Buf, int> count_;
   KernelBinding<int, int, Buf, Buf> scan_;
-  KernelBinding<int, int, int, int, int, int, Buf, Buf, Buf, Buf, Buf, Buf, Buf> plan_;
-  KernelBinding<int, int, Set, Buf, Buf, Buf, Buf, Buf, Set, Set> move_pool_;
-  KernelBinding<int, int, int, int, int, int, Set, Buf, Buf, Buf, Buf, Buf, Buf, Set, Set> move_out_;
+  KernelBinding<int, int, int, int, int, int, int, Buf, Buf, Buf, Buf, Buf, Buf, Buf, Buf, Buf, Buf> plan_;
+  KernelBinding<int, int, int, Set, Buf, Buf, Buf, Buf, Buf, Set, Set> move_pool_;
+  KernelBinding<int, int, int, int, int, Set, Buf, Buf, Buf, Buf, Buf, Buf, Set, Set> move_out_;
   KernelBinding<int, int, int, int, int, int, Set, Buf, Buf, Buf, Buf, Buf, Buf, Buf, Set, Set> move_blocks_;
   // Move by block (one work-item walks a block in order: CPUs) or by entry
   // (one work-item per record, ranks stored by the count: GPUs).

@@ -69,6 +69,10 @@ struct Renderer::Machine {
   // tests can show how a failure among running ranks ends them all.
   int fault_round = -1;
   FlightPlan flight{1, 1, 1, 1};
+  // Descriptors that may wait before the exchange takes only the rays that
+  // end their tree (kernels/scatter.cl): 0, the planned pool once a level
+  // (depth first, about what the trees hold); OPSILA_WAITING_LIMIT sets it.
+  std::size_t waiting_limit = 0;
   FrameParams fp{};
   RenderStats prepared;  // what the prepare step knows: banks, n, work-group size
   ShareFigures share;    // a scene read in shares: what the collective partition did here

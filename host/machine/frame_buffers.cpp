@@ -188,12 +188,14 @@ std::vector<BufferSpec> Renderer::Machine::buffer_table(const BankedScene& bs, c
     t.push_back(d);
   };
   grown("scatter ranks", sources, &scatter->ranks);
-  grown("scatter block counts", (blocks + 1) * P, &scatter->block_counts);
+  grown("scatter block counts", (blocks + 1) * 2 * P, &scatter->block_counts);  // two sort keys a PE
   grown("SPMD work-group PEs", groups, &scatter->group_pe);
   grown("SPMD work-group slots", groups, &scatter->group_first);
   // ... and its per-PE tables, which it allocates when it is made.
-  for (const char* name : {"bank offsets", "bank counts", "scatter totals", "scatter overflow bases"})
+  for (const char* name : {"bank offsets", "bank counts", "scatter totals"})
     t.push_back(frame_buffer(name, P_::other, sint, P, Fill::device, nullptr));
+  for (const char* name : {"scatter key totals", "scatter key offsets", "scatter key counts", "scatter overflow bases"})
+    t.push_back(frame_buffer(name, P_::other, sint, 2 * std::size_t(P), Fill::device, nullptr));
   t.push_back(frame_buffer("scatter counts", P_::other, sint, 3, Fill::device, nullptr));
   t.push_back(frame_buffer("no SPMD outputs", P_::other, sint, 1, Fill::device, nullptr));
   return t;

@@ -36,6 +36,8 @@ Renderer::Machine::Machine(const Scene& scene, PreparedBanks banks, const Render
   progress = settings.progress;
   if (const auto k = env_hook_number(EnvHook::fault_round, 0, 999999999, "a round number"))
     fault_round = static_cast<int>(*k);
+  if (const auto w = env_hook_number(EnvHook::waiting_limit, 0, std::uint64_t(1) << 40, "a descriptor count"))
+    waiting_limit = static_cast<std::size_t>(*w);
 
   measure = settings.measure_cost;
   // --stats and the bench count the work; a plain render counts only rays.
@@ -92,7 +94,7 @@ Renderer::Machine::Machine(const Scene& scene, PreparedBanks banks, const Render
   prepared.prepare = banks.prepare;
   prepared.prepare[PrepareStage::upload] = stages_since(before_upload)[PrepareStage::upload];
   prepared.prepare.peak_host_bytes = host_peak_bytes();
-  if (!group.all()) rank_exchange = std::make_unique<RankExchange>(rt, ranks, group, P);
+  if (!group.all()) rank_exchange = std::make_unique<RankExchange>(rt, ranks, group, P, depth);
 }
 
 // n, the paper's bank size: P * n descriptors in flight fill the device

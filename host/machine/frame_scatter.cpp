@@ -1,5 +1,6 @@
 #include "machine/frame.h"
 
+#include <algorithm>
 #include <utility>
 
 namespace opsila {
@@ -19,6 +20,12 @@ ScatterPass::Args Renderer::Machine::exchange_args(const Frame& f) const {
   sa.next_pool = &next_pool;
   sa.group_begin = group.begin;
   sa.group_end = group.end;
+  // Depth first, what waits is about the planned pool once a level of the
+  // ray trees; beyond that the exchange takes only the rays that end their
+  // tree (kernels/scatter.cl), so that what waits stays bounded whatever
+  // the depth and the scene. Below it, rounds stay full.
+  const std::size_t limit = waiting_limit > 0 ? waiting_limit : flight.pool * std::size_t(std::max(depth, 1));
+  sa.throttle = f.pool_len > limit;
   return sa;
 }
 
@@ -32,6 +39,7 @@ void Renderer::Machine::exchange(Launcher& launch, Frame& f, int round, RenderSt
   if (next_pool.capacity < bound) next_pool.allocate(rt, bound + bound / 2, "descriptor pool");
   const ScatterPass::Args sa = exchange_args(f);
   scatter->plan(launch, sa, round);
+  st.throttled_rounds += sa.throttle ? 1 : 0;
   cl_int counts[3] = {0, 0, 0};
   cl::Event read;
   launch.check(rt.queue().enqueueReadBuffer(scatter->counts, CL_FALSE, 0, sizeof(counts), counts, nullptr, &read),
@@ -43,6 +51,7 @@ void Renderer::Machine::exchange(Launcher& launch, Frame& f, int round, RenderSt
   f.pool_len = static_cast<std::size_t>(counts[0]);
   f.groups = counts[2];
   st.overflow_deferrals += rank_exchange ? rank_exchange->waiting() : static_cast<std::uint64_t>(counts[0]);
+  st.waiting_peak = std::max<std::uint64_t>(st.waiting_peak, static_cast<std::uint64_t>(counts[0]));
 }
 
 // Several ranks, after the SPMD launch: the records bound for other ranks

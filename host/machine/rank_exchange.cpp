@@ -93,8 +93,8 @@ void relay_share(Ranks& ranks, ClRuntime& rt, const ItemBuffers& b, std::size_t 
   if (ranks.rank() != last) write_states(rt, b, 0, state);
 }
 
-RankExchange::RankExchange(ClRuntime& rt, Ranks& ranks, const PeGroup& group, int num_pes)
-    : rt_(rt), ranks_(ranks), group_(group), num_pes_(num_pes), totals_(num_pes) {}
+RankExchange::RankExchange(ClRuntime& rt, Ranks& ranks, const PeGroup& group, int num_pes, int depth)
+    : rt_(rt), ranks_(ranks), group_(group), num_pes_(num_pes), depth_(depth), totals_(num_pes) {}
 
 void RankExchange::reset() {
   sent.clear();
@@ -155,14 +155,18 @@ std::size_t RankExchange::finish(const DescriptorSet& next, DescriptorSet& into,
   const std::size_t B = DescriptorSet::kBytes, in = recv_.size() / B, len = waiting_ + in;
   if (into.capacity < len + spare) into.allocate(rt_, (len + spare) * 3 / 2, "descriptor pool");
   auto& q = rt_.queue();
+  // What arrived leads: it was spawned by the phase that just ran elsewhere,
+  // and the exchange takes the newest records first (kernels/scatter.cl), so
+  // the ray trees are worked depth first on every rank as on one.
+  // Only records travel between ranks; their destinations are read from them.
+  into.write_raw(rt_, recv_.data(), in, 0, depth_);
   if (waiting_ > 0) {
-    cl_check(q.enqueueCopyBuffer(next.records, into.records, lo_ * B, 0, waiting_ * B),
+    cl_check(q.enqueueCopyBuffer(next.records, into.records, lo_ * B, in * B, waiting_ * B),
              "clEnqueueCopyBuffer(waiting records)");
-    cl_check(q.enqueueCopyBuffer(next.dests, into.dests, lo_ * sizeof(cl_int), 0, waiting_ * sizeof(cl_int)),
+    cl_check(q.enqueueCopyBuffer(next.dests, into.dests, lo_ * sizeof(cl_int), in * sizeof(cl_int),
+                                 waiting_ * sizeof(cl_int)),
              "clEnqueueCopyBuffer(waiting records' destinations)");
   }
-  // Only records travel between ranks; their destinations are read from them.
-  into.write_raw(rt_, recv_.data(), in, waiting_);
   staging_seconds.back() += since(t0);
   return len;
 }

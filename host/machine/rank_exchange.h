@@ -41,7 +41,8 @@ void relay_share(Ranks& ranks, ClRuntime& rt, const ItemBuffers& b, std::size_t 
 
 class RankExchange {
  public:
-  RankExchange(ClRuntime& rt, Ranks& ranks, const PeGroup& group, int num_pes);
+  // depth: the frame's, for the received records' sort keys.
+  RankExchange(ClRuntime& rt, Ranks& ranks, const PeGroup& group, int num_pes, int depth);
   // After the exchange's move (before the SPMD launch): `next` holds
   // `waiting` records per destination PE in PE order (other groups' PEs had
   // no bank here, so all of theirs waits). Reads the per-PE totals and
@@ -49,8 +50,8 @@ class RankExchange {
   void start(const cl::Buffer& pe_total, const DescriptorSet& next, std::size_t waiting);
   // While the SPMD phase runs: the MPI exchange.
   void exchange();
-  // The next pool: this rank's waiting records (still in `next`), then the
-  // received ones, written into `into` (free: the exchange consumed it),
+  // The next pool: the received records, then this rank's waiting ones
+  // (still in `next`), written into `into` (free: the exchange consumed it),
   // grown to hold `spare` more. Returns its length.
   std::size_t finish(const DescriptorSet& next, DescriptorSet& into, std::size_t spare);
   std::uint64_t waiting() const { return waiting_; }  // own records that found no bank slot
@@ -64,7 +65,7 @@ class RankExchange {
   ClRuntime& rt_;
   Ranks& ranks_;
   PeGroup group_;
-  int num_pes_;
+  int num_pes_, depth_;
   std::vector<cl_int> totals_;
   std::uint64_t lo_ = 0, waiting_ = 0;
   std::vector<std::uint64_t> send_counts_;

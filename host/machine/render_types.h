@@ -96,6 +96,8 @@ struct RenderStats {
   std::uint64_t descriptors_finished = 0;  // shaded hits + misses + occluded + lit
   std::uint64_t forwards = 0;        // extra descriptors for cross-bank nearest hit / shadows
   std::uint64_t overflow_deferrals = 0;  // descriptors that waited a round for a bank slot
+  std::uint64_t waiting_peak = 0;        // most descriptors waiting after one exchange (this device)
+  int throttled_rounds = 0;              // exchanges that took only rays ending their tree (this device)
   int rounds = 0;                    // SPMD + scatter rounds
   double render_seconds = 0;         // host wall time of the phases
   std::vector<LaunchRecord> launches;

@@ -164,7 +164,9 @@ nlohmann::json stats_json(const RenderResult& result, const Scene& scene,
   j["descriptors"] = {{"spawned", s.descriptors_spawned},
                       {"finished", s.descriptors_finished},
                       {"forwards", s.forwards},
-                      {"overflow_deferrals", s.overflow_deferrals}};
+                      {"overflow_deferrals", s.overflow_deferrals},
+                      {"waiting_peak", s.waiting_peak},
+                      {"throttled_rounds", s.throttled_rounds}};
   j["balanced"] = s.descriptors_spawned == s.descriptors_finished;
   // Destination choice over the frame: sphere tests plus PE-box and
   // routing-node tests, and the descriptors the PEs processed.

@@ -8,9 +8,10 @@ typedef struct {
 } Descriptor;
 
 /* A descriptor vector as a kernel parameter: record k is lanes 4k .. 4k+3,
- * and p_dest[k] repeats record k's destination PE (DESC_DEST) in a dense
- * stream, so that the exchange's count reads 4 bytes per descriptor, not
- * the record's whole 64-byte line. Whoever writes a record writes both,
+ * and p_dest[k] holds record k's sort key (its destination PE, DESC_DEST,
+ * and whether it can still spawn radiance rays: OPSILA_STREAM_KEY) in a
+ * dense stream, so that the exchange's count reads 4 bytes per descriptor,
+ * not the record's whole 64-byte line. Whoever writes a record writes both,
  * except the exchange's move into a bank (see desc_move_record). */
 #define DESC_PARAMS(p) __global float4 *p, __global int *p##_dest
 
@@ -23,14 +24,15 @@ inline Descriptor desc_load(__global const float4 *v, int k) {
 }
 
 #define DESC_STORE_LANE(lane, name, type, host_type) v[at + lane] = as_float4(d.name);
-inline void desc_store(__global float4 *v, __global int *v_dest, int k, Descriptor d) {
+/* depth: the frame's (FrameParams.max_depth), for the sort key. */
+inline void desc_store(__global float4 *v, __global int *v_dest, int k, Descriptor d, int depth) {
   long at = (long)k * OPSILA_DESCRIPTOR_LANE_COUNT;
   OPSILA_DESCRIPTOR_LANES(DESC_STORE_LANE)
-  v_dest[k] = d.ids.w;
+  v_dest[k] = OPSILA_STREAM_KEY(d.ids.w, d.ids.y, depth);
 }
 
 /* The exchange's move: one record, lane by lane, untouched, and its
- * destination with it; into a bank, the record alone (every slot of a bank
+ * sort key with it; into a bank, the record alone (every slot of a bank
  * belongs to its PE, and the SPMD phase reads only records). */
 inline void desc_move_record(__global float4 *to, int j, __global const float4 *from, int k) {
   long a = (long)j * OPSILA_DESCRIPTOR_LANE_COUNT, b = (long)k * OPSILA_DESCRIPTOR_LANE_COUNT;

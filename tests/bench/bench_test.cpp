@@ -159,58 +159,72 @@ TEST(Bench, EmbreeAgreesOnTexturedSceneWithSamples) { expect_embree_agrees("text
 TEST(Bench, EmbreeAgreesOnSmoothScene) { expect_embree_agrees("smooth.json", 1); }
 TEST(Bench, EmbreeAgreesOnSmoothSceneWithSamples) { expect_embree_agrees("smooth.json", 4); }
 
-// Host scatter and ScatterPass on the same input, with holes and overflow:
-// the same plan, and every lane of every bank slot and waiting entry.
-void expect_same_placement(std::size_t length, int pes, int slots, int cap, int group_size, double holes,
-                           unsigned seed) {
+// ScatterPass over a pool alone (no SPMD outputs) of a frame of depth 5,
+// and what it made: the plan, every bank slot and what waits.
+constexpr int kScatterDepth = 5;
+struct PoolScatter {
+  std::vector<cl_int> bank_begin, bank_count, counts;  // counts = {waiting, placed, groups}
+  HostDescriptors banks, next;
+};
+PoolScatter scatter_pool(const HostDescriptors& src, int pes, int slots, int cap, int group_size, bool throttle) {
   ClRuntime& rt = runtime();
-  const HostDescriptors src = random_descriptors(length, pes, holes, seed);
   const std::size_t bank_slots = std::size_t(slots) + std::size_t(pes) * group_size;
-  HostDescriptors hb(bank_slots), hn(length);
-  std::vector<std::size_t> scratch;
-  const HostScatterResult hr = host_scatter(src, pes, slots, cap, group_size, hb, hn, scratch);
-
   DescriptorSet pool, banks, next;
-  pool.allocate(rt, length, "test pool");
+  pool.allocate(rt, src.size(), "test pool");
   banks.allocate(rt, bank_slots, "test banks");
-  next.allocate(rt, length, "test next");
-  pool.write(rt, src);
+  next.allocate(rt, src.size(), "test next");
+  pool.write(rt, src, 0, kScatterDepth);
   std::vector<LaunchRecord> records;
   Launcher launch(rt, records);
   ScatterPass scatter(rt, pes);
-  ScatterPass::Args a;
-  a.pool_len = static_cast<int>(length);
-  a.pool = &pool;
-  a.slots = slots;
+  ScatterPass::Args a = ScatterPass::pool_only(pool, src.size(), banks, next, slots, group_size);
   a.cap = cap;
-  a.group_size = group_size;
-  a.banks = &banks;
-  a.next_pool = &next;
+  a.throttle = throttle;
   scatter.plan(launch, a, 0);
   scatter.move(launch, a, 0);
   launch.check(rt.queue().finish(), "finish");
   launch.harvest();
+  auto ints = [&](const cl::Buffer& b, std::size_t n) {
+    std::vector<cl_int> v(n);
+    cl_check(rt.queue().enqueueReadBuffer(b, CL_TRUE, 0, n * sizeof(cl_int), v.data()), "read");
+    return v;
+  };
+  PoolScatter r;
+  r.bank_begin = ints(scatter.bank_begin, pes);
+  r.bank_count = ints(scatter.bank_count, pes);
+  r.counts = ints(scatter.counts, 3);
+  r.banks = banks.read(rt, bank_slots);
+  r.next = next.read(rt, std::size_t(r.counts[0]));
+  return r;
+}
 
-  std::vector<cl_int> bank_begin(pes), bank_count(pes), counts(3);
-  cl_check(rt.queue().enqueueReadBuffer(scatter.bank_begin, CL_TRUE, 0, pes * sizeof(cl_int), bank_begin.data()),
-           "read");
-  cl_check(rt.queue().enqueueReadBuffer(scatter.bank_count, CL_TRUE, 0, pes * sizeof(cl_int), bank_count.data()),
-           "read");
-  cl_check(rt.queue().enqueueReadBuffer(scatter.counts, CL_TRUE, 0, 3 * sizeof(cl_int), counts.data()), "read");
-  ASSERT_EQ(bank_begin, hr.bank_begin);
-  ASSERT_EQ(bank_count, hr.bank_count);
-  ASSERT_EQ(std::size_t(counts[0]), hr.waiting);
-  ASSERT_EQ(std::size_t(counts[1]), hr.placed);
-  ASSERT_EQ(counts[2], hr.groups);
+// Host scatter and ScatterPass on the same input, with holes and overflow:
+// the same plan, and every lane of every bank slot and waiting entry. A
+// fraction `shadows` of the rays end their tree (shadow rays);
+// `throttle` as when more wait than the frame planned for.
+void expect_same_placement(std::size_t length, int pes, int slots, int cap, int group_size, double holes,
+                           unsigned seed, double shadows = 0.0, bool throttle = false) {
+  SCOPED_TRACE("length " + std::to_string(length) + ", seed " + std::to_string(seed));
+  const HostDescriptors src = random_descriptors(length, pes, holes, seed, shadows);
+  const std::size_t bank_slots = std::size_t(slots) + std::size_t(pes) * group_size;
+  HostDescriptors hb(bank_slots), hn(length);
+  std::vector<std::size_t> scratch;
+  const HostScatterResult hr =
+      host_scatter(src, pes, slots, cap, group_size, kScatterDepth, throttle, hb, hn, scratch);
+  const PoolScatter d = scatter_pool(src, pes, slots, cap, group_size, throttle);
+  ASSERT_EQ(d.bank_begin, hr.bank_begin);
+  ASSERT_EQ(d.bank_count, hr.bank_count);
+  ASSERT_EQ(std::size_t(d.counts[0]), hr.waiting);
+  ASSERT_EQ(std::size_t(d.counts[1]), hr.placed);
+  ASSERT_EQ(d.counts[2], hr.groups);
   ASSERT_GT(hr.placed, 0u);
-  const HostDescriptors db = banks.read(rt, bank_slots), dn = next.read(rt, hr.waiting);
   for (int q = 0; q < pes; ++q)
-    for (int r = 0; r < bank_count[q]; ++r) {
-      const std::size_t at = std::size_t(bank_begin[q]) + r;
-      ASSERT_TRUE(test::same_record(db[at], hb[at])) << "bank " << q << " slot " << r;
-      ASSERT_EQ(desc_dest(db[at]), q);
+    for (int r = 0; r < d.bank_count[q]; ++r) {
+      const std::size_t at = std::size_t(d.bank_begin[q]) + r;
+      ASSERT_TRUE(test::same_record(d.banks[at], hb[at])) << "bank " << q << " slot " << r;
+      ASSERT_EQ(desc_dest(d.banks[at]), q);
     }
-  for (std::size_t k = 0; k < hr.waiting; ++k) ASSERT_TRUE(test::same_record(dn[k], hn[k])) << "pool slot " << k;
+  for (std::size_t k = 0; k < hr.waiting; ++k) ASSERT_TRUE(test::same_record(d.next[k], hn[k])) << "pool slot " << k;
 }
 
 TEST(Bench, HostScatterPlacesLikeTheScatterKernels) {
@@ -220,6 +234,48 @@ TEST(Bench, HostScatterPlacesLikeTheScatterKernels) {
   expect_same_placement(3000, 1, 100, 0, 64, 0.5, 4);
   expect_same_placement(4000, 64, 64, 0, 1, 0.2, 5);
   expect_same_placement(4000, 16, 4000, 32, 16, 0.2, 6);    // two work-groups per PE at most
+  // Shadow rays (they end their tree) go first; throttled, only they go.
+  expect_same_placement(5000, 16, 3200, 0, 16, 0.3, 7, 0.25);
+  expect_same_placement(5000, 16, 3200, 0, 16, 0.3, 8, 0.25, true);
+  expect_same_placement(4000, 16, 4000, 32, 16, 0.2, 9, 0.5, true);
+  expect_same_placement(4000, 16, 4000, 32, 16, 0.2, 10, 0.0, true);  // none ends its tree: not throttled
+}
+
+// The order that bounds what waits (kernels/scatter.cl), on the kernels'
+// own banks: per PE, the rays that end their tree (shadow rays here) take
+// the first slots; throttled, the banks take only them while any waits,
+// and with none waiting the round is as if not throttled.
+TEST(Bench, ScatterTakesRaysThatEndTheirTreeFirst) {
+  constexpr int kPes = 8, kSlots = 800, kGroup = 16;
+  constexpr std::size_t kLength = 3000;
+  // Per PE, per bank slot: whether it holds a shadow ray.
+  auto banks_of = [&](double shadows, bool throttle, int* placed) {
+    const PoolScatter d = scatter_pool(random_descriptors(kLength, kPes, 0.1, 21, shadows), kPes, kSlots, 0, kGroup,
+                                       throttle);
+    *placed = d.counts[1];
+    std::vector<std::vector<bool>> ends(kPes);
+    for (int q = 0; q < kPes; ++q)
+      for (int r = 0; r < d.bank_count[q]; ++r)
+        ends[q].push_back(OPSILA_META_KIND(desc_meta(d.banks[std::size_t(d.bank_begin[q]) + r])) ==
+                          OPSILA_KIND_SHADOW);
+    return ends;
+  };
+  int placed = 0, shadows = 0;
+  for (const auto& bank : banks_of(0.15, false, &placed)) {
+    ASSERT_TRUE(std::is_sorted(bank.begin(), bank.end(), std::greater<bool>())) << "a radiance ray before a shadow ray";
+    shadows += static_cast<int>(std::count(bank.begin(), bank.end(), true));
+  }
+  EXPECT_EQ(placed, kSlots);
+  EXPECT_GT(shadows, 0);
+  EXPECT_LT(shadows, placed);
+  int throttled = 0;
+  for (const auto& bank : banks_of(0.15, true, &throttled))
+    EXPECT_EQ(std::count(bank.begin(), bank.end(), false), 0) << "a throttled bank took a radiance ray";
+  EXPECT_GT(throttled, 0);
+  EXPECT_LT(throttled, kSlots);  // about 0.15 x 0.9 x 3000 = 405 shadow rays
+  int unthrottled = 0;
+  banks_of(0.0, true, &unthrottled);
+  EXPECT_EQ(unthrottled, kSlots) << "with nothing that ends its tree, a throttled round still fills the banks";
 }
 
 TEST(Bench, ScatterPointIsSane) {

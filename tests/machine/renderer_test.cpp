@@ -12,6 +12,7 @@
 #include "reference/reference.h"
 #include "machine/renderer.h"
 #include "machine/frame.h"
+#include "machine/memory_plan.h"
 #include "machine/partition.h"
 #include "machine/pilot.h"
 #include "machine/prepare_banks.h"
@@ -115,6 +116,52 @@ TEST(Renderer, DepthOneIsLocalShadingOnly) {
   EXPECT_GE(test::clamped_psnr(r.rgb, ref.rgb), 40.0);
   EXPECT_EQ(r.rays.secondary, 0u);
   expect_balanced(r.stats);
+}
+
+// Two facing glass slabs: every hit spawns a reflected and a refracted ray,
+// so a pixel's ray tree doubles with each level (SPEC's depth) until its
+// rays leave the slabs' sides.
+Scene facing_slabs(int depth) {
+  const std::string text = R"({"image": {"size": [64, 48]}, "depth": )" + std::to_string(depth) + R"(,
+    "camera": {"eye": [0, 0, 0.5], "look_at": [0, 0, -1]},
+    "materials": {"glass": {"kr": 0.9, "kt": 0.9, "Ni": 1.5}},
+    "objects": [{"type": "box", "min": [-50, -50, -1.1], "max": [50, 50, -1], "material": "glass"},
+                {"type": "box", "min": [-50, -50, 1], "max": [50, 50, 1.1], "material": "glass"}]})";
+  return load_scene_from_string(text, "facing slabs", "");
+}
+
+// The exchange takes the newest records first (kernels/scatter.cl), so the
+// ray trees are worked depth first and what waits stays within the planned
+// pool once a level. Taking the oldest first held about 241,000 records on
+// this scene (a level of every tree at once), above that bound (174,336);
+// depth first holds about 30,000.
+TEST(Renderer, RayTreesAreWorkedDepthFirst) {
+  constexpr int kDepth = 12, kPes = 16;
+  const RenderResult r = render_with(facing_slabs(kDepth), kPes);
+  expect_balanced(r.stats);
+  const FlightPlan plan(kPes, r.stats.bank_capacity, std::size_t(r.stats.work_group_size), OPSILA_SPAWN_SLOTS(0));
+  EXPECT_GT(r.rays.secondary, 1000000u) << "the trees should be deep and wide";
+  EXPECT_LE(r.stats.waiting_peak, plan.pool * kDepth);
+  EXPECT_GT(r.stats.waiting_peak, 0u);
+  EXPECT_EQ(r.stats.throttled_rounds, 0) << "below the limit the exchange is not throttled";
+}
+
+// Beyond the waiting limit the exchange takes only the rays that end their
+// tree: the rounds change, never the bytes of the image, and no ray is lost.
+TEST(Renderer, AThrottledExchangeGivesTheSameImage) {
+  for (const Scene& s : {facing_slabs(8), test::mirror_glass_scene(48)}) {
+    const RenderResult free_run = render_with(s, 16);
+    ::setenv("OPSILA_WAITING_LIMIT", "200", 1);
+    const RenderResult held = render_with(s, 16);
+    ::unsetenv("OPSILA_WAITING_LIMIT");
+    EXPECT_EQ(free_run.stats.throttled_rounds, 0);
+    EXPECT_GT(held.stats.throttled_rounds, 0);
+    ASSERT_EQ(held.rgb.size(), free_run.rgb.size());
+    EXPECT_EQ(0, std::memcmp(held.rgb.data(), free_run.rgb.data(), held.rgb.size() * sizeof(float)));
+    EXPECT_EQ(held.item_buffer, free_run.item_buffer);
+    expect_balanced(held.stats);
+    EXPECT_EQ(held.stats.descriptors_spawned, free_run.stats.descriptors_spawned);
+  }
 }
 
 // The image is the same bit for bit on every PE count: the same facet wins

@@ -1,7 +1,8 @@
 // The SIMD exchange on its own (tests/exchange_check.h): pools with NIL
 // holes and a hot PE, SPMD outputs, banks that follow demand, caps and
-// overflow; every descriptor arrives once, whole, in source order within its
-// destination, and what does not fit waits in the next pool.
+// overflow; every descriptor arrives once, whole, in the exchange's order
+// within its destination (what ends its ray tree first, the outputs before
+// the pool), and what does not fit waits in the next pool.
 #include <gtest/gtest.h>
 
 #include "exchange_check.h"
@@ -29,19 +30,42 @@ TEST(Scatter, EveryDescriptorArrivesOnceInOrder) {
   }
 }
 
+// A pool of 3000 behind 40 SPMD work-groups' outputs, over 16 PEs.
+test::ExchangeCase outputs_and_pool(int by_block, int slots) {
+  test::ExchangeCase c;
+  c.pes = 16;
+  c.pool_len = 3000;
+  c.out_groups = 40;
+  c.group_size = 64;
+  c.spawn_slots = 4;
+  c.slots = slots;
+  c.move_by_block = by_block;
+  return c;
+}
+
 TEST(Scatter, SpmdOutputsAndPoolTogether) {
   for (int by_block : {0, 1}) {  // the GPU and the CPU move, on whatever device runs the tests
     SCOPED_TRACE(by_block ? "move by block" : "move by entry");
-    test::ExchangeCase c;
-    c.pes = 16;
-    c.pool_len = 3000;
-    c.out_groups = 40;
-    c.group_size = 64;
-    c.spawn_slots = 4;
-    c.slots = 4096;
-    c.move_by_block = by_block;
+    const test::ExchangeCase c = outputs_and_pool(by_block, 4096);
     const auto counts = test::check_exchange(runtime(), c);
     EXPECT_GT(counts[0], 0) << "the case should overflow";
+  }
+}
+
+// More wait than the frame planned for: the banks take only the rays that
+// end their tree, and when none waits the round is not held back.
+TEST(Scatter, ThrottledBanksTakeOnlyRaysThatEndTheirTree) {
+  for (int by_block : {0, 1}) {
+    SCOPED_TRACE(by_block ? "move by block" : "move by entry");
+    // More slots than the ~4400 rays that end their tree, fewer than the ~7400 in all.
+    test::ExchangeCase c = outputs_and_pool(by_block, 6000);
+    c.throttle = true;
+    const auto held = test::check_exchange(runtime(), c);
+    EXPECT_GT(held[1], 0);
+    EXPECT_LT(held[1], 6000) << "throttled, the radiance rays of levels 0 and 1 should wait";
+    c.depth = 31;  // no ray ends its tree
+    const auto full = test::check_exchange(runtime(), c);
+    EXPECT_EQ(full[1], 6000);
   }
 }
 

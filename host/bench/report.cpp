@@ -152,7 +152,7 @@ void BenchReport::analyse() {
   kernel_seconds = exchange_seconds = 0;
   for (const LaunchRecord& l : st.launches) {
     KernelTime& e = by_kernel[l.name];
-    e.launches += 1;
+    e.launches += static_cast<int>(l.launches);
     e.seconds += l.seconds;
     kernel_seconds += l.seconds;
     if (is_scatter(l.name)) exchange_seconds += l.seconds;

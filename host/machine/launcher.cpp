@@ -44,6 +44,24 @@ void Launcher::check(cl_int err, const char* what) {
                   (pending_.empty() ? std::string() : " after kernel " + describe(pending_.back())));
 }
 
+void Launcher::record(const char* name, int round, double seconds) {
+  if (sink_.size() < record_cap_) {
+    sink_.push_back({name, round, seconds});
+    return;
+  }
+  // Past the cap: into the kernel's folded record. They all lie past the
+  // cap, one per kernel name, so the search stays short.
+  auto it = std::find_if(sink_.begin() + std::ptrdiff_t(record_cap_), sink_.end(), [&](const LaunchRecord& r) {
+    return r.round == LaunchRecord::kFoldedRound && r.name == name;
+  });
+  if (it == sink_.end()) {
+    sink_.push_back({name, LaunchRecord::kFoldedRound, seconds, 1});
+    return;
+  }
+  it->seconds += seconds;
+  it->launches += 1;
+}
+
 void Launcher::harvest() {
   check(CL_SUCCESS, "collecting kernel timings");
   // Launches still running (and, in an in-order queue, all after them) stay
@@ -57,7 +75,7 @@ void Launcher::harvest() {
     cl_ulong t0 = 0, t1 = 0;
     if (p.ev.getProfilingInfo(CL_PROFILING_COMMAND_START, &t0) == CL_SUCCESS &&
         p.ev.getProfilingInfo(CL_PROFILING_COMMAND_END, &t1) == CL_SUCCESS)
-      sink_.push_back({p.name, p.round, (t1 - t0) * 1e-9});
+      record(p.name, p.round, (t1 - t0) * 1e-9);
   }
   std::vector<Pending> running(pending_.begin() + done, pending_.end());
   pending_ = std::move(running);

@@ -18,7 +18,12 @@ inline std::size_t round_up(std::size_t x, std::size_t m) { return (x + m - 1) /
 // OpenCL-profiled launch records once the queue has drained.
 class Launcher {
  public:
-  Launcher(ClRuntime& rt, std::vector<LaunchRecord>& sink) : rt_(rt), sink_(sink) {}
+  // Records kept one per launch in `sink`; past `record_cap` of them, each
+  // kernel's later launches are folded into one record
+  // (LaunchRecord::kFoldedRound), about 50 bytes a kernel.
+  static constexpr std::size_t kRecordCap = std::size_t(1) << 18;
+  Launcher(ClRuntime& rt, std::vector<LaunchRecord>& sink, std::size_t record_cap = kRecordCap)
+      : rt_(rt), sink_(sink), record_cap_(record_cap) {}
   // Enqueues `k`, after the events in `wait` when given.
   void run(cl::Kernel& k, const char* name, std::size_t global, std::size_t local, int round,
            const std::vector<cl::Event>* wait = nullptr);
@@ -39,7 +44,9 @@ class Launcher {
   };
   ClRuntime& rt_;
   std::vector<LaunchRecord>& sink_;
+  std::size_t record_cap_;
   std::vector<Pending> pending_;
+  void record(const char* name, int round, double seconds);
   std::size_t checked_ = 0;  // pending_[0, checked_) are known to have completed
 };
 

@@ -57,8 +57,13 @@ struct RenderSettings {
 // One kernel launch, named, with its OpenCL-profiled time.
 struct LaunchRecord {
   std::string name;   // e.g. "item_buffer", "spmd_phase", "scatter_move"
-  int round = -1;     // SPMD/scatter round, -1 for set-up kernels
+  int round = -1;     // SPMD/scatter round, -1 for set-up kernels, kFoldedRound (below)
   double seconds = 0; // CL_PROFILING_COMMAND_END - START
+  std::uint64_t launches = 1;  // more than one: a folded record (Launcher)
+  // Past Launcher's record cap, a kernel's later launches are folded into one
+  // record of this round: their count and total seconds, so that an endless
+  // render's records stay bounded and the per-kernel totals stay exact.
+  static constexpr int kFoldedRound = -2;
 };
 
 // A rank's part of a scene read in shares (machine/collective_partition.h):

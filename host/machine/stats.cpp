@@ -61,9 +61,11 @@ void add_launches(nlohmann::json& j, const RenderStats& s) {
   nlohmann::json launches = nlohmann::json::array();
   std::map<std::string, std::pair<std::uint64_t, double>> by_name;
   for (const LaunchRecord& launch : s.launches) {
-    launches.push_back({{"name", launch.name}, {"round", launch.round}, {"seconds", launch.seconds}});
+    nlohmann::json entry = {{"name", launch.name}, {"round", launch.round}, {"seconds", launch.seconds}};
+    if (launch.round == LaunchRecord::kFoldedRound) entry["launches"] = launch.launches;
+    launches.push_back(std::move(entry));
     auto& summary = by_name[launch.name];
-    summary.first += 1;
+    summary.first += launch.launches;
     summary.second += launch.seconds;
   }
   j["launches"] = std::move(launches);

@@ -21,7 +21,8 @@ namespace opsila {
 // mrays_per_s, levels [{level, totals{...}, pes[{...}]}],
 // descriptors {spawned, finished, forwards, overflow_deferrals, waiting_peak,
 //   throttled_rounds},
-// balanced (spawned == finished), launches [{name, round, seconds}],
+// balanced (spawned == finished), launches [{name, round, seconds}] (past
+// Launcher::kRecordCap, one per kernel with round -2 and its "launches"),
 // launch_summary {name: {count, total_seconds}},
 // memory {bank_bytes[], bank_bytes_max, bank_bytes_mean, global_bytes, replicated_bytes},
 // traffic [level][src][dst]; with several MPI ranks, mpi {...} (ranks_json).

@@ -417,6 +417,30 @@ TEST(LaunchFaults, CleanLaunchesPassAndErrorsNameTheLastKernel) {
   EXPECT_EQ(records[0].name, "scatter_plan");
 }
 
+// An endless render launches without end: past its cap the launcher folds
+// each kernel's later launches into one record, their count and seconds.
+TEST(LaunchRecords, PastTheCapEachKernelsLaunchesAreFolded) {
+  ClRuntime rt(test_device(), plain_options());
+  PlanKernel plan(rt);
+  std::vector<LaunchRecord> records;
+  Launcher launch(rt, records, 3);
+  for (int i = 0; i < 10; ++i) launch.run(plan.kernel, i % 2 ? "odd" : "even", 1, 1, i);
+  launch.check(rt.queue().finish(), "clFinish");
+  launch.harvest();
+  ASSERT_EQ(records.size(), 5u);
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_EQ(records[i].round, i);
+    EXPECT_EQ(records[i].launches, 1u);
+  }
+  EXPECT_EQ(records[3].name, "odd");  // rounds 3, 5, 7, 9
+  EXPECT_EQ(records[3].round, LaunchRecord::kFoldedRound);
+  EXPECT_EQ(records[3].launches, 4u);
+  EXPECT_EQ(records[4].name, "even");  // rounds 4, 6, 8
+  EXPECT_EQ(records[4].round, LaunchRecord::kFoldedRound);
+  EXPECT_EQ(records[4].launches, 3u);
+  EXPECT_GE(records[3].seconds, 0.0);
+}
+
 TEST(LaunchFaults, AnEnqueueThatFailsNamesTheKernel) {
   ClRuntime rt(test_device(), plain_options());
   cl::Kernel k = rt.kernel("scatter_plan");  // no arguments set

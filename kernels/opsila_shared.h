@@ -118,7 +118,6 @@ typedef std::uint32_t opsila_u32;
 #define OPSILA_STREAM_KEY(dest, meta, depth)                                                        \
   ((dest) < 0 ? -1                                                                                  \
               : 2 * (dest) + ((OPSILA_META_KIND(meta) != OPSILA_KIND_SHADOW && OPSILA_META_LEVEL(meta) + 1 < (depth)) ? 1 : 0))
-#define OPSILA_STREAM_PE(key) ((key) >> 1)
 
 /* Statistics counters per (level, PE), declared once, in index order:
  * X(NAME, "JSON name", SUM). The kernels count OPSILA_STAT_NAME; SUM says

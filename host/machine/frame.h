@@ -70,8 +70,8 @@ struct Renderer::Machine {
   int fault_round = -1;
   FlightPlan flight{1, 1, 1, 1};
   // Descriptors that may wait before the exchange takes only the rays that
-  // end their tree (kernels/scatter.cl): 0, the planned pool once a level
-  // (depth first, about what the trees hold); OPSILA_WAITING_LIMIT sets it.
+  // end their tree (kernels/scatter.cl): OPSILA_WAITING_LIMIT, else the
+  // planned pool once a level (depth first, about what the trees hold).
   std::size_t waiting_limit = 0;
   FrameParams fp{};
   RenderStats prepared;  // what the prepare step knows: banks, n, work-group size

@@ -36,7 +36,7 @@ Renderer::Machine::Machine(const Scene& scene, PreparedBanks banks, const Render
   progress = settings.progress;
   if (const auto k = env_hook_number(EnvHook::fault_round, 0, 999999999, "a round number"))
     fault_round = static_cast<int>(*k);
-  if (const auto w = env_hook_number(EnvHook::waiting_limit, 0, std::uint64_t(1) << 40, "a descriptor count"))
+  if (const auto w = env_hook_number(EnvHook::waiting_limit, 1, std::uint64_t(1) << 40, "a descriptor count"))
     waiting_limit = static_cast<std::size_t>(*w);
 
   measure = settings.measure_cost;
@@ -73,6 +73,9 @@ Renderer::Machine::Machine(const Scene& scene, PreparedBanks banks, const Render
   n = choose_bank_capacity(bs, settings);
   fp.bank_capacity = n;
   flight = FlightPlan(G, n, spmd_wg, S);
+  // Depth first, what waits is about the planned pool once a level of the
+  // ray trees; beyond that the exchange throttles (frame_scatter.cpp).
+  if (waiting_limit == 0) waiting_limit = flight.pool * std::size_t(std::max(depth, 1));
   buffers = buffer_table(bs, flight);
   plan = plan_of(buffers);
 

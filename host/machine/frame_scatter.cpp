@@ -20,12 +20,10 @@ ScatterPass::Args Renderer::Machine::exchange_args(const Frame& f) const {
   sa.next_pool = &next_pool;
   sa.group_begin = group.begin;
   sa.group_end = group.end;
-  // Depth first, what waits is about the planned pool once a level of the
-  // ray trees; beyond that the exchange takes only the rays that end their
-  // tree (kernels/scatter.cl), so that what waits stays bounded whatever
-  // the depth and the scene. Below it, rounds stay full.
-  const std::size_t limit = waiting_limit > 0 ? waiting_limit : flight.pool * std::size_t(std::max(depth, 1));
-  sa.throttle = f.pool_len > limit;
+  // Beyond the waiting limit the exchange takes only the rays that end their
+  // tree (kernels/scatter.cl), so that what waits stays bounded whatever the
+  // depth and the scene. Below it, rounds stay full.
+  sa.throttle = f.pool_len > waiting_limit;
   return sa;
 }
 

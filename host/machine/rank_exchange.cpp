@@ -165,7 +165,7 @@ std::size_t RankExchange::finish(const DescriptorSet& next, DescriptorSet& into,
              "clEnqueueCopyBuffer(waiting records)");
     cl_check(q.enqueueCopyBuffer(next.dests, into.dests, lo_ * sizeof(cl_int), in * sizeof(cl_int),
                                  waiting_ * sizeof(cl_int)),
-             "clEnqueueCopyBuffer(waiting records' destinations)");
+             "clEnqueueCopyBuffer(waiting records' sort keys)");
   }
   staging_seconds.back() += since(t0);
   return len;

@@ -44,6 +44,15 @@ using PrimaryKernel = KernelBinding<FrameParams, Buf, Buf, Buf, int, int, float,
 // statistics, traffic and its levels, and the pilots' cluster work.
 using SpmdKernel = KernelBinding<FrameParams, Buf, Buf, Buf, int, Buf, Buf, Buf, Buf, SurfaceBuffers, DescriptorSet,
                                  Buf, Buf, Buf, Buf, DescriptorSet, Buf, Buf, Buf, Buf, int, Buf, Buf, Buf>;
+// The three, from one program (frame_prepare.cpp).
+struct Set {
+  ItemBufferKernel item;
+  PrimaryKernel primary;
+  SpmdKernel spmd;
+  bool built = false;
+  Set() = default;
+  Set(ClRuntime& rt, KernelProgram program);
+};
 }  // namespace frame_kernels
 
 // Everything the machine keeps between frames, and the stages of a frame.
@@ -77,9 +86,15 @@ struct Renderer::Machine {
   RenderStats prepared;  // what the prepare step knows: banks, n, work-group size
   ShareFigures share;    // a scene read in shares: what the collective partition did here
 
-  frame_kernels::ItemBufferKernel k_item;
-  frame_kernels::PrimaryKernel k_primary;
-  frame_kernels::SpmdKernel k_spmd;
+  // The frame's kernels: from the program that counts the work (--stats,
+  // the bench's counted frame, the pilots' measure program), and from the
+  // one that counts only rays (a plain render, the bench's timed frames).
+  // `counting` picks this frame's set; a machine prepared with
+  // RenderSettings::switch_counting holds both.
+  frame_kernels::Set work_kernels, ray_kernels;
+  bool counting = true;
+  int counted_traffic_levels = 0;  // traffic_levels of a counting frame (the buffer's size)
+  frame_kernels::Set& kernels() { return counting ? work_kernels : ray_kernels; }
   std::unique_ptr<ScatterPass> scatter;
   cl::Buffer b_tris, b_nodes, b_clusters, b_route, b_pes, b_mats, b_lights, b_rects;
   SurfaceBuffers surface;  // vertex attributes and texture copies of the banks

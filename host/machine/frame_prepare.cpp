@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cstdint>
 #include <cstdlib>
 #include <stdexcept>
 #include <string>
@@ -40,14 +41,13 @@ Renderer::Machine::Machine(const Scene& scene, PreparedBanks banks, const Render
     waiting_limit = static_cast<std::size_t>(*w);
 
   measure = settings.measure_cost;
-  // --stats and the bench count the work; a plain render counts only rays.
-  const KernelProgram program = measure                ? KernelProgram::measure
-                                : settings.count_work ? KernelProgram::render
-                                                      : KernelProgram::render_uncounted;
-  rt.program(program);  // compile before anything is timed
-  k_item = decltype(k_item)(rt, "item_buffer", program);
-  k_primary = decltype(k_primary)(rt, "build_primary", program);
-  k_spmd = decltype(k_spmd)(rt, "spmd_phase", program);
+  // --stats and the bench's counted frame count the work; a plain render
+  // and the bench's timed frames count only rays. Compiled before anything
+  // is timed.
+  counting = measure || settings.count_work;
+  if (counting || settings.switch_counting)
+    work_kernels = frame_kernels::Set(rt, measure ? KernelProgram::measure : KernelProgram::render);
+  if (!counting || settings.switch_counting) ray_kernels = frame_kernels::Set(rt, KernelProgram::render_uncounted);
   scatter = std::make_unique<ScatterPass>(rt, P);
   choose_work_groups();
   cap = settings.work_groups_per_pe > 0 ? settings.work_groups_per_pe * static_cast<int>(spmd_wg) : 0;
@@ -62,9 +62,11 @@ Renderer::Machine::Machine(const Scene& scene, PreparedBanks banks, const Render
   auto upload = std::make_unique<StageClock>(PrepareStage::upload);
   if (measure) ncost = std::size_t(depth) * bs.clusters.size();
   S = OPSILA_SPAWN_SLOTS(static_cast<int>(bs.lights.size()));
-  traffic_levels = settings.count_work && P <= OPSILA_TRAFFIC_MAX_PES ? depth : 0;
+  counted_traffic_levels =
+      (settings.count_work || settings.switch_counting) && P <= OPSILA_TRAFFIC_MAX_PES ? depth : 0;
+  traffic_levels = counting ? counted_traffic_levels : 0;
   nstats = std::size_t(OPSILA_MAX_DEPTH) * P * OPSILA_STAT_COUNT;
-  ntraffic = std::max<std::size_t>(1, std::size_t(traffic_levels) * P * P);
+  ntraffic = std::max<std::size_t>(1, std::size_t(counted_traffic_levels) * P * P);
   fp = frame_params(scene, bs, 0);
   fp.group_begin = group.begin;
   fp.group_end = group.end;
@@ -132,22 +134,36 @@ int Renderer::Machine::choose_bank_capacity(const BankedScene& bs, const RenderS
 // Work-group sizes: queried, never assumed. The SPMD phase's (one
 // descriptor per work-item), and the item buffer's square tile of pixels (as
 // large as the kernel allows up to 8x8).
+// A machine holding both sets takes sizes that both allow, so that its
+// frames differ only in what they count.
 void Renderer::Machine::choose_work_groups() {
   const cl::Device& dev = rt.device().device;
-  std::size_t allowed = 0, multiple = 0;
-  cl_check(k_spmd.kernel().getWorkGroupInfo(dev, CL_KERNEL_WORK_GROUP_SIZE, &allowed),
-           "clGetKernelWorkGroupInfo(spmd_phase)");
-  cl_check(k_spmd.kernel().getWorkGroupInfo(dev, CL_KERNEL_PREFERRED_WORK_GROUP_SIZE_MULTIPLE, &multiple),
-           "clGetKernelWorkGroupInfo(spmd_phase)");
-  spmd_wg = std::min<std::size_t>(allowed, rt.group_size());  // 64 unless asked (ClRuntime::group_size)
+  std::size_t spmd_allowed = SIZE_MAX, item_allowed = SIZE_MAX, multiple = 0;
+  for (frame_kernels::Set* k : {&work_kernels, &ray_kernels}) {
+    if (!k->built) continue;
+    std::size_t allowed = 0;
+    cl_check(k->spmd.kernel().getWorkGroupInfo(dev, CL_KERNEL_WORK_GROUP_SIZE, &allowed),
+             "clGetKernelWorkGroupInfo(spmd_phase)");
+    spmd_allowed = std::min(spmd_allowed, allowed);
+    cl_check(k->spmd.kernel().getWorkGroupInfo(dev, CL_KERNEL_PREFERRED_WORK_GROUP_SIZE_MULTIPLE, &multiple),
+             "clGetKernelWorkGroupInfo(spmd_phase)");
+    cl_check(k->item.kernel().getWorkGroupInfo(dev, CL_KERNEL_WORK_GROUP_SIZE, &allowed),
+             "clGetKernelWorkGroupInfo(item_buffer)");
+    item_allowed = std::min(item_allowed, allowed);
+  }
+  spmd_wg = std::min<std::size_t>(spmd_allowed, rt.group_size());  // 64 unless asked (ClRuntime::group_size)
   if (multiple > 0 && spmd_wg >= multiple) spmd_wg = spmd_wg / multiple * multiple;
   spmd_wg = std::max<std::size_t>(1, spmd_wg);
   prepared.work_group_size = spmd_wg;
 
-  cl_check(k_item.kernel().getWorkGroupInfo(dev, CL_KERNEL_WORK_GROUP_SIZE, &allowed),
-           "clGetKernelWorkGroupInfo(item_buffer)");
   tile_w = OPSILA_ITEM_TILE_SIDE;
-  while (tile_w > 1 && std::size_t(tile_w) * tile_w > allowed) tile_w /= 2;
+  while (tile_w > 1 && std::size_t(tile_w) * tile_w > item_allowed) tile_w /= 2;
 }
+
+frame_kernels::Set::Set(ClRuntime& rt, KernelProgram program)
+    : item(rt, "item_buffer", program),
+      primary(rt, "build_primary", program),
+      spmd(rt, "spmd_phase", program),
+      built(true) {}
 
 }  // namespace opsila

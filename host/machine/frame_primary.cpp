@@ -27,10 +27,10 @@ void Renderer::Machine::primary_descriptors(Launcher& launch, Frame& f, int roun
     pool = bigger;
   }
   if (f.pool_len + count > pool.capacity) count = pool.capacity - f.pool_len;
-  k_primary.bind(fp, b_pes, b_item_tri, b_item_t, static_cast<int>(f.next_pixel), static_cast<int>(count),
+  kernels().primary.bind(fp, b_pes, b_item_tri, b_item_t, static_cast<int>(f.next_pixel), static_cast<int>(count),
                  offsets[std::size_t(f.sample % spp_k)], offsets[std::size_t(f.sample / spp_k)],
                  static_cast<int>(f.pool_len), pool, b_accum, b_hits);
-  launch.run(k_primary.kernel(), "build_primary", round_up(count, 64), 0, round);
+  launch.run(kernels().primary.kernel(), "build_primary", round_up(count, 64), 0, round);
   f.next_pixel += count;
   f.pool_len += count;
 }

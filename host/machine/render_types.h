@@ -52,6 +52,10 @@ struct RenderSettings {
   // leaves it out (OPSILA_COUNT_WORK=0); the image, the ray counts and the
   // spawned and finished descriptors are the same.
   bool count_work = true;
+  // Prepare both programs, so that Renderer::count_work can switch between
+  // them from frame to frame (the bench: timed frames as a plain render
+  // runs them, then one counted frame for the work figures).
+  bool switch_counting = false;
 };
 
 // One kernel launch, named, with its OpenCL-profiled time.

@@ -5,6 +5,7 @@
 #include "machine/renderer.h"
 
 #include <chrono>
+#include <stdexcept>
 #include <string>
 
 #include "core/progress.h"
@@ -28,6 +29,14 @@ Renderer::Renderer(const Scene& scene, PreparedBanks banks, const RenderSettings
 Renderer::~Renderer() = default;
 
 // One frame, as the paper runs it.
+void Renderer::count_work(bool on) {
+  Machine& m = *m_;
+  if (m.measure || !(on ? m.work_kernels : m.ray_kernels).built)
+    throw std::logic_error("Renderer::count_work: the machine was not prepared to switch (switch_counting)");
+  m.counting = on;
+  m.traffic_levels = on ? m.counted_traffic_levels : 0;
+}
+
 RenderResult Renderer::render() {
   Machine& m = *m_;
   RenderResult result;

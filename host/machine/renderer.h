@@ -47,6 +47,11 @@ class Renderer {
   Renderer(const Renderer&) = delete;
   Renderer& operator=(const Renderer&) = delete;
   RenderResult render();
+  // From the next frame on, count the work (tests, forwards, PE x PE
+  // traffic) or only the rays (RenderSettings::count_work); the image and
+  // the ray counts are the same. Needs RenderSettings::switch_counting, or
+  // the way the machine was prepared (std::logic_error otherwise).
+  void count_work(bool on);
   // After render() of a Renderer prepared with measure_cost: each cluster's
   // tests per level, [level * clusters + cluster], summed over the ranks
   // (machine/pilot.h spreads them over the facets); empty otherwise.

@@ -384,6 +384,10 @@ TEST(Bench, QuickRunWritesEveryJsonKey) {
   EXPECT_EQ(rj["traffic"].size(), 3u);
   EXPECT_GE(rj["exchange_share"].get<double>(), 0.0);
   EXPECT_TRUE(rj["deterministic"].get<bool>());
+  // The work is counted (in a frame of its own: the timed frames count
+  // only rays, as a plain render does) and reported beside the times.
+  EXPECT_GT(rj["work"]["triangle_tests"].get<std::uint64_t>(), 0u);
+  EXPECT_GT(rj["work"]["box_tests"].get<std::uint64_t>(), 0u);
   // Destination choice is counted: the default routes on cluster boxes.
   EXPECT_EQ(j["routing"], "boxes");
   EXPECT_GT(rj["work"]["route_tests"].get<std::uint64_t>(), 0u);

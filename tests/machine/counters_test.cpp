@@ -6,12 +6,14 @@
 #include <gtest/gtest.h>
 
 #include <cstdint>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "core/scene.h"
 #include "machine/counters.h"
 #include "machine/descriptors.h"
+#include "machine/prepare_banks.h"
 #include "machine/renderer.h"
 #include "opsila_shared.h"
 #include "test_device.h"
@@ -108,6 +110,40 @@ TEST(Counters, WorkCountersLeftOutChangeNothingElse) {
     EXPECT_FALSE(a.stats.traffic.empty()) << pes;
     EXPECT_TRUE(b.stats.traffic.empty()) << pes;
   }
+}
+
+// The bench's machine: prepared once with both programs, it switches
+// between them frame by frame. Each frame is the frame a machine prepared
+// for that program alone gives: counters and traffic included, the image
+// and ray counts the same either way. A machine prepared for one program
+// refuses to switch.
+TEST(Counters, AMachineSwitchesBetweenCountingAndNot) {
+  const Scene s = test::mirror_glass_scene(64, 5);
+  for (int pes : {1, 16}) {
+    RenderSettings counted;
+    counted.num_pes = pes;
+    RenderSettings plain = counted;
+    plain.count_work = false;
+    const RenderResult a = render(s, counted, test::shared_runtime());
+    const RenderResult b = render(s, plain, test::shared_runtime());
+    RenderSettings both = plain;
+    both.switch_counting = true;
+    Renderer machine(s, prepare_banks(s, both, test::shared_runtime()), both, test::shared_runtime());
+    for (bool on : {false, true, false, true}) {
+      machine.count_work(on);
+      const RenderResult r = machine.render();
+      const RenderResult& want = on ? a : b;
+      EXPECT_EQ(r.rgb, want.rgb) << pes << " " << on;
+      EXPECT_TRUE(r.rays.same_rays(want.rays)) << pes << " " << on;
+      EXPECT_EQ(r.stats.counters, want.stats.counters) << pes << " " << on;
+      EXPECT_EQ(r.stats.traffic, want.stats.traffic) << pes << " " << on;
+      EXPECT_EQ(r.stats.forwards, want.stats.forwards) << pes << " " << on;
+    }
+  }
+  Renderer fixed(s, prepare_banks(s, RenderSettings(), test::shared_runtime()), RenderSettings(),
+                 test::shared_runtime());
+  EXPECT_NO_THROW(fixed.count_work(true));
+  EXPECT_THROW(fixed.count_work(false), std::logic_error);
 }
 
 }  // namespace

@@ -314,6 +314,19 @@ ClRuntime::ClRuntime(const DeviceEntry& device, const ClRuntimeOptions& options)
     throw ClError(message);
   }
 
+  // The specular power: PoCL's float pow costs about 80 ns a call on this
+  // project's CPUs and is 1 ulp off in about 9% of calls on [0.5, 1];
+  // exp2(Ns log2 x) in doubles takes about 16 ns and rounds correctly
+  // (docs/BENCHMARKS.md). A GPU may run doubles at a fraction of its float
+  // rate, so it keeps its own pow unless asked.
+  const bool has_fp64 = (" " + caps.extensions + " ").find(" cl_khr_fp64 ") != std::string::npos;
+  using SpecularPow = ClRuntimeOptions::SpecularPow;
+  if (options.specular_pow == SpecularPow::fp64 && !has_fp64)
+    throw ClError("device " + device_.device_name + " (" + device_.platform_name +
+                  ") has no double precision (cl_khr_fp64) for the specular power in doubles");
+  pow_fp64_ = options.specular_pow == SpecularPow::fp64 ||
+              (options.specular_pow == SpecularPow::automatic && has_fp64 && !device_.is_gpu);
+
   source_ = options.kernel_source;
   source_origin_ = source_.empty() ? "embedded kernels"
                                    : (options.kernel_source_origin.empty() ? "kernel source given by the caller"
@@ -371,9 +384,11 @@ cl::Program& ClRuntime::program(KernelProgram which) {
   program = cl::Program(context_, source, false, &err);
   cl_check(err, "clCreateProgramWithSource");
   // No fast-math: every device must reproduce the reference's arithmetic.
-  err = program.build({device_.device}, which == KernelProgram::measure            ? "-cl-std=CL1.2 -DOPSILA_MEASURE_COST=1"
-                                       : which == KernelProgram::render_uncounted ? "-cl-std=CL1.2 -DOPSILA_COUNT_WORK=0"
-                                                                                  : "-cl-std=CL1.2");
+  std::string options = "-cl-std=CL1.2";
+  if (which == KernelProgram::measure) options += " -DOPSILA_MEASURE_COST=1";
+  if (which == KernelProgram::render_uncounted) options += " -DOPSILA_COUNT_WORK=0";
+  if (pow_fp64_) options += " -DOPSILA_POW_FP64=1";
+  err = program.build({device_.device}, options.c_str());
   if (err != CL_SUCCESS) {
     std::string log;
     program.getBuildInfo(device_.device, CL_PROGRAM_BUILD_LOG, &log);

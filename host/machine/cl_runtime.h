@@ -66,6 +66,12 @@ struct ClRuntimeOptions {
   // Non-zero: the work-group size the kernels ask for instead of 64 (a power
   // of two up to 1024), still capped by what each kernel allows.
   std::size_t group_size = 0;
+  // How the kernels raise the specular base to Ns (kernels/lib/shading.cl,
+  // OPSILA_POW_FP64): automatic takes double precision on a CPU device
+  // with cl_khr_fp64 and the device's float pow elsewhere; fp64 is refused
+  // (ClError) by a device without doubles.
+  enum class SpecularPow { automatic, fp32, fp64 };
+  SpecularPow specular_pow = SpecularPow::automatic;
   // Honour OPSILA_KERNEL_SOURCE=path (a file replacing the embedded kernels),
   // OPSILA_DEVICE_MEMORY_LIMIT=bytes and OPSILA_GROUP_SIZE=N, read when the
   // runtime is created.
@@ -97,6 +103,9 @@ class ClRuntime {
   // wavefront; or ClRuntimeOptions::group_size / OPSILA_GROUP_SIZE, to check
   // the kernels with GPU-sized groups (.ci/oclgrind.sh runs 256).
   std::size_t group_size() const { return group_size_; }
+  // Whether the kernels take the specular power in double precision
+  // (ClRuntimeOptions::specular_pow).
+  bool specular_pow_fp64() const { return pow_fp64_; }
   cl_ulong max_alloc() const { return max_alloc_; }
   // Device bytes asked for through device_buffer (machine/descriptors.h)
   // since the runtime was made: what the memory plan is checked against.
@@ -121,6 +130,7 @@ class ClRuntime {
   cl::Program programs_[4];
   bool built_[4] = {false, false, false, false};
   std::size_t group_size_ = 64;
+  bool pow_fp64_ = false;
   cl_ulong max_alloc_ = 0, global_mem_ = 0, limit_ = 0;
   std::uint64_t allocated_ = 0;
   std::map<std::string, std::uint64_t> by_name_;

@@ -110,7 +110,9 @@ RankReport Renderer::Machine::rank_report(const RenderStats& st, double seconds,
                            [&](const auto& e) { return e.first == l.name; });
     if (it == r.kernel_seconds.end()) it = r.kernel_seconds.insert(it, {l.name, 0.0});
     it->second += l.seconds;
-    if (l.name == "spmd_phase" && l.round >= 0 && std::size_t(l.round) < spmd.size()) spmd[l.round] += l.seconds;
+    // Rounds past the exchange's cap share its last row (keep_round).
+    if (l.name == "spmd_phase" && l.round >= 0 && !spmd.empty())
+      spmd[std::min(std::size_t(l.round), spmd.size() - 1)] += l.seconds;
   }
   // The MPI part runs while the device runs the SPMD phase; the staging
   // (reading back, writing the received records) overlaps nothing.

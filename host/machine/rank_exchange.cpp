@@ -93,8 +93,15 @@ void relay_share(Ranks& ranks, ClRuntime& rt, const ItemBuffers& b, std::size_t 
   if (ranks.rank() != last) write_states(rt, b, 0, state);
 }
 
-RankExchange::RankExchange(ClRuntime& rt, Ranks& ranks, const PeGroup& group, int num_pes, int depth)
-    : rt_(rt), ranks_(ranks), group_(group), num_pes_(num_pes), depth_(depth), totals_(num_pes) {}
+RankExchange::RankExchange(ClRuntime& rt, Ranks& ranks, const PeGroup& group, int num_pes, int depth,
+                           std::size_t round_cap)
+    : rt_(rt),
+      ranks_(ranks),
+      group_(group),
+      num_pes_(num_pes),
+      depth_(depth),
+      round_cap_(std::max<std::size_t>(1, round_cap)),
+      totals_(num_pes) {}
 
 void RankExchange::reset() {
   sent.clear();
@@ -105,8 +112,8 @@ void RankExchange::reset() {
 
 void RankExchange::start(const cl::Buffer& pe_total, const DescriptorSet& next, std::size_t waiting) {
   const auto t0 = std::chrono::steady_clock::now();
-  staging_seconds.push_back(0);
-  mpi_seconds.push_back(0);
+  keep_round(staging_seconds, 0.0, round_cap_);
+  keep_round(mpi_seconds, 0.0, round_cap_);
   cl_check(rt_.queue().enqueueReadBuffer(pe_total, CL_TRUE, 0, totals_.size() * sizeof(cl_int), totals_.data()),
            "clEnqueueReadBuffer(exchange totals)");
   // [bound for lower ranks | this group's waiting | bound for higher ranks]
@@ -145,8 +152,8 @@ void RankExchange::exchange() {
   // Records are sent as they lie, in destination-rank order; each source's
   // arrive in rank order, each in its own (stable) order.
   std::vector<std::uint64_t> got = ranks_.all_to_all(send_, send_counts_, DescriptorSet::kBytes, recv_);
-  sent.push_back(send_counts_);
-  received.push_back(got);
+  keep_round(sent, send_counts_, round_cap_);
+  keep_round(received, got, round_cap_);
   mpi_seconds.back() += since(t1);
 }
 

@@ -13,6 +13,7 @@
 
 #include <cstdint>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "machine/cl_runtime.h"
@@ -39,10 +40,33 @@ void relay_send(Ranks& ranks, ClRuntime& rt, const ItemBuffers& b, std::size_t b
 // rank gets its hits (to build the primary descriptors of its PEs).
 void relay_share(Ranks& ranks, ClRuntime& rt, const ItemBuffers& b, std::size_t npix);
 
+// One round's figures kept per round for the first `cap` rounds of a
+// frame; later rounds are added into the last kept one, so that an endless
+// render's records stay bounded and every sum over the rounds stays exact.
+template <typename Row>
+void keep_round(std::vector<Row>& rounds, const Row& row, std::size_t cap) {
+  if (rounds.size() < cap || rounds.empty()) {
+    rounds.push_back(row);
+    return;
+  }
+  Row& last = rounds.back();
+  if constexpr (std::is_arithmetic_v<Row>) {
+    last += row;
+  } else {
+    if (last.size() < row.size()) last.resize(row.size());
+    for (std::size_t i = 0; i < row.size(); ++i) last[i] += row[i];
+  }
+}
+
 class RankExchange {
  public:
+  // Rounds whose figures are kept one by one (keep_round): 2^16, some
+  // 16 x ranks + 16 bytes each, far more rounds than any finite scene of
+  // this repository takes.
+  static constexpr std::size_t kRoundCap = std::size_t(1) << 16;
   // depth: the frame's, for the received records' sort keys.
-  RankExchange(ClRuntime& rt, Ranks& ranks, const PeGroup& group, int num_pes, int depth);
+  RankExchange(ClRuntime& rt, Ranks& ranks, const PeGroup& group, int num_pes, int depth,
+               std::size_t round_cap = kRoundCap);
   // After the exchange's move (before the SPMD launch): `next` holds
   // `waiting` records per destination PE in PE order (other groups' PEs had
   // no bank here, so all of theirs waits). Reads the per-PE totals and
@@ -56,16 +80,19 @@ class RankExchange {
   std::size_t finish(const DescriptorSet& next, DescriptorSet& into, std::size_t spare);
   std::uint64_t waiting() const { return waiting_; }  // own records that found no bank slot
   void reset();  // a new frame: forget the rounds' records
-  std::vector<std::vector<std::uint64_t>> sent, received;  // [round][rank]
-  // Host wall time per round: staging (reading back, writing the received
-  // records) and inside MPI (Alltoall + Alltoallv).
+  // [round][rank]; past round_cap rounds, the last row sums the rest.
+  std::vector<std::vector<std::uint64_t>> sent, received;
+  // Host wall time per round (the same rows): staging (reading back,
+  // writing the received records) and inside MPI (Alltoall + Alltoallv).
   std::vector<double> staging_seconds, mpi_seconds;
+  std::size_t round_cap() const { return round_cap_; }
 
  private:
   ClRuntime& rt_;
   Ranks& ranks_;
   PeGroup group_;
   int num_pes_, depth_;
+  std::size_t round_cap_;
   std::vector<cl_int> totals_;
   std::uint64_t lo_ = 0, waiting_ = 0;
   std::vector<std::uint64_t> send_counts_;

@@ -21,6 +21,9 @@
 #include <vector>
 
 #include "machine/descriptors.h"
+#include "machine/pe_group.h"
+#include "machine/rank_exchange.h"
+#include "machine/ranks.h"
 #include "core/image_io.h"
 #include "opsila_shared.h"
 #include "machine/renderer.h"
@@ -439,6 +442,59 @@ TEST(LaunchRecords, PastTheCapEachKernelsLaunchesAreFolded) {
   EXPECT_EQ(records[4].round, LaunchRecord::kFoldedRound);
   EXPECT_EQ(records[4].launches, 3u);
   EXPECT_GE(records[3].seconds, 0.0);
+}
+
+// The rank exchange's per-round figures: kept one by one up to the cap,
+// then added into the last row, so every sum over the rounds stays exact.
+TEST(ExchangeRecords, PastTheCapRoundsAreAddedIntoTheLastRow) {
+  std::vector<std::vector<std::uint64_t>> rows;
+  std::vector<double> seconds;
+  std::vector<std::uint64_t> total(3, 0);
+  double total_seconds = 0;
+  for (std::uint64_t k = 0; k < 10; ++k) {
+    const std::vector<std::uint64_t> row = {k, 10 * k, 100 * k};
+    keep_round(rows, row, 3);
+    keep_round(seconds, 0.5 * double(k), 3);
+    for (int i = 0; i < 3; ++i) total[i] += row[i];
+    total_seconds += 0.5 * double(k);
+  }
+  ASSERT_EQ(rows.size(), 3u);
+  ASSERT_EQ(seconds.size(), 3u);
+  EXPECT_EQ(rows[0], (std::vector<std::uint64_t>{0, 0, 0}));
+  EXPECT_EQ(rows[1], (std::vector<std::uint64_t>{1, 10, 100}));
+  EXPECT_EQ(rows[2], (std::vector<std::uint64_t>{44, 440, 4400}));  // rounds 2 .. 9
+  std::vector<std::uint64_t> sum(3, 0);
+  for (const auto& r : rows)
+    for (int i = 0; i < 3; ++i) sum[i] += r[i];
+  EXPECT_EQ(sum, total);
+  EXPECT_DOUBLE_EQ(seconds[0] + seconds[1] + seconds[2], total_seconds);
+}
+
+// A rank exchange run for more rounds than its cap holds that many rows,
+// its four per-round tables alike.
+TEST(ExchangeRecords, AnExchangeKeepsAtMostItsCapOfRounds) {
+  ClRuntime rt(test_device(), plain_options());
+  const int pes = 4;
+  PeGroup one;
+  one.begin = 0;
+  one.end = pes;
+  RankExchange x(rt, Ranks::world(), one, pes, 5, 3);
+  cl::Buffer totals = device_buffer(rt, pes * sizeof(cl_int), "test totals");
+  const std::vector<cl_int> none(pes, 0);
+  cl_check(rt.queue().enqueueWriteBuffer(totals, CL_TRUE, 0, pes * sizeof(cl_int), none.data()), "write totals");
+  DescriptorSet next, into;
+  next.allocate(rt, 16, "test next");
+  for (int round = 0; round < 10; ++round) {
+    x.start(totals, next, 0);
+    x.exchange();
+    x.finish(next, into, 1);
+  }
+  EXPECT_EQ(x.sent.size(), 3u);
+  EXPECT_EQ(x.received.size(), 3u);
+  EXPECT_EQ(x.staging_seconds.size(), 3u);
+  EXPECT_EQ(x.mpi_seconds.size(), 3u);
+  x.reset();
+  EXPECT_TRUE(x.sent.empty());
 }
 
 TEST(LaunchFaults, AnEnqueueThatFailsNamesTheKernel) {

@@ -11,6 +11,7 @@
 
 #include "core/util.h"
 #include "input/obj_loader.h"
+#include "input/obj_text.h"
 
 namespace opsila {
 
@@ -214,6 +215,17 @@ void check_off(const std::string& text, std::size_t file_bytes, const std::strin
 // Binary STL: 80 bytes of header, a 32-bit facet count, 50 bytes a facet.
 // The importer takes a file whose size is exactly that as binary even when
 // it starts with "solid", as here; anything else starting so is text.
+// What the importer's number reader (text STL) starts a number with: an
+// optional sign, then a digit, a point and a digit, or 'nan' or 'inf' (any
+// case; caught later as not finite).
+bool stl_number_start(std::string_view w) {
+  std::size_t i = w.size() > 0 && (w[0] == '-' || w[0] == '+') ? 1 : 0;
+  const auto digit = [&](std::size_t k) { return k < w.size() && w[k] >= '0' && w[k] <= '9'; };
+  if (digit(i) || (i < w.size() && w[i] == '.' && digit(i + 1))) return true;
+  const std::string rest = lower(std::string(w.substr(i, 3)));
+  return rest == "nan" || rest == "inf";
+}
+
 void check_stl(const std::string& bytes, const std::string& name) {
   const std::uint64_t size = bytes.size();
   std::uint64_t count = 0;
@@ -229,16 +241,37 @@ void check_stl(const std::string& bytes, const std::string& name) {
                        std::to_string((size - 84) / 50) + " (truncated file)");
     return;
   }
-  // Text: every facet ends ("endfacet") and so does the last solid.
-  std::size_t at = 0;
+  // Text: every facet ends ("endfacet") and so does the last solid; the
+  // three values after 'vertex' and after 'normal' are numbers as the
+  // importer reads them (its own message names no line). A solid's name,
+  // the rest of its line, may hold any word.
+  std::size_t at = 0, counted = 0;
+  unsigned long long line = 1;
+  const auto line_at = [&](std::size_t pos) {
+    line += std::count(bytes.begin() + std::ptrdiff_t(counted), bytes.begin() + std::ptrdiff_t(pos), '\n');
+    counted = pos;
+    return line;
+  };
   std::string_view w;
   unsigned long long facets = 0;
   bool in_facet = false, in_solid = false;
   while (next_word(bytes, at, w)) {
-    if (w == "solid") in_solid = true;
-    else if (w == "endsolid") in_solid = false;
-    else if (w == "facet") in_facet = true, ++facets;
-    else if (w == "endfacet") in_facet = false;
+    if (w == "solid" || w == "endsolid") {
+      in_solid = w == "solid";
+      at = std::min(bytes.find('\n', at), bytes.size());
+    } else if (w == "facet") {
+      in_facet = true, ++facets;
+    } else if (w == "endfacet") {
+      in_facet = false;
+    } else if (w == "vertex" || w == "normal") {
+      const std::string key(w);
+      for (int k = 0; k < 3; ++k) {
+        if (!next_word(bytes, at, w)) break;  // the end of the data: said below
+        if (stl_number_start(w)) continue;
+        throw InputError(name + ":" + std::to_string(line_at(at - w.size())) + ": STL '" + key +
+                         "' needs 3 numbers; " + obj_text::quote(w) + " is not one");
+      }
+    }
   }
   if (in_facet)
     throw InputError(name + ": STL data ends inside facet " + std::to_string(facets) +

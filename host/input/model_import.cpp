@@ -27,6 +27,7 @@
 #include "input/model_files.h"
 #include "input/obj_loader.h"
 #include "input/model_materials.h"
+#include "input/model_window.h"
 
 #ifdef OPSILA_HAVE_ASSIMP
 #include <assimp/Importer.hpp>
@@ -223,6 +224,18 @@ Scene convert(Assimp::Importer& importer, const aiScene* ai, const std::string& 
   }
 }
 
+// When the importer refuses a PLY or STL file that the project's own stream
+// reads (input/model_window.h), the stream's counting read names the line
+// and the key of the first problem, the message a rank reading its share
+// gives; the importer's own text stays where the stream finds nothing
+// wrong. Only on the way to an error: a file the importer reads is never
+// read twice.
+void explain_with_stream(const std::string& path) {
+  if (!is_streamed_model(path) || !model_stream_refusal(path).empty()) return;
+  std::uint64_t fans = 0;
+  (void)load_model_window(path, std::size_t(1) << 40, ObjWindow{}, fans);
+}
+
 // The stack of the import thread: the importer's readers, its validation
 // and its scene's destructor recurse once per node level (kMaxNodeDepth at
 // most from glTF; other formats are not checked before the importer builds
@@ -248,6 +261,7 @@ Scene import_model(ModelFiles& files, const std::string& path, const std::string
     } else {
       ai = importer.ReadFile(path, kImportFlags);
     }
+    if (!ai && !base_dir.empty()) explain_with_stream(path);  // a file on disk (not a model in memory)
     scene = convert(importer, ai, path, base_dir, files);
   });
   scene.input_files.insert(scene.input_files.begin(), files.files().begin(), files.files().end());

@@ -280,5 +280,30 @@ TEST(HostileModel, TruncatedDataIsRefusedInEveryFormat) {
          "endfacet\n", "STL data ends after facet 1 without 'endsolid' (truncated file)");
 }
 
+// A value that is not a number, or an index out of range: the error names
+// the line, one process or many (the importer's own messages named none).
+TEST(HostileModel, BadValuesAreNamedWithTheirLine) {
+  TempDir dir;
+  const auto expect = [&](const std::string& file, const std::string& bytes, const std::string& what) {
+    const std::string e = error_loading(dir.write(file, bytes));
+    EXPECT_NE(e.find(dir.file(file) + what), std::string::npos) << e;
+  };
+  const std::string facet = "outer loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 1 0\nendloop\nendfacet\n";
+  expect("num.stl", "solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 1 zz\nendloop\n"
+         "endfacet\nendsolid t\n", ":6: STL 'vertex' needs 3 numbers; 'zz' is not one");
+  expect("normal.stl", "solid t\nfacet normal 0 0 1\n" + facet + "facet normal 0 .x 1\n" + facet + "endsolid t\n",
+         ":9: STL 'normal' needs 3 numbers; '.x' is not one");
+  expect("short.stl", "solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0\nvertex 1 0 0\n",
+         ":5: STL 'vertex' needs 3 numbers; 'vertex' is not one");
+  // Numbers as the importer reads them, and a solid whose name holds keywords.
+  EXPECT_EQ(load_scene(dir.write("ok.stl", "solid vertex normal x\nfacet normal -0 +0 1e0\nouter loop\n"
+                                           "vertex .5 0 0\nvertex 1 0 0\nvertex 0 1 0\nendloop\nendfacet\n"
+                                           "endsolid vertex normal x\n"))
+                .num_facets,
+            1);
+  expect("index.ply", std::string(kPlyHeader) + "0 0 0\n1 0 0\n1 1 0\n0 1 0\n3 0 1 2\n3 0 2 7\n",
+         ":15: PLY 'face' element 2 of 2: vertex index 7 out of range (the file has 4 vertices)");
+}
+
 }  // namespace
 }  // namespace opsila

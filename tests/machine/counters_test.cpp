@@ -82,15 +82,28 @@ TEST(Counters, SumsFollowTheCounterTable) {
 // them (OPSILA_COUNT_WORK=0): the same image, item buffer, ray counts and
 // descriptors spawned and finished; the work counters and the traffic are
 // left out, not merely unread.
+// One frame rendered by a machine that counts the work (a) and by one that
+// counts only rays (b, with its settings).
+struct BothWays {
+  RenderSettings plain;
+  RenderResult a, b;
+};
+BothWays render_both_ways(const Scene& s, int pes) {
+  BothWays w;
+  RenderSettings counted;
+  counted.num_pes = pes;
+  w.plain = counted;
+  w.plain.count_work = false;
+  w.a = render(s, counted, test::shared_runtime());
+  w.b = render(s, w.plain, test::shared_runtime());
+  return w;
+}
+
 TEST(Counters, WorkCountersLeftOutChangeNothingElse) {
   const Scene s = test::mirror_glass_scene(64, 5);
   for (int pes : {1, 16, 64}) {
-    RenderSettings counted;
-    counted.num_pes = pes;
-    RenderSettings plain = counted;
-    plain.count_work = false;
-    const RenderResult a = render(s, counted, test::shared_runtime());
-    const RenderResult b = render(s, plain, test::shared_runtime());
+    const BothWays w = render_both_ways(s, pes);
+    const RenderResult &a = w.a, &b = w.b;
     EXPECT_EQ(a.rgb, b.rgb) << pes;
     EXPECT_EQ(a.item_buffer, b.item_buffer) << pes;
     EXPECT_TRUE(a.rays.same_rays(b.rays)) << pes;
@@ -120,13 +133,9 @@ TEST(Counters, WorkCountersLeftOutChangeNothingElse) {
 TEST(Counters, AMachineSwitchesBetweenCountingAndNot) {
   const Scene s = test::mirror_glass_scene(64, 5);
   for (int pes : {1, 16}) {
-    RenderSettings counted;
-    counted.num_pes = pes;
-    RenderSettings plain = counted;
-    plain.count_work = false;
-    const RenderResult a = render(s, counted, test::shared_runtime());
-    const RenderResult b = render(s, plain, test::shared_runtime());
-    RenderSettings both = plain;
+    const BothWays w = render_both_ways(s, pes);
+    const RenderResult &a = w.a, &b = w.b;
+    RenderSettings both = w.plain;
     both.switch_counting = true;
     Renderer machine(s, prepare_banks(s, both, test::shared_runtime()), both, test::shared_runtime());
     for (bool on : {false, true, false, true}) {

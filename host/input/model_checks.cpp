@@ -175,6 +175,16 @@ void check_ply(const std::string& bytes, const std::string& name) {
   const std::string_view body = std::string_view(bytes).substr(data);
   if (format == "ascii") check_ply_text(body, elements, name);
   else check_ply_binary(body, elements, format == "binary_big_endian", name);
+  // Points only: the importer's validation would refuse its empty mesh
+  // ("Mesh contains no faces"). Its readers take faces from these elements.
+  bool faces = false;
+  for (const PlyElement& e : elements) {
+    const std::string n = lower(e.name);
+    faces = faces || (e.count > 0 && (n.rfind("face", 0) == 0 || n.rfind("tristrips", 0) == 0 ||
+                                      n.rfind("range_grid", 0) == 0));
+  }
+  if (!faces)
+    throw InputError(name + ": no facets (the PLY file has no faces: no 'face' element with entries, points only)");
 }
 
 // The importer's OFF reader allocates what the header's counts ask for before

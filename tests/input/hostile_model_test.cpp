@@ -282,6 +282,7 @@ TEST(HostileModel, TruncatedDataIsRefusedInEveryFormat) {
 
 // A value that is not a number, or an index out of range: the error names
 // the line, one process or many (the importer's own messages named none).
+// A PLY of points only says so (the importer: "Mesh contains no faces").
 TEST(HostileModel, BadValuesAreNamedWithTheirLine) {
   TempDir dir;
   const auto expect = [&](const std::string& file, const std::string& bytes, const std::string& what) {
@@ -301,6 +302,9 @@ TEST(HostileModel, BadValuesAreNamedWithTheirLine) {
                                            "endsolid vertex normal x\n"))
                 .num_facets,
             1);
+  expect("points.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+         "property float z\nend_header\n0 0 0\n1 0 0\n0 1 0\n",
+         ": no facets (the PLY file has no faces: no 'face' element with entries, points only)");
   expect("index.ply", std::string(kPlyHeader) + "0 0 0\n1 0 0\n1 1 0\n0 1 0\n3 0 1 2\n3 0 2 7\n",
          ":15: PLY 'face' element 2 of 2: vertex index 7 out of range (the file has 4 vertices)");
 }

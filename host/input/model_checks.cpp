@@ -3,10 +3,13 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cmath>
+#include <cstdlib>
 #include <cstdint>
 #include <limits>
 #include <sstream>
 #include <string_view>
+#include <unordered_map>
 #include <vector>
 
 #include "core/util.h"
@@ -26,9 +29,14 @@ bool next_word(std::string_view text, std::size_t& at, std::string_view& out) {
   return at > start;
 }
 
+// A number word as the importer stores it, in a float: beyond the float
+// range it is infinite.
+float float_of(std::string_view w) { return static_cast<float>(std::strtod(std::string(w).c_str(), nullptr)); }
+
 struct PlyProperty {
   int count_bytes = 0;  // > 0 for a list: the size of its count
   int item_bytes = 0;   // size of the value (or of each list item)
+  std::string name;
 };
 struct PlyElement {
   std::string name;
@@ -51,22 +59,47 @@ int ply_type_bytes(const std::string& t) {
 }
 
 // The text data: every property one word, a list its count and that many.
-void check_ply_text(std::string_view data, const std::vector<PlyElement>& elements, const std::string& name) {
-  std::size_t at = 0;
+// A vertex whose x, y or z is not finite in floats (as the importer stores
+// it) is named with its line where a face uses it (data starts on line
+// `first_line`); one no face uses is harmless.
+void check_ply_text(std::string_view data, unsigned long long first_line, const std::vector<PlyElement>& elements,
+                    const std::string& name) {
+  std::size_t at = 0, counted = 0;
+  unsigned long long line = first_line;
+  const auto line_of = [&](std::string_view word) {  // words in file order
+    const std::size_t pos = std::size_t(word.data() - data.data());
+    line += std::count(data.begin() + std::ptrdiff_t(counted), data.begin() + std::ptrdiff_t(pos), '\n');
+    counted = pos;
+    return line;
+  };
+  std::unordered_map<unsigned long long, unsigned long long> not_finite;  // vertex -> its line
   std::string_view w;
   for (const PlyElement& e : elements) {
     if (e.properties.empty()) continue;
     for (unsigned long long i = 0; i < e.count; ++i)
       for (const PlyProperty& p : e.properties) {
         if (!next_word(data, at, w)) ply_truncated(name, e, i);
-        if (p.count_bytes == 0) continue;
+        if (p.count_bytes == 0) {
+          if (e.name == "vertex" && (p.name == "x" || p.name == "y" || p.name == "z") && !std::isfinite(float_of(w)))
+            not_finite.emplace(i, line_of(w));
+          continue;
+        }
         unsigned long long n = 0;
         if (w.size() > 19 || w.find_first_not_of("0123456789") != std::string_view::npos)
           throw InputError(name + ": PLY '" + e.name + "' element " + std::to_string(i + 1) + ": list length '" +
                            std::string(w.substr(0, 20)) + "' is not a count");
         for (char c : w) n = n * 10 + unsigned(c - '0');
-        for (unsigned long long k = 0; k < n; ++k)
+        const bool corners = !not_finite.empty() && e.name == "face" &&
+                             (p.name == "vertex_indices" || p.name == "vertex_index");
+        for (unsigned long long k = 0; k < n; ++k) {
           if (!next_word(data, at, w)) ply_truncated(name, e, i);
+          if (!corners || w.size() > 19 || w.find_first_not_of("0123456789") != std::string_view::npos) continue;
+          const auto bad = not_finite.find(std::stoull(std::string(w)));
+          if (bad != not_finite.end())
+            throw InputError(name + ":" + std::to_string(line_of(w)) + ": PLY 'face' element " +
+                             std::to_string(i + 1) + " of " + std::to_string(e.count) + ": vertex " + std::string(w) +
+                             " (line " + std::to_string(bad->second) + ") is not a finite number");
+        }
       }
   }
 }
@@ -120,8 +153,8 @@ void check_ply_header(const std::string& head, std::size_t file_bytes, const std
   };
   while (std::getline(lines, line)) {
     std::istringstream words(line);
-    std::string keyword, a, b, c;
-    words >> keyword >> a >> b >> c;
+    std::string keyword, a, b, c, d;
+    words >> keyword >> a >> b >> c >> d;
     if (keyword == "format") {
       format = a;
     } else if (keyword == "element") {
@@ -137,8 +170,9 @@ void check_ply_header(const std::string& head, std::size_t file_bytes, const std
     } else if (keyword == "property" && elements.empty()) {
       throw InputError(name + ": PLY header has a property before any element");
     } else if (keyword == "property") {
-      elements.back().properties.push_back(a == "list" ? PlyProperty{ply_type_bytes(b) > 0 ? ply_type_bytes(b) : -1, ply_type_bytes(c)}
-                                                       : PlyProperty{0, ply_type_bytes(a)});
+      elements.back().properties.push_back(
+          a == "list" ? PlyProperty{ply_type_bytes(b) > 0 ? ply_type_bytes(b) : -1, ply_type_bytes(c), d}
+                      : PlyProperty{0, ply_type_bytes(a), b});
     }
   }
   judge();
@@ -173,7 +207,8 @@ void check_ply(const std::string& bytes, const std::string& name) {
     throw InputError(name + ": PLY format '" + format.substr(0, 20) +
                      "' (ascii, binary_little_endian or binary_big_endian)");
   const std::string_view body = std::string_view(bytes).substr(data);
-  if (format == "ascii") check_ply_text(body, elements, name);
+  if (format == "ascii")
+    check_ply_text(body, 1 + std::count(bytes.begin(), bytes.begin() + std::ptrdiff_t(data), '\n'), elements, name);
   else check_ply_binary(body, elements, format == "binary_big_endian", name);
   // Points only: the importer's validation would refuse its empty mesh
   // ("Mesh contains no faces"). Its readers take faces from these elements.
@@ -187,48 +222,10 @@ void check_ply(const std::string& bytes, const std::string& name) {
     throw InputError(name + ": no facets (the PLY file has no faces: no 'face' element with entries, points only)");
 }
 
-// The importer's OFF reader allocates what the header's counts ask for before
-// it reads a vertex (found by fuzz_model: tens of GB from a 100-byte file).
-// A vertex or face takes at least two bytes of text, so counts beyond the
-// file's size are refused here; everything else is left to the importer's
-// own checks.
-void check_off(const std::string& text, std::size_t file_bytes, const std::string& name) {
-  std::vector<std::string> tokens;
-  std::size_t i = 0;
-  while (i < text.size() && tokens.size() < 3) {
-    while (i < text.size() && std::isspace(static_cast<unsigned char>(text[i]))) ++i;
-    if (i < text.size() && text[i] == '#') {  // a comment runs to the end of its line
-      while (i < text.size() && text[i] != '\n') ++i;
-      continue;
-    }
-    const std::size_t start = i;
-    while (i < text.size() && !std::isspace(static_cast<unsigned char>(text[i]))) ++i;
-    if (i > start) tokens.push_back(text.substr(start, i - start));
-  }
-  // The counts are the first two runs of digits (the importer also reads
-  // them when they follow the OFF keyword in the same token, or precede
-  // other bytes); each must fit the file.
-  int judged = 0;
-  for (const std::string& token : tokens) {
-    const std::size_t from = token.find_first_of("0123456789");
-    if (from == std::string::npos) continue;
-    const std::size_t to = std::min(token.find_first_not_of("0123456789", from), token.size());
-    const std::string t = token.substr(from, to - from);
-    const char* what = judged == 0 ? "vertices" : "faces";
-    if (t.size() > 15 || std::stoull(t) > file_bytes / 2)
-      throw InputError(name + ": OFF header asks for " + (t.size() > 15 ? t.substr(0, 15) + "..." : t) + " " +
-                       what + ", more than a file of " + std::to_string(file_bytes) + " bytes can hold");
-    if (++judged == 2) return;
-  }
-}
-
-// Binary STL: 80 bytes of header, a 32-bit facet count, 50 bytes a facet.
-// The importer takes a file whose size is exactly that as binary even when
-// it starts with "solid", as here; anything else starting so is text.
-// What the importer's number reader (text STL) starts a number with: an
+// What the importer's number reader (text STL, OFF) starts a number with: an
 // optional sign, then a digit, a point and a digit, or 'nan' or 'inf' (any
-// case; caught later as not finite).
-bool stl_number_start(std::string_view w) {
+// case; not finite, caught where a facet uses it).
+bool number_start(std::string_view w) {
   std::size_t i = w.size() > 0 && (w[0] == '-' || w[0] == '+') ? 1 : 0;
   const auto digit = [&](std::size_t k) { return k < w.size() && w[k] >= '0' && w[k] <= '9'; };
   if (digit(i) || (i < w.size() && w[i] == '.' && digit(i + 1))) return true;
@@ -236,6 +233,176 @@ bool stl_number_start(std::string_view w) {
   return rest == "nan" || rest == "inf";
 }
 
+// OFF, read as the importer's OFF reader reads it, which is lenient in ways
+// that change the model without a word: an index beyond the vertices
+// becomes the last vertex, a face of 0 or of more than 9 vertices is
+// dropped, a count or index that is not digits reads as 0, a line of 4096
+// characters or more is split (and overruns its line buffer by one byte),
+// and its own errors name no line. It also allocates what the header's
+// counts ask for before reading a vertex (found by fuzz_model: tens of GB
+// from a 100-byte file). Every such file is refused here, naming its line.
+//
+// The layout: a header of optional prefixes (ST, C, N, 4, n) and the keyword
+// OFF, the dimension after an 'n' prefix, then the vertex, face and edge
+// counts, with comment lines and blank space anywhere between; then one line
+// per vertex (its coordinates first) and one per face ("n i1 ... in").
+void check_off(const std::string& text, std::size_t file_bytes, const std::string& name) {
+  const std::string_view t(text);
+  std::size_t at = 0;
+  unsigned long long line = 1;
+  const auto advance_to = [&](std::size_t to) {
+    line += std::count(t.begin() + std::ptrdiff_t(at), t.begin() + std::ptrdiff_t(to), '\n');
+    at = to;
+  };
+  const auto where = [&] { return name + ":" + std::to_string(line) + ": "; };
+  if (t.find('\0') != std::string_view::npos) {
+    advance_to(t.find('\0'));
+    throw InputError(where() + "OFF text holds a NUL byte (not an OFF file)");
+  }
+  // The header's tokens: blank space, line ends and comment lines skipped.
+  const auto next_token = [&] {
+    std::size_t i = at;
+    for (;;) {
+      while (i < t.size() && std::isspace(static_cast<unsigned char>(t[i]))) ++i;
+      if (i < t.size() && t[i] == '#') {
+        while (i < t.size() && t[i] != '\n') ++i;
+        continue;
+      }
+      break;
+    }
+    advance_to(i);
+  };
+  const auto digits_at = [&](std::size_t i) {
+    std::size_t j = i;
+    while (j < t.size() && t[j] >= '0' && t[j] <= '9') ++j;
+    return j - i;
+  };
+  next_token();
+  const auto prefix = [&](std::string_view p) {
+    if (t.compare(at, p.size(), p) != 0) return false;
+    at += p.size();
+    return true;
+  };
+  prefix("ST"), prefix("C");
+  const bool normals = prefix("N");
+  bool homogeneous = prefix("4");
+  const bool dimension = prefix("n"), keyword = prefix("OFF");
+  next_token();
+  if (!keyword && digits_at(at) == 0)
+    throw InputError(where() + "not OFF (no 'OFF' keyword and no vertex count)");
+  if (!keyword) homogeneous = false;  // the importer's reading without the keyword
+  unsigned long long dims = 3;
+  std::size_t d = digits_at(at);
+  if (dimension) {
+    if (d == 0 || d > 1 || t[at] == '0' || t[at] > '3')
+      throw InputError(where() + "OFF dimension " + obj_text::quote(t.substr(at, std::max<std::size_t>(d, 1))) +
+                       " (1, 2 or 3 coordinates a vertex)");
+    dims = unsigned(t[at] - '0');
+    at += d;
+    next_token();
+  }
+  if (!keyword) dims = 3;
+  unsigned long long counts[3] = {0, 0, 0}, lines[3] = {0, 0, 0};
+  const char* const what[3] = {"vertex", "face", "edge"};
+  for (int k = 0; k < 3; ++k) {
+    lines[k] = line;
+    // Without an edge count the importer takes the first digits of the
+    // first vertex for it, and misreads every vertex after.
+    if (k == 2 && lines[0] == lines[1] && line != lines[1])
+      throw InputError(name + ":" + std::to_string(lines[1]) +
+                       ": OFF header has vertex and face counts but no edge count ('vertices faces edges')");
+    d = digits_at(at);
+    if (d == 0)
+      throw InputError(where() + "OFF header: the " + what[k] + " count " +
+                       obj_text::quote(t.substr(at, std::min<std::size_t>(t.find_first_of(" \t\r\n", at), t.size()) - at)) +
+                       " is not a number");
+    const std::string digits(t.substr(at, d));
+    if (k < 2 && (d > 15 || std::stoull(digits) > file_bytes / 2))
+      throw InputError(name + ": OFF header asks for " + (d > 15 ? digits.substr(0, 15) + "..." : digits) + " " +
+                       (k == 0 ? "vertices" : "faces") + ", more than a file of " + std::to_string(file_bytes) +
+                       " bytes can hold");
+    if (k < 2) counts[k] = std::stoull(digits);
+    at += d;
+    next_token();
+  }
+  if (counts[0] == 0) throw InputError(where() + "OFF header counts no vertices");
+  if (counts[1] == 0) throw InputError(where() + "OFF header counts no faces");
+  // The body's lines: blank lines skipped, comment lines not (the importer
+  // reads a vertex or face from them and fails or misreads).
+  std::string_view l;
+  const auto next_line = [&] {
+    std::size_t i = at;
+    while (i < t.size() && (t[i] == '\n' || t[i] == '\r' || t[i] == '\f')) ++i;
+    advance_to(i);
+    if (at >= t.size()) return false;
+    const std::size_t end = std::min(t.find_first_of("\n\r\f", at), t.size());
+    l = t.substr(at, end - at);
+    if (l.size() >= 4096) throw InputError(where() + "OFF line of " + std::to_string(l.size()) +
+                                           " characters (the model importer reads at most 4095)");
+    at = end;
+    return true;
+  };
+  const std::size_t numbers = dims + (homogeneous ? 1 : 0) + (normals ? 3 : 0);
+  // Vertices that are not finite as the importer reads them (in floats,
+  // divided by w): the line of each, named if a face uses it.
+  std::unordered_map<unsigned long long, unsigned long long> not_finite;
+  for (unsigned long long v = 0; v < counts[0]; ++v) {
+    if (!next_line())
+      throw InputError(name + ": OFF data ends after vertex " + std::to_string(v) + " of " +
+                       std::to_string(counts[0]) + " (truncated file)");
+    std::size_t w_at = 0;
+    std::string_view w;
+    float c[4] = {0, 0, 0, 1};
+    if (l.find_first_not_of(" \t") != std::string_view::npos && l[l.find_first_not_of(" \t")] == '#')
+      throw InputError(where() + "OFF vertex " + std::to_string(v + 1) +
+                       ": a comment line (the model importer reads comments in the header only)");
+    for (std::size_t k = 0; k < numbers; ++k) {
+      if (!next_word(l, w_at, w))
+        throw InputError(where() + "OFF vertex " + std::to_string(v + 1) + " needs " + std::to_string(numbers) +
+                         " numbers; the line has " + std::to_string(k));
+      if (!number_start(w))
+        throw InputError(where() + "OFF vertex " + std::to_string(v + 1) + ": " + obj_text::quote(w) +
+                         " is not a number");
+      if (k < dims + (homogeneous ? 1 : 0)) c[k] = float_of(w);
+    }
+    for (std::size_t k = 0; k < dims; ++k)
+      if (!std::isfinite(homogeneous ? c[k] / c[dims] : c[k])) not_finite.emplace(v, line);
+  }
+  for (unsigned long long f = 0; f < counts[1]; ++f) {
+    const std::string face = "OFF face " + std::to_string(f + 1) + " of " + std::to_string(counts[1]);
+    if (!next_line())
+      throw InputError(name + ": OFF data ends before face " + std::to_string(f + 1) + " of " +
+                       std::to_string(counts[1]) + " (truncated file)");
+    std::size_t w_at = 0;
+    std::string_view w;
+    if (l.find_first_not_of(" \t") != std::string_view::npos && l[l.find_first_not_of(" \t")] == '#')
+      throw InputError(where() + face + ": a comment line (the model importer reads comments in the header only)");
+    const bool counted = next_word(l, w_at, w) && w.find_first_not_of("0123456789") == std::string_view::npos;
+    if (!counted) throw InputError(where() + face + ": vertex count " + obj_text::quote(w) + " is not a count");
+    if (w.size() > 2 || w == "0" || w == "00" || std::stoi(std::string(w)) > 9)
+      throw InputError(where() + face + " has " + std::string(w.substr(0, 15)) +
+                       " vertices; the model importer reads faces of 1 to 9");
+    const int n = std::stoi(std::string(w));
+    for (int k = 0; k < n; ++k) {
+      if (!next_word(l, w_at, w))
+        throw InputError(where() + face + " needs " + std::to_string(n) + " vertex indices; the line has " +
+                         std::to_string(k));
+      if (w.find_first_not_of("0123456789") != std::string_view::npos)
+        throw InputError(where() + face + ": " + obj_text::quote(w) + " is not a vertex index");
+      if (w.size() > 15 || std::stoull(std::string(w)) >= counts[0])
+        throw InputError(where() + face + ": vertex index " + obj_text::quote(w) +
+                         " out of range (the file has " + std::to_string(counts[0]) + " vertices)");
+      const auto bad = not_finite.find(std::stoull(std::string(w)));
+      if (bad != not_finite.end())
+        throw InputError(where() + face + ": vertex " + std::string(w) + " (line " + std::to_string(bad->second) +
+                         ") is not a finite number");
+    }
+  }
+}
+
+// Binary STL: 80 bytes of header, a 32-bit facet count, 50 bytes a facet.
+// The importer takes a file whose size is exactly that as binary even when
+// it starts with "solid", as here; anything else starting so is text.
 void check_stl(const std::string& bytes, const std::string& name) {
   const std::uint64_t size = bytes.size();
   std::uint64_t count = 0;
@@ -277,7 +444,13 @@ void check_stl(const std::string& bytes, const std::string& name) {
       const std::string key(w);
       for (int k = 0; k < 3; ++k) {
         if (!next_word(bytes, at, w)) break;  // the end of the data: said below
-        if (stl_number_start(w)) continue;
+        if (number_start(w)) {
+          // Every vertex of a text STL is a facet's.
+          if (key == "vertex" && !std::isfinite(float_of(w)))
+            throw InputError(name + ":" + std::to_string(line_at(at - w.size())) + ": STL 'vertex': " +
+                             obj_text::quote(w) + " is not a finite number");
+          continue;
+        }
         throw InputError(name + ":" + std::to_string(line_at(at - w.size())) + ": STL '" + key +
                          "' needs 3 numbers; " + obj_text::quote(w) + " is not one");
       }
@@ -351,7 +524,7 @@ void check_model_file_shape(ModelFiles& files, const std::string& path, const st
   const std::string e = lower(!ext.empty() && ext[0] == '.' ? ext.substr(1) : ext);
   if (e == "off") {
     const std::uint64_t size = files.size(path);
-    check_off(files.head(path, 64 * 1024), static_cast<std::size_t>(size), path);
+    check_off(files.head(path, kMaxInputFileBytes), static_cast<std::size_t>(size), path);
     return;
   }
   const std::string bytes = files.head(path, kMaxInputFileBytes);

@@ -28,8 +28,10 @@ void check_model_file_shape(ModelFiles& files, const std::string& path, const st
 // PLY: the header ends, its element counts fit the file, and the data holds
 // every element the header counts (text or binary).
 void check_ply(const std::string& bytes, const std::string& name);
-// OFF: the vertex and face counts fit the file.
-void check_off(const std::string& head, std::size_t file_bytes, const std::string& name);
+// OFF: the vertex and face counts fit the file; every vertex line holds its
+// numbers and every face line a count of 1 to 9 and that many indices of
+// vertices in the file (the importer would clamp, drop or misread them).
+void check_off(const std::string& text, std::size_t file_bytes, const std::string& name);
 // STL: a binary file holds the facets its header counts; a text file ends
 // every facet and solid it opens.
 void check_stl(const std::string& bytes, const std::string& name);

@@ -10,7 +10,10 @@
 #ifdef OPSILA_HAVE_ASSIMP
 #include <algorithm>
 #include <climits>
+#include <cmath>
 #include <new>
+#include <string>
+#include <unordered_map>
 
 #include <assimp/mesh.h>
 
@@ -23,7 +26,11 @@ namespace {
 
 // The vertex arrays the importer path uses: positions, normals (nx, ny,
 // nz) and the first texture coordinates ((u, v), (s, t), ...), as floats.
-void read_vertices(ply::Body& body, const ply::Element& e, const ply::Header& h, aiMesh& mesh, const std::string& path) {
+// not_finite: the line of each vertex whose position is not finite in
+// floats, in a text file (named if a face uses it, as the importer path's
+// checks name it; in a binary file both paths name the mesh and face).
+void read_vertices(ply::Body& body, const ply::Element& e, const ply::Header& h, aiMesh& mesh, const std::string& path,
+                   std::unordered_map<unsigned, std::string>& not_finite) {
   // Each vertex takes at least a byte a value: a count the file cannot
   // hold is refused before anything is allocated.
   const std::uint64_t per = h.format == ply::Format::ascii ? 2 * e.properties.size() - 1 : e.properties.size();
@@ -42,6 +49,7 @@ void read_vertices(ply::Body& body, const ply::Element& e, const ply::Header& h,
     role.push_back(r);
   }
   const unsigned count = static_cast<unsigned>(e.count);
+  const bool text = h.format == ply::Format::ascii;
   mesh.mNumVertices = count;
   mesh.mVertices = new aiVector3D[count];
   if (normals) mesh.mNormals = new aiVector3D[count];
@@ -49,6 +57,8 @@ void read_vertices(ply::Body& body, const ply::Element& e, const ply::Header& h,
   for (unsigned i = 0; i < count; ++i) {
     for (std::size_t k = 0; k < role.size(); ++k) {
       const float f = body.next(e.properties[k].type, e, i).as_float();
+      if (text && (role[k] == px || role[k] == py || role[k] == pz) && !std::isfinite(f))
+        not_finite.emplace(i, body.where());
       switch (role[k]) {
         case px: mesh.mVertices[i].x = f; break;
         case py: mesh.mVertices[i].y = f; break;
@@ -78,10 +88,11 @@ class PlyWindowReader {
       if (!why.empty()) throw InputError(path_ + ": the PLY stream cannot read this file: " + why);
       ply::Body body(path_, h, block_);
       aiMesh mesh;
-      read_vertices(body, h.elements[0], h, mesh, path_);
+      std::unordered_map<unsigned, std::string> not_finite;
+      read_vertices(body, h.elements[0], h, mesh, path_, not_finite);
       Scene scene;
       WindowFan fan(path_, mesh, max_triangles_, window_, scene);
-      read_faces(body, h.elements[1], mesh, fan);
+      read_faces(body, h.elements[1], mesh, not_finite, fan);
       fan.finish(fans);
       return scene;
     } catch (const std::bad_alloc&) {
@@ -94,7 +105,8 @@ class PlyWindowReader {
  private:
   // Every face read and checked; fanned into the figures, and into the
   // scene when it is this rank's (WindowFan).
-  void read_faces(ply::Body& body, const ply::Element& e, const aiMesh& mesh, WindowFan& fan) {
+  void read_faces(ply::Body& body, const ply::Element& e, const aiMesh& mesh,
+                  const std::unordered_map<unsigned, std::string>& not_finite, WindowFan& fan) {
     const ply::Property& list = e.properties[0];
     std::vector<unsigned> corner;
     for (std::uint64_t f = 0; f < e.count; ++f) {
@@ -110,6 +122,9 @@ class PlyWindowReader {
           body.fail(e, f, "vertex index " + std::to_string(v.i) + " out of range (the file has " +
                               std::to_string(mesh.mNumVertices) + " vertices)");
         corner[k] = static_cast<unsigned>(v.i);
+        const auto bad = not_finite.find(corner[k]);
+        if (bad != not_finite.end())
+          body.fail(e, f, "vertex " + std::to_string(v.i) + " (" + bad->second + ") is not a finite number");
       }
       body.end_of_instance(e, f);
       if (n < 3) fan.skip();  // the importer path skips points and lines (and empty faces), with no id

@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <string>
@@ -307,6 +308,69 @@ TEST(HostileModel, BadValuesAreNamedWithTheirLine) {
          ": no facets (the PLY file has no faces: no 'face' element with entries, points only)");
   expect("index.ply", std::string(kPlyHeader) + "0 0 0\n1 0 0\n1 1 0\n0 1 0\n3 0 1 2\n3 0 2 7\n",
          ":15: PLY 'face' element 2 of 2: vertex index 7 out of range (the file has 4 vertices)");
+  // A vertex not finite in floats, named where a face uses it (text PLY).
+  expect("nan.ply", std::string(kPlyHeader) + "0 0 0\n1 0 0\n1 1 -nan\n0 1 0\n3 0 1 3\n3 0 2 3\n",
+         ":15: PLY 'face' element 2 of 2: vertex 2 (line 12) is not a finite number");
+  EXPECT_EQ(load_scene(dir.write("unused.ply", std::string(kPlyHeader) + "0 0 0\n1 0 0\n1e40 1 0\n0 1 0\n"
+                                                                      "3 0 1 3\n3 0 1 3\n"))
+                .num_facets,
+            2);
+}
+
+// OFF faces the importer would clamp, drop or misread without a word (an
+// index past the vertices read as the last vertex, a face of 0 or 10
+// vertices skipped, a sign or letter read as index 0) are refused, naming
+// the line; files it reads as written still load.
+TEST(HostileModel, OffFacesTheImporterWouldMisreadAreRefused) {
+  TempDir dir;
+  const std::string square = "OFF\n# a comment line\n4 1 0\n\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n";
+  const auto expect = [&](const std::string& file, const std::string& bytes, const std::string& what) {
+    const std::string e = error_loading(dir.write(file, bytes));
+    EXPECT_NE(e.find(dir.file(file) + what), std::string::npos) << file << ": " << e;
+  };
+  expect("range.off", square + "4 0 1 2 4\n", ":9: OFF face 1 of 1: vertex index '4' out of range (the file has 4 vertices)");
+  expect("sign.off", square + "3 0 -1 2\n", ":9: OFF face 1 of 1: '-1' is not a vertex index");
+  expect("fraction.off", square + "3 0 1.5 2\n", ":9: OFF face 1 of 1: '1.5' is not a vertex index");
+  expect("short.off", square + "4 0 1 2\n", ":9: OFF face 1 of 1 needs 4 vertex indices; the line has 3");
+  expect("empty.off", square + "0\n", ":9: OFF face 1 of 1 has 0 vertices; the model importer reads faces of 1 to 9");
+  expect("count.off", square + "x 0 1 2\n", ":9: OFF face 1 of 1: vertex count 'x' is not a count");
+  expect("vertex.off", "OFF\n3 1 0\n0 0 0\n1 zz 0\n0 1 0\n3 0 1 2\n", ":4: OFF vertex 2: 'zz' is not a number");
+  expect("few.off", "OFF\n3 1 0\n0 0 0\n1 0\n0 1 0\n3 0 1 2\n", ":4: OFF vertex 2 needs 3 numbers; the line has 2");
+  expect("edges.off", "OFF\n3 1\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n",
+         ":2: OFF header has vertex and face counts but no edge count ('vertices faces edges')");
+  // A vertex that is not finite in floats is named where a face uses it;
+  // one that no face uses is harmless.
+  expect("nan.off", "OFF\n4 1 0\n0 0 0\n1 0 0\n0 nan 0\n0 1 0\n3 0 2 1\n",
+         ":7: OFF face 1 of 1: vertex 2 (line 5) is not a finite number");
+  expect("huge.off", "OFF\n3 1 0\n0 0 0\n1e39 0 0\n0 1 0\n3 0 1 2\n",
+         ":6: OFF face 1 of 1: vertex 1 (line 4) is not a finite number");
+  expect("w.off", "4OFF\n3 1 0\n0 0 0 1\n1 0 0 0\n0 1 0 1\n3 0 1 2\n",
+         ":6: OFF face 1 of 1: vertex 1 (line 4) is not a finite number");
+  EXPECT_EQ(load_scene(dir.write("plane.off", "nOFF 2\n3 1 0\n0 0\n1 0\n0 1\n3 0 1 2\n")).num_facets, 1);
+  EXPECT_EQ(load_scene(dir.write("unused.off", "OFF\n4 1 0\n0 0 0\n1 0 0\ninf 0 0\n0 1 0\n3 0 1 3\n")).num_facets, 1);
+  expect("nan.stl", "solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 1 NaN\nendloop\n"
+         "endfacet\nendsolid t\n", ":6: STL 'vertex': 'NaN' is not a finite number");
+  expect("comment.off", "OFF\n3 2 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n  # the last face\n3 0 2 1\n",
+         ":7: OFF face 2 of 2: a comment line (the model importer reads comments in the header only)");
+  expect("dimension.off", "nOFF\n4\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n",
+         ":2: OFF dimension '4' (1, 2 or 3 coordinates a vertex)");
+  expect("truncated.off", "OFF\n3 2 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n",
+         ": OFF data ends before face 2 of 2 (truncated file)");
+  expect("long.off", "OFF\n3 1 0\n0 0 0" + std::string(5000, ' ') + "\n1 0 0\n0 1 0\n3 0 1 2\n",
+         ":3: OFF line of 5005 characters (the model importer reads at most 4095)");
+  // Read as written: comments and blank lines in the header, a quad, a
+  // coloured vertex list (COFF), a 9-gon.
+  EXPECT_EQ(load_scene(dir.write("ok.off", square + "4 0 1 2 3\n")).num_facets, 1);
+  EXPECT_EQ(load_scene(dir.write("colour.off", "COFF\n3 1 0\n0 0 0 1 0 0 1\n1 0 0 0 1 0 1\n0 1 0 0 0 1 1\n3 0 1 2\n"))
+                .num_facets,
+            1);
+  std::string nine = "OFF\n9 1 0\n";
+  for (int k = 0; k < 9; ++k) nine += std::to_string(std::cos(k * 0.698)) + " " + std::to_string(std::sin(k * 0.698)) + " 0\n";
+  EXPECT_EQ(load_scene(dir.write("nine.off", nine + "9 0 1 2 3 4 5 6 7 8\n")).num_facets, 1);
+  std::string ten = "OFF\n10 1 0\n";
+  for (int k = 0; k < 10; ++k) ten += std::to_string(std::cos(k * 0.628)) + " " + std::to_string(std::sin(k * 0.628)) + " 0\n";
+  expect("ten.off", ten + "10 0 1 2 3 4 5 6 7 8 9\n",
+         ":13: OFF face 1 of 1 has 10 vertices; the model importer reads faces of 1 to 9");
 }
 
 }  // namespace

@@ -177,7 +177,8 @@ TEST_F(PlyWindow, BadFilesGiveOneErrorOnEveryRank) {
   expect_error(q, "nan", "", {"mesh 0 face 0: a vertex is not a finite number"});
   q.vertices[6][1] = -INFINITY;
   q.format = "ascii";
-  expect_error(q, "ascii_infinity", "", {"mesh 0 face 0: a vertex is not a finite number"});
+  // Text: the face that uses it, and the vertex's line (header 10 lines).
+  expect_error(q, "ascii_infinity", "", {": PLY 'face' element ", ": vertex 6 (line 17) is not a finite number"});
   q = p;
   q.vertices.resize(1000);
   expect_error(q, "too_many_vertices", "", {".ply:4: PLY header asks for 1000 vertices"});

@@ -1,6 +1,8 @@
 // stb_image is compiled here, once, with only the decoders SPEC names.
 #include "input/texture_file.h"
 
+#include <algorithm>
+#include <cstdint>
 #include <filesystem>
 #include <limits>
 #include <system_error>
@@ -11,6 +13,8 @@
 #define STBI_ONLY_BMP
 #define STBI_NO_STDIO
 #define STBI_MAX_DIMENSIONS 16384
+// Failure reasons as sentences ("Corrupt PNG"), not stb's short codes.
+#define STBI_FAILURE_USERMSG
 #define STB_IMAGE_IMPLEMENTATION
 #include <stb/stb_image.h>
 
@@ -28,6 +32,22 @@ bool decode_texture_memory(const unsigned char* data, std::size_t size, const st
   }
   const int len = static_cast<int>(size);
   int w = 0, h = 0, channels = 0;
+  // A PNG's size is in its first chunk (IHDR, big-endian width and height):
+  // stb refuses one past its limit, then tries the other formats, and its
+  // last reason ("unknown type") would hide why.
+  static const unsigned char kPngSignature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+  const bool png = size >= 8 && std::equal(kPngSignature, kPngSignature + 8, data);
+  if (png && size >= 24) {
+    const auto be32 = [&](std::size_t at) {
+      return std::uint32_t(data[at]) << 24 | std::uint32_t(data[at + 1]) << 16 | std::uint32_t(data[at + 2]) << 8 |
+             std::uint32_t(data[at + 3]);
+    };
+    const std::uint32_t pw = be32(16), ph = be32(20);
+    if (pw > std::uint32_t(kMaxTextureSide) || ph > std::uint32_t(kMaxTextureSide)) {
+      problem = "image too large (" + std::to_string(pw) + "x" + std::to_string(ph) + ")";
+      return false;
+    }
+  }
   if (!stbi_info_from_memory(data, len, &w, &h, &channels)) {
     const char* why = stbi_failure_reason();
     problem = std::string("not a readable PNG, JPEG, TGA or BMP image") + (why ? std::string(" (") + why + ")" : "");
@@ -46,6 +66,10 @@ bool decode_texture_memory(const unsigned char* data, std::size_t size, const st
   if (!pixels) {
     const char* why = stbi_failure_reason();
     problem = std::string("cannot decode the image") + (why ? std::string(" (") + why + ")" : "");
+    // stb names the chunk it could not read, not the truncation.
+    static const char kIend[4] = {'I', 'E', 'N', 'D'};
+    if (png && std::search(data, data + size, kIend, kIend + 4) == data + size)
+      problem = "cannot decode the image (truncated PNG: it ends before its IEND chunk)";
     return false;
   }
   out.path = name;

@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "core/image_io.h"
 #include "core/texture.h"
 #include "input/obj_loader.h"
 #include "input/scene_file.h"
@@ -172,6 +173,28 @@ TEST(Textures, DecodeKeepsTopRowFirstAndSrgbCodes) {
   EXPECT_FALSE(decode_texture_memory(reinterpret_cast<const unsigned char*>(junk.data()), junk.size(), "x", t,
                                      problem));
   EXPECT_NE(problem.find("not a readable"), std::string::npos);
+}
+
+// A PNG too large says its size (stb would go on to the other formats and
+// say only "unknown type"); a truncated one says it is truncated.
+TEST(Textures, PngTooLargeOrTruncatedSaysWhy) {
+  const std::string ok = encode_png(4, 4, std::vector<float>(4 * 4 * 3, 0.5f));
+  const auto problem_of = [](const std::string& bytes) {
+    Texture t;
+    std::string problem;
+    EXPECT_FALSE(decode_texture_memory(reinterpret_cast<const unsigned char*>(bytes.data()), bytes.size(), "x", t,
+                                       problem));
+    return problem;
+  };
+  Texture t;
+  std::string problem;
+  ASSERT_TRUE(decode_texture_memory(reinterpret_cast<const unsigned char*>(ok.data()), ok.size(), "x", t, problem))
+      << problem;
+  std::string large = ok;
+  large.replace(16, 8, std::string("\x00\x00\xea\x60\x00\x00\x00\x04", 8));  // IHDR width 60000
+  EXPECT_EQ(problem_of(large), "image too large (60000x4)");
+  const std::string truncated = problem_of(ok.substr(0, 45));
+  EXPECT_EQ(truncated, "cannot decode the image (truncated PNG: it ends before its IEND chunk)");
 }
 
 TEST(Textures, SrgbDecodeTable) {

@@ -11,6 +11,7 @@
 #include "core/parallel.h"
 #include "core/stage_clock.h"
 #include "input/obj_parser.h"
+#include "input/obj_text.h"
 
 namespace opsila {
 namespace obj_parse {
@@ -21,10 +22,17 @@ std::vector<std::string_view> split_lines(std::string_view text, std::size_t chu
   for (std::size_t begin = 0; begin < n;) {
     std::size_t end = n;
     if (n - begin > step) {
-      // The first line end at or after the nominal end: \n, \r\n or a lone \r.
-      const std::size_t at = text.find_first_of("\r\n", begin + step - 1);
-      if (at != std::string_view::npos)
-        end = at + ((text[at] == '\r' && at + 1 < n && text[at + 1] == '\n') ? 2 : 1);
+      // The first line end at or after the nominal end: \n, \r\n or a lone \r,
+      // after a line that does not go on in the next (obj_text::LineScanner).
+      std::size_t at = text.find_first_of("\r\n", begin + step - 1);
+      while (at != std::string_view::npos) {
+        const std::size_t after = at + ((text[at] == '\r' && at + 1 < n && text[at + 1] == '\n') ? 2 : 1);
+        if (!obj_text::continues_at(text, at)) {
+          end = after;
+          break;
+        }
+        at = text.find_first_of("\r\n", after);
+      }
     }
     parts.push_back(text.substr(begin, end - begin));
     begin = end;

@@ -47,7 +47,7 @@ void ObjParser::parse_lines() {
   std::size_t reported = 0;
   while (sc.next(line)) {
     line_ = line_base_ + sc.line_no();
-    if ((sc.line_no() & 0xffff) == 0) {
+    if ((sc.lines() & 0xffff) == 0) {
       const std::size_t at = static_cast<std::size_t>(line.data() - text_.data());
       if (shared_) {
         if (shared_->stop.load(std::memory_order_relaxed)) throw ChunkStopped{};
@@ -60,7 +60,7 @@ void ObjParser::parse_lines() {
     }
     statement(line);
   }
-  lines_ = sc.line_no();
+  lines_ = sc.lines();
 }
 
 void ObjParser::statement(std::string_view line) {

@@ -15,6 +15,7 @@
 
 #include "core/parallel.h"
 #include "core/stage_clock.h"
+#include "input/obj_text.h"
 #include "input/obj_parser.h"
 
 namespace opsila {
@@ -32,9 +33,15 @@ void stream_blocks(const std::string& path, std::size_t block_bytes,
   const auto cut = [&](bool at_end) {
     std::size_t end = buf.size();
     if (!at_end) {
-      // After the last \n, or else the last lone \r that is not the last byte.
-      const std::size_t nl = buf.rfind('\n');
-      const std::size_t cr = buf.size() >= 2 ? buf.rfind('\r', buf.size() - 2) : std::string::npos;
+      // After the last \n, or else the last lone \r that is not the last
+      // byte, that ends a line not going on in the next.
+      const std::string_view text(buf);
+      std::size_t nl = text.rfind('\n');
+      while (nl != std::string::npos && obj_text::continues_at(text, nl))
+        nl = nl == 0 ? std::string::npos : text.rfind('\n', nl - 1);
+      std::size_t cr = text.size() >= 2 ? text.rfind('\r', text.size() - 2) : std::string::npos;
+      while (cr != std::string::npos && (text[cr + 1] == '\n' || obj_text::continues_at(text, cr)))
+        cr = cr == 0 ? std::string::npos : text.rfind('\r', cr - 1);
       if (nl != std::string::npos) end = nl + 1;
       else if (cr != std::string::npos) end = cr + 1;
       else return;  // one long line so far: read on

@@ -24,7 +24,10 @@ std::string_view next_token(std::string_view& rest);
 bool is_identifier(std::string_view s);
 
 // Splits text into lines (\n, \r\n or a lone \r) and refuses binary bytes, so
-// every later message can name a line.
+// every later message can name a line. A line that ends in a backslash
+// goes on in the next one (the OBJ and MTL line continuation): the
+// statement is their text joined, the backslash and line end read as one
+// blank, and it is named by its first line.
 class LineScanner {
  public:
   // file_start: the text is the start of the file (where a byte-order mark
@@ -41,7 +44,33 @@ class LineScanner {
 
   bool next(std::string_view& line) {
     if (p_ >= end_) return false;
-    ++line_no_;
+    first_line_ = lines_ + 1;
+    physical(line);
+    if (!continued(line)) return true;
+    joined_.assign(line.data(), line.size() - 1);
+    while (p_ < end_) {
+      joined_ += ' ';
+      physical(line);
+      if (!continued(line)) {
+        joined_.append(line.data(), line.size());
+        break;
+      }
+      joined_.append(line.data(), line.size() - 1);
+    }
+    line = joined_;
+    return true;
+  }
+
+  // The first line of the statement last read.
+  int line_no() const { return first_line_; }
+  // Lines read so far (a continued statement counts all of its lines).
+  int lines() const { return lines_; }
+
+ private:
+  static bool continued(std::string_view line) { return !line.empty() && line.back() == '\\'; }
+
+  void physical(std::string_view& line) {
+    const int line_no_ = ++lines_;
     const char* q = p_;
     for (; q < end_; ++q) {
       const unsigned char c = static_cast<unsigned char>(*q);
@@ -56,17 +85,22 @@ class LineScanner {
     line = std::string_view(p_, static_cast<std::size_t>(q - p_));
     if (q < end_) q += (*q == '\r' && q + 1 < end_ && q[1] == '\n') ? 2 : 1;
     p_ = q;
-    return true;
   }
 
-  int line_no() const { return line_no_; }
-
- private:
   const char* p_;
   const char* end_;
   const std::string& file_;
-  int line_no_ = 0;
+  int lines_ = 0, first_line_ = 0;
+  std::string joined_;  // a continued statement's lines, joined
 };
+
+// Whether the line end at text[i] (a \n, a lone \r, or either byte of a
+// \r\n) closes a line that goes on in the next: no split of the text may
+// fall there.
+inline bool continues_at(std::string_view text, std::size_t i) {
+  if (text[i] == '\n' && i > 0 && text[i - 1] == '\r') --i;
+  return i > 0 && text[i - 1] == '\\';
+}
 
 enum class Num { ok, not_number, not_finite, too_large };
 

@@ -83,6 +83,16 @@ TEST(ObjChunks, SplitEndsEveryChunkAtALineEnd) {
     }
     ASSERT_EQ(joined, text) << bytes;
   }
+  // Never after a line that goes on in the next (a backslash before its end).
+  const std::string continued = "v 0 0 0\nf 1 \\\n2 \\\r\n3\nf 1 \\\r2 3\n";
+  for (std::size_t bytes = 1; bytes <= continued.size(); ++bytes) {
+    const std::vector<std::string_view> parts = obj_parse::split_lines(continued, bytes);
+    for (std::size_t k = 0; k + 1 < parts.size(); ++k) {
+      const std::string_view p = parts[k];
+      const std::size_t eol = p.size() >= 2 && p.substr(p.size() - 2) == "\r\n" ? p.size() - 2 : p.size() - 1;
+      ASSERT_FALSE(eol > 0 && p[eol - 1] == '\\') << bytes << ": chunk " << k << " ends inside a continued line";
+    }
+  }
   // A border in the middle of a face line: the chunk takes the whole line.
   const std::vector<std::string_view> two = obj_parse::split_lines("v 1 2 3\nf 1 2 3 4 5\nv 4 5 6\n", 12);
   ASSERT_EQ(two.size(), 2u);
@@ -97,7 +107,8 @@ TEST(ObjChunks, SameSceneAsOneParser) {
       "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nvn 0 0 1\n"
       "f 1 2 3\no first\nusemtl red\nf -4/-3 -3/-2 -2/-1\ng part\nf 1//1 2//1 4//1 3//1\n"
       "f 1 2\nf 1 1 1\nwhatever 1 2\nusemtl blue\no second\n# comment\nv 2 2 2\nf -1 -2 -3 -4\n"
-      "g other\nf 2/-9 3/-1 4/-2\nusemtl red\nf 5 1 2\nmtllib nothing.mtl\nf 1/9 2/1 3/2\n";
+      "g other\nf 2/-9 3/-1 4/-2\nusemtl red\nf 5 1 2\nmtllib nothing.mtl\nf 1/9 2/1 3/2\n"
+      "f 1 2 \\\n3 4\nv 3 \\\n\\\n3 3\nf -1 \\\n1 2\n";  // lines that go on in the next
   expect_same_in_chunks(body, "", "LF");
   std::string crlf, cr;
   for (char c : body) {
@@ -122,6 +133,8 @@ TEST(ObjChunks, SameErrorAsOneParser) {
   expect_same_in_chunks(good + "f 1 2 3\nf 1 2 3\nf 1 2 3\nf 1 2 3 1\n", "", "too many triangles", 4);
   expect_same_in_chunks(good + "f 1 2 3\n", "", "exactly the triangle limit", 2);
   expect_same_in_chunks(std::string("\xff\xfe") + good, "", "UTF-16");
+  expect_same_in_chunks(good + "f 1 \\\n2 \\\n 9\nv 1 2 3\n", "", "a continued face's bad index");
+  expect_same_in_chunks(good + "f 1 \\\n2 3\nv 1 \\\n\\\n2\nv 1 x 2\n", "", "an error after continued lines");
 }
 
 // The repository's OBJ files, good and bad, with their material libraries.

@@ -181,6 +181,33 @@ TEST(ObjParse, GeometryKeepsTheWindingAsWritten) {
   EXPECT_EQ(s.triangles[1].v0, (Vec3{0, 1, 0}));
 }
 
+// A backslash before the line end joins the next line (Wavefront's line
+// continuation), in OBJ and MTL; a statement is named by its first line,
+// and the lines after it keep their numbers.
+TEST(ObjParse, ABackslashAtTheEndGoesOnInTheNextLine) {
+  const Scene s = from_text("v 0 0 0\nv 1 \\\n0 0\nv 0 1 0\nv 1 1 0\nf 1 2 \\\r\n3 \\\r4\nf 1\\\n\\\n 3 4\n");
+  ASSERT_EQ(s.num_facets, 2);
+  ASSERT_EQ(s.triangles.size(), 3u);
+  EXPECT_EQ(s.triangles[0].v1, (Vec3{1, 0, 0}));
+  EXPECT_EQ(s.triangles[1].v2, (Vec3{1, 1, 0}));
+  try {
+    from_text("v 0 0 0\nv 1 0 0\nf 1 \\\n2 \\\nx\n");
+    ADD_FAILURE() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("t.obj:3: bad vertex reference 'x'"), std::string::npos) << e.what();
+  }
+  try {
+    from_text("v 0 \\\n0 0\nv 1 0 0\nv 0 1 \\\n0\nf 1 2 3\nv 1 y 2\n");
+    ADD_FAILURE() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("t.obj:7:"), std::string::npos) << e.what();
+  }
+  std::vector<std::string> warnings;
+  const auto mats = parse_mtl("newmtl a\nKd 0.5 \\\n 0.25 0.125\n", "x.mtl", warnings);
+  ASSERT_EQ(mats.size(), 1u);
+  EXPECT_EQ(mats[0].kd, (Vec3{0.5f, 0.25f, 0.125f}));
+}
+
 TEST(ObjParse, UnknownStatementsAreOneWarning) {
   const Scene s = from_text(std::string(kTriVerts) + "frobnicate 1\nf 1 2 3\nzap\n");
   EXPECT_TRUE(has_warning(s, "t.obj:5:", "ignored 2 line(s) with unknown statements"));

@@ -291,7 +291,12 @@ void ObjParser::mtllib(std::string_view rest) {
     const std::string path = (fs::path(base_dir_) / f).lexically_normal().string();
     if (!loaded_libs_.insert(path).second) continue;
     if (!fs::is_regular_file(path, ec)) {
-      warnings_.push_back(at(name_, line_) + "material library " + quote(f) + " not found (" +
+      // A folder, a device or a pipe is there but is no file to read.
+      const bool there = fs::exists(path, ec);
+      warnings_.push_back(at(name_, line_) + "material library " + quote(f) +
+                          (there ? (fs::is_directory(path, ec) ? " is a folder, not a file ("
+                                                               : " is not a regular file (")
+                                 : " not found (") +
                           quote(path) + "); faces using its materials get the default material");
       continue;
     }

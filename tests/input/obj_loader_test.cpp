@@ -291,6 +291,14 @@ TEST(ObjMaterials, MissingMtlIsAWarningNotAnError) {
   ASSERT_EQ(s.triangles.size(), 1u);
   EXPECT_EQ(s.triangles[0].material, 0);
   EXPECT_EQ(s.materials[0].illum, 2);
+  EXPECT_TRUE(has_warning(s, "missing_mtl.obj:1:", "'does_not_exist.mtl' not found"));
+  // Something there that is no file says what it is.
+  test::TempDir dir;
+  fs::create_directory(dir.file("lib.mtl"));
+  const Scene f = load_obj(dir.write("folder.obj", "mtllib lib.mtl\n" + std::string(kTriVerts) + "f 1 2 3\n"));
+  EXPECT_TRUE(has_warning(f, "folder.obj:1:", "material library 'lib.mtl' is a folder, not a file"));
+  const Scene d = load_obj(dir.write("device.obj", "mtllib /dev/null\n" + std::string(kTriVerts) + "f 1 2 3\n"));
+  EXPECT_TRUE(has_warning(d, "device.obj:1:", "material library '/dev/null' is not a regular file"));
 }
 
 TEST(ObjMaterials, FromMemoryWithoutAFolderReadsNoMtl) {

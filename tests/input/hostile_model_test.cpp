@@ -67,6 +67,13 @@ std::string error_loading(const std::string& path) {
   return test::error_of([&] { load_scene(path); });
 }
 
+// Loading `file` (written with `bytes`) fails with one message holding its
+// path followed by `what`.
+void expect_refused(TempDir& dir, const std::string& file, const std::string& bytes, const std::string& what) {
+  const std::string e = error_loading(dir.write(file, bytes));
+  EXPECT_NE(e.find(dir.file(file) + what), std::string::npos) << file << ": " << e;
+}
+
 // ---------------------------------------------------------------- inputs ---
 
 // A buffer may have any name; whatever it is, no output may replace it.
@@ -246,8 +253,7 @@ TEST(HostileModel, TruncatedDataIsRefusedInEveryFormat) {
   const std::string whole = std::string(kPlyHeader) + "0 0 0\n1 0 0\n1 1 0\n0 1 0\n3 0 1 2\n3 0 2 3\n";
   EXPECT_EQ(load_scene(dir.write("ok.ply", whole)).num_facets, 2);
   const auto expect = [&](const std::string& file, const std::string& bytes, const std::string& what) {
-    const std::string e = error_loading(dir.write(file, bytes));
-    EXPECT_NE(e.find(dir.file(file) + ": " + what), std::string::npos) << e;
+    expect_refused(dir, file, bytes, ": " + what);
   };
   expect("few.ply", std::string(kPlyHeader) + "0 0 0\n1 0 0\n1 1 0\n",
          "PLY data ends early: 'vertex' element 4 of 4 is missing or incomplete (truncated file)");
@@ -287,8 +293,7 @@ TEST(HostileModel, TruncatedDataIsRefusedInEveryFormat) {
 TEST(HostileModel, BadValuesAreNamedWithTheirLine) {
   TempDir dir;
   const auto expect = [&](const std::string& file, const std::string& bytes, const std::string& what) {
-    const std::string e = error_loading(dir.write(file, bytes));
-    EXPECT_NE(e.find(dir.file(file) + what), std::string::npos) << e;
+    expect_refused(dir, file, bytes, what);
   };
   const std::string facet = "outer loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 1 0\nendloop\nendfacet\n";
   expect("num.stl", "solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 1 zz\nendloop\n"
@@ -325,8 +330,7 @@ TEST(HostileModel, OffFacesTheImporterWouldMisreadAreRefused) {
   TempDir dir;
   const std::string square = "OFF\n# a comment line\n4 1 0\n\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n";
   const auto expect = [&](const std::string& file, const std::string& bytes, const std::string& what) {
-    const std::string e = error_loading(dir.write(file, bytes));
-    EXPECT_NE(e.find(dir.file(file) + what), std::string::npos) << file << ": " << e;
+    expect_refused(dir, file, bytes, what);
   };
   expect("range.off", square + "4 0 1 2 4\n", ":9: OFF face 1 of 1: vertex index '4' out of range (the file has 4 vertices)");
   expect("sign.off", square + "3 0 -1 2\n", ":9: OFF face 1 of 1: '-1' is not a vertex index");

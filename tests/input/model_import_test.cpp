@@ -112,6 +112,24 @@ TEST(ModelImport, TestModelsOfSeveralFormats) {
   }
 }
 
+// A text STL makes a mesh of every solid; an empty one keeps its place in
+// the list, so the solids after it keep their object ids (SPEC: the mesh's
+// index), and the file renders (the importer's validation refused it
+// whole: "The mesh emptySolid contains no vertices").
+TEST(ModelImport, AnEmptySolidKeepsItsPlace) {
+  test::TempDir dir;
+  const std::string facet = "facet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 1 0\nendloop\nendfacet\n";
+  const Scene s = load_scene(dir.write("solids.stl", "solid a\n" + facet + "endsolid a\nsolid empty\nendsolid empty\n"
+                                                     "solid c\n" + facet + facet + "endsolid c\n"));
+  EXPECT_EQ(s.num_objects, 3);
+  EXPECT_EQ(s.num_facets, 3);
+  ASSERT_EQ(s.triangles.size(), 3u);
+  EXPECT_EQ(s.triangles[0].object_id, 0);
+  EXPECT_EQ(s.triangles[1].object_id, 2);
+  EXPECT_EQ(s.triangles[2].facet_id, 2);
+  EXPECT_NE(error_of(dir.write("none.stl", "solid a\nendsolid a\n")).find("no facets"), std::string::npos);
+}
+
 TEST(ModelImport, MaterialsAndTextureMaps) {
   REQUIRE_TEST_MODELS();
   // COLLADA duck: one material with a diffuse texture (a TGA beside it).

@@ -127,7 +127,7 @@ int run_bench(const std::vector<std::string>& args) {
   report.device = device_facts(rt);
   report.context = gather_context();
   report.load_before = load_average();
-  build_program(report, rt, progress);
+  build_program(report, rt, settings.balance, progress);
   measure_opsila(report, scene, settings, rt, progress);
   report.ranks = ranks.size();
   if (ranks.size() == 1) {

@@ -18,8 +18,10 @@ struct BenchProgress {
 // The 1-minute load average of the host (other work skews timings); -1 when unknown.
 double load_average();
 
-// 0. Compiles the program (never timed) and records the compile time.
-void build_program(BenchReport& report, ClRuntime& runtime, const BenchProgress& progress);
+// 0. Compiles the programs (never timed: the renderer's, the timed frames',
+//    the baselines' and, for --balance measured, the pilots') and records
+//    the compile time.
+void build_program(BenchReport& report, ClRuntime& runtime, Balance balance, const BenchProgress& progress);
 // 1. The OPSILA render: warm-up, then the median of the timed runs. A
 //    scene read in shares gives up its facets to the partition.
 void measure_opsila(BenchReport& report, Scene& scene, const RenderSettings& settings, ClRuntime& runtime,

@@ -4,6 +4,9 @@
 // joins and reorders meshes, and so would change the object ids).
 #include "input/model_import.h"
 
+#include <signal.h>
+#include <unistd.h>
+
 #include <algorithm>
 #include <cctype>
 #include <chrono>
@@ -11,6 +14,7 @@
 #include <condition_variable>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <limits>
 #include <mutex>
@@ -171,6 +175,56 @@ class ImportWatchdog {
   std::thread thread_;
 };
 
+// Some of the importer's readers (Half-Life MDL, LightWave, ... : the
+// formats opsila does not check first, so not fuzzed) fault or assert on
+// truncated or corrupt files. While such a read runs on the import
+// thread, a fault there (SIGSEGV, SIGBUS, SIGFPE, SIGILL) or an abort
+// (a failed assertion, an exception no one catches) ends the run with one
+// error line naming the file and exit code 2, like the watchdog: nothing
+// has been written yet while a scene loads. The handler runs on its own
+// stack (the fault may be a stack overflow) and calls only write and
+// _exit. Models read from memory (the fuzzers) get no guard, so that a
+// fault there is still found.
+class ImportFaultGuard {
+ public:
+  explicit ImportFaultGuard(const std::string& name) {
+    std::snprintf(message_, sizeof message_,
+                  "opsila: error: %s: the model importer failed while reading it (malformed file?)\n",
+                  name.size() < 3000 ? name.c_str() : "the model");
+    length_ = std::strlen(message_);
+    alt_.resize(std::max<std::size_t>(SIGSTKSZ, 64 * 1024));
+    stack_t st{};
+    st.ss_sp = alt_.data();
+    st.ss_size = alt_.size();
+    sigaltstack(&st, &old_stack_);
+    struct sigaction sa {};
+    sa.sa_handler = &ImportFaultGuard::on_fault;
+    sa.sa_flags = SA_ONSTACK;
+    sigemptyset(&sa.sa_mask);
+    for (int k = 0; k < kSignals; ++k) sigaction(kSignal[k], &sa, &old_[k]);
+  }
+  ~ImportFaultGuard() {
+    for (int k = 0; k < kSignals; ++k) sigaction(kSignal[k], &old_[k], nullptr);
+    sigaltstack(&old_stack_, nullptr);
+  }
+  ImportFaultGuard(const ImportFaultGuard&) = delete;
+  ImportFaultGuard& operator=(const ImportFaultGuard&) = delete;
+
+ private:
+  static void on_fault(int) {
+    const ssize_t ignored = write(2, message_, length_);
+    (void)ignored;
+    _exit(2);  // the exit code of bad input (cli/args.h)
+  }
+  static constexpr int kSignals = 5;
+  static constexpr int kSignal[kSignals] = {SIGSEGV, SIGBUS, SIGFPE, SIGILL, SIGABRT};
+  static inline char message_[4096];
+  static inline std::size_t length_ = 0;
+  std::vector<char> alt_;
+  stack_t old_stack_{};
+  struct sigaction old_[kSignals] {};
+};
+
 // The extension without its dot, in lower case.
 std::string bare_extension(const std::string& ext) {
   std::string e = lower(ext);
@@ -287,6 +341,7 @@ Scene import_model(ModelFiles& files, const std::string& path, const std::string
     const unsigned flags = validated_by_us(ext) ? 0u : kImportFlags;
     if (watched) {
       const ImportWatchdog watchdog(path, files.size(path));
+      const ImportFaultGuard guard(path);
       ai = importer.ReadFile(path, flags);
     } else {
       ai = importer.ReadFile(path, flags);

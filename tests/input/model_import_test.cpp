@@ -277,6 +277,26 @@ TEST(ModelImport, AnImportThatOutlivesItsBudgetIsOneClearError) {
   EXPECT_EQ(test::run_opsila({"render", model, "-o", dir.file("y.png"), "--size", "8x8"}).exit_code, 0);
 }
 
+// Readers opsila does not check first fault on some truncated files (the
+// Half-Life MDL reader on the first 30% of one of Debian's test models:
+// SIGSEGV inside the library). The run ends with one error line naming the
+// file and exit 2, as for any bad input; no output file appears, and a
+// good model still loads afterwards in the same way.
+TEST(ModelImport, AFaultInsideTheImporterIsOneClearError) {
+  REQUIRE_TEST_MODELS();
+  test::TempDir dir;
+  const fs::path whole = kModels / "MDL" / "MDL (HL1)" / "unnamed_bones.mdl";
+  ASSERT_TRUE(fs::exists(whole));
+  const std::string bytes = test::read_file(whole.string());
+  const std::string model = dir.write("cut.mdl", bytes.substr(0, bytes.size() * 3 / 10));
+  const test::RunResult r = test::run_opsila({"render", model, "-o", dir.file("x.png"), "--size", "8x8"});
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  ASSERT_EQ(r.error_lines().size(), 1u) << r.err;
+  EXPECT_NE(r.error_lines()[0].find(model + ": the model importer failed while reading it"), std::string::npos)
+      << r.err;
+  EXPECT_FALSE(test::file_exists(dir.file("x.png")));
+}
+
 // Counts in an OFF header that no file of that size can hold are refused
 // before the importer allocates for them (found by fuzz_model).
 TEST(ModelImport, OffCountsBeyondTheFileAreRefused) {

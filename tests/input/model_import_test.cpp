@@ -277,6 +277,28 @@ TEST(ModelImport, AnImportThatOutlivesItsBudgetIsOneClearError) {
   EXPECT_EQ(test::run_opsila({"render", model, "-o", dir.file("y.png"), "--size", "8x8"}).exit_code, 0);
 }
 
+// A reader that grows without end (a corrupted Q3O file took 19 GB in the
+// watchdog's 60 s) is stopped by its memory budget: one error line, exit
+// 2. A budget of 1 MiB stops the read of a 200,000-vertex text PLY (which
+// takes tens of MiB and most of a second); the default budget reads it.
+TEST(ModelImport, AnImportThatOutgrowsItsMemoryIsOneClearError) {
+  test::TempDir dir;
+  std::string ply = "ply\nformat ascii 1.0\nelement vertex 200000\nproperty float x\nproperty float y\n"
+                    "property float z\nelement face 100000\nproperty list uchar int vertex_indices\nend_header\n";
+  for (int i = 0; i < 200000; ++i) ply += std::to_string(i % 1000) + " " + std::to_string(i / 1000) + " 0.5\n";
+  for (int f = 0; f < 100000; ++f) ply += "3 " + std::to_string(2 * f) + " " + std::to_string(2 * f + 1) + " " +
+                                         std::to_string((2 * f + 1000) % 200000) + "\n";
+  const std::string model = dir.write("big.ply", ply);
+  const test::RunResult r = test::run_program(OPSILA_BINARY, {"render", model, "-o", dir.file("x.png"), "--size", "8x8"},
+                                              {{"OPSILA_IMPORT_MEMORY", "1048576"}});
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  ASSERT_EQ(r.error_lines().size(), 1u) << r.err;
+  EXPECT_NE(r.error_lines()[0].find(model + ": the model importer took more than 1 MiB of memory"), std::string::npos)
+      << r.err;
+  EXPECT_FALSE(test::file_exists(dir.file("x.png")));
+  EXPECT_EQ(test::run_opsila({"render", model, "-o", dir.file("y.png"), "--size", "8x8"}).exit_code, 0);
+}
+
 // Readers opsila does not check first fault on some truncated files (the
 // Half-Life MDL reader on the first 30% of one of Debian's test models:
 // SIGSEGV inside the library). The run ends with one error line naming the

@@ -305,6 +305,10 @@ TEST(ModelImport, AnImportThatOutgrowsItsMemoryIsOneClearError) {
 // file and exit 2, as for any bad input; no output file appears, and a
 // good model still loads afterwards in the same way.
 TEST(ModelImport, AFaultInsideTheImporterIsOneClearError) {
+#if defined(__SANITIZE_ADDRESS__)
+  GTEST_SKIP() << "built with AddressSanitizer, which reports the library's out-of-bounds read itself "
+                  "(and ends the run) before it faults";
+#endif
   REQUIRE_TEST_MODELS();
   test::TempDir dir;
   const fs::path whole = kModels / "MDL" / "MDL (HL1)" / "unnamed_bones.mdl";

@@ -33,6 +33,14 @@ bool next_word(std::string_view text, std::size_t& at, std::string_view& out) {
 // range it is infinite.
 float float_of(std::string_view w) { return static_cast<float>(std::strtod(std::string(w).c_str(), nullptr)); }
 
+// Whether that float is finite. Every vertex value of a text file passes
+// here, so plain decimals short enough to stay below the float range (no
+// letter, so no exponent, nan or inf; at most 38 characters) skip strtod.
+bool finite_in_float(std::string_view w) {
+  if (w.size() <= 38 && w.find_first_not_of("0123456789+-.") == std::string_view::npos) return true;
+  return std::isfinite(float_of(w));
+}
+
 struct PlyProperty {
   int count_bytes = 0;  // > 0 for a list: the size of its count
   int item_bytes = 0;   // size of the value (or of each list item)
@@ -80,7 +88,7 @@ void check_ply_text(std::string_view data, unsigned long long first_line, const 
       for (const PlyProperty& p : e.properties) {
         if (!next_word(data, at, w)) ply_truncated(name, e, i);
         if (p.count_bytes == 0) {
-          if (e.name == "vertex" && (p.name == "x" || p.name == "y" || p.name == "z") && !std::isfinite(float_of(w)))
+          if (e.name == "vertex" && (p.name == "x" || p.name == "y" || p.name == "z") && !finite_in_float(w))
             not_finite.emplace(i, line_of(w));
           continue;
         }
@@ -342,6 +350,11 @@ void check_off(const std::string& text, std::size_t file_bytes, const std::strin
     at = end;
     return true;
   };
+  const auto comment_line = [&] {
+    const std::size_t first = l.find_first_not_of(" \t");
+    return first != std::string_view::npos && l[first] == '#';
+  };
+  static const char* const kCommentLine = ": a comment line (the model importer reads comments in the header only)";
   const std::size_t numbers = dims + (homogeneous ? 1 : 0) + (normals ? 3 : 0);
   // Vertices that are not finite as the importer reads them (in floats,
   // divided by w): the line of each, named if a face uses it.
@@ -352,10 +365,9 @@ void check_off(const std::string& text, std::size_t file_bytes, const std::strin
                        std::to_string(counts[0]) + " (truncated file)");
     std::size_t w_at = 0;
     std::string_view w;
-    float c[4] = {0, 0, 0, 1};
-    if (l.find_first_not_of(" \t") != std::string_view::npos && l[l.find_first_not_of(" \t")] == '#')
-      throw InputError(where() + "OFF vertex " + std::to_string(v + 1) +
-                       ": a comment line (the model importer reads comments in the header only)");
+    if (comment_line()) throw InputError(where() + "OFF vertex " + std::to_string(v + 1) + kCommentLine);
+    float c[4] = {0, 0, 0, 1};  // read only with a w
+    bool finite = true;
     for (std::size_t k = 0; k < numbers; ++k) {
       if (!next_word(l, w_at, w))
         throw InputError(where() + "OFF vertex " + std::to_string(v + 1) + " needs " + std::to_string(numbers) +
@@ -363,10 +375,11 @@ void check_off(const std::string& text, std::size_t file_bytes, const std::strin
       if (!number_start(w))
         throw InputError(where() + "OFF vertex " + std::to_string(v + 1) + ": " + obj_text::quote(w) +
                          " is not a number");
-      if (k < dims + (homogeneous ? 1 : 0)) c[k] = float_of(w);
+      if (homogeneous && k <= dims) c[k] = float_of(w);
+      else if (k < dims) finite = finite && finite_in_float(w);
     }
-    for (std::size_t k = 0; k < dims; ++k)
-      if (!std::isfinite(homogeneous ? c[k] / c[dims] : c[k])) not_finite.emplace(v, line);
+    for (std::size_t k = 0; homogeneous && k < dims; ++k) finite = finite && std::isfinite(c[k] / c[dims]);
+    if (!finite) not_finite.emplace(v, line);
   }
   for (unsigned long long f = 0; f < counts[1]; ++f) {
     const std::string face = "OFF face " + std::to_string(f + 1) + " of " + std::to_string(counts[1]);
@@ -375,8 +388,7 @@ void check_off(const std::string& text, std::size_t file_bytes, const std::strin
                        std::to_string(counts[1]) + " (truncated file)");
     std::size_t w_at = 0;
     std::string_view w;
-    if (l.find_first_not_of(" \t") != std::string_view::npos && l[l.find_first_not_of(" \t")] == '#')
-      throw InputError(where() + face + ": a comment line (the model importer reads comments in the header only)");
+    if (comment_line()) throw InputError(where() + face + kCommentLine);
     const bool counted = next_word(l, w_at, w) && w.find_first_not_of("0123456789") == std::string_view::npos;
     if (!counted) throw InputError(where() + face + ": vertex count " + obj_text::quote(w) + " is not a count");
     if (w.size() > 2 || w == "0" || w == "00" || std::stoi(std::string(w)) > 9)
@@ -446,7 +458,7 @@ void check_stl(const std::string& bytes, const std::string& name) {
         if (!next_word(bytes, at, w)) break;  // the end of the data: said below
         if (number_start(w)) {
           // Every vertex of a text STL is a facet's.
-          if (key == "vertex" && !std::isfinite(float_of(w)))
+          if (key == "vertex" && !finite_in_float(w))
             throw InputError(name + ":" + std::to_string(line_at(at - w.size())) + ": STL 'vertex': " +
                              obj_text::quote(w) + " is not a finite number");
           continue;

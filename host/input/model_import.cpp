@@ -374,7 +374,8 @@ Scene import_model(ModelFiles& files, const std::string& path, const std::string
     importer.SetIOHandler(files.io_system());  // the importer owns it
     keep_readers_for(importer, ext);
     const aiScene* ai = nullptr;
-    const unsigned flags = validated_by_us(ext) ? 0u : kImportFlags;
+    const bool our_checks = validated_by_us(ext);
+    const unsigned flags = our_checks ? 0u : kImportFlags;
     if (watched) {
       const ImportWatchdog watchdog(path, files.size(path));
       const ImportFaultGuard guard(path);
@@ -383,7 +384,7 @@ Scene import_model(ModelFiles& files, const std::string& path, const std::string
       ai = importer.ReadFile(path, flags);
     }
     if (!ai && !base_dir.empty()) explain_with_stream(path);  // a file on disk (not a model in memory)
-    if (ai && validated_by_us(ext)) check_stl_scene(*ai, path);
+    if (ai && our_checks) check_stl_scene(*ai, path);
     scene = convert(importer, ai, path, base_dir, files);
   });
   scene.input_files.insert(scene.input_files.begin(), files.files().begin(), files.files().end());

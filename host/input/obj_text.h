@@ -70,17 +70,17 @@ class LineScanner {
   static bool continued(std::string_view line) { return !line.empty() && line.back() == '\\'; }
 
   void physical(std::string_view& line) {
-    const int line_no_ = ++lines_;
+    const int at_line = ++lines_;
     const char* q = p_;
     for (; q < end_; ++q) {
       const unsigned char c = static_cast<unsigned char>(*q);
       if (c >= 0x20 && c != 0x7f) continue;
       if (c == '\n' || c == '\r') break;
       if (c == '\t') continue;
-      if (c == 0) fail(file_, line_no_, "NUL byte in text (binary file?)");
+      if (c == 0) fail(file_, at_line, "NUL byte in text (binary file?)");
       char buf[64];
       std::snprintf(buf, sizeof buf, "control character 0x%02x in text (binary file?)", c);
-      fail(file_, line_no_, buf);
+      fail(file_, at_line, buf);
     }
     line = std::string_view(p_, static_cast<std::size_t>(q - p_));
     if (q < end_) q += (*q == '\r' && q + 1 < end_ && q[1] == '\n') ? 2 : 1;

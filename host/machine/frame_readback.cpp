@@ -1,3 +1,6 @@
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
 // What a frame reads back: the image, the counters, the progress line
 // and, with several ranks, this rank's report.
 #include "machine/frame.h"
@@ -11,22 +14,71 @@
 
 namespace opsila {
 
+// A device buffer mapped for reading. On a CPU device (PoCL) the mapping is
+// the buffer's own memory: the image is decoded straight from it, with no
+// staging copy whose fresh pages cost more than the copy itself
+// (docs/BENCHMARKS.md, "Levers"); elsewhere the driver makes one transfer,
+// as a read would. Unmapped when done (checked) or, on an error, when dropped.
+class MappedRead {
+ public:
+  MappedRead(Launcher& launch, cl::CommandQueue& q, const cl::Buffer& b, std::size_t bytes, const char* what)
+      : q_(q), b_(b) {
+    cl_int err = CL_SUCCESS;
+    p_ = q.enqueueMapBuffer(b, CL_TRUE, CL_MAP_READ, 0, bytes, nullptr, nullptr, &err);
+    launch.check(err, what);
+  }
+  ~MappedRead() {
+    if (p_) q_.enqueueUnmapMemObject(b_, p_);
+  }
+  MappedRead(const MappedRead&) = delete;
+  MappedRead& operator=(const MappedRead&) = delete;
+  template <class T>
+  const T* data() const {
+    return static_cast<const T*>(p_);
+  }
+  void unmap(Launcher& launch, const char* what) {
+    void* p = p_;
+    p_ = nullptr;
+    launch.check(q_.enqueueUnmapMemObject(b_, p), what);
+  }
+
+ private:
+  cl::CommandQueue& q_;
+  cl::Buffer b_;
+  void* p_ = nullptr;
+};
+
+static_assert(OPSILA_ACCUM_WORDS == 3 * OPSILA_COUNTER_WORDS, "pixel sums: three (low, high) word pairs a pixel");
+
 // Read back the pixel sums (fixed point: the sum of the N samples, decoded
 // here into their mean) and the item buffer.
 void Renderer::Machine::read_image(Launcher& launch, RenderResult& result) {
   cl::CommandQueue& q = rt.queue();
-  std::vector<cl_uint> accum(npix * OPSILA_ACCUM_WORDS);
-  launch.check(q.enqueueReadBuffer(b_accum, CL_TRUE, 0, accum.size() * sizeof(cl_uint), accum.data()),
-               "clEnqueueReadBuffer(pixel sums)");
-  result.item_buffer.resize(npix * 2);
-  launch.check(q.enqueueReadBuffer(b_items, CL_TRUE, 0, npix * sizeof(cl_int2), result.item_buffer.data()),
-               "clEnqueueReadBuffer(item buffer)");
+  const std::size_t values = npix * 3;
+  MappedRead accum(launch, q, b_accum, npix * OPSILA_ACCUM_WORDS * sizeof(cl_uint), "clEnqueueMapBuffer(pixel sums)");
+  MappedRead items(launch, q, b_items, npix * sizeof(cl_int2), "clEnqueueMapBuffer(item buffer)");
+  auto T0=std::chrono::steady_clock::now();
+  const cl_int* item = items.data<cl_int>();
+  result.item_buffer.assign(item, item + npix * 2);
+  items.unmap(launch, "clEnqueueUnmapMemObject(item buffer)");
+  auto T1=std::chrono::steady_clock::now();
+  const cl_uint* words = accum.data<cl_uint>();
+  result.rgb.resize(values);
+  auto T2=std::chrono::steady_clock::now();
+  if (group.all()) {
+    for (std::size_t i = 0; i < values; ++i) result.rgb[i] = from_fixed(join_words(words[2 * i], words[2 * i + 1]), spp);
+    accum.unmap(launch, "clEnqueueUnmapMemObject(pixel sums)");
+  auto T3=std::chrono::steady_clock::now();
+  if(getenv("TL2")) fprintf(stderr,"TL5 items %.3f rgbresize %.3f decode %.3f\n",std::chrono::duration<double>(T1-T0).count()*1e3,std::chrono::duration<double>(T2-T1).count()*1e3,std::chrono::duration<double>(T3-T2).count()*1e3);
+  } else {
+    // 64-bit integer sums, summed over the ranks on rank 0.
+    std::vector<std::uint64_t> sums(values);
+    for (std::size_t i = 0; i < values; ++i) sums[i] = join_words(words[2 * i], words[2 * i + 1]);
+    accum.unmap(launch, "clEnqueueUnmapMemObject(pixel sums)");
+    reduce_to_root(ranks, sums);
+    for (std::size_t i = 0; i < values; ++i) result.rgb[i] = from_fixed(sums[i], spp);
+  }
   launch.check(q.finish(), "clFinish");
-  // 64-bit integer sums: with several ranks, summed over them on rank 0.
-  std::vector<std::uint64_t> sums = join_word_pairs(accum);
-  if (!group.all()) reduce_to_root(ranks, sums);
-  result.rgb.resize(npix * 3);
-  for (std::size_t i = 0; i < npix * 3; ++i) result.rgb[i] = from_fixed(sums[i], spp);
 }
 
 // Per-level, per-PE counters and traffic, then the frame's totals. Every

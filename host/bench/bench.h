@@ -87,6 +87,8 @@ class Megakernel {
   Megakernel(const Scene& scene, ClRuntime& runtime, int tile = 1 << 16);
   ~Megakernel();
   BaselineImage frame();
+  // The same frame into `out`, reusing its image storage (Renderer::render).
+  void frame(BaselineImage& out);
 
  private:
   struct State;

@@ -108,6 +108,8 @@ struct Megakernel::State {
   MegaScene ms;
   MegaKernel mega;
   MegaBuffers b;
+  std::vector<cl_long> accum;    // host copies of the pixel sums and ray counts,
+  std::vector<cl_uint4> counts;  // kept between frames as the output image is
   State(const Scene& s, ClRuntime& runtime, int t)
       : scene(s), rt(runtime), tile(t), ms(mega_scene(s)),
         mega(runtime, "megakernel", KernelProgram::baselines),  // the program is built here, before any timing
@@ -122,12 +124,20 @@ Megakernel::Megakernel(const Scene& scene, ClRuntime& rt, int tile) {
 Megakernel::~Megakernel() = default;
 
 BaselineImage Megakernel::frame() {
+  BaselineImage out;
+  frame(out);
+  return out;
+}
+
+// Timed as OPSILA's frame is (Renderer::render): the kernels, the read-back
+// and the decode of the pixel sums into the float image, into storage that
+// a repeated frame reuses.
+void Megakernel::frame(BaselineImage& out) {
   const Scene& scene = s_->scene;
   ClRuntime& rt = s_->rt;
   const MegaScene& ms = s_->ms;
   const MegaBuffers& b = s_->b;
   const std::size_t npix = std::size_t(scene.width) * scene.height;
-  BaselineImage out;
   out.width = scene.width;
   out.height = scene.height;
   out.build_seconds = ms.build_seconds;
@@ -140,8 +150,10 @@ BaselineImage Megakernel::frame() {
     s_->mega.bind(ms.fp, b.nodes, b.tris, b.mats, b.lights, b.surface, ms.root, ms.root_lo, ms.root_hi,
                   spp_side(scene.spp), b.offsets, begin, count, b.accum, b.counts, b.items);
   });
-  std::vector<cl_long> accum(npix * 3);
-  std::vector<cl_uint4> counts(npix);
+  std::vector<cl_long>& accum = s_->accum;
+  std::vector<cl_uint4>& counts = s_->counts;
+  accum.resize(npix * 3);
+  counts.resize(npix);
   out.item_buffer.resize(npix * 2);
   launch.check(q.enqueueReadBuffer(b.accum, CL_TRUE, 0, accum.size() * sizeof(cl_long), accum.data()),
                "clEnqueueReadBuffer(megakernel pixel sums)");
@@ -150,22 +162,23 @@ BaselineImage Megakernel::frame() {
   launch.check(q.enqueueReadBuffer(b.items, CL_TRUE, 0, npix * sizeof(cl_int2), out.item_buffer.data()),
                "clEnqueueReadBuffer(megakernel item buffer)");
   launch.check(q.finish(), "clFinish");
-  out.seconds = seconds_since(t0);
-  launch.harvest();
-  for (const LaunchRecord& r : launches) out.kernel_seconds += r.seconds;
-
   // Pixel sums -> floats exactly as the renderer converts its fixed point.
   out.rgb.resize(npix * 3);
   for (std::size_t i = 0; i < npix * 3; ++i)
     out.rgb[i] = from_fixed(static_cast<std::uint64_t>(accum[i]), scene.spp);  // >= 0: add_sat
+  out.seconds = seconds_since(t0);
+  launch.harvest();
+  out.kernel_seconds = 0;
+  for (const LaunchRecord& r : launches) out.kernel_seconds += r.seconds;
+  out.rays = RayCounts();
   out.rays.primary = npix * static_cast<std::size_t>(scene.spp);
+  out.triangle_tests = out.box_tests = 0;
   for (const cl_uint4& c : counts) {
     out.rays.secondary += c.s[0];
     out.rays.shadow += c.s[1];
     out.triangle_tests += c.s[2];
     out.box_tests += c.s[3];
   }
-  return out;
 }
 
 BaselineImage render_megakernel(const Scene& scene, ClRuntime& rt, int tile) {

@@ -36,6 +36,10 @@ BaselineImage run_reference(const Scene& scene, int threads, Progress& live) {
   return out;
 }
 
+// run(image) renders one frame into `image`, which every run reuses (a
+// megakernel frame then maps no fresh pages, as OPSILA's does not). The
+// frames are the same but for their times: the report keeps the last image
+// with the times of the median run.
 template <typename F>
 BaselineRun measure_baseline(const std::string& name, const std::string& label, int threads, int warmup,
                              int repeats, F&& run) {
@@ -45,18 +49,22 @@ BaselineRun measure_baseline(const std::string& name, const std::string& label, 
   b.threads = threads;
   b.repeats = repeats;
   b.present = true;
-  std::vector<BaselineImage> runs;
+  BaselineImage img;
+  std::vector<double> build_seconds;
   for (int r = 0; r < warmup + repeats; ++r) {
-    BaselineImage img = run();
+    run(img);
     if (r < warmup) continue;
     b.seconds_all.push_back(img.seconds);
     b.kernel_seconds_all.push_back(img.kernel_seconds);
-    runs.push_back(std::move(img));
+    build_seconds.push_back(img.build_seconds);
   }
   const std::size_t m = median_index(b.seconds_all);
   b.seconds = median(b.seconds_all);
   b.kernel_seconds = median(b.kernel_seconds_all);
-  b.median_run = std::move(runs[m]);
+  b.median_run = std::move(img);
+  b.median_run.seconds = b.seconds_all[m];
+  b.median_run.kernel_seconds = b.kernel_seconds_all[m];
+  b.median_run.build_seconds = build_seconds[m];
   return b;
 }
 
@@ -122,35 +130,43 @@ void measure_opsila(BenchReport& report, Scene& scene, const RenderSettings& set
   const int warmup = report.warmup, repeats = report.repeats;
   progress("OPSILA render %dx%d, depth %d, %d PEs: %d warm-up + %d timed runs", scene.width, scene.height,
            scene.max_depth, settings.num_pes, warmup, repeats);
-  std::vector<RenderResult> renders;
   // The machine is prepared once (partition, uploads); every run is one frame.
   // The timed frames run the program a plain render runs, which counts only
   // rays; one more frame, not timed, counts the work (tests, forwards,
-  // traffic) that the report gives beside them.
+  // traffic) that the report gives beside them. Every frame renders into the
+  // same result, whose image storage is then reused (Renderer::render); each
+  // timed frame's image is compared with the first's, outside the timing.
   Progress live("bench", !progress.quiet);
   RenderSettings with_progress = settings;
   with_progress.progress = &live;
   with_progress.count_work = false;
   with_progress.switch_counting = true;
   Renderer renderer(scene, prepare_banks(scene, settings, rt), with_progress, rt);
+  RenderResult frame, first;
+  std::vector<RenderStats> stats;
+  report.deterministic = true;
   for (int r = 0; r < warmup + repeats; ++r) {
     auto t0 = std::chrono::steady_clock::now();
     live.restart("bench: OPSILA run " + std::to_string(r + 1) + "/" + std::to_string(warmup + repeats));
-    RenderResult res = renderer.render();
+    renderer.render(frame);
     live.finish();
     if (r == 0) report.first_render_seconds = seconds_since(t0);
     if (r < warmup) continue;
-    report.render_times.push_back(res.stats.render_seconds);
-    renders.push_back(std::move(res));
+    report.render_times.push_back(frame.stats.render_seconds);
+    stats.push_back(frame.stats);
+    if (r == warmup)
+      first = frame;
+    else
+      report.deterministic = report.deterministic && frame.rgb == first.rgb && frame.rays.same_rays(first.rays);
   }
   live.restart("bench: OPSILA, the work counted");
   renderer.count_work(true);
-  const RenderResult counted = renderer.render();
+  renderer.render(frame);
   live.finish();
-  report.deterministic = counted.rgb == renders.front().rgb && counted.rays.same_rays(renders.front().rays);
-  for (const RenderResult& r : renders) report.deterministic = report.deterministic && r.rgb == renders.front().rgb;
-  report.opsila = std::move(renders[median_index(report.render_times)]);
-  with_work_counts(report.opsila.stats, counted.stats);
+  report.deterministic = report.deterministic && frame.rgb == first.rgb && frame.rays.same_rays(first.rays);
+  report.opsila = std::move(first);
+  report.opsila.stats = stats[median_index(report.render_times)];
+  with_work_counts(report.opsila.stats, frame.stats);
   report.render_seconds = median(report.render_times);
   progress("OPSILA: %.3f s, %.3f Mrays/s", report.render_seconds, mrays(report.rays_total(), report.render_seconds));
 }
@@ -162,24 +178,24 @@ void measure_baselines(BenchReport& report, const Scene& scene, ClRuntime& rt, c
   progress("replicated megakernel: %d warm-up + %d timed runs", warmup, repeats);
   Megakernel mega(scene, rt);
   report.megakernel = measure_baseline("replicated_megakernel", "replicated megakernel (same device)", 0, warmup,
-                                       repeats, [&] { return mega.frame(); });
+                                       repeats, [&](BaselineImage& img) { mega.frame(img); });
   progress("traversal alone: the megakernel's rays through its BVH, %d warm-up + %d timed runs", warmup, repeats);
   report.traversal = measure_traversal_alone(scene, rt, warmup, repeats);
   if (!report.traversal.present) progress("traversal alone: not measured: %s", report.traversal.skipped.c_str());
   progress("sequential host reference, 1 thread: %d timed runs", host_repeats);
   report.sequential = measure_baseline("sequential_host", "host reference, 1 thread", 1, 0, host_repeats,
-                                       [&] {
+                                       [&](BaselineImage& img) {
                                          live.restart("bench: host reference, 1 thread");
-                                         return run_reference(scene, 1, live);
+                                         img = run_reference(scene, 1, live);
                                        });
   if (host_threads > 1) {
     progress("host reference, %d threads: %d timed runs", host_threads, host_repeats);
     report.threads = measure_baseline("host_threads", "host reference, " + std::to_string(host_threads) + " threads",
                                       host_threads, 0, host_repeats,
-                                      [&] {
+                                      [&](BaselineImage& img) {
                                         live.restart("bench: host reference, " + std::to_string(host_threads) +
                                                      " threads");
-                                        return run_reference(scene, host_threads, live);
+                                        img = run_reference(scene, host_threads, live);
                                       });
   }
   if (embree_available()) {
@@ -187,7 +203,8 @@ void measure_baselines(BenchReport& report, const Scene& scene, ClRuntime& rt, c
              host_repeats);
     report.embree = measure_baseline(
         "embree", "Embree " + embree_version() + ", " + std::to_string(host_threads) + " threads", host_threads,
-        std::min(warmup, 1), host_repeats, [&] { return render_embree(scene, host_threads); });
+        std::min(warmup, 1), host_repeats,
+        [&](BaselineImage& img) { img = render_embree(scene, host_threads); });
   }
 }
 

@@ -38,8 +38,14 @@ void Renderer::count_work(bool on) {
 }
 
 RenderResult Renderer::render() {
-  Machine& m = *m_;
   RenderResult result;
+  render(result);
+  return result;
+}
+
+void Renderer::render(RenderResult& result) {
+  Machine& m = *m_;
+  result.rays = RayCounts();
   result.width = m.width;
   result.height = m.height;
   result.stats = m.prepared;
@@ -85,7 +91,6 @@ RenderResult Renderer::render() {
   m.read_stats(result);
   if (ranks) m.ranks.end_collective();
   if (m.progress && m.progress->due()) m.progress->report(1.0, result.rays.total());
-  return result;
 }
 
 std::vector<std::uint64_t> Renderer::cluster_work() {

@@ -47,6 +47,10 @@ class Renderer {
   Renderer(const Renderer&) = delete;
   Renderer& operator=(const Renderer&) = delete;
   RenderResult render();
+  // The same frame into `out`, whose image storage is reused when it already
+  // has this frame's size (the bench's repeated frames: no fresh pages to
+  // map in every frame, as Embree's and the megakernel's images are not).
+  void render(RenderResult& out);
   // From the next frame on, count the work (tests, forwards, PE x PE
   // traffic) or only the rays (RenderSettings::count_work); the image and
   // the ray counts are the same. Needs RenderSettings::switch_counting, or

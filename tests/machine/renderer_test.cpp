@@ -400,7 +400,18 @@ TEST(Renderer, PreparedOnceRendersEqualFrames) {
   RenderResult first = machine.render();
   RenderResult second = machine.render();
   RenderResult fresh = render_with(s, 4, 32);
-  for (const RenderResult* r : {&second, &fresh}) {
+  // Into a result that already holds a frame, and one of another size: its
+  // storage is reused or resized, and nothing of the old frame is left.
+  RenderResult reused = first, resized = render_with(test::mirror_glass_scene(40), 4, 32);
+  std::fill(reused.rgb.begin(), reused.rgb.end(), -1.0f);
+  std::fill(reused.item_buffer.begin(), reused.item_buffer.end(), 7);
+  reused.stats.rounds += 5;
+  machine.render(reused);
+  machine.render(resized);
+  EXPECT_EQ(resized.width, first.width);
+  EXPECT_EQ(resized.rays.total(), first.rays.total());
+  EXPECT_EQ(reused.rays.total(), first.rays.total());
+  for (const RenderResult* r : {&second, &fresh, &reused, &resized}) {
     ASSERT_EQ(first.rgb.size(), r->rgb.size());
     EXPECT_EQ(0, std::memcmp(first.rgb.data(), r->rgb.data(), first.rgb.size() * sizeof(float)));
     EXPECT_EQ(first.item_buffer, r->item_buffer);

@@ -50,6 +50,7 @@ class Renderer {
   // The same frame into `out`, whose image storage is reused when it already
   // has this frame's size (the bench's repeated frames: no fresh pages to
   // map in every frame, as Embree's and the megakernel's images are not).
+  // When it throws, `out` holds no frame: its contents are left unspecified.
   void render(RenderResult& out);
   // From the next frame on, count the work (tests, forwards, PE x PE
   // traffic) or only the rays (RenderSettings::count_work); the image and

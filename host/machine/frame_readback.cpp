@@ -1,6 +1,3 @@
-#include <chrono>
-#include <cstdio>
-#include <cstdlib>
 // What a frame reads back: the image, the counters, the progress line
 // and, with several ranks, this rank's report.
 #include "machine/frame.h"
@@ -57,23 +54,19 @@ void Renderer::Machine::read_image(Launcher& launch, RenderResult& result) {
   const std::size_t values = npix * 3;
   MappedRead accum(launch, q, b_accum, npix * OPSILA_ACCUM_WORDS * sizeof(cl_uint), "clEnqueueMapBuffer(pixel sums)");
   MappedRead items(launch, q, b_items, npix * sizeof(cl_int2), "clEnqueueMapBuffer(item buffer)");
-  auto T0=std::chrono::steady_clock::now();
   const cl_int* item = items.data<cl_int>();
   result.item_buffer.assign(item, item + npix * 2);
   items.unmap(launch, "clEnqueueUnmapMemObject(item buffer)");
-  auto T1=std::chrono::steady_clock::now();
   const cl_uint* words = accum.data<cl_uint>();
+  auto sum = [words](std::size_t i) { return join_words(words[2 * i], words[2 * i + 1]); };
   result.rgb.resize(values);
-  auto T2=std::chrono::steady_clock::now();
   if (group.all()) {
-    for (std::size_t i = 0; i < values; ++i) result.rgb[i] = from_fixed(join_words(words[2 * i], words[2 * i + 1]), spp);
+    for (std::size_t i = 0; i < values; ++i) result.rgb[i] = from_fixed(sum(i), spp);
     accum.unmap(launch, "clEnqueueUnmapMemObject(pixel sums)");
-  auto T3=std::chrono::steady_clock::now();
-  if(getenv("TL2")) fprintf(stderr,"TL5 items %.3f rgbresize %.3f decode %.3f\n",std::chrono::duration<double>(T1-T0).count()*1e3,std::chrono::duration<double>(T2-T1).count()*1e3,std::chrono::duration<double>(T3-T2).count()*1e3);
   } else {
     // 64-bit integer sums, summed over the ranks on rank 0.
     std::vector<std::uint64_t> sums(values);
-    for (std::size_t i = 0; i < values; ++i) sums[i] = join_words(words[2 * i], words[2 * i + 1]);
+    for (std::size_t i = 0; i < values; ++i) sums[i] = sum(i);
     accum.unmap(launch, "clEnqueueUnmapMemObject(pixel sums)");
     reduce_to_root(ranks, sums);
     for (std::size_t i = 0; i < values; ++i) result.rgb[i] = from_fixed(sums[i], spp);

@@ -82,20 +82,20 @@ typedef struct {
   const CostProbe *probe;
 } BankWalk;
 
-OPSILA_INLINE void bank_node(BankWalk *w, __global const BankNode *nd, float *te, int *hm) {
+/* Every child box in use is a test, met or not. */
+OPSILA_INLINE uint bank_node(BankWalk *w, __global const BankNode *nd, float *te) {
   floatW enter;
   intW hit = node_hits(w->r, nd, w->tmin, w->tmax, w->slack, &enter);
   vstoreW(enter, 0, te);
-  vstoreW(hit, 0, hm);
+  if (OPSILA_COUNT_WORK) *w->box_tests += popcount(lane_mask(vloadW(0, nd->count) >= (intW)(0)));
+#ifdef OPSILA_MEASURE_COST
+  for (int k = 0; k < OPSILA_BVH_WIDTH; ++k)
+    if (nd->count[k] >= 0) COST_CHILD(w->probe, nd, k);
+#endif
+  return lane_mask(hit);
 }
 
-/* Every child box is a test, met or not. */
-OPSILA_INLINE bool bank_child(BankWalk *w, __global const BankNode *nd, int k, int cnt, int met, float entry) {
-  if (cnt < 0) return false;
-  COUNT_TEST(w->box_tests);
-  COST_CHILD(w->probe, nd, k);
-  return met;
-}
+OPSILA_INLINE bool bank_child(BankWalk *w, __global const BankNode *nd, int k, int cnt, float entry) { return true; }
 
 /* A popped entry beyond the tie limit of the best hit found since it was
  * pushed cannot hold a winner; the limit bounds the node's test too. */

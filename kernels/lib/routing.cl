@@ -104,19 +104,19 @@ typedef struct {
   int cursor_pe, q;
 } RouteWalk;
 
-/* route_hits into per-child arrays: entries and whether each child is met. */
-OPSILA_INLINE void route_node(RouteWalk *w, __global const BankNode *nd, float *te, int *hm) {
+/* route_hits: the entries into te, the mask of the children met. */
+OPSILA_INLINE uint route_node(RouteWalk *w, __global const BankNode *nd, float *te) {
   COUNT_TEST(w->route_tests);
   floatW ent;
   intW met = route_hits(w->r, nd, w->tmin, w->tmax, &ent);
   vstoreW(ent, 0, te);
-  vstoreW(met, 0, hm);
+  return lane_mask(met);
 }
 
 /* Nearest entry: only a box entered below both the candidate's entry and
  * this PE's entry so far can change the answer. */
-OPSILA_INLINE bool entry_child(RouteWalk *w, __global const BankNode *nd, int k, int cnt, int met, float entry) {
-  return met && entry < fmin(w->best_entry, w->entry);
+OPSILA_INLINE bool entry_child(RouteWalk *w, __global const BankNode *nd, int k, int cnt, float entry) {
+  return entry < fmin(w->best_entry, w->entry);
 }
 
 /* A cluster box entered at or before the cursor: the PE was already visited
@@ -127,8 +127,8 @@ OPSILA_INLINE bool entry_leaf(RouteWalk *w, int first, int count, float entry) {
   return false;
 }
 
-OPSILA_INLINE bool segment_child(RouteWalk *w, __global const BankNode *nd, int k, int cnt, int met, float entry) {
-  return met;
+OPSILA_INLINE bool segment_child(RouteWalk *w, __global const BankNode *nd, int k, int cnt, float entry) {
+  return true;
 }
 
 /* Any cluster box met by the segment: the shadow ray goes to this PE. */
@@ -153,10 +153,9 @@ inline int next_destination_boxes(const RayPre *r, __global const BankNode *rout
   for (int n = 0; n < top_nodes; ++n) {
     __global const BankNode *tn = &route[num_pes + n];
     float pe_entry[OPSILA_BVH_WIDTH];
-    int pe_met[OPSILA_BVH_WIDTH];
-    route_node(&w, tn, pe_entry, pe_met);
-    for (int kq = 0; kq < OPSILA_BVH_WIDTH; ++kq) {
-      if (!pe_met[kq] || !(pe_entry[kq] < w.best_entry)) continue;
+    for (uint met = route_node(&w, tn, pe_entry); met != 0u; met &= met - 1u) {
+      int kq = 31 - clz(met & (0u - met)); /* lowest set bit: PEs in increasing order */
+      if (!(pe_entry[kq] < w.best_entry)) continue;
       int q = tn->child[kq];
       if (q == cursor_pe) continue; /* (entry, q) == cursor: visited */
       w.q = q;
@@ -185,11 +184,9 @@ inline int next_shadow_destination_boxes(const RayPre *r, __global const BankNod
   for (int n = first / OPSILA_BVH_WIDTH; n < top_nodes; ++n) {
     __global const BankNode *tn = &route[num_pes + n];
     float pe_entry[OPSILA_BVH_WIDTH];
-    int pe_met[OPSILA_BVH_WIDTH];
-    route_node(&w, tn, pe_entry, pe_met);
-    for (int kq = 0; kq < OPSILA_BVH_WIDTH; ++kq) {
-      int q = n * OPSILA_BVH_WIDTH + kq;
-      if (q < first || q == home || !pe_met[kq]) continue;
+    for (uint met = route_node(&w, tn, pe_entry); met != 0u; met &= met - 1u) {
+      int q = n * OPSILA_BVH_WIDTH + (31 - clz(met & (0u - met)));
+      if (q < first || q == home) continue;
       if (walk_route_segment(&w, route, q)) return q;
     }
   }

@@ -43,6 +43,18 @@ typedef int4 intW;
 #define vstoreW vstore4
 #endif
 
+/* A node test's lanes (-1 or 0 each) as a bit mask, bit k for lane k. */
+OPSILA_INLINE uint lane_mask(intW m) {
+#if OPSILA_BVH_WIDTH == 8
+  int8 b = m & (int8)(1, 2, 4, 8, 16, 32, 64, 128);
+  int4 h = b.lo | b.hi;
+#else
+  int4 h = m & (int4)(1, 2, 4, 8);
+#endif
+  int2 q = h.lo | h.hi;
+  return (uint)(q.x | q.y);
+}
+
 /* Raw slab distances of a node's child boxes: the largest plane entry and
  * the smallest plane exit, per child. Planes are taken near/far by the sign
  * of the direction, so one subtraction and one product per plane; a NaN (a
@@ -64,15 +76,17 @@ OPSILA_INLINE void node_spans(const RayPre *r, __global const BankNode *nd, floa
  *   bool name(State *w, __global const BankNode *nodes, int root)
  * a depth-first walk below `root` (OpenCL C has no templates: the hooks are
  * functions named here, inlined into the walk):
- *   NODE(w, nd, float te[W], int hm[W]): the node test; per child, its
- *     entry distance and whether the ray meets it (empty slots never do);
- *   CHILD(w, nd, k, count, met, entry): whether child k is visited; it sees
- *     every child, empty slots (count < 0) and missed ones included, so that
- *     it may count the tests;
+ *   NODE(w, nd, float te[W]) -> uint: the node test; per child, its entry
+ *     distance, and the mask of the children the ray meets (bit k: child k;
+ *     empty slots never do). It counts the node's tests;
+ *   CHILD(w, nd, k, count, entry): whether met child k is visited;
  *   LEAF(w, first, count, entry): a leaf's items; true ends the walk (and
  *     the walk returns true);
  *   POP(w, entry): ordered walks: whether a popped entry is still worth
  *     visiting (it may set the bound the next NODE uses).
+ * The children met are taken from the mask in increasing k (lowest set bit
+ * first), the order a loop over k would give: a node's missed children cost
+ * no branch (most of a node's eight are missed).
  * ORDERED 0: a met inner child is pushed, a met leaf visited at once.
  * ORDERED 1: every met child, leaves too, is pushed, the children of one
  *   node farthest first, so that the nearest is popped next; a leaf is
@@ -98,12 +112,13 @@ OPSILA_INLINE void node_spans(const RayPre *r, __global const BankNode *nd, floa
       }                                                                           \
       __global const BankNode *nd = &nodes[s_node[sp]];                           \
       float te[OPSILA_BVH_WIDTH];                                                 \
-      int hm[OPSILA_BVH_WIDTH];                                                   \
-      NODE(w, nd, te, hm);                                                        \
+      uint met = NODE(w, nd, te);                                                 \
       int base = sp;                                                              \
-      for (int k = 0; k < OPSILA_BVH_WIDTH; ++k) {                                \
+      while (met != 0u) {                                                         \
+        int k = 31 - clz(met & (0u - met)); /* lowest set bit */                  \
+        met &= met - 1u;                                                          \
         int cnt = nd->count[k];                                                   \
-        if (!CHILD(w, nd, k, cnt, hm[k], te[k])) continue;                        \
+        if (!CHILD(w, nd, k, cnt, te[k])) continue;                               \
         if (ORDERED) {                                                            \
           if (sp >= OPSILA_BVH_STACK) continue;                                   \
           /* Insert, keeping this node's entries farthest first. */               \

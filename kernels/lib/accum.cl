@@ -51,6 +51,36 @@ inline void accumulate(volatile __global uint *accum, int pixel, float3 value) {
   if (q.z != 0) add_fixed(&accum[pixel * OPSILA_ACCUM_WORDS + 4], q.z);
 }
 
+/* What one work-item adds to one pixel, summed in private and added into
+ * the pixel's sums once (pixel_flush): the SPMD phase's descriptor adds its
+ * ambient term, its lit shadow rays and its children's misses to its own
+ * pixel, one to three atomics a channel each time before. Each contribution
+ * is quantised as accumulate() quantises it, and the private sum stops at
+ * 2^63: below that the pixel's sum is the same integer (addition modulo 2^64
+ * is order-free), and a true sum at or above 2^63 still sets the
+ * saturation bit (add_fixed of 2^63 adds bit 31 to the high word, or
+ * carries out of it), which is all the host reads of a saturated sum. */
+typedef struct {
+  ulong3 sum;
+} PixelSum;
+
+inline PixelSum pixel_sum_zero(void) {
+  PixelSum ps;
+  ps.sum = (ulong3)(0ul);
+  return ps;
+}
+
+inline void pixel_add(PixelSum *ps, float3 value) {
+  const ulong3 cap = (ulong3)(0x8000000000000000ul); /* 2^63; each term is below it */
+  ps->sum = min(ps->sum + convert_ulong3(fixed3(value)), cap);
+}
+
+inline void pixel_flush(volatile __global uint *accum, int pixel, const PixelSum *ps) {
+  if (ps->sum.x != 0ul) add_fixed(&accum[pixel * OPSILA_ACCUM_WORDS + 0], (long)ps->sum.x);
+  if (ps->sum.y != 0ul) add_fixed(&accum[pixel * OPSILA_ACCUM_WORDS + 2], (long)ps->sum.y);
+  if (ps->sum.z != 0ul) add_fixed(&accum[pixel * OPSILA_ACCUM_WORDS + 4], (long)ps->sum.z);
+}
+
 /* Counter `index` of a 64-bit counter array (OPSILA_COUNTER_WORDS words
  * each): statistics, PE x PE traffic, primary hits. */
 inline void count_add(volatile __global uint *counters, long index, uint amount) {

@@ -214,11 +214,12 @@ inline void process(FrameParams fp, const Routing *rt, const Bank *bank, __globa
   int pixel = DESC_PIXEL(ds);
   float3 org = DESC_ORIGIN(ds), d = DESC_DIRECTION(ds), w = DESC_WEIGHT(ds);
   STAT_INC(st, TRACED);
-  RayPre r = make_ray(org, d);
   Descriptor next;
 
+  /* A resolved descriptor is shaded at once: no ray set-up for it. */
   if (kind == OPSILA_KIND_SHADOW) {
     STAT_INC(st, SHADOW);
+    RayPre r = make_ray(org, d);
     if (shadow_visit(rt, bank, &r, eps, DESC_T_MAX(ds), bank->pe, DESC_SHADOW_HOME(ds), w, pixel, meta, ps, st,
                      probe, &next) == VISIT_SEND)
       emit(out, next);
@@ -228,6 +229,7 @@ inline void process(FrameParams fp, const Routing *rt, const Bank *bank, __globa
   int hit = DESC_HIT(ds);
   if (kind == OPSILA_KIND_TRACE) {
     STAT_INC(st, RADIANCE);
+    RayPre r = make_ray(org, d);
     int best_facet = hit >= 0 ? as_int(DESC_BEST_FACET(ds)) : INT_MAX;
     int v = trace_visit(fp, rt, bank, &r, w, pixel, meta, DESC_CURSOR_ENTRY(ds), &t_best, &hit, best_facet, ps,
                         st, probe, &next);

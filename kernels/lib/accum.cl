@@ -4,8 +4,9 @@
 /* 64-bit fixed-point add from two 32-bit atomics: the carry out of the low
  * word goes to the high word. Integer sums are order-independent, so the
  * image is identical however the work-items are scheduled.
- * Saturation: values are >= 0 and < 2^63 (every term of SPEC's pixel sum
- * is >= 0, and fixed3 saturates), so a sum reaching 2^63 sets bit 31 of
+ * Saturation: values are >= 0 and at most 2^63 read as unsigned (every
+ * term of SPEC's pixel sum is >= 0, fixed3 saturates below 2^63, and
+ * pixel_add stops at 2^63), so a sum reaching 2^63 sets bit 31 of
  * the high word; an add that carries out of the high word sets it again
  * (atomic_or), and adds that do not carry out cannot clear it. So bit 31 is
  * set at the end exactly when the true sum is >= 2^63, whatever the order:
@@ -36,7 +37,8 @@ inline void add_fixed_owned(volatile __global uint *cell, long value) {
   cell[1] = hi;
 }
 
-/* accumulate() into a pixel that no other work-item adds to during the launch. */
+/* A contribution added into a pixel that no other work-item adds to during
+ * the launch (the primary descriptors' misses). */
 inline void accumulate_owned(volatile __global uint *accum, int pixel, float3 value) {
   long3 q = fixed3(value);
   add_fixed_owned(&accum[pixel * OPSILA_ACCUM_WORDS + 0], q.x);
@@ -44,18 +46,11 @@ inline void accumulate_owned(volatile __global uint *accum, int pixel, float3 va
   add_fixed_owned(&accum[pixel * OPSILA_ACCUM_WORDS + 4], q.z);
 }
 
-inline void accumulate(volatile __global uint *accum, int pixel, float3 value) {
-  long3 q = fixed3(value);
-  if (q.x != 0) add_fixed(&accum[pixel * OPSILA_ACCUM_WORDS + 0], q.x);
-  if (q.y != 0) add_fixed(&accum[pixel * OPSILA_ACCUM_WORDS + 2], q.y);
-  if (q.z != 0) add_fixed(&accum[pixel * OPSILA_ACCUM_WORDS + 4], q.z);
-}
-
 /* What one work-item adds to one pixel, summed in private and added into
  * the pixel's sums once (pixel_flush): the SPMD phase's descriptor adds its
  * ambient term, its lit shadow rays and its children's misses to its own
  * pixel, one to three atomics a channel each time before. Each contribution
- * is quantised as accumulate() quantises it, and the private sum stops at
+ * is quantised on its own (fixed3), and the private sum stops at
  * 2^63: below that the pixel's sum is the same integer (addition modulo 2^64
  * is order-free), and a true sum at or above 2^63 still sets the
  * saturation bit (add_fixed of 2^63 adds bit 31 to the high word, or

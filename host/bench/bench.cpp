@@ -128,10 +128,10 @@ int run_bench(const std::vector<std::string>& args) {
   report.context = gather_context();
   report.load_before = load_average();
   build_program(report, rt, settings.balance, progress);
-  measure_opsila(report, scene, settings, rt, progress);
+  measure_renders(report, scene, settings, rt, ranks.size() == 1, progress);
   report.ranks = ranks.size();
   if (ranks.size() == 1) {
-    measure_baselines(report, scene, rt, progress);
+    measure_host_references(report, scene, progress);
     measure_scatter_curve(report, rt, progress);
   } else {
     report.single_process_only = kSingleProcessOnly;

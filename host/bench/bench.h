@@ -8,6 +8,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <memory>
+#include <utility>
 #include <string>
 #include <vector>
 
@@ -115,6 +116,25 @@ struct TraversalAlone {
 };
 TraversalAlone measure_traversal_alone(const Scene& scene, ClRuntime& runtime, int warmup, int repeats,
                                        int tile = 1 << 16);
+
+// The traversal alone a run at a time, for a bench that interleaves its
+// renderers' runs: the construction logs the megakernel's rays and uploads
+// them (into `record`'s counts, or its reason when the device cannot hold
+// them); run() traces them once and returns the two kernels' device
+// seconds (nearest hit, any hit).
+class TraversalBatch {
+ public:
+  TraversalBatch(const Scene& scene, ClRuntime& runtime, TraversalAlone& record, int tile = 1 << 16);
+  ~TraversalBatch();
+  std::pair<double, double> run();
+
+ private:
+  struct State;
+  std::unique_ptr<State> s_;
+};
+// A timed run's seconds into `t`; median() picks the median run's.
+void record_traversal_run(TraversalAlone& t, std::pair<double, double> seconds);
+void finish_traversal(TraversalAlone& t);
 
 // True when the binary was built with Embree (CMake found it).
 bool embree_available();

@@ -243,47 +243,83 @@ bool log_megakernel_rays(const Scene& scene, ClRuntime& rt, const MegaScene& ms,
 
 }  // namespace
 
-TraversalAlone measure_traversal_alone(const Scene& scene, ClRuntime& rt, int warmup, int repeats, int tile) {
+// kernels/baselines/traversal.cl: nodes, facets, root and its children's box, slack, rays, count, one word per ray.
+using BatchKernel = KernelBinding<Buf, Buf, int, cl_float4, cl_float4, float, Buf, int, Buf>;
+
+struct TraversalBatch::State {
+  State(ClRuntime& rt, const Scene& scene)
+      : rt(rt),
+        ms(mega_scene(scene)),
+        nearest(rt, "traversal_nearest", KernelProgram::baselines),
+        any(rt, "traversal_any", KernelProgram::baselines) {}
+  ClRuntime& rt;
+  MegaScene ms;
+  MegaBuffers b;
+  BatchKernel nearest, any;
+  Buf b_nearest, b_any, b_hits;
+  std::size_t nearest_rays = 0, any_rays = 0;
+};
+
+TraversalBatch::TraversalBatch(const Scene& scene, ClRuntime& rt, TraversalAlone& record, int tile) {
   check_kernel_limits(scene);
-  TraversalAlone out;
-  const MegaScene ms = mega_scene(scene);
   rt.program(KernelProgram::baselines);
-  const MegaBuffers b = mega_buffers(rt, scene, ms.bs);
+  auto s = std::make_unique<State>(rt, scene);
+  s->b = mega_buffers(rt, scene, s->ms.bs);
   RayLog log;
-  if (!log_megakernel_rays(scene, rt, ms, b, tile, log, out.skipped)) return out;
-  out.present = true;
-  out.nearest_rays = log.nearest.size() / 2;
-  out.any_rays = log.any.size() / 2;
-  // kernels/baselines/traversal.cl: nodes, facets, root and its children's box, slack, rays, count, one word per ray.
-  using Batch = KernelBinding<Buf, Buf, int, cl_float4, cl_float4, float, Buf, int, Buf>;
-  Batch nearest(rt, "traversal_nearest", KernelProgram::baselines), any(rt, "traversal_any", KernelProgram::baselines);
-  const Buf b_nearest = upload(rt, log.nearest, "nearest-hit rays");
-  const Buf b_any = upload(rt, log.any, "any-hit rays");
-  const Buf b_hits = device_buffer(rt, std::max<std::size_t>(out.nearest_rays, out.any_rays) * sizeof(cl_int) + 4,
-                                   "traversal answers");
-  for (int r = 0; r < warmup + repeats; ++r) {
-    std::vector<LaunchRecord> launches;
-    Launcher launch(rt, launches);
-    for (auto [k, rays, count] : {std::tuple{&nearest, &b_nearest, out.nearest_rays},
-                                  std::tuple{&any, &b_any, out.any_rays}}) {
-      if (count == 0) continue;
-      cl::Kernel &kk = k->bind(b.nodes, b.tris, ms.root, ms.root_lo, ms.root_hi, ms.fp.box_slack, *rays,
-                               static_cast<int>(count), b_hits);
-      launch.run(kk, k->name().c_str(), round_up(static_cast<int>(count), 64), fixed_local(rt, kk), -1);
-    }
-    launch.check(rt.queue().finish(), "clFinish");
-    launch.harvest();
-    if (r < warmup) continue;
-    double n = 0, a = 0;
-    for (const LaunchRecord& l : launches) (l.name == "traversal_nearest" ? n : a) += l.seconds;
-    out.nearest_seconds_all.push_back(n);
-    out.any_seconds_all.push_back(a);
-    out.seconds_all.push_back(n + a);
+  if (!log_megakernel_rays(scene, rt, s->ms, s->b, tile, log, record.skipped)) return;
+  record.present = true;
+  s->nearest_rays = record.nearest_rays = log.nearest.size() / 2;
+  s->any_rays = record.any_rays = log.any.size() / 2;
+  s->b_nearest = upload(rt, log.nearest, "nearest-hit rays");
+  s->b_any = upload(rt, log.any, "any-hit rays");
+  s->b_hits = device_buffer(rt, std::max<std::size_t>(s->nearest_rays, s->any_rays) * sizeof(cl_int) + 4,
+                            "traversal answers");
+  s_ = std::move(s);
+}
+
+TraversalBatch::~TraversalBatch() = default;
+
+std::pair<double, double> TraversalBatch::run() {
+  State& s = *s_;
+  std::vector<LaunchRecord> launches;
+  Launcher launch(s.rt, launches);
+  for (auto [k, rays, count] : {std::tuple{&s.nearest, &s.b_nearest, s.nearest_rays},
+                                std::tuple{&s.any, &s.b_any, s.any_rays}}) {
+    if (count == 0) continue;
+    cl::Kernel& kk = k->bind(s.b.nodes, s.b.tris, s.ms.root, s.ms.root_lo, s.ms.root_hi, s.ms.fp.box_slack, *rays,
+                             static_cast<int>(count), s.b_hits);
+    launch.run(kk, k->name().c_str(), round_up(static_cast<int>(count), 64), fixed_local(s.rt, kk), -1);
   }
-  const std::size_t m = median_index(out.seconds_all);
-  out.seconds = out.seconds_all[m];
-  out.nearest_seconds = out.nearest_seconds_all[m];
-  out.any_seconds = out.any_seconds_all[m];
+  launch.check(s.rt.queue().finish(), "clFinish");
+  launch.harvest();
+  double n = 0, a = 0;
+  for (const LaunchRecord& l : launches) (l.name == "traversal_nearest" ? n : a) += l.seconds;
+  return {n, a};
+}
+
+void record_traversal_run(TraversalAlone& t, std::pair<double, double> seconds) {
+  t.nearest_seconds_all.push_back(seconds.first);
+  t.any_seconds_all.push_back(seconds.second);
+  t.seconds_all.push_back(seconds.first + seconds.second);
+}
+
+void finish_traversal(TraversalAlone& t) {
+  if (t.seconds_all.empty()) return;
+  const std::size_t m = median_index(t.seconds_all);
+  t.seconds = t.seconds_all[m];
+  t.nearest_seconds = t.nearest_seconds_all[m];
+  t.any_seconds = t.any_seconds_all[m];
+}
+
+TraversalAlone measure_traversal_alone(const Scene& scene, ClRuntime& rt, int warmup, int repeats, int tile) {
+  TraversalAlone out;
+  TraversalBatch batch(scene, rt, out, tile);
+  if (!out.present) return out;
+  for (int r = 0; r < warmup + repeats; ++r) {
+    const auto seconds = batch.run();
+    if (r >= warmup) record_traversal_run(out, seconds);
+  }
+  finish_traversal(out);
   return out;
 }
 

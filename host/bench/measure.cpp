@@ -36,36 +36,50 @@ BaselineImage run_reference(const Scene& scene, int threads, Progress& live) {
   return out;
 }
 
-// run(image) renders one frame into `image`, which every run reuses (a
-// megakernel frame then maps no fresh pages, as OPSILA's does not). The
-// frames are the same but for their times: the report keeps the last image
-// with the times of the median run.
+// One baseline's timed runs, gathered a run at a time: run() renders one
+// frame into `image`, which every run reuses (a megakernel frame then maps
+// no fresh pages, as OPSILA's does not), and record() keeps a timed run's
+// times. The frames are the same but for their times: finish() keeps the
+// last image with the times of the median run.
+struct BaselineSeries {
+  BaselineRun b;
+  BaselineImage image;
+  std::vector<double> build_seconds;
+
+  BaselineSeries(const std::string& name, const std::string& label, int threads, int repeats) {
+    b.name = name;
+    b.label = label;
+    b.threads = threads;
+    b.repeats = repeats;
+    b.present = true;
+  }
+  void record() {
+    b.seconds_all.push_back(image.seconds);
+    b.kernel_seconds_all.push_back(image.kernel_seconds);
+    build_seconds.push_back(image.build_seconds);
+  }
+  BaselineRun finish() {
+    const std::size_t m = median_index(b.seconds_all);
+    b.seconds = median(b.seconds_all);
+    b.kernel_seconds = median(b.kernel_seconds_all);
+    b.median_run = std::move(image);
+    b.median_run.seconds = b.seconds_all[m];
+    b.median_run.kernel_seconds = b.kernel_seconds_all[m];
+    b.median_run.build_seconds = build_seconds[m];
+    return std::move(b);
+  }
+};
+
+// A baseline's runs one after the other: `warmup` untimed, then `repeats`.
 template <typename F>
 BaselineRun measure_baseline(const std::string& name, const std::string& label, int threads, int warmup,
                              int repeats, F&& run) {
-  BaselineRun b;
-  b.name = name;
-  b.label = label;
-  b.threads = threads;
-  b.repeats = repeats;
-  b.present = true;
-  BaselineImage img;
-  std::vector<double> build_seconds;
+  BaselineSeries series(name, label, threads, repeats);
   for (int r = 0; r < warmup + repeats; ++r) {
-    run(img);
-    if (r < warmup) continue;
-    b.seconds_all.push_back(img.seconds);
-    b.kernel_seconds_all.push_back(img.kernel_seconds);
-    build_seconds.push_back(img.build_seconds);
+    run(series.image);
+    if (r >= warmup) series.record();
   }
-  const std::size_t m = median_index(b.seconds_all);
-  b.seconds = median(b.seconds_all);
-  b.kernel_seconds = median(b.kernel_seconds_all);
-  b.median_run = std::move(img);
-  b.median_run.seconds = b.seconds_all[m];
-  b.median_run.kernel_seconds = b.kernel_seconds_all[m];
-  b.median_run.build_seconds = build_seconds[m];
-  return b;
+  return series.finish();
 }
 
 // The scatter curve's vector lengths: powers of two from 16 and the paper's
@@ -125,11 +139,18 @@ void build_program(BenchReport& report, ClRuntime& rt, Balance balance, const Be
   report.compile_seconds = seconds_since(tc);
 }
 
-void measure_opsila(BenchReport& report, Scene& scene, const RenderSettings& settings, ClRuntime& rt,
-                    const BenchProgress& progress) {
+void measure_renders(BenchReport& report, Scene& scene, const RenderSettings& settings, ClRuntime& rt,
+                     bool baselines, const BenchProgress& progress) {
   const int warmup = report.warmup, repeats = report.repeats;
-  progress("OPSILA render %dx%d, depth %d, %d PEs: %d warm-up + %d timed runs", scene.width, scene.height,
-           scene.max_depth, settings.num_pes, warmup, repeats);
+  const int host_threads = report.host_threads;
+  const bool embree = baselines && embree_available();
+  std::string others;
+  if (baselines)
+    others = embree ? ", the megakernel, the traversal alone and Embree " + embree_version() + " (" +
+                          std::to_string(host_threads) + " threads) in turn"
+                    : ", the megakernel and the traversal alone in turn";
+  progress("OPSILA render %dx%d, depth %d, %d PEs%s: %d warm-up + %d timed rounds", scene.width, scene.height,
+           scene.max_depth, settings.num_pes, others.c_str(), warmup, repeats);
   // The machine is prepared once (partition, uploads); every run is one frame.
   // The timed frames run the program a plain render runs, which counts only
   // rays; one more frame, not timed, counts the work (tests, forwards,
@@ -142,22 +163,57 @@ void measure_opsila(BenchReport& report, Scene& scene, const RenderSettings& set
   with_progress.count_work = false;
   with_progress.switch_counting = true;
   Renderer renderer(scene, prepare_banks(scene, settings, rt), with_progress, rt);
+  // The baselines are prepared too (after OPSILA's preparation, whose host
+  // peak the report gives), and every round runs one frame of each, in
+  // turn: the machine's speed drifts over seconds, and the ratios between
+  // renderers are what the report is for.
+  std::unique_ptr<Megakernel> mega;
+  std::unique_ptr<TraversalBatch> batch;
+  std::unique_ptr<BaselineSeries> mega_runs, embree_runs;
+  if (baselines) {
+    mega = std::make_unique<Megakernel>(scene, rt);
+    mega_runs = std::make_unique<BaselineSeries>("replicated_megakernel", "replicated megakernel (same device)", 0,
+                                                 repeats);
+    batch = std::make_unique<TraversalBatch>(scene, rt, report.traversal);
+    if (!report.traversal.present) {
+      progress("traversal alone: not measured: %s", report.traversal.skipped.c_str());
+      batch.reset();
+    }
+    if (embree)
+      embree_runs = std::make_unique<BaselineSeries>(
+          "embree", "Embree " + embree_version() + ", " + std::to_string(host_threads) + " threads", host_threads,
+          repeats);
+  }
   RenderResult frame, first;
   std::vector<RenderStats> stats;
   report.deterministic = true;
   for (int r = 0; r < warmup + repeats; ++r) {
+    const bool timed = r >= warmup;
     auto t0 = std::chrono::steady_clock::now();
-    live.restart("bench: OPSILA run " + std::to_string(r + 1) + "/" + std::to_string(warmup + repeats));
+    live.restart("bench: round " + std::to_string(r + 1) + "/" + std::to_string(warmup + repeats) + ", OPSILA");
     renderer.render(frame);
     live.finish();
     if (r == 0) report.first_render_seconds = seconds_since(t0);
-    if (r < warmup) continue;
-    report.render_times.push_back(frame.stats.render_seconds);
-    stats.push_back(frame.stats);
-    if (r == warmup)
-      first = frame;
-    else
-      report.deterministic = report.deterministic && frame.rgb == first.rgb && frame.rays.same_rays(first.rays);
+    if (timed) {
+      report.render_times.push_back(frame.stats.render_seconds);
+      stats.push_back(frame.stats);
+      if (r == warmup)
+        first = frame;
+      else
+        report.deterministic = report.deterministic && frame.rgb == first.rgb && frame.rays.same_rays(first.rays);
+    }
+    if (mega) {
+      mega->frame(mega_runs->image);
+      if (timed) mega_runs->record();
+    }
+    if (batch) {
+      const auto seconds = batch->run();
+      if (timed) record_traversal_run(report.traversal, seconds);
+    }
+    if (embree_runs) {
+      embree_runs->image = render_embree(scene, host_threads);
+      if (timed) embree_runs->record();
+    }
   }
   live.restart("bench: OPSILA, the work counted");
   renderer.count_work(true);
@@ -169,19 +225,14 @@ void measure_opsila(BenchReport& report, Scene& scene, const RenderSettings& set
   with_work_counts(report.opsila.stats, frame.stats);
   report.render_seconds = median(report.render_times);
   progress("OPSILA: %.3f s, %.3f Mrays/s", report.render_seconds, mrays(report.rays_total(), report.render_seconds));
+  if (mega_runs) report.megakernel = mega_runs->finish();
+  if (batch) finish_traversal(report.traversal);
+  if (embree_runs) report.embree = embree_runs->finish();
 }
 
-void measure_baselines(BenchReport& report, const Scene& scene, ClRuntime& rt, const BenchProgress& progress) {
-  const int warmup = report.warmup, repeats = report.repeats, host_repeats = report.host_repeats;
-  const int host_threads = report.host_threads;
+void measure_host_references(BenchReport& report, const Scene& scene, const BenchProgress& progress) {
+  const int host_repeats = report.host_repeats, host_threads = report.host_threads;
   Progress live("bench", !progress.quiet);
-  progress("replicated megakernel: %d warm-up + %d timed runs", warmup, repeats);
-  Megakernel mega(scene, rt);
-  report.megakernel = measure_baseline("replicated_megakernel", "replicated megakernel (same device)", 0, warmup,
-                                       repeats, [&](BaselineImage& img) { mega.frame(img); });
-  progress("traversal alone: the megakernel's rays through its BVH, %d warm-up + %d timed runs", warmup, repeats);
-  report.traversal = measure_traversal_alone(scene, rt, warmup, repeats);
-  if (!report.traversal.present) progress("traversal alone: not measured: %s", report.traversal.skipped.c_str());
   progress("sequential host reference, 1 thread: %d timed runs", host_repeats);
   report.sequential = measure_baseline("sequential_host", "host reference, 1 thread", 1, 0, host_repeats,
                                        [&](BaselineImage& img) {
@@ -197,14 +248,6 @@ void measure_baselines(BenchReport& report, const Scene& scene, ClRuntime& rt, c
                                                      " threads");
                                         img = run_reference(scene, host_threads, live);
                                       });
-  }
-  if (embree_available()) {
-    progress("Embree %s, %d threads: %d warm-up + %d timed runs", embree_version().c_str(), host_threads, warmup,
-             host_repeats);
-    report.embree = measure_baseline(
-        "embree", "Embree " + embree_version() + ", " + std::to_string(host_threads) + " threads", host_threads,
-        std::min(warmup, 1), host_repeats,
-        [&](BaselineImage& img) { img = render_embree(scene, host_threads); });
   }
 }
 

@@ -22,13 +22,16 @@ double load_average();
 //    the baselines' and, for --balance measured, the pilots') and records
 //    the compile time.
 void build_program(BenchReport& report, ClRuntime& runtime, Balance balance, const BenchProgress& progress);
-// 1. The OPSILA render: warm-up, then the median of the timed runs. A
-//    scene read in shares gives up its facets to the partition.
-void measure_opsila(BenchReport& report, Scene& scene, const RenderSettings& settings, ClRuntime& runtime,
-                    const BenchProgress& progress);
-// 2. Baselines on the same rays: megakernel, host reference on 1 and all
-//    threads, Embree when built in.
-void measure_baselines(BenchReport& report, const Scene& scene, ClRuntime& runtime, const BenchProgress& progress);
+// 1. The renders on the same rays, in rounds: each round runs one frame of
+//    OPSILA, then (`baselines`: one process) of the replicated megakernel,
+//    the traversal alone and Embree when built in, so that the machine's
+//    drift over the run weighs on all of them alike. Warm-up rounds, then
+//    the median of the timed rounds, each renderer's own. A scene read in
+//    shares gives up its facets to the partition.
+void measure_renders(BenchReport& report, Scene& scene, const RenderSettings& settings, ClRuntime& runtime,
+                     bool baselines, const BenchProgress& progress);
+// 2. The host reference on 1 and all threads (one process), after the renders.
+void measure_host_references(BenchReport& report, const Scene& scene, const BenchProgress& progress);
 // 3. The scatter curve (the paper's figure 6), and one length over PE counts.
 void measure_scatter_curve(BenchReport& report, ClRuntime& runtime, const BenchProgress& progress);
 

@@ -47,9 +47,14 @@ void header_text(std::string& out, const BenchReport& r) {
     appendf(out, "device: %s\n", r.device.description.c_str());
   appendf(out, "scene: %zu triangles, %d facets, %d objects, %d clusters, %zu lights\n", r.triangles, r.facets,
           r.objects, st.num_clusters, r.lights);
-  appendf(out,
-          "timing: median of %d runs after %d warm-up (host baselines: median of %d); compile %.2f s, not timed\n\n",
-          r.repeats, r.warmup, r.host_repeats, r.compile_seconds);
+  if (r.megakernel.present)
+    appendf(out,
+            "timing: median of %d rounds after %d warm-up, each round one frame of every renderer on the same rays "
+            "in turn (host references: median of %d); compile %.2f s, not timed\n\n",
+            r.repeats, r.warmup, r.host_repeats, r.compile_seconds);
+  else
+    appendf(out, "timing: median of %d runs after %d warm-up; compile %.2f s, not timed\n\n", r.repeats, r.warmup,
+            r.compile_seconds);
 }
 
 void renders_text(std::string& out, const BenchReport& r) {

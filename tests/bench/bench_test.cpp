@@ -348,6 +348,26 @@ TEST(Bench, TheScatterCurveStopsWhereTheDeviceIsFull) {
   EXPECT_EQ(j["scatter_by_pes"].front()["length"], 1 << 19);
 }
 
+// The renders on the same rays run in rounds, one frame of each a round, so
+// every one of them has a timed frame in every timed round (Embree too,
+// where it used to run the host references' count); the host references
+// run after the rounds, at most 3 times.
+TEST(Bench, RendersRunInRoundsOneFrameOfEachARound) {
+  test::TempDir dir;
+  const std::string json_path = dir.file("bench.json");
+  const test::RunResult r = test::run_opsila({"bench", std::string(OPSILA_SOURCE_DIR) + "/scenes/whitted.json",
+                                              "--size", "32x24", "--depth", "2", "--pes", "4", "--quick",
+                                              "--scatter-max", "4", "--repeats", "4", "--json", json_path});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("timing: median of 4 rounds after 1 warm-up"), std::string::npos) << r.out;
+  const nlohmann::json j = nlohmann::json::parse(test::read_file(json_path));
+  EXPECT_EQ(j["render"]["seconds_all"].size(), 4u);
+  EXPECT_EQ(j["baselines"]["replicated_megakernel"]["seconds_all"].size(), 4u);
+  EXPECT_EQ(j["traversal_alone"]["seconds_all"].size(), 4u);
+  if (embree_available()) EXPECT_EQ(j["baselines"]["embree"]["seconds_all"].size(), 4u);
+  EXPECT_EQ(j["baselines"]["sequential_host"]["seconds_all"].size(), 3u);
+}
+
 TEST(Bench, QuickRunWritesEveryJsonKey) {
   test::TempDir dir;
   const std::string json_path = dir.file("bench.json"), csv = dir.file("csv");

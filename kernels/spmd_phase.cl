@@ -65,7 +65,7 @@ typedef struct {
  * its home PE (which spawned it and tested its own bank first), or it is
  * lit. */
 inline int shadow_visit(const Routing *rt, const Bank *bank, const RayPre *r, float eps, float tmax, int after_pe,
-                        int home, float3 contrib, int pixel, int meta, PixelSum *ps, PrivStats *st,
+                        int home, float3 contrib, int pixel, int meta, volatile __global uint *accum, PrivStats *st,
                         const CostProbe *probe, Descriptor *next) {
   bool blocked = !bank->empty && traverse_any(r, bank->nodes, bank->tris, bank->root, eps, tmax, bank->slack,
                                               &st->v[OPSILA_STAT_TRI_TESTS], &st->v[OPSILA_STAT_BOX_TESTS], probe);
@@ -77,7 +77,7 @@ inline int shadow_visit(const Routing *rt, const Bank *bank, const RayPre *r, fl
                                      &st->v[OPSILA_STAT_ROUTE_TESTS]);
   if (dest < 0) {
     STAT_INC(st, LIT);
-    pixel_add(ps, contrib);
+    accumulate(accum, pixel, contrib);
     return VISIT_DONE;
   }
   STAT_INC(st, FORWARD);
@@ -91,7 +91,7 @@ inline int shadow_visit(const Routing *rt, const Bank *bank, const RayPre *r, fl
  * *t_best and *hit carry the best hit so far in and out. */
 inline int trace_visit(FrameParams fp, const Routing *rt, const Bank *bank, const RayPre *r, float3 w, int pixel,
                        int meta, float cursor_entry, float *t_best, int *hit, int best_facet,
-                       PixelSum *ps, PrivStats *st, const CostProbe *probe, Descriptor *next) {
+                       volatile __global uint *accum, PrivStats *st, const CostProbe *probe, Descriptor *next) {
   float eps = fp.epsilon;
   int found = -1; /* local index of a facet of this bank that won */
   if (!bank->empty)
@@ -109,7 +109,7 @@ inline int trace_visit(FrameParams fp, const Routing *rt, const Bank *bank, cons
   }
   if (*hit < 0) {
     STAT_INC(st, MISS);
-    pixel_add(ps, w * load3(fp.background));
+    accumulate(accum, pixel, w * load3(fp.background));
     return VISIT_DONE;
   }
   int owner = owner_pe(rt->pes, fp.num_pes, *hit);
@@ -129,7 +129,7 @@ inline int trace_visit(FrameParams fp, const Routing *rt, const Bank *bank, cons
  * most per new ray. st counts at `level`, st_child at level + 1. */
 inline void shade(FrameParams fp, const Routing *rt, const Bank *bank, __global const Material *materials,
                   __global const Light *lights, SURFACE_PARAMS, float3 org, float3 d, float t, int tri_index,
-                  float3 weight, int pixel, int level, Outputs *out, PixelSum *ps, PrivStats *st,
+                  float3 weight, int pixel, int level, Outputs *out, volatile __global uint *accum, PrivStats *st,
                   PrivStats *st_child, const CostProbe *probe, const CostProbe *probe_child) {
   __global const Material *m = &materials[bank->tris[tri_index].material];
   SurfacePoint sp = surface_point(fp, bank->tris, tri_index, m, SURFACE_ARGS, org, d, t);
@@ -137,7 +137,7 @@ inline void shade(FrameParams fp, const Routing *rt, const Bank *bank, __global 
   float eps = fp.epsilon;
   Descriptor next;
 
-  pixel_add(ps, weight * load3(fp.ambient) * sp.ka);
+  accumulate(accum, pixel, weight * load3(fp.ambient) * sp.ka);
 
   for (int l = 0; l < fp.num_lights; ++l) {
     float3 lv;
@@ -148,7 +148,7 @@ inline void shade(FrameParams fp, const Routing *rt, const Bank *bank, __global 
     STAT_INC(st, LOCAL);
     RayPre sr = make_ray(p, lv);
     if (shadow_visit(rt, bank, &sr, eps, dist, -1, bank->pe, contrib, pixel, OPSILA_META(OPSILA_KIND_SHADOW, level),
-                     ps, st, probe, &next) == VISIT_SEND)
+                     accum, st, probe, &next) == VISIT_SEND)
       emit(out, next);
   }
 
@@ -176,7 +176,7 @@ inline void shade(FrameParams fp, const Routing *rt, const Bank *bank, __global 
     int dest = next_destination(rt, &cr, eps, OPSILA_INF, -1.0f, -1, &entry, &st->v[OPSILA_STAT_SPHERE_TESTS],
                                 &st->v[OPSILA_STAT_ROUTE_TESTS]);
     if (dest < 0) { /* meets no box or sphere: a miss, finished here */
-      pixel_add(ps, child_w[j] * load3(fp.background));
+      accumulate(accum, pixel, child_w[j] * load3(fp.background));
       STAT_INC(st_child, MISS);
       continue;
     }
@@ -189,7 +189,7 @@ inline void shade(FrameParams fp, const Routing *rt, const Bank *bank, __global 
     STAT_INC(st_child, LOCAL);
     float t_best = OPSILA_INF;
     int hit = -1;
-    int v = trace_visit(fp, rt, bank, &cr, child_w[j], pixel, child_meta, entry, &t_best, &hit, INT_MAX, ps,
+    int v = trace_visit(fp, rt, bank, &cr, child_w[j], pixel, child_meta, entry, &t_best, &hit, INT_MAX, accum,
                         st_child, probe_child, &next);
     if (v == VISIT_SHADE) {
       STAT_INC(st_child, FORWARD);
@@ -206,7 +206,7 @@ inline void shade(FrameParams fp, const Routing *rt, const Bank *bank, __global 
  * miss, or (its nearest hit known) shaded by the PE that owns the facet. */
 inline void process(FrameParams fp, const Routing *rt, const Bank *bank, __global const Material *materials,
                     __global const Light *lights, SURFACE_PARAMS, Descriptor ds, Outputs *out,
-                    PixelSum *ps, PrivStats *st, PrivStats *st_child, const CostProbe *probe,
+                    volatile __global uint *accum, PrivStats *st, PrivStats *st_child, const CostProbe *probe,
                     const CostProbe *probe_child) {
   float eps = fp.epsilon;
   int meta = DESC_META(ds);
@@ -214,13 +214,12 @@ inline void process(FrameParams fp, const Routing *rt, const Bank *bank, __globa
   int pixel = DESC_PIXEL(ds);
   float3 org = DESC_ORIGIN(ds), d = DESC_DIRECTION(ds), w = DESC_WEIGHT(ds);
   STAT_INC(st, TRACED);
+  RayPre r = make_ray(org, d);
   Descriptor next;
 
-  /* A resolved descriptor is shaded at once: no ray set-up for it. */
   if (kind == OPSILA_KIND_SHADOW) {
     STAT_INC(st, SHADOW);
-    RayPre r = make_ray(org, d);
-    if (shadow_visit(rt, bank, &r, eps, DESC_T_MAX(ds), bank->pe, DESC_SHADOW_HOME(ds), w, pixel, meta, ps, st,
+    if (shadow_visit(rt, bank, &r, eps, DESC_T_MAX(ds), bank->pe, DESC_SHADOW_HOME(ds), w, pixel, meta, accum, st,
                      probe, &next) == VISIT_SEND)
       emit(out, next);
     return;
@@ -229,16 +228,15 @@ inline void process(FrameParams fp, const Routing *rt, const Bank *bank, __globa
   int hit = DESC_HIT(ds);
   if (kind == OPSILA_KIND_TRACE) {
     STAT_INC(st, RADIANCE);
-    RayPre r = make_ray(org, d);
     int best_facet = hit >= 0 ? as_int(DESC_BEST_FACET(ds)) : INT_MAX;
-    int v = trace_visit(fp, rt, bank, &r, w, pixel, meta, DESC_CURSOR_ENTRY(ds), &t_best, &hit, best_facet, ps,
+    int v = trace_visit(fp, rt, bank, &r, w, pixel, meta, DESC_CURSOR_ENTRY(ds), &t_best, &hit, best_facet, accum,
                         st, probe, &next);
     if (v == VISIT_SEND) emit(out, next);
     if (v != VISIT_SHADE) return;
   }
   STAT_INC(st, RESOLVED);
   shade(fp, rt, bank, materials, lights, SURFACE_ARGS, org, d, t_best, hit - fp.tri_base, w, pixel, level, out,
-        ps, st, st_child, probe, probe_child);
+        accum, st, st_child, probe, probe_child);
 }
 
 __kernel void spmd_phase(FrameParams fp, __global const PeInfo *pes, __global const Cluster *clusters,
@@ -276,9 +274,7 @@ __kernel void spmd_phase(FrameParams fp, __global const PeInfo *pes, __global co
     probe.cost = cost + (long)level * fp.num_clusters;
     probe_child.cost = level + 1 < depth ? probe.cost + fp.num_clusters : 0;
 #endif
-    PixelSum ps = pixel_sum_zero(); /* all that this descriptor and its children add is for its pixel */
-    process(fp, &rt, &bank, materials, lights, SURFACE_ARGS, ds, &out, &ps, &st, &st_child, &probe, &probe_child);
-    pixel_flush(accum, DESC_PIXEL(ds), &ps);
+    process(fp, &rt, &bank, materials, lights, SURFACE_ARGS, ds, &out, accum, &st, &st_child, &probe, &probe_child);
     add_stats(lstats, level, &st);
     /* Children traced or finished here count at their own level. */
     if (level + 1 < depth) add_stats(lstats, level + 1, &st_child);

@@ -6,7 +6,7 @@
  * whole scene), measured on the same device.
  *
  * Shading is kernels/spmd_phase.cl's, expression for expression, and every
- * contribution is quantised to fixed point exactly as pixel_add() does, so
+ * contribution is quantised to fixed point exactly as accumulate() does, so
  * the sums (and the image) equal the OPSILA renderer's up to float ties. */
 #include "../lib/bvh.cl"
 #include "../lib/camera.cl"

@@ -4,9 +4,8 @@
 /* 64-bit fixed-point add from two 32-bit atomics: the carry out of the low
  * word goes to the high word. Integer sums are order-independent, so the
  * image is identical however the work-items are scheduled.
- * Saturation: values are >= 0 and at most 2^63 read as unsigned (every
- * term of SPEC's pixel sum is >= 0, fixed3 saturates below 2^63, and
- * pixel_add stops at 2^63), so a sum reaching 2^63 sets bit 31 of
+ * Saturation: values are >= 0 and < 2^63 (every term of SPEC's pixel sum
+ * is >= 0, and fixed3 saturates), so a sum reaching 2^63 sets bit 31 of
  * the high word; an add that carries out of the high word sets it again
  * (atomic_or), and adds that do not carry out cannot clear it. So bit 31 is
  * set at the end exactly when the true sum is >= 2^63, whatever the order:
@@ -37,8 +36,7 @@ inline void add_fixed_owned(volatile __global uint *cell, long value) {
   cell[1] = hi;
 }
 
-/* A contribution added into a pixel that no other work-item adds to during
- * the launch (the primary descriptors' misses). */
+/* accumulate() into a pixel that no other work-item adds to during the launch. */
 inline void accumulate_owned(volatile __global uint *accum, int pixel, float3 value) {
   long3 q = fixed3(value);
   add_fixed_owned(&accum[pixel * OPSILA_ACCUM_WORDS + 0], q.x);
@@ -46,34 +44,11 @@ inline void accumulate_owned(volatile __global uint *accum, int pixel, float3 va
   add_fixed_owned(&accum[pixel * OPSILA_ACCUM_WORDS + 4], q.z);
 }
 
-/* What one work-item adds to one pixel, summed in private and added into
- * the pixel's sums once (pixel_flush): the SPMD phase's descriptor adds its
- * ambient term, its lit shadow rays and its children's misses to its own
- * pixel, one to three atomics a channel each time before. Each contribution
- * is quantised on its own (fixed3), and the private sum stops at
- * 2^63: below that the pixel's sum is the same integer (addition modulo 2^64
- * is order-free), and a true sum at or above 2^63 still sets the
- * saturation bit (add_fixed of 2^63 adds bit 31 to the high word, or
- * carries out of it), which is all the host reads of a saturated sum. */
-typedef struct {
-  ulong3 sum;
-} PixelSum;
-
-inline PixelSum pixel_sum_zero(void) {
-  PixelSum ps;
-  ps.sum = (ulong3)(0ul);
-  return ps;
-}
-
-inline void pixel_add(PixelSum *ps, float3 value) {
-  const ulong3 cap = (ulong3)(0x8000000000000000ul); /* 2^63; each term is below it */
-  ps->sum = min(ps->sum + convert_ulong3(fixed3(value)), cap);
-}
-
-inline void pixel_flush(volatile __global uint *accum, int pixel, const PixelSum *ps) {
-  if (ps->sum.x != 0ul) add_fixed(&accum[pixel * OPSILA_ACCUM_WORDS + 0], (long)ps->sum.x);
-  if (ps->sum.y != 0ul) add_fixed(&accum[pixel * OPSILA_ACCUM_WORDS + 2], (long)ps->sum.y);
-  if (ps->sum.z != 0ul) add_fixed(&accum[pixel * OPSILA_ACCUM_WORDS + 4], (long)ps->sum.z);
+inline void accumulate(volatile __global uint *accum, int pixel, float3 value) {
+  long3 q = fixed3(value);
+  if (q.x != 0) add_fixed(&accum[pixel * OPSILA_ACCUM_WORDS + 0], q.x);
+  if (q.y != 0) add_fixed(&accum[pixel * OPSILA_ACCUM_WORDS + 2], q.y);
+  if (q.z != 0) add_fixed(&accum[pixel * OPSILA_ACCUM_WORDS + 4], q.z);
 }
 
 /* Counter `index` of a 64-bit counter array (OPSILA_COUNTER_WORDS words

@@ -132,7 +132,7 @@ class TraversalBatch {
   struct State;
   std::unique_ptr<State> s_;
 };
-// A timed run's seconds into `t`; median() picks the median run's.
+// A timed run's seconds into `t`; finish_traversal then keeps the median run's.
 void record_traversal_run(TraversalAlone& t, std::pair<double, double> seconds);
 void finish_traversal(TraversalAlone& t);
 

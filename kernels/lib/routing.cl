@@ -154,7 +154,7 @@ inline int next_destination_boxes(const RayPre *r, __global const BankNode *rout
     __global const BankNode *tn = &route[num_pes + n];
     float pe_entry[OPSILA_BVH_WIDTH];
     for (uint met = route_node(&w, tn, pe_entry); met != 0u; met &= met - 1u) {
-      int kq = 31 - clz(met & (0u - met)); /* lowest set bit: PEs in increasing order */
+      int kq = lowest_bit(met); /* PEs in increasing order */
       if (!(pe_entry[kq] < w.best_entry)) continue;
       int q = tn->child[kq];
       if (q == cursor_pe) continue; /* (entry, q) == cursor: visited */
@@ -185,7 +185,7 @@ inline int next_shadow_destination_boxes(const RayPre *r, __global const BankNod
     __global const BankNode *tn = &route[num_pes + n];
     float pe_entry[OPSILA_BVH_WIDTH];
     for (uint met = route_node(&w, tn, pe_entry); met != 0u; met &= met - 1u) {
-      int q = n * OPSILA_BVH_WIDTH + (31 - clz(met & (0u - met)));
+      int q = n * OPSILA_BVH_WIDTH + lowest_bit(met);
       if (q < first || q == home) continue;
       if (walk_route_segment(&w, route, q)) return q;
     }

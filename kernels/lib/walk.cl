@@ -55,6 +55,10 @@ OPSILA_INLINE uint lane_mask(intW m) {
   return (uint)(q.x | q.y);
 }
 
+/* The lowest set bit of a non-zero mask, its index: the walks take a mask's
+ * children (or PEs) in increasing order, as a loop over k would. */
+OPSILA_INLINE int lowest_bit(uint mask) { return 31 - clz(mask & (0u - mask)); }
+
 /* Raw slab distances of a node's child boxes: the largest plane entry and
  * the smallest plane exit, per child. Planes are taken near/far by the sign
  * of the direction, so one subtraction and one product per plane; a NaN (a
@@ -115,7 +119,7 @@ OPSILA_INLINE void node_spans(const RayPre *r, __global const BankNode *nd, floa
       uint met = NODE(w, nd, te);                                                 \
       int base = sp;                                                              \
       while (met != 0u) {                                                         \
-        int k = 31 - clz(met & (0u - met)); /* lowest set bit */                  \
+        int k = lowest_bit(met);                                                  \
         met &= met - 1u;                                                          \
         int cnt = nd->count[k];                                                   \
         if (!CHILD(w, nd, k, cnt, te[k])) continue;                               \

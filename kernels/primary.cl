@@ -4,33 +4,64 @@
 #include "lib/camera.cl"
 #include "lib/accum.cl"
 
-/* From the item buffer, primary ray descriptors are built for the banks of
+/* The hit list: the pixels of a sample pass whose primary ray hits, in
+ * pixel order. Only they get primary descriptors; a miss is done here, so
+ * the rounds of descriptors and exchanges never carry the misses (a view
+ * where most rays miss costs the item buffer and little more). Two passes
+ * over blocks of OPSILA_SCATTER_BLOCK pixels, one work-item a block, with
+ * the exchange's scan between them (scatter_scan, one key):
+ *   count_hits: the block's hits; a miss adds the background once over all
+ *               groups of PEs (the device that holds PE 0), and only this
+ *               work-item adds to the pixel in the launch;
+ *   list_hits:  the block's hit pixels, from the block's exclusive prefix on. */
+__kernel void count_hits(FrameParams fp, __global const int *item_tri, int npix, __global int *block_hits,
+                         volatile __global uint *accum) {
+  int b = get_global_id(0);
+  int first = b * OPSILA_SCATTER_BLOCK;
+  if (first >= npix) return;
+  int end = min(first + OPSILA_SCATTER_BLOCK, npix), hits = 0;
+  for (int pixel = first; pixel < end; ++pixel) {
+    if (item_tri[pixel] >= 0)
+      ++hits;
+    else if (fp.group_begin == 0)
+      accumulate_owned(accum, pixel, load3(fp.background));
+  }
+  block_hits[b] = hits;
+}
+
+__kernel void list_hits(__global const int *item_tri, int npix, __global const int *block_first,
+                        __global int *hit_pixels) {
+  int b = get_global_id(0);
+  int first = b * OPSILA_SCATTER_BLOCK;
+  if (first >= npix) return;
+  int end = min(first + OPSILA_SCATTER_BLOCK, npix), at = block_first[b];
+  for (int pixel = first; pixel < end; ++pixel)
+    if (item_tri[pixel] >= 0) hit_pixels[at++] = pixel;
+}
+
+/* From the hit list, primary ray descriptors are built for the banks of
  * the PEs that own the items: already RESOLVED (the nearest hit is known),
- * bound for the owner PE, which shades them. Misses add the background and
- * leave a NIL hole (destination -1). Written at queue[offset + k]. With
- * several samples per pixel, the item buffer holds one sample pass's hits,
- * (ox, oy) is that sample's place in the pixel, and the descriptor carries
- * the pixel index: every sample adds into the same pixel sums (divided by N
- * when read). hit_count (64-bit fixed pair) counts the descriptors built. */
-__kernel void build_primary(FrameParams fp, __global const PeInfo *pes, __global const int *item_tri,
-                            __global const float *item_t, int pixel_begin, int pixel_count, float ox, float oy,
-                            int offset, DESC_PARAMS(q), volatile __global uint *accum,
-                            volatile __global uint *hit_count) {
+ * bound for the owner PE, which shades them. Hits first .. first + count - 1
+ * of the list; written at queue[offset + k]. With several ranks, a hit that
+ * another device's PE owns leaves a NIL hole here (destination -1): the
+ * exchange reads no record of a hole. With several samples per pixel, the
+ * item buffer holds one sample pass's hits, (ox, oy) is that sample's place
+ * in the pixel, and the descriptor carries the pixel index: every sample
+ * adds into the same pixel sums (divided by N when read). hit_count (64-bit
+ * fixed pair) counts the descriptors built. */
+__kernel void build_primary(FrameParams fp, __global const PeInfo *pes, __global const int *hit_pixels,
+                            __global const int *item_tri, __global const float *item_t, int first, int count,
+                            float ox, float oy, int offset, DESC_PARAMS(q), volatile __global uint *hit_count) {
   __local uint hits;
   if (get_local_id(0) == 0) hits = 0u;
   barrier(CLK_LOCAL_MEM_FENCE);
   int k = get_global_id(0);
-  if (k < pixel_count) {
-    int pixel = pixel_begin + k;
+  if (k < count) {
+    int pixel = hit_pixels[first + k];
     int slot = offset + k;
     int tri = item_tri[pixel];
-    int owner = tri >= 0 ? owner_pe(pes, fp.num_pes, tri) : -1;
-    if (tri < 0 || owner < fp.group_begin || owner >= fp.group_end) {
-      /* A miss adds the background once over all groups of PEs (this
-       * work-item alone adds to its pixel in this launch); a hit is built by
-       * the device that holds its owner PE. A NIL hole is its destination
-       * alone: the exchange reads no record of a hole. */
-      if (tri < 0 && fp.group_begin == 0) accumulate_owned(accum, pixel, load3(fp.background));
+    int owner = owner_pe(pes, fp.num_pes, tri);
+    if (owner < fp.group_begin || owner >= fp.group_end) {
       q_dest[slot] = -1;
     } else {
       int x = pixel % fp.width, y = pixel / fp.width;

@@ -135,6 +135,12 @@ void ScatterPass::plan(Launcher& launch, const Args& a, int round) {
   launch.run(plan_.kernel(), "scatter_plan", wg_plan_, wg_plan_, round);
 }
 
+void ScatterPass::scan(Launcher& launch, const char* name, const cl::Buffer& values, int n, const cl::Buffer& total,
+                       int round) {
+  scan_.bind(n, 1, values, total);
+  launch.run(scan_.kernel(), name, wg_scan_, wg_scan_, round);
+}
+
 void ScatterPass::move(Launcher& launch, const Args& a, int round) {
   const int K = 2 * num_pes_;
   const int pool_blocks = (a.pool_len + kBlock - 1) / kBlock;

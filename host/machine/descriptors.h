@@ -92,6 +92,9 @@ class ScatterPass {
   // tests run both on any device.
   void set_move_by_block(bool by_block) { by_block_ = by_block; }
   void plan(Launcher& launch, const Args& a, int round);
+  // The exclusive scan of n ints in place (scatter_scan, one key), their
+  // total in total[0], launched as `name`: the hit list's (kernels/primary.cl).
+  void scan(Launcher& launch, const char* name, const cl::Buffer& values, int n, const cl::Buffer& total, int round);
   void move(Launcher& launch, const Args& a, int round);
   // Results of plan(): per PE, per sort key (two a PE), and the SPMD
   // work-group table; pe_total: each PE's entries (placed or not).

@@ -29,24 +29,31 @@ namespace opsila {
 
 namespace frame_kernels {
 using Buf = cl::Buffer;
-// The three kernels of the frame, their parameters as the host passes them.
+// The kernels of the frame, their parameters as the host passes them.
 // kernels/item_buffer.cl: frame, clusters, projected boxes and their union,
 // bank nodes and facets, tile side, tiles per row, first tile, sample
 // offsets, mode, and the item buffer with its hits, distances and facets.
 using ItemBufferKernel =
     KernelBinding<FrameParams, Buf, Buf, cl_int4, Buf, Buf, int, int, int, float, float, int, Buf, Buf, Buf, Buf>;
-// kernels/primary.cl: frame, PE table, item hits and distances, pixels,
-// sample offsets, pool offset, the pool, pixel sums, primary hit count.
-using PrimaryKernel = KernelBinding<FrameParams, Buf, Buf, Buf, int, int, float, float, int, DescriptorSet, Buf, Buf>;
+// kernels/primary.cl: the hit list's two passes (frame, item buffer hits,
+// pixels, per-block hits, pixel sums; item buffer hits, pixels, per-block
+// prefixes, hit list); then frame, PE table, hit list, item hits and
+// distances, hits in the list, sample offsets, pool offset, the pool,
+// primary hit count.
+using CountHitsKernel = KernelBinding<FrameParams, Buf, int, Buf, Buf>;
+using ListHitsKernel = KernelBinding<Buf, int, Buf, Buf>;
+using PrimaryKernel = KernelBinding<FrameParams, Buf, Buf, Buf, Buf, int, int, float, float, int, DescriptorSet, Buf>;
 // kernels/spmd_phase.cl: frame, PE table, clusters, routing boxes, routing,
 // bank nodes, facets, materials, lights, surface, banks, the exchange's
 // work-group table and bank ranges, outputs and their counts, pixel sums,
 // statistics, traffic and its levels, and the pilots' cluster work.
 using SpmdKernel = KernelBinding<FrameParams, Buf, Buf, Buf, int, Buf, Buf, Buf, Buf, SurfaceBuffers, DescriptorSet,
                                  Buf, Buf, Buf, Buf, DescriptorSet, Buf, Buf, Buf, Buf, int, Buf, Buf, Buf>;
-// The three, from one program (frame_prepare.cpp).
+// All of them, from one program (frame_prepare.cpp).
 struct Set {
   ItemBufferKernel item;
+  CountHitsKernel count_hits;
+  ListHitsKernel list_hits;
   PrimaryKernel primary;
   SpmdKernel spmd;
   bool built = false;
@@ -99,6 +106,7 @@ struct Renderer::Machine {
   cl::Buffer b_tris, b_nodes, b_clusters, b_route, b_pes, b_mats, b_lights, b_rects;
   SurfaceBuffers surface;  // vertex attributes and texture copies of the banks
   cl::Buffer b_items, b_item_tri, b_item_t, b_item_facet, b_accum, b_stats, b_traffic, b_out_count, b_hits;
+  cl::Buffer b_hit_pixels, b_hit_blocks, b_hit_total;  // the hit list (kernels/primary.cl)
   // Pilot frames (measure_cost): each cluster's tests per level, and what
   // maps them back to the scene's facets (every cluster's, on every rank).
   bool measure = false;
@@ -122,7 +130,8 @@ struct Renderer::Machine {
   // Where a frame stands between rounds.
   struct Frame {
     int sample = 0;              // the sample pass whose hits the item buffer holds
-    std::size_t next_pixel = 0;  // first pixel without a primary descriptor yet, in this pass
+    std::size_t listed = 0;      // its hit list's length (the pixels that need a primary descriptor)
+    std::size_t next_pixel = 0;  // first hit of the list without a primary descriptor yet
     std::size_t pool_len = 0;    // descriptors waiting in `pool`
     int out_groups = 0;          // SPMD work-groups whose outputs the next exchange reads
     int groups = 0;              // SPMD work-groups of this round (from the exchange's plan)
@@ -138,6 +147,7 @@ struct Renderer::Machine {
 
   void clear_frame();
   void item_buffer(Launcher& launch, int sample);
+  std::size_t list_hits(Launcher& launch);
   void primary_descriptors(Launcher& launch, Frame& f, int round);
   ScatterPass::Args exchange_args(const Frame& f) const;
   void exchange(Launcher& launch, Frame& f, int round, RenderStats& st);

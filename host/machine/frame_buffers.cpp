@@ -156,6 +156,12 @@ std::vector<BufferSpec> Renderer::Machine::buffer_table(const BankedScene& bs, c
       frame_buffer("item buffer hits", P_::image, sint, npix, Fill::device, &b_item_tri),
       frame_buffer("item buffer distances", P_::image, sizeof(cl_float), npix, Fill::device, &b_item_t),
       frame_buffer("item buffer facets", P_::image, sint, npix, Fill::device, &b_item_facet),
+      // The hit list of a sample pass (kernels/primary.cl): its pixels, the
+      // hits per block of pixels (then their prefixes), and their total.
+      frame_buffer("hit list", P_::image, sint, npix, Fill::device, &b_hit_pixels),
+      frame_buffer("hit list blocks", P_::image, sint, (npix + ScatterPass::kBlock - 1) / ScatterPass::kBlock,
+                   Fill::device, &b_hit_blocks),
+      frame_buffer("hit list length", P_::other, sint, 1, Fill::device, &b_hit_total),
       frame_buffer("pixel sums", P_::image, OPSILA_ACCUM_WORDS * sizeof(cl_uint), npix, Fill::zero, &b_accum),
       // Counters: statistics, PE x PE traffic, primary hits; the pilots'
       // cluster work; the SPMD phase's output counts.

@@ -162,6 +162,8 @@ void Renderer::Machine::choose_work_groups() {
 
 frame_kernels::Set::Set(ClRuntime& rt, KernelProgram program)
     : item(rt, "item_buffer", program),
+      count_hits(rt, "count_hits", program),
+      list_hits(rt, "list_hits", program),
       primary(rt, "build_primary", program),
       spmd(rt, "spmd_phase", program),
       built(true) {}

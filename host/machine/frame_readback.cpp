@@ -128,7 +128,8 @@ void Renderer::Machine::report_progress(const Frame& f) {
   const std::uint64_t primary_hits = read_counters(rt, b_hits, 1, "primary hit count")[0];
   const CounterSums sums = counter_sums(counters);
   const std::uint64_t spawned = primary_hits + sums.spawned, finished = sums.finished;
-  const std::uint64_t injected = std::uint64_t(f.sample) * npix + f.next_pixel;
+  // A miss is done when its pass's hit list is made.
+  const std::uint64_t injected = std::uint64_t(f.sample) * npix + (npix - f.listed) + f.next_pixel;
   const std::uint64_t in_flight = spawned > finished ? spawned - finished : 0;
   const double done = injected > in_flight ? double(injected - in_flight) : 0.0;
   const std::uint64_t rays = injected + sums.spawned;

@@ -55,6 +55,9 @@ TEST(Renderer, MatchesReferenceOnMirrorsGlassAndShadows) {
 // The item buffer lists no cluster whose box lies wholly behind the eye (no
 // primary ray can meet it), and the image stays the reference's: turned
 // away from the scene, every pixel is background and no pixel tests a box.
+// Only hits become primary descriptors (the hit list, kernels/primary.cl):
+// with every pixel a miss, no descriptor is built and no round runs, with
+// one sample or four.
 TEST(Renderer, ClustersBehindTheEyeAreNeverListed) {
   Scene s = test::mirror_glass_scene(48);
   auto listed = [](const Scene& sc) {
@@ -74,7 +77,18 @@ TEST(Renderer, ClustersBehindTheEyeAreNeverListed) {
     for (std::size_t i = 3; i < r.rgb.size(); ++i) ASSERT_EQ(r.rgb[i], r.rgb[i % 3]) << pes;  // all background
     EXPECT_EQ(r.item_buffer, ref.item_buffer) << pes;
     EXPECT_EQ(r.rays.primary_hits, 0u) << pes;
+    EXPECT_EQ(r.stats.rounds, 0) << pes;
+    for (const LaunchRecord& l : r.stats.launches)
+      EXPECT_TRUE(l.name != "build_primary" && l.name.compare(0, 8, "scatter_") != 0) << l.name << " " << pes;
   }
+  s.spp = 4;
+  const RenderResult four = render_with(s, 16);
+  EXPECT_EQ(four.rays.primary_hits, 0u);
+  EXPECT_EQ(four.stats.rounds, 0);
+  int passes = 0;
+  for (const LaunchRecord& l : four.stats.launches) passes += l.name == "count_hits";
+  EXPECT_EQ(passes, 4) << "one hit list per sample pass";
+  EXPECT_EQ(four.rgb, render_with([&] { Scene one = s; one.spp = 1; return one; }(), 16).rgb);
 }
 
 // Seen from far, the scene covers the middle of the screen: the union of

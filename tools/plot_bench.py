@@ -135,7 +135,7 @@ def plot_phases(bench, path, dpi):
     tk = r["time_by_kernel"]
     groups = [
         ("item buffer (SIMD)", ["item_buffer"], "C1"),
-        ("build primary (SIMD)", ["build_primary"], "C4"),
+        ("primary descriptors (SIMD)", ["count_hits", "hit_list_scan", "list_hits", "build_primary"], "C4"),
         ("SPMD phases", ["spmd_phase"], "C0"),
         ("scatter (SIMD exchange)", ["scatter_count", "scatter_scan", "scatter_plan", "scatter_move"], "C3"),
     ]

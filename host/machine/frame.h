@@ -131,7 +131,7 @@ struct Renderer::Machine {
   struct Frame {
     int sample = 0;              // the sample pass whose hits the item buffer holds
     std::size_t listed = 0;      // its hit list's length (the pixels that need a primary descriptor)
-    std::size_t next_pixel = 0;  // first hit of the list without a primary descriptor yet
+    std::size_t next_hit = 0;    // first hit of the list without a primary descriptor yet
     std::size_t pool_len = 0;    // descriptors waiting in `pool`
     int out_groups = 0;          // SPMD work-groups whose outputs the next exchange reads
     int groups = 0;              // SPMD work-groups of this round (from the exchange's plan)

@@ -34,13 +34,13 @@ void Renderer::Machine::primary_descriptors(Launcher& launch, Frame& f, int roun
   // descriptors of its own PEs from the same pixels, and the item buffer
   // passes, relayed between ranks, start on every rank in the same round.
   if ((group.all() ? f.pool_len : f.pool_len_max) >= flight.inject) return;
-  while (f.next_pixel >= f.listed && f.sample + 1 < spp) {
+  while (f.next_hit >= f.listed && f.sample + 1 < spp) {
     item_buffer(launch, ++f.sample);
     f.listed = list_hits(launch);
-    f.next_pixel = 0;
+    f.next_hit = 0;
   }
-  if (f.next_pixel >= f.listed) return;
-  std::size_t count = std::min(flight.inject, f.listed - f.next_pixel);
+  if (f.next_hit >= f.listed) return;
+  std::size_t count = std::min(flight.inject, f.listed - f.next_hit);
   if (!group.all() && f.pool_len + count > pool.capacity) {
     DescriptorSet bigger;
     bigger.allocate(rt, (f.pool_len + count) * 3 / 2, "descriptor pool");
@@ -48,11 +48,11 @@ void Renderer::Machine::primary_descriptors(Launcher& launch, Frame& f, int roun
     pool = bigger;
   }
   if (f.pool_len + count > pool.capacity) count = pool.capacity - f.pool_len;
-  kernels().primary.bind(fp, b_pes, b_hit_pixels, b_item_tri, b_item_t, static_cast<int>(f.next_pixel),
+  kernels().primary.bind(fp, b_pes, b_hit_pixels, b_item_tri, b_item_t, static_cast<int>(f.next_hit),
                          static_cast<int>(count), offsets[std::size_t(f.sample % spp_k)],
                          offsets[std::size_t(f.sample / spp_k)], static_cast<int>(f.pool_len), pool, b_hits);
   launch.run(kernels().primary.kernel(), "build_primary", round_up(count, 64), 0, round);
-  f.next_pixel += count;
+  f.next_hit += count;
   f.pool_len += count;
 }
 

@@ -129,7 +129,7 @@ void Renderer::Machine::report_progress(const Frame& f) {
   const CounterSums sums = counter_sums(counters);
   const std::uint64_t spawned = primary_hits + sums.spawned, finished = sums.finished;
   // A miss is done when its pass's hit list is made.
-  const std::uint64_t injected = std::uint64_t(f.sample) * npix + (npix - f.listed) + f.next_pixel;
+  const std::uint64_t injected = std::uint64_t(f.sample) * npix + (npix - f.listed) + f.next_hit;
   const std::uint64_t in_flight = spawned > finished ? spawned - finished : 0;
   const double done = injected > in_flight ? double(injected - in_flight) : 0.0;
   const std::uint64_t rays = injected + sums.spawned;

@@ -61,7 +61,7 @@ bool Renderer::Machine::end_rank_round(Launcher& launch, Frame& f) {
   rank_exchange->exchange();
   f.pool_len = rank_exchange->finish(pool, next_pool, flight.inject);
   std::swap(pool, next_pool);
-  const bool left = f.pool_len > 0 || f.out_groups > 0 || f.next_pixel < f.listed || f.sample + 1 < spp;
+  const bool left = f.pool_len > 0 || f.out_groups > 0 || f.next_hit < f.listed || f.sample + 1 < spp;
   std::vector<std::uint64_t> all = {left ? 1u : 0u, f.pool_len};
   ranks.max(all);
   f.pool_len_max = all[1];

@@ -12,18 +12,28 @@
  * the exchange's scan between them (scatter_scan, one key):
  *   count_hits: the block's hits; a miss adds the background once over all
  *               groups of PEs (the device that holds PE 0), and only this
- *               work-item adds to the pixel in the launch;
+ *               work-item adds to the pixel in the launch. The frame's
+ *               first pass (first != 0) writes every pixel's sums instead of
+ *               adding to them: the background or zero. The frame's pixel
+ *               sums need no clearing before (a third of an all-miss frame's
+ *               time on a CPU device: docs/BENCHMARKS.md, "Levers"); no
+ *               descriptor has added to them yet;
  *   list_hits:  the block's hit pixels, from the block's exclusive prefix on. */
-__kernel void count_hits(FrameParams fp, __global const int *item_tri, int npix, __global int *block_hits,
-                         volatile __global uint *accum) {
+__kernel void count_hits(FrameParams fp, __global const int *item_tri, int npix, int first_pass,
+                         __global int *block_hits, volatile __global uint *accum) {
   int b = get_global_id(0);
   int first = b * OPSILA_SCATTER_BLOCK;
   if (first >= npix) return;
   int end = min(first + OPSILA_SCATTER_BLOCK, npix), hits = 0;
+  /* fixed3 of a value >= 0 is below 2^63: written into zero sums, the same
+   * words (no saturation bit) as accumulate_owned onto cleared ones. */
+  long3 background = fp.group_begin == 0 ? fixed3(load3(fp.background)) : (long3)(0);
   for (int pixel = first; pixel < end; ++pixel) {
-    if (item_tri[pixel] >= 0)
-      ++hits;
-    else if (fp.group_begin == 0)
+    bool hit = item_tri[pixel] >= 0;
+    hits += hit;
+    if (first_pass)
+      store_fixed3(accum, pixel, hit ? (long3)(0) : background);
+    else if (!hit && fp.group_begin == 0)
       accumulate_owned(accum, pixel, load3(fp.background));
   }
   block_hits[b] = hits;

@@ -40,7 +40,7 @@ using ItemBufferKernel =
 // prefixes, hit list); then frame, PE table, hit list, item hits and
 // distances, hits in the list, sample offsets, pool offset, the pool,
 // primary hit count.
-using CountHitsKernel = KernelBinding<FrameParams, Buf, int, Buf, Buf>;
+using CountHitsKernel = KernelBinding<FrameParams, Buf, int, int, Buf, Buf>;
 using ListHitsKernel = KernelBinding<Buf, int, Buf, Buf>;
 using PrimaryKernel = KernelBinding<FrameParams, Buf, Buf, Buf, Buf, int, int, float, float, int, DescriptorSet, Buf>;
 // kernels/spmd_phase.cl: frame, PE table, clusters, routing boxes, routing,
@@ -147,7 +147,7 @@ struct Renderer::Machine {
 
   void clear_frame();
   void item_buffer(Launcher& launch, int sample);
-  std::size_t list_hits(Launcher& launch);
+  std::size_t list_hits(Launcher& launch, int sample);
   void primary_descriptors(Launcher& launch, Frame& f, int round);
   ScatterPass::Args exchange_args(const Frame& f) const;
   void exchange(Launcher& launch, Frame& f, int round, RenderStats& st);

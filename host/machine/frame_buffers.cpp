@@ -162,7 +162,8 @@ std::vector<BufferSpec> Renderer::Machine::buffer_table(const BankedScene& bs, c
       frame_buffer("hit list blocks", P_::image, sint, (npix + ScatterPass::kBlock - 1) / ScatterPass::kBlock,
                    Fill::device, &b_hit_blocks),
       frame_buffer("hit list length", P_::other, sint, 1, Fill::device, &b_hit_total),
-      frame_buffer("pixel sums", P_::image, OPSILA_ACCUM_WORDS * sizeof(cl_uint), npix, Fill::zero, &b_accum),
+      // Not cleared: the frame's first hit list writes every pixel's sums.
+      frame_buffer("pixel sums", P_::image, OPSILA_ACCUM_WORDS * sizeof(cl_uint), npix, Fill::device, &b_accum),
       // Counters: statistics, PE x PE traffic, primary hits; the pilots'
       // cluster work; the SPMD phase's output counts.
       frame_buffer("stats", P_::other, 1, counter_bytes(nstats), Fill::zero, &b_stats),
@@ -207,7 +208,8 @@ std::vector<BufferSpec> Renderer::Machine::buffer_table(const BankedScene& bs, c
   return t;
 }
 
-// Every frame starts from zero pixel sums, statistics, traffic and work.
+// Every frame starts from zero statistics, traffic and work (and the pixel
+// sums its first hit list writes).
 void Renderer::Machine::clear_frame() {
   if (rank_exchange) rank_exchange->reset();
   zero_frame_buffers(rt, buffers);

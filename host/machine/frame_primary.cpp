@@ -8,11 +8,12 @@ namespace opsila {
 // its misses are done here, and the list's length comes back to the host,
 // which injects that many primary descriptors. With several ranks, every
 // rank lists the same pixels (the item buffer is relayed whole), so they
-// decide alike.
-std::size_t Renderer::Machine::list_hits(Launcher& launch) {
+// decide alike. The frame's first pass (sample 0) writes every pixel's
+// sums, which are not cleared before the frame (frame_buffers.cpp).
+std::size_t Renderer::Machine::list_hits(Launcher& launch, int sample) {
   const int pixels = static_cast<int>(npix);
   const int blocks = (pixels + ScatterPass::kBlock - 1) / ScatterPass::kBlock;
-  kernels().count_hits.bind(fp, b_item_tri, pixels, b_hit_blocks, b_accum);
+  kernels().count_hits.bind(fp, b_item_tri, pixels, sample == 0 ? 1 : 0, b_hit_blocks, b_accum);
   launch.run(kernels().count_hits.kernel(), "count_hits", round_up(blocks, 64), 0, -1);
   scatter->scan(launch, "hit_list_scan", b_hit_blocks, blocks, b_hit_total, -1);
   kernels().list_hits.bind(b_item_tri, pixels, b_hit_blocks, b_hit_pixels);
@@ -36,7 +37,7 @@ void Renderer::Machine::primary_descriptors(Launcher& launch, Frame& f, int roun
   if ((group.all() ? f.pool_len : f.pool_len_max) >= flight.inject) return;
   while (f.next_hit >= f.listed && f.sample + 1 < spp) {
     item_buffer(launch, ++f.sample);
-    f.listed = list_hits(launch);
+    f.listed = list_hits(launch, f.sample);
     f.next_hit = 0;
   }
   if (f.next_hit >= f.listed) return;

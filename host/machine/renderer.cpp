@@ -63,7 +63,7 @@ void Renderer::render(RenderResult& result) {
   if (m.spp_k % 2 == 0) m.item_buffer(launch, -1);  // even k: the centre ray is no sample
   m.item_buffer(launch, 0);
   Machine::Frame f;
-  f.listed = m.list_hits(launch);
+  f.listed = m.list_hits(launch, 0);
   for (int round = 0;; ++round) {
     if (round == m.fault_round)
       throw ClError("device fault at round " + std::to_string(round) + " (injected by OPSILA_FAULT_ROUND)");

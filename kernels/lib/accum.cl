@@ -44,6 +44,15 @@ inline void accumulate_owned(volatile __global uint *accum, int pixel, float3 va
   add_fixed_owned(&accum[pixel * OPSILA_ACCUM_WORDS + 4], q.z);
 }
 
+/* A pixel's three sums set to q (each >= 0): what accumulate_owned of the
+ * value q came from leaves in cleared sums. */
+inline void store_fixed3(volatile __global uint *accum, int pixel, long3 q) {
+  __global uint *at = (__global uint *)&accum[pixel * OPSILA_ACCUM_WORDS];
+  at[0] = (uint)q.x, at[1] = (uint)(q.x >> 32);
+  at[2] = (uint)q.y, at[3] = (uint)(q.y >> 32);
+  at[4] = (uint)q.z, at[5] = (uint)(q.z >> 32);
+}
+
 inline void accumulate(volatile __global uint *accum, int pixel, float3 value) {
   long3 q = fixed3(value);
   if (q.x != 0) add_fixed(&accum[pixel * OPSILA_ACCUM_WORDS + 0], q.x);

@@ -403,8 +403,9 @@ TEST(Renderer, BitIdenticalRunToRun) {
 }
 
 // A prepared machine renders frame after frame (the bench's repeats): each
-// frame starts from zero sums and counters and ends with the same image and
-// the same statistics as a fresh one.
+// frame starts from zero counters, writes its pixel sums afresh (its first
+// hit list: nothing of the frame before is left in them) and ends with the
+// same image and the same statistics as a fresh one.
 TEST(Renderer, PreparedOnceRendersEqualFrames) {
   Scene s = test::mirror_glass_scene(64);
   RenderSettings rs;

@@ -43,8 +43,9 @@ __kernel void item_buffer(FrameParams fp, __global const Cluster *clusters, __gl
    * after cluster as one device would: with the tie rule, the answer depends
    * on that order (host/machine/rank_exchange.h). */
   bool continued = fp.group_begin > 0 && inside;
-  float best_t = continued ? item_t[pixel] : OPSILA_INF;
-  int best_facet = continued && item_tri[pixel] >= 0 ? item_facet[pixel] : INT_MAX;
+  bool held = continued && item_tri[pixel] >= 0; /* a miss leaves no distance or facet */
+  float best_t = held ? item_t[pixel] : OPSILA_INF;
+  int best_facet = held ? item_facet[pixel] : INT_MAX;
   int best_tri = -1; /* a facet of this group's banks (local index) that won */
   uint tri_tests = 0, box_tests = 0;
   CostProbe no_probe = no_cost_probe();
@@ -90,8 +91,12 @@ __kernel void item_buffer(FrameParams fp, __global const Cluster *clusters, __gl
   if (mode & OPSILA_ITEM_WRITE_ITEMS)
     items[pixel] = best_tri >= 0 ? (int2)(tris[best_tri].object_id, tris[best_tri].facet_id) : (int2)(-1, -1);
   if (mode & OPSILA_ITEM_WRITE_HITS) {
+    /* A miss writes only its -1: its distance and facet are never read
+     * (here, in build_primary, or by the ranks after this one). */
     item_tri[pixel] = best_tri >= 0 ? fp.tri_base + best_tri : -1;
-    item_t[pixel] = best_t;
-    item_facet[pixel] = best_facet;
+    if (best_tri >= 0) {
+      item_t[pixel] = best_t;
+      item_facet[pixel] = best_facet;
+    }
   }
 }

@@ -85,7 +85,8 @@ struct BaselineImage : ImageResult {
 // mapped afresh every frame.
 class Megakernel {
  public:
-  Megakernel(const Scene& scene, ClRuntime& runtime, int tile = 1 << 16);
+  // item_buffer: the frames give the item buffer too (BaselineImage::item_buffer).
+  Megakernel(const Scene& scene, ClRuntime& runtime, int tile = 1 << 16, bool item_buffer = true);
   ~Megakernel();
   BaselineImage frame();
   // The same frame into `out`, reusing its image storage (Renderer::render).

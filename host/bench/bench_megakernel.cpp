@@ -23,12 +23,13 @@ namespace {
 using Buf = cl::Buffer;
 // kernels/baselines/megakernel.cl: frame, bank nodes and facets, materials,
 // lights, surface, root node and its children's box, sample grid side and
-// offsets, pixels, pixel sums, ray counts, item buffer; megakernel_rays adds
+// offsets, pixels, pixel sums, ray counts, whether to write the item buffer
+// and the item buffer; megakernel_rays adds
 // where each pixel's rays go and the ray log.
 using MegaKernel = KernelBinding<FrameParams, Buf, Buf, Buf, Buf, SurfaceBuffers, int, cl_float4, cl_float4, int, Buf,
-                                 int, int, Buf, Buf, Buf>;
+                                 int, int, Buf, Buf, int, Buf>;
 using MegaRaysKernel = KernelBinding<FrameParams, Buf, Buf, Buf, Buf, SurfaceBuffers, int, cl_float4, cl_float4, int,
-                                     Buf, int, int, Buf, Buf, Buf, Buf, Buf>;
+                                     Buf, int, int, Buf, Buf, int, Buf, Buf, Buf>;
 
 // The whole scene on one PE: bank 0 under one BVH (clusters on top).
 struct MegaScene {
@@ -105,20 +106,21 @@ struct Megakernel::State {
   const Scene& scene;
   ClRuntime& rt;
   int tile;
+  bool items;  // the item buffer too (tests); the bench's frames leave it out, as OPSILA's do
   MegaScene ms;
   MegaKernel mega;
   MegaBuffers b;
   std::vector<cl_long> accum;    // host copies of the pixel sums and ray counts,
   std::vector<cl_uint4> counts;  // kept between frames as the output image is
-  State(const Scene& s, ClRuntime& runtime, int t)
-      : scene(s), rt(runtime), tile(t), ms(mega_scene(s)),
+  State(const Scene& s, ClRuntime& runtime, int t, bool with_items)
+      : scene(s), rt(runtime), tile(t), items(with_items), ms(mega_scene(s)),
         mega(runtime, "megakernel", KernelProgram::baselines),  // the program is built here, before any timing
         b(mega_buffers(runtime, s, ms.bs)) {}
 };
 
-Megakernel::Megakernel(const Scene& scene, ClRuntime& rt, int tile) {
+Megakernel::Megakernel(const Scene& scene, ClRuntime& rt, int tile, bool item_buffer) {
   check_kernel_limits(scene);
-  s_ = std::make_unique<State>(scene, rt, tile);
+  s_ = std::make_unique<State>(scene, rt, tile, item_buffer);
 }
 
 Megakernel::~Megakernel() = default;
@@ -148,19 +150,23 @@ void Megakernel::frame(BaselineImage& out) {
   Launcher launch(rt, launches);
   launch_tiles(rt, launch, s_->mega.kernel(), "megakernel", npix, s_->tile, [&](int begin, int count) {
     s_->mega.bind(ms.fp, b.nodes, b.tris, b.mats, b.lights, b.surface, ms.root, ms.root_lo, ms.root_hi,
-                  spp_side(scene.spp), b.offsets, begin, count, b.accum, b.counts, b.items);
+                  spp_side(scene.spp), b.offsets, begin, count, b.accum, b.counts, s_->items ? 1 : 0, b.items);
   });
   std::vector<cl_long>& accum = s_->accum;
   std::vector<cl_uint4>& counts = s_->counts;
   accum.resize(npix * 3);
   counts.resize(npix);
-  out.item_buffer.resize(npix * 2);
   launch.check(q.enqueueReadBuffer(b.accum, CL_TRUE, 0, accum.size() * sizeof(cl_long), accum.data()),
                "clEnqueueReadBuffer(megakernel pixel sums)");
   launch.check(q.enqueueReadBuffer(b.counts, CL_TRUE, 0, counts.size() * sizeof(cl_uint4), counts.data()),
                "clEnqueueReadBuffer(megakernel ray counts)");
-  launch.check(q.enqueueReadBuffer(b.items, CL_TRUE, 0, npix * sizeof(cl_int2), out.item_buffer.data()),
-               "clEnqueueReadBuffer(megakernel item buffer)");
+  if (s_->items) {
+    out.item_buffer.resize(npix * 2);
+    launch.check(q.enqueueReadBuffer(b.items, CL_TRUE, 0, npix * sizeof(cl_int2), out.item_buffer.data()),
+                 "clEnqueueReadBuffer(megakernel item buffer)");
+  } else {
+    out.item_buffer.clear();
+  }
   launch.check(q.finish(), "clFinish");
   // Pixel sums -> floats exactly as the renderer converts its fixed point.
   out.rgb.resize(npix * 3);
@@ -205,7 +211,7 @@ bool log_megakernel_rays(const Scene& scene, ClRuntime& rt, const MegaScene& ms,
   Launcher launch(rt, launches);
   launch_tiles(rt, launch, mega.kernel(), "megakernel", npix, tile, [&](int begin, int count) {
     mega.bind(ms.fp, b.nodes, b.tris, b.mats, b.lights, b.surface, ms.root, ms.root_lo, ms.root_hi, side, b.offsets,
-              begin, count, b.accum, b.counts, b.items);
+              begin, count, b.accum, b.counts, 0, b.items);
   });
   std::vector<cl_uint4> counts(npix);
   launch.check(rt.queue().enqueueReadBuffer(b.counts, CL_TRUE, 0, npix * sizeof(cl_uint4), counts.data()),
@@ -226,7 +232,7 @@ bool log_megakernel_rays(const Scene& scene, ClRuntime& rt, const MegaScene& ms,
   const Buf b_log = device_buffer(rt, std::max<std::uint64_t>(bytes, 1), "ray log");
   launch_tiles(rt, launch, rays.kernel(), "megakernel_rays", npix, tile, [&](int begin, int count) {
     rays.bind(ms.fp, b.nodes, b.tris, b.mats, b.lights, b.surface, ms.root, ms.root_lo, ms.root_hi, side, b.offsets,
-              begin, count, b.accum, b.counts, b.items, b_first, b_log);
+              begin, count, b.accum, b.counts, 0, b.items, b_first, b_log);
   });
   std::vector<cl_float4> all(total * 2);
   if (total > 0)

@@ -161,6 +161,7 @@ void measure_renders(BenchReport& report, Scene& scene, const RenderSettings& se
   RenderSettings with_progress = settings;
   with_progress.progress = &live;
   with_progress.count_work = false;
+  with_progress.item_buffer_output = false;  // the image is what the renderers are compared on
   with_progress.switch_counting = true;
   Renderer renderer(scene, prepare_banks(scene, settings, rt), with_progress, rt);
   // The baselines are prepared too (after OPSILA's preparation, whose host
@@ -171,7 +172,7 @@ void measure_renders(BenchReport& report, Scene& scene, const RenderSettings& se
   std::unique_ptr<TraversalBatch> batch;
   std::unique_ptr<BaselineSeries> mega_runs, embree_runs;
   if (baselines) {
-    mega = std::make_unique<Megakernel>(scene, rt);
+    mega = std::make_unique<Megakernel>(scene, rt, 1 << 16, false);  // images only, as OPSILA's frames
     mega_runs = std::make_unique<BaselineSeries>("replicated_megakernel", "replicated megakernel (same device)", 0,
                                                  repeats);
     batch = std::make_unique<TraversalBatch>(scene, rt, report.traversal);

@@ -255,6 +255,7 @@ int run_render(const std::vector<std::string>& args) {
   Progress progress("render", !o.quiet && writer);
   settings.progress = &progress;
   settings.count_work = !o.stats_path.empty();  // only --stats reads the work counters
+  settings.item_buffer_output = !o.item_buffer_path.empty();
 
   RenderResult result;
   std::string device;

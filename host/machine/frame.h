@@ -78,6 +78,7 @@ struct Renderer::Machine {
   std::size_t spmd_wg = 1;
   int tile_w = 1, item_launch_pixels = 1;
   int spp = 1, spp_k = 1;         // samples per pixel, N = k*k
+  bool item_output = true;        // RenderSettings::item_buffer_output
   std::vector<float> offsets;     // (i + 0.5) / k, i = 0..k-1
   Progress* progress = nullptr;
   // OPSILA_FAULT_ROUND=K: a device fault reported at round K of every frame

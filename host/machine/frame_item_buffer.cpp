@@ -11,21 +11,23 @@ namespace opsila {
 // One pass per sample (0 .. N-1, i rightwards, j downwards) keeps the
 // nearest hits for that sample's primary descriptors; the (object, facet)
 // output is the centre ray's: the centre sample's pass writes it for odd k,
-// a pass of its own (sample -1, no hits kept) for even k. With several
+// a pass of its own (sample -1, no hits kept) for even k; neither when the
+// frame gives no item buffer (RenderSettings::item_buffer_output). With several
 // ranks, each launch covers whole rows of tiles, which the ranks relay in
 // turn (rank_exchange.h), and every pass keeps its hits (the relayed state).
 void Renderer::Machine::item_buffer(Launcher& launch, int sample) {
   const bool centre_only = sample < 0;
   const int i = centre_only ? 0 : sample % spp_k, j = centre_only ? 0 : sample / spp_k;
   const bool centre = centre_only || (2 * i + 1 == spp_k && 2 * j + 1 == spp_k);
-  const int mode = (centre ? OPSILA_ITEM_WRITE_ITEMS : 0) |
+  const bool items = centre && item_output;
+  const int mode = (items ? OPSILA_ITEM_WRITE_ITEMS : 0) |
                    (centre_only && group.all() ? 0 : OPSILA_ITEM_WRITE_HITS);
   const float ox = centre_only ? 0.5f : offsets[std::size_t(i)], oy = centre_only ? 0.5f : offsets[std::size_t(j)];
   const int tiles_x = (width + tile_w - 1) / tile_w, tiles_y = (height + tile_w - 1) / tile_w;
   const int tiles = tiles_x * tiles_y;
   int per_launch = std::max(1, item_launch_pixels / (tile_w * tile_w));
   if (!group.all()) per_launch = std::max(1, per_launch / tiles_x) * tiles_x;
-  const ItemBuffers relay{&b_items, &b_item_tri, &b_item_t, &b_item_facet, centre};
+  const ItemBuffers relay{&b_items, &b_item_tri, &b_item_t, &b_item_facet, items};
   for (int begin = 0; begin < tiles; begin += per_launch) {
     const int count = std::min(per_launch, tiles - begin);
     const std::size_t px0 = std::size_t(begin / tiles_x) * tile_w * width;

@@ -48,15 +48,19 @@ class MappedRead {
 static_assert(OPSILA_ACCUM_WORDS == 3 * OPSILA_COUNTER_WORDS, "pixel sums: three (low, high) word pairs a pixel");
 
 // Read back the pixel sums (fixed point: the sum of the N samples, decoded
-// here into their mean) and the item buffer.
+// here into their mean) and, when the frame gives it, the item buffer.
 void Renderer::Machine::read_image(Launcher& launch, RenderResult& result) {
   cl::CommandQueue& q = rt.queue();
   const std::size_t values = npix * 3;
   MappedRead accum(launch, q, b_accum, npix * OPSILA_ACCUM_WORDS * sizeof(cl_uint), "clEnqueueMapBuffer(pixel sums)");
-  MappedRead items(launch, q, b_items, npix * sizeof(cl_int2), "clEnqueueMapBuffer(item buffer)");
-  const cl_int* item = items.data<cl_int>();
-  result.item_buffer.assign(item, item + npix * 2);
-  items.unmap(launch, "clEnqueueUnmapMemObject(item buffer)");
+  if (item_output) {
+    MappedRead items(launch, q, b_items, npix * sizeof(cl_int2), "clEnqueueMapBuffer(item buffer)");
+    const cl_int* item = items.data<cl_int>();
+    result.item_buffer.assign(item, item + npix * 2);
+    items.unmap(launch, "clEnqueueUnmapMemObject(item buffer)");
+  } else {
+    result.item_buffer.clear();
+  }
   const cl_uint* words = accum.data<cl_uint>();
   auto sum = [words](std::size_t i) { return join_words(words[2 * i], words[2 * i + 1]); };
   result.rgb.resize(values);

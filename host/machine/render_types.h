@@ -56,6 +56,11 @@ struct RenderSettings {
   // them from frame to frame (the bench: timed frames as a plain render
   // runs them, then one counted frame for the work figures).
   bool switch_counting = false;
+  // Fill RenderResult::item_buffer with each pixel's centre-ray (object,
+  // facet), as --item-buffer writes it. false (a render without
+  // --item-buffer, the bench's frames): the item buffer keeps only the hits
+  // the frame needs and the output stays empty; the image is the same.
+  bool item_buffer_output = true;
 };
 
 // One kernel launch, named, with its OpenCL-profiled time.

@@ -60,7 +60,8 @@ void Renderer::render(RenderResult& result) {
 
   if (m.progress) m.progress->start();
   m.clear_frame();
-  if (m.spp_k % 2 == 0) m.item_buffer(launch, -1);  // even k: the centre ray is no sample
+  // Even k: the centre ray is no sample; its pass writes the item buffer alone.
+  if (m.spp_k % 2 == 0 && m.item_output) m.item_buffer(launch, -1);
   m.item_buffer(launch, 0);
   Machine::Frame f;
   f.listed = m.list_hits(launch, 0);

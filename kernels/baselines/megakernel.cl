@@ -22,7 +22,8 @@
  * offsets[i] = (i + 0.5) / spp_k, from the host.
  * ray_counts: per pixel (secondary rays spawned, shadow rays spawned, as
  * RenderStats counts them; ray-facet tests, ray-box tests).
- * items: (object, facet) of the centre ray's primary hit. */
+ * items: (object, facet) of the centre ray's primary hit, written when
+ * write_items is set (the bench's frames compare images only). */
 /* ray_log: 0, or where this pixel's rays go, from ray_log[2 * log_at] on
  * (megakernel_rays below): each ray traced, in the order traced (the centre
  * ray of an even sample grid apart, which is not counted as a ray), as
@@ -37,7 +38,8 @@
 inline void mega_pixel(FrameParams fp, __global const BankNode *nodes, __global const BankTriangle *tris,
                        __global const Material *materials, __global const Light *lights, SURFACE_PARAMS, int root,
                        float3 lo, float3 hi, int spp_k, __global const float *offsets, int pixel, __global long *accum,
-                       __global uint4 *ray_counts, __global int2 *items, __global float4 *ray_log, uint log_at) {
+                       __global uint4 *ray_counts, int write_items, __global int2 *items, __global float4 *ray_log,
+                       uint log_at) {
   int x = pixel % fp.width, y = pixel / fp.width;
   float eps = fp.epsilon;
 
@@ -51,7 +53,7 @@ inline void mega_pixel(FrameParams fp, __global const BankNode *nodes, __global 
   CostProbe no_probe = no_cost_probe();
   int2 item = (int2)(-1, -1);
   /* Even k: the centre ray is not a sample; its hit is looked up alone. */
-  if (spp_k % 2 == 0) {
+  if (spp_k % 2 == 0 && write_items) {
     RayPre cr = make_ray(load3(fp.eye), primary_direction(fp, x, y));
     float t = OPSILA_INF;
     int hit = -1, facet = INT_MAX;
@@ -133,17 +135,18 @@ inline void mega_pixel(FrameParams fp, __global const BankNode *nodes, __global 
   accum[pixel * 3 + 1] = sum.y;
   accum[pixel * 3 + 2] = sum.z;
   ray_counts[pixel] = (uint4)(secondary, shadow, tri_tests, box_tests);
-  items[pixel] = item;
+  if (write_items) items[pixel] = item;
 }
 
 __kernel void megakernel(FrameParams fp, __global const BankNode *nodes, __global const BankTriangle *tris,
                          __global const Material *materials, __global const Light *lights, SURFACE_PARAMS, int root,
                          float4 root_lo, float4 root_hi, int spp_k, __global const float *offsets, int pixel_begin,
-                         int pixel_count, __global long *accum, __global uint4 *ray_counts, __global int2 *items) {
+                         int pixel_count, __global long *accum, __global uint4 *ray_counts, int write_items,
+                         __global int2 *items) {
   int k = get_global_id(0);
   if (k >= pixel_count) return;
   mega_pixel(fp, nodes, tris, materials, lights, SURFACE_ARGS, root, root_lo.xyz, root_hi.xyz, spp_k, offsets,
-             pixel_begin + k, accum, ray_counts, items, 0, 0u);
+             pixel_begin + k, accum, ray_counts, write_items, items, 0, 0u);
 }
 
 /* The same frame, every ray also written to ray_log from ray_log[2 *
@@ -153,9 +156,10 @@ __kernel void megakernel_rays(FrameParams fp, __global const BankNode *nodes, __
                               __global const Material *materials, __global const Light *lights, SURFACE_PARAMS,
                               int root, float4 root_lo, float4 root_hi, int spp_k, __global const float *offsets,
                               int pixel_begin, int pixel_count, __global long *accum, __global uint4 *ray_counts,
-                              __global int2 *items, __global const uint *log_first, __global float4 *ray_log) {
+                              int write_items, __global int2 *items, __global const uint *log_first,
+                              __global float4 *ray_log) {
   int k = get_global_id(0);
   if (k >= pixel_count) return;
   mega_pixel(fp, nodes, tris, materials, lights, SURFACE_ARGS, root, root_lo.xyz, root_hi.xyz, spp_k, offsets,
-             pixel_begin + k, accum, ray_counts, items, ray_log, log_first[pixel_begin + k]);
+             pixel_begin + k, accum, ray_counts, write_items, items, ray_log, log_first[pixel_begin + k]);
 }

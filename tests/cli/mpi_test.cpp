@@ -268,6 +268,25 @@ TEST_F(MpiFixture, HundredsIsTheSameOnOneToFourRanks) {
   expect_same_as_one_process(*this, "hundreds.json", "96x72", "16");
 }
 
+// Without --item-buffer the frame writes no (object, facet) output: no
+// centre pass for an even sample grid, and the ranks relay only the hits.
+// The image is the same, on one process or three ranks, as with it.
+TEST_F(MpiFixture, WithoutTheItemBufferOutputRanksGiveTheSameImage) {
+  const std::string path = scene("hundreds.json");
+  auto args = [&](const std::string& tag, bool items) {
+    std::vector<std::string> a{path, "--size", "48x36", "--pes", "16", "--spp", "4", "-q", "-o", dir.file(tag + ".pfm")};
+    if (items) a.insert(a.end(), {"--item-buffer", dir.file(tag + ".npy")});
+    return a;
+  };
+  ASSERT_EQ(one(args("items", true)).exit_code, 0);
+  ASSERT_EQ(one(args("one", false)).exit_code, 0);
+  const RunResult r = ranks(3, args("r3", false));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::string pfm = test::read_file(dir.file("items.pfm"));
+  EXPECT_TRUE(test::read_file(dir.file("one.pfm")) == pfm);
+  EXPECT_TRUE(test::read_file(dir.file("r3.pfm")) == pfm);
+}
+
 TEST_F(MpiFixture, TexturedAndSmoothAreTheSameOnThreeRanks) {
   expect_same_as_one_process(*this, "textured.json", "64x48", "8");
   expect_same_as_one_process(*this, "smooth.json", "64x48", "8");

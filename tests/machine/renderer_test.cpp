@@ -437,6 +437,36 @@ TEST(Renderer, PreparedOnceRendersEqualFrames) {
   expect_balanced(second.stats);
 }
 
+// A frame asked for no item buffer (a render without --item-buffer, the
+// bench) keeps only the hits it needs: no centre pass for an even sample
+// grid, no (object, facet) output. The image, the rays and the work are the
+// same as with it.
+TEST(Renderer, WithoutTheItemBufferOutputTheImageIsTheSame) {
+  for (int spp : {1, 4}) {
+    Scene s = test::mirror_glass_scene(40);
+    s.spp = spp;
+    RenderSettings rs;
+    rs.num_pes = 16;
+    const RenderResult with = render(s, rs, runtime());
+    rs.item_buffer_output = false;
+    const RenderResult without = render(s, rs, runtime());
+    EXPECT_EQ(with.item_buffer.size(), std::size_t(2) * s.width * s.height) << spp;
+    EXPECT_TRUE(without.item_buffer.empty()) << spp;
+    ASSERT_EQ(with.rgb.size(), without.rgb.size());
+    EXPECT_EQ(0, std::memcmp(with.rgb.data(), without.rgb.data(), with.rgb.size() * sizeof(float))) << spp;
+    EXPECT_TRUE(with.rays.same_rays(without.rays)) << spp;
+    EXPECT_EQ(with.stats.counters, without.stats.counters) << spp;
+    auto passes = [](const RenderResult& r) {
+      int n = 0;
+      for (const LaunchRecord& l : r.stats.launches) n += l.name == "item_buffer";
+      return n;
+    };
+    // One launch a pass here (a small image): the centre pass is the one left out.
+    EXPECT_EQ(passes(with), spp == 4 ? 5 : 1) << spp;
+    EXPECT_EQ(passes(without), spp) << spp;
+  }
+}
+
 // Brute force: every facet against every primary ray, no acceleration.
 TEST(Renderer, ItemBufferEqualsBruteForcePrimaryRays) {
   Scene s = test::mirror_glass_scene(72);

@@ -16,7 +16,10 @@
 
 #define ITEM_TILE_MAX (OPSILA_ITEM_TILE_SIDE * OPSILA_ITEM_TILE_SIDE) /* pixels per tile, at most */
 
-/* One work-group = one square tile of tile_w x tile_w pixels. The group
+/* One work-group = one square tile of tile_w x tile_w pixels, of the
+ * tiles_x-wide grid of tiles from tile (tile_origin.x, tile_origin.y) on
+ * (the host's traced rectangle: the pixels outside it are misses that the
+ * hit list counts without reading them, kernels/primary.cl). The group
  * first lists, in cluster order, the clusters whose projected box overlaps
  * the tile (one rectangle test per cluster per tile instead of per pixel);
  * each pixel then tests only those rectangles and traces their facets.
@@ -26,14 +29,15 @@
  * write their misses. */
 __kernel void item_buffer(FrameParams fp, __global const Cluster *clusters, __global const int4 *cluster_rects,
                           int4 listed_rect, __global const BankNode *nodes, __global const BankTriangle *tris,
-                          int tile_w, int tiles_x, int tile_begin, float ox, float oy, int mode, __global int2 *items,
+                          int tile_w, int2 tile_origin, int tiles_x, int tile_begin, float ox, float oy, int mode,
+                          __global int2 *items,
                           __global int *item_tri, __global float *item_t, __global int *item_facet) {
   __local int flags[ITEM_TILE_MAX];
   __local int list[OPSILA_ITEM_LIST_CAP];
   __local int listed;
   int lid = get_local_id(0), lsz = get_local_size(0);
   int tile = tile_begin + get_group_id(0);
-  int x0 = (tile % tiles_x) * tile_w, y0 = (tile / tiles_x) * tile_w;
+  int x0 = (tile_origin.x + tile % tiles_x) * tile_w, y0 = (tile_origin.y + tile / tiles_x) * tile_w;
   int x1 = x0 + tile_w - 1, y1 = y0 + tile_w - 1;
   int x = x0 + lid % tile_w, y = y0 + lid / tile_w;
   bool inside = lid < tile_w * tile_w && x < fp.width && y < fp.height;

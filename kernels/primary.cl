@@ -19,7 +19,14 @@
  *               time on a CPU device: docs/BENCHMARKS.md, "Levers"); no
  *               descriptor has added to them yet;
  *   list_hits:  the block's hit pixels, from the block's exclusive prefix on. */
-__kernel void count_hits(FrameParams fp, __global const int *item_tri, int npix, int first_pass,
+/* traced: the pixels the item buffer traced (x0, y0, x1, y1); a pixel
+ * outside them is a miss, whatever its item_tri holds. */
+inline bool traced_hit(__global const int *item_tri, int pixel, int width, int4 traced) {
+  int x = pixel % width, y = pixel / width;
+  return x >= traced.x && x <= traced.z && y >= traced.y && y <= traced.w && item_tri[pixel] >= 0;
+}
+
+__kernel void count_hits(FrameParams fp, __global const int *item_tri, int npix, int4 traced, int first_pass,
                          __global int *block_hits, volatile __global uint *accum) {
   int b = get_global_id(0);
   int first = b * OPSILA_SCATTER_BLOCK;
@@ -29,7 +36,7 @@ __kernel void count_hits(FrameParams fp, __global const int *item_tri, int npix,
    * words (no saturation bit) as accumulate_owned onto cleared ones. */
   long3 background = fp.group_begin == 0 ? fixed3(load3(fp.background)) : (long3)(0);
   for (int pixel = first; pixel < end; ++pixel) {
-    bool hit = item_tri[pixel] >= 0;
+    bool hit = traced_hit(item_tri, pixel, fp.width, traced);
     hits += hit;
     if (first_pass)
       store_fixed3(accum, pixel, hit ? (long3)(0) : background);
@@ -39,14 +46,14 @@ __kernel void count_hits(FrameParams fp, __global const int *item_tri, int npix,
   block_hits[b] = hits;
 }
 
-__kernel void list_hits(__global const int *item_tri, int npix, __global const int *block_first,
-                        __global int *hit_pixels) {
+__kernel void list_hits(__global const int *item_tri, int npix, int width, int4 traced,
+                        __global const int *block_first, __global int *hit_pixels) {
   int b = get_global_id(0);
   int first = b * OPSILA_SCATTER_BLOCK;
   if (first >= npix) return;
   int end = min(first + OPSILA_SCATTER_BLOCK, npix), at = block_first[b];
   for (int pixel = first; pixel < end; ++pixel)
-    if (item_tri[pixel] >= 0) hit_pixels[at++] = pixel;
+    if (traced_hit(item_tri, pixel, width, traced)) hit_pixels[at++] = pixel;
 }
 
 /* From the hit list, primary ray descriptors are built for the banks of

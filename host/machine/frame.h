@@ -31,17 +31,19 @@ namespace frame_kernels {
 using Buf = cl::Buffer;
 // The kernels of the frame, their parameters as the host passes them.
 // kernels/item_buffer.cl: frame, clusters, projected boxes and their union,
-// bank nodes and facets, tile side, tiles per row, first tile, sample
-// offsets, mode, and the item buffer with its hits, distances and facets.
-using ItemBufferKernel =
-    KernelBinding<FrameParams, Buf, Buf, cl_int4, Buf, Buf, int, int, int, float, float, int, Buf, Buf, Buf, Buf>;
+// bank nodes and facets, tile side, the traced tiles' first column and row,
+// tiles per row, first tile, sample offsets, mode, and the item buffer with
+// its hits, distances and facets.
+using ItemBufferKernel = KernelBinding<FrameParams, Buf, Buf, cl_int4, Buf, Buf, int, cl_int2, int, int, float, float,
+                                       int, Buf, Buf, Buf, Buf>;
 // kernels/primary.cl: the hit list's two passes (frame, item buffer hits,
-// pixels, per-block hits, pixel sums; item buffer hits, pixels, per-block
-// prefixes, hit list); then frame, PE table, hit list, item hits and
+// pixels, traced rectangle, first pass, per-block hits, pixel sums; item
+// buffer hits, pixels, traced rectangle, per-block prefixes, hit list);
+// then frame, PE table, hit list, item hits and
 // distances, hits in the list, sample offsets, pool offset, the pool,
 // primary hit count.
-using CountHitsKernel = KernelBinding<FrameParams, Buf, int, int, Buf, Buf>;
-using ListHitsKernel = KernelBinding<Buf, int, Buf, Buf>;
+using CountHitsKernel = KernelBinding<FrameParams, Buf, int, cl_int4, int, Buf, Buf>;
+using ListHitsKernel = KernelBinding<Buf, int, int, cl_int4, Buf, Buf>;
 using PrimaryKernel = KernelBinding<FrameParams, Buf, Buf, Buf, Buf, int, int, float, float, int, DescriptorSet, Buf>;
 // kernels/spmd_phase.cl: frame, PE table, clusters, routing boxes, routing,
 // bank nodes, facets, materials, lights, surface, banks, the exchange's
@@ -123,6 +125,11 @@ struct Renderer::Machine {
   std::vector<Light> lights;     // at least one (a stand-in never lit)
   std::vector<cl_int4> rects;    // projected cluster boxes
   cl_int4 listed_rect{};         // their union: a tile outside it lists no cluster
+  // The pixels the item buffer traces (x0, y0, x1, y1, inclusive): on one
+  // device, when the frame gives no item buffer, the union above within the
+  // image (empty when no cluster is listed); else the whole image. A pixel
+  // outside it is a miss that the hit list counts without reading it.
+  cl_int4 traced_rect{};
   std::vector<float> srgb;       // sRGB decode table
   std::vector<int> no_cluster{-1};
   std::vector<BufferSpec> buffers;  // the buffer table, as allocated (frame_buffers.cpp)

@@ -103,6 +103,12 @@ void Renderer::Machine::host_tables(const Scene& scene, BankedScene& bs) {
   for (std::size_t c = 0; c < rects.size(); ++c)  // another rank's cluster: never listed here
     if (bs.clusters[c].root < 0) rects[c] = kNeverListed;
   listed_rect = rects_union(rects);
+  // Several ranks relay the item buffer in bands of whole tile rows, and
+  // each lists only its own clusters: they trace the whole image alike.
+  traced_rect = {{0, 0, width - 1, height - 1}};
+  if (group.all() && !item_output)
+    traced_rect = {{std::max(listed_rect.s[0], 0), std::max(listed_rect.s[1], 0),
+                    std::min(listed_rect.s[2], width - 1), std::min(listed_rect.s[3], height - 1)}};
   const std::array<float, 256>& table = srgb_decode_table();
   srgb.assign(table.begin(), table.end());
   const HostSharing sharing = host_sharing(rt);

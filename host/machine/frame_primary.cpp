@@ -13,10 +13,10 @@ namespace opsila {
 std::size_t Renderer::Machine::list_hits(Launcher& launch, int sample) {
   const int pixels = static_cast<int>(npix);
   const int blocks = (pixels + ScatterPass::kBlock - 1) / ScatterPass::kBlock;
-  kernels().count_hits.bind(fp, b_item_tri, pixels, sample == 0 ? 1 : 0, b_hit_blocks, b_accum);
+  kernels().count_hits.bind(fp, b_item_tri, pixels, traced_rect, sample == 0 ? 1 : 0, b_hit_blocks, b_accum);
   launch.run(kernels().count_hits.kernel(), "count_hits", round_up(blocks, 64), 0, -1);
   scatter->scan(launch, "hit_list_scan", b_hit_blocks, blocks, b_hit_total, -1);
-  kernels().list_hits.bind(b_item_tri, pixels, b_hit_blocks, b_hit_pixels);
+  kernels().list_hits.bind(b_item_tri, pixels, width, traced_rect, b_hit_blocks, b_hit_pixels);
   launch.run(kernels().list_hits.kernel(), "list_hits", round_up(blocks, 64), 0, -1);
   cl_int listed = 0;
   launch.check(rt.queue().enqueueReadBuffer(b_hit_total, CL_TRUE, 0, sizeof(cl_int), &listed),

@@ -439,32 +439,46 @@ TEST(Renderer, PreparedOnceRendersEqualFrames) {
 
 // A frame asked for no item buffer (a render without --item-buffer, the
 // bench) keeps only the hits it needs: no centre pass for an even sample
-// grid, no (object, facet) output. The image, the rays and the work are the
-// same as with it.
+// grid, no (object, facet) output, and on one device the item buffer traces
+// only the tiles that overlap a cluster's rectangle (none when the view
+// meets no cluster): the hit list counts the pixels outside as misses. The
+// image, the rays and the work are the same as with it, facing the scene,
+// from far (most tiles outside) and turned away (no tile traced).
 TEST(Renderer, WithoutTheItemBufferOutputTheImageIsTheSame) {
-  for (int spp : {1, 4}) {
-    Scene s = test::mirror_glass_scene(40);
-    s.spp = spp;
-    RenderSettings rs;
-    rs.num_pes = 16;
-    const RenderResult with = render(s, rs, runtime());
-    rs.item_buffer_output = false;
-    const RenderResult without = render(s, rs, runtime());
-    EXPECT_EQ(with.item_buffer.size(), std::size_t(2) * s.width * s.height) << spp;
-    EXPECT_TRUE(without.item_buffer.empty()) << spp;
-    ASSERT_EQ(with.rgb.size(), without.rgb.size());
-    EXPECT_EQ(0, std::memcmp(with.rgb.data(), without.rgb.data(), with.rgb.size() * sizeof(float))) << spp;
-    EXPECT_TRUE(with.rays.same_rays(without.rays)) << spp;
-    EXPECT_EQ(with.stats.counters, without.stats.counters) << spp;
-    auto passes = [](const RenderResult& r) {
-      int n = 0;
-      for (const LaunchRecord& l : r.stats.launches) n += l.name == "item_buffer";
-      return n;
-    };
-    // One launch a pass here (a small image): the centre pass is the one left out.
-    EXPECT_EQ(passes(with), spp == 4 ? 5 : 1) << spp;
-    EXPECT_EQ(passes(without), spp) << spp;
+  auto passes = [](const RenderResult& r) {
+    int n = 0;
+    for (const LaunchRecord& l : r.stats.launches) n += l.name == "item_buffer";
+    return n;
+  };
+  const Scene facing = test::mirror_glass_scene(40);
+  Scene far = facing, away = facing;
+  for (int i = 0; i < 3; ++i) {
+    far.camera.eye[i] = facing.camera.look_at[i] + 4 * (facing.camera.eye[i] - facing.camera.look_at[i]);
+    away.camera.look_at[i] = 2 * facing.camera.eye[i] - facing.camera.look_at[i];
   }
+  for (const Scene* view : std::initializer_list<const Scene*>{&facing, &far, &away})
+    for (int spp : {1, 4}) {
+      Scene s = *view;
+      s.spp = spp;
+      const std::string what = (view == &facing ? "facing" : view == &far ? "far" : "away") + std::string(", spp ") +
+                               std::to_string(spp);
+      RenderSettings rs;
+      rs.num_pes = 16;
+      const RenderResult with = render(s, rs, runtime());
+      rs.item_buffer_output = false;
+      const RenderResult without = render(s, rs, runtime());
+      EXPECT_EQ(with.item_buffer.size(), std::size_t(2) * s.width * s.height) << what;
+      EXPECT_TRUE(without.item_buffer.empty()) << what;
+      ASSERT_EQ(with.rgb.size(), without.rgb.size());
+      EXPECT_EQ(0, std::memcmp(with.rgb.data(), without.rgb.data(), with.rgb.size() * sizeof(float))) << what;
+      EXPECT_TRUE(with.rays.same_rays(without.rays)) << what;
+      EXPECT_EQ(with.stats.counters, without.stats.counters) << what;
+      // One launch a pass here (a small image): the centre pass is the one
+      // left out; turned away, no pass traces anything.
+      EXPECT_EQ(passes(with), spp == 4 ? 5 : 1) << what;
+      EXPECT_EQ(passes(without), view == &away ? 0 : spp) << what;
+      if (view == &far) EXPECT_GT(with.rays.primary_hits, 0u) << what;
+    }
 }
 
 // Brute force: every facet against every primary ray, no acceleration.

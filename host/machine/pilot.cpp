@@ -75,13 +75,15 @@ MeasuredWork spread_cluster_work(const std::vector<std::uint64_t>& work, int lev
 
 namespace {
 
-// The pilots' settings: the frame's PEs, routing and work-groups, counting.
+// The pilots' settings: the frame's PEs, routing and work-groups, counting;
+// they read the work, not the item buffer.
 RenderSettings pilot_settings(const RenderSettings& settings) {
   RenderSettings ps;
   ps.num_pes = settings.num_pes;
   ps.work_groups_per_pe = settings.work_groups_per_pe;
   ps.routing = settings.routing;
   ps.measure_cost = true;
+  ps.item_buffer_output = false;
   return ps;
 }
 

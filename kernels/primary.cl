@@ -17,7 +17,9 @@
  *               adding to them: the background or zero. The frame's pixel
  *               sums need no clearing before (a third of an all-miss frame's
  *               time on a CPU device: docs/BENCHMARKS.md, "Levers"); no
- *               descriptor has added to them yet;
+ *               descriptor has added to them yet. A pixel outside the
+ *               traced rectangle is left alone: the host reads it as
+ *               the background's sum (Renderer::Machine::read_image);
  *   list_hits:  the block's hit pixels, from the block's exclusive prefix on. */
 /* traced: the pixels the item buffer traced (x0, y0, x1, y1); a pixel
  * outside them is a miss, whatever its item_tri holds. */
@@ -36,7 +38,10 @@ __kernel void count_hits(FrameParams fp, __global const int *item_tri, int npix,
    * words (no saturation bit) as accumulate_owned onto cleared ones. */
   long3 background = fp.group_begin == 0 ? fixed3(load3(fp.background)) : (long3)(0);
   for (int pixel = first; pixel < end; ++pixel) {
-    bool hit = traced_hit(item_tri, pixel, fp.width, traced);
+    int x = pixel % fp.width, y = pixel / fp.width;
+    if (x < traced.x || x > traced.z || y < traced.y || y > traced.w)
+      continue; /* a miss in every pass, which the host's read-back gives the background */
+    bool hit = item_tri[pixel] >= 0;
     hits += hit;
     if (first_pass)
       store_fixed3(accum, pixel, hit ? (long3)(0) : background);

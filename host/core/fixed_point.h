@@ -51,6 +51,20 @@ inline float from_fixed(std::uint64_t sum, int samples) {
   return static_cast<float>(s / (static_cast<double>(OPSILA_FIXED_SCALE) * samples));
 }
 
+// The pixel sum that `n` adds of q (>= 0) leave in a zero sum, as
+// add_fixed_owned in kernels/lib/accum.cl makes it: a carry out of the 64
+// bits sets the top bit (from_fixed then reads the saturated value). What a
+// pixel that misses in every sample pass holds (frame_readback.cpp).
+inline std::uint64_t owned_sum(std::int64_t q, int n) {
+  std::uint64_t s = 0;
+  for (int k = 0; k < n; ++k) {
+    const std::uint64_t old = s;
+    s += static_cast<std::uint64_t>(q);
+    if (s < old) s |= std::uint64_t(1) << 63;
+  }
+  return s;
+}
+
 // Adds a contribution (>= 0) to a host-side sum, saturating at 2^63 - 1.
 inline std::int64_t add_fixed_saturating(std::int64_t sum, std::int64_t q) {
   return q > std::numeric_limits<std::int64_t>::max() - sum ? std::numeric_limits<std::int64_t>::max()

@@ -65,7 +65,21 @@ void Renderer::Machine::read_image(Launcher& launch, RenderResult& result) {
   auto sum = [words](std::size_t i) { return join_words(words[2 * i], words[2 * i + 1]); };
   result.rgb.resize(values);
   if (group.all()) {
-    for (std::size_t i = 0; i < values; ++i) result.rgb[i] = from_fixed(sum(i), spp);
+    // Outside the traced rectangle every pass missed and nothing wrote the
+    // sums: the background's, as count_hits would have left them.
+    float background[3];
+    for (int c = 0; c < 3; ++c) background[c] = from_fixed(owned_sum(to_fixed(fp.background[c]), spp), spp);
+    const int x0 = traced_rect.s[0], x1 = traced_rect.s[2], y0 = traced_rect.s[1], y1 = traced_rect.s[3];
+    for (int y = 0; y < height; ++y) {
+      const bool row = y >= y0 && y <= y1 && x0 <= x1;
+      const std::size_t begin = std::size_t(y) * width;
+      const std::size_t in0 = begin + (row ? x0 : width), in1 = begin + (row ? x1 + 1 : width);
+      for (std::size_t p = begin; p < in0; ++p)
+        for (int c = 0; c < 3; ++c) result.rgb[3 * p + c] = background[c];
+      for (std::size_t i = 3 * in0; i < 3 * in1; ++i) result.rgb[i] = from_fixed(sum(i), spp);
+      for (std::size_t p = in1; p < begin + width; ++p)
+        for (int c = 0; c < 3; ++c) result.rgb[3 * p + c] = background[c];
+    }
     accum.unmap(launch, "clEnqueueUnmapMemObject(pixel sums)");
   } else {
     // 64-bit integer sums, summed over the ranks on rank 0.

@@ -104,20 +104,24 @@ TEST(HugeValues, SumsBeyondTheFixedPointSaturateNotWrap) {
 // Misses add the background without atomics (each pixel's own work-item):
 // four samples of 3.3e11 each fit the fixed point, and their sum carries
 // out of 64 bits; four of 2e11 reach 2^63; both saturate.
-// Four of 1e11 fit, and their mean is the background.
+// Four of 1e11 fit, and their mean is the background. Without item buffer
+// output no pixel is traced here (the sphere is behind the eye) and the
+// read-back gives every pixel the background's sum (owned_sum): the same.
 TEST(HugeValues, BackgroundSumsOfMissesSaturateNotWrap) {
   for (const char* bg : {"3.3e11", "2e11", "1e11"}) {
     Scene s = scene_of(std::string(R"({"image": {"size": [16, 8]}, "spp": 4, "background": )") + bg +
                        R"(, "camera": {"eye": [0, 0, 5], "look_at": [0, 0, 0]},
       "objects": [{"type": "sphere", "center": [0, 0, 9], "radius": 1, "material": {"Kd": 1}}]})");
     const float expect = std::string(bg) != "1e11" ? kMaxPixelValue / 4 : from_fixed(4 * to_fixed(1e11f), 4);
-    for (int pes : {1, 4}) {
-      RenderSettings settings;
-      settings.num_pes = pes;
-      const RenderResult cl = render(s, settings, runtime());
-      ASSERT_EQ(cl.rgb.size(), std::size_t(16 * 8 * 3));
-      for (float v : cl.rgb) ASSERT_EQ(v, expect) << bg << ", " << pes << " PEs";
-    }
+    for (int pes : {1, 4})
+      for (bool items : {true, false}) {
+        RenderSettings settings;
+        settings.num_pes = pes;
+        settings.item_buffer_output = items;
+        const RenderResult cl = render(s, settings, runtime());
+        ASSERT_EQ(cl.rgb.size(), std::size_t(16 * 8 * 3));
+        for (float v : cl.rgb) ASSERT_EQ(v, expect) << bg << ", " << pes << " PEs, items " << items;
+      }
   }
 }
 
@@ -129,6 +133,11 @@ TEST(HugeValues, DecodeSaturatesAtTheLargestSum) {
   EXPECT_EQ(add_fixed_saturating(std::numeric_limits<std::int64_t>::max() - 1, 5),
             std::numeric_limits<std::int64_t>::max());
   EXPECT_EQ(from_fixed(std::uint64_t(1) << 63, 4), kMaxPixelValue / 4);  // the mean of 4 samples
+  // What N adds of one value leave (kernels/lib/accum.cl, add_fixed_owned).
+  EXPECT_EQ(owned_sum(7, 9), 63u);
+  EXPECT_EQ(owned_sum(std::int64_t(1) << 62, 2), std::uint64_t(1) << 63);  // reaches 2^63: saturated
+  EXPECT_EQ(owned_sum(std::numeric_limits<std::int64_t>::max(), 3) >> 63, 1u);  // carried out: marked
+  EXPECT_EQ(from_fixed(owned_sum(std::numeric_limits<std::int64_t>::max(), 3), 3), kMaxPixelValue / 3);
   EXPECT_EQ(saturate_sum(std::numeric_limits<double>::infinity()), double(kMaxPixelValue));
   EXPECT_EQ(saturate_sum(std::nan("")), 0.0);
 }

@@ -107,7 +107,11 @@ void traversal_text(std::string& out, const BenchReport& r) {
   auto per_ray = [&](const char* what, double seconds, std::uint64_t rays) {
     const auto x = r.over_traversal(seconds, rays);
     if (!x) return;
-    appendf(out, "  %-34s %8.1f ns per ray = traversal %.1f + %.1f (%.2fx)\n", what, ns * *x, ns, ns * (*x - 1), *x);
+    // Below 1x (a renderer that proves rays miss without tracing them) the
+    // rest is a saving: "traversal 5.4 - 1.2".
+    const double rest = ns * (*x - 1);
+    appendf(out, "  %-34s %8.1f ns per ray = traversal %.1f %c %.1f (%.2fx)\n", what, ns * *x, ns, rest < 0 ? '-' : '+',
+            std::abs(rest), *x);
   };
   per_ray("megakernel, kernels", r.megakernel.kernel_seconds, r.megakernel.median_run.rays.total());
   per_ray("megakernel, frame", r.megakernel.seconds, r.megakernel.median_run.rays.total());

@@ -18,8 +18,8 @@
 
 /* One work-group = one square tile of tile_w x tile_w pixels, of the
  * tiles_x-wide grid of tiles from tile (tile_origin.x, tile_origin.y) on
- * (the host's traced rectangle: the pixels outside it are misses that the
- * hit list counts without reading them, kernels/primary.cl). The group
+ * (the host's traced rectangle: the pixels outside it are misses that no
+ * kernel touches; the read-back gives them the background). The group
  * first lists, in cluster order, the clusters whose projected box overlaps
  * the tile (one rectangle test per cluster per tile instead of per pixel);
  * each pixel then tests only those rectangles and traces their facets.

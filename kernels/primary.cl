@@ -13,7 +13,7 @@
  *   count_hits: the block's hits; a miss adds the background once over all
  *               groups of PEs (the device that holds PE 0), and only this
  *               work-item adds to the pixel in the launch. The frame's
- *               first pass (first != 0) writes every pixel's sums instead of
+ *               first pass (first_pass != 0) writes every pixel's sums instead of
  *               adding to them: the background or zero. The frame's pixel
  *               sums need no clearing before (a third of an all-miss frame's
  *               time on a CPU device: docs/BENCHMARKS.md, "Levers"); no
@@ -23,9 +23,9 @@
  *   list_hits:  the block's hit pixels, from the block's exclusive prefix on. */
 /* traced: the pixels the item buffer traced (x0, y0, x1, y1); a pixel
  * outside them is a miss, whatever its item_tri holds. */
-inline bool traced_hit(__global const int *item_tri, int pixel, int width, int4 traced) {
+inline bool was_traced(int pixel, int width, int4 traced) {
   int x = pixel % width, y = pixel / width;
-  return x >= traced.x && x <= traced.z && y >= traced.y && y <= traced.w && item_tri[pixel] >= 0;
+  return x >= traced.x && x <= traced.z && y >= traced.y && y <= traced.w;
 }
 
 __kernel void count_hits(FrameParams fp, __global const int *item_tri, int npix, int4 traced, int first_pass,
@@ -38,15 +38,14 @@ __kernel void count_hits(FrameParams fp, __global const int *item_tri, int npix,
    * words (no saturation bit) as accumulate_owned onto cleared ones. */
   long3 background = fp.group_begin == 0 ? fixed3(load3(fp.background)) : (long3)(0);
   for (int pixel = first; pixel < end; ++pixel) {
-    int x = pixel % fp.width, y = pixel / fp.width;
-    if (x < traced.x || x > traced.z || y < traced.y || y > traced.w)
+    if (!was_traced(pixel, fp.width, traced))
       continue; /* a miss in every pass, which the host's read-back gives the background */
     bool hit = item_tri[pixel] >= 0;
     hits += hit;
     if (first_pass)
       store_fixed3(accum, pixel, hit ? (long3)(0) : background);
     else if (!hit && fp.group_begin == 0)
-      accumulate_owned(accum, pixel, load3(fp.background));
+      add_fixed3_owned(accum, pixel, background);
   }
   block_hits[b] = hits;
 }
@@ -58,7 +57,7 @@ __kernel void list_hits(__global const int *item_tri, int npix, int width, int4 
   if (first >= npix) return;
   int end = min(first + OPSILA_SCATTER_BLOCK, npix), at = block_first[b];
   for (int pixel = first; pixel < end; ++pixel)
-    if (traced_hit(item_tri, pixel, width, traced)) hit_pixels[at++] = pixel;
+    if (was_traced(pixel, width, traced) && item_tri[pixel] >= 0) hit_pixels[at++] = pixel;
 }
 
 /* From the hit list, primary ray descriptors are built for the banks of

@@ -128,7 +128,8 @@ struct Renderer::Machine {
   // The pixels the item buffer traces (x0, y0, x1, y1, inclusive): on one
   // device, when the frame gives no item buffer, the union above within the
   // image (empty when no cluster is listed); else the whole image. A pixel
-  // outside it is a miss that the hit list counts without reading it.
+  // outside it is a miss that no kernel touches: read_image gives it the
+  // background's sum.
   cl_int4 traced_rect{};
   std::vector<float> srgb;       // sRGB decode table
   std::vector<int> no_cluster{-1};

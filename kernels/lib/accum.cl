@@ -37,11 +37,14 @@ inline void add_fixed_owned(volatile __global uint *cell, long value) {
 }
 
 /* accumulate() into a pixel that no other work-item adds to during the launch. */
-inline void accumulate_owned(volatile __global uint *accum, int pixel, float3 value) {
-  long3 q = fixed3(value);
+inline void add_fixed3_owned(volatile __global uint *accum, int pixel, long3 q) {
   add_fixed_owned(&accum[pixel * OPSILA_ACCUM_WORDS + 0], q.x);
   add_fixed_owned(&accum[pixel * OPSILA_ACCUM_WORDS + 2], q.y);
   add_fixed_owned(&accum[pixel * OPSILA_ACCUM_WORDS + 4], q.z);
+}
+
+inline void accumulate_owned(volatile __global uint *accum, int pixel, float3 value) {
+  add_fixed3_owned(accum, pixel, fixed3(value));
 }
 
 /* A pixel's three sums set to q (each >= 0): what accumulate_owned of the

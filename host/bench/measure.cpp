@@ -134,7 +134,9 @@ void build_program(BenchReport& report, ClRuntime& rt, Balance balance, const Be
   rt.program(KernelProgram::render_uncounted);  // the timed frames' (rays counted only)
   rt.program(KernelProgram::baselines);
   // The pilots' program is built here too, so that the pilot frames' time
-  // is theirs and not the compiler's (a cold compiler cache tripled it).
+  // is theirs and not the compiler's (a cold compiler cache tripled it);
+  // their kernels are compiled for their work-group sizes by a first
+  // pilot frame run before the pilots' clock (RenderSettings::pilot_warm_up).
   if (balance == Balance::measured) rt.program(KernelProgram::measure);
   report.compile_seconds = seconds_since(tc);
 }
@@ -163,7 +165,9 @@ void measure_renders(BenchReport& report, Scene& scene, const RenderSettings& se
   with_progress.count_work = false;
   with_progress.item_buffer_output = false;  // the image is what the renderers are compared on
   with_progress.switch_counting = true;
-  Renderer renderer(scene, prepare_banks(scene, settings, rt), with_progress, rt);
+  RenderSettings prepare = settings;
+  prepare.pilot_warm_up = true;  // as the timed frames follow a warm-up frame
+  Renderer renderer(scene, prepare_banks(scene, prepare, rt), with_progress, rt);
   // The baselines are prepared too (after OPSILA's preparation, whose host
   // peak the report gives), and every round runs one frame of each, in
   // turn: the machine's speed drifts over seconds, and the ratios between

@@ -67,6 +67,7 @@ json header_json(const BenchReport& r) {
   j["balance"] = balance_name(r.stats().balance);
   j["pilot_frames"] = r.stats().pilot_frames;
   j["pilot_seconds"] = r.stats().pilot_seconds;
+  j["pilot_warm_up_seconds"] = r.stats().pilot_warm_up_seconds;
   j["bank_capacity"] = st.bank_capacity;
   j["work_group_size"] = st.work_group_size;
   j["settings"] = {{"repeats", r.repeats}, {"warmup", r.warmup}, {"host_repeats", r.host_repeats},

@@ -39,8 +39,10 @@ void header_text(std::string& out, const BenchReport& r) {
           r.scene_path.c_str(), r.width, r.height, r.spp, r.depth, r.pes, st.bank_capacity, st.work_group_size,
           balance_name(st.balance));
   if (st.balance == Balance::measured)
-    appendf(out, "balance measured: the partition of the best of %d pilot frames, %.2f s while preparing (not timed)\n",
-            st.pilot_frames, st.pilot_seconds);
+    appendf(out,
+            "balance measured: the partition of the best of %d pilot frames, %.2f s while preparing (not timed; "
+            "their first frame run once before them, %.2f s, as the timed frames' warm-up)\n",
+            st.pilot_frames, st.pilot_seconds, st.pilot_warm_up_seconds);
   if (r.ranks > 1)
     appendf(out, "device: %d MPI ranks, one device each (below); rank 0: %s\n", r.ranks, r.device.description.c_str());
   else

@@ -37,6 +37,7 @@ struct PreparedBanks {
   Balance balance = Balance::facets;
   int pilot_frames = 0;      // --balance measured: pilot frames run to prepare these banks
   double pilot_seconds = 0;  // and their time
+  double pilot_warm_up_seconds = 0;  // RenderSettings::pilot_warm_up: the untimed frame before them
   PrepareTimes prepare;      // the stages that prepared them: partition, bank build, pilots (core/stage_clock.h)
   // The cluster of every scene facet (of this rank's share, for a scene read
   // in shares): the pilot frames' per-cluster counts are spread over these

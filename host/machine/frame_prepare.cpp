@@ -89,6 +89,7 @@ Renderer::Machine::Machine(const Scene& scene, PreparedBanks banks, const Render
   prepared.balance = banks.balance;
   prepared.pilot_frames = banks.pilot_frames;
   prepared.pilot_seconds = banks.pilot_seconds;
+  prepared.pilot_warm_up_seconds = banks.pilot_warm_up_seconds;
   share = banks.share;
   prepared.bank_bytes = bs.bank_bytes;
   prepared.global_bytes = bs.global_bytes;

@@ -38,6 +38,9 @@ constexpr int kPilotFrames = 5;
 struct PilotFigures {
   int frames = 0;       // run
   double seconds = 0;   // their time
+  // RenderSettings::pilot_warm_up: the first pilot frame's untimed run
+  // before them (not in `seconds`).
+  double warm_up_seconds = 0;
   // A scene read in shares: the most facets this rank held at once while
   // they ran, its share beside a pilot's banks (0 for a whole scene).
   std::uint64_t facets_held = 0;

@@ -39,6 +39,7 @@ PreparedBanks prepare_whole(const Scene& scene, Scene* lendable, const RenderSet
   PreparedBanks banks = bank_scene(scene, settings.num_pes, settings.routing, policy, group);
   banks.pilot_frames = pilots.frames;
   banks.pilot_seconds = pilots.seconds;
+  banks.pilot_warm_up_seconds = pilots.warm_up_seconds;
   banks.prepare = stages_since(before);
   return banks;
 }
@@ -73,6 +74,7 @@ PreparedBanks prepare_banks(Scene& scene, const RenderSettings& settings, ClRunt
   banks.balance = settings.balance;
   banks.pilot_frames = pilots.frames;
   banks.pilot_seconds = pilots.seconds;
+  banks.pilot_warm_up_seconds = pilots.warm_up_seconds;
   banks.share.pilot_facets_held = pilots.facets_held;
   banks.prepare = stages_since(before);
   return banks;

@@ -61,6 +61,12 @@ struct RenderSettings {
   // --item-buffer, the bench's frames): the item buffer keeps only the hits
   // the frame needs and the output stays empty; the image is the same.
   bool item_buffer_output = true;
+  // --balance measured: render the first pilot frame once more before the
+  // pilots' clock starts, so that their time (PreparedBanks::pilot_seconds)
+  // is the frames' and not the driver's (PoCL compiles a kernel for its
+  // work-group size at its first launch). The bench sets it, as its timed
+  // frames follow a warm-up frame.
+  bool pilot_warm_up = false;
 };
 
 // One kernel launch, named, with its OpenCL-profiled time.
@@ -129,6 +135,7 @@ struct RenderStats {
   Balance balance = Balance::facets;  // how the partition shared the scene (--balance)
   int pilot_frames = 0;               // --balance measured: pilot frames run while preparing
   double pilot_seconds = 0;           // their time (part of the prepare step, not of the frame)
+  double pilot_warm_up_seconds = 0;   // RenderSettings::pilot_warm_up: the untimed frame before them
   PrepareTimes prepare;               // the preparation's stages (core/stage_clock.h)
   std::size_t work_group_size = 0;
   std::vector<RankReport> ranks;  // several MPI ranks: one report each (rank 0's result only)

@@ -297,7 +297,8 @@ TEST(Renderer, BalancingByMeasuredWorkGivesTheSameImageAndEvenerPes) {
 // pilots' view is copied (no second copy of them), and gets them back: the
 // same buffer, and the same banks as the pilots of a const scene, whose view
 // is a full copy. The view keeps the scene's bounds, so the pilot frames'
-// epsilon, and with it every count, are the copy's. (Not in the Pilot
+// epsilon, and with it every count, are the copy's. The bench's warm-up
+// frame changes nothing either. (Not in the Pilot
 // suite: Oclgrind runs that one, and ten pilot frames of hundreds are far
 // too slow there.)
 TEST(PilotView, AWholeSceneLendsItsFacetsToThePilotsView) {
@@ -323,6 +324,20 @@ TEST(PilotView, AWholeSceneLendsItsFacetsToThePilotsView) {
     EXPECT_EQ(lent.scene.pes[p].tri_begin, copied.scene.pes[p].tri_begin) << "PE " << p;
     EXPECT_EQ(lent.scene.pes[p].tri_end, copied.scene.pes[p].tri_end) << "PE " << p;
   }
+  EXPECT_EQ(lent.pilot_warm_up_seconds, 0.0);
+
+  // The bench's warm-up (the first pilot frame run once more, untimed)
+  // leaves the pilots' counts, so their partition, as they were.
+  rs.pilot_warm_up = true;
+  const PreparedBanks warmed = prepare_banks(s, rs, runtime());
+  EXPECT_EQ(warmed.pilot_frames, kPilotFrames);
+  EXPECT_GT(warmed.pilot_warm_up_seconds, 0.0);
+  ASSERT_EQ(warmed.scene.triangles.size(), copied.scene.triangles.size());
+  EXPECT_EQ(0, std::memcmp(warmed.scene.triangles.data(), copied.scene.triangles.data(),
+                           copied.scene.triangles.size() * sizeof(BankTriangle)));
+  ASSERT_EQ(warmed.scene.pes.size(), copied.scene.pes.size());
+  for (std::size_t p = 0; p < copied.scene.pes.size(); ++p)
+    EXPECT_EQ(warmed.scene.pes[p].tri_end, copied.scene.pes[p].tri_end) << "PE " << p;
 }
 
 // The pilot's counts: every test of the SPMD phase of a child box or facet

@@ -91,6 +91,11 @@ class Megakernel {
   BaselineImage frame();
   // The same frame into `out`, reusing its image storage (Renderer::render).
   void frame(BaselineImage& out);
+  // Count the ray-facet and ray-box tests (the default) or not: the
+  // program without the counters (KernelProgram::baselines_uncounted,
+  // built here) for the bench's timed frames, as OPSILA's timed frames run
+  // without theirs. The image and the ray counts are the same.
+  void count_work(bool count);
 
  private:
   struct State;

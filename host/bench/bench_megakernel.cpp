@@ -109,6 +109,8 @@ struct Megakernel::State {
   bool items;  // the item buffer too (tests); the bench's frames leave it out, as OPSILA's do
   MegaScene ms;
   MegaKernel mega;
+  std::unique_ptr<MegaKernel> uncounted;  // count_work(false): the program without the test counters
+  bool count = true;
   MegaBuffers b;
   std::vector<cl_long> accum;    // host copies of the pixel sums and ray counts,
   std::vector<cl_uint4> counts;  // kept between frames as the output image is
@@ -124,6 +126,12 @@ Megakernel::Megakernel(const Scene& scene, ClRuntime& rt, int tile, bool item_bu
 }
 
 Megakernel::~Megakernel() = default;
+
+void Megakernel::count_work(bool count) {
+  if (!count && !s_->uncounted)
+    s_->uncounted = std::make_unique<MegaKernel>(s_->rt, "megakernel", KernelProgram::baselines_uncounted);
+  s_->count = count;
+}
 
 BaselineImage Megakernel::frame() {
   BaselineImage out;
@@ -148,9 +156,10 @@ void Megakernel::frame(BaselineImage& out) {
   auto t0 = std::chrono::steady_clock::now();
   std::vector<LaunchRecord> launches;
   Launcher launch(rt, launches);
-  launch_tiles(rt, launch, s_->mega.kernel(), "megakernel", npix, s_->tile, [&](int begin, int count) {
-    s_->mega.bind(ms.fp, b.nodes, b.tris, b.mats, b.lights, b.surface, ms.root, ms.root_lo, ms.root_hi,
-                  spp_side(scene.spp), b.offsets, begin, count, b.accum, b.counts, s_->items ? 1 : 0, b.items);
+  MegaKernel& mega = s_->count ? s_->mega : *s_->uncounted;
+  launch_tiles(rt, launch, mega.kernel(), "megakernel", npix, s_->tile, [&](int begin, int count) {
+    mega.bind(ms.fp, b.nodes, b.tris, b.mats, b.lights, b.surface, ms.root, ms.root_lo, ms.root_hi,
+              spp_side(scene.spp), b.offsets, begin, count, b.accum, b.counts, s_->items ? 1 : 0, b.items);
   });
   std::vector<cl_long>& accum = s_->accum;
   std::vector<cl_uint4>& counts = s_->counts;
@@ -178,7 +187,7 @@ void Megakernel::frame(BaselineImage& out) {
   for (const LaunchRecord& r : launches) out.kernel_seconds += r.seconds;
   out.rays = RayCounts();
   out.rays.primary = npix * static_cast<std::size_t>(scene.spp);
-  out.triangle_tests = out.box_tests = 0;
+  out.triangle_tests = out.box_tests = 0;  // stay 0 without the counters (count_work)
   for (const cl_uint4& c : counts) {
     out.rays.secondary += c.s[0];
     out.rays.shadow += c.s[1];

@@ -133,6 +133,7 @@ void build_program(BenchReport& report, ClRuntime& rt, Balance balance, const Be
   rt.program();
   rt.program(KernelProgram::render_uncounted);  // the timed frames' (rays counted only)
   rt.program(KernelProgram::baselines);
+  rt.program(KernelProgram::baselines_uncounted);  // the megakernel's timed frames'
   // The pilots' program is built here too, so that the pilot frames' time
   // is theirs and not the compiler's (a cold compiler cache tripled it);
   // their kernels are compiled for their work-group sizes by a first
@@ -177,6 +178,7 @@ void measure_renders(BenchReport& report, Scene& scene, const RenderSettings& se
   std::unique_ptr<BaselineSeries> mega_runs, embree_runs;
   if (baselines) {
     mega = std::make_unique<Megakernel>(scene, rt, 1 << 16, false);  // images only, as OPSILA's frames
+    mega->count_work(false);  // timed without the test counters, as OPSILA's frames
     mega_runs = std::make_unique<BaselineSeries>("replicated_megakernel", "replicated megakernel (same device)", 0,
                                                  repeats);
     batch = std::make_unique<TraversalBatch>(scene, rt, report.traversal);
@@ -225,6 +227,16 @@ void measure_renders(BenchReport& report, Scene& scene, const RenderSettings& se
   renderer.render(frame);
   live.finish();
   report.deterministic = report.deterministic && frame.rgb == first.rgb && frame.rays.same_rays(first.rays);
+  if (mega) {
+    // The megakernel's tests, from one more frame that counts them (not timed).
+    mega->count_work(true);
+    BaselineImage counted;
+    mega->frame(counted);
+    mega_runs->image.triangle_tests = counted.triangle_tests;
+    mega_runs->image.box_tests = counted.box_tests;
+    report.deterministic = report.deterministic && counted.rgb == mega_runs->image.rgb &&
+                           counted.rays.same_rays(mega_runs->image.rays);
+  }
   report.opsila = std::move(first);
   report.opsila.stats = stats[median_index(report.render_times)];
   with_work_counts(report.opsila.stats, frame.stats);

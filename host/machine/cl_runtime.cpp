@@ -377,7 +377,7 @@ cl::Program& ClRuntime::program(KernelProgram which) {
   const int index = static_cast<int>(which);
   cl::Program& program = programs_[index];
   if (built_[index]) return program;
-  const bool render = which != KernelProgram::baselines;
+  const bool render = which != KernelProgram::baselines && which != KernelProgram::baselines_uncounted;
   const std::string& source = !render ? baseline_kernel_source() : source_.empty() ? kernel_source() : source_;
   const std::string origin = render ? source_origin_ : "embedded baseline kernels";
   cl_int err = CL_SUCCESS;
@@ -386,7 +386,8 @@ cl::Program& ClRuntime::program(KernelProgram which) {
   // No fast-math: every device must reproduce the reference's arithmetic.
   std::string options = "-cl-std=CL1.2";
   if (which == KernelProgram::measure) options += " -DOPSILA_MEASURE_COST=1";
-  if (which == KernelProgram::render_uncounted) options += " -DOPSILA_COUNT_WORK=0";
+  if (which == KernelProgram::render_uncounted || which == KernelProgram::baselines_uncounted)
+    options += " -DOPSILA_COUNT_WORK=0";
   if (pow_fp64_) options += " -DOPSILA_POW_FP64=1";
   err = program.build({device_.device}, options.c_str());
   if (err != CL_SUCCESS) {

@@ -83,8 +83,10 @@ struct ClRuntimeOptions {
 // stages counting each cluster's tests (OPSILA_MEASURE_COST) for the pilot
 // frames of --balance measured, and the renderer's stages without the work
 // counters (OPSILA_COUNT_WORK=0) for a render that neither --stats nor the
-// bench reads them from.
-enum class KernelProgram { render = 0, baselines = 1, measure = 2, render_uncounted = 3 };
+// bench reads them from; and the baselines without them, for the bench's
+// timed megakernel frames (as its timed OPSILA frames run without them).
+enum class KernelProgram { render = 0, baselines = 1, measure = 2, render_uncounted = 3, baselines_uncounted = 4 };
+constexpr int kKernelPrograms = 5;
 
 class ClRuntime {
  public:
@@ -127,8 +129,8 @@ class ClRuntime {
   DeviceEntry device_;
   cl::Context context_;
   cl::CommandQueue queue_;
-  cl::Program programs_[4];
-  bool built_[4] = {false, false, false, false};
+  cl::Program programs_[kKernelPrograms];
+  bool built_[kKernelPrograms] = {};
   std::size_t group_size_ = 64;
   bool pow_fp64_ = false;
   cl_ulong max_alloc_ = 0, global_mem_ = 0, limit_ = 0;

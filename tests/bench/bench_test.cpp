@@ -60,6 +60,29 @@ TEST(Bench, MegakernelTilesDoNotChangeTheImage) {
   EXPECT_EQ(whole.rays.total(), tiled.rays.total());
 }
 
+// Without its test counters (the bench's timed frames) the megakernel gives
+// the same image, item buffer and rays and counts no test; counting again,
+// its tests are those of a fresh megakernel's.
+TEST(Bench, MegakernelWithoutCountersGivesTheSameImage) {
+  const Scene s = test::mirror_glass_scene(48, 4);
+  const BaselineImage counted = render_megakernel(s, runtime());
+  ASSERT_GT(counted.box_tests, 0u);
+  ASSERT_GT(counted.triangle_tests, 0u);
+  Megakernel mega(s, runtime(), 500);
+  mega.count_work(false);
+  const BaselineImage uncounted = mega.frame();
+  EXPECT_EQ(uncounted.rgb, counted.rgb);
+  EXPECT_EQ(uncounted.item_buffer, counted.item_buffer);
+  EXPECT_TRUE(uncounted.rays.same_rays(counted.rays));
+  EXPECT_EQ(uncounted.box_tests, 0u);
+  EXPECT_EQ(uncounted.triangle_tests, 0u);
+  mega.count_work(true);
+  const BaselineImage again = mega.frame();
+  EXPECT_EQ(again.rgb, counted.rgb);
+  EXPECT_EQ(again.box_tests, counted.box_tests);
+  EXPECT_EQ(again.triangle_tests, counted.triangle_tests);
+}
+
 // A megakernel prepared once renders every frame alike: its buffers, kept
 // between frames, are written whole by each.
 TEST(Bench, MegakernelFramesReuseItsBuffersAlike) {

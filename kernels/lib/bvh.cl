@@ -62,9 +62,7 @@ inline CostProbe no_cost_probe(void) {
 OPSILA_INLINE intW node_hits(const RayPre *r, __global const BankNode *nd, float tmin, float tmax, float slack,
                              floatW *enter) {
   floatW lo, hi;
-  node_spans(r, nd, &lo, &hi);
-  lo = fmax(lo, (floatW)(tmin));
-  hi = fmin(hi, (floatW)(tmax));
+  node_spans(r, nd, tmin, tmax, &lo, &hi);
   hi = hi + fabs(hi) * (4.0f * OPSILA_TIE_TOLERANCE) + slack;
   *enter = lo;
   return (lo <= hi) & (vloadW(0, nd->count) >= (intW)(0));

@@ -88,8 +88,11 @@ inline int next_shadow_destination_spheres(const RayPre *r, __global const PeInf
  * never above its clusters' and its exit never below. */
 OPSILA_INLINE intW route_hits(const RayPre *r, __global const BankNode *nd, float tmin, float tmax, floatW *entry) {
   floatW lo, hi;
-  node_spans(r, nd, &lo, &hi);
-  *entry = fmax(lo, (floatW)(0.0f));
+  /* Unclamped: from -inf and +inf. A NaN slab is ignored as fmax ignores it;
+   * all three NaN would need a zero direction. lo is never NaN, so the
+   * clamp at 0 needs no NaN test either. */
+  node_spans(r, nd, -INFINITY, INFINITY, &lo, &hi);
+  *entry = MAX_A_OR_B(lo, (floatW)(0.0f));
   return (lo <= hi) & (hi > (floatW)(tmin)) & (lo < (floatW)(tmax)) & (vloadW(0, nd->count) >= (intW)(0));
 }
 

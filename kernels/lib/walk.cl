@@ -59,12 +59,23 @@ OPSILA_INLINE uint lane_mask(intW m) {
  * children (or PEs) in increasing order, as a loop over k would. */
 OPSILA_INLINE int lowest_bit(uint mask) { return 31 - clz(mask & (0u - mask)); }
 
-/* Raw slab distances of a node's child boxes: the largest plane entry and
- * the smallest plane exit, per child. Planes are taken near/far by the sign
- * of the direction, so one subtraction and one product per plane; a NaN (a
- * ray in a slab's boundary plane) is ignored by fmax/fmin, i.e. that slab
- * counts as containing the ray, as in ray_box_span. */
-OPSILA_INLINE void node_spans(const RayPre *r, __global const BankNode *nd, floatW *enter, floatW *leave) {
+/* The larger of a and b, b when a is NaN: one compare and select, which x86
+ * does in one max instruction where fmax must also test for NaN. */
+#define MAX_A_OR_B(a, b) select((b), (a), (a) > (b))
+#define MIN_A_OR_B(a, b) select((b), (a), (a) < (b))
+
+/* Slab distances of a node's child boxes, clamped to [tmin, tmax]: per
+ * child, the largest of tmin and the plane entries, and the smallest of tmax
+ * and the plane exits. Planes are taken near/far by the sign of the
+ * direction, so one subtraction and one product per plane. A NaN (a ray in
+ * a slab's boundary plane) is ignored, i.e. that slab counts as containing
+ * the ray, as in ray_box_span. The bounds start from tmin and tmax, never
+ * NaN, so each step is a compare and select (MAX_A_OR_B) with no NaN test;
+ * the values are those of fmax and fmin (a maximum rounds nothing), only a
+ * zero's sign may differ, which no comparison sees. -INFINITY and INFINITY
+ * leave the distances unclamped (routing). */
+OPSILA_INLINE void node_spans(const RayPre *r, __global const BankNode *nd, float tmin, float tmax, floatW *enter,
+                              floatW *leave) {
   __global const float *nx = r->neg.x ? nd->hi_x : nd->lo_x, *fx = r->neg.x ? nd->lo_x : nd->hi_x;
   __global const float *ny = r->neg.y ? nd->hi_y : nd->lo_y, *fy = r->neg.y ? nd->lo_y : nd->hi_y;
   __global const float *nz = r->neg.z ? nd->hi_z : nd->lo_z, *fz = r->neg.z ? nd->lo_z : nd->hi_z;
@@ -72,8 +83,13 @@ OPSILA_INLINE void node_spans(const RayPre *r, __global const BankNode *nd, floa
   floatW ix = (floatW)(r->inv_dir.x), iy = (floatW)(r->inv_dir.y), iz = (floatW)(r->inv_dir.z);
   floatW tnx = (vloadW(0, nx) - ox) * ix, tny = (vloadW(0, ny) - oy) * iy, tnz = (vloadW(0, nz) - oz) * iz;
   floatW tfx = (vloadW(0, fx) - ox) * ix, tfy = (vloadW(0, fy) - oy) * iy, tfz = (vloadW(0, fz) - oz) * iz;
-  *enter = fmax(fmax(tnx, tny), tnz);
-  *leave = fmin(fmin(tfx, tfy), tfz);
+  floatW e = (floatW)(tmin), l = (floatW)(tmax);
+  e = MAX_A_OR_B(tnx, e);
+  e = MAX_A_OR_B(tny, e);
+  *enter = MAX_A_OR_B(tnz, e);
+  l = MIN_A_OR_B(tfx, l);
+  l = MIN_A_OR_B(tfy, l);
+  *leave = MIN_A_OR_B(tfz, l);
 }
 
 /* OPSILA_DEFINE_WALK(name, State, NODE, CHILD, LEAF, POP, ORDERED) defines

@@ -78,7 +78,15 @@ typedef struct {
   int best_tri, best_facet;
   uint *tri_tests, *box_tests;
   const CostProbe *probe;
+  /* Nearest hit: best_t's tie limit and the entry beyond which a popped
+   * child is skipped, made when best_t changes, not at every pop. */
+  float limit, cull;
 } BankWalk;
+
+OPSILA_INLINE void nearest_bounds(BankWalk *w) {
+  w->limit = tie_limit(w->best_t);
+  w->cull = w->limit + fabs(w->limit) * (4.0f * OPSILA_TIE_TOLERANCE) + w->slack;
+}
 
 /* Every child box in use is a test, met or not. */
 OPSILA_INLINE uint bank_node(BankWalk *w, __global const BankNode *nd, float *te) {
@@ -98,9 +106,8 @@ OPSILA_INLINE bool bank_child(BankWalk *w, __global const BankNode *nd, int k, i
 /* A popped entry beyond the tie limit of the best hit found since it was
  * pushed cannot hold a winner; the limit bounds the node's test too. */
 OPSILA_INLINE bool nearest_pop(BankWalk *w, float entry) {
-  float limit = tie_limit(w->best_t);
-  w->tmax = limit;
-  return !(entry > limit + fabs(limit) * (4.0f * OPSILA_TIE_TOLERANCE) + w->slack);
+  w->tmax = w->limit;
+  return !(entry > w->cull);
 }
 
 OPSILA_INLINE bool nearest_leaf(BankWalk *w, int first, int count, float entry) {
@@ -112,6 +119,7 @@ OPSILA_INLINE bool nearest_leaf(BankWalk *w, int first, int count, float entry) 
       w->best_t = t;
       w->best_tri = i;
       w->best_facet = w->tris[i].facet_id;
+      nearest_bounds(w);
     }
   }
   return false;
@@ -136,7 +144,9 @@ OPSILA_INLINE void traverse_nearest(const RayPre *r, __global const BankNode *no
                                     __global const BankTriangle *tris, int root, float tmin, float slack, float *best_t,
                                     int *best_tri, int *best_facet, uint *tri_tests, uint *box_tests,
                                     const CostProbe *probe) {
-  BankWalk w = {r, tris, tmin, OPSILA_INF, slack, *best_t, *best_tri, *best_facet, tri_tests, box_tests, probe};
+  BankWalk w = {r, tris, tmin, OPSILA_INF, slack, *best_t, *best_tri, *best_facet, tri_tests, box_tests, probe,
+                0.0f, 0.0f};
+  nearest_bounds(&w);
   walk_nearest(&w, nodes, root);
   *best_t = w.best_t;
   *best_tri = w.best_tri;
@@ -147,7 +157,7 @@ OPSILA_INLINE void traverse_nearest(const RayPre *r, __global const BankNode *no
 OPSILA_INLINE bool traverse_any(const RayPre *r, __global const BankNode *nodes, __global const BankTriangle *tris,
                                 int root, float tmin, float tmax, float slack, uint *tri_tests, uint *box_tests,
                                 const CostProbe *probe) {
-  BankWalk w = {r, tris, tmin, tmax, slack, OPSILA_INF, -1, INT_MAX, tri_tests, box_tests, probe};
+  BankWalk w = {r, tris, tmin, tmax, slack, OPSILA_INF, -1, INT_MAX, tri_tests, box_tests, probe, 0.0f, 0.0f};
   return walk_any(&w, nodes, root);
 }
 

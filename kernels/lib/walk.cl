@@ -102,35 +102,46 @@ OPSILA_INLINE void node_spans(const RayPre *r, __global const BankNode *nd, floa
  *   CHILD(w, nd, k, count, entry): whether met child k is visited;
  *   LEAF(w, first, count, entry): a leaf's items; true ends the walk (and
  *     the walk returns true);
- *   POP(w, entry): ordered walks: whether a popped entry is still worth
- *     visiting (it may set the bound the next NODE uses).
+ *   POP(w, entry): ordered walks: whether an entry taken next is still
+ *     worth visiting (it may set the bound the next NODE uses).
  * The children met are taken from the mask in increasing k (lowest set bit
  * first), the order a loop over k would give: a node's missed children cost
  * no branch (most of a node's eight are missed).
- * ORDERED 0: a met inner child is pushed, a met leaf visited at once.
+ * ORDERED 0: a met inner child is pushed, a met leaf visited at once; the
+ *   last inner child met is visited next.
  * ORDERED 1: every met child, leaves too, is pushed, the children of one
- *   node farthest first, so that the nearest is popped next; a leaf is
- *   visited when popped.
- * A child that would overflow the stack is dropped (the builder's bound
- * makes that never happen). */
+ *   node farthest first (of equal entries, the later k nearer the top), so
+ *   that the nearest is visited next; a leaf is visited when taken.
+ * The child visited next is held in registers, never pushed: the stack sees
+ * only the children left for later, in the same order as if every child
+ * went through it (one store and load fewer per node, and the stack
+ * bound of the builder holds with one entry to spare). A child that would
+ * overflow the stack is dropped (the builder's bound makes that never
+ * happen). */
 #define OPSILA_DEFINE_WALK(name, State, NODE, CHILD, LEAF, POP, ORDERED)           \
   OPSILA_INLINE bool name(State *w, __global const BankNode *nodes, int root) {  \
     int s_node[OPSILA_BVH_STACK], s_count[OPSILA_BVH_STACK];                      \
     float s_t[OPSILA_BVH_STACK];                                                  \
-    int sp = 1;                                                                   \
-    s_node[0] = root;                                                             \
-    s_count[0] = 0;                                                               \
-    s_t[0] = -INFINITY;                                                           \
-    while (sp > 0) {                                                              \
-      --sp;                                                                       \
-      if (ORDERED) {                                                              \
-        if (!POP(w, s_t[sp])) continue;                                           \
-        if (s_count[sp] > 0) {                                                    \
-          if (LEAF(w, s_node[sp], s_count[sp], s_t[sp])) return true;             \
-          continue;                                                               \
-        }                                                                         \
+    int sp = 0;                                                                   \
+    /* The child taken next: the root first. */                                  \
+    int c_node = root, c_count = 0;                                               \
+    float c_t = -INFINITY; /* its entry (ORDERED) */                             \
+    bool have = !ORDERED || POP(w, c_t);                                          \
+    for (;;) {                                                                    \
+      if (!have) {                                                                \
+        if (sp == 0) return false;                                                \
+        --sp;                                                                     \
+        if (ORDERED && !POP(w, s_t[sp])) continue;                                \
+        c_node = s_node[sp];                                                      \
+        c_count = ORDERED ? s_count[sp] : 0;                                      \
+        if (ORDERED) c_t = s_t[sp];                                               \
       }                                                                           \
-      __global const BankNode *nd = &nodes[s_node[sp]];                           \
+      have = false;                                                               \
+      if (ORDERED && c_count > 0) {                                               \
+        if (LEAF(w, c_node, c_count, c_t)) return true;                           \
+        continue;                                                                 \
+      }                                                                           \
+      __global const BankNode *nd = &nodes[c_node];                               \
       float te[OPSILA_BVH_WIDTH];                                                 \
       uint met = NODE(w, nd, te);                                                 \
       int base = sp;                                                              \
@@ -139,10 +150,22 @@ OPSILA_INLINE void node_spans(const RayPre *r, __global const BankNode *nd, floa
         met &= met - 1u;                                                          \
         int cnt = nd->count[k];                                                   \
         if (!CHILD(w, nd, k, cnt, te[k])) continue;                               \
+        int node = nd->child[k];                                                  \
         if (ORDERED) {                                                            \
+          float t = te[k];                                                        \
+          if (!have) {                                                            \
+            have = true;                                                          \
+            c_node = node, c_count = cnt, c_t = t;                                \
+            continue;                                                             \
+          }                                                                       \
+          if (t <= c_t) { /* the new child is taken next; push the held one */    \
+            float t0 = c_t;                                                       \
+            int n0 = c_node, c0 = c_count;                                        \
+            c_node = node, c_count = cnt, c_t = t;                                \
+            node = n0, cnt = c0, t = t0;                                          \
+          }                                                                       \
           if (sp >= OPSILA_BVH_STACK) continue;                                   \
           /* Insert, keeping this node's entries farthest first. */               \
-          float t = te[k];                                                        \
           int j = sp++;                                                           \
           while (j > base && s_t[j - 1] < t) {                                    \
             s_t[j] = s_t[j - 1];                                                  \
@@ -151,18 +174,20 @@ OPSILA_INLINE void node_spans(const RayPre *r, __global const BankNode *nd, floa
             --j;                                                                  \
           }                                                                       \
           s_t[j] = t;                                                             \
-          s_node[j] = nd->child[k];                                               \
+          s_node[j] = node;                                                       \
           s_count[j] = cnt;                                                       \
           continue;                                                               \
         }                                                                         \
         if (cnt == 0) {                                                           \
-          if (sp < OPSILA_BVH_STACK) s_node[sp++] = nd->child[k];                 \
+          if (have && sp < OPSILA_BVH_STACK) s_node[sp++] = c_node;               \
+          have = true;                                                            \
+          c_node = node;                                                          \
           continue;                                                               \
         }                                                                         \
-        if (LEAF(w, nd->child[k], cnt, te[k])) return true;                       \
+        if (LEAF(w, node, cnt, te[k])) return true;                               \
       }                                                                           \
+      if (ORDERED && have && !POP(w, c_t)) have = false;                          \
     }                                                                             \
-    return false;                                                                 \
   }
 
 /* POP of the unordered walks (never called). */

@@ -24,6 +24,9 @@ typedef struct {
   int3 neg; /* sign bits of the direction (-0 included): far planes first */
   int kx, ky, kz;
   float sx, sy, sz;
+  float3 org_k; /* the origin's kx, ky, kz components: the facet test reads
+                   each vertex at these indices, one load each, not a whole
+                   vertex and a choice among its components */
 } RayPre;
 
 inline float comp(float3 v, int k) { return k == 0 ? v.x : (k == 1 ? v.y : v.z); }
@@ -47,19 +50,22 @@ inline RayPre make_ray(float3 org, float3 dir) {
   r.sx = comp(dir, r.kx) / dz;
   r.sy = comp(dir, r.ky) / dz;
   r.sz = 1.0f / dz;
+  r.org_k = (float3)(comp(org, r.kx), comp(org, r.ky), comp(org, r.kz));
   return r;
 }
 
 /* The watertight test's edge functions (u, v, w) of the triangle's
  * vertices v0, v1, v2 as seen along the ray, and their depths along kz. */
 OPSILA_INLINE float3 edge_functions(const RayPre *r, __global const BankTriangle *tri, float3 *depths) {
-  float3 a = load3g(tri->v0) - r->org;
-  float3 b = load3g(tri->v1) - r->org;
-  float3 c = load3g(tri->v2) - r->org;
-  float az = comp(a, r->kz), bz = comp(b, r->kz), cz = comp(c, r->kz);
-  float ax = comp(a, r->kx) - r->sx * az, ay = comp(a, r->ky) - r->sy * az;
-  float bx = comp(b, r->kx) - r->sx * bz, by = comp(b, r->ky) - r->sy * bz;
-  float cx = comp(c, r->kx) - r->sx * cz, cy = comp(c, r->ky) - r->sy * cz;
+  /* The vertices relative to the origin, taken in the ray's kx, ky, kz
+   * order: the values of (v - org) picked by comp, with indexed loads. */
+  __global const float *p0 = tri->v0, *p1 = tri->v1, *p2 = tri->v2;
+  int kx = r->kx, ky = r->ky, kz = r->kz;
+  float3 o = r->org_k;
+  float az = p0[kz] - o.z, bz = p1[kz] - o.z, cz = p2[kz] - o.z;
+  float ax = (p0[kx] - o.x) - r->sx * az, ay = (p0[ky] - o.y) - r->sy * az;
+  float bx = (p1[kx] - o.x) - r->sx * bz, by = (p1[ky] - o.y) - r->sy * bz;
+  float cx = (p2[kx] - o.x) - r->sx * cz, cy = (p2[ky] - o.y) - r->sy * cz;
   *depths = (float3)(az, bz, cz);
   return (float3)(cx * by - cy * bx, ax * cy - ay * cx, bx * ay - by * ax);
 }

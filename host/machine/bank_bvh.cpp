@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cstring>
+#include <limits>
 #include <numeric>
 #include <string>
 
@@ -224,12 +225,16 @@ class Builder {
   }
 };
 
-// A node with every child slot empty.
+// A node with every child slot empty. An empty slot's box is inverted
+// (lo = +inf, hi = -inf): every slab distance pair is then +inf, -inf, so
+// no ray meets it and the bank walks' node test needs no look at the count
+// (kernels/lib/bvh.cl, node_hits).
 BankNode empty_node() {
   BankNode n;
+  const float inf = std::numeric_limits<float>::infinity();
   for (int i = 0; i < kWidth; ++i) {
-    n.lo_x[i] = n.lo_y[i] = n.lo_z[i] = 0.0f;
-    n.hi_x[i] = n.hi_y[i] = n.hi_z[i] = 0.0f;
+    n.lo_x[i] = n.lo_y[i] = n.lo_z[i] = inf;
+    n.hi_x[i] = n.hi_y[i] = n.hi_z[i] = -inf;
     n.child[i] = 0;
     n.count[i] = -1;
   }

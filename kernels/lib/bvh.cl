@@ -65,7 +65,9 @@ OPSILA_INLINE intW node_hits(const RayPre *r, __global const BankNode *nd, float
   node_spans(r, nd, tmin, tmax, &lo, &hi);
   hi = hi + fabs(hi) * (4.0f * OPSILA_TIE_TOLERANCE) + slack;
   *enter = lo;
-  return (lo <= hi) & (vloadW(0, nd->count) >= (intW)(0));
+  /* An empty slot's inverted box gives lo = +inf and hi = -inf, then NaN
+   * from the slack (-inf + inf): never met, so the count is not read. */
+  return lo <= hi;
 }
 
 /* A walk of one bank's BVH: the ray, its segment, and (nearest hit) the

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cstdlib>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -22,12 +23,23 @@ bool inside(const BankNode& n, int k, const float* p) {
          p[2] <= n.hi_z[k];
 }
 
+// An empty slot's box is inverted (lo = +inf, hi = -inf): the bank walks'
+// node test then never meets it without reading its count.
+bool inverted(const BankNode& n, int k) {
+  const float inf = std::numeric_limits<float>::infinity();
+  return n.lo_x[k] == inf && n.lo_y[k] == inf && n.lo_z[k] == inf && n.hi_x[k] == -inf && n.hi_y[k] == -inf &&
+         n.hi_z[k] == -inf;
+}
+
 // Walks nodes[root]; counts facet visits, checks boxes; returns the stack need.
 int walk(const BankedScene& bs, int node, std::vector<int>& seen) {
   const BankNode& n = bs.nodes[node];
   int k_used = 0, deeper = 0;
   for (int k = 0; k < OPSILA_BVH_WIDTH; ++k) {
-    if (n.count[k] < 0) continue;
+    if (n.count[k] < 0) {
+      EXPECT_TRUE(inverted(n, k)) << "node " << node << ", empty slot " << k << " has a box a ray can meet";
+      continue;
+    }
     ++k_used;
     if (n.count[k] > 0) {
       for (int i = n.child[k]; i < n.child[k] + n.count[k]; ++i) {

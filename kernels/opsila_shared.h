@@ -212,11 +212,10 @@ typedef struct {
  * Child k of a node:
  *   count[k] == 0: inner node, child[k] is its node index;
  *   count[k] >  0: leaf, facets child[k] .. child[k] + count[k] - 1;
- *   count[k] <  0: empty slot. The bank builder gives it an inverted box
- *                  (lo = +inf, hi = -inf) that no ray meets, so the bank
- *                  walks test all W boxes without reading the counts
- *                  (kernels/lib/bvh.cl, node_hits); the routing's top level
- *                  keeps zero boxes there and tests the count.
+ *   count[k] <  0: empty slot, with an inverted box (lo = +inf, hi = -inf,
+ *                  host/machine/bank_bvh.h, empty_node) that no ray meets,
+ *                  so the walks test all W boxes without reading the
+ *                  counts.
  * Indices are global (bank offsets applied). The routing BVH (one per PE,
  * over its cluster boxes, see kernels/lib/routing.cl) uses the same node with
  * leaves of one cluster: child[k] is then a cluster index.

@@ -225,21 +225,6 @@ class Builder {
   }
 };
 
-// A node with every child slot empty. An empty slot's box is inverted
-// (lo = +inf, hi = -inf): every slab distance pair is then +inf, -inf, so
-// no ray meets it and the bank walks' node test needs no look at the count
-// (kernels/lib/bvh.cl, node_hits).
-BankNode empty_node() {
-  BankNode n;
-  const float inf = std::numeric_limits<float>::infinity();
-  for (int i = 0; i < kWidth; ++i) {
-    n.lo_x[i] = n.lo_y[i] = n.lo_z[i] = inf;
-    n.hi_x[i] = n.hi_y[i] = n.hi_z[i] = -inf;
-    n.child[i] = 0;
-    n.count[i] = -1;
-  }
-  return n;
-}
 
 // Collapses binary node b into the wide node nodes[slot] (wide_of[b] =
 // slot). `budget` bounds the private stack this subtree may need: a node
@@ -328,6 +313,19 @@ void check_stack(const BankArray<BankNode>& nodes, int root) {
 }
 
 }  // namespace
+
+// Inverted boxes for the empty slots (bank_bvh.h).
+BankNode empty_node() {
+  BankNode n;
+  const float inf = std::numeric_limits<float>::infinity();
+  for (int i = 0; i < kWidth; ++i) {
+    n.lo_x[i] = n.lo_y[i] = n.lo_z[i] = inf;
+    n.hi_x[i] = n.hi_y[i] = n.hi_z[i] = -inf;
+    n.child[i] = 0;
+    n.count[i] = -1;
+  }
+  return n;
+}
 
 int build_bank_bvh(BankArray<BankNode>& nodes, BankArray<BankTriangle>& tris, const std::vector<Box>& tri_boxes,
                    std::vector<Cluster>& clusters, int c_begin, int c_end,

@@ -46,6 +46,12 @@ std::vector<BankBvh> build_bank_bvhs(BankArray<BankNode>& nodes, BankArray<BankT
 void build_route_bvh(BankArray<BankNode>& nodes, int root, const std::vector<Box>& boxes,
                      const std::vector<int>& cluster_ids);
 
+// A node with every child slot empty (count -1). An empty slot's box is
+// inverted (lo = +inf, hi = -inf): every slab distance pair is then
+// (+inf, -inf), so no ray meets it and the node tests of the bank and
+// routing walks need not read the counts (kernels/lib/walk.cl).
+BankNode empty_node();
+
 // The union of a node's child boxes (its slots in use), in the nodes' own
 // floats: a box that a ray misses, under the same slab test, holds no child
 // box the ray meets. False when the node has no slot in use.

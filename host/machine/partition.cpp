@@ -57,10 +57,8 @@ void build_routing(BankedScene& bs, const Box& sbox) {
   // never above any of its clusters' and a PE it misses holds no box met.
   for (int i = 0; i < top_nodes; ++i) {
     BankNode& top = bs.route_nodes[std::size_t(bs.num_pes) + i];
+    top = empty_node();
     for (int k = 0; k < OPSILA_BVH_WIDTH; ++k) {
-      top.lo_x[k] = top.lo_y[k] = top.lo_z[k] = top.hi_x[k] = top.hi_y[k] = top.hi_z[k] = 0.0f;
-      top.child[k] = 0;
-      top.count[k] = -1;
       const int q = i * OPSILA_BVH_WIDTH + k;
       if (q >= bs.num_pes) continue;
       Box box;

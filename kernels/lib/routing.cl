@@ -93,7 +93,8 @@ OPSILA_INLINE intW route_hits(const RayPre *r, __global const BankNode *nd, floa
    * clamp at 0 needs no NaN test either. */
   node_spans(r, nd, -INFINITY, INFINITY, &lo, &hi);
   *entry = MAX_A_OR_B(lo, (floatW)(0.0f));
-  return (lo <= hi) & (hi > (floatW)(tmin)) & (lo < (floatW)(tmax)) & (vloadW(0, nd->count) >= (intW)(0));
+  /* An empty slot's inverted box (empty_node) gives lo = +inf, hi = -inf. */
+  return (lo <= hi) & (hi > (floatW)(tmin)) & (lo < (floatW)(tmax));
 }
 
 /* A walk of one PE's routing BVH (or of the top level): the ray and its

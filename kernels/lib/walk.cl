@@ -13,9 +13,9 @@
  * lo_y[W], ... ), then child[W] and count[W]:
  *   count == 0: inner node, child = node index;
  *   count >  0: leaf, items child .. child + count - 1;
- *   count <  0: empty slot, its box inverted (lo = +inf, hi = -inf), which
- *              no ray meets (the routing's top level, built apart, keeps
- *              zero boxes there: route_hits also tests the count).
+ *   count <  0: empty slot, its box inverted (lo = +inf, hi = -inf,
+ *              empty_node in host/machine/bank_bvh.h), which no ray meets:
+ *              the node tests never read the counts.
  * A root has no box of its own: a walk starts by testing its children.
  *
  * PoCL does not vectorise these loops across work-items (divergent control

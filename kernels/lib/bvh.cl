@@ -94,7 +94,7 @@ OPSILA_INLINE void nearest_bounds(BankWalk *w) {
  * by their boxes (an empty slot's is inverted), not by the counts: a vector
  * load of the counts here would make the compiler take the walk's count[k]
  * from it, through a store to the stack and a load of one lane, for every
- * child met (a stall that cost the counting builds about 5%). */
+ * child met, a load that waits for the store (docs/BENCHMARKS.md, Levers). */
 OPSILA_INLINE uint bank_node(BankWalk *w, __global const BankNode *nd, float *te) {
   floatW enter;
   intW hit = node_hits(w->r, nd, w->tmin, w->tmax, w->slack, &enter);

@@ -60,10 +60,16 @@ struct MpiFixture : ::testing::Test {
     if (std::string(kMpiexec).empty() || ::access(kMpiexec, X_OK) != 0)
       GTEST_SKIP() << "no MPI launcher (mpirun) found at build time";
   }
+  // The launcher's own session folder, one per test. Open MPI's launchers
+  // share /tmp/ompi.HOST.UID and the last one to end removes it, so under
+  // `ctest -j` a launcher starting then fails in its mkdir ("orte_init
+  // failed"). A private TMPDIR keeps two tests' launchers apart; it is not
+  // `dir`, whose entries some tests count.
+  TempDir session;
   // Open MPI refuses root unless told twice; other MPIs ignore these.
-  test::EnvChanges env = rank_environment();
-  static test::EnvChanges rank_environment() {
-    test::EnvChanges e = {{"OMPI_ALLOW_RUN_AS_ROOT", "1"}, {"OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1"}};
+  test::EnvChanges env = rank_environment(session.path());
+  static test::EnvChanges rank_environment(const std::string& tmp) {
+    test::EnvChanges e = {{"OMPI_ALLOW_RUN_AS_ROOT", "1"}, {"OMPI_ALLOW_RUN_AS_ROOT_CONFIRM", "1"}, {"TMPDIR", tmp}};
     // Under the sanitizers: Open MPI unloads its components before
     // LeakSanitizer reports, so what they keep cannot be traced to a library
     // (frames "<unknown module>") nor suppressed by name. The ranks run with

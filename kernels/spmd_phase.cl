@@ -88,9 +88,10 @@ inline int shadow_visit(const Routing *rt, const Bank *bank, const RayPre *r, fl
 /* A radiance ray at this PE (the cursor of its ordered forwarding: entry
  * cursor_entry here): its nearest hit in the bank, then on to the next PE
  * that may hold a nearer one, a miss, or to the PE that owns its hit.
- * *t_best and *hit carry the best hit so far in and out. */
+ * *t_best and *hit carry the best hit so far in and out. after: the next PE,
+ * when the ray's first destination choice found it (first_destination). */
 inline int trace_visit(FrameParams fp, const Routing *rt, const Bank *bank, const RayPre *r, float3 w, int pixel,
-                       int meta, float cursor_entry, float *t_best, int *hit, int best_facet,
+                       int meta, float cursor_entry, float *t_best, int *hit, int best_facet, const NextPe *after,
                        volatile __global uint *accum, PrivStats *st, const CostProbe *probe, Descriptor *next) {
   float eps = fp.epsilon;
   int found = -1; /* local index of a facet of this bank that won */
@@ -98,9 +99,15 @@ inline int trace_visit(FrameParams fp, const Routing *rt, const Bank *bank, cons
     traverse_nearest(r, bank->nodes, bank->tris, bank->root, eps, bank->slack, t_best, &found, &best_facet,
                      &st->v[OPSILA_STAT_TRI_TESTS], &st->v[OPSILA_STAT_BOX_TESTS], probe);
   if (found >= 0) *hit = fp.tri_base + found;
-  float entry;
-  int dest = next_destination(rt, r, eps, tie_limit(*t_best), cursor_entry, bank->pe, &entry,
-                              &st->v[OPSILA_STAT_SPHERE_TESTS], &st->v[OPSILA_STAT_ROUTE_TESTS]);
+  float entry, limit = tie_limit(*t_best);
+  int dest;
+  if (after->known) { /* the same choice, made before (see first_two_destinations_boxes) */
+    dest = after->pe >= 0 && after->entry < limit ? after->pe : -1;
+    entry = after->entry;
+  } else {
+    dest = next_destination(rt, r, eps, limit, cursor_entry, bank->pe, &entry, &st->v[OPSILA_STAT_SPHERE_TESTS],
+                            &st->v[OPSILA_STAT_ROUTE_TESTS]);
+  }
   if (dest >= 0) { /* a nearer hit (or a tie with a lower facet id) may wait in another bank */
     STAT_INC(st, FORWARD);
     *next = make_descriptor(r->org, *t_best, r->dir, entry, w, pixel, meta, *hit, dest);
@@ -173,8 +180,9 @@ inline void shade(FrameParams fp, const Routing *rt, const Bank *bank, __global 
     STAT_INC(st, SPAWN_RADIANCE);
     RayPre cr = make_ray(p, child_d[j]);
     float entry;
-    int dest = next_destination(rt, &cr, eps, OPSILA_INF, -1.0f, -1, &entry, &st->v[OPSILA_STAT_SPHERE_TESTS],
-                                &st->v[OPSILA_STAT_ROUTE_TESTS]);
+    NextPe after;
+    int dest = first_destination(rt, &cr, eps, &entry, &after, &st->v[OPSILA_STAT_SPHERE_TESTS],
+                                 &st->v[OPSILA_STAT_ROUTE_TESTS]);
     if (dest < 0) { /* meets no box or sphere: a miss, finished here */
       accumulate(accum, pixel, child_w[j] * load3(fp.background));
       STAT_INC(st_child, MISS);
@@ -185,11 +193,12 @@ inline void shade(FrameParams fp, const Routing *rt, const Bank *bank, __global 
       continue;
     }
     /* Its first PE is this one: visit it now. A hit here that no other bank
-     * can beat is shaded next round, by this PE, like any resolved hit. */
+     * can beat is shaded next round, by this PE, like any resolved hit. The
+     * visit's next choice is the runner-up of the choice just made. */
     STAT_INC(st_child, LOCAL);
     float t_best = OPSILA_INF;
     int hit = -1;
-    int v = trace_visit(fp, rt, bank, &cr, child_w[j], pixel, child_meta, entry, &t_best, &hit, INT_MAX, accum,
+    int v = trace_visit(fp, rt, bank, &cr, child_w[j], pixel, child_meta, entry, &t_best, &hit, INT_MAX, &after, accum,
                         st_child, probe_child, &next);
     if (v == VISIT_SHADE) {
       STAT_INC(st_child, FORWARD);
@@ -229,8 +238,9 @@ inline void process(FrameParams fp, const Routing *rt, const Bank *bank, __globa
   if (kind == OPSILA_KIND_TRACE) {
     STAT_INC(st, RADIANCE);
     int best_facet = hit >= 0 ? as_int(DESC_BEST_FACET(ds)) : INT_MAX;
-    int v = trace_visit(fp, rt, bank, &r, w, pixel, meta, DESC_CURSOR_ENTRY(ds), &t_best, &hit, best_facet, accum,
-                        st, probe, &next);
+    NextPe unknown = {false, -1, OPSILA_INF};
+    int v = trace_visit(fp, rt, bank, &r, w, pixel, meta, DESC_CURSOR_ENTRY(ds), &t_best, &hit, best_facet, &unknown,
+                        accum, st, probe, &next);
     if (v == VISIT_SEND) emit(out, next);
     if (v != VISIT_SHADE) return;
   }

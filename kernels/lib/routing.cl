@@ -106,6 +106,7 @@ typedef struct {
   uint *route_tests;
   float cursor_t, best_entry, entry;
   int cursor_pe, q;
+  float bound; /* an entry at or beyond it cannot change the answer */
 } RouteWalk;
 
 /* route_hits: the entries into te, the mask of the children met. */
@@ -117,10 +118,12 @@ OPSILA_INLINE uint route_node(RouteWalk *w, __global const BankNode *nd, float *
   return lane_mask(met);
 }
 
-/* Nearest entry: only a box entered below both the candidate's entry and
- * this PE's entry so far can change the answer. */
+/* Nearest entry: only a box entered below both the bound (the candidate's
+ * entry, or the runner-up's when both are kept) and this PE's entry so far
+ * can change the answer. Node boxes contain their children's, so a subtree
+ * entered at or beyond the bound holds no box entered below it. */
 OPSILA_INLINE bool entry_child(RouteWalk *w, __global const BankNode *nd, int k, int cnt, float entry) {
-  return entry < fmin(w->best_entry, w->entry);
+  return entry < fmin(w->bound, w->entry);
 }
 
 /* A cluster box entered at or before the cursor: the PE was already visited
@@ -149,7 +152,7 @@ OPSILA_DEFINE_WALK(walk_route_segment, RouteWalk, route_node, segment_child, seg
 inline int next_destination_boxes(const RayPre *r, __global const BankNode *route, int num_pes, float tmin,
                                   float tmax, float cursor_t, int cursor_pe, float *entry_out, uint *route_tests) {
   int best_pe = -1;
-  RouteWalk w = {r, tmin, tmax, route_tests, cursor_t, OPSILA_INF, OPSILA_INF, cursor_pe, -1};
+  RouteWalk w = {r, tmin, tmax, route_tests, cursor_t, OPSILA_INF, OPSILA_INF, cursor_pe, -1, OPSILA_INF};
   /* PEs in increasing order, as the ties want, W at a time through the top
    * level: a PE whose box is missed, or entered at or beyond the current
    * candidate, has no cluster box that could change the answer. */
@@ -164,6 +167,7 @@ inline int next_destination_boxes(const RayPre *r, __global const BankNode *rout
       if (q == cursor_pe) continue; /* (entry, q) == cursor: visited */
       w.q = q;
       w.entry = OPSILA_INF;
+      w.bound = w.best_entry;
       bool visited = walk_route_entry(&w, route, q);
       float entry = w.entry;
       if (visited || !(entry < tmax)) continue;
@@ -182,7 +186,7 @@ inline int next_destination_boxes(const RayPre *r, __global const BankNode *rout
  * level: PEs whose box the segment misses are not walked. */
 inline int next_shadow_destination_boxes(const RayPre *r, __global const BankNode *route, int num_pes, float tmin,
                                          float tmax, int after_pe, int home, uint *route_tests) {
-  RouteWalk w = {r, tmin, tmax, route_tests, -1.0f, OPSILA_INF, OPSILA_INF, -1, -1};
+  RouteWalk w = {r, tmin, tmax, route_tests, -1.0f, OPSILA_INF, OPSILA_INF, -1, -1, OPSILA_INF};
   int first = after_pe + 1;
   int top_nodes = (num_pes + OPSILA_BVH_WIDTH - 1) / OPSILA_BVH_WIDTH;
   for (int n = first / OPSILA_BVH_WIDTH; n < top_nodes; ++n) {
@@ -195,6 +199,69 @@ inline int next_shadow_destination_boxes(const RayPre *r, __global const BankNod
     }
   }
   return -1;
+}
+
+/* The choice after the first, when the first is known in advance (pe -1:
+ * none; known false: not computed, the visit chooses as usual). */
+typedef struct {
+  bool known;
+  int pe;
+  float entry;
+} NextPe;
+
+/* next_destination_boxes for a new ray (no cursor, tmax = inf) that keeps
+ * the runner-up too: the least (entry, PE) after the first, in *after. A
+ * visit to the first PE would choose exactly it, or none when it is entered
+ * at or beyond that visit's limit. Its choice, from the cursor (first's
+ * entry, first), is the least (entry, PE) after the cursor entered below the
+ * limit T: a PE's entry is the least over its boxes that meet the segment,
+ * and the box that gives the least entry here (below T) meets (tmin, T) as
+ * well, while a PE with every box entered at or beyond T has none meeting it.
+ * Entries come from the same unclamped slab spans, whatever tmax, so they
+ * are the same floats; a PE is visited exactly when its entry is at or
+ * before the cursor. So the ray's first visit needs no second walk. */
+inline int first_two_destinations_boxes(const RayPre *r, __global const BankNode *route, int num_pes, float tmin,
+                                        float *entry_out, NextPe *after, uint *route_tests) {
+  int best_pe = -1, next_pe = -1;
+  float next_entry = OPSILA_INF;
+  RouteWalk w = {r, tmin, OPSILA_INF, route_tests, -1.0f, OPSILA_INF, OPSILA_INF, -1, -1, OPSILA_INF};
+  int top_nodes = (num_pes + OPSILA_BVH_WIDTH - 1) / OPSILA_BVH_WIDTH;
+  for (int n = 0; n < top_nodes; ++n) {
+    __global const BankNode *tn = &route[num_pes + n];
+    float pe_entry[OPSILA_BVH_WIDTH];
+    for (uint met = route_node(&w, tn, pe_entry); met != 0u; met &= met - 1u) {
+      int kq = lowest_bit(met); /* PEs in increasing order: of equal entries, the lower PE first */
+      if (!(pe_entry[kq] < next_entry)) continue;
+      int q = tn->child[kq];
+      w.q = q;
+      w.entry = OPSILA_INF;
+      w.bound = next_entry;
+      walk_route_entry(&w, route, q); /* no cursor: nothing is visited */
+      float entry = w.entry;
+      if (entry < w.best_entry) {
+        next_pe = best_pe, next_entry = w.best_entry;
+        best_pe = q, w.best_entry = entry;
+      } else if (entry < next_entry) {
+        next_pe = q, next_entry = entry;
+      }
+    }
+  }
+  after->known = true;
+  after->pe = next_pe;
+  after->entry = next_entry;
+  *entry_out = w.best_entry;
+  return best_pe;
+}
+
+/* The first destination of a new ray (next_destination from no cursor, tmax
+ * inf); with cluster boxes, the one after it too. */
+inline int first_destination(const Routing *rt, const RayPre *r, float tmin, float *entry_out, NextPe *after,
+                             uint *sphere_tests, uint *route_tests) {
+  if (rt->mode == OPSILA_ROUTING_BOXES)
+    return first_two_destinations_boxes(r, rt->route, rt->num_pes, tmin, entry_out, after, route_tests);
+  after->known = false;
+  return next_destination_spheres(r, rt->pes, rt->clusters, rt->num_pes, tmin, OPSILA_INF, -1.0f, -1, entry_out,
+                                  sphere_tests, route_tests);
 }
 
 inline int next_destination(const Routing *rt, const RayPre *r, float tmin, float tmax, float cursor_t,

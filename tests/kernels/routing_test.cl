@@ -52,3 +52,25 @@ __kernel void shadow_chain(__global const PeInfo *pes, __global const Cluster *c
     after = q >= 0 ? q : -2;
   }
 }
+
+/* A new ray's first choice with its runner-up (first_destination), and what
+ * a visit to that first PE would choose next with the limit dir[i].w:
+ * out[i] = (first, runner-up or -1, known, the visit's choice) and
+ * out_entries[i] = (first's entry, runner-up's, the visit choice's, 0). */
+__kernel void first_two(__global const PeInfo *pes, __global const Cluster *clusters, __global const BankNode *route,
+                        int num_pes, int mode, __global const float4 *org, __global const float4 *dir, int count,
+                        __global int4 *out, __global float4 *out_entries) {
+  int i = get_global_id(0);
+  if (i >= count) return;
+  Routing rt = {pes, clusters, route, num_pes, mode};
+  RayPre r = make_ray(org[i].xyz, dir[i].xyz);
+  uint sphere_tests = 0u, route_tests = 0u;
+  float entry = OPSILA_INF, next_entry = OPSILA_INF;
+  NextPe after;
+  int first = first_destination(&rt, &r, org[i].w, &entry, &after, &sphere_tests, &route_tests);
+  int next = first < 0 ? -1
+                       : next_destination(&rt, &r, org[i].w, dir[i].w, entry, first, &next_entry, &sphere_tests,
+                                          &route_tests);
+  out[i] = (int4)(first, after.known ? after.pe : -1, after.known ? 1 : 0, next);
+  out_entries[i] = (float4)(entry, after.known ? after.entry : OPSILA_INF, next >= 0 ? next_entry : OPSILA_INF, 0.0f);
+}

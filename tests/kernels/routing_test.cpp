@@ -194,5 +194,76 @@ TEST(Routing, ShadowRaysVisitTheMetPesInPeOrderOnRandomSegments) {
   }
 }
 
+// A new ray's first destination choice also names the runner-up, so that
+// the ray's first visit (made at once when the first PE is the spawning one)
+// needs no second walk: the runner-up, when entered below the visit's limit,
+// must be what next_destination chooses from the first PE's cursor, entry
+// bits included; otherwise it must choose none. The oracle checks the pair.
+TEST(Routing, TheFirstChoiceNamesTheVisitsNextChoice) {
+  for (int pes : {5, 16, 64}) {
+    const Routed r = routed(pes, 1e-3f, 0.5f, 12.0f);
+    for (int mode : {OPSILA_ROUTING_BOXES, OPSILA_ROUTING_SPHERES}) {
+      ClRuntime& rt = test::batch_runtime();
+      const std::size_t n = r.rays.size();
+      cl::Buffer pe_info = test::to_device(rt, r.bs.pes), clusters = test::to_device(rt, r.bs.clusters);
+      cl::Buffer route = test::to_device(rt, r.bs.route_nodes);
+      cl::Buffer org = test::to_device(rt, r.rays.org), dir = test::to_device(rt, r.rays.dir);
+      cl::Buffer out = test::to_device(rt, std::vector<cl_int4>(n));
+      cl::Buffer out_entries = test::to_device(rt, std::vector<cl_float4>(n));
+      cl::Kernel k = rt.kernel("first_two");
+      int a = 0;
+      for (const cl::Buffer* b : {&pe_info, &clusters, &route}) k.setArg(a++, *b);
+      k.setArg(a++, cl_int(r.bs.num_pes));
+      k.setArg(a++, cl_int(mode));
+      k.setArg(a++, org);
+      k.setArg(a++, dir);
+      k.setArg(a++, cl_int(n));
+      k.setArg(a++, out);
+      k.setArg(a++, out_entries);
+      test::run_batch(rt, k, n);
+      const std::vector<cl_int4> got = test::from_device<cl_int4>(rt, out, n);
+      const std::vector<cl_float4> got_t = test::from_device<cl_float4>(rt, out_entries, n);
+      std::size_t checked = 0, decided = 0, cut = 0;
+      for (std::size_t i = 0; i < n; ++i) {
+        const std::string at = std::string(mode_name(mode)) + ", " + std::to_string(pes) + " PEs, ray " +
+                               std::to_string(i);
+        const cl_int4& g = got[i];
+        const cl_float4& t = got_t[i];
+        if (mode != OPSILA_ROUTING_BOXES) {  // spheres: no runner-up, each visit chooses
+          ASSERT_EQ(g.s[2], 0) << at;
+          continue;
+        }
+        ASSERT_EQ(g.s[2], 1) << at;
+        const float limit = r.rays.dir[i].s[3];
+        if (g.s[0] >= 0) {  // the visit's choice, from the pair
+          const bool below = g.s[1] >= 0 && t.s[1] < limit;
+          ASSERT_EQ(g.s[3], below ? g.s[1] : -1) << at;
+          if (below) ASSERT_EQ(t.s[2], t.s[1]) << at << ": the same entry bits";
+          decided += below;
+          cut += g.s[1] >= 0 && !below;
+        }
+        // The pair against the oracle: the two least (entry, PE) of an open ray.
+        cl_float4 open_dir = r.rays.dir[i];
+        open_dir.s[3] = kInf;
+        const std::vector<Reach> reach = reach_of_pes(r.bs, mode, r.rays.org[i], open_dir);
+        std::vector<std::pair<float, int>> expect;
+        for (int q = 0; q < pes; ++q)
+          if (reach[q].entry < kInf) expect.push_back({reach[q].entry, q});
+        std::sort(expect.begin(), expect.end());
+        expect.resize(std::max<std::size_t>(expect.size(), 2), {kInf, -1});
+        ASSERT_EQ(g.s[0], expect[0].second) << at;
+        ASSERT_EQ(g.s[1], expect[1].second) << at;
+        if (g.s[0] >= 0) ASSERT_EQ(t.s[0], expect[0].first) << at;
+        if (g.s[1] >= 0) ASSERT_EQ(t.s[1], expect[1].first) << at;
+        ++checked;
+      }
+      if (mode == OPSILA_ROUTING_BOXES) {
+        EXPECT_GT(decided, checked / 10) << pes << " PEs: too few runner-ups below the limit";
+        EXPECT_GT(cut, checked / 50) << pes << " PEs: too few runner-ups cut by the limit";
+      }
+    }
+  }
+}
+
 }  // namespace
 }  // namespace opsila

@@ -254,7 +254,11 @@ inline int first_two_destinations_boxes(const RayPre *r, __global const BankNode
 }
 
 /* The first destination of a new ray (next_destination from no cursor, tmax
- * inf); with cluster boxes, the one after it too. */
+ * inf); with cluster boxes, the one after it too. Not with spheres: there a
+ * PE is skipped when its box, not its spheres, is entered beyond a bound,
+ * and the box's rounded entry may exceed a tangent sphere's, so a choice
+ * made with another bound (the runner-up's, another limit) could differ
+ * from the visit's in such a case. */
 inline int first_destination(const Routing *rt, const RayPre *r, float tmin, float *entry_out, NextPe *after,
                              uint *sphere_tests, uint *route_tests) {
   if (rt->mode == OPSILA_ROUTING_BOXES)

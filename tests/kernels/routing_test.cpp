@@ -108,25 +108,40 @@ Routed routed(int pes, float tmin, float tmax_lo, float tmax_hi) {
   return Routed{partition_scene(s, pes), test::random_rays(1500, 31 + pes, tmin, tmax_lo, tmax_hi)};
 }
 
+// The routing tables and rays of `r` on the device, bound as every batch
+// kernel of routing_test.cl takes them: pes, clusters, route, num_pes, mode,
+// [home,] org, dir, count; then the kernel's outputs from `next_arg` on.
+struct RoutingArgs {
+  cl::Buffer pes, clusters, route, org, dir;
+  RoutingArgs(ClRuntime& rt, const Routed& r)
+      : pes(test::to_device(rt, r.bs.pes)),
+        clusters(test::to_device(rt, r.bs.clusters)),
+        route(test::to_device(rt, r.bs.route_nodes)),
+        org(test::to_device(rt, r.rays.org)),
+        dir(test::to_device(rt, r.rays.dir)) {}
+  int bind(cl::Kernel& k, const Routed& r, int mode, const int* home = nullptr) const {
+    int a = 0;
+    for (const cl::Buffer* b : {&pes, &clusters, &route}) k.setArg(a++, *b);
+    k.setArg(a++, cl_int(r.bs.num_pes));
+    k.setArg(a++, cl_int(mode));
+    if (home) k.setArg(a++, cl_int(*home));
+    k.setArg(a++, org);
+    k.setArg(a++, dir);
+    k.setArg(a++, cl_int(r.rays.size()));
+    return a;
+  }
+};
+
 // Runs destination_chain or shadow_chain; visits (and entries) per ray.
 std::pair<std::vector<int>, std::vector<float>> run_chain(const Routed& r, int mode, const char* kernel, int home) {
   ClRuntime& rt = test::batch_runtime();
   const std::size_t n = r.rays.size(), cells = n * r.bs.pes.size();
-  cl::Buffer pes = test::to_device(rt, r.bs.pes), clusters = test::to_device(rt, r.bs.clusters);
-  cl::Buffer route = test::to_device(rt, r.bs.route_nodes);
-  cl::Buffer org = test::to_device(rt, r.rays.org), dir = test::to_device(rt, r.rays.dir);
+  const RoutingArgs args(rt, r);
   cl::Buffer visits = test::to_device(rt, std::vector<cl_int>(cells));
   cl::Buffer entries = test::to_device(rt, std::vector<float>(cells));
   const bool shadow = std::string(kernel) == "shadow_chain";
   cl::Kernel k = rt.kernel(kernel);
-  int a = 0;
-  for (const cl::Buffer* b : {&pes, &clusters, &route}) k.setArg(a++, *b);
-  k.setArg(a++, cl_int(r.bs.num_pes));
-  k.setArg(a++, cl_int(mode));
-  if (shadow) k.setArg(a++, cl_int(home));
-  k.setArg(a++, org);
-  k.setArg(a++, dir);
-  k.setArg(a++, cl_int(n));
+  int a = args.bind(k, r, mode, shadow ? &home : nullptr);
   k.setArg(a++, visits);
   if (!shadow) k.setArg(a++, entries);
   test::run_batch(rt, k, n);
@@ -202,22 +217,14 @@ TEST(Routing, ShadowRaysVisitTheMetPesInPeOrderOnRandomSegments) {
 TEST(Routing, TheFirstChoiceNamesTheVisitsNextChoice) {
   for (int pes : {5, 16, 64}) {
     const Routed r = routed(pes, 1e-3f, 0.5f, 12.0f);
+    ClRuntime& rt = test::batch_runtime();
+    const std::size_t n = r.rays.size();
+    const RoutingArgs args(rt, r);
     for (int mode : {OPSILA_ROUTING_BOXES, OPSILA_ROUTING_SPHERES}) {
-      ClRuntime& rt = test::batch_runtime();
-      const std::size_t n = r.rays.size();
-      cl::Buffer pe_info = test::to_device(rt, r.bs.pes), clusters = test::to_device(rt, r.bs.clusters);
-      cl::Buffer route = test::to_device(rt, r.bs.route_nodes);
-      cl::Buffer org = test::to_device(rt, r.rays.org), dir = test::to_device(rt, r.rays.dir);
       cl::Buffer out = test::to_device(rt, std::vector<cl_int4>(n));
       cl::Buffer out_entries = test::to_device(rt, std::vector<cl_float4>(n));
       cl::Kernel k = rt.kernel("first_two");
-      int a = 0;
-      for (const cl::Buffer* b : {&pe_info, &clusters, &route}) k.setArg(a++, *b);
-      k.setArg(a++, cl_int(r.bs.num_pes));
-      k.setArg(a++, cl_int(mode));
-      k.setArg(a++, org);
-      k.setArg(a++, dir);
-      k.setArg(a++, cl_int(n));
+      int a = args.bind(k, r, mode);
       k.setArg(a++, out);
       k.setArg(a++, out_entries);
       test::run_batch(rt, k, n);

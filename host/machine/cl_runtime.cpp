@@ -327,6 +327,16 @@ ClRuntime::ClRuntime(const DeviceEntry& device, const ClRuntimeOptions& options)
   pow_fp64_ = options.specular_pow == SpecularPow::fp64 ||
               (options.specular_pow == SpecularPow::automatic && has_fp64 && !device_.is_gpu);
 
+  // Division and square root correctly rounded wherever the device offers
+  // it (CL_FP_CORRECTLY_ROUNDED_DIVIDE_SQRT): OpenCL C 1.2 lets x / y be
+  // 2.5 ulp off, and NVIDIA's driver takes that licence, so its camera rays
+  // and slab inverses (1 / d) differed from the host's in the last bits and
+  // routing entries, hit distances and grazing hits with them. CPUs divide
+  // exactly anyway (PoCL's images are byte-identical with and without it).
+  cl_device_fp_config single_fp = 0;
+  cl_check(device_.device.getInfo(CL_DEVICE_SINGLE_FP_CONFIG, &single_fp), "clGetDeviceInfo(CL_DEVICE_SINGLE_FP_CONFIG)");
+  exact_divide_ = (single_fp & CL_FP_CORRECTLY_ROUNDED_DIVIDE_SQRT) != 0;
+
   source_ = options.kernel_source;
   source_origin_ = source_.empty() ? "embedded kernels"
                                    : (options.kernel_source_origin.empty() ? "kernel source given by the caller"
@@ -389,6 +399,7 @@ cl::Program& ClRuntime::program(KernelProgram which) {
   if (which == KernelProgram::render_uncounted || which == KernelProgram::baselines_uncounted)
     options += " -DOPSILA_COUNT_WORK=0";
   if (pow_fp64_) options += " -DOPSILA_POW_FP64=1";
+  if (exact_divide_) options += " -cl-fp32-correctly-rounded-divide-sqrt";
   err = program.build({device_.device}, options.c_str());
   if (err != CL_SUCCESS) {
     std::string log;

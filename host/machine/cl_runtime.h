@@ -108,6 +108,9 @@ class ClRuntime {
   // Whether the kernels take the specular power in double precision
   // (ClRuntimeOptions::specular_pow).
   bool specular_pow_fp64() const { return pow_fp64_; }
+  // Whether the kernels are built with -cl-fp32-correctly-rounded-divide-sqrt
+  // (the device reports CL_FP_CORRECTLY_ROUNDED_DIVIDE_SQRT).
+  bool exact_divide() const { return exact_divide_; }
   cl_ulong max_alloc() const { return max_alloc_; }
   // Device bytes asked for through device_buffer (machine/descriptors.h)
   // since the runtime was made: what the memory plan is checked against.
@@ -133,6 +136,7 @@ class ClRuntime {
   bool built_[kKernelPrograms] = {};
   std::size_t group_size_ = 64;
   bool pow_fp64_ = false;
+  bool exact_divide_ = false;
   cl_ulong max_alloc_ = 0, global_mem_ = 0, limit_ = 0;
   std::uint64_t allocated_ = 0;
   std::map<std::string, std::uint64_t> by_name_;

@@ -155,7 +155,10 @@ TEST(BankBvhWalk, NearestHitIsTheBruteForceNearestOnRandomRays) {
       brute_tests += static_cast<std::size_t>(pe.tri_end - pe.tri_begin);
       if (best < 0 || w.tri[i] < 0) return;
       ++hits;
-      EXPECT_NEAR(w.t[i], best_t, 1e-5f * best_t) << at;
+      // The rounding of t follows the coordinates (origin to vertices, up
+      // to about 14 here), not t: NVIDIA's kernel was 4.8e-7 off the host's
+      // at t = 0.036.
+      EXPECT_NEAR(w.t[i], best_t, 1e-5f * std::max(best_t, 1.0f)) << at;
       if (w.tri[i] != best) {  // only a tie may go either way
         EXPECT_LE(std::fabs(w.t[i] - best_t), 2 * OPSILA_TIE_TOLERANCE * best_t)
             << at << ": facet " << w.tri[i] << ", brute force " << best;

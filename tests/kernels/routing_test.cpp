@@ -148,6 +148,12 @@ std::pair<std::vector<int>, std::vector<float>> run_chain(const Routed& r, int m
   return {test::from_device<cl_int>(rt, visits, cells), shadow ? std::vector<float>() : test::from_device<float>(rt, entries, cells)};
 }
 
+// A box entry is (plane - origin) * (1 / d) on host and device alike, but a
+// device may round 1 / d its own way (OpenCL C 1.2 allows 2.5 ulp; NVIDIA's
+// driver did until the runtime asked for correct rounding), so the entries
+// are held to a few ulps, not to their bits.
+float box_entry_tolerance(float entry) { return 1e-6f * (1.0f + std::fabs(entry)); }
+
 const char* mode_name(int mode) { return mode == OPSILA_ROUTING_BOXES ? "boxes" : "spheres"; }
 
 TEST(Routing, ForwardingVisitsTheMetPesInEntryOrderOnRandomRays) {
@@ -172,8 +178,9 @@ TEST(Routing, ForwardingVisitsTheMetPesInEntryOrderOnRandomRays) {
             break;
           }
           ASSERT_EQ(got, expect[j].second) << at << ": visit " << j;
-          if (mode == OPSILA_ROUTING_BOXES)  // the same float arithmetic: the same bits
-            ASSERT_EQ(entries[i * pes + j], expect[j].first) << at << ": entry of visit " << j;
+          if (mode == OPSILA_ROUTING_BOXES)
+            ASSERT_NEAR(entries[i * pes + j], expect[j].first, box_entry_tolerance(expect[j].first))
+                << at << ": entry of visit " << j;
           else
             ASSERT_NEAR(entries[i * pes + j], expect[j].first, 1e-4f * (1 + expect[j].first)) << at;
         }
@@ -260,8 +267,8 @@ TEST(Routing, TheFirstChoiceNamesTheVisitsNextChoice) {
         expect.resize(std::max<std::size_t>(expect.size(), 2), {kInf, -1});
         ASSERT_EQ(g.s[0], expect[0].second) << at;
         ASSERT_EQ(g.s[1], expect[1].second) << at;
-        if (g.s[0] >= 0) ASSERT_EQ(t.s[0], expect[0].first) << at;
-        if (g.s[1] >= 0) ASSERT_EQ(t.s[1], expect[1].first) << at;
+        if (g.s[0] >= 0) ASSERT_NEAR(t.s[0], expect[0].first, box_entry_tolerance(expect[0].first)) << at;
+        if (g.s[1] >= 0) ASSERT_NEAR(t.s[1], expect[1].first, box_entry_tolerance(expect[1].first)) << at;
         ++checked;
       }
       if (mode == OPSILA_ROUTING_BOXES) {

@@ -334,7 +334,8 @@ ClRuntime::ClRuntime(const DeviceEntry& device, const ClRuntimeOptions& options)
   // routing entries, hit distances and grazing hits with them. CPUs divide
   // exactly anyway (PoCL's images are byte-identical with and without it).
   cl_device_fp_config single_fp = 0;
-  cl_check(device_.device.getInfo(CL_DEVICE_SINGLE_FP_CONFIG, &single_fp), "clGetDeviceInfo(CL_DEVICE_SINGLE_FP_CONFIG)");
+  cl_check(device_.device.getInfo(CL_DEVICE_SINGLE_FP_CONFIG, &single_fp),
+           "clGetDeviceInfo(CL_DEVICE_SINGLE_FP_CONFIG)");
   exact_divide_ = (single_fp & CL_FP_CORRECTLY_ROUNDED_DIVIDE_SQRT) != 0;
 
   source_ = options.kernel_source;

@@ -63,7 +63,8 @@ TEST(DeviceArithmetic, DivisionAndSquareRootAreTheHostsWhereTheDeviceOffersIt) {
     ASSERT_LE(ulps(got_inv[i], 1.0f / y[i]), div_ulps) << at << ": 1 / y = " << got_inv[i];
     ASSERT_LE(ulps(got_root[i], std::sqrt(x[i])), sqrt_ulps) << at << ": sqrt(x) = " << got_root[i];
   }
-  if (!offered) GTEST_SKIP() << "the device does not report CL_FP_CORRECTLY_ROUNDED_DIVIDE_SQRT: held to OpenCL's bounds only";
+  if (!offered)
+    GTEST_SKIP() << "the device does not report CL_FP_CORRECTLY_ROUNDED_DIVIDE_SQRT: held to OpenCL's bounds only";
 }
 
 }  // namespace

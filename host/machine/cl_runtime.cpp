@@ -332,7 +332,7 @@ ClRuntime::ClRuntime(const DeviceEntry& device, const ClRuntimeOptions& options)
   // 2.5 ulp off, and NVIDIA's driver takes that licence, so its camera rays
   // and slab inverses (1 / d) differed from the host's in the last bits and
   // routing entries, hit distances and grazing hits with them. CPUs divide
-  // exactly anyway (PoCL's images are byte-identical with and without it).
+  // exactly anyway (PoCL's machine code is the same with and without it).
   cl_device_fp_config single_fp = 0;
   cl_check(device_.device.getInfo(CL_DEVICE_SINGLE_FP_CONFIG, &single_fp),
            "clGetDeviceInfo(CL_DEVICE_SINGLE_FP_CONFIG)");

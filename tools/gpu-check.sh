@@ -174,18 +174,21 @@ debian_build() {
   ((limit > 60)) || limit=60
   local pids=()
   for ((i = 0; i < shards; ++i)); do
-    GTEST_TOTAL_SHARDS=$shards GTEST_SHARD_INDEX=$i timeout "$limit" build/opsila_tests --gtest_filter='-MpiFixture.*' \
-      >"$out/tests.$i.txt" 2>&1 &
+    GTEST_TOTAL_SHARDS=$shards GTEST_SHARD_INDEX=$i timeout "$limit" build/opsila_tests \
+      --gtest_filter='-MpiFixture.*' >"$out/tests.$i.txt" 2>&1 &
     pids+=($!)
   done
   wait "${pids[@]}"
-  if grep -qs -E '^\[  FAILED  \]' "$out"/tests.*.txt || [ "$(cat "$out"/tests.*.txt | grep -c -E '^\[==========\] .* ran')" != $shards ]; then
-    echo "FAIL  tests on the default device (all but MPI):"
-    grep -h -E '^\[  FAILED  \] [A-Z]' "$out"/tests.*.txt | sort -u
+  local logs=("$out"/tests.*.txt) ran passed skipped
+  ran=$(cat "${logs[@]}" | grep -c -E '^\[==========\] .* ran')
+  passed=$(grep -h -E '^\[  PASSED  \]' "${logs[@]}" | awk '{s += $4} END {print s + 0}')
+  skipped=$(grep -h -E '^\[  SKIPPED \] [0-9]' "${logs[@]}" | awk '{s += $4} END {print s + 0}')
+  if [ "$ran" != $shards ] || grep -qs -E '^\[  FAILED  \]' "${logs[@]}"; then
+    echo "FAIL  tests on the default device (all but MPI): $ran of $shards shards ran to the end; failed:"
+    grep -h -E '^\[  FAILED  \] [A-Z]' "${logs[@]}" | sort -u
     failed=1
   else
-    echo "ok    tests on the default device (all but MPI): $(grep -h -E '^\[  PASSED  \]' "$out"/tests.*.txt | awk '{s += $4} END {print s}') passed," \
-      "$(grep -h -E '^\[  SKIPPED \] [0-9]' "$out"/tests.*.txt | awk '{s += $4} END {print s + 0}') skipped (reasons in $out/tests.*.txt)"
+    echo "ok    tests on the default device (all but MPI): $passed passed, $skipped skipped (reasons in $out/tests.*.txt)"
   fi
   return $failed
 }
@@ -196,7 +199,8 @@ build_from_source() {
   cmake -S . -B build-gpu -DCMAKE_BUILD_TYPE=Release -DOPSILA_BUILD_TESTS=OFF -DOPSILA_DEPS_DIR="$kit" \
     -DOpenCL_INCLUDE_DIR="$kit/include" -DOpenCL_LIBRARY="$1" -DCMAKE_DISABLE_FIND_PACKAGE_embree=ON \
     -DCMAKE_DISABLE_FIND_PACKAGE_MPI=ON -DCMAKE_DISABLE_FIND_PACKAGE_assimp=ON \
-    -DCMAKE_DISABLE_FIND_PACKAGE_nlohmann_json=ON && timeout 240 nice cmake --build build-gpu -j"$(nproc)" --target opsila
+    -DCMAKE_DISABLE_FIND_PACKAGE_nlohmann_json=ON &&
+    timeout 240 nice cmake --build build-gpu -j"$(nproc)" --target opsila
 }
 
 run() {
@@ -218,9 +222,12 @@ run() {
       echo "FAIL  default: the build from source failed to render"
       failed=1
     elif [ -f "$out/debian/default.16.pfm" ]; then
-      cmp -s "$out/default.source.pfm" "$out/debian/default.16.pfm" &&
-        echo "ok    default: the build from source gives the Debian build's image, byte for byte" ||
-        echo "note  default: the build from source differs from the Debian build (host compilers): $(compare "$out/default.source.pfm" "$out/debian/default.16.pfm")"
+      if cmp -s "$out/default.source.pfm" "$out/debian/default.16.pfm"; then
+        echo "ok    default: the build from source gives the Debian build's image, byte for byte"
+      else
+        echo "note  default: the build from source differs from the Debian build (host compilers):" \
+          "$(compare "$out/default.source.pfm" "$out/debian/default.16.pfm")"
+      fi
     elif result=$(compare "$out/default.source.pfm" "$kit/pocl/default.pfm"); then
       echo "ok    default (build from source) vs PoCL: $result"
     else

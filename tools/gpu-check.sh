@@ -245,7 +245,7 @@ run() {
     if timeout "$left" "$bin" bench scenes/hundreds.json --size $size --repeats 3 --scatter-max 20 \
       --json "$out/bench.$size.json" >"$out/bench.$size.txt" 2>&1; then
       echo "ok    bench $size:"
-      grep -E '^(OPSILA|replicated|Embree)|launch overhead  ' "$out/bench.$size.txt"
+      grep -E '^(OPSILA|replicated|Embree)|launch overhead  |of it: ' "$out/bench.$size.txt"
     else
       echo "FAIL  bench $size (or out of time)"
       failed=1

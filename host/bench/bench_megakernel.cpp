@@ -10,6 +10,7 @@
 #include "bench/bench.h"
 #include "core/camera.h"
 #include "core/fixed_point.h"
+#include "core/parallel.h"
 #include "opsila_shared.h"
 #include "machine/bank_bvh.h"
 #include "machine/partition.h"
@@ -114,10 +115,14 @@ struct Megakernel::State {
   MegaBuffers b;
   std::vector<cl_long> accum;    // host copies of the pixel sums and ray counts,
   std::vector<cl_uint4> counts;  // kept between frames as the output image is
+  // Where the device does not share host memory, the copies go to pinned
+  // memory instead, as OPSILA's image does (RenderSettings::pinned_readback).
+  bool pinned;
+  PinnedHostBuffer accum_host, counts_host;
   State(const Scene& s, ClRuntime& runtime, int t, bool with_items)
       : scene(s), rt(runtime), tile(t), items(with_items), ms(mega_scene(s)),
         mega(runtime, "megakernel", KernelProgram::baselines),  // the program is built here, before any timing
-        b(mega_buffers(runtime, s, ms.bs)) {}
+        b(mega_buffers(runtime, s, ms.bs)), pinned(!host_sharing(runtime).in_place) {}
 };
 
 Megakernel::Megakernel(const Scene& scene, ClRuntime& rt, int tile, bool item_buffer) {
@@ -161,13 +166,22 @@ void Megakernel::frame(BaselineImage& out) {
     mega.bind(ms.fp, b.nodes, b.tris, b.mats, b.lights, b.surface, ms.root, ms.root_lo, ms.root_hi,
               spp_side(scene.spp), b.offsets, begin, count, b.accum, b.counts, s_->items ? 1 : 0, b.items);
   });
-  std::vector<cl_long>& accum = s_->accum;
-  std::vector<cl_uint4>& counts = s_->counts;
-  accum.resize(npix * 3);
-  counts.resize(npix);
-  launch.check(q.enqueueReadBuffer(b.accum, CL_TRUE, 0, accum.size() * sizeof(cl_long), accum.data()),
+  cl_long* accum = nullptr;
+  cl_uint4* counts = nullptr;
+  if (s_->pinned) {
+    s_->accum_host.reserve(rt, npix * 3 * sizeof(cl_long), "megakernel pixel sums, host copy");
+    s_->counts_host.reserve(rt, npix * sizeof(cl_uint4), "megakernel ray counts, host copy");
+    accum = static_cast<cl_long*>(s_->accum_host.data());
+    counts = static_cast<cl_uint4*>(s_->counts_host.data());
+  } else {
+    s_->accum.resize(npix * 3);
+    s_->counts.resize(npix);
+    accum = s_->accum.data();
+    counts = s_->counts.data();
+  }
+  launch.check(q.enqueueReadBuffer(b.accum, CL_TRUE, 0, npix * 3 * sizeof(cl_long), accum),
                "clEnqueueReadBuffer(megakernel pixel sums)");
-  launch.check(q.enqueueReadBuffer(b.counts, CL_TRUE, 0, counts.size() * sizeof(cl_uint4), counts.data()),
+  launch.check(q.enqueueReadBuffer(b.counts, CL_TRUE, 0, npix * sizeof(cl_uint4), counts),
                "clEnqueueReadBuffer(megakernel ray counts)");
   if (s_->items) {
     out.item_buffer.resize(npix * 2);
@@ -179,8 +193,10 @@ void Megakernel::frame(BaselineImage& out) {
   launch.check(q.finish(), "clFinish");
   // Pixel sums -> floats exactly as the renderer converts its fixed point.
   out.rgb.resize(npix * 3);
-  for (std::size_t i = 0; i < npix * 3; ++i)
-    out.rgb[i] = from_fixed(static_cast<std::uint64_t>(accum[i]), scene.spp);  // >= 0: add_sat
+  const MeanDecoder mean(scene.spp);
+  parallel_ranges(npix * 3, std::size_t(1) << 16, [&](std::size_t i0, std::size_t i1) {
+    for (std::size_t i = i0; i < i1; ++i) out.rgb[i] = mean(static_cast<std::uint64_t>(accum[i]));  // >= 0: add_sat
+  });
   out.seconds = seconds_since(t0);
   launch.harvest();
   out.kernel_seconds = 0;
@@ -188,7 +204,8 @@ void Megakernel::frame(BaselineImage& out) {
   out.rays = RayCounts();
   out.rays.primary = npix * static_cast<std::size_t>(scene.spp);
   out.triangle_tests = out.box_tests = 0;  // stay 0 without the counters (count_work)
-  for (const cl_uint4& c : counts) {
+  for (std::size_t i = 0; i < npix; ++i) {
+    const cl_uint4& c = counts[i];
     out.rays.secondary += c.s[0];
     out.rays.shadow += c.s[1];
     out.triangle_tests += c.s[2];

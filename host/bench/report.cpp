@@ -157,6 +157,19 @@ void BenchReport::analyse() {
     kernel_seconds += l.seconds;
     if (is_scatter(l.name)) exchange_seconds += l.seconds;
   }
+  idle_seconds = host_late_seconds = 0;
+  const LaunchRecord* prev = nullptr;
+  for (const LaunchRecord& l : st.launches) {
+    if (l.queued < 0) {
+      prev = nullptr;
+      continue;
+    }
+    if (prev) {
+      const double end = prev->started + prev->seconds, gap = l.started - end;
+      if (gap > 0) idle_seconds += gap, host_late_seconds += std::min(gap, std::max(0.0, l.queued - end));
+    }
+    prev = &l;
+  }
   const double rs = st.render_seconds;
   overhead_seconds = std::max(0.0, rs - kernel_seconds);
   exchange_share = rs > 0 ? exchange_seconds / rs : 0;

@@ -118,6 +118,11 @@ struct BenchReport {
   std::map<std::string, KernelTime> by_kernel;
   double kernel_seconds = 0, exchange_seconds = 0, overhead_seconds = 0;
   double exchange_share = 0, overhead_share = 0;
+  // Of the overhead: the device idle between one kernel's end and the next
+  // one's start, and of that the part before the host had enqueued the next
+  // (the device waiting on the host); the rest is the driver's, from enqueue
+  // to start. From the launches' profiled times (LaunchRecord::queued).
+  double idle_seconds = 0, host_late_seconds = 0;
   std::vector<LevelWork> work;
   std::uint64_t all_descriptors = 0, all_triangle_tests = 0, all_box_tests = 0, all_sphere_tests = 0;
   std::uint64_t all_route_tests = 0;  // destination choice: all_sphere_tests + all_route_tests in all

@@ -148,6 +148,9 @@ json render_json(const BenchReport& r) {
   j["exchange_share"] = r.exchange_share;
   j["overhead_seconds"] = r.overhead_seconds;
   j["overhead_share"] = r.overhead_share;
+  j["readback_seconds"] = st.readback_seconds;  // part of the overhead: the image read back and decoded
+  j["idle_seconds"] = r.idle_seconds;            // part of it: the device idle between kernels,
+  j["host_late_seconds"] = r.host_late_seconds;  // of which before the host had enqueued the next
   j["exchange_plus_overhead_share"] = r.exchange_share + r.overhead_share;
   j["descriptors"] = {{"spawned", st.descriptors_spawned},
                       {"finished", st.descriptors_finished},

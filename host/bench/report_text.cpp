@@ -151,6 +151,11 @@ void phases_text(std::string& out, const BenchReport& r) {
             rs > 0 ? 100.0 * e.seconds / rs : 0.0);
   appendf(out, "  %-18s %5s %9s %10.4f %6.1f%%\n", "launch overhead", "", "", r.overhead_seconds,
           100.0 * r.overhead_share);
+  appendf(out, "  %-18s %5s %9s %10.4f %6.1f%%  (host: the image read back and decoded)\n", "  of it: read-back", "",
+          "", st.readback_seconds, rs > 0 ? 100.0 * st.readback_seconds / rs : 0.0);
+  appendf(out, "  %-18s %5s %9s %10.4f %6.1f%%  (device idle between kernels: %.4f s before the host enqueued "
+          "the next, %.4f s from enqueue to start)\n", "  of it: idle", "", "", r.idle_seconds,
+          rs > 0 ? 100.0 * r.idle_seconds / rs : 0.0, r.host_late_seconds, r.idle_seconds - r.host_late_seconds);
   appendf(out, "  exchange (scatter) %.1f%% + launch overhead %.1f%% = %.1f%% of the frame\n\n",
           100.0 * r.exchange_share, 100.0 * r.overhead_share, 100.0 * (r.exchange_share + r.overhead_share));
 }

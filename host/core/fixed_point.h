@@ -51,6 +51,31 @@ inline float from_fixed(std::uint64_t sum, int samples) {
   return static_cast<float>(s / (static_cast<double>(OPSILA_FIXED_SCALE) * samples));
 }
 
+// from_fixed(sum, samples) for a whole image: the same floats. Where the
+// divisor samples x 2^24 is a power of two (1, 4, 16, 64 ... samples), its
+// reciprocal is exact and so is a product by it (a power-of-two scaling of a
+// double far from under- and overflow), so a multiplication replaces the
+// division; other counts divide as from_fixed does.
+class MeanDecoder {
+ public:
+  explicit MeanDecoder(int samples)
+      : divisor_(static_cast<double>(OPSILA_FIXED_SCALE) * samples),
+        exact_(samples > 0 && (samples & (samples - 1)) == 0),
+        inverse_(1.0 / divisor_) {}
+  float operator()(std::uint64_t sum) const { return static_cast<float>(mean(sum)); }
+  // The mean before its rounding to float: from_fixed's quotient, exactly.
+  double mean(std::uint64_t sum) const {
+    const double s = saturated(sum) ? static_cast<double>(kMaxPixelValue) * OPSILA_FIXED_SCALE
+                                    : static_cast<double>(sum);
+    return exact_ ? s * inverse_ : s / divisor_;
+  }
+
+ private:
+  double divisor_;
+  bool exact_;
+  double inverse_;
+};
+
 // The pixel sum that `n` adds of q (>= 0) leave in a zero sum, as
 // add_fixed_owned in kernels/lib/accum.cl makes it: a carry out of the 64
 // bits sets the top bit (from_fixed then reads the saturated value). What a

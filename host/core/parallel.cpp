@@ -52,4 +52,11 @@ void parallel_for(std::size_t n, const std::function<void(std::size_t)>& task, i
   if (error) std::rethrow_exception(error);
 }
 
+void parallel_ranges(std::size_t n, std::size_t grain, const std::function<void(std::size_t, std::size_t)>& fn,
+                     int threads) {
+  const std::size_t most = (n + std::max<std::size_t>(grain, 1) - 1) / std::max<std::size_t>(grain, 1);
+  const std::size_t ranges = std::max<std::size_t>(1, std::min<std::size_t>(most, std::size_t(std::max(1, threads))));
+  parallel_for(ranges, [&](std::size_t r) { fn(n * r / ranges, n * (r + 1) / ranges); }, int(ranges));
+}
+
 }  // namespace opsila

@@ -20,4 +20,10 @@ int host_threads();
 // failure are skipped unless numbered below it.
 void parallel_for(std::size_t n, const std::function<void(std::size_t)>& task, int threads = host_threads());
 
+// Runs fn(begin, end) over [0, n) cut into contiguous ranges of at least
+// `grain` items, one range a thread (fewer threads when n is small), for
+// loops whose items are independent, such as decoding an image's pixels.
+void parallel_ranges(std::size_t n, std::size_t grain, const std::function<void(std::size_t, std::size_t)>& fn,
+                     int threads = host_threads());
+
 }  // namespace opsila

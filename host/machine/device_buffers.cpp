@@ -54,6 +54,32 @@ BufferSpec frame_buffer(const char* name, PlanPart part, std::size_t element, st
   return s;
 }
 
+void PinnedHostBuffer::release() {
+  // A failed unmap changes nothing for the caller: the buffer is released
+  // with it, and the runtime frees both.
+  if (p_) queue_.enqueueUnmapMemObject(buffer_, p_), queue_.finish();
+  p_ = nullptr;
+  bytes_ = 0;
+  buffer_ = cl::Buffer();
+}
+
+PinnedHostBuffer::~PinnedHostBuffer() { release(); }
+
+void PinnedHostBuffer::reserve(ClRuntime& rt, std::size_t bytes, const char* what) {
+  if (p_ && bytes_ >= bytes) return;
+  release();
+  queue_ = rt.queue();
+  cl_int err = CL_SUCCESS;
+  buffer_ = cl::Buffer(rt.context(), CL_MEM_READ_WRITE | CL_MEM_ALLOC_HOST_PTR, std::max<std::size_t>(bytes, 1), nullptr,
+                       &err);
+  cl_check(err, (std::string("clCreateBuffer(") + what + ", CL_MEM_ALLOC_HOST_PTR)").c_str());
+  p_ = queue_.enqueueMapBuffer(buffer_, CL_TRUE, CL_MAP_READ | CL_MAP_WRITE, 0, std::max<std::size_t>(bytes, 1),
+                               nullptr, nullptr, &err);
+  if (err != CL_SUCCESS) p_ = nullptr;
+  cl_check(err, (std::string("clEnqueueMapBuffer(") + what + ")").c_str());
+  bytes_ = bytes;
+}
+
 HostSharing host_sharing(ClRuntime& rt) {
   HostSharing h;
   const cl::Device& d = rt.device().device;

@@ -39,6 +39,30 @@ cl::Buffer upload(ClRuntime& rt, const std::vector<T, A>& v, const char* what) {
   return b;
 }
 
+// Host memory that a device's copy engine reads and writes directly: a
+// CL_MEM_ALLOC_HOST_PTR buffer, mapped once for its whole life. A read
+// from a discrete GPU into it is one transfer; into ordinary (pageable)
+// memory, or through a map of the device buffer, the driver stages the
+// bytes through pinned pages of its own on every call. Unmapped and
+// released with the object.
+class PinnedHostBuffer {
+ public:
+  PinnedHostBuffer() = default;
+  ~PinnedHostBuffer();
+  PinnedHostBuffer(const PinnedHostBuffer&) = delete;
+  PinnedHostBuffer& operator=(const PinnedHostBuffer&) = delete;
+  // At least `bytes` (kept when already as large). Throws ClError.
+  void reserve(ClRuntime& rt, std::size_t bytes, const char* what);
+  void* data() const { return p_; }
+
+ private:
+  void release();
+  cl::CommandQueue queue_;
+  cl::Buffer buffer_;
+  void* p_ = nullptr;
+  std::size_t bytes_ = 0;
+};
+
 // A large host array that a device buffer may use in place: on a device
 // that shares host memory (CL_DEVICE_HOST_UNIFIED_MEMORY, PoCL on a CPU),
 // CL_MEM_USE_HOST_PTR spares a second copy of the bank arrays, but only at

@@ -81,6 +81,10 @@ struct Renderer::Machine {
   int tile_w = 1, item_launch_pixels = 1;
   int spp = 1, spp_k = 1;         // samples per pixel, N = k*k
   bool item_output = true;        // RenderSettings::item_buffer_output
+  // The pixel sums read into pinned host memory (RenderSettings::pinned_readback)
+  // rather than mapped; accum_host holds them.
+  bool pinned_readback = false;
+  PinnedHostBuffer accum_host;
   std::vector<float> offsets;     // (i + 0.5) / k, i = 0..k-1
   Progress* progress = nullptr;
   // OPSILA_FAULT_ROUND=K: a device fault reported at round K of every frame

@@ -3,8 +3,10 @@
 #include "machine/frame.h"
 
 #include <algorithm>
+#include <optional>
 
 #include "core/fixed_point.h"
+#include "core/parallel.h"
 #include "core/progress.h"
 #include "machine/counters.h"
 #include "machine/stats.h"
@@ -52,7 +54,26 @@ static_assert(OPSILA_ACCUM_WORDS == 3 * OPSILA_COUNTER_WORDS, "pixel sums: three
 void Renderer::Machine::read_image(Launcher& launch, RenderResult& result) {
   cl::CommandQueue& q = rt.queue();
   const std::size_t values = npix * 3;
-  MappedRead accum(launch, q, b_accum, npix * OPSILA_ACCUM_WORDS * sizeof(cl_uint), "clEnqueueMapBuffer(pixel sums)");
+  const std::size_t pixel_bytes = OPSILA_ACCUM_WORDS * sizeof(cl_uint);
+  // One device alone reads only the rows of the traced rectangle: the
+  // decode below reads no other sum.
+  const bool rect_only = group.all();
+  const bool traced = traced_rect.s[0] <= traced_rect.s[2] && traced_rect.s[1] <= traced_rect.s[3];
+  const std::size_t row0 = rect_only ? (traced ? std::size_t(traced_rect.s[1]) : 0) : 0;
+  const std::size_t rows = rect_only ? (traced ? std::size_t(traced_rect.s[3]) + 1 - row0 : 0) : std::size_t(height);
+  std::optional<MappedRead> accum;
+  const cl_uint* words = nullptr;  // the sums of pixel (row0, 0) onward
+  if (pinned_readback) {
+    accum_host.reserve(rt, npix * pixel_bytes, "pixel sums, host copy");
+    if (rows > 0)
+      launch.check(q.enqueueReadBuffer(b_accum, CL_TRUE, row0 * width * pixel_bytes, rows * width * pixel_bytes,
+                                       accum_host.data()),
+                   "clEnqueueReadBuffer(pixel sums)");
+    words = static_cast<const cl_uint*>(accum_host.data());
+  } else {
+    accum.emplace(launch, q, b_accum, npix * pixel_bytes, "clEnqueueMapBuffer(pixel sums)");
+    words = accum->data<cl_uint>() + row0 * width * OPSILA_ACCUM_WORDS;
+  }
   if (item_output) {
     MappedRead items(launch, q, b_items, npix * sizeof(cl_int2), "clEnqueueMapBuffer(item buffer)");
     const cl_int* item = items.data<cl_int>();
@@ -61,33 +82,43 @@ void Renderer::Machine::read_image(Launcher& launch, RenderResult& result) {
   } else {
     result.item_buffer.clear();
   }
-  const cl_uint* words = accum.data<cl_uint>();
-  auto sum = [words](std::size_t i) { return join_words(words[2 * i], words[2 * i + 1]); };
+  const std::size_t first = row0 * width * 3;  // the first value `words` holds
+  auto sum = [words, first](std::size_t i) { return join_words(words[2 * (i - first)], words[2 * (i - first) + 1]); };
+  const MeanDecoder mean(spp);
   result.rgb.resize(values);
+  // Rows on the host's threads, each writing only its own pixels: on one
+  // core the decode of a 1920x1080 image takes about as long as a GPU's
+  // whole frame (docs/BENCHMARKS.md, "On a GPU").
+  constexpr std::size_t kDecodeGrain = std::size_t(1) << 16;  // values a thread, at least
   if (group.all()) {
     // Outside the traced rectangle every pass missed and nothing wrote the
     // sums: the background's, as count_hits would have left them.
     float background[3];
-    for (int c = 0; c < 3; ++c) background[c] = from_fixed(owned_sum(to_fixed(fp.background[c]), spp), spp);
+    for (int c = 0; c < 3; ++c) background[c] = mean(owned_sum(to_fixed(fp.background[c]), spp));
     const int x0 = traced_rect.s[0], x1 = traced_rect.s[2], y0 = traced_rect.s[1], y1 = traced_rect.s[3];
-    for (int y = 0; y < height; ++y) {
-      const bool row = y >= y0 && y <= y1 && x0 <= x1;
-      const std::size_t begin = std::size_t(y) * width;
-      const std::size_t in0 = begin + (row ? x0 : width), in1 = begin + (row ? x1 + 1 : width);
-      for (std::size_t p = begin; p < in0; ++p)
-        for (int c = 0; c < 3; ++c) result.rgb[3 * p + c] = background[c];
-      for (std::size_t i = 3 * in0; i < 3 * in1; ++i) result.rgb[i] = from_fixed(sum(i), spp);
-      for (std::size_t p = in1; p < begin + width; ++p)
-        for (int c = 0; c < 3; ++c) result.rgb[3 * p + c] = background[c];
-    }
-    accum.unmap(launch, "clEnqueueUnmapMemObject(pixel sums)");
+    parallel_ranges(std::size_t(height), kDecodeGrain / (3 * std::size_t(width)) + 1, [&](std::size_t r0,
+                                                                                           std::size_t r1) {
+      for (std::size_t y = r0; y < r1; ++y) {
+        const bool row = int(y) >= y0 && int(y) <= y1 && x0 <= x1;
+        const std::size_t begin = y * width;
+        const std::size_t in0 = begin + (row ? x0 : width), in1 = begin + (row ? x1 + 1 : width);
+        for (std::size_t p = begin; p < in0; ++p)
+          for (int c = 0; c < 3; ++c) result.rgb[3 * p + c] = background[c];
+        for (std::size_t i = 3 * in0; i < 3 * in1; ++i) result.rgb[i] = mean(sum(i));
+        for (std::size_t p = in1; p < begin + width; ++p)
+          for (int c = 0; c < 3; ++c) result.rgb[3 * p + c] = background[c];
+      }
+    });
+    if (accum) accum->unmap(launch, "clEnqueueUnmapMemObject(pixel sums)");
   } else {
     // 64-bit integer sums, summed over the ranks on rank 0.
     std::vector<std::uint64_t> sums(values);
     for (std::size_t i = 0; i < values; ++i) sums[i] = sum(i);
-    accum.unmap(launch, "clEnqueueUnmapMemObject(pixel sums)");
+    if (accum) accum->unmap(launch, "clEnqueueUnmapMemObject(pixel sums)");
     reduce_to_root(ranks, sums);
-    for (std::size_t i = 0; i < values; ++i) result.rgb[i] = from_fixed(sums[i], spp);
+    parallel_ranges(values, kDecodeGrain, [&](std::size_t i0, std::size_t i1) {
+      for (std::size_t i = i0; i < i1; ++i) result.rgb[i] = mean(sums[i]);
+    });
   }
   launch.check(q.finish(), "clFinish");
 }

@@ -44,9 +44,11 @@ void Launcher::check(cl_int err, const char* what) {
                   (pending_.empty() ? std::string() : " after kernel " + describe(pending_.back())));
 }
 
-void Launcher::record(const char* name, int round, double seconds) {
+void Launcher::record(const char* name, int round, double seconds, double queued, double started) {
   if (sink_.size() < record_cap_) {
-    sink_.push_back({name, round, seconds});
+    LaunchRecord r{name, round, seconds};
+    r.queued = queued, r.started = started;
+    sink_.push_back(std::move(r));
     return;
   }
   // Past the cap: into the kernel's folded record. They all lie past the
@@ -72,10 +74,14 @@ void Launcher::harvest() {
     cl_int status = CL_COMPLETE;
     cl_check(p.ev.getInfo(CL_EVENT_COMMAND_EXECUTION_STATUS, &status), "clGetEventInfo(execution status)");
     if (status != CL_COMPLETE) break;
-    cl_ulong t0 = 0, t1 = 0;
+    cl_ulong tq = 0, t0 = 0, t1 = 0;
     if (p.ev.getProfilingInfo(CL_PROFILING_COMMAND_START, &t0) == CL_SUCCESS &&
-        p.ev.getProfilingInfo(CL_PROFILING_COMMAND_END, &t1) == CL_SUCCESS)
-      record(p.name, p.round, (t1 - t0) * 1e-9);
+        p.ev.getProfilingInfo(CL_PROFILING_COMMAND_END, &t1) == CL_SUCCESS) {
+      const bool queued = p.ev.getProfilingInfo(CL_PROFILING_COMMAND_QUEUED, &tq) == CL_SUCCESS && tq <= t0;
+      if (queued && !based_) base_ns_ = tq, based_ = true;
+      auto since = [this](cl_ulong t) { return t >= base_ns_ ? (t - base_ns_) * 1e-9 : -((base_ns_ - t) * 1e-9); };
+      record(p.name, p.round, (t1 - t0) * 1e-9, queued && based_ ? since(tq) : -1, based_ ? since(t0) : -1);
+    }
   }
   std::vector<Pending> running(pending_.begin() + done, pending_.end());
   pending_ = std::move(running);

@@ -46,7 +46,9 @@ class Launcher {
   std::vector<LaunchRecord>& sink_;
   std::size_t record_cap_;
   std::vector<Pending> pending_;
-  void record(const char* name, int round, double seconds);
+  void record(const char* name, int round, double seconds, double queued, double started);
+  cl_ulong base_ns_ = 0;  // CL_PROFILING_COMMAND_QUEUED of the first launch harvested
+  bool based_ = false;
   std::size_t checked_ = 0;  // pending_[0, checked_) are known to have completed
 };
 

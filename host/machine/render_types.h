@@ -67,6 +67,11 @@ struct RenderSettings {
   // work-group size at its first launch). The bench sets it, as its timed
   // frames follow a warm-up frame.
   bool pilot_warm_up = false;
+  // The image's read-back: false maps the pixel sums where the device shares
+  // host memory (a CPU device) and reads them into pinned host memory
+  // elsewhere (a discrete GPU); true takes the second way on any device, so
+  // that the tests hold it to the same image on a CPU.
+  bool pinned_readback = false;
 };
 
 // One kernel launch, named, with its OpenCL-profiled time.
@@ -74,6 +79,10 @@ struct LaunchRecord {
   std::string name;   // e.g. "item_buffer", "spmd_phase", "scatter_move"
   int round = -1;     // SPMD/scatter round, -1 for set-up kernels, kFoldedRound (below)
   double seconds = 0; // CL_PROFILING_COMMAND_END - START
+  // When the host enqueued it and when it started, on the device's clock, in
+  // seconds after the frame's first enqueue (CL_PROFILING_COMMAND_QUEUED and
+  // _START): the gaps between kernels read from them. -1 in a folded record.
+  double queued = -1, started = -1;
   std::uint64_t launches = 1;  // more than one: a folded record (Launcher)
   // Past Launcher's record cap, a kernel's later launches are folded into one
   // record of this round: their count and total seconds, so that an endless
@@ -120,6 +129,7 @@ struct RenderStats {
   int throttled_rounds = 0;              // exchanges that took only rays ending their tree (this device)
   int rounds = 0;                    // SPMD + scatter rounds
   double render_seconds = 0;         // host wall time of the phases
+  double readback_seconds = 0;       // of it, the image's read-back and decode (host wall time)
   std::vector<LaunchRecord> launches;
   std::vector<std::uint64_t> bank_bytes;  // scene bytes per bank
   std::vector<std::uint64_t> texture_bytes;  // texture copies per bank (part of bank_bytes)

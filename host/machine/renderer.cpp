@@ -81,9 +81,11 @@ void Renderer::render(RenderResult& result) {
     if (ranks && !m.end_rank_round(launch, f)) break;
     if (m.progress && m.progress->due()) m.report_progress(f);
   }
+  const auto t_read = std::chrono::steady_clock::now();
   m.read_image(launch, result);
-
-  st.render_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t_start).count();
+  const auto t_end = std::chrono::steady_clock::now();
+  st.readback_seconds = std::chrono::duration<double>(t_end - t_read).count();
+  st.render_seconds = std::chrono::duration<double>(t_end - t_start).count();
   launch.harvest();
   if (ranks) {
     const RankReport mine = m.rank_report(st, st.render_seconds, m.ranks.mpi_seconds() - mpi_start);

@@ -62,6 +62,7 @@ void add_launches(nlohmann::json& j, const RenderStats& s) {
   std::map<std::string, std::pair<std::uint64_t, double>> by_name;
   for (const LaunchRecord& launch : s.launches) {
     nlohmann::json entry = {{"name", launch.name}, {"round", launch.round}, {"seconds", launch.seconds}};
+    if (launch.queued >= 0) entry["queued"] = launch.queued, entry["started"] = launch.started;
     if (launch.round == LaunchRecord::kFoldedRound) entry["launches"] = launch.launches;
     launches.push_back(std::move(entry));
     auto& summary = by_name[launch.name];
@@ -155,6 +156,7 @@ nlohmann::json stats_json(const RenderResult& result, const Scene& scene,
                {"shadow", rays.shadow},
                {"total", total_rays}};
   j["render_seconds"] = s.render_seconds;
+  j["readback_seconds"] = s.readback_seconds;
   j["mrays_per_s"] = s.render_seconds > 0 ? static_cast<double>(total_rays) / s.render_seconds / 1e6 : 0.0;
   j["prepare"] = prepare_json(s.prepare);
 

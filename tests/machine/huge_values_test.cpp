@@ -5,6 +5,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <limits>
 #include <string>
 #include <vector>
@@ -140,6 +142,34 @@ TEST(HugeValues, DecodeSaturatesAtTheLargestSum) {
   EXPECT_EQ(from_fixed(owned_sum(std::numeric_limits<std::int64_t>::max(), 3), 3), kMaxPixelValue / 3);
   EXPECT_EQ(saturate_sum(std::numeric_limits<double>::infinity()), double(kMaxPixelValue));
   EXPECT_EQ(saturate_sum(std::nan("")), 0.0);
+}
+
+// The image's decode (MeanDecoder: a product by the exact reciprocal where
+// N x 2^24 is a power of two) gives from_fixed's floats, bit for bit, on
+// sums of every size, saturated ones, and the sums of N equal samples.
+TEST(HugeValues, TheImageDecodeIsFromFixedBitForBit) {
+  std::uint64_t state = 0x9e3779b97f4a7c15u;
+  auto next = [&state] {
+    state ^= state << 13, state ^= state >> 7, state ^= state << 17;  // xorshift64
+    return state;
+  };
+  for (int samples : {1, 2, 3, 4, 9, 16, 25, 64, 256, 1024}) {
+    const MeanDecoder mean(samples);
+    std::vector<std::uint64_t> sums = {0, 1, std::uint64_t(1) << 63, ~std::uint64_t(0),
+                                       std::uint64_t(std::numeric_limits<std::int64_t>::max())};
+    for (int i = 0; i < 20000; ++i) sums.push_back(next() >> (next() % 64));  // every magnitude
+    for (int i = 0; i < 200; ++i) sums.push_back(std::uint64_t(samples) * (next() >> 40));  // N equal samples
+    for (std::uint64_t s : sums) {
+      const float a = mean(s), b = from_fixed(s, samples);
+      ASSERT_EQ(0, std::memcmp(&a, &b, sizeof(float))) << "sum " << s << ", " << samples << " samples";
+      // Before the rounding to float too, where a product by an inexact
+      // reciprocal would differ in the last bits.
+      const double q = (saturated(s) ? double(kMaxPixelValue) * OPSILA_FIXED_SCALE : double(s)) /
+                       (double(OPSILA_FIXED_SCALE) * samples);
+      const double m = mean.mean(s);
+      ASSERT_EQ(0, std::memcmp(&m, &q, sizeof(double))) << "sum " << s << ", " << samples << " samples";
+    }
+  }
 }
 
 TEST(HugeValues, NoPfmHoldsANonFiniteValue) {

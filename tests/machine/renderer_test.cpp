@@ -496,6 +496,43 @@ TEST(Renderer, WithoutTheItemBufferOutputTheImageIsTheSame) {
     }
 }
 
+// The read-back a discrete GPU takes (the pixel sums read into pinned host
+// memory, only the traced rectangle's rows on one device) gives the image
+// the map of a CPU device gives, facing the scene, from far (a band of rows)
+// and turned away (no row read), with and without the item buffer, at 1, 4
+// and 9 samples (the decode's product and its division), frame after frame.
+TEST(Renderer, ThePinnedReadBackGivesTheMappedImage) {
+  const Scene facing = test::mirror_glass_scene(40);
+  Scene far = facing, away = facing;
+  for (int i = 0; i < 3; ++i) {
+    far.camera.eye[i] = facing.camera.look_at[i] + 6 * (facing.camera.eye[i] - facing.camera.look_at[i]);
+    away.camera.look_at[i] = 2 * facing.camera.eye[i] - facing.camera.look_at[i];
+  }
+  far.width = 48, far.height = 40;  // not square: rows and columns differ
+  for (const Scene* view : std::initializer_list<const Scene*>{&facing, &far, &away})
+    for (int spp : {1, 4, 9})
+      for (bool items : {false, true}) {
+        Scene s = *view;
+        s.spp = spp;
+        const std::string what = (view == &facing ? "facing" : view == &far ? "far" : "away") +
+                                 std::string(", spp ") + std::to_string(spp) + (items ? ", items" : "");
+        RenderSettings rs;
+        rs.num_pes = 16;
+        rs.item_buffer_output = items;
+        const RenderResult mapped = render(s, rs, runtime());
+        rs.pinned_readback = true;
+        PreparedBanks banks = prepare_banks(s, rs, runtime());
+        Renderer machine(s, std::move(banks), rs, runtime());
+        for (int frame = 0; frame < 2; ++frame) {
+          const RenderResult pinned = machine.render();
+          ASSERT_EQ(mapped.rgb.size(), pinned.rgb.size()) << what;
+          EXPECT_EQ(0, std::memcmp(mapped.rgb.data(), pinned.rgb.data(), mapped.rgb.size() * sizeof(float)))
+              << what << ", frame " << frame;
+          EXPECT_EQ(mapped.item_buffer, pinned.item_buffer) << what;
+        }
+      }
+}
+
 // Brute force: every facet against every primary ray, no acceleration.
 TEST(Renderer, ItemBufferEqualsBruteForcePrimaryRays) {
   Scene s = test::mirror_glass_scene(72);

@@ -16,12 +16,15 @@ namespace opsila {
 // Keys: version, device, width, height, depth, pes, bank_capacity, clusters,
 // work_group_size, rounds, scene {triangles, facets, objects, lights},
 // rays {primary, primary_hits, secondary, shadow, total}, render_seconds,
+// readback_seconds (of it, the image read back and decoded),
 // prepare {read_seconds, parse_seconds, partition_seconds, bank_build_seconds,
 // upload_seconds, pilot_seconds, peak_host_bytes} (prepare_json),
 // mrays_per_s, levels [{level, totals{...}, pes[{...}]}],
 // descriptors {spawned, finished, forwards, overflow_deferrals, waiting_peak,
 //   throttled_rounds},
-// balanced (spawned == finished), launches [{name, round, seconds}] (past
+// balanced (spawned == finished), launches [{name, round, seconds, queued,
+// started}] (queued and started: seconds after the frame's first enqueue,
+// device clock; past
 // Launcher::kRecordCap, one per kernel with round -2 and its "launches"),
 // launch_summary {name: {count, total_seconds}},
 // memory {bank_bytes[], bank_bytes_max, bank_bytes_mean, global_bytes, replicated_bytes},

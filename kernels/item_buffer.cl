@@ -31,7 +31,7 @@ __kernel void item_buffer(FrameParams fp, __global const Cluster *clusters, __gl
                           int4 listed_rect, __global const BankNode *nodes, __global const BankTriangle *tris,
                           int tile_w, int2 tile_origin, int tiles_x, int tile_begin, float ox, float oy, int mode,
                           __global int2 *items,
-                          __global int *item_tri, __global float *item_t, __global int *item_facet) {
+                          __global int *item_tri, __global float *item_t, __global int2 *item_key) {
   __local int flags[ITEM_TILE_MAX];
   __local int list[OPSILA_ITEM_LIST_CAP];
   __local int listed;
@@ -43,13 +43,11 @@ __kernel void item_buffer(FrameParams fp, __global const Cluster *clusters, __gl
   bool inside = lid < tile_w * tile_w && x < fp.width && y < fp.height;
   int pixel = y * fp.width + x;
   /* A group of PEs after the first (an MPI rank) continues the nearest-hit
-   * search from the state the groups before it left (with hits kept), cluster
-   * after cluster as one device would: with the tie rule, the answer depends
-   * on that order (host/machine/rank_exchange.h). */
+   * search from the state the groups before it left (with hits kept): the
+   * least hit of all groups (host/machine/rank_exchange.h). */
   bool continued = fp.group_begin > 0 && inside;
-  bool held = continued && item_tri[pixel] >= 0; /* a miss leaves no distance or facet */
-  float best_t = held ? item_t[pixel] : OPSILA_INF;
-  int best_facet = held ? item_facet[pixel] : INT_MAX;
+  bool held = continued && item_tri[pixel] >= 0; /* a miss leaves no distance or key */
+  HitKey best = held ? hit_key(item_t[pixel], item_key[pixel].x, item_key[pixel].y) : hit_none();
   int best_tri = -1; /* a facet of this group's banks (local index) that won */
   uint tri_tests = 0, box_tests = 0;
   CostProbe no_probe = no_cost_probe();
@@ -83,7 +81,7 @@ __kernel void item_buffer(FrameParams fp, __global const Cluster *clusters, __gl
         int cl = list[i];
         int4 pr = cluster_rects[cl]; /* x0, y0, x1, y1 inclusive */
         if (x < pr.x || x > pr.z || y < pr.y || y > pr.w) continue;
-        traverse_nearest(&r, nodes, tris, clusters[cl].root, 0.0f, fp.box_slack, &best_t, &best_tri, &best_facet, &tri_tests,
+        traverse_nearest(&r, nodes, tris, clusters[cl].root, 0.0f, fp.box_slack, &best, &best_tri, &tri_tests,
                          &box_tests, &no_probe);
       }
       barrier(CLK_LOCAL_MEM_FENCE);
@@ -99,8 +97,8 @@ __kernel void item_buffer(FrameParams fp, __global const Cluster *clusters, __gl
      * (here, in build_primary, or by the ranks after this one). */
     item_tri[pixel] = best_tri >= 0 ? fp.tri_base + best_tri : -1;
     if (best_tri >= 0) {
-      item_t[pixel] = best_t;
-      item_facet[pixel] = best_facet;
+      item_t[pixel] = best.t;
+      item_key[pixel] = (int2)(best.facet, best.fan);
     }
   }
 }

@@ -64,11 +64,6 @@ typedef std::uint32_t opsila_u32;
  * shadow ray per light. It fills them from the front and says how many. */
 #define OPSILA_SPAWN_SLOTS(lights) (2 + (lights))
 
-/* Hits whose distances differ by at most this fraction are a tie, won by
- * the lower facet id: coplanar facets and shared edges then give the answer
- * of exact arithmetic with file-order tie-breaking, not float noise. */
-#define OPSILA_TIE_TOLERANCE 1e-6f
-
 /* PE x PE traffic matrices (per level) are counted up to this many PEs. */
 #define OPSILA_TRAFFIC_MAX_PES 64
 
@@ -108,6 +103,12 @@ typedef std::uint32_t opsila_u32;
 #define OPSILA_META(kind, level) ((opsila_i32)((kind) | ((level) << 2)))
 #define OPSILA_META_KIND(meta) ((meta)&3)
 #define OPSILA_META_LEVEL(meta) (((meta) >> 2) & OPSILA_MAX_DEPTH)
+/* A radiance ray's meta field also carries, above the level, the fan index
+ * of its best hit so far (hit_order.h's third key; DESC_BEST_FACET holds
+ * the second). */
+#define OPSILA_META_FAN_SHIFT (OPSILA_LEVEL_BITS + 2)
+#define OPSILA_META_WITH_FAN(meta, fan) ((opsila_i32)(((meta) & ((1 << OPSILA_META_FAN_SHIFT) - 1)) | (((fan) & (OPSILA_MAX_FAN - 1)) << OPSILA_META_FAN_SHIFT)))
+#define OPSILA_META_FAN(meta) (((meta) >> OPSILA_META_FAN_SHIFT) & (OPSILA_MAX_FAN - 1))
 
 /* The exchange's sort key of a record, which the dense destination stream
  * holds (DESC_PARAMS): 2 x its destination PE, plus 1 when the record can
@@ -169,15 +170,24 @@ enum { OPSILA_STAT_COUNTERS(OPSILA_STAT_WORK_FLAG) OPSILA_STAT_WORK_END };
 #define OPSILA_COUNTER_WORDS 2
 
 /* One facet triangle as stored in a bank (48 bytes). Vertices are kept
- * exactly as loaded so that the watertight test sees shared edges alike. */
+ * exactly as loaded so that the watertight test sees shared edges alike.
+ * material_fan: the material's index (low OPSILA_MATERIAL_BITS bits) and the
+ * triangle's index in its facet's fan (the bits above), the hit order's
+ * last key (hit_order.h); hence the two limits below. */
+#define OPSILA_MATERIAL_BITS 16
+#define OPSILA_MAX_MATERIALS (1 << OPSILA_MATERIAL_BITS)
+#define OPSILA_MAX_FAN (1 << (32 - OPSILA_MATERIAL_BITS))
 typedef struct {
   float v0[3];
   opsila_i32 facet_id; /* SPEC facet id (file order) */
   float v1[3];
   opsila_i32 object_id; /* SPEC object id */
   float v2[3];
-  opsila_i32 material; /* index into the material table */
+  opsila_i32 material_fan; /* material | fan << OPSILA_MATERIAL_BITS */
 } BankTriangle;
+#define OPSILA_PACK_MATERIAL_FAN(material, fan) ((opsila_i32)((opsila_u32)(material) | ((opsila_u32)(fan) << OPSILA_MATERIAL_BITS)))
+#define OPSILA_TRI_MATERIAL(tri) ((tri).material_fan & (OPSILA_MAX_MATERIALS - 1))
+#define OPSILA_TRI_FAN(tri) ((opsila_i32)((opsila_u32)(tri).material_fan >> OPSILA_MATERIAL_BITS))
 
 /* What the vertices of one bank triangle carry (SPEC "barycentric
  * attributes"), stored in the bank of the PE that owns the triangle, at the
@@ -324,7 +334,9 @@ static_assert(OPSILA_ITEM_LIST_CAP > OPSILA_ITEM_TILE_SIDE * OPSILA_ITEM_TILE_SI
 static_assert(OPSILA_SCATTER_GROUP_MAX >= 1 && (OPSILA_SCATTER_GROUP_MAX & (OPSILA_SCATTER_GROUP_MAX - 1)) == 0,
               "the scatter's work-group cap is a power of two (queried sizes are rounded down to one)");
 static_assert(offsetof(BankTriangle, facet_id) == 12, "BankTriangle layout");
-static_assert(offsetof(BankTriangle, material) == 44, "BankTriangle layout");
+static_assert(offsetof(BankTriangle, material_fan) == 44, "BankTriangle layout");
+static_assert(OPSILA_META_FAN_SHIFT + (32 - OPSILA_MATERIAL_BITS) <= 31,
+              "a fan index fits in the meta field above the kind and level");
 static_assert(OPSILA_BVH_WIDTH == 4 || OPSILA_BVH_WIDTH == 8, "vector width of the node tests");
 static_assert(sizeof(BankNode) == 32 * OPSILA_BVH_WIDTH, "BankNode layout");
 static_assert(offsetof(BankNode, hi_x) == 4 * OPSILA_BVH_WIDTH, "BankNode layout");

@@ -87,19 +87,20 @@ inline int shadow_visit(const Routing *rt, const Bank *bank, const RayPre *r, fl
 
 /* A radiance ray at this PE (the cursor of its ordered forwarding: entry
  * cursor_entry here): its nearest hit in the bank, then on to the next PE
- * that may hold a nearer one, a miss, or to the PE that owns its hit.
- * *t_best and *hit carry the best hit so far in and out. after: the next PE,
- * when the ray's first destination choice found it (first_destination). */
+ * that may hold a hit before it (hit_order.h), a miss, or to the PE that
+ * owns its hit. *best and *hit carry the best hit so far in and out.
+ * after: the next PE, when the ray's first destination choice found it
+ * (first_destination). */
 inline int trace_visit(FrameParams fp, const Routing *rt, const Bank *bank, const RayPre *r, float3 w, int pixel,
-                       int meta, float cursor_entry, float *t_best, int *hit, int best_facet, const NextPe *after,
+                       int meta, float cursor_entry, HitKey *best, int *hit, const NextPe *after,
                        volatile __global uint *accum, PrivStats *st, const CostProbe *probe, Descriptor *next) {
   float eps = fp.epsilon;
   int found = -1; /* local index of a facet of this bank that won */
   if (!bank->empty)
-    traverse_nearest(r, bank->nodes, bank->tris, bank->root, eps, bank->slack, t_best, &found, &best_facet,
+    traverse_nearest(r, bank->nodes, bank->tris, bank->root, eps, bank->slack, best, &found,
                      &st->v[OPSILA_STAT_TRI_TESTS], &st->v[OPSILA_STAT_BOX_TESTS], probe);
   if (found >= 0) *hit = fp.tri_base + found;
-  float entry, limit = tie_limit(*t_best);
+  float entry, limit = hit_limit(best->t);
   int dest;
   if (after->known) { /* the same choice, made before (see first_two_destinations_boxes) */
     dest = after->pe >= 0 && after->entry < limit ? after->pe : -1;
@@ -108,10 +109,10 @@ inline int trace_visit(FrameParams fp, const Routing *rt, const Bank *bank, cons
     dest = next_destination(rt, r, eps, limit, cursor_entry, bank->pe, &entry, &st->v[OPSILA_STAT_SPHERE_TESTS],
                             &st->v[OPSILA_STAT_ROUTE_TESTS]);
   }
-  if (dest >= 0) { /* a nearer hit (or a tie with a lower facet id) may wait in another bank */
+  if (dest >= 0) { /* a hit before the best may wait in another bank */
     STAT_INC(st, FORWARD);
-    *next = make_descriptor(r->org, *t_best, r->dir, entry, w, pixel, meta, *hit, dest);
-    DESC_BEST_FACET(*next) = as_float(best_facet);
+    *next = make_descriptor(r->org, best->t, r->dir, entry, w, pixel, meta, *hit, dest);
+    desc_set_best(next, *best);
     return VISIT_SEND;
   }
   if (*hit < 0) {
@@ -123,7 +124,7 @@ inline int trace_visit(FrameParams fp, const Routing *rt, const Bank *bank, cons
   if (owner == bank->pe) return VISIT_SHADE;
   /* nearest hit known; its facet lives in another bank */
   STAT_INC(st, FORWARD);
-  *next = make_descriptor(r->org, *t_best, r->dir, 0.0f, w, pixel, OPSILA_META(OPSILA_KIND_RESOLVED,
+  *next = make_descriptor(r->org, best->t, r->dir, 0.0f, w, pixel, OPSILA_META(OPSILA_KIND_RESOLVED,
                                                                                OPSILA_META_LEVEL(meta)), *hit, owner);
   return VISIT_SEND;
 }
@@ -138,7 +139,7 @@ inline void shade(FrameParams fp, const Routing *rt, const Bank *bank, __global 
                   __global const Light *lights, SURFACE_PARAMS, float3 org, float3 d, float t, int tri_index,
                   float3 weight, int pixel, int level, Outputs *out, volatile __global uint *accum, PrivStats *st,
                   PrivStats *st_child, const CostProbe *probe, const CostProbe *probe_child) {
-  __global const Material *m = &materials[bank->tris[tri_index].material];
+  __global const Material *m = &materials[OPSILA_TRI_MATERIAL(bank->tris[tri_index])];
   SurfacePoint sp = surface_point(fp, bank->tris, tri_index, m, SURFACE_ARGS, org, d, t);
   float3 p = sp.p;
   float eps = fp.epsilon;
@@ -196,13 +197,13 @@ inline void shade(FrameParams fp, const Routing *rt, const Bank *bank, __global 
      * can beat is shaded next round, by this PE, like any resolved hit. The
      * visit's next choice is the runner-up of the choice just made. */
     STAT_INC(st_child, LOCAL);
-    float t_best = OPSILA_INF;
+    HitKey best = hit_none();
     int hit = -1;
-    int v = trace_visit(fp, rt, bank, &cr, child_w[j], pixel, child_meta, entry, &t_best, &hit, INT_MAX, &after, accum,
+    int v = trace_visit(fp, rt, bank, &cr, child_w[j], pixel, child_meta, entry, &best, &hit, &after, accum,
                         st_child, probe_child, &next);
     if (v == VISIT_SHADE) {
       STAT_INC(st_child, FORWARD);
-      next = make_descriptor(p, t_best, child_d[j], 0.0f, child_w[j], pixel,
+      next = make_descriptor(p, best.t, child_d[j], 0.0f, child_w[j], pixel,
                              OPSILA_META(OPSILA_KIND_RESOLVED, level + 1), hit, bank->pe);
       v = VISIT_SEND;
     }
@@ -233,19 +234,18 @@ inline void process(FrameParams fp, const Routing *rt, const Bank *bank, __globa
       emit(out, next);
     return;
   }
-  float t_best = DESC_T_BEST(ds);
   int hit = DESC_HIT(ds);
+  HitKey best = desc_best(ds);
   if (kind == OPSILA_KIND_TRACE) {
     STAT_INC(st, RADIANCE);
-    int best_facet = hit >= 0 ? as_int(DESC_BEST_FACET(ds)) : INT_MAX;
     NextPe unknown = {false, -1, OPSILA_INF};
-    int v = trace_visit(fp, rt, bank, &r, w, pixel, meta, DESC_CURSOR_ENTRY(ds), &t_best, &hit, best_facet, &unknown,
-                        accum, st, probe, &next);
+    int v = trace_visit(fp, rt, bank, &r, w, pixel, meta, DESC_CURSOR_ENTRY(ds), &best, &hit, &unknown, accum, st,
+                        probe, &next);
     if (v == VISIT_SEND) emit(out, next);
     if (v != VISIT_SHADE) return;
   }
   STAT_INC(st, RESOLVED);
-  shade(fp, rt, bank, materials, lights, SURFACE_ARGS, org, d, t_best, hit - fp.tri_base, w, pixel, level, out,
+  shade(fp, rt, bank, materials, lights, SURFACE_ARGS, org, d, best.t, hit - fp.tri_base, w, pixel, level, out,
         accum, st, st_child, probe, probe_child);
 }
 

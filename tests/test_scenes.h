@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <map>
 #include <utility>
+#include <vector>
 
 #include "core/scene.h"
 
@@ -23,7 +24,7 @@ inline int add_material(Scene& s, Vec3 ka, Vec3 kd, Vec3 ks, float ns, Vec3 tf, 
 inline void add_quad(Scene& s, Vec3 a, Vec3 b, Vec3 c, Vec3 d, int object, int material) {
   int f = s.num_facets++;
   s.triangles.push_back({a, b, c, f, object, material});
-  s.triangles.push_back({a, c, d, f, object, material});
+  s.triangles.push_back({a, c, d, f, object, material, -1, 1});  // the fan's second triangle
 }
 
 // Icosphere with outward counter-clockwise faces.
@@ -200,6 +201,62 @@ inline Scene textured_smooth_scene(int width, bool smooth) {
   s.max_depth = 4;
   s.ambient = {0.15f, 0.15f, 0.15f};
   s.smooth = smooth;
+  return s;
+}
+
+// Where the nearest hit is decided by the hit order's ids, not by distance
+// (kernels/hit_order.h): a grid of non-planar quads (two fan triangles
+// meeting at a crease), non-planar hexagons (fans of four), and coincident
+// facets of two objects (the same quad in two colours; the same square cut
+// along either diagonal), seen directly and in a mirror sphere. Facet ids
+// grow with object ids, as every reader numbers them. cells: the grid's
+// quads per side.
+inline Scene tie_scene(int width, int cells) {
+  Scene s;
+  const int grey = add_material(s, {0.1f, 0.1f, 0.1f}, {0.7f, 0.7f, 0.6f}, {0.3f, 0.3f, 0.3f}, 20, {0, 0, 0}, 1, 2);
+  const int red = add_material(s, {0.1f, 0, 0}, {0.9f, 0.1f, 0.1f}, {0, 0, 0}, 1, {0, 0, 0}, 1, 1);
+  const int blue = add_material(s, {0, 0, 0.1f}, {0.1f, 0.2f, 0.9f}, {0, 0, 0}, 1, {0, 0, 0}, 1, 1);
+  const int mirror = add_material(s, {0, 0, 0}, {0.1f, 0.1f, 0.1f}, {0.8f, 0.8f, 0.8f}, 50, {0, 0, 0}, 1, 3);
+  int obj = 0;
+  const auto height = [](float x, float z) {
+    return 0.4f * std::sin(1.7f * x) * std::cos(1.3f * z) + 0.1f * std::sin(5.1f * x + 2.3f * z);
+  };
+  const float step = 8.0f / float(cells);
+  for (int j = 0; j < cells; ++j)
+    for (int i = 0; i < cells; ++i) {
+      const float x0 = -4 + step * float(i), z0 = -4 + step * float(j), x1 = x0 + step, z1 = z0 + step;
+      add_quad(s, {x0, height(x0, z0), z0}, {x0, height(x0, z1) + 0.03f, z1}, {x1, height(x1, z1), z1},
+               {x1, height(x1, z0) - 0.03f, z0}, obj, grey);
+    }
+  ++obj;
+  for (int h = 0; h < 3; ++h) {  // non-planar hexagons standing up: fans of four
+    const float cx = -2.0f + 2.0f * float(h);
+    const int f = s.num_facets++;
+    std::vector<Vec3> v;
+    for (int k = 0; k < 6; ++k) {
+      const float a = 1.0471976f * float(k);
+      v.push_back({cx + 0.7f * std::cos(a), 1.2f + 0.7f * std::sin(a), -1.5f + 0.25f * float(k % 2)});
+    }
+    for (int k = 1; k + 1 < 6; ++k) s.triangles.push_back({v[0], v[std::size_t(k)], v[std::size_t(k) + 1], f, obj, grey, -1, k - 1});
+    ++obj;
+  }
+  const Vec3 a{-3.5f, 0.9f, 1.0f}, b{-3.5f, 2.4f, 1.0f}, c{-1.5f, 2.4f, 1.0f}, d{-1.5f, 0.9f, 1.0f};
+  add_quad(s, a, b, c, d, obj++, red);  // coincident, same triangles: the lower object (red) shows
+  add_quad(s, a, b, c, d, obj++, blue);
+  const Vec3 e{1.0f, 0.9f, 1.0f}, g{1.0f, 2.4f, 1.0f}, h{3.0f, 2.4f, 1.0f}, k{3.0f, 0.9f, 1.0f};
+  add_quad(s, e, g, h, k, obj++, blue);  // coincident, the other diagonal: float noise may not decide
+  add_quad(s, g, h, k, e, obj++, red);
+  add_sphere(s, {0.0f, 2.2f, -3.2f}, 1.0f, 2, obj++, mirror);
+  s.num_objects = obj;
+  s.camera.eye = {0.3f, 4.5f, 8.0f};
+  s.camera.look_at = {0.0f, 0.6f, 0.0f};
+  s.camera.fov_deg = 50;
+  s.width = width;
+  s.height = width * 3 / 4;
+  s.lights.push_back({{4, 8, 6}, {0.9f, 0.9f, 0.9f}});
+  s.lights.push_back({{-6, 5, 2}, {0.4f, 0.4f, 0.5f}});
+  s.ambient = {0.1f, 0.1f, 0.1f};
+  s.max_depth = 3;
   return s;
 }
 

@@ -61,6 +61,7 @@ struct Triangle {
   int object_id = 0;
   int material = 0;     // index into Scene::materials
   int attributes = -1;  // index into Scene::attributes, -1 = none
+  int fan = 0;          // index in the facet's fan, 0 first: the hit order's last key (kernels/hit_order.h)
 };
 
 // What the vertices of one triangle carry besides their position (SPEC

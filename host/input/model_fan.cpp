@@ -1,5 +1,8 @@
 #include "input/model_fan.h"
 
+#include <algorithm>
+#include <climits>
+
 #ifdef OPSILA_HAVE_ASSIMP
 #include <algorithm>
 #include <cmath>
@@ -56,6 +59,7 @@ bool MeshFan::face(const unsigned* corners, unsigned n, unsigned f, int object, 
     any = true;
     if (!out) continue;
     t.facet_id = facet;
+    t.fan = static_cast<int>(std::min<long long>(INT_MAX, (long long)placement * (n - 2) + (k - 1)));
     t.object_id = object;
     t.material = material;
     if (mesh_.HasNormals() || mesh_.HasTextureCoords(0)) t.attributes = attributes(corner, *out);

@@ -40,6 +40,10 @@ class MeshFan {
   // tally and, when `out` is not null, appended to it with their
   // attributes. True when the face left a triangle.
   bool face(const unsigned* corner, unsigned n, unsigned f, int object, int facet, int material, Scene* out);
+  // Which placement of the mesh this is, 0 first: the placements share the
+  // mesh's ids, so a facet's triangles are ranked placement by placement,
+  // then along the fan (Triangle::fan, the hit order's last key).
+  int placement = 0;
 
  private:
   int attributes(const unsigned* corner, Scene& out) const;

@@ -99,7 +99,8 @@ class ModelReader {
         else ++skipped;
         if (facet < 0) throw InputError(name_ + ": too many facets for 32-bit ids");
       }
-      for (const aiMatrix4x4& place : placements[m]) emit_mesh(*mesh, static_cast<int>(m), first_facet, place, tally);
+      for (std::size_t k = 0; k < placements[m].size(); ++k)
+        emit_mesh(*mesh, static_cast<int>(m), first_facet, placements[m][k], static_cast<int>(k), tally);
     }
     scene_.num_objects = std::max(1, static_cast<int>(ai_.mNumMeshes));
     scene_.num_facets = facet;
@@ -114,9 +115,11 @@ class ModelReader {
 
  private:
   // One placement of a mesh (model_fan.h).
-  void emit_mesh(const aiMesh& mesh, int object, int facet, const aiMatrix4x4& place, FanTally& tally) {
+  void emit_mesh(const aiMesh& mesh, int object, int facet, const aiMatrix4x4& place, int placement,
+                 FanTally& tally) {
     const int material = mesh.mMaterialIndex < material_index_.size() ? material_index_[mesh.mMaterialIndex] : 0;
     MeshFan fan(name_, mesh, place, kMaxTriangles, tally);
+    fan.placement = placement;
     for (unsigned f = 0; f < mesh.mNumFaces; ++f) {
       const aiFace& face = mesh.mFaces[f];
       if (face.mNumIndices < 3) continue;

@@ -179,6 +179,7 @@ bool ObjParser::fan(const Polygon& poly, int id, FanFigures& fig, Scene* out, in
     t.v1 = p1;
     t.v2 = p2;
     t.facet_id = id;
+    t.fan = static_cast<int>(k - 1);
     t.object_id = object;
     t.material = material;
     t.attributes = add_attributes(*out, poly, k);

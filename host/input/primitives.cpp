@@ -30,9 +30,11 @@ void cos_sin_deg(double deg, double& c, double& s) {
   s = std::sin(r);
 }
 
+// fan: the triangle's index in its facet's fan (a facet of one triangle: 0).
 void push(std::vector<Triangle>& out, const Vec3& a, const Vec3& b, const Vec3& c,
-          FacetTag tag, int facet) {
+          FacetTag tag, int facet, int fan = 0) {
   Triangle t;
+  t.fan = fan;
   t.v0 = a;
   t.v1 = b;
   t.v2 = c;
@@ -168,7 +170,7 @@ int add_polygon(std::vector<Triangle>& out, const std::vector<Vec3>& vertices, F
                 int facet) {
   for (std::size_t k = 1; k + 1 < vertices.size(); ++k) {
     if (zero_area(vertices[0], vertices[k], vertices[k + 1])) continue;
-    push(out, vertices[0], vertices[k], vertices[k + 1], tag, facet);
+    push(out, vertices[0], vertices[k], vertices[k + 1], tag, facet, static_cast<int>(k - 1));
   }
   return facet + 1;
 }
@@ -201,8 +203,8 @@ int add_box(std::vector<Triangle>& out, const Vec3& lo, const Vec3& hi, FacetTag
       {{x0, y0, z1}, {x1, y0, z1}, {x1, y1, z1}, {x0, y1, z1}},  // +z
   };
   for (const auto& q : quads) {
-    push(out, q[0], q[1], q[2], tag, facet);
-    push(out, q[0], q[2], q[3], tag, facet);
+    push(out, q[0], q[1], q[2], tag, facet, 0);
+    push(out, q[0], q[2], q[3], tag, facet, 1);
     ++facet;
   }
   return facet;
@@ -228,8 +230,8 @@ int add_checkerboard(std::vector<Triangle>& out, const Vec3& center, float size_
       // Corners in CCW order seen from +y: (x0,z0) (x0,z1) (x1,z1) (x1,z0).
       const Vec3 a{gx(i), y, gz(j)}, d{gx(i), y, gz(j + 1)}, c{gx(i + 1), y, gz(j + 1)},
           b{gx(i + 1), y, gz(j)};
-      push(out, a, d, c, tag, facet);
-      push(out, a, c, b, tag, facet);
+      push(out, a, d, c, tag, facet, 0);
+      push(out, a, c, b, tag, facet, 1);
       ++facet;
     }
   }

@@ -112,7 +112,7 @@ struct Renderer::Machine {
   std::unique_ptr<ScatterPass> scatter;
   cl::Buffer b_tris, b_nodes, b_clusters, b_route, b_pes, b_mats, b_lights, b_rects;
   SurfaceBuffers surface;  // vertex attributes and texture copies of the banks
-  cl::Buffer b_items, b_item_tri, b_item_t, b_item_facet, b_accum, b_stats, b_traffic, b_out_count, b_hits;
+  cl::Buffer b_items, b_item_tri, b_item_t, b_item_key, b_accum, b_stats, b_traffic, b_out_count, b_hits;
   cl::Buffer b_hit_pixels, b_hit_blocks, b_hit_total;  // the hit list (kernels/primary.cl)
   // Pilot frames (measure_cost): each cluster's tests per level, and what
   // maps them back to the scene's facets (every cluster's, on every rank).

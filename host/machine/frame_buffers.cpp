@@ -156,12 +156,12 @@ std::vector<BufferSpec> Renderer::Machine::buffer_table(const BankedScene& bs, c
       // Only the pilot's program reads these; others get one-entry stand-ins.
       host_buffer("node clusters", P_::scene, measure ? bs.node_cluster : no_cluster, &b_node_cluster),
       host_buffer("facet clusters", P_::scene, measure ? bs.tri_cluster : no_cluster, &b_tri_cluster),
-      // Item buffer (pair, triangle, distance, facet) and 64-bit fixed-point
-      // RGB sums.
+      // Item buffer (pair, triangle, distance, the hit order's (facet, fan)
+      // key) and 64-bit fixed-point RGB sums.
       frame_buffer("item buffer", P_::image, sizeof(cl_int2), npix, Fill::device, &b_items),
       frame_buffer("item buffer hits", P_::image, sint, npix, Fill::device, &b_item_tri),
       frame_buffer("item buffer distances", P_::image, sizeof(cl_float), npix, Fill::device, &b_item_t),
-      frame_buffer("item buffer facets", P_::image, sint, npix, Fill::device, &b_item_facet),
+      frame_buffer("item buffer keys", P_::image, sizeof(cl_int2), npix, Fill::device, &b_item_key),
       // The hit list of a sample pass (kernels/primary.cl): its pixels, the
       // hits per block of pixels (then their prefixes), and their total.
       frame_buffer("hit list", P_::image, sint, npix, Fill::device, &b_hit_pixels),

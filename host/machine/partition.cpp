@@ -4,6 +4,9 @@
 #include "machine/partition_steps.h"
 
 #include <algorithm>
+#include <climits>
+#include <stdexcept>
+#include <string>
 #include <cmath>
 #include <iterator>
 #include <numeric>
@@ -11,6 +14,7 @@
 #include <vector>
 
 #include "core/camera.h"
+#include "core/errors.h"
 #include "core/parallel.h"
 #include "core/stage_clock.h"
 
@@ -153,6 +157,36 @@ std::uint64_t texture_once(const Scene& scene, const std::vector<char>& used) {
   return once;
 }
 
+// What the hit order (kernels/hit_order.h) needs of the ids: a material
+// index and a fan index that fit their halves of BankTriangle::material_fan
+// (user limits: one line), and facet ids that never decrease as object ids
+// increase, so that comparing facet ids orders by object first (every
+// reader numbers them so: a failure here is a reader's fault).
+void check_hit_order_ids(const Scene& scene) {
+  std::vector<std::pair<int, int>> facets;  // per object id: least and greatest facet id
+  for (const Triangle& t : scene.triangles) {
+    if (t.material >= OPSILA_MAX_MATERIALS)
+      throw InputError("the scene has more than " + std::to_string(OPSILA_MAX_MATERIALS) +
+                       " materials, the most opsila renders (docs/CONTRACT.md, Limits)");
+    if (t.fan >= OPSILA_MAX_FAN)
+      throw InputError("facet " + std::to_string(t.facet_id) + " (object " + std::to_string(t.object_id) +
+                       ") has more than " + std::to_string(OPSILA_MAX_FAN) +
+                       " triangles (its polygon's fan, times its mesh's placements), the most opsila "
+                       "renders (docs/CONTRACT.md, Limits)");
+    if (std::size_t(t.object_id) >= facets.size()) facets.resize(std::size_t(t.object_id) + 1, {INT_MAX, -1});
+    auto& f = facets[std::size_t(t.object_id)];
+    f = {std::min(f.first, t.facet_id), std::max(f.second, t.facet_id)};
+  }
+  int below = -1;  // the greatest facet id of the objects before
+  for (std::size_t o = 0; o < facets.size(); ++o) {
+    if (facets[o].second < 0) continue;
+    if (facets[o].first <= below)
+      throw std::logic_error("facet ids do not increase with object ids (object " + std::to_string(o) +
+                             "): the hit order would not be the contract's");
+    below = facets[o].second;
+  }
+}
+
 // 3. Banks: triangles of each PE contiguous, cluster by cluster, and each
 // cluster's bounding sphere. ranges[c] is cluster c's triangle range, source[k]
 // the scene triangle of bank triangle k (all four start empty). Clusters are
@@ -160,6 +194,7 @@ std::uint64_t texture_once(const Scene& scene, const std::vector<char>& used) {
 void fill_banks(const Scene& scene, const Box& sbox, const std::vector<ClusterBuild>& cb, BankedScene& bs,
                 std::vector<Box>& tri_boxes, std::vector<int>& source,
                 std::vector<std::pair<int, int>>& ranges) {
+  check_hit_order_ids(scene);
   ranges.resize(cb.size());
   int next = 0;
   for (std::size_t c = 0; c < cb.size(); ++c) {
@@ -184,7 +219,7 @@ void fill_banks(const Scene& scene, const Box& sbox, const std::vector<ClusterBu
       put3(bt.v2, t.v2);
       bt.facet_id = t.facet_id;
       bt.object_id = t.object_id;
-      bt.material = t.material;
+      bt.material_fan = OPSILA_PACK_MATERIAL_FAN(t.material, t.fan);
       bs.triangles[k] = bt;
       tri_boxes[k] = tri_box(t);
       source[k] = i;

@@ -14,12 +14,15 @@ double since(std::chrono::steady_clock::time_point t0) {
 }
 
 // One pixel of the item buffer as the relay carries it: the nearest hit so
-// far (distance, global triangle, facet id) and the (object, facet) output.
+// far (distance, global triangle, (facet, fan) key) and the (object, facet)
+// output.
 struct ItemState {
   cl_float t;
-  cl_int tri, facet, object, item_facet;
+  cl_int tri;
+  cl_int2 key;
+  cl_int object, item_facet;
 };
-static_assert(sizeof(ItemState) == 20, "ItemState layout");
+static_assert(sizeof(ItemState) == 24, "ItemState layout");
 
 constexpr int kRelayTag = 12;
 
@@ -35,29 +38,31 @@ void write_range(ClRuntime& rt, const cl::Buffer& b, std::size_t begin, const st
 void read_states(ClRuntime& rt, const ItemBuffers& b, std::size_t begin, std::size_t count,
                  std::vector<ItemState>& out) {
   std::vector<cl_int2> items(b.with_items ? count : 0);
-  std::vector<cl_int> tri(count), facet(count);
+  std::vector<cl_int> tri(count);
+  std::vector<cl_int2> key(count);
   std::vector<cl_float> t(count);
   if (b.with_items) read_range(rt, *b.items, begin, items, "clEnqueueReadBuffer(item buffer)");
   read_range(rt, *b.tri, begin, tri, "clEnqueueReadBuffer(item buffer hits)");
-  read_range(rt, *b.facet, begin, facet, "clEnqueueReadBuffer(item buffer facets)");
+  read_range(rt, *b.key, begin, key, "clEnqueueReadBuffer(item buffer keys)");
   read_range(rt, *b.t, begin, t, "clEnqueueReadBuffer(item buffer distances)");
   out.resize(count);
   for (std::size_t i = 0; i < count; ++i)
-    out[i] = {t[i], tri[i], facet[i], b.with_items ? items[i].s[0] : -1, b.with_items ? items[i].s[1] : -1};
+    out[i] = {t[i], tri[i], key[i], b.with_items ? items[i].s[0] : -1, b.with_items ? items[i].s[1] : -1};
 }
 
 void write_states(ClRuntime& rt, const ItemBuffers& b, std::size_t begin, const std::vector<ItemState>& in) {
   const std::size_t count = in.size();
   std::vector<cl_int2> items(count);
-  std::vector<cl_int> tri(count), facet(count);
+  std::vector<cl_int> tri(count);
+  std::vector<cl_int2> key(count);
   std::vector<cl_float> t(count);
   for (std::size_t i = 0; i < count; ++i) {
-    t[i] = in[i].t, tri[i] = in[i].tri, facet[i] = in[i].facet;
+    t[i] = in[i].t, tri[i] = in[i].tri, key[i] = in[i].key;
     items[i].s[0] = in[i].object, items[i].s[1] = in[i].item_facet;
   }
   if (b.with_items) write_range(rt, *b.items, begin, items, "clEnqueueWriteBuffer(item buffer)");
   write_range(rt, *b.tri, begin, tri, "clEnqueueWriteBuffer(item buffer hits)");
-  write_range(rt, *b.facet, begin, facet, "clEnqueueWriteBuffer(item buffer facets)");
+  write_range(rt, *b.key, begin, key, "clEnqueueWriteBuffer(item buffer keys)");
   write_range(rt, *b.t, begin, t, "clEnqueueWriteBuffer(item buffer distances)");
 }
 

@@ -1,9 +1,9 @@
 // Between MPI ranks (one group of PEs and one device each): the stages that
 // cross a rank boundary. Every MPI call goes through Ranks (ranks.h); with
 // one rank none of this runs.
-//  - item buffer relay: the ranks extend each pixel's nearest hit in turn,
-//    as one device visits the clusters in order (exact tie rule), pipelined
-//    over bands of pixel rows; the last rank shares the result;
+//  - item buffer relay: the ranks extend each pixel's nearest hit in turn
+//    (the least in the one hit order, kernels/hit_order.h), pipelined over
+//    bands of pixel rows; the last rank shares the result;
 //  - descriptor exchange, once per round: what the scatter left for PEs of
 //    other ranks is read back, sent with MPI_Alltoall (counts) and
 //    MPI_Alltoallv (records), and appended to the receiving rank's queue in
@@ -28,7 +28,7 @@ struct ItemBuffers {
   const cl::Buffer* items = nullptr;  // int2 (object, facet): the output, relayed when the pass writes it
   const cl::Buffer* tri = nullptr;    // int, global facet triangle of the nearest hit so far
   const cl::Buffer* t = nullptr;      // float, its distance
-  const cl::Buffer* facet = nullptr;  // int, its facet id (the tie rule's)
+  const cl::Buffer* key = nullptr;    // int2, its (facet id, fan index): the hit order's keys
   bool with_items = false;
 };
 // Before the item-buffer launch over pixels [begin, begin + count): ranks

@@ -6,6 +6,7 @@
 #include "core/progress.h"
 #include "core/fixed_point.h"
 #include "core/texture.h"
+#include "hit_order.h"
 #include "opsila_shared.h"
 
 #include <algorithm>
@@ -33,6 +34,7 @@ struct Tri {
   Vec3 normal;   // Ng = normalize(cross(v1 - v0, v2 - v0))
   bool degenerate;  // zero area: no well-defined Ng, never hit
   int material, object_id, facet_id;
+  int fan;  // the triangle's index in its facet's fan: the hit order's last key
 };
 
 // Möller–Trumbore. Edges and vertices count as inside. Returns the ray
@@ -177,20 +179,11 @@ Bvh build_bvh(const std::vector<Tri>& tris, const std::vector<Triangle>& source,
   return bvh;
 }
 
-// Nearer first; distances equal within OPSILA_TIE_TOLERANCE (relative) are a
-// tie, won by the lower triangle index (file order): coplanar facets and
-// shared edges get the answer of exact arithmetic, not rounding noise.
-bool closer(float t, int index, float best_t, int best_index) {
-  if (best_index < 0) return true;
-  const float tol = OPSILA_TIE_TOLERANCE * best_t;
-  if (t < best_t - tol) return true;
-  return t <= best_t + tol && index < best_index;
-}
-
-// A node's box met within [t_min, t_max]; the exit widened above the tie
-// tolerance, so that rounding never culls a box holding a possible tie.
+// A node's box met within [t_min, t_max]; the exit widened by the hit
+// order's culling slack, so that rounding never culls a box holding a hit
+// before the best (hit_order.h).
 bool hits_box(const Node& node, const Vec3& origin, const Vec3& dir, float t_min, float t_max) {
-  return slab_test(node.box, origin, dir, t_min, t_max, 4 * OPSILA_TIE_TOLERANCE);
+  return slab_test(node.box, origin, dir, t_min, t_max, OPSILA_CULL_SLACK);
 }
 
 using Hit = FacetHit;
@@ -232,15 +225,22 @@ struct ReferenceTracer::Impl {
     }
   }
 
-  // The hit with t > t_min that no other beats, `beats(t, index, best)`
-  // saying whether a hit at t on triangle `index` beats `best`. Boxes are
-  // culled only beyond the best t widened above the tie tolerance, so a hit
-  // that ties or nearly ties is still found.
-  template <typename Beats>
-  bool nearest_by(const Vec3& origin, const Vec3& dir, float t_min, Hit& hit, Beats beats) const {
-    walk(origin, dir, t_min, [&] { return hit.t + hit.t * (2 * OPSILA_TIE_TOLERANCE); }, [&](int index) {
+  // The hit order's key of triangle `index` hit at t (hit_order.h).
+  HitKey key_of(float t, int index) const {
+    const Tri& tri = tris[std::size_t(index)];
+    return hit_key(t, tri.facet_id, tri.fan);
+  }
+
+  // Nearest hit with t > t_min: the least in the one hit order (hit_order.h),
+  // whatever order the BVH visits the triangles in. Boxes are culled only
+  // beyond the end of the best hit's grid cell (widened in hits_box).
+  bool own_nearest(const Vec3& origin, const Vec3& dir, float t_min, Hit& hit) const {
+    HitKey best = hit.tri < 0 ? hit_none() : key_of(hit.t, hit.tri);
+    walk(origin, dir, t_min, [&] { return hit_limit(best.t); }, [&](int index) {
       float t, b1, b2;
-      if (intersect(tris[index], origin, dir, t, &b1, &b2) && t > t_min && beats(t, index, hit)) {
+      const Tri& tri = tris[std::size_t(index)];
+      if (intersect(tri, origin, dir, t, &b1, &b2) && t > t_min && hit_before(t, tri.facet_id, tri.fan, best)) {
+        best = key_of(t, index);
         hit.t = t;
         hit.tri = index;
         hit.b1 = b1;
@@ -251,12 +251,9 @@ struct ReferenceTracer::Impl {
     return hit.tri >= 0;
   }
 
-  // Nearest hit with t > t_min. Ties go to the lower triangle index
-  // (Scene::triangles order), whatever order the BVH visits them in.
   bool nearest(const Vec3& origin, const Vec3& dir, float t_min, Hit& hit) const {
     if (queries) return queries->nearest(origin, dir, t_min, hit);
-    return nearest_by(origin, dir, t_min, hit,
-                      [](float t, int index, const Hit& best) { return closer(t, index, best.t, best.tri); });
+    return own_nearest(origin, dir, t_min, hit);
   }
 
   // Shadow test: is any triangle hit with t in (t_min, t_max)?
@@ -400,26 +397,11 @@ struct ReferenceTracer::Impl {
     return hit.tri;
   }
 
-  // ------------------------------------------------ the ray sample's rules
-
-  // The facet's key in the sample's order on hits (sample_rays).
+  // The sample's key of a triangle after the distance's cell: (facet, fan),
+  // the rest of the hit order (sample_rays joins holders on both).
   std::uint64_t sample_key(int index) const {
     const Tri& t = tris[std::size_t(index)];
-    return std::uint64_t(std::uint32_t(t.object_id)) << 32 | std::uint32_t(t.facet_id);
-  }
-  // Is a hit at t on triangle `index` before `best` in the sample's order:
-  // t, then the facet's key, then the triangle's index (the triangles of one
-  // polygon share its ids, and one holder has them all, in one process's order)?
-  bool sample_before(float t, int index, const Hit& best) const {
-    if (best.tri < 0 || t < best.t) return true;
-    if (t > best.t) return false;
-    const std::uint64_t a = sample_key(index), b = sample_key(best.tri);
-    return a < b || (a == b && index < best.tri);
-  }
-  // The least hit in that order with t > t_min.
-  bool sample_nearest(const Vec3& origin, const Vec3& dir, float t_min, Hit& hit) const {
-    return nearest_by(origin, dir, t_min, hit,
-                      [this](float t, int index, const Hit& best) { return sample_before(t, index, best); });
+    return std::uint64_t(std::uint32_t(t.facet_id)) << 32 | std::uint32_t(t.fan);
   }
 };
 
@@ -445,6 +427,7 @@ ReferenceTracer::ReferenceTracer(const Scene& scene, const FacetQueries* queries
     tri.material = t.material >= 0 && t.material < static_cast<int>(impl_->materials.size()) ? t.material : 0;
     tri.object_id = t.object_id;
     tri.facet_id = t.facet_id;
+    tri.fan = t.fan;
     impl_->tris.push_back(tri);
   }
   impl_->queries = queries;
@@ -514,12 +497,6 @@ constexpr std::uint64_t kNoHit = ~std::uint64_t(0);
 // Rays of a level traced, joined and spawned at once (sample_rays).
 constexpr std::size_t kSampleChunk = std::size_t(1) << 14;
 
-std::uint64_t bits_of(float t) {  // t > 0: ordered as the floats are
-  std::uint32_t b;
-  std::memcpy(&b, &t, sizeof b);
-  return b;
-}
-
 float float_of(std::uint64_t bits) {
   const std::uint32_t b = static_cast<std::uint32_t>(bits);
   float t;
@@ -554,14 +531,15 @@ RaySample ReferenceTracer::sample_rays(int target_primary, const SampleJoin* joi
       const SampleRay* rays = level.data() + c0;
       const std::size_t n = std::min(level.size() - c0, kSampleChunk);
       std::vector<Hit> hits(n);
-      for (std::size_t i = 0; i < n; ++i) im.sample_nearest(rays[i].origin, rays[i].direction, rays[i].t_min, hits[i]);
-      // The least hit over every holder: the least t, then the least key at
-      // that t, then (should two holders share a facet) the lowest holder.
+      for (std::size_t i = 0; i < n; ++i) im.own_nearest(rays[i].origin, rays[i].direction, rays[i].t_min, hits[i]);
+      // The least hit over every holder, in the hit order: the least cell
+      // of t, then the least (facet, fan) key in it, then (should two
+      // holders share a facet) the lowest holder.
       std::vector<std::uint64_t> t_bits(n, kNoHit), key(n, kNoHit), holder(n, kNoHit);
       for (std::size_t i = 0; i < n; ++i)
-        if (hits[i].tri >= 0) t_bits[i] = bits_of(hits[i].t);
+        if (hits[i].tri >= 0) t_bits[i] = hit_grid(hits[i].t);
       if (join) join->min(t_bits);
-      const auto least_t = [&](std::size_t i) { return hits[i].tri >= 0 && bits_of(hits[i].t) == t_bits[i]; };
+      const auto least_t = [&](std::size_t i) { return hits[i].tri >= 0 && hit_grid(hits[i].t) == t_bits[i]; };
       for (std::size_t i = 0; i < n; ++i)
         if (least_t(i)) key[i] = im.sample_key(hits[i].tri);
       if (join) join->min(key);
@@ -604,6 +582,7 @@ RaySample ReferenceTracer::sample_rays(int target_primary, const SampleJoin* joi
       // after it; the next level's rays in the same order.
       std::size_t k = 0;
       for (std::size_t i = 0; i < n && out.rays.size() < kMaxSampleRays; ++i) {
+        // The hit's cell (its start): the segment ends there, within 2^-19.
         const float t = t_bits[i] == kNoHit ? std::numeric_limits<float>::infinity() : float_of(t_bits[i]);
         out.rays.push_back({rays[i].origin, rays[i].direction, t});
         for (; k < spawned.size() && spawned[k].ray == i; ++k) {

@@ -55,10 +55,9 @@ inline void mega_pixel(FrameParams fp, __global const BankNode *nodes, __global 
   /* Even k: the centre ray is not a sample; its hit is looked up alone. */
   if (spp_k % 2 == 0 && write_items) {
     RayPre cr = make_ray(load3(fp.eye), primary_direction(fp, x, y));
-    float t = OPSILA_INF;
-    int hit = -1, facet = INT_MAX;
-    scene_nearest(&cr, nodes, tris, root, lo, hi, 0.0f, fp.box_slack, &t, &hit, &facet, &tri_tests, &box_tests,
-                  &no_probe);
+    HitKey best = hit_none();
+    int hit = -1;
+    scene_nearest(&cr, nodes, tris, root, lo, hi, 0.0f, fp.box_slack, &best, &hit, &tri_tests, &box_tests, &no_probe);
     if (hit >= 0) item = (int2)(tris[hit].object_id, tris[hit].facet_id);
   }
 
@@ -79,10 +78,11 @@ inline void mega_pixel(FrameParams fp, __global const BankNode *nodes, __global 
       float tmin = level == 0 ? 0.0f : eps;
       MEGA_LOG(org, d, tmin, -1.0f);
       RayPre r = make_ray(org, d);
-      float t = OPSILA_INF;
-      int hit = -1, facet = INT_MAX;
-      scene_nearest(&r, nodes, tris, root, lo, hi, tmin, fp.box_slack, &t, &hit, &facet, &tri_tests, &box_tests,
+      HitKey best = hit_none();
+      int hit = -1;
+      scene_nearest(&r, nodes, tris, root, lo, hi, tmin, fp.box_slack, &best, &hit, &tri_tests, &box_tests,
                     &no_probe);
+      float t = best.t;
       if (hit < 0) {
         sum = add_sat(sum, fixed3(weight * load3(fp.background)));
         continue;
@@ -91,7 +91,7 @@ inline void mega_pixel(FrameParams fp, __global const BankNode *nodes, __global 
       if (level == 0 && centre) item = (int2)(tri->object_id, tri->facet_id);
 
       /* shade() of spmd_phase.cl, with the shadow ray traced here. */
-      __global const Material *m = &materials[tri->material];
+      __global const Material *m = &materials[OPSILA_TRI_MATERIAL(*tri)];
       SurfacePoint surf = surface_point(fp, tris, hit, m, SURFACE_ARGS, org, d, t);
       float3 p = surf.p;
 

@@ -15,11 +15,11 @@ __kernel void traversal_nearest(__global const BankNode *nodes, __global const B
   if (i >= count) return;
   float4 o = rays[2 * i], d = rays[2 * i + 1];
   RayPre r = make_ray(o.xyz, d.xyz);
-  float t = OPSILA_INF;
-  int tri = -1, facet = INT_MAX;
+  HitKey best = hit_none();
+  int tri = -1;
   uint tri_tests = 0u, box_tests = 0u; /* unread: the compiler may drop the counting */
   CostProbe probe = no_cost_probe();
-  scene_nearest(&r, nodes, tris, root, root_lo.xyz, root_hi.xyz, o.w, slack, &t, &tri, &facet, &tri_tests, &box_tests,
+  scene_nearest(&r, nodes, tris, root, root_lo.xyz, root_hi.xyz, o.w, slack, &best, &tri, &tri_tests, &box_tests,
                 &probe);
   hit[i] = tri;
 }

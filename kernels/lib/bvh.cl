@@ -49,9 +49,9 @@ inline CostProbe no_cost_probe(void) {
   return p;
 }
 
-/* Children met in [tmin, tmax], with slack: relative, above the tie
- * tolerance (a box is never culled while a facet on its face could still
- * win a tie), and absolute, `slack` (FrameParams.box_slack). The facet test
+/* Children met in [tmin, tmax], with slack: relative, OPSILA_CULL_SLACK (a
+ * box is never culled while a facet on its face could still win), and
+ * absolute, `slack` (FrameParams.box_slack). The facet test
  * computes t from vertices taken relative to the origin, so its rounding is
  * of the order of the coordinates' ulp, not of t's: near the origin (a
  * glass block standing on a floor, a ray leaving one face towards the
@@ -63,7 +63,7 @@ OPSILA_INLINE intW node_hits(const RayPre *r, __global const BankNode *nd, float
                              floatW *enter) {
   floatW lo, hi;
   node_spans(r, nd, tmin, tmax, &lo, &hi);
-  hi = hi + fabs(hi) * (4.0f * OPSILA_TIE_TOLERANCE) + slack;
+  hi = hi + fabs(hi) * OPSILA_CULL_SLACK + slack; /* cull_exit, lane-wise */
   *enter = lo;
   /* An empty slot's inverted box gives lo = +inf and hi = -inf, then NaN
    * from the slack (-inf + inf): never met, so the count is not read. */
@@ -75,19 +75,20 @@ OPSILA_INLINE intW node_hits(const RayPre *r, __global const BankNode *nd, float
 typedef struct {
   const RayPre *r;
   __global const BankTriangle *tris;
-  float tmin, tmax, slack; /* nearest hit: tmax is the tie limit of best_t, set at each pop */
-  float best_t;
-  int best_tri, best_facet;
+  float tmin, tmax, slack; /* nearest hit: tmax is the best hit's limit, set at each pop */
+  HitKey best;
+  int best_tri;
   uint *tri_tests, *box_tests;
   const CostProbe *probe;
-  /* Nearest hit: best_t's tie limit and the entry beyond which a popped
-   * child is skipped, made when best_t changes, not at every pop. */
+  /* Nearest hit: the best hit's limit (hit_limit) and the entry beyond
+   * which a popped child is skipped, made when the best changes, not at
+   * every pop. */
   float limit, cull;
 } BankWalk;
 
 OPSILA_INLINE void nearest_bounds(BankWalk *w) {
-  w->limit = tie_limit(w->best_t);
-  w->cull = w->limit + fabs(w->limit) * (4.0f * OPSILA_TIE_TOLERANCE) + w->slack;
+  w->limit = hit_limit(w->best.t);
+  w->cull = cull_exit(w->limit, w->slack);
 }
 
 /* Every child box in use is a test, met or not. The slots in use are told
@@ -109,7 +110,7 @@ OPSILA_INLINE uint bank_node(BankWalk *w, __global const BankNode *nd, float *te
 
 OPSILA_INLINE bool bank_child(BankWalk *w, __global const BankNode *nd, int k, int cnt, float entry) { return true; }
 
-/* A popped entry beyond the tie limit of the best hit found since it was
+/* A popped entry beyond the limit of the best hit found since it was
  * pushed cannot hold a winner; the limit bounds the node's test too. */
 OPSILA_INLINE bool nearest_pop(BankWalk *w, float entry) {
   w->tmax = w->limit;
@@ -120,11 +121,10 @@ OPSILA_INLINE bool nearest_leaf(BankWalk *w, int first, int count, float entry) 
   for (int i = first; i < first + count; ++i) {
     COUNT_TEST(w->tri_tests);
     COST_TRI(w->probe, i);
-    float t = intersect_triangle(w->r, &w->tris[i], w->tmin, OPSILA_INF);
-    if (t < OPSILA_INF && closer(t, w->tris[i].facet_id, w->best_t, w->best_facet)) {
-      w->best_t = t;
+    float t = intersect_triangle(w->r, &w->tris[i], w->tmin, w->limit);
+    if (t < OPSILA_INF && hit_before(t, w->tris[i].facet_id, OPSILA_TRI_FAN(w->tris[i]), w->best)) {
+      w->best = hit_key(t, w->tris[i].facet_id, OPSILA_TRI_FAN(w->tris[i]));
       w->best_tri = i;
-      w->best_facet = w->tris[i].facet_id;
       nearest_bounds(w);
     }
   }
@@ -144,26 +144,25 @@ OPSILA_DEFINE_WALK(walk_nearest, BankWalk, bank_node, bank_child, nearest_leaf, 
 OPSILA_DEFINE_WALK(walk_any, BankWalk, bank_node, bank_child, any_leaf, WALK_NO_POP, 0)
 
 /* Nearest hit below `root` (a bank, one cluster of it, or a whole scene),
- * after the best one so far (*best_t, *best_tri, *best_facet, updated);
- * slack: FrameParams.box_slack (node_hits). */
+ * after the best one so far (*best and *best_tri, updated: the least in
+ * hit_order.h's order, whoever found the others); slack:
+ * FrameParams.box_slack (node_hits). */
 OPSILA_INLINE void traverse_nearest(const RayPre *r, __global const BankNode *nodes,
-                                    __global const BankTriangle *tris, int root, float tmin, float slack, float *best_t,
-                                    int *best_tri, int *best_facet, uint *tri_tests, uint *box_tests,
+                                    __global const BankTriangle *tris, int root, float tmin, float slack,
+                                    HitKey *best, int *best_tri, uint *tri_tests, uint *box_tests,
                                     const CostProbe *probe) {
-  BankWalk w = {r, tris, tmin, OPSILA_INF, slack, *best_t, *best_tri, *best_facet, tri_tests, box_tests, probe,
-                0.0f, 0.0f};
+  BankWalk w = {r, tris, tmin, OPSILA_INF, slack, *best, *best_tri, tri_tests, box_tests, probe, 0.0f, 0.0f};
   nearest_bounds(&w);
   walk_nearest(&w, nodes, root);
-  *best_t = w.best_t;
+  *best = w.best;
   *best_tri = w.best_tri;
-  *best_facet = w.best_facet;
 }
 
 /* Any hit in (tmin, tmax): shadow rays. */
 OPSILA_INLINE bool traverse_any(const RayPre *r, __global const BankNode *nodes, __global const BankTriangle *tris,
                                 int root, float tmin, float tmax, float slack, uint *tri_tests, uint *box_tests,
                                 const CostProbe *probe) {
-  BankWalk w = {r, tris, tmin, tmax, slack, OPSILA_INF, -1, INT_MAX, tri_tests, box_tests, probe, 0.0f, 0.0f};
+  BankWalk w = {r, tris, tmin, tmax, slack, hit_none(), -1, tri_tests, box_tests, probe, 0.0f, 0.0f};
   return walk_any(&w, nodes, root);
 }
 
@@ -181,7 +180,7 @@ OPSILA_INLINE bool root_box_met(const RayPre *r, __global const BankNode *nodes,
   float3 tn = (near - r->org) * r->inv_dir, tf = (far - r->org) * r->inv_dir;
   float enter = fmax(fmax(fmax(tn.x, tn.y), tn.z), tmin);
   float leave = fmin(fmin(fmin(tf.x, tf.y), tf.z), tmax);
-  leave = leave + fabs(leave) * (4.0f * OPSILA_TIE_TOLERANCE) + slack;
+  leave = cull_exit(leave, slack);
   if (enter <= leave) return true;
   __global const BankNode *nd = &nodes[root];
   for (int k = 0; k < OPSILA_BVH_WIDTH; ++k) {
@@ -199,10 +198,10 @@ OPSILA_INLINE bool root_box_met(const RayPre *r, __global const BankNode *nodes,
  * boxes, and the item buffer tests a cluster only inside its projected
  * rectangle. */
 OPSILA_INLINE void scene_nearest(const RayPre *r, __global const BankNode *nodes, __global const BankTriangle *tris,
-                                 int root, float3 lo, float3 hi, float tmin, float slack, float *best_t, int *best_tri,
-                                 int *best_facet, uint *tri_tests, uint *box_tests, const CostProbe *probe) {
-  if (root_box_met(r, nodes, root, lo, hi, tmin, tie_limit(*best_t), slack, box_tests, probe))
-    traverse_nearest(r, nodes, tris, root, tmin, slack, best_t, best_tri, best_facet, tri_tests, box_tests, probe);
+                                 int root, float3 lo, float3 hi, float tmin, float slack, HitKey *best, int *best_tri,
+                                 uint *tri_tests, uint *box_tests, const CostProbe *probe) {
+  if (root_box_met(r, nodes, root, lo, hi, tmin, hit_limit(best->t), slack, box_tests, probe))
+    traverse_nearest(r, nodes, tris, root, tmin, slack, best, best_tri, tri_tests, box_tests, probe);
 }
 
 OPSILA_INLINE bool scene_any(const RayPre *r, __global const BankNode *nodes, __global const BankTriangle *tris,

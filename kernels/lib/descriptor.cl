@@ -1,6 +1,7 @@
 /* Ray descriptors as the kernels see them: a vector of 64-byte records,
  * generated from the field table OPSILA_DESCRIPTOR_LANES (opsila_shared.h). */
 #include "../opsila_shared.h"
+#include "../hit_order.h"
 
 #define DESC_MEMBER(lane, name, type, host_type) type name;
 typedef struct {
@@ -56,7 +57,8 @@ inline void desc_move(__global float4 *to, __global int *to_dest, int j, __globa
 #define DESC_HIT(d) ((d).ids.z)          /* global triangle of the best hit, -1 none */
 #define DESC_SHADOW_HOME(d) ((d).ids.z)  /* shadow: the PE that spawned it (and tested its bank first) */
 #define DESC_DEST(d) ((d).ids.w)         /* destination PE = cursor PE; -1 NIL */
-/* Radiance: facet id of the best hit (its bits), for the tie rule at the
+/* Radiance: facet id of the best hit (its bits); with the fan index in the
+ * meta field and the distance, the best hit's key (hit_order.h) for the
  * next PE, whose device may not hold that facet. */
 #define DESC_BEST_FACET(d) ((d).wgt.w)
 
@@ -68,4 +70,16 @@ inline Descriptor make_descriptor(float3 origin, float t, float3 direction, floa
   d.wgt = (float4)(weight, 0.0f);
   d.ids = (int4)(pixel, meta, hit, dest);
   return d;
+}
+
+/* A radiance descriptor's best hit so far: (DESC_T_BEST, its facet, its
+ * fan index), or none while DESC_HIT is -1. */
+inline HitKey desc_best(Descriptor d) {
+  if (DESC_HIT(d) < 0) return hit_none();
+  return hit_key(DESC_T_BEST(d), as_int(DESC_BEST_FACET(d)), OPSILA_META_FAN(DESC_META(d)));
+}
+inline void desc_set_best(Descriptor *d, HitKey best) {
+  DESC_T_BEST(*d) = best.t;
+  DESC_BEST_FACET(*d) = as_float(best.facet);
+  DESC_META(*d) = OPSILA_META_WITH_FAN(DESC_META(*d), best.fan);
 }

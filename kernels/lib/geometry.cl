@@ -1,5 +1,6 @@
-/* Ray-facet and ray-volume tests, and the hit-ordering (tie) rule. */
+/* Ray-facet and ray-volume tests (the order of their hits: ../hit_order.h). */
 #include "descriptor.cl"
+#include "../hit_order.h"
 
 /* Every PE must compute bit-identical sphere entry distances for the same ray
  * (they order the visit of candidate PEs), so no silent fma contraction. */
@@ -117,9 +118,8 @@ inline bool ray_box_span(const RayPre *r, float3 bmin, float3 bmax, float tmin, 
   float3 hi = fmax(select(t0, pinf, isnan(t0)), select(t1, pinf, isnan(t1)));
   float enter = fmax(fmax(lo.x, lo.y), fmax(lo.z, tmin));
   float leave = fmin(fmin(hi.x, hi.y), fmin(hi.z, tmax));
-  /* Relative slack above the tie tolerance: a box is never culled by rounding
-   * when a facet on its face could still win a tie. */
-  leave = leave + fabs(leave) * (4.0f * OPSILA_TIE_TOLERANCE) + 1e-30f;
+  /* Never culled by rounding while a facet on its face could still win. */
+  leave = cull_exit(leave, 1e-30f);
   *t_enter = enter;
   *t_leave = leave;
   return enter <= leave;
@@ -138,16 +138,3 @@ inline float sphere_entry(const RayPre *r, __global const Cluster *cl, float tmi
   if (t_far <= tmin || t_near >= tmax) return OPSILA_INF;
   return fmax(t_near, 0.0f);
 }
-
-/* Hit ordering: nearer first; distances equal within OPSILA_TIE_TOLERANCE go
- * to the lower facet id, so the answer does not depend on which PE or BVH
- * leaf saw a facet first, nor on rounding between coplanar facets. */
-inline bool closer(float t, int facet, float best_t, int best_facet) {
-  if (best_t == OPSILA_INF) return t < OPSILA_INF;
-  float tol = OPSILA_TIE_TOLERANCE * best_t;
-  if (t < best_t - tol) return true;
-  return t <= best_t + tol && facet < best_facet;
-}
-
-/* Farthest distance at which a hit could still win against best_t. */
-inline float tie_limit(float best_t) { return best_t + best_t * (2.0f * OPSILA_TIE_TOLERANCE); }

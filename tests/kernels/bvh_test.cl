@@ -12,13 +12,13 @@ __kernel void nearest_batch(__global const BankNode *nodes, __global const BankT
   int i = get_global_id(0);
   if (i >= count) return;
   RayPre r = make_ray(org[i].xyz, dir[i].xyz);
-  float t = OPSILA_INF;
-  int tri = -1, facet = INT_MAX;
+  HitKey best = hit_none();
+  int tri = -1;
   uint tri_tests = 0u, box_tests = 0u;
   CostProbe probe = no_cost_probe();
-  traverse_nearest(&r, nodes, tris, root, org[i].w, slack, &t, &tri, &facet, &tri_tests, &box_tests, &probe);
+  traverse_nearest(&r, nodes, tris, root, org[i].w, slack, &best, &tri, &tri_tests, &box_tests, &probe);
   hit_tri[i] = tri;
-  hit_t[i] = t;
+  hit_t[i] = best.t;
   tests[i] = (uint2)(tri_tests, box_tests);
 }
 

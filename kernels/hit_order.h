@@ -1,0 +1,100 @@
+/* opsila: the nearest-hit order, declared once for the kernels (OpenCL C)
+ * and the host (C++17: the reference tracer, the ray sample, the tests).
+ * docs/CONTRACT.md "Nearest hit" states the rule; this is its only code.
+ *
+ * A hit's key is (distance on the grid, facet id, fan triangle), compared
+ * key by key: a strict total order, so the least hit of a ray is the same
+ * whatever order its hits are found in (any PE count, rank count, balance,
+ * bank BVH, visit order). Facet ids are unique over a scene and never
+ * decrease as object ids increase (checked when the banks are built,
+ * host/machine/partition.cpp), so the facet id orders by object id first.
+ *
+ * The grid: a distance's float bits with the OPSILA_HIT_GRID_BITS lowest
+ * mantissa bits cleared. Positive floats order as their bits do, so the
+ * grid is monotonic, and two distances that differ by float noise alone
+ * (coplanar facets, a polygon's shared fan edges) usually share a cell and
+ * are told apart by ids, not by rounding. 0 bits: exact distances. */
+#ifndef OPSILA_HIT_ORDER_H
+#define OPSILA_HIT_ORDER_H
+
+#ifdef __OPENCL_C_VERSION__
+typedef uint hit_bits_t;
+inline hit_bits_t hit_float_bits(float t) { return as_uint(t); }
+inline float hit_bits_float(hit_bits_t b) { return as_float(b); }
+#define OPSILA_HIT_INF INFINITY
+#else
+#include <cstdint>
+#include <cstring>
+typedef std::uint32_t hit_bits_t;
+inline hit_bits_t hit_float_bits(float t) {
+  hit_bits_t b;
+  std::memcpy(&b, &t, sizeof b);
+  return b;
+}
+inline float hit_bits_float(hit_bits_t b) {
+  float t;
+  std::memcpy(&t, &b, sizeof t);
+  return t;
+}
+#define OPSILA_HIT_INF INFINITY
+#endif
+
+/* Mantissa bits cleared: cells of 16 ulps, a relative width between 2^-20
+ * and 2^-19, the scale of the watertight test's rounding on coplanar
+ * facets (a -D define, so a build can try others: 0 is exact distances). */
+#ifndef OPSILA_HIT_GRID_BITS
+#define OPSILA_HIT_GRID_BITS 4
+#endif
+#define OPSILA_HIT_GRID_MASK ((hit_bits_t)((1u << OPSILA_HIT_GRID_BITS) - 1u))
+#define OPSILA_HIT_INF_BITS ((hit_bits_t)0x7f800000u)
+
+/* Box culling's relative slack: a box is culled only when it is entered
+ * beyond x + |x| * OPSILA_CULL_SLACK (+ an absolute slack), x the end of
+ * the best hit's grid cell, so that the slab test's rounding never culls
+ * a box whose facet would win (bank walks, routing, the reference). */
+#define OPSILA_CULL_SLACK 4e-6f
+
+/* A hit as the order sees it; the least is the nearest hit. No hit:
+ * hit_none() (infinite distance, greatest ids). */
+typedef struct {
+  float t;
+  int facet;
+  int fan; /* the triangle's index in its facet's fan, 0 first */
+} HitKey;
+
+inline HitKey hit_key(float t, int facet, int fan) {
+  HitKey k;
+  k.t = t;
+  k.facet = facet;
+  k.fan = fan;
+  return k;
+}
+inline HitKey hit_none(void) { return hit_key(OPSILA_HIT_INF, 0x7fffffff, 0x7fffffff); }
+
+/* The distance's cell (t >= 0, or +inf). */
+inline hit_bits_t hit_grid(float t) { return hit_float_bits(t) & ~OPSILA_HIT_GRID_MASK; }
+
+/* Whether a hit (t, facet, fan) comes before `best` in the order. */
+inline bool hit_before(float t, int facet, int fan, HitKey best) {
+  hit_bits_t a = hit_grid(t), b = hit_grid(best.t);
+  if (a != b) return a < b;
+  if (facet != best.facet) return facet < best.facet;
+  return fan < best.fan;
+}
+
+/* The least distance whose cell lies after best_t's: a hit at or beyond it
+ * cannot come before the best; INFINITY when there is no best. */
+inline float hit_limit(float best_t) {
+  hit_bits_t b = hit_float_bits(best_t);
+  if (b >= OPSILA_HIT_INF_BITS) return OPSILA_HIT_INF;
+  return hit_bits_float((b | OPSILA_HIT_GRID_MASK) + 1u);
+}
+
+/* A box's exit distance widened by the culling slack (relative) and
+ * `slack` (absolute): the box may hold a winner while its entry is not
+ * beyond it. */
+inline float cull_exit(float leave, float slack) {
+  return leave + (leave < 0.0f ? -leave : leave) * OPSILA_CULL_SLACK + slack;
+}
+
+#endif /* OPSILA_HIT_ORDER_H */

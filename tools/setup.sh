@@ -13,6 +13,7 @@ PACKAGES=(
   libstb-dev libtinyobjloader-dev nlohmann-json3-dev libassimp-dev libopenexr-dev
   libgtest-dev googletest
   libopenmpi-dev openmpi-bin
+  libembree-dev mesa-opencl-icd
   assimp-testmodels python3-matplotlib python3-numpy
 )
 

@@ -19,9 +19,11 @@
 /* One work-group = one square tile of tile_w x tile_w pixels, of the
  * tiles_x-wide grid of tiles from tile (tile_origin.x, tile_origin.y) on
  * (the host's traced rectangle: the pixels outside it are misses that no
- * kernel touches; the read-back gives them the background). The group
- * first lists, in cluster order, the clusters whose projected box overlaps
- * the tile (one rectangle test per cluster per tile instead of per pixel);
+ * kernel touches; the read-back gives them the background). `clusters`
+ * and `cluster_rects` come nearest the eye first (item_depth_order,
+ * host/machine/frame.h), so that a near hit culls the clusters behind it;
+ * the hit order makes the items the same in any order. The group first
+ * lists, in that order, the clusters whose projected box overlaps the tile (one rectangle test per cluster per tile instead of per pixel);
  * each pixel then tests only those rectangles and traces their facets.
  * listed_rect, the union of the rectangles (the host's), skips the listing
  * of a tile that no cluster can overlap: where the scene covers a small

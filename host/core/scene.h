@@ -101,6 +101,13 @@ struct CameraDesc {
 // these figures describe the whole scene.
 struct Scene;
 
+// What the hit order (kernels/hit_order.h) needs of a scene's ids, checked
+// by whoever builds a structure to search it (the banks, the reference
+// tracer): material and fan indices that fit BankTriangle::material_fan
+// (else InputError naming the limit), and facet ids that never decrease as
+// object ids increase (else std::logic_error: every reader numbers them so).
+void check_hit_order_ids(const Scene& scene);
+
 struct SceneShare {
   int rank = 0, ranks = 1;         // ranks == 1: the scene is whole
   std::size_t total_triangles = 0;  // every rank's, together

@@ -110,7 +110,7 @@ struct Renderer::Machine {
   int counted_traffic_levels = 0;  // traffic_levels of a counting frame (the buffer's size)
   frame_kernels::Set& kernels() { return counting ? work_kernels : ray_kernels; }
   std::unique_ptr<ScatterPass> scatter;
-  cl::Buffer b_tris, b_nodes, b_clusters, b_route, b_pes, b_mats, b_lights, b_rects;
+  cl::Buffer b_tris, b_nodes, b_clusters, b_route, b_pes, b_mats, b_lights, b_rects, b_item_clusters;
   SurfaceBuffers surface;  // vertex attributes and texture copies of the banks
   cl::Buffer b_items, b_item_tri, b_item_t, b_item_key, b_accum, b_stats, b_traffic, b_out_count, b_hits;
   cl::Buffer b_hit_pixels, b_hit_blocks, b_hit_total;  // the hit list (kernels/primary.cl)
@@ -127,7 +127,10 @@ struct Renderer::Machine {
   // made for the upload and freed with the machine.
   HostArray host_tris, host_nodes, host_attributes, host_texels;
   std::vector<Light> lights;     // at least one (a stand-in never lit)
-  std::vector<cl_int4> rects;    // projected cluster boxes
+  // The item buffer's clusters, nearest the eye first (item_depth_order),
+  // and their projected boxes in that order.
+  std::vector<Cluster> item_clusters;
+  std::vector<cl_int4> rects;
   cl_int4 listed_rect{};         // their union: a tile outside it lists no cluster
   // The pixels the item buffer traces (x0, y0, x1, y1, inclusive): on one
   // device, when the frame gives no item buffer, the union above within the
@@ -175,5 +178,9 @@ struct Renderer::Machine {
 // "Projected object boxes" of the item buffer (frame_buffers.cpp).
 std::vector<cl_int4> cluster_rects(const Scene& scene, const BankedScene& bs);
 cl_int4 rects_union(const std::vector<cl_int4>& rects);
+// Cluster indices by the distance from the eye to their boxes, nearest first
+// (ties by index): the item buffer meets near hits first and culls behind
+// them; any order gives the same items (kernels/hit_order.h).
+std::vector<int> item_depth_order(const Scene& scene, const BankedScene& bs);
 
 }  // namespace opsila

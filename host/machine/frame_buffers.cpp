@@ -72,6 +72,22 @@ std::vector<cl_int4> cluster_rects(const Scene& scene, const BankedScene& bs) {
   return rects;
 }
 
+std::vector<int> item_depth_order(const Scene& scene, const BankedScene& bs) {
+  const Vec3 eye = scene.camera.eye;
+  std::vector<double> d2(bs.clusters.size());
+  for (std::size_t c = 0; c < bs.clusters.size(); ++c) {
+    const Cluster& cl = bs.clusters[c];
+    for (int a = 0; a < 3; ++a) {
+      const double out = std::max({double(cl.bmin[a]) - eye[a], double(eye[a]) - cl.bmax[a], 0.0});
+      d2[c] += out * out;
+    }
+  }
+  std::vector<int> order(bs.clusters.size());
+  for (std::size_t c = 0; c < order.size(); ++c) order[c] = static_cast<int>(c);
+  std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return d2[std::size_t(a)] < d2[std::size_t(b)]; });
+  return order;
+}
+
 // The union of the rectangles (empty, kNeverListed, when there are none).
 cl_int4 rects_union(const std::vector<cl_int4>& rects) {
   cl_int4 u = kNeverListed;
@@ -99,9 +115,13 @@ SurfaceBuffers upload_surface(ClRuntime& rt, const BankedScene& bs) {
 void Renderer::Machine::host_tables(const Scene& scene, BankedScene& bs) {
   lights = bs.lights;
   if (lights.empty()) lights.push_back(Light{});
-  rects = cluster_rects(scene, bs);
-  for (std::size_t c = 0; c < rects.size(); ++c)  // another rank's cluster: never listed here
-    if (bs.clusters[c].root < 0) rects[c] = kNeverListed;
+  const std::vector<cl_int4> by_index = cluster_rects(scene, bs);
+  rects.clear();
+  item_clusters.clear();
+  for (int c : item_depth_order(scene, bs)) {  // another rank's cluster: never listed here
+    rects.push_back(bs.clusters[std::size_t(c)].root < 0 ? kNeverListed : by_index[std::size_t(c)]);
+    item_clusters.push_back(bs.clusters[std::size_t(c)]);
+  }
   listed_rect = rects_union(rects);
   // Several ranks relay the item buffer in bands of whole tile rows, and
   // each lists only its own clusters: they trace the whole image alike.
@@ -153,6 +173,7 @@ std::vector<BufferSpec> Renderer::Machine::buffer_table(const BankedScene& bs, c
       kept_host_buffer("texels", P_::scene, host_texels, &surface.texels),
       host_buffer("sRGB decode table", P_::scene, srgb, &surface.srgb),
       host_buffer("projected cluster boxes", P_::scene, rects, &b_rects),
+      host_buffer("item buffer clusters", P_::scene, item_clusters, &b_item_clusters),
       // Only the pilot's program reads these; others get one-entry stand-ins.
       host_buffer("node clusters", P_::scene, measure ? bs.node_cluster : no_cluster, &b_node_cluster),
       host_buffer("facet clusters", P_::scene, measure ? bs.tri_cluster : no_cluster, &b_tri_cluster),

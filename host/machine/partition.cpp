@@ -4,9 +4,6 @@
 #include "machine/partition_steps.h"
 
 #include <algorithm>
-#include <climits>
-#include <stdexcept>
-#include <string>
 #include <cmath>
 #include <iterator>
 #include <numeric>
@@ -14,7 +11,6 @@
 #include <vector>
 
 #include "core/camera.h"
-#include "core/errors.h"
 #include "core/parallel.h"
 #include "core/stage_clock.h"
 
@@ -155,36 +151,6 @@ std::uint64_t texture_once(const Scene& scene, const std::vector<char>& used) {
       once += std::uint64_t(scene.textures[t].width) * std::uint64_t(scene.textures[t].height) *
                   sizeof(std::uint32_t) + sizeof(BankTexture);
   return once;
-}
-
-// What the hit order (kernels/hit_order.h) needs of the ids: a material
-// index and a fan index that fit their halves of BankTriangle::material_fan
-// (user limits: one line), and facet ids that never decrease as object ids
-// increase, so that comparing facet ids orders by object first (every
-// reader numbers them so: a failure here is a reader's fault).
-void check_hit_order_ids(const Scene& scene) {
-  std::vector<std::pair<int, int>> facets;  // per object id: least and greatest facet id
-  for (const Triangle& t : scene.triangles) {
-    if (t.material >= OPSILA_MAX_MATERIALS)
-      throw InputError("the scene has more than " + std::to_string(OPSILA_MAX_MATERIALS) +
-                       " materials, the most opsila renders (docs/CONTRACT.md, Limits)");
-    if (t.fan >= OPSILA_MAX_FAN)
-      throw InputError("facet " + std::to_string(t.facet_id) + " (object " + std::to_string(t.object_id) +
-                       ") has more than " + std::to_string(OPSILA_MAX_FAN) +
-                       " triangles (its polygon's fan, times its mesh's placements), the most opsila "
-                       "renders (docs/CONTRACT.md, Limits)");
-    if (std::size_t(t.object_id) >= facets.size()) facets.resize(std::size_t(t.object_id) + 1, {INT_MAX, -1});
-    auto& f = facets[std::size_t(t.object_id)];
-    f = {std::min(f.first, t.facet_id), std::max(f.second, t.facet_id)};
-  }
-  int below = -1;  // the greatest facet id of the objects before
-  for (std::size_t o = 0; o < facets.size(); ++o) {
-    if (facets[o].second < 0) continue;
-    if (facets[o].first <= below)
-      throw std::logic_error("facet ids do not increase with object ids (object " + std::to_string(o) +
-                             "): the hit order would not be the contract's");
-    below = facets[o].second;
-  }
 }
 
 // 3. Banks: triangles of each PE contiguous, cluster by cluster, and each

@@ -46,9 +46,6 @@ void split_object(const Scene& scene, std::vector<int> cur, std::size_t max_tris
 std::vector<std::vector<int>> triangles_by_object(const Scene& scene);
 int split_threads();  // levels of split_object's halves to split side by side
 
-// Throws when the ids do not fit the hit order (kernels/hit_order.h).
-void check_hit_order_ids(const Scene& scene);
-
 // 1. Objects cut into clusters, in object order; `total` is the whole
 // scene's triangle count (the pieces' size follows it).
 std::vector<ClusterBuild> split_clusters(const Scene& scene, std::size_t total, const Box& sbox, int num_pes,

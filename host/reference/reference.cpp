@@ -414,6 +414,7 @@ ReferenceTracer::ReferenceTracer(const Scene& scene, const FacetQueries* queries
   impl_->materials = scene.materials;
   // SPEC "a face with no material".
   if (impl_->materials.empty()) impl_->materials.push_back(MaterialDesc::default_material());
+  check_hit_order_ids(scene);
   impl_->tris.reserve(scene.triangles.size());
   for (const Triangle& t : scene.triangles) {
     Tri tri;

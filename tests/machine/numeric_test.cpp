@@ -70,10 +70,10 @@ void add_grid(Scene& s, Vec3 origin, Vec3 du, Vec3 dv, int nu, int nv, int objec
       const int f = s.num_facets++;
       if ((i + j) % 2) {
         s.triangles.push_back({a, b, c, f, object, mat});
-        s.triangles.push_back({a, c, d, f, object, mat});
+        s.triangles.push_back({a, c, d, f, object, mat, -1, 1});
       } else {
         s.triangles.push_back({a, b, d, f, object, mat});
-        s.triangles.push_back({b, c, d, f, object, mat});
+        s.triangles.push_back({b, c, d, f, object, mat, -1, 1});
       }
     }
 }

@@ -2,13 +2,16 @@
 
 #include <algorithm>
 #include <cctype>
+#include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <optional>
 #include <sstream>
 
 #include "opsila_shared.h"
 #include "core/env_hooks.h"
+#include "core/progress.h"
 #include "core/scene.h"
 #include "core/util.h"
 
@@ -401,7 +404,7 @@ cl::Program& ClRuntime::program(KernelProgram which) {
     options += " -DOPSILA_COUNT_WORK=0";
   if (pow_fp64_) options += " -DOPSILA_POW_FP64=1";
   if (exact_divide_) options += " -cl-fp32-correctly-rounded-divide-sqrt";
-  err = program.build({device_.device}, options.c_str());
+  err = build(program, options);
   if (err != CL_SUCCESS) {
     std::string log;
     program.getBuildInfo(device_.device, CL_PROGRAM_BUILD_LOG, &log);
@@ -412,6 +415,23 @@ cl::Program& ClRuntime::program(KernelProgram which) {
   }
   built_[index] = true;
   return program;
+}
+
+// clBuildProgram, timed; a build still running after half a second is a
+// compile (a cached build takes a few milliseconds), and the user hears so.
+cl_int ClRuntime::build(cl::Program& program, const std::string& options) {
+  const auto start = std::chrono::steady_clock::now();
+  std::optional<SlowNote> note;
+  if (slow_build_note_ && !slow_build_noted_)
+    note.emplace(std::min(0.5, progress_delay()), [this] {
+      slow_build_noted_ = true;
+      slow_build_note_("compiling the OpenCL kernels for " + device_.device_name +
+                       " (drivers usually cache them, so later runs start sooner)");
+    });
+  const cl_int err = program.build({device_.device}, options.c_str());
+  note.reset();
+  build_seconds_ += seconds_since(start);
+  return err;
 }
 
 cl::Kernel ClRuntime::kernel(const char* name, KernelProgram which) {

@@ -12,11 +12,10 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
-#include <fstream>
 #include <limits>
-#include <sstream>
 #include <stdexcept>
 
+#include "core/input_file.h"
 #include "core/scene.h"
 #include "core/util.h"
 
@@ -69,14 +68,7 @@ T read_4(const char* p, bool little) {
   return value;
 }
 
-std::string read_whole_file(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(path + ": cannot open (" + std::strerror(errno) + ")");
-  std::ostringstream data;
-  data << in.rdbuf();
-  if (in.bad()) throw InputError(path + ": read error");
-  return data.str();
-}
+std::string read_whole_file(const std::string& path) { return read_input_file(path, kMaxInputFileBytes); }
 
 void check_image_size(int width, int height, std::size_t have, std::size_t per_pixel) {
   if (width <= 0 || height <= 0)

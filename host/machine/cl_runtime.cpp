@@ -5,12 +5,12 @@
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
-#include <fstream>
 #include <optional>
 #include <sstream>
 
 #include "opsila_shared.h"
 #include "core/env_hooks.h"
+#include "core/input_file.h"
 #include "core/progress.h"
 #include "core/scene.h"
 #include "core/util.h"
@@ -294,6 +294,9 @@ std::vector<std::string> missing_capabilities(const DeviceCapabilities& c) {
 
 namespace {
 
+// OPSILA_KERNEL_SOURCE: the embedded kernels are about 120 KiB.
+constexpr std::size_t kMaxKernelSourceBytes = std::size_t(16) << 20;
+
 // A work-group size asked for (ClRuntimeOptions::group_size or
 // OPSILA_GROUP_SIZE): a power of two from 1 to 1024.
 std::size_t checked_group_size(const std::string& text, const std::string& origin) {
@@ -355,12 +358,8 @@ ClRuntime::ClRuntime(const DeviceEntry& device, const ClRuntimeOptions& options)
     // kernels (to try a kernel change without rebuilding, or to test faults).
     const char* path = env_hook(EnvHook::kernel_source);
     if (path && source_.empty()) {
-      std::ifstream in(path, std::ios::binary);
-      std::ostringstream text;
-      text << in.rdbuf();
-      if (!in || text.str().empty())
-        throw InputError(std::string("OPSILA_KERNEL_SOURCE=") + path + ": cannot read the file (or it is empty)");
-      source_ = text.str();
+      source_ = read_named_file("OPSILA_KERNEL_SOURCE=", path, kMaxKernelSourceBytes);
+      if (source_.empty()) throw InputError(std::string("OPSILA_KERNEL_SOURCE=") + path + ": the file is empty");
       source_origin_ = std::string("OPSILA_KERNEL_SOURCE=") + path;
     }
     // OPSILA_DEVICE_MEMORY_LIMIT=bytes: plan as if the device had no more.

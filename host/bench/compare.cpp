@@ -1,10 +1,10 @@
 #include "bench/compare.h"
 
 #include <cstdio>
-#include <fstream>
 #include <sstream>
 
 #include "bench/report.h"
+#include "core/input_file.h"
 #include "core/scene.h"
 
 namespace opsila {
@@ -78,11 +78,8 @@ std::vector<BenchFigure> bench_figures(const json& j) {
 }
 
 json read_saved_bench(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError("--compare " + path + ": cannot read the file");
-  std::ostringstream text;
-  text << in.rdbuf();
-  json j = json::parse(text.str(), nullptr, false);
+  // A saved bench result is a few hundred KiB.
+  json j = json::parse(read_named_file("--compare ", path, std::size_t(64) << 20), nullptr, false);
   if (j.is_discarded()) throw InputError("--compare " + path + ": not JSON");
   if (!j.is_object() || !j.contains("render") || !j["render"].is_object())
     throw InputError("--compare " + path + ": not an opsila bench result (no \"render\" block)");

@@ -204,10 +204,14 @@ void write_render_outputs(const RenderOptions& o, OutputFiles& outputs, const Re
     outputs.write(o.stats_path, stats_json(result, scene, settings, device).dump(2) + "\n");
   outputs.commit();
   if (o.quiet) return;
-  char line[256];
-  std::snprintf(line, sizeof line, "%s (%dx%d, depth %d, %llu rays in %.3f s)", o.output_path.c_str(), result.width,
+  // The kernels' compile (a first run on a device) is said apart from the frame's time.
+  char compile[96] = "";
+  if (result.stats.kernel_compile_seconds >= 0.5)
+    std::snprintf(compile, sizeof compile, "; kernel compile %.1f s, not counted", result.stats.kernel_compile_seconds);
+  char line[512];
+  std::snprintf(line, sizeof line, "%s (%dx%d, depth %d, %llu rays in %.3f s%s)", o.output_path.c_str(), result.width,
                 result.height, scene.max_depth, static_cast<unsigned long long>(result.rays.total()),
-                result.stats.render_seconds);
+                result.stats.render_seconds, compile);
   std::fprintf(stderr, "opsila: wrote %s\n", line);
 }
 
@@ -240,6 +244,7 @@ int run_render(const std::vector<std::string>& args) {
   std::optional<ClRuntime> runtime;
   if (!o.reference) {
     runtime.emplace(choose_device_flag(o.device_spec));
+    if (!o.quiet && writer) runtime->on_slow_build([](const std::string& note) { print_line("note", note); });
   } else if (!o.quiet) {
     if (!o.device_spec.empty()) print_line("warning", "--device is ignored with --reference");
     if (o.balance) print_line("warning", "--balance is ignored with --reference (one processor, no banks)");

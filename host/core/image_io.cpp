@@ -1,6 +1,7 @@
 #include "core/image_io.h"
 
 #include <fcntl.h>
+#include <signal.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -11,11 +12,10 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
-#include <fstream>
 #include <limits>
-#include <sstream>
 #include <stdexcept>
 
+#include "core/input_file.h"
 #include "core/scene.h"
 #include "core/util.h"
 
@@ -68,14 +68,7 @@ T read_4(const char* p, bool little) {
   return value;
 }
 
-std::string read_whole_file(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(path + ": cannot open (" + std::strerror(errno) + ")");
-  std::ostringstream data;
-  data << in.rdbuf();
-  if (in.bad()) throw InputError(path + ": read error");
-  return data.str();
-}
+std::string read_whole_file(const std::string& path) { return read_input_file(path, kMaxInputFileBytes); }
 
 void check_image_size(int width, int height, std::size_t have, std::size_t per_pixel) {
   if (width <= 0 || height <= 0)
@@ -121,6 +114,20 @@ void check_output_path(const std::string& path) {
     cannot_write(path, "folder " + folder + ": " + std::strerror(errno));
 }
 
+int write_all(int fd, const void* data, std::size_t size) {
+  // Set on every call: a library loaded meanwhile (LLVM, inside an OpenCL
+  // driver) may have put a handler of its own there.
+  ::signal(SIGXFSZ, SIG_IGN);
+  const char* bytes = static_cast<const char*>(data);
+  for (std::size_t done = 0; done < size;) {
+    const ssize_t n = ::write(fd, bytes + done, size - done);
+    if (n < 0 && errno == EINTR) continue;
+    if (n < 0) return errno;
+    done += static_cast<std::size_t>(n);
+  }
+  return 0;
+}
+
 void write_file_atomic(const std::string& path, const void* data, std::size_t size) {
   check_output_path(path);
   // The temporary file lives next to the target so that rename() is atomic;
@@ -142,16 +149,7 @@ void write_file_atomic(const std::string& path, const void* data, std::size_t si
     ::unlink(temp.c_str());
     cannot_write(path, reason);
   };
-  const char* bytes = static_cast<const char*>(data);
-  std::size_t done = 0;
-  while (done < size) {
-    const ssize_t n = ::write(fd, bytes + done, size - done);
-    if (n < 0) {
-      if (errno == EINTR) continue;
-      fail(std::strerror(errno));
-    }
-    done += static_cast<std::size_t>(n);
-  }
+  if (const int err = write_all(fd, data, size)) fail(std::strerror(err));
   if (::fsync(fd) != 0 && errno != EINVAL && errno != EROFS) fail(std::strerror(errno));
   const int closed = ::close(fd);
   fd = -1;

@@ -24,6 +24,12 @@ std::vector<std::uint8_t> to_srgb8(const std::vector<float>& linear);
 // Lets the command line fail before any rendering is done.
 void check_output_path(const std::string& path);
 
+// Writes all `size` bytes to `fd`: 0, or the errno of the write that
+// failed. The file-size limit (ulimit -f) fails it with EFBIG as a full
+// disk would, instead of SIGXFSZ killing the process with its temporary
+// file left behind (the signal is ignored from the first call on).
+int write_all(int fd, const void* data, std::size_t size);
+
 // Atomic write of `size` bytes (temporary file + rename).
 void write_file_atomic(const std::string& path, const void* data, std::size_t size);
 void write_text_file(const std::string& path, const std::string& text);

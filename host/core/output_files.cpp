@@ -182,16 +182,9 @@ void OutputFiles::write(const std::string& path, const std::string& bytes) {
     }
   }
   if (fd < 0) fail("no free temporary file name");
-  std::size_t done = 0;
-  while (done < bytes.size()) {
-    const ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
-    if (n < 0 && errno == EINTR) continue;
-    if (n < 0) {
-      const int err = errno;
-      ::close(fd);
-      fail(std::strerror(err));
-    }
-    done += static_cast<std::size_t>(n);
+  if (const int err = write_all(fd, bytes.data(), bytes.size())) {
+    ::close(fd);
+    fail(std::strerror(err));
   }
   if (::fsync(fd) != 0 && errno != EINVAL && errno != EROFS) {
     const int err = errno;

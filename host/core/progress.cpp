@@ -48,14 +48,35 @@ std::string count_text(double n) {
 
 }  // namespace
 
-Progress::Progress(std::string label, bool enabled) : label_(std::move(label)), enabled_(enabled) {
-  tty_ = ::isatty(STDERR_FILENO) == 1;
-  every_ = tty_ ? 0.25 : 5.0;
+double progress_delay() {
   if (const char* env = env_hook(EnvHook::progress_after)) {
     char* end = nullptr;
     const double v = std::strtod(env, &end);
-    if (end != env && *end == '\0' && v >= 0 && std::isfinite(v)) after_ = v;
+    if (end != env && *end == '\0' && v >= 0 && std::isfinite(v)) return v;
   }
+  return 2.0;
+}
+
+SlowNote::SlowNote(double after, std::function<void()> say) {
+  watcher_ = std::thread([this, after, say = std::move(say)] {
+    std::unique_lock<std::mutex> hold(lock_);
+    if (!wake_.wait_for(hold, std::chrono::duration<double>(after), [this] { return done_; })) say();
+  });
+}
+
+SlowNote::~SlowNote() {
+  {
+    std::lock_guard<std::mutex> hold(lock_);
+    done_ = true;
+  }
+  wake_.notify_all();
+  watcher_.join();
+}
+
+Progress::Progress(std::string label, bool enabled) : label_(std::move(label)), enabled_(enabled) {
+  tty_ = ::isatty(STDERR_FILENO) == 1;
+  every_ = tty_ ? 0.25 : 5.0;
+  after_ = progress_delay();
   start_ = Clock::now();
   next_ = start_ + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(after_));
 }

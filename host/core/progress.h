@@ -13,8 +13,12 @@
 #pragma once
 
 #include <chrono>
+#include <condition_variable>
 #include <cstdint>
+#include <functional>
+#include <mutex>
 #include <string>
+#include <thread>
 
 #include "core/scene.h"
 
@@ -53,6 +57,27 @@ class Progress {
   double shown_fraction_ = 0;
   Clock::time_point start_, next_;
   void show(double fraction, const char* rays_per_s);
+};
+
+// The delay before a progress line first shows: two seconds, or
+// OPSILA_PROGRESS_AFTER seconds when set to a valid value.
+double progress_delay();
+
+// Calls `say` once, from a thread of its own, if it is still alive `after`
+// seconds from now: a long blocking call (a kernel build) is not silent,
+// and a short one prints nothing.
+class SlowNote {
+ public:
+  SlowNote(double after, std::function<void()> say);
+  ~SlowNote();  // cancels the note if it has not been said
+  SlowNote(const SlowNote&) = delete;
+  SlowNote& operator=(const SlowNote&) = delete;
+
+ private:
+  std::mutex lock_;
+  std::condition_variable wake_;
+  bool done_ = false;
+  std::thread watcher_;
 };
 
 // Upper bound of the rays a render can cast: pixels x spp x the largest ray

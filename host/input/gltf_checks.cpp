@@ -296,6 +296,21 @@ void check_nodes(const Gltf& g, const std::string& name) {
                      std::to_string(kMaxNodeDepth) + ")");
 }
 
+// Mesh compressions the importer cannot decode (Debian's assimp 5.2 reads
+// Draco, not meshopt): a file that requires one would otherwise fail on its
+// placeholder buffers, with a message about their lengths.
+void check_required_extensions(const Json& root, const std::string& name) {
+  static const char* const kUndecodable[] = {"EXT_meshopt_compression", "KHR_meshopt_compression"};
+  const auto required = root.find("extensionsRequired");
+  if (required == root.end() || !required->is_array()) return;
+  for (const Json& e : *required)
+    for (const char* extension : kUndecodable)
+      if (e.is_string() && e.get_ref<const std::string&>() == extension)
+        throw InputError(name + ": extensionsRequired names " + extension +
+                         " (meshopt-compressed meshes), which the model importer cannot decode: save the model "
+                         "without mesh compression");
+}
+
 }  // namespace
 
 void check_gltf(ModelFiles& files, const std::string& bytes, const std::string& path) {
@@ -315,6 +330,7 @@ void check_gltf(ModelFiles& files, const std::string& bytes, const std::string& 
     throw InputError(path + ": not glTF JSON (" + why.substr(why.find(']') + 2) + ")");
   }
   if (!root.is_object()) throw InputError(path + ": not glTF JSON (not an object)");
+  check_required_extensions(root, path);
   const Gltf g(root, path);
   const std::vector<u64> buffers = buffer_lengths(g, files, parts, path);
   check_accessors(g, buffer_views(g, buffers));

@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "core/input_file.h"
 #include "core/scene.h"
 
 namespace opsila {
@@ -19,24 +20,7 @@ namespace opsila {
 // 2^24 triangles fit a 24 GB machine with room to spare; beyond it the input
 // is refused before it is built.
 constexpr std::size_t kMaxTriangles = std::size_t(1) << 24;
-// Upper bound on the size of any input file read by the loaders.
-constexpr std::size_t kMaxInputFileBytes = std::size_t(1) << 31;
 
-// Called on each chunk of a file as it is read (bytes, count, offset of the
-// first byte); throws InputError to refuse the file there.
-using ChunkCheck = std::function<void(const char*, std::size_t, std::size_t)>;
-
-// Reads a regular file of at most max_bytes a chunk at a time: `sized`
-// hears its size once it is open, and each chunk is checked, then taken,
-// before the next is read.
-using ChunkTake = std::function<void(const char*, std::size_t)>;
-void read_file_chunks(const std::string& path, std::size_t max_bytes, const ChunkCheck& check,
-                      const std::function<void(std::uintmax_t)>& sized, const ChunkTake& take);
-// Reads a whole regular file of at most max_bytes, a chunk at a time, each
-// chunk checked before the next is read. Directories, devices, unreadable or
-// oversized files give an InputError naming the path.
-std::string read_input_file(const std::string& path, std::size_t max_bytes,
-                            const ChunkCheck& check);
 // Any file (an image) of at most kMaxInputFileBytes.
 std::string read_input_file(const std::string& path);
 // A text file (OBJ, MTL) of at most kMaxInputFileBytes: a NUL byte (a binary

@@ -3,6 +3,8 @@
 // scene fits the limits.
 #include "input/scene_reader.h"
 
+#include <cmath>
+
 namespace opsila {
 
 namespace fs = std::filesystem;
@@ -20,7 +22,8 @@ void SceneReader::budget(std::size_t triangles, std::size_t facets, std::size_t 
   if (triangles > max_triangles_ || planned_triangles_ > max_triangles_ - triangles)
     fail(path, "would make " + std::to_string(triangles) + " more triangles (" +
                    std::to_string(planned_triangles_) + " so far); a scene may have at most " +
-                   std::to_string(max_triangles_) + on_ranks + " (scenes/FORMAT.md, Limits)");
+                   std::to_string(max_triangles_) + on_ranks + " (scenes/FORMAT.md, Limits)" +
+                   ranks_hint(triangles, windowed));
   if (triangles > entry_limit_ && !(windowed && share_.ranks > 1))  // every rank builds an entry whole
     fail(path, "would make " + std::to_string(triangles) + " triangles; one entry of objects may have at most " +
                    std::to_string(entry_limit_) + (windowed ? "" : " on any number of ranks") +
@@ -31,6 +34,21 @@ void SceneReader::budget(std::size_t triangles, std::size_t facets, std::size_t 
   planned_triangles_ += triangles;
   planned_facets_ += facets;
   planned_objects_ += objects;
+}
+
+// How many MPI ranks would take the triangles counted so far, when this
+// entry can be spread over them; "" when no number of ranks would (at most
+// one per PE, 1024) or the build has no MPI.
+std::string SceneReader::ranks_hint(std::size_t triangles, bool windowed) const {
+#ifdef OPSILA_HAVE_MPI
+  const double ranks = std::ceil((double(planned_triangles_) + double(triangles)) / double(entry_limit_));
+  if ((triangles > entry_limit_ && !windowed) || ranks > 1024) return "";
+  const std::string r = std::to_string(static_cast<int>(ranks));
+  return ": with the objects so far it needs at least " + r + " MPI ranks (mpirun -n " + r + " opsila render ...)";
+#else
+  (void)triangles, (void)windowed;
+  return "";
+#endif
 }
 
 void SceneReader::budget(std::size_t triangles, const std::string& path) {

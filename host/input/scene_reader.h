@@ -134,6 +134,7 @@ class SceneReader {
   void budget(std::size_t triangles, std::size_t facets, std::size_t objects,
               const std::string& path, bool windowed = false);
   void budget(std::size_t triangles, const std::string& path);
+  std::string ranks_hint(std::size_t triangles, bool windowed) const;
   void objects(const Json& v, const std::string& path);
   void object(const Json& v, const std::string& path);
   std::size_t settle(std::size_t first, const std::string& path);  // returns the triangles dropped

@@ -2,13 +2,16 @@
 
 #include <algorithm>
 #include <cctype>
+#include <chrono>
 #include <cstdio>
 #include <cstdlib>
-#include <fstream>
+#include <optional>
 #include <sstream>
 
 #include "opsila_shared.h"
 #include "core/env_hooks.h"
+#include "core/input_file.h"
+#include "core/progress.h"
 #include "core/scene.h"
 #include "core/util.h"
 
@@ -291,6 +294,9 @@ std::vector<std::string> missing_capabilities(const DeviceCapabilities& c) {
 
 namespace {
 
+// OPSILA_KERNEL_SOURCE: the embedded kernels are about 120 KiB.
+constexpr std::size_t kMaxKernelSourceBytes = std::size_t(16) << 20;
+
 // A work-group size asked for (ClRuntimeOptions::group_size or
 // OPSILA_GROUP_SIZE): a power of two from 1 to 1024.
 std::size_t checked_group_size(const std::string& text, const std::string& origin) {
@@ -352,12 +358,8 @@ ClRuntime::ClRuntime(const DeviceEntry& device, const ClRuntimeOptions& options)
     // kernels (to try a kernel change without rebuilding, or to test faults).
     const char* path = env_hook(EnvHook::kernel_source);
     if (path && source_.empty()) {
-      std::ifstream in(path, std::ios::binary);
-      std::ostringstream text;
-      text << in.rdbuf();
-      if (!in || text.str().empty())
-        throw InputError(std::string("OPSILA_KERNEL_SOURCE=") + path + ": cannot read the file (or it is empty)");
-      source_ = text.str();
+      source_ = read_named_file("OPSILA_KERNEL_SOURCE=", path, kMaxKernelSourceBytes);
+      if (source_.empty()) throw InputError(std::string("OPSILA_KERNEL_SOURCE=") + path + ": the file is empty");
       source_origin_ = std::string("OPSILA_KERNEL_SOURCE=") + path;
     }
     // OPSILA_DEVICE_MEMORY_LIMIT=bytes: plan as if the device had no more.
@@ -401,7 +403,7 @@ cl::Program& ClRuntime::program(KernelProgram which) {
     options += " -DOPSILA_COUNT_WORK=0";
   if (pow_fp64_) options += " -DOPSILA_POW_FP64=1";
   if (exact_divide_) options += " -cl-fp32-correctly-rounded-divide-sqrt";
-  err = program.build({device_.device}, options.c_str());
+  err = build(program, options);
   if (err != CL_SUCCESS) {
     std::string log;
     program.getBuildInfo(device_.device, CL_PROGRAM_BUILD_LOG, &log);
@@ -412,6 +414,23 @@ cl::Program& ClRuntime::program(KernelProgram which) {
   }
   built_[index] = true;
   return program;
+}
+
+// clBuildProgram, timed; a build still running after half a second is a
+// compile (a cached build takes a few milliseconds), and the user hears so.
+cl_int ClRuntime::build(cl::Program& program, const std::string& options) {
+  const auto start = std::chrono::steady_clock::now();
+  std::optional<SlowNote> note;
+  if (slow_build_note_ && !slow_build_noted_)
+    note.emplace(std::min(0.5, progress_delay()), [this] {
+      slow_build_noted_ = true;
+      slow_build_note_("compiling the OpenCL kernels for " + device_.device_name +
+                       " (drivers usually cache them, so later runs start sooner)");
+    });
+  const cl_int err = program.build({device_.device}, options.c_str());
+  note.reset();
+  build_seconds_ += seconds_since(start);
+  return err;
 }
 
 cl::Kernel ClRuntime::kernel(const char* name, KernelProgram which) {

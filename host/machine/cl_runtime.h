@@ -3,9 +3,10 @@
 
 #include <CL/opencl.hpp>
 
+#include <cstdint>
+#include <functional>
 #include <map>
 #include <stdexcept>
-#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -127,6 +128,13 @@ class ClRuntime {
   // "embedded kernels", or where the replacement source of the render
   // program came from (the baselines are always the embedded ones).
   const std::string& kernel_source_origin() const { return source_origin_; }
+  // Seconds spent in clBuildProgram so far (the driver compiling the
+  // kernels, or taking them from its cache).
+  double build_seconds() const { return build_seconds_; }
+  // `note` is told once when a program build takes longer than half a
+  // second (or OPSILA_PROGRESS_AFTER, if lower): the driver is compiling,
+  // not finding the kernels in its cache. The command line prints it.
+  void on_slow_build(std::function<void(const std::string&)> note) { slow_build_note_ = std::move(note); }
 
  private:
   DeviceEntry device_;
@@ -141,6 +149,10 @@ class ClRuntime {
   std::uint64_t allocated_ = 0;
   std::map<std::string, std::uint64_t> by_name_;
   std::string source_, source_origin_;  // source_ empty: the embedded kernels
+  double build_seconds_ = 0;
+  std::function<void(const std::string&)> slow_build_note_;
+  bool slow_build_noted_ = false;
+  cl_int build(cl::Program& program, const std::string& options);
 };
 
 // Throws ClError("<what>: <ERROR_NAME> (<code>)") when code != CL_SUCCESS.

@@ -98,6 +98,7 @@ struct Renderer::Machine {
   std::size_t waiting_limit = 0;
   FrameParams fp{};
   RenderStats prepared;  // what the prepare step knows: banks, n, work-group size
+  bool first_frame = true;  // its kernels' first launches may wait for their compile
   ShareFigures share;    // a scene read in shares: what the collective partition did here
 
   // The frame's kernels: from the program that counts the work (--stats,

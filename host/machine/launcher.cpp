@@ -88,4 +88,15 @@ void Launcher::harvest() {
   checked_ = 0;
 }
 
+double compile_waits(const std::vector<LaunchRecord>& launches) {
+  double waits = 0, previous_end = 0;
+  for (const LaunchRecord& r : launches) {
+    if (r.queued < 0 || r.started < 0) continue;  // folded, or no profiling times
+    const double wait = r.started - std::max(r.queued, previous_end);
+    if (wait > 0.005) waits += wait;
+    previous_end = std::max(previous_end, r.started + r.seconds);
+  }
+  return waits;
+}
+
 }  // namespace opsila

@@ -52,4 +52,11 @@ class Launcher {
   std::size_t checked_ = 0;  // pending_[0, checked_) are known to have completed
 };
 
+// The device's waits of more than 5 ms before launches in `launches` (a
+// frame's records, in launch order): a launch's start less the later of its
+// enqueue and the previous launch's end. A warm launch waits microseconds;
+// PoCL compiles a kernel for each work-group size at its first launch, so a
+// machine's first frame finds its compile here.
+double compile_waits(const std::vector<LaunchRecord>& launches);
+
 }  // namespace opsila

@@ -130,6 +130,10 @@ struct RenderStats {
   int rounds = 0;                    // SPMD + scatter rounds
   double render_seconds = 0;         // host wall time of the phases
   double readback_seconds = 0;       // of it, the image's read-back and decode (host wall time)
+  // The kernels' compilation, kept out of render_seconds: in a machine's
+  // first frame, the runtime's program builds so far and the device's long
+  // waits before launches (compile_waits, machine/launcher.h).
+  double kernel_compile_seconds = 0;
   std::vector<LaunchRecord> launches;
   std::vector<std::uint64_t> bank_bytes;  // scene bytes per bank
   std::vector<std::uint64_t> texture_bytes;  // texture copies per bank (part of bank_bytes)

@@ -157,6 +157,7 @@ nlohmann::json stats_json(const RenderResult& result, const Scene& scene,
                {"total", total_rays}};
   j["render_seconds"] = s.render_seconds;
   j["readback_seconds"] = s.readback_seconds;
+  j["kernel_compile_seconds"] = s.kernel_compile_seconds;
   j["mrays_per_s"] = s.render_seconds > 0 ? static_cast<double>(total_rays) / s.render_seconds / 1e6 : 0.0;
   j["prepare"] = prepare_json(s.prepare);
 

@@ -104,6 +104,28 @@ TEST(Outputs, AFailedWriteLeavesNoOutputAtAll) {
   EXPECT_EQ(dir.entries(), (Names{"o.json", "o.npy", "o.png", "s.json"}));
 }
 
+// The file-size limit with SIGXFSZ left at its default (a user's `ulimit
+// -f`, set by a shell in the child only): a write error like any other, not
+// a process killed by the signal with its temporary file left behind.
+TEST(Outputs, TheFileSizeLimitIsAWriteError) {
+  TempDir dir;
+  const std::string scene = dir.write("s.json", kScene);
+  const Names before = dir.entries();
+  std::vector<std::string> outputs = {"o.pfm"};  // (a 64x48 PNG of this scene may fit)
+  if (exr_available()) outputs.push_back("o.exr");
+  for (const std::string& name : outputs) {
+    SCOPED_TRACE(name);
+    // 4 blocks (2 or 4 KiB, as the shell counts them): under every 64x48 image.
+    const RunResult r = test::run_program(
+        "/bin/sh", {"-c", "ulimit -f 4 && exec \"$0\" \"$@\"", OPSILA_BINARY, "render", scene, "-o",
+                    dir.file(name), "--reference", "-q"});
+    EXPECT_EQ(r.exit_code, 2) << r.err;
+    ASSERT_EQ(r.error_lines().size(), 1u) << r.err;
+    EXPECT_NE(r.err.find(name + ": cannot write (File too large)"), std::string::npos) << r.err;
+    EXPECT_EQ(dir.entries(), before);  // no image, no temporary file
+  }
+}
+
 TEST(Outputs, BenchCreatesNothingBeforeItsInputIsRead) {
   TempDir dir;
   const RunResult r = run_opsila({"bench", dir.file("MISSING.json"), "--csv", dir.file("tables"),

@@ -157,6 +157,34 @@ TEST(HostileModel, GlbChunkLengthsAreCheckedAgainstTheFile) {
             std::string::npos);
 }
 
+// A glTF that requires meshopt compression (as gltfpack writes it: the
+// compressed bytes, and a fallback buffer with no data of its own) is
+// refused by name: the importer cannot decode it. Other required
+// extensions are the importer's to read.
+TEST(HostileModel, ARequiredCompressionTheImporterCannotDecodeIsNamed) {
+  TempDir dir;
+  dir.write("tri.bin", triangle_bytes());
+  const auto requiring = [](std::string json, const std::string& extension) {
+    const std::string buffer = R"({"uri": "tri.bin", "byteLength": 36})";
+    json.replace(json.find(buffer), buffer.size(),
+                 buffer + R"(, {"byteLength": 3600, "extensions": {")" + extension + R"(": {"fallback": true}}})");
+    return R"({"extensionsUsed": [")" + extension + R"("], "extensionsRequired": [")" + extension + "\"], " +
+           json.substr(1);
+  };
+  for (const char* extension : {"EXT_meshopt_compression", "KHR_meshopt_compression"}) {
+    const std::string json = requiring(gltf("tri.bin"), extension);
+    expect_refused(dir, "m.gltf", json,
+                   std::string(": extensionsRequired names ") + extension + " (meshopt-compressed meshes)");
+    std::string padded = json;
+    padded.resize((padded.size() + 3) / 4 * 4, ' ');
+    expect_refused(dir, "m.glb", glb(padded, std::uint32_t(padded.size())),
+                   std::string(": extensionsRequired names ") + extension);
+  }
+  std::string unlit = gltf("tri.bin");
+  unlit.insert(1, R"("extensionsUsed": ["KHR_materials_unlit"], "extensionsRequired": ["KHR_materials_unlit"], )");
+  EXPECT_EQ(load_scene(dir.write("unlit.gltf", unlit)).triangles.size(), 1u);
+}
+
 TEST(HostileModel, OffsetsNear2To64AreRefusedBeforeTheImporterSeesThem) {
   TempDir dir;
   dir.write("tri.bin", triangle_bytes());

@@ -74,12 +74,17 @@ inline HitKey hit_none(void) { return hit_key(OPSILA_HIT_INF, 0x7fffffff, 0x7fff
 /* The distance's cell (t >= 0, or +inf). */
 inline hit_bits_t hit_grid(float t) { return hit_float_bits(t) & ~OPSILA_HIT_GRID_MASK; }
 
+/* The order in two steps, for a caller that reads the ids only when the
+ * cells are equal (a walk's leaf): the first key, then the others. */
+inline bool hit_cell_before(float t, HitKey best) { return hit_grid(t) < hit_grid(best.t); }
+inline bool hit_cell_same(float t, HitKey best) { return hit_grid(t) == hit_grid(best.t); }
+inline bool hit_ids_before(int facet, int fan, HitKey best) {
+  return facet != best.facet ? facet < best.facet : fan < best.fan;
+}
+
 /* Whether a hit (t, facet, fan) comes before `best` in the order. */
 inline bool hit_before(float t, int facet, int fan, HitKey best) {
-  hit_bits_t a = hit_grid(t), b = hit_grid(best.t);
-  if (a != b) return a < b;
-  if (facet != best.facet) return facet < best.facet;
-  return fan < best.fan;
+  return hit_cell_before(t, best) || (hit_cell_same(t, best) && hit_ids_before(facet, fan, best));
 }
 
 /* The least distance whose cell lies after best_t's: a hit at or beyond it

@@ -122,8 +122,12 @@ OPSILA_INLINE bool nearest_leaf(BankWalk *w, int first, int count, float entry) 
     COUNT_TEST(w->tri_tests);
     COST_TRI(w->probe, i);
     float t = intersect_triangle(w->r, &w->tris[i], w->tmin, w->limit);
-    if (t < OPSILA_INF && hit_before(t, w->tris[i].facet_id, OPSILA_TRI_FAN(w->tris[i]), w->best)) {
-      w->best = hit_key(t, w->tris[i].facet_id, OPSILA_TRI_FAN(w->tris[i]));
+    if (!(t < OPSILA_INF)) continue;
+    /* hit_before, the ids read only when the distances share a cell. */
+    __global const BankTriangle *tri = &w->tris[i];
+    if (hit_cell_before(t, w->best) ||
+        (hit_cell_same(t, w->best) && hit_ids_before(tri->facet_id, OPSILA_TRI_FAN(*tri), w->best))) {
+      w->best = hit_key(t, tri->facet_id, OPSILA_TRI_FAN(*tri));
       w->best_tri = i;
       nearest_bounds(w);
     }

@@ -69,18 +69,20 @@ class ReferenceTracer {
   // order; at most kMaxSampleRays segments (a deep tree of glass and
   // mirrors is cut there, its last level first).
   //
-  // A ray ends at its least hit in (t, object id, facet id, triangle
-  // order): a total order, so on a scene read in shares each holder finds
-  // the least of its own facets and `join` (every holder calling it
-  // alike) picks the least of those, which is the whole scene's. The
-  // holder of that facet makes its segments' children. The answer is one
-  // process's for any number of holders (the image's nearest hit ties
-  // within a tolerance, which is not an order: SPEC's answer, not this).
+  // A ray ends at its least hit in the image's hit order
+  // (kernels/hit_order.h), a total order: on a scene read in shares each
+  // holder finds the least of its own facets and `join` (every holder
+  // calling it alike) picks the least of those, which is the whole
+  // scene's. The holder of that facet makes its segments' children. The
+  // answer is one process's for any number of holders.
   RaySample sample_rays(int target_primary, const SampleJoin* join = nullptr) const;
   static constexpr std::size_t kMaxSampleRays = std::size_t(1) << 20;
 
- private:
+  // The tracer's state and rules: host/reference/tracer_impl.h, private to
+  // host/reference (named here so that the sample's steps can take it).
   struct Impl;
+
+ private:
   const Scene& scene_;
   float epsilon_ = 0;
   std::unique_ptr<Impl> impl_;

@@ -142,6 +142,72 @@ void build_program(BenchReport& report, ClRuntime& rt, Balance balance, const Be
   report.compile_seconds = seconds_since(tc);
 }
 
+namespace {
+
+// The baselines a bench round runs beside OPSILA's frame, on the same rays:
+// the replicated megakernel, the traversal alone and Embree (each when
+// present). Prepared after OPSILA's preparation, whose host peak the
+// report gives; every round runs one frame of each, in turn, since the
+// machine's speed drifts over seconds and the ratios are what the report
+// is for.
+struct Baselines {
+  std::unique_ptr<Megakernel> mega;
+  std::unique_ptr<TraversalBatch> batch;
+  std::unique_ptr<BaselineSeries> mega_runs, embree_runs;
+  int host_threads = 0;
+
+  Baselines() = default;
+  Baselines(BenchReport& report, const Scene& scene, ClRuntime& rt, bool embree, const BenchProgress& progress)
+      : host_threads(report.host_threads) {
+    mega = std::make_unique<Megakernel>(scene, rt, 1 << 16, false);  // images only, as OPSILA's frames
+    mega->count_work(false);  // timed without the test counters, as OPSILA's frames
+    mega_runs = std::make_unique<BaselineSeries>("replicated_megakernel", "replicated megakernel (same device)", 0,
+                                                 report.repeats);
+    batch = std::make_unique<TraversalBatch>(scene, rt, report.traversal);
+    if (!report.traversal.present) {
+      progress("traversal alone: not measured: %s", report.traversal.skipped.c_str());
+      batch.reset();
+    }
+    if (embree)
+      embree_runs = std::make_unique<BaselineSeries>(
+          "embree", "Embree " + embree_version() + ", " + std::to_string(host_threads) + " threads", host_threads,
+          report.repeats);
+  }
+  // One frame of each; recorded when the round is timed.
+  void round(BenchReport& report, const Scene& scene, bool timed) {
+    if (mega) {
+      mega->frame(mega_runs->image);
+      if (timed) mega_runs->record();
+    }
+    if (batch) {
+      const auto seconds = batch->run();
+      if (timed) record_traversal_run(report.traversal, seconds);
+    }
+    if (embree_runs) {
+      embree_runs->image = render_embree(scene, host_threads);
+      if (timed) embree_runs->record();
+    }
+  }
+  // The megakernel's tests, from one more frame that counts them (not timed).
+  void count_megakernel_work(BenchReport& report) {
+    if (!mega) return;
+    mega->count_work(true);
+    BaselineImage counted;
+    mega->frame(counted);
+    mega_runs->image.triangle_tests = counted.triangle_tests;
+    mega_runs->image.box_tests = counted.box_tests;
+    report.deterministic = report.deterministic && counted.rgb == mega_runs->image.rgb &&
+                           counted.rays.same_rays(mega_runs->image.rays);
+  }
+  void finish(BenchReport& report) {
+    if (mega_runs) report.megakernel = mega_runs->finish();
+    if (batch) finish_traversal(report.traversal);
+    if (embree_runs) report.embree = embree_runs->finish();
+  }
+};
+
+}  // namespace
+
 void measure_renders(BenchReport& report, Scene& scene, const RenderSettings& settings, ClRuntime& rt,
                      bool baselines, const BenchProgress& progress) {
   const int warmup = report.warmup, repeats = report.repeats;
@@ -169,28 +235,8 @@ void measure_renders(BenchReport& report, Scene& scene, const RenderSettings& se
   RenderSettings prepare = settings;
   prepare.pilot_warm_up = true;  // as the timed frames follow a warm-up frame
   Renderer renderer(scene, prepare_banks(scene, prepare, rt), with_progress, rt);
-  // The baselines are prepared too (after OPSILA's preparation, whose host
-  // peak the report gives), and every round runs one frame of each, in
-  // turn: the machine's speed drifts over seconds, and the ratios between
-  // renderers are what the report is for.
-  std::unique_ptr<Megakernel> mega;
-  std::unique_ptr<TraversalBatch> batch;
-  std::unique_ptr<BaselineSeries> mega_runs, embree_runs;
-  if (baselines) {
-    mega = std::make_unique<Megakernel>(scene, rt, 1 << 16, false);  // images only, as OPSILA's frames
-    mega->count_work(false);  // timed without the test counters, as OPSILA's frames
-    mega_runs = std::make_unique<BaselineSeries>("replicated_megakernel", "replicated megakernel (same device)", 0,
-                                                 repeats);
-    batch = std::make_unique<TraversalBatch>(scene, rt, report.traversal);
-    if (!report.traversal.present) {
-      progress("traversal alone: not measured: %s", report.traversal.skipped.c_str());
-      batch.reset();
-    }
-    if (embree)
-      embree_runs = std::make_unique<BaselineSeries>(
-          "embree", "Embree " + embree_version() + ", " + std::to_string(host_threads) + " threads", host_threads,
-          repeats);
-  }
+  Baselines base;
+  if (baselines) base = Baselines(report, scene, rt, embree, progress);
   RenderResult frame, first;
   std::vector<RenderStats> stats;
   report.deterministic = true;
@@ -209,42 +255,20 @@ void measure_renders(BenchReport& report, Scene& scene, const RenderSettings& se
       else
         report.deterministic = report.deterministic && frame.rgb == first.rgb && frame.rays.same_rays(first.rays);
     }
-    if (mega) {
-      mega->frame(mega_runs->image);
-      if (timed) mega_runs->record();
-    }
-    if (batch) {
-      const auto seconds = batch->run();
-      if (timed) record_traversal_run(report.traversal, seconds);
-    }
-    if (embree_runs) {
-      embree_runs->image = render_embree(scene, host_threads);
-      if (timed) embree_runs->record();
-    }
+    base.round(report, scene, timed);
   }
   live.restart("bench: OPSILA, the work counted");
   renderer.count_work(true);
   renderer.render(frame);
   live.finish();
   report.deterministic = report.deterministic && frame.rgb == first.rgb && frame.rays.same_rays(first.rays);
-  if (mega) {
-    // The megakernel's tests, from one more frame that counts them (not timed).
-    mega->count_work(true);
-    BaselineImage counted;
-    mega->frame(counted);
-    mega_runs->image.triangle_tests = counted.triangle_tests;
-    mega_runs->image.box_tests = counted.box_tests;
-    report.deterministic = report.deterministic && counted.rgb == mega_runs->image.rgb &&
-                           counted.rays.same_rays(mega_runs->image.rays);
-  }
+  base.count_megakernel_work(report);
   report.opsila = std::move(first);
   report.opsila.stats = stats[median_index(report.render_times)];
   with_work_counts(report.opsila.stats, frame.stats);
   report.render_seconds = median(report.render_times);
   progress("OPSILA: %.3f s, %.3f Mrays/s", report.render_seconds, mrays(report.rays_total(), report.render_seconds));
-  if (mega_runs) report.megakernel = mega_runs->finish();
-  if (batch) finish_traversal(report.traversal);
-  if (embree_runs) report.embree = embree_runs->finish();
+  base.finish(report);
 }
 
 void measure_host_references(BenchReport& report, const Scene& scene, const BenchProgress& progress) {

@@ -159,6 +159,7 @@ struct Renderer::Machine {
   int choose_bank_capacity(const BankedScene& bs, const RenderSettings& settings);
   void choose_work_groups();
   void host_tables(const Scene& scene, BankedScene& bs);
+  void describe_prepared(const PreparedBanks& banks);
   std::vector<BufferSpec> buffer_table(const BankedScene& bs, const FlightPlan& f);
   void allocate();
 

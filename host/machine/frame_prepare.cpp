@@ -83,6 +83,19 @@ Renderer::Machine::Machine(const Scene& scene, PreparedBanks banks, const Render
   buffers = buffer_table(bs, flight);
   plan = plan_of(buffers);
 
+  describe_prepared(banks);
+  share = banks.share;
+  allocate();
+  upload.reset();
+  prepared.prepare = banks.prepare;
+  prepared.prepare[PrepareStage::upload] = stages_since(before_upload)[PrepareStage::upload];
+  prepared.prepare.peak_host_bytes = host_peak_bytes();
+  if (!group.all()) rank_exchange = std::make_unique<RankExchange>(rt, ranks, group, P, depth);
+}
+
+// What the stats report of the machine's preparation (RenderStats).
+void Renderer::Machine::describe_prepared(const PreparedBanks& banks) {
+  const BankedScene& bs = banks.scene;
   prepared.num_pes = P;
   prepared.bank_capacity = n;
   prepared.num_clusters = static_cast<int>(bs.clusters.size());
@@ -91,18 +104,11 @@ Renderer::Machine::Machine(const Scene& scene, PreparedBanks banks, const Render
   prepared.pilot_frames = banks.pilot_frames;
   prepared.pilot_seconds = banks.pilot_seconds;
   prepared.pilot_warm_up_seconds = banks.pilot_warm_up_seconds;
-  share = banks.share;
   prepared.bank_bytes = bs.bank_bytes;
   prepared.global_bytes = bs.global_bytes;
   prepared.replicated_bytes = bs.replicated_bytes;
   prepared.texture_bytes = bs.texture_bytes;
   prepared.texture_replicated_bytes = bs.texture_replicated_bytes;
-  allocate();
-  upload.reset();
-  prepared.prepare = banks.prepare;
-  prepared.prepare[PrepareStage::upload] = stages_since(before_upload)[PrepareStage::upload];
-  prepared.prepare.peak_host_bytes = host_peak_bytes();
-  if (!group.all()) rank_exchange = std::make_unique<RankExchange>(rt, ranks, group, P, depth);
 }
 
 // n, the paper's bank size: P * n descriptors in flight fill the device

@@ -14,6 +14,7 @@ PACKAGES=(
   libgtest-dev googletest
   libopenmpi-dev openmpi-bin
   libembree-dev mesa-opencl-icd
+  universal-ctags
   assimp-testmodels python3-matplotlib python3-numpy
 )
 

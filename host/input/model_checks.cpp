@@ -1,4 +1,4 @@
-// PLY, OFF and STL checks (glTF's are in gltf_checks.cpp).
+// PLY and STL checks (OFF's are in off_checks.cpp, glTF's in gltf_checks.cpp).
 #include "input/model_checks.h"
 
 #include <algorithm>
@@ -14,32 +14,14 @@
 
 #include "core/util.h"
 #include "input/obj_loader.h"
+#include "input/model_words.h"
 #include "input/obj_text.h"
 
 namespace opsila {
 
+using namespace model_words;
+
 namespace {
-
-// The next whitespace-separated word of `text` from `at` (false at the end).
-bool next_word(std::string_view text, std::size_t& at, std::string_view& out) {
-  while (at < text.size() && std::isspace(static_cast<unsigned char>(text[at]))) ++at;
-  const std::size_t start = at;
-  while (at < text.size() && !std::isspace(static_cast<unsigned char>(text[at]))) ++at;
-  out = text.substr(start, at - start);
-  return at > start;
-}
-
-// A number word as the importer stores it, in a float: beyond the float
-// range it is infinite.
-float float_of(std::string_view w) { return static_cast<float>(std::strtod(std::string(w).c_str(), nullptr)); }
-
-// Whether that float is finite. Every vertex value of a text file passes
-// here, so plain decimals short enough to stay below the float range (no
-// letter, so no exponent, nan or inf; at most 38 characters) skip strtod.
-bool finite_in_float(std::string_view w) {
-  if (w.size() <= 38 && w.find_first_not_of("0123456789+-.") == std::string_view::npos) return true;
-  return std::isfinite(float_of(w));
-}
 
 struct PlyProperty {
   int count_bytes = 0;  // > 0 for a list: the size of its count
@@ -228,188 +210,6 @@ void check_ply(const std::string& bytes, const std::string& name) {
   }
   if (!faces)
     throw InputError(name + ": no facets (the PLY file has no faces: no 'face' element with entries, points only)");
-}
-
-// What the importer's number reader (text STL, OFF) starts a number with: an
-// optional sign, then a digit, a point and a digit, or 'nan' or 'inf' (any
-// case; not finite, caught where a facet uses it).
-bool number_start(std::string_view w) {
-  std::size_t i = w.size() > 0 && (w[0] == '-' || w[0] == '+') ? 1 : 0;
-  const auto digit = [&](std::size_t k) { return k < w.size() && w[k] >= '0' && w[k] <= '9'; };
-  if (digit(i) || (i < w.size() && w[i] == '.' && digit(i + 1))) return true;
-  const std::string rest = lower(std::string(w.substr(i, 3)));
-  return rest == "nan" || rest == "inf";
-}
-
-// OFF, read as the importer's OFF reader reads it, which is lenient in ways
-// that change the model without a word: an index beyond the vertices
-// becomes the last vertex, a face of 0 or of more than 9 vertices is
-// dropped, a count or index that is not digits reads as 0, a line of 4096
-// characters or more is split (and overruns its line buffer by one byte),
-// and its own errors name no line. It also allocates what the header's
-// counts ask for before reading a vertex (found by fuzz_model: tens of GB
-// from a 100-byte file). Every such file is refused here, naming its line.
-//
-// The layout: a header of optional prefixes (ST, C, N, 4, n) and the keyword
-// OFF, the dimension after an 'n' prefix, then the vertex, face and edge
-// counts, with comment lines and blank space anywhere between; then one line
-// per vertex (its coordinates first) and one per face ("n i1 ... in").
-void check_off(const std::string& text, std::size_t file_bytes, const std::string& name) {
-  const std::string_view t(text);
-  std::size_t at = 0;
-  unsigned long long line = 1;
-  const auto advance_to = [&](std::size_t to) {
-    line += std::count(t.begin() + std::ptrdiff_t(at), t.begin() + std::ptrdiff_t(to), '\n');
-    at = to;
-  };
-  const auto where = [&] { return name + ":" + std::to_string(line) + ": "; };
-  if (t.find('\0') != std::string_view::npos) {
-    advance_to(t.find('\0'));
-    throw InputError(where() + "OFF text holds a NUL byte (not an OFF file)");
-  }
-  // The header's tokens: blank space, line ends and comment lines skipped.
-  const auto next_token = [&] {
-    std::size_t i = at;
-    for (;;) {
-      while (i < t.size() && std::isspace(static_cast<unsigned char>(t[i]))) ++i;
-      if (i < t.size() && t[i] == '#') {
-        while (i < t.size() && t[i] != '\n') ++i;
-        continue;
-      }
-      break;
-    }
-    advance_to(i);
-  };
-  const auto digits_at = [&](std::size_t i) {
-    std::size_t j = i;
-    while (j < t.size() && t[j] >= '0' && t[j] <= '9') ++j;
-    return j - i;
-  };
-  next_token();
-  const auto prefix = [&](std::string_view p) {
-    if (t.compare(at, p.size(), p) != 0) return false;
-    at += p.size();
-    return true;
-  };
-  prefix("ST"), prefix("C");
-  const bool normals = prefix("N");
-  bool homogeneous = prefix("4");
-  const bool dimension = prefix("n"), keyword = prefix("OFF");
-  next_token();
-  if (!keyword && digits_at(at) == 0)
-    throw InputError(where() + "not OFF (no 'OFF' keyword and no vertex count)");
-  if (!keyword) homogeneous = false;  // the importer's reading without the keyword
-  unsigned long long dims = 3;
-  std::size_t d = digits_at(at);
-  if (dimension) {
-    if (d == 0 || d > 1 || t[at] == '0' || t[at] > '3')
-      throw InputError(where() + "OFF dimension " + obj_text::quote(t.substr(at, std::max<std::size_t>(d, 1))) +
-                       " (1, 2 or 3 coordinates a vertex)");
-    dims = unsigned(t[at] - '0');
-    at += d;
-    next_token();
-  }
-  if (!keyword) dims = 3;
-  unsigned long long counts[3] = {0, 0, 0}, lines[3] = {0, 0, 0};
-  const char* const what[3] = {"vertex", "face", "edge"};
-  for (int k = 0; k < 3; ++k) {
-    lines[k] = line;
-    // Without an edge count the importer takes the first digits of the
-    // first vertex for it, and misreads every vertex after.
-    if (k == 2 && lines[0] == lines[1] && line != lines[1])
-      throw InputError(name + ":" + std::to_string(lines[1]) +
-                       ": OFF header has vertex and face counts but no edge count ('vertices faces edges')");
-    d = digits_at(at);
-    if (d == 0)
-      throw InputError(where() + "OFF header: the " + what[k] + " count " +
-                       obj_text::quote(t.substr(at, std::min<std::size_t>(t.find_first_of(" \t\r\n", at), t.size()) - at)) +
-                       " is not a number");
-    const std::string digits(t.substr(at, d));
-    if (k < 2 && (d > 15 || std::stoull(digits) > file_bytes / 2))
-      throw InputError(name + ": OFF header asks for " + (d > 15 ? digits.substr(0, 15) + "..." : digits) + " " +
-                       (k == 0 ? "vertices" : "faces") + ", more than a file of " + std::to_string(file_bytes) +
-                       " bytes can hold");
-    if (k < 2) counts[k] = std::stoull(digits);
-    at += d;
-    next_token();
-  }
-  if (counts[0] == 0) throw InputError(where() + "OFF header counts no vertices");
-  if (counts[1] == 0) throw InputError(where() + "OFF header counts no faces");
-  // The body's lines: blank lines skipped, comment lines not (the importer
-  // reads a vertex or face from them and fails or misreads).
-  std::string_view l;
-  const auto next_line = [&] {
-    std::size_t i = at;
-    while (i < t.size() && (t[i] == '\n' || t[i] == '\r' || t[i] == '\f')) ++i;
-    advance_to(i);
-    if (at >= t.size()) return false;
-    const std::size_t end = std::min(t.find_first_of("\n\r\f", at), t.size());
-    l = t.substr(at, end - at);
-    if (l.size() >= 4096) throw InputError(where() + "OFF line of " + std::to_string(l.size()) +
-                                           " characters (the model importer reads at most 4095)");
-    at = end;
-    return true;
-  };
-  const auto comment_line = [&] {
-    const std::size_t first = l.find_first_not_of(" \t");
-    return first != std::string_view::npos && l[first] == '#';
-  };
-  static const char* const kCommentLine = ": a comment line (the model importer reads comments in the header only)";
-  const std::size_t numbers = dims + (homogeneous ? 1 : 0) + (normals ? 3 : 0);
-  // Vertices that are not finite as the importer reads them (in floats,
-  // divided by w): the line of each, named if a face uses it.
-  std::unordered_map<unsigned long long, unsigned long long> not_finite;
-  for (unsigned long long v = 0; v < counts[0]; ++v) {
-    if (!next_line())
-      throw InputError(name + ": OFF data ends after vertex " + std::to_string(v) + " of " +
-                       std::to_string(counts[0]) + " (truncated file)");
-    std::size_t w_at = 0;
-    std::string_view w;
-    if (comment_line()) throw InputError(where() + "OFF vertex " + std::to_string(v + 1) + kCommentLine);
-    float c[4] = {0, 0, 0, 1};  // read only with a w
-    bool finite = true;
-    for (std::size_t k = 0; k < numbers; ++k) {
-      if (!next_word(l, w_at, w))
-        throw InputError(where() + "OFF vertex " + std::to_string(v + 1) + " needs " + std::to_string(numbers) +
-                         " numbers; the line has " + std::to_string(k));
-      if (!number_start(w))
-        throw InputError(where() + "OFF vertex " + std::to_string(v + 1) + ": " + obj_text::quote(w) +
-                         " is not a number");
-      if (homogeneous && k <= dims) c[k] = float_of(w);
-      else if (k < dims) finite = finite && finite_in_float(w);
-    }
-    for (std::size_t k = 0; homogeneous && k < dims; ++k) finite = finite && std::isfinite(c[k] / c[dims]);
-    if (!finite) not_finite.emplace(v, line);
-  }
-  for (unsigned long long f = 0; f < counts[1]; ++f) {
-    const std::string face = "OFF face " + std::to_string(f + 1) + " of " + std::to_string(counts[1]);
-    if (!next_line())
-      throw InputError(name + ": OFF data ends before face " + std::to_string(f + 1) + " of " +
-                       std::to_string(counts[1]) + " (truncated file)");
-    std::size_t w_at = 0;
-    std::string_view w;
-    if (comment_line()) throw InputError(where() + face + kCommentLine);
-    const bool counted = next_word(l, w_at, w) && w.find_first_not_of("0123456789") == std::string_view::npos;
-    if (!counted) throw InputError(where() + face + ": vertex count " + obj_text::quote(w) + " is not a count");
-    if (w.size() > 2 || w == "0" || w == "00" || std::stoi(std::string(w)) > 9)
-      throw InputError(where() + face + " has " + std::string(w.substr(0, 15)) +
-                       " vertices; the model importer reads faces of 1 to 9");
-    const int n = std::stoi(std::string(w));
-    for (int k = 0; k < n; ++k) {
-      if (!next_word(l, w_at, w))
-        throw InputError(where() + face + " needs " + std::to_string(n) + " vertex indices; the line has " +
-                         std::to_string(k));
-      if (w.find_first_not_of("0123456789") != std::string_view::npos)
-        throw InputError(where() + face + ": " + obj_text::quote(w) + " is not a vertex index");
-      if (w.size() > 15 || std::stoull(std::string(w)) >= counts[0])
-        throw InputError(where() + face + ": vertex index " + obj_text::quote(w) +
-                         " out of range (the file has " + std::to_string(counts[0]) + " vertices)");
-      const auto bad = not_finite.find(std::stoull(std::string(w)));
-      if (bad != not_finite.end())
-        throw InputError(where() + face + ": vertex " + std::string(w) + " (line " + std::to_string(bad->second) +
-                         ") is not a finite number");
-    }
-  }
 }
 
 // Binary STL: 80 bytes of header, a 32-bit facet count, 50 bytes a facet.

@@ -28,113 +28,135 @@
  * (megakernel_rays below): each ray traced, in the order traced (the centre
  * ray of an even sample grid apart, which is not counted as a ray), as
  * (origin, tmin) and (direction, tmax), tmax < 0 for a nearest-hit ray. */
-#define MEGA_LOG(o, dir, tmin, tmax)                  \
-  if (ray_log) {                                      \
-    ray_log[2 * log_at] = (float4)((o), (tmin));      \
-    ray_log[2 * log_at + 1] = (float4)((dir), (tmax)); \
-    ++log_at;                                         \
+#define MEGA_LOG(ms, o, dir, tmin, tmax)                       \
+  if ((ms)->ray_log) {                                         \
+    (ms)->ray_log[2 * (ms)->log_at] = (float4)((o), (tmin));     \
+    (ms)->ray_log[2 * (ms)->log_at + 1] = (float4)((dir), (tmax)); \
+    ++(ms)->log_at;                                            \
   }
 
-inline void mega_pixel(FrameParams fp, __global const BankNode *nodes, __global const BankTriangle *tris,
-                       __global const Material *materials, __global const Light *lights, SURFACE_PARAMS, int root,
-                       float3 lo, float3 hi, int spp_k, __global const float *offsets, int pixel, __global long *accum,
-                       __global uint4 *ray_counts, int write_items, __global int2 *items, __global float4 *ray_log,
-                       uint log_at) {
+/* The whole scene as one bank, the tests counted over the pixel's rays,
+ * and the pixel's ray log (MEGA_LOG). */
+typedef struct {
+  __global const BankNode *nodes;
+  __global const BankTriangle *tris;
+  int root;
+  float3 lo, hi; /* the union of the root's child boxes (scene_nearest) */
+  float slack;
+  uint tri_tests, box_tests;
+  __global float4 *ray_log;
+  uint log_at;
+} MegaScene;
+
+/* Pending rays of one pixel's tree, depth-first. */
+typedef struct {
+  float3 org[MEGA_STACK], dir[MEGA_STACK], w[MEGA_STACK];
+  int level[MEGA_STACK];
+  int sp;
+} MegaStack;
+
+inline bool mega_push(MegaStack *s, float3 org, float3 dir, float3 w, int level) {
+  if (s->sp >= MEGA_STACK) return false;
+  s->org[s->sp] = org;
+  s->dir[s->sp] = dir;
+  s->w[s->sp] = w;
+  s->level[s->sp] = level;
+  ++s->sp;
+  return true;
+}
+
+/* The nearest hit of a ray (its triangle, -1 for none) and its distance. */
+inline int mega_nearest(MegaScene *ms, const RayPre *r, float tmin, float *t) {
+  CostProbe no_probe = no_cost_probe();
+  HitKey best = hit_none();
+  int hit = -1;
+  scene_nearest(r, ms->nodes, ms->tris, ms->root, ms->lo, ms->hi, tmin, ms->slack, &best, &hit, &ms->tri_tests,
+                &ms->box_tests, &no_probe);
+  *t = best.t;
+  return hit;
+}
+
+/* The lights' terms at a hit, each where its shadow ray is not blocked
+ * (shade() of spmd_phase.cl, with the shadow ray traced here). */
+inline long3 mega_direct(FrameParams fp, MegaScene *ms, __global const Light *lights, __global const Material *m,
+                         SurfacePoint surf, float3 d, float3 weight, long3 sum, uint *shadow) {
+  CostProbe no_probe = no_cost_probe();
+  for (int l = 0; l < fp.num_lights; ++l) {
+    float3 lv;
+    float dist;
+    float3 contrib = light_term(m, &lights[l], surf, d, weight, &lv, &dist);
+    if (all(contrib == (float3)(0.0f))) continue;
+    ++*shadow;
+    MEGA_LOG(ms, surf.p, lv, fp.epsilon, dist);
+    RayPre sr = make_ray(surf.p, lv);
+    if (!scene_any(&sr, ms->nodes, ms->tris, ms->root, ms->lo, ms->hi, fp.epsilon, dist, ms->slack, &ms->tri_tests,
+                   &ms->box_tests, &no_probe))
+      sum = add_sat(sum, fixed3(contrib)); /* >= 0: saturates as add_fixed does */
+  }
+  return sum;
+}
+
+/* The transmitted and reflected rays of a hit (total internal reflection:
+ * no transmitted ray), pushed for the next level; returns how many. */
+inline uint mega_children(MegaStack *s, __global const Material *m, SurfacePoint surf, float3 d, float3 weight,
+                          int level) {
+  float3 kr = load3g(m->kr), kt = load3g(m->kt);
+  float3 t_dir;
+  uint pushed = 0u;
+  if (any(kt != (float3)(0.0f)) && transmitted_direction(m, surf, d, &t_dir))
+    pushed += mega_push(s, surf.p, t_dir, weight * kt, level + 1);
+  if (any(kr != (float3)(0.0f))) pushed += mega_push(s, surf.p, reflected_direction(surf, d), weight * kr, level + 1);
+  return pushed;
+}
+
+/* One pixel's samples, each sample's ray tree traced depth-first. */
+inline void mega_pixel(FrameParams fp, MegaScene *ms, __global const Material *materials, __global const Light *lights,
+                       SURFACE_PARAMS, int spp_k, __global const float *offsets, int pixel, __global long *accum,
+                       __global uint4 *ray_counts, int write_items, __global int2 *items) {
   int x = pixel % fp.width, y = pixel / fp.width;
-  float eps = fp.epsilon;
-
-  float3 s_org[MEGA_STACK], s_dir[MEGA_STACK], s_w[MEGA_STACK];
-  int s_level[MEGA_STACK];
-  int sp = 0;
-
+  MegaStack s;
   long3 sum = (long3)(0);
   uint secondary = 0u, shadow = 0u;
-  uint tri_tests = 0u, box_tests = 0u;
-  CostProbe no_probe = no_cost_probe();
   int2 item = (int2)(-1, -1);
+  float t;
   /* Even k: the centre ray is not a sample; its hit is looked up alone. */
   if (spp_k % 2 == 0 && write_items) {
     RayPre cr = make_ray(load3(fp.eye), primary_direction(fp, x, y));
-    HitKey best = hit_none();
-    int hit = -1;
-    scene_nearest(&cr, nodes, tris, root, lo, hi, 0.0f, fp.box_slack, &best, &hit, &tri_tests, &box_tests, &no_probe);
-    if (hit >= 0) item = (int2)(tris[hit].object_id, tris[hit].facet_id);
+    int hit = mega_nearest(ms, &cr, 0.0f, &t);
+    if (hit >= 0) item = (int2)(ms->tris[hit].object_id, ms->tris[hit].facet_id);
   }
-
   for (int sample = 0; sample < spp_k * spp_k; ++sample) {
     int si = sample % spp_k, sj = sample / spp_k;
     bool centre = 2 * si + 1 == spp_k && 2 * sj + 1 == spp_k;
-    s_org[0] = load3(fp.eye);
-    s_dir[0] = primary_direction_at(fp, (float)x + offsets[si], (float)y + offsets[sj]);
-    s_w[0] = (float3)(1.0f, 1.0f, 1.0f);
-    s_level[0] = 0;
-    sp = 1;
-
-    while (sp > 0) {
-      --sp;
-      float3 org = s_org[sp], d = s_dir[sp], weight = s_w[sp];
-      int level = s_level[sp];
+    s.sp = 0;
+    mega_push(&s, load3(fp.eye), primary_direction_at(fp, (float)x + offsets[si], (float)y + offsets[sj]),
+              (float3)(1.0f, 1.0f, 1.0f), 0);
+    while (s.sp > 0) {
+      --s.sp;
+      float3 org = s.org[s.sp], d = s.dir[s.sp], weight = s.w[s.sp];
+      int level = s.level[s.sp];
       /* Primary rays accept any t > 0 (the item buffer's rule); others t > eps. */
-      float tmin = level == 0 ? 0.0f : eps;
-      MEGA_LOG(org, d, tmin, -1.0f);
+      float tmin = level == 0 ? 0.0f : fp.epsilon;
+      MEGA_LOG(ms, org, d, tmin, -1.0f);
       RayPre r = make_ray(org, d);
-      HitKey best = hit_none();
-      int hit = -1;
-      scene_nearest(&r, nodes, tris, root, lo, hi, tmin, fp.box_slack, &best, &hit, &tri_tests, &box_tests,
-                    &no_probe);
-      float t = best.t;
+      int hit = mega_nearest(ms, &r, tmin, &t);
       if (hit < 0) {
         sum = add_sat(sum, fixed3(weight * load3(fp.background)));
         continue;
       }
-      __global const BankTriangle *tri = &tris[hit];
+      __global const BankTriangle *tri = &ms->tris[hit];
       if (level == 0 && centre) item = (int2)(tri->object_id, tri->facet_id);
-
-      /* shade() of spmd_phase.cl, with the shadow ray traced here. */
       __global const Material *m = &materials[OPSILA_TRI_MATERIAL(*tri)];
-      SurfacePoint surf = surface_point(fp, tris, hit, m, SURFACE_ARGS, org, d, t);
-      float3 p = surf.p;
-
+      SurfacePoint surf = surface_point(fp, ms->tris, hit, m, SURFACE_ARGS, org, d, t);
       sum = add_sat(sum, fixed3(weight * load3(fp.ambient) * surf.ka));
-
-      for (int l = 0; l < fp.num_lights; ++l) {
-        float3 lv;
-        float dist;
-        float3 contrib = light_term(m, &lights[l], surf, d, weight, &lv, &dist);
-        if (all(contrib == (float3)(0.0f))) continue;
-        ++shadow;
-        MEGA_LOG(p, lv, eps, dist);
-        RayPre sr = make_ray(p, lv);
-        if (!scene_any(&sr, nodes, tris, root, lo, hi, eps, dist, fp.box_slack, &tri_tests, &box_tests, &no_probe))
-          sum = add_sat(sum, fixed3(contrib)); /* >= 0: saturates as add_fixed does */
-      }
-
-      if (level + 1 >= fp.max_depth) continue;
-      float3 kr = load3g(m->kr), kt = load3g(m->kt);
-      float3 t_dir;
-      /* Total internal reflection: no transmitted ray. */
-      if (any(kt != (float3)(0.0f)) && transmitted_direction(m, surf, d, &t_dir) && sp < MEGA_STACK) {
-        ++secondary;
-        s_org[sp] = p;
-        s_dir[sp] = t_dir;
-        s_w[sp] = weight * kt;
-        s_level[sp] = level + 1;
-        ++sp;
-      }
-      if (any(kr != (float3)(0.0f)) && sp < MEGA_STACK) {
-        ++secondary;
-        s_org[sp] = p;
-        s_dir[sp] = reflected_direction(surf, d);
-        s_w[sp] = weight * kr;
-        s_level[sp] = level + 1;
-        ++sp;
-      }
+      sum = mega_direct(fp, ms, lights, m, surf, d, weight, sum, &shadow);
+      if (level + 1 < fp.max_depth) secondary += mega_children(&s, m, surf, d, weight, level);
     }
   } /* samples */
   accum[pixel * 3 + 0] = sum.x;
   accum[pixel * 3 + 1] = sum.y;
   accum[pixel * 3 + 2] = sum.z;
-  ray_counts[pixel] = (uint4)(secondary, shadow, tri_tests, box_tests);
+  ray_counts[pixel] = (uint4)(secondary, shadow, ms->tri_tests, ms->box_tests);
   if (write_items) items[pixel] = item;
 }
 
@@ -145,8 +167,9 @@ __kernel void megakernel(FrameParams fp, __global const BankNode *nodes, __globa
                          __global int2 *items) {
   int k = get_global_id(0);
   if (k >= pixel_count) return;
-  mega_pixel(fp, nodes, tris, materials, lights, SURFACE_ARGS, root, root_lo.xyz, root_hi.xyz, spp_k, offsets,
-             pixel_begin + k, accum, ray_counts, write_items, items, 0, 0u);
+  MegaScene ms = {nodes, tris, root, root_lo.xyz, root_hi.xyz, fp.box_slack, 0u, 0u, 0, 0u};
+  mega_pixel(fp, &ms, materials, lights, SURFACE_ARGS, spp_k, offsets, pixel_begin + k, accum, ray_counts,
+             write_items, items);
 }
 
 /* The same frame, every ray also written to ray_log from ray_log[2 *
@@ -160,6 +183,8 @@ __kernel void megakernel_rays(FrameParams fp, __global const BankNode *nodes, __
                               __global float4 *ray_log) {
   int k = get_global_id(0);
   if (k >= pixel_count) return;
-  mega_pixel(fp, nodes, tris, materials, lights, SURFACE_ARGS, root, root_lo.xyz, root_hi.xyz, spp_k, offsets,
-             pixel_begin + k, accum, ray_counts, write_items, items, ray_log, log_first[pixel_begin + k]);
+  MegaScene ms = {nodes, tris, root, root_lo.xyz, root_hi.xyz, fp.box_slack, 0u, 0u, ray_log,
+                  log_first[pixel_begin + k]};
+  mega_pixel(fp, &ms, materials, lights, SURFACE_ARGS, spp_k, offsets, pixel_begin + k, accum, ray_counts,
+             write_items, items);
 }

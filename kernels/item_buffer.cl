@@ -21,7 +21,8 @@
  * (the host's traced rectangle: the pixels outside it are misses that no
  * kernel touches; the read-back gives them the background). `clusters`
  * and `cluster_rects` come nearest the eye first (item_depth_order,
- * host/machine/frame.h), so that a near hit culls the clusters behind it;
+ * host/machine/frame.h; cluster_near: each one's distance from the eye), so
+ * that a near hit ends a pixel's search at the first cluster beyond it;
  * the hit order makes the items the same in any order. The group first
  * lists, in that order, the clusters whose projected box overlaps the tile (one rectangle test per cluster per tile instead of per pixel);
  * each pixel then tests only those rectangles and traces their facets.
@@ -29,7 +30,8 @@
  * of a tile that no cluster can overlap: where the scene covers a small
  * part of the screen, most tiles; their pixels make no camera ray and only
  * write their misses. */
-__kernel void item_buffer(FrameParams fp, __global const Cluster *clusters, __global const int4 *cluster_rects,
+__kernel void item_buffer(FrameParams fp, __global const Cluster *clusters, __global const float *cluster_near,
+                          __global const int4 *cluster_rects,
                           int4 listed_rect, __global const BankNode *nodes, __global const BankTriangle *tris,
                           int tile_w, int2 tile_origin, int tiles_x, int tile_begin, float ox, float oy, int mode,
                           __global int2 *items,
@@ -81,6 +83,10 @@ __kernel void item_buffer(FrameParams fp, __global const Cluster *clusters, __gl
     if (n > OPSILA_ITEM_LIST_CAP - lsz || base + lsz >= fp.num_clusters) {
       for (int i = 0; i < n && inside; ++i) {
         int cl = list[i];
+        /* The list is nearest first: a cluster whose box lies beyond the
+         * best hit's limit (with the culling slack) holds no winner, nor
+         * does any after it. */
+        if (cluster_near[cl] > cull_exit(hit_limit(best.t), fp.box_slack)) break;
         int4 pr = cluster_rects[cl]; /* x0, y0, x1, y1 inclusive */
         if (x < pr.x || x > pr.z || y < pr.y || y > pr.w) continue;
         traverse_nearest(&r, nodes, tris, clusters[cl].root, 0.0f, fp.box_slack, &best, &best_tri, &tri_tests,

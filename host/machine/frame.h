@@ -30,12 +30,13 @@ namespace opsila {
 namespace frame_kernels {
 using Buf = cl::Buffer;
 // The kernels of the frame, their parameters as the host passes them.
-// kernels/item_buffer.cl: frame, clusters, projected boxes and their union,
-// bank nodes and facets, tile side, the traced tiles' first column and row,
-// tiles per row, first tile, sample offsets, mode, and the item buffer with
-// its hits, distances and facets.
-using ItemBufferKernel = KernelBinding<FrameParams, Buf, Buf, cl_int4, Buf, Buf, int, cl_int2, int, int, float, float,
-                                       int, Buf, Buf, Buf, Buf>;
+// kernels/item_buffer.cl: frame, clusters (nearest first), their distances
+// from the eye, projected boxes and their union, bank nodes and facets, tile
+// side, the traced tiles' first column and row, tiles per row, first tile,
+// sample offsets, mode, and the item buffer with its hits, distances and
+// hit order keys.
+using ItemBufferKernel = KernelBinding<FrameParams, Buf, Buf, Buf, cl_int4, Buf, Buf, int, cl_int2, int, int, float,
+                                       float, int, Buf, Buf, Buf, Buf>;
 // kernels/primary.cl: the hit list's two passes (frame, item buffer hits,
 // pixels, traced rectangle, first pass, per-block hits, pixel sums; item
 // buffer hits, pixels, traced rectangle, per-block prefixes, hit list);
@@ -111,7 +112,7 @@ struct Renderer::Machine {
   int counted_traffic_levels = 0;  // traffic_levels of a counting frame (the buffer's size)
   frame_kernels::Set& kernels() { return counting ? work_kernels : ray_kernels; }
   std::unique_ptr<ScatterPass> scatter;
-  cl::Buffer b_tris, b_nodes, b_clusters, b_route, b_pes, b_mats, b_lights, b_rects, b_item_clusters;
+  cl::Buffer b_tris, b_nodes, b_clusters, b_route, b_pes, b_mats, b_lights, b_rects, b_item_clusters, b_item_near;
   SurfaceBuffers surface;  // vertex attributes and texture copies of the banks
   cl::Buffer b_items, b_item_tri, b_item_t, b_item_key, b_accum, b_stats, b_traffic, b_out_count, b_hits;
   cl::Buffer b_hit_pixels, b_hit_blocks, b_hit_total;  // the hit list (kernels/primary.cl)
@@ -131,6 +132,7 @@ struct Renderer::Machine {
   // The item buffer's clusters, nearest the eye first (item_depth_order),
   // and their projected boxes in that order.
   std::vector<Cluster> item_clusters;
+  std::vector<float> item_near;  // each one's distance from the eye, rounded down
   std::vector<cl_int4> rects;
   cl_int4 listed_rect{};         // their union: a tile outside it lists no cluster
   // The pixels the item buffer traces (x0, y0, x1, y1, inclusive): on one
@@ -183,6 +185,6 @@ cl_int4 rects_union(const std::vector<cl_int4>& rects);
 // Cluster indices by the distance from the eye to their boxes, nearest first
 // (ties by index): the item buffer meets near hits first and culls behind
 // them; any order gives the same items (kernels/hit_order.h).
-std::vector<int> item_depth_order(const Scene& scene, const BankedScene& bs);
+std::vector<int> item_depth_order(const Scene& scene, const BankedScene& bs, std::vector<double>* distance = nullptr);
 
 }  // namespace opsila

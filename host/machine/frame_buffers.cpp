@@ -72,7 +72,7 @@ std::vector<cl_int4> cluster_rects(const Scene& scene, const BankedScene& bs) {
   return rects;
 }
 
-std::vector<int> item_depth_order(const Scene& scene, const BankedScene& bs) {
+std::vector<int> item_depth_order(const Scene& scene, const BankedScene& bs, std::vector<double>* distance) {
   const Vec3 eye = scene.camera.eye;
   std::vector<double> d2(bs.clusters.size());
   for (std::size_t c = 0; c < bs.clusters.size(); ++c) {
@@ -85,6 +85,8 @@ std::vector<int> item_depth_order(const Scene& scene, const BankedScene& bs) {
   std::vector<int> order(bs.clusters.size());
   for (std::size_t c = 0; c < order.size(); ++c) order[c] = static_cast<int>(c);
   std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return d2[std::size_t(a)] < d2[std::size_t(b)]; });
+  if (distance)
+    for (std::size_t c = 0; c < d2.size(); ++c) (*distance).push_back(std::sqrt(d2[c]));
   return order;
 }
 
@@ -118,9 +120,15 @@ void Renderer::Machine::host_tables(const Scene& scene, BankedScene& bs) {
   const std::vector<cl_int4> by_index = cluster_rects(scene, bs);
   rects.clear();
   item_clusters.clear();
-  for (int c : item_depth_order(scene, bs)) {  // another rank's cluster: never listed here
+  item_near.clear();
+  std::vector<double> distance;
+  for (int c : item_depth_order(scene, bs, &distance)) {  // another rank's cluster: never listed here
     rects.push_back(bs.clusters[std::size_t(c)].root < 0 ? kNeverListed : by_index[std::size_t(c)]);
     item_clusters.push_back(bs.clusters[std::size_t(c)]);
+    // Rounded down: a camera ray enters the box no nearer than this.
+    float near = static_cast<float>(distance[std::size_t(c)]);
+    if (double(near) > distance[std::size_t(c)]) near = std::nextafter(near, 0.0f);
+    item_near.push_back(near);
   }
   listed_rect = rects_union(rects);
   // Several ranks relay the item buffer in bands of whole tile rows, and
@@ -174,6 +182,7 @@ std::vector<BufferSpec> Renderer::Machine::buffer_table(const BankedScene& bs, c
       host_buffer("sRGB decode table", P_::scene, srgb, &surface.srgb),
       host_buffer("projected cluster boxes", P_::scene, rects, &b_rects),
       host_buffer("item buffer clusters", P_::scene, item_clusters, &b_item_clusters),
+      host_buffer("item buffer cluster distances", P_::scene, item_near, &b_item_near),
       // Only the pilot's program reads these; others get one-entry stand-ins.
       host_buffer("node clusters", P_::scene, measure ? bs.node_cluster : no_cluster, &b_node_cluster),
       host_buffer("facet clusters", P_::scene, measure ? bs.tri_cluster : no_cluster, &b_tri_cluster),

@@ -38,7 +38,7 @@ void Renderer::Machine::item_buffer(Launcher& launch, int sample) {
     const std::size_t px0 = std::size_t(origin.s[1] + begin / tiles_x) * tile_w * width;
     const std::size_t px1 = std::min(npix, std::size_t(origin.s[1] + (begin + count) / tiles_x) * tile_w * width);
     if (!group.all()) relay_receive(ranks, rt, relay, px0, px1 - px0);
-    kernels().item.bind(fp, b_item_clusters, b_rects, listed_rect, b_nodes, b_tris, tile_w, origin, tiles_x, begin, ox, oy,
+    kernels().item.bind(fp, b_item_clusters, b_item_near, b_rects, listed_rect, b_nodes, b_tris, tile_w, origin, tiles_x, begin, ox, oy,
                         mode, b_items, b_item_tri, b_item_t, b_item_key);
     launch.run(kernels().item.kernel(), "item_buffer", std::size_t(count) * tile_w * tile_w,
                std::size_t(tile_w) * tile_w, -1);

@@ -33,5 +33,27 @@ TEST_F(MpiFixture, PlyStripsReadInWindowsAreTheSameAsOneProcess) {
 }
 #endif
 
+// Every rank failing at once, each its own error: one error line, from one
+// rank, whether the ranks fail while reading (the same broken file) or in
+// the middle of a frame (a device fault every rank meets in one round,
+// where each would otherwise print its line and abort).
+TEST_F(MpiFixture, RanksFailingTogetherPrintOneLine) {
+  const std::string broken = dir.write("broken.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 7\n");
+  for (int R : {2, 3}) {
+    SCOPED_TRACE(std::to_string(R) + " ranks");
+    const RunResult read = ranks(R, {broken, "--size", "32x24", "-o", dir.file("x.pfm")});
+    expect_refused(read, {"broken.obj:4: vertex index 7 out of range"});
+    env["OPSILA_FAULT_ROUND"] = "1";
+    const RunResult r = ranks(R, {scene("hundreds.json"), "--size", "32x24", "-o", dir.file("x.pfm")});
+    env.erase("OPSILA_FAULT_ROUND");
+    EXPECT_EQ(r.exit_code, 3) << r.err;
+    const auto errors = r.error_lines();
+    ASSERT_EQ(errors.size(), 1u) << r.err;
+    EXPECT_EQ(errors[0].rfind("opsila: error: rank ", 0), 0u) << errors[0];
+    EXPECT_NE(errors[0].find(": OpenCL: device fault at round 1"), std::string::npos) << errors[0];
+    EXPECT_FALSE(test::file_exists(dir.file("x.pfm")));
+  }
+}
+
 }  // namespace
 }  // namespace opsila

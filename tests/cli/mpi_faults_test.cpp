@@ -55,5 +55,43 @@ TEST_F(MpiFixture, RanksFailingTogetherPrintOneLine) {
   }
 }
 
+// Ranks that do not see the same model file (one started in another
+// folder, as on machines with their own copies, or a file rewritten while
+// they stream it): refused with one line naming the file, before any
+// facet is exchanged, where they went on to exchange what did not match.
+TEST_F(MpiFixture, RanksThatReadDifferentFilesAreRefused) {
+  TempDir other;
+  for (const std::string name : {"model.obj", "model.ply"}) {
+    SCOPED_TRACE(name);
+    for (TempDir* d : {&dir, &other}) {
+      test::PlyFile p = test::ply_grid(d == &dir ? 30 : 34, 20, 0);
+      if (name == "model.ply") {
+        test::write_ply(d->file(name), p);
+        continue;
+      }
+      std::string obj;
+      for (const auto& v : p.vertices) obj += "v " + std::to_string(v[0]) + " " + std::to_string(v[1]) + " " +
+                                              std::to_string(v[2]) + "\n";
+      for (const auto& f : p.faces) {
+        if (f.size() < 3) continue;
+        obj += "f";
+        for (long long i : f) obj += " " + std::to_string(i + 1);
+        obj += "\n";
+      }
+      d->write(name, obj);
+    }
+    const std::vector<std::string> args = {OPSILA_BINARY, "render", name, "--size", "32x24", "--pes", "4",
+                                           "-o", dir.file("x.pfm")};
+    std::vector<std::string> a = launch(2);
+    a.insert(a.end(), {"-wdir", dir.path()});
+    a.insert(a.end(), args.begin(), args.end());
+    a.insert(a.end(), {":", "-np", "1", "-wdir", other.path()});  // rank 2 sees the other copy
+    a.insert(a.end(), args.begin(), args.end());
+    const RunResult r = test::run_program("/usr/bin/timeout", a, env);
+    expect_refused(r, {"opsila: error: rank 0: " + name + ": the ranks did not read the same file"});
+    EXPECT_FALSE(test::file_exists(dir.file("x.pfm")));
+  }
+}
+
 }  // namespace
 }  // namespace opsila

@@ -24,6 +24,11 @@ struct PlyFile {
   std::vector<std::vector<long long>> faces;
   std::string extra_header;  // lines before end_header
   std::uint64_t face_count = UINT64_MAX;  // the header's, when not faces.size()
+  bool face_element = true;               // false: no 'face' element at all
+  // A 'tristrips' element after the faces, one list a strip (-1 restarts),
+  // when not empty; extra_strip_header follows its property line.
+  std::vector<std::vector<long long>> strips;
+  std::string strip_count_type = "int", extra_strip_header;
 };
 
 inline void put_ply_value(std::string& out, const std::string& type, double value, bool big) {
@@ -41,8 +46,14 @@ inline void write_ply(const std::string& path, const PlyFile& p) {
   std::string out = "ply\nformat " + p.format + " 1.0\ncomment made by a test\n";
   out += "element vertex " + std::to_string(p.vertices.size()) + "\n";
   for (const auto& [type, name] : p.props) out += "property " + type + " " + name + "\n";
-  out += "element face " + std::to_string(p.face_count != UINT64_MAX ? p.face_count : p.faces.size()) + "\n";
-  out += "property list " + p.count_type + " " + p.index_type + " " + p.list_name + "\n" + p.extra_header + "end_header\n";
+  if (p.face_element) {
+    out += "element face " + std::to_string(p.face_count != UINT64_MAX ? p.face_count : p.faces.size()) + "\n";
+    out += "property list " + p.count_type + " " + p.index_type + " " + p.list_name + "\n";
+  }
+  if (!p.strips.empty())
+    out += "element tristrips " + std::to_string(p.strips.size()) + "\nproperty list " + p.strip_count_type + " " +
+           p.index_type + " vertex_indices\n" + p.extra_strip_header;
+  out += p.extra_header + "end_header\n";
   const bool ascii = p.format == "ascii", big = p.format == "binary_big_endian";
   const auto value = [&](const std::string& type, double v) {
     if (!ascii) return put_ply_value(out, type, v, big);
@@ -54,11 +65,15 @@ inline void write_ply(const std::string& path, const PlyFile& p) {
     for (std::size_t k = 0; k < v.size(); ++k) value(p.props[k].first, v[k]);
     if (ascii) out.back() = '\n';
   }
-  for (const auto& f : p.faces) {
-    value(p.count_type, double(f.size()));
-    for (long long i : f) value(p.index_type, double(i));
-    if (ascii) out.back() = '\n';
-  }
+  const auto lists = [&](const std::vector<std::vector<long long>>& all, const std::string& count_type) {
+    for (const auto& f : all) {
+      value(count_type, double(f.size()));
+      for (long long i : f) value(p.index_type, double(i));
+      if (ascii) out.back() = '\n';
+    }
+  };
+  lists(p.faces, p.count_type);
+  lists(p.strips, p.strip_count_type);
   std::ofstream(path, std::ios::binary) << out;
 }
 
@@ -81,6 +96,24 @@ inline PlyFile ply_grid(int w, int h, int extra) {
   p.faces.push_back({0, 1});
   p.faces.push_back({0, 1, 1});  // zero area
   return p;
+}
+
+// The strips of a w x h grid's rows (ply_grid's vertices): one list, a -1
+// before each row but the last, which continues the row before it through
+// repeated vertices (triangles that are no facets). `faces` gets the same
+// triangles as a 'face' element lists them, each cell's two turned alike.
+inline std::vector<std::vector<long long>> grid_strips(int w, int h, std::vector<std::vector<long long>>& faces) {
+  std::vector<long long> strip;
+  for (long long j = 0; j + 1 < h; ++j) {
+    if (j > 0 && j + 2 < h) strip.push_back(-1);
+    if (j > 0 && j + 2 == h) strip.push_back(strip.back()), strip.push_back(j * w);  // an even count: same parity
+    for (long long i = 0; i < w; ++i) strip.push_back(j * w + i), strip.push_back((j + 1) * w + i);
+    for (long long i = 0; i + 1 < w; ++i) {
+      faces.push_back({j * w + i, (j + 1) * w + i, j * w + i + 1});
+      faces.push_back({j * w + i + 1, (j + 1) * w + i, (j + 1) * w + i + 1});
+    }
+  }
+  return {strip};
 }
 
 }  // namespace test

@@ -372,9 +372,9 @@ int report_rank_failure(std::exception_ptr error) {
   }
   if (ranks.size() == 1) return report_exception(error);
   // The others may wait for this rank in a collective: end them all.
-  if (ranks.in_collective()) ranks.abort(report_exception(error));
   std::string message;
   int code = describe_exception(error, message);
+  if (ranks.in_collective()) ranks.abort(code, [&] { report_exception(error); });
   if (ranks.agree(code) == ranks.rank()) report_exception(error);
   return code;
 }

@@ -1,5 +1,7 @@
 #include "core/input_file.h"
 
+#include <sys/stat.h>
+
 #include <cerrno>
 #include <cstring>
 #include <filesystem>
@@ -73,6 +75,31 @@ std::string read_named_file(const std::string& origin, const std::string& path, 
   } catch (const InputError& e) {
     throw InputError(origin + e.what());
   }
+}
+
+namespace {
+
+// Size and modification time (ns); zeros for a file stat cannot see (the
+// reader has said why already).
+std::vector<std::uint64_t> stamp(const std::string& path) {
+  struct stat st {};
+  if (::stat(path.c_str(), &st) != 0) return {0, 0};
+  const std::uint64_t ns = std::uint64_t(st.st_mtim.tv_sec) * 1000000000u + std::uint64_t(st.st_mtim.tv_nsec);
+  return {std::uint64_t(st.st_size), ns};
+}
+
+}  // namespace
+
+FileReadStamp::FileReadStamp(const std::string& path) : path_(path), before_(stamp(path)) {}
+
+std::vector<std::uint64_t> FileReadStamp::after(std::uint64_t fans, std::uint64_t triangles,
+                                                std::uint64_t facets) const {
+  if (stamp(path_) != before_)
+    throw InputError(path_ + ": the file changed while it was read (its size or modification time); read it again "
+                             "once nothing writes it");
+  std::vector<std::uint64_t> figures = before_;
+  figures.insert(figures.end(), {fans, triangles, facets});
+  return figures;
 }
 
 }  // namespace opsila

@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <functional>
 #include <string>
+#include <vector>
 
 namespace opsila {
 
@@ -31,5 +32,19 @@ std::string read_input_file(const std::string& path, std::size_t max_bytes,
 // The same for a file named by `origin` (an environment variable or a
 // flag): every message starts "ORIGIN=PATH: " ("--compare PATH: ").
 std::string read_named_file(const std::string& origin, const std::string& path, std::size_t max_bytes);
+
+// What a rank read of a file it streams, for the ranks to compare before
+// they exchange anything (SceneShare::reads): the file's size and
+// modification time before the first read and after the last, then the
+// reader's own figures of what it read (fan triangles, triangles, facets).
+// Throws InputError naming the file when it changed during this rank's reads.
+struct FileReadStamp {
+  explicit FileReadStamp(const std::string& path);  // before the first read
+  std::vector<std::uint64_t> after(std::uint64_t fans, std::uint64_t triangles, std::uint64_t facets) const;
+
+ private:
+  std::string path_;
+  std::vector<std::uint64_t> before_;
+};
 
 }  // namespace opsila

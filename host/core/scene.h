@@ -127,6 +127,11 @@ struct SceneShare {
   // bounds over every rank (a collective call, made by the reader once
   // every entry is built). Unset: the figures stay this rank's.
   std::function<void(SceneShare&)> combine;
+  // What this rank read of each file it streamed (FileReadStamp::after),
+  // in read order: `combine` refuses the scene, naming the file, unless
+  // every rank's are the same (the file changed while the ranks read it,
+  // or they see different copies of it), before anything is exchanged.
+  std::vector<std::pair<std::string, std::vector<std::uint64_t>>> reads;
   // Set with it: decodes the texture maps the given facets use (their
   // images were checked while reading, input/texture_file.h) and returns
   // the texel bytes held; the partition calls it on the facets a rank's

@@ -33,6 +33,7 @@
 #include "input/obj_loader.h"
 #include "input/model_materials.h"
 #include "input/model_window.h"
+#include "input/ply_reader.h"
 
 #ifdef OPSILA_HAVE_ASSIMP
 #include <assimp/Importer.hpp>
@@ -406,9 +407,14 @@ bool is_imported_model(const std::string& path) {
 Scene load_model(const std::string& path) {
   ModelFiles files;
   files.size(path);  // the usual messages for a missing, special or huge file
+  const bool ply = lower(fs::path(path).extension().string()) == ".ply";
+  if (ply && ply_has_strips(path)) return load_ply_whole(path, kMaxTriangles);  // the importer keeps one triangle
   std::string dir = fs::path(path).parent_path().string();
   if (dir.empty()) dir = ".";
-  return import_model(files, path, dir, true);
+  Scene scene = import_model(files, path, dir, true);
+  if (ply)
+    for (std::string& w : ply_unread_elements(path)) scene.warnings.push_back(std::move(w));
+  return scene;
 }
 
 Scene load_model_from_memory(const std::string& bytes, const std::string& name, const std::string& hint,

@@ -43,6 +43,9 @@ struct Header {
 // (scalar or list), 'end_header'. Any other line is an error naming it.
 Header read_header(const std::string& path);
 
+// Whether the header declares a 'tristrips' element.
+bool has_strips(const Header& h);
+
 // Why the stream cannot read `h` exactly as the importer does ("" when it
 // can): the importer path is then used.
 std::string stream_refusal(const Header& h);

@@ -124,18 +124,30 @@ Header read_header(const std::string& path) {
   return h;
 }
 
+bool has_strips(const Header& h) {
+  for (const Element& e : h.elements)
+    if (e.name == "tristrips") return true;
+  return false;
+}
+
 std::string stream_refusal(const Header& h) {
-  if (h.elements.size() != 2 || h.elements[0].name != "vertex" || h.elements[1].name != "face")
-    return "its elements are not 'vertex' then 'face'";
+  // 'vertex', then 'face' or 'tristrips' or both in that order (faces'
+  // facet ids come first either way).
+  const auto named = [&](std::size_t k, const char* n) { return h.elements.size() > k && h.elements[k].name == n; };
+  const bool faces = named(1, "face"), strips = named(faces ? 2 : 1, "tristrips");
+  if (!named(0, "vertex") || h.elements.size() != 1u + faces + strips || h.elements.size() < 2)
+    return "its elements are not 'vertex' then 'face' (or 'tristrips', or both)";
   for (const std::string& c : h.comments)
     if (lower(c).find("texture") != std::string::npos) return "a comment names a texture";
-  const Element& face = h.elements[1];
-  if (face.properties.size() != 1 || !face.properties[0].list ||
-      (face.properties[0].name != "vertex_indices" && face.properties[0].name != "vertex_index"))
-    return "its faces hold more than one list of vertex indices";
-  const Property& list = face.properties[0];
-  const Value count{0, 0, list.count}, item{0, 0, list.type};
-  if (!count.is_integer() || !item.is_integer()) return "its face lists are not integers";
+  for (std::size_t k = 1; k < h.elements.size(); ++k) {
+    const Element& face = h.elements[k];
+    if (face.properties.size() != 1 || !face.properties[0].list ||
+        (face.properties[0].name != "vertex_indices" && face.properties[0].name != "vertex_index"))
+      return "its '" + face.name + "' elements hold more than one list of vertex indices";
+    const Property& list = face.properties[0];
+    const Value count{0, 0, list.count}, item{0, 0, list.type};
+    if (!count.is_integer() || !item.is_integer()) return "its '" + face.name + "' lists are not integers";
+  }
   std::vector<std::string> names;
   for (const Property& p : h.elements[0].properties) {
     if (p.list) return "a vertex property is a list";

@@ -92,7 +92,11 @@ class PlyWindowReader {
       read_vertices(body, h.elements[0], h, mesh, path_, not_finite);
       Scene scene;
       WindowFan fan(path_, mesh, max_triangles_, window_, scene);
-      read_faces(body, h.elements[1], mesh, not_finite, fan);
+      vertices_ = mesh.mNumVertices;
+      for (std::size_t k = 1; k < h.elements.size(); ++k) {
+        if (h.elements[k].name == "face") read_faces(body, h.elements[k], not_finite, fan);
+        else read_strips(body, h.elements[k], not_finite, fan);
+      }
       fan.finish(fans);
       return scene;
     } catch (const std::bad_alloc&) {
@@ -103,32 +107,71 @@ class PlyWindowReader {
   }
 
  private:
+  // A face's or strip's vertex index, checked: in range, and its vertex
+  // finite where a text file said it is not.
+  unsigned corner(ply::Body& body, const ply::Element& e, std::uint64_t f, std::int64_t v,
+                  const std::unordered_map<unsigned, std::string>& not_finite) const {
+    if (v < 0 || v >= std::int64_t(vertices_))
+      body.fail(e, f, "vertex index " + std::to_string(v) + " out of range (the file has " +
+                          std::to_string(vertices_) + " vertices)");
+    const auto bad = not_finite.find(unsigned(v));
+    if (bad != not_finite.end())
+      body.fail(e, f, "vertex " + std::to_string(v) + " (" + bad->second + ") is not a finite number");
+    return unsigned(v);
+  }
+
+  // A list's length, checked.
+  unsigned list_length(ply::Body& body, const ply::Element& e, std::uint64_t f, std::uint64_t most) const {
+    const ply::Value count = body.next(e.properties[0].count, e, f);
+    if (count.i < 0) body.fail(e, f, "a negative number of corners");
+    if (std::uint64_t(count.i) > most)
+      throw InputError(path_ + ": too many triangles (more than " + std::to_string(max_triangles_) + ")");
+    return static_cast<unsigned>(count.i);
+  }
+
   // Every face read and checked; fanned into the figures, and into the
   // scene when it is this rank's (WindowFan).
-  void read_faces(ply::Body& body, const ply::Element& e, const aiMesh& mesh,
+  void read_faces(ply::Body& body, const ply::Element& e,
                   const std::unordered_map<unsigned, std::string>& not_finite, WindowFan& fan) {
-    const ply::Property& list = e.properties[0];
-    std::vector<unsigned> corner;
+    std::vector<unsigned> corners;
     for (std::uint64_t f = 0; f < e.count; ++f) {
-      const ply::Value count = body.next(list.count, e, f);
-      if (count.i < 0) body.fail(e, f, "a negative number of corners");
-      if (std::uint64_t(count.i) > max_triangles_ + 2)
-        throw InputError(path_ + ": too many triangles (more than " + std::to_string(max_triangles_) + ")");
-      const unsigned n = static_cast<unsigned>(count.i);
-      corner.resize(n);
-      for (unsigned k = 0; k < n; ++k) {
-        const ply::Value v = body.next(list.type, e, f);
-        if (v.i < 0 || v.i >= std::int64_t(mesh.mNumVertices))
-          body.fail(e, f, "vertex index " + std::to_string(v.i) + " out of range (the file has " +
-                              std::to_string(mesh.mNumVertices) + " vertices)");
-        corner[k] = static_cast<unsigned>(v.i);
-        const auto bad = not_finite.find(corner[k]);
-        if (bad != not_finite.end())
-          body.fail(e, f, "vertex " + std::to_string(v.i) + " (" + bad->second + ") is not a finite number");
-      }
+      const unsigned n = list_length(body, e, f, max_triangles_ + 2);
+      corners.resize(n);
+      for (unsigned k = 0; k < n; ++k)
+        corners[k] = corner(body, e, f, body.next(e.properties[0].type, e, f).i, not_finite);
       body.end_of_instance(e, f);
       if (n < 3) fan.skip();  // the importer path skips points and lines (and empty faces), with no id
-      else fan.face(corner.data(), n, static_cast<unsigned>(f));
+      else fan.face(corners.data(), n, static_cast<unsigned>(f));
+    }
+    faces_ = e.count;
+  }
+
+  // Triangle strips (scenes/FORMAT.md): triangle k of a strip is corners
+  // (k, k+1, k+2), every odd one turned (k+1, k, k+2) so that all face the
+  // same way; -1 (or a new list) starts a new strip; a triangle naming a
+  // vertex twice joins strips and is no facet. Each triangle is a facet of
+  // its own, after the faces'.
+  void read_strips(ply::Body& body, const ply::Element& e,
+                   const std::unordered_map<unsigned, std::string>& not_finite, WindowFan& fan) {
+    std::uint64_t triangle = faces_;
+    for (std::uint64_t f = 0; f < e.count; ++f) {
+      const unsigned n = list_length(body, e, f, UINT_MAX);
+      unsigned last[2] = {0, 0};
+      std::uint64_t k = 0;  // corners since the strip's start
+      for (unsigned c = 0; c < n; ++c) {
+        const std::int64_t v = body.next(e.properties[0].type, e, f).i;
+        if (v == -1) {
+          k = 0;
+          continue;
+        }
+        const unsigned now = corner(body, e, f, v, not_finite);
+        if (k >= 2 && last[0] != last[1] && last[1] != now && now != last[0]) {
+          const unsigned tri[3] = {k % 2 ? last[1] : last[0], k % 2 ? last[0] : last[1], now};
+          fan.face(tri, 3, static_cast<unsigned>(std::min<std::uint64_t>(triangle++, UINT_MAX)));
+        }
+        last[0] = last[1], last[1] = now, ++k;
+      }
+      body.end_of_instance(e, f);
     }
   }
 
@@ -136,6 +179,8 @@ class PlyWindowReader {
   std::size_t max_triangles_;
   ObjWindow window_;
   std::size_t block_;
+  unsigned vertices_ = 0;
+  std::uint64_t faces_ = 0;  // of the 'face' element: the strips' triangles are numbered after them
 };
 
 }  // namespace
@@ -153,6 +198,42 @@ Scene load_ply_window(const std::string& path, std::size_t max_triangles, const 
   return PlyWindowReader(path, max_triangles, window, block_bytes).run(fans);
 }
 
+bool ply_has_strips(const std::string& path) {
+  ply::Header h;
+  try {
+    h = ply::read_header(path);
+  } catch (const InputError&) {
+    return false;
+  }
+  if (!ply::has_strips(h)) return false;
+  if (const std::string why = ply::stream_refusal(h); !why.empty())
+    throw InputError(path + ": PLY triangle strips are read only from a file of 'vertex', 'face' and 'tristrips' "
+                            "elements as scenes/FORMAT.md says, and " + why);
+  return true;
+}
+
+Scene load_ply_whole(const std::string& path, std::size_t max_triangles) {
+  ObjWindow all;  // one rank, one fan triangle in the plan: every face is kept
+  all.fans = 1;
+  std::uint64_t fans = 0;
+  Scene scene = load_ply_window(path, max_triangles, all, fans);
+  scene.share = SceneShare{};
+  return scene;
+}
+
+std::vector<std::string> ply_unread_elements(const std::string& path) {
+  std::vector<std::string> out;
+  try {
+    for (const ply::Element& e : ply::read_header(path).elements)
+      if (e.name != "vertex" && e.name != "face" && e.name != "tristrips" && e.name != "material")
+        out.push_back(path + ":" + std::to_string(e.line) + ": the PLY element '" + e.name + "' (" +
+                      std::to_string(e.count) + " of them) is not read: only 'vertex', 'face' and 'tristrips' "
+                      "give facets, so nothing of it is drawn");
+  } catch (const InputError&) {  // a header only the importer reads: it has said what it could
+  }
+  return out;
+}
+
 }  // namespace opsila
 
 #else  // built without the Open Asset Import Library: the importer path says so
@@ -164,6 +245,13 @@ std::string ply_stream_refusal(const std::string&) { return "this build has no O
 Scene load_ply_window(const std::string& path, std::size_t, const ObjWindow&, std::uint64_t&, std::size_t) {
   throw InputError(path + ": this build has no Open Asset Import Library (install libassimp-dev and rebuild)");
 }
+
+bool ply_has_strips(const std::string&) { return false; }
+Scene load_ply_whole(const std::string& path, std::size_t) {
+  std::uint64_t fans = 0;
+  return load_ply_window(path, 0, ObjWindow{}, fans);
+}
+std::vector<std::string> ply_unread_elements(const std::string&) { return {}; }
 
 }  // namespace opsila
 

@@ -9,6 +9,7 @@
 #include "input/scene_reader.h"
 #include "input/model_window.h"
 #include "core/env_hooks.h"
+#include "core/input_file.h"
 #include "core/stage_clock.h"
 
 #include <chrono>
@@ -288,7 +289,8 @@ namespace {
 
 using WindowRead = std::function<Scene(const ObjWindow&, std::uint64_t& fans)>;
 
-Scene load_window_share(const WindowRead& read, const SceneShare& share) {
+Scene load_window_share(const std::string& path, const WindowRead& read, const SceneShare& share) {
+  const FileReadStamp stamp(path);
   ObjWindow w;
   w.rank = share.rank, w.ranks = share.ranks;
   w.load_maps = false;
@@ -303,6 +305,7 @@ Scene load_window_share(const WindowRead& read, const SceneShare& share) {
   figures.lo = scene.share.lo;
   figures.hi = scene.share.hi;
   figures.spread = std::move(scene.share.spread);
+  figures.reads.emplace_back(path, stamp.after(fans, all, std::uint64_t(scene.num_facets)));
   if (figures.combine) figures.combine(figures);
   scene.share = std::move(figures);
   return scene;
@@ -323,7 +326,7 @@ Scene load_scene(const std::string& path, const SceneShare& share) {
   if (windowed(path, ext, share)) {
     const std::size_t limit = rank_triangle_limit() * std::size_t(share.ranks);
     Scene scene = load_window_share(
-        [&](const ObjWindow& w, std::uint64_t& fans) {
+        path, [&](const ObjWindow& w, std::uint64_t& fans) {
           return ext == ".obj" ? load_obj_window(path, limit, w, fans) : load_model_window(path, limit, w, fans);
         },
         share);

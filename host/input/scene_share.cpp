@@ -11,6 +11,8 @@
 
 #include <limits>
 
+#include "core/input_file.h"
+
 namespace opsila {
 namespace scene_json {
 
@@ -112,9 +114,12 @@ void SceneReader::file_window(Scene& sub, const std::string& file, std::uint64_t
   w.load_maps = false;  // the first read loaded them
   entry_.windowed = true;
   try {
+    const FileReadStamp stamp(file);
     std::uint64_t again = 0;
     Scene part = is_streamed_model(file) ? load_model_window(file, max_triangles_, w, again)
                                          : load_obj_window(file, max_triangles_, w, again);
+    if (again != fans) throw InputError(file + ": the file changed while it was read (its polygons)");
+    share_.reads.emplace_back(file, stamp.after(again, part.share.total_triangles, std::uint64_t(part.num_facets)));
     sub.triangles = std::move(part.triangles);
     sub.attributes = std::move(part.attributes);
     sub.share.spread = std::move(part.share.spread);

@@ -4,6 +4,8 @@
 #include <cstring>
 #include <utility>
 
+#include "core/errors.h"
+
 namespace opsila {
 
 using namespace partition_steps;
@@ -146,8 +148,35 @@ ShareClusters split_share(const Scene& share, const Box& sbox, int num_pes, bool
   return out;
 }
 
+namespace {
+
+// Every rank's record of what it read, compared by the largest and the
+// smallest of each value (one collective each, the same on every rank).
+void check_same_reads(const SceneShare& share, Ranks& ranks) {
+  std::vector<std::uint64_t> high{share.reads.size()};
+  for (const auto& [file, figures] : share.reads) high.insert(high.end(), figures.begin(), figures.end());
+  std::vector<std::uint64_t> length{high.size()}, low_length{~high.size()};
+  ranks.max(length), ranks.max(low_length);
+  std::vector<std::uint64_t> low(high.size());
+  for (std::size_t k = 0; k < high.size(); ++k) low[k] = ~high[k];
+  if (length[0] == ~low_length[0]) ranks.max(high), ranks.max(low);
+  std::size_t at = 1;
+  for (const auto& [file, figures] : share.reads) {
+    bool same = length[0] == ~low_length[0];
+    for (std::size_t k = 0; same && k < figures.size(); ++k) same = high[at + k] == ~low[at + k];
+    if (!same)
+      throw InputError(file + ": the ranks did not read the same file (its size, modification time or contents "
+                              "differ between ranks): it changed while they read it, or they see different copies");
+    at += figures.size();
+  }
+  if (length[0] != ~low_length[0]) throw InputError("the ranks did not stream the same model files");
+}
+
+}  // namespace
+
 void combine_share(SceneShare& share, Ranks& ranks) {
   ranks.checkpoint();  // a rank that failed reading its share is waiting there
+  check_same_reads(share, ranks);
   share.total_triangles = share.total_triangles - share.window_triangles + ranks.sum(share.window_triangles);
   ranks.sum(share.window_dropped);  // as many entries on every rank
   Box b;

@@ -60,6 +60,8 @@ struct RanksTimer {
 namespace {
 void finish_at_exit() { Ranks::world().finish(); }
 
+MPI_Comm failures = MPI_COMM_NULL;  // abort's messages (made by start)
+
 int checked_int(std::uint64_t n, const char* what) {
   if (n > std::uint64_t(INT_MAX))
     throw std::runtime_error(std::string(what) + ": " + std::to_string(n) + " items exceed one MPI message");
@@ -84,6 +86,7 @@ void Ranks::start() {
   MPI_Comm_rank(local, &local_rank_);
   MPI_Comm_size(local, &local_size_);
   MPI_Comm_free(&local);
+  MPI_Comm_dup(MPI_COMM_WORLD, &failures);
 }
 
 void Ranks::finish() {
@@ -239,8 +242,62 @@ int Ranks::agree(int& code) {
   return first;
 }
 
-void Ranks::abort(int code) {
-  if (started_) MPI_Abort(MPI_COMM_WORLD, code);
+namespace {
+
+// The failures of the collective part are told on a communicator of their
+// own (no collective can match them): a failing rank tells every other
+// that it failed, then listens for kReportGrace seconds. It stays silent
+// when a lower rank failed too or another already reports; else it says it
+// reports, and does. A message takes far less than half the grace, so of
+// ranks failing at once only one reports, and the lowest failing rank is
+// silent only when another reports.
+constexpr int kFailedTag = 1, kReportsTag = 2;
+constexpr double kReportGrace = 1.0;
+constexpr double kSilentWait = 30.0;  // then a silent rank ends the job itself
+
+void tell_others(int rank, int size, int tag) {
+  static int token = 0;  // what is sent is the tag and the source; the buffer outlives the sends
+  for (int q = 0; q < size; ++q) {
+    if (q == rank) continue;
+    MPI_Request request;
+    MPI_Isend(&token, 1, MPI_INT, q, tag, failures, &request);
+    MPI_Request_free(&request);
+  }
+}
+
+bool reports_the_failure(int rank, int size) {
+  tell_others(rank, size, kFailedTag);
+  const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(kReportGrace);
+  while (std::chrono::steady_clock::now() < end) {
+    int arrived = 0;
+    MPI_Status status;
+    MPI_Iprobe(MPI_ANY_SOURCE, MPI_ANY_TAG, failures, &arrived, &status);
+    if (!arrived) {
+      usleep(1000);
+      continue;
+    }
+    int token = 0;
+    MPI_Recv(&token, 1, MPI_INT, status.MPI_SOURCE, status.MPI_TAG, failures, MPI_STATUS_IGNORE);
+    if (status.MPI_TAG == kReportsTag || status.MPI_SOURCE < rank) return false;
+  }
+  tell_others(rank, size, kReportsTag);
+  return true;
+}
+
+}  // namespace
+
+void Ranks::abort(int code, const std::function<void()>& report) {
+  if (!started_ || size_ == 1 || failures == MPI_COMM_NULL) {
+    report();
+    if (started_) MPI_Abort(MPI_COMM_WORLD, code);
+    std::_Exit(code);
+  }
+  if (reports_the_failure(rank_, size_)) {
+    report();
+  } else {
+    usleep(useconds_t(kSilentWait * 1e6));  // the reporting rank ends the job before
+  }
+  MPI_Abort(MPI_COMM_WORLD, code);
   std::_Exit(code);
 }
 
@@ -266,7 +323,10 @@ void Ranks::send(const void*, std::size_t, int, int) { throw std::logic_error("R
 void Ranks::receive(void*, std::size_t, int, int) { throw std::logic_error("Ranks::receive without MPI"); }
 void Ranks::wait_sends() {}
 int Ranks::agree(int& code) { return code != 0 ? 0 : -1; }
-void Ranks::abort(int code) { std::_Exit(code); }
+void Ranks::abort(int code, const std::function<void()>& report) {
+  report();
+  std::_Exit(code);
+}
 
 #endif
 

@@ -7,6 +7,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -68,9 +69,12 @@ class Ranks {
   // code (0 = fine). Returns the lowest failing rank (-1 when none) and sets
   // `code` to that rank's code on every rank.
   int agree(int& code);
-  // Ends every rank (MPI_Abort) after a failure seen by this rank alone,
-  // while the others may wait in a collective. Never returns.
-  [[noreturn]] void abort(int code);
+  // Ends every rank (MPI_Abort) after a failure seen by this rank, while
+  // the others may wait in a collective. Several ranks may fail at once
+  // (every rank's device faults in one round): they settle which one calls
+  // `report` (prints the one error line) without any collective, and the
+  // others end silently with it. Never returns.
+  [[noreturn]] void abort(int code, const std::function<void()>& report);
 
   // Phases of a run. Before begin_collective() each rank works alone
   // (reading, partitioning, uploading): a rank that fails there joins the

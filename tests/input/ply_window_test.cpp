@@ -200,11 +200,13 @@ TEST_F(PlyWindow, FilesItCannotReadAsTheImporterDoesAreLeftToIt) {
   EXPECT_EQ(ply_stream_refusal(file(q, "nx.ply")), "its vertices have some normal components, not all");
   q = p;
   q.extra_header = "element edge 0\nproperty int vertex1\n";
-  EXPECT_EQ(ply_stream_refusal(file(q, "edges.ply")), "its elements are not 'vertex' then 'face'");
+  EXPECT_EQ(ply_stream_refusal(file(q, "edges.ply")),
+            "its elements are not 'vertex' then 'face' (or 'tristrips', or both)");
   q = p;
   q.list_name = "vertex_indices";
   q.extra_header = "property uchar red\n";
-  EXPECT_EQ(ply_stream_refusal(file(q, "face_colour.ply")), "its faces hold more than one list of vertex indices");
+  EXPECT_EQ(ply_stream_refusal(file(q, "face_colour.ply")),
+            "its 'face' elements hold more than one list of vertex indices");
   const std::string missing = (dir / "missing.ply").string();
   EXPECT_EQ(ply_stream_refusal(missing).rfind("its header: " + missing + ": cannot open", 0), 0u);
   std::ofstream(dir / "odd_header.ply") << "ply\nformat ascii 1.0\nmade by hand\nend_header\n";

@@ -404,5 +404,39 @@ TEST(ModelImport, SceneFileModelObjects) {
   EXPECT_NE(msg.find("not a model format"), std::string::npos) << msg;
 }
 
+// glTF primitive modes (scenes/FORMAT.md): triangle strips and fans are
+// read as their triangles, each a facet; points and lines make none (a
+// model of nothing else is "no facets").
+std::string gltf_of_mode(int mode) {
+  // Six vertices (0,0) (1,0) (0,1) (1,1) (0,2) (1,2) in the plane z = 0, base64 floats.
+  const std::string data =
+      "AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAAAACAPwAAgD8AAAAAAAAAAAAAAEAAAAAAAACAPwAAAEAAAAAA";
+  return R"({"asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0]}], "nodes": [{"mesh": 0}],
+    "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "mode": )" + std::to_string(mode) + R"(}]}],
+    "buffers": [{"byteLength": 72, "uri": "data:application/octet-stream;base64,)" + data + R"("}],
+    "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 72}],
+    "accessors": [{"bufferView": 0, "componentType": 5126, "count": 6, "type": "VEC3",
+                   "min": [0, 0, 0], "max": [1, 2, 0]}]})";
+}
+
+TEST(ModelImport, GltfStripsAndFansAreTheirTrianglesPointsAndLinesNone) {
+  test::TempDir dir;
+  EXPECT_EQ(load_scene(dir.write("list.gltf", gltf_of_mode(4))).triangles.size(), 2u);
+  for (int mode : {5, 6}) {  // TRIANGLE_STRIP, TRIANGLE_FAN: 4 triangles of 6 vertices
+    const Scene s = load_scene(dir.write("m" + std::to_string(mode) + ".gltf", gltf_of_mode(mode)));
+    EXPECT_EQ(s.triangles.size(), 4u) << "mode " << mode;
+    EXPECT_EQ(s.num_facets, 4) << "mode " << mode;
+  }
+  for (int mode : {0, 1, 3}) {  // POINTS, LINES, LINE_STRIP
+    const std::string path = dir.write("p" + std::to_string(mode) + ".gltf", gltf_of_mode(mode));
+    try {
+      load_scene(path);
+      ADD_FAILURE() << "mode " << mode << " gave facets";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("no facets"), std::string::npos) << e.what();
+    }
+  }
+}
+
 }  // namespace
 }  // namespace opsila

@@ -21,8 +21,8 @@
 typedef uint hit_bits_t;
 inline hit_bits_t hit_float_bits(float t) { return as_uint(t); }
 inline float hit_bits_float(hit_bits_t b) { return as_float(b); }
-#define OPSILA_HIT_INF INFINITY
 #else
+#include <cmath>
 #include <cstdint>
 #include <cstring>
 typedef std::uint32_t hit_bits_t;
@@ -36,8 +36,8 @@ inline float hit_bits_float(hit_bits_t b) {
   std::memcpy(&t, &b, sizeof t);
   return t;
 }
-#define OPSILA_HIT_INF INFINITY
 #endif
+#define OPSILA_HIT_INF INFINITY
 
 /* Mantissa bits cleared: cells of 16 ulps, a relative width between 2^-20
  * and 2^-19, the scale of the watertight test's rounding on coplanar

@@ -36,13 +36,6 @@ constexpr std::uint64_t kNoHit = ~std::uint64_t(0);
 // Rays of a level traced, joined and spawned at once (sample_rays).
 constexpr std::size_t kSampleChunk = std::size_t(1) << 14;
 
-float float_of(std::uint64_t bits) {
-  const std::uint32_t b = static_cast<std::uint32_t>(bits);
-  float t;
-  std::memcpy(&t, &b, sizeof t);
-  return t;
-}
-
 using Impl = ReferenceTracer::Impl;
 
 // The least hit over every holder, in the hit order: the least cell of t
@@ -144,7 +137,7 @@ RaySample ReferenceTracer::sample_rays(int target_primary, const SampleJoin* joi
       std::size_t k = 0;
       for (std::size_t i = 0; i < n && out.rays.size() < kMaxSampleRays; ++i) {
         // The hit's cell (its start): the segment ends there, within 2^-19.
-        const float t = t_bits[i] == kNoHit ? std::numeric_limits<float>::infinity() : float_of(t_bits[i]);
+        const float t = t_bits[i] == kNoHit ? OPSILA_HIT_INF : hit_bits_float(static_cast<hit_bits_t>(t_bits[i]));
         out.rays.push_back({rays[i].origin, rays[i].direction, t});
         for (; k < spawned.size() && spawned[k].ray == i; ++k) {
           const SampleSpawn& sp = spawned[k];

@@ -7,7 +7,7 @@
  * whatever order its hits are found in (any PE count, rank count, balance,
  * bank BVH, visit order). Facet ids are unique over a scene and never
  * decrease as object ids increase (checked when the banks are built,
- * host/machine/partition.cpp), so the facet id orders by object id first.
+ * host/partition/partition.cpp), so the facet id orders by object id first.
  *
  * The grid: a distance's float bits with the OPSILA_HIT_GRID_BITS lowest
  * mantissa bits cleared. Positive floats order as their bits do, so the

@@ -21,7 +21,7 @@
  * (the host's traced rectangle: the pixels outside it are misses that no
  * kernel touches; the read-back gives them the background). `clusters`
  * and `cluster_rects` come nearest the eye first (item_depth_order,
- * host/machine/frame.h; cluster_near: each one's distance from the eye), so
+ * host/frame/frame.h; cluster_near: each one's distance from the eye), so
  * that a near hit ends a pixel's search at the first cluster beyond it;
  * the hit order makes the items the same in any order. The group first
  * lists, in that order, the clusters whose projected box overlaps the tile (one rectangle test per cluster per tile instead of per pixel);
@@ -48,7 +48,7 @@ __kernel void item_buffer(FrameParams fp, __global const Cluster *clusters, __gl
   int pixel = y * fp.width + x;
   /* A group of PEs after the first (an MPI rank) continues the nearest-hit
    * search from the state the groups before it left (with hits kept): the
-   * least hit of all groups (host/machine/rank_exchange.h). */
+   * least hit of all groups (host/frame/rank_exchange.h). */
   bool continued = fp.group_begin > 0 && inside;
   bool held = continued && item_tri[pixel] >= 0; /* a miss leaves no distance or key */
   HitKey best = held ? hit_key(item_t[pixel], item_key[pixel].x, item_key[pixel].y) : hit_none();

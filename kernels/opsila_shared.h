@@ -125,7 +125,7 @@ typedef std::uint32_t opsila_u32;
  * which of the frame's totals the counter adds to: SPAWNED (descriptors
  * created at this level), FINISHED (descriptors that end here) or NONE.
  * The host takes the JSON names and the sums from here
- * (host/machine/counters.h). A new counter is one line below. */
+ * (host/device/counters.h). A new counter is one line below. */
 #define OPSILA_STAT_COUNTERS(X)                                                                            \
   X(TRACED, "traced", NONE)                     /* descriptors processed by the PE (any kind) */           \
   X(RADIANCE, "radiance", NONE)                 /* TRACE descriptors processed */                           \
@@ -223,7 +223,7 @@ typedef struct {
  *   count[k] == 0: inner node, child[k] is its node index;
  *   count[k] >  0: leaf, facets child[k] .. child[k] + count[k] - 1;
  *   count[k] <  0: empty slot, with an inverted box (lo = +inf, hi = -inf,
- *                  host/machine/bank_bvh.h, empty_node) that no ray meets,
+ *                  host/partition/bank_bvh.h, empty_node) that no ray meets,
  *                  so the walks test all W boxes without reading the
  *                  counts.
  * Indices are global (bank offsets applied). The routing BVH (one per PE,

@@ -32,7 +32,7 @@
  * With several devices (MPI ranks), a device has banks only for its PEs
  * [group_begin, group_end): what is bound for other PEs all waits in the
  * next pool, contiguous per destination PE in PE order, which is what the
- * rank exchange sends (host/machine/rank_exchange.cpp), and the records it
+ * rank exchange sends (host/frame/rank_exchange.cpp), and the records it
  * receives lead the next pool.
  *
  * Blocks: each SPMD work-group's outputs are one block, then the pool is cut

@@ -18,8 +18,8 @@
 #include <random>
 #include <vector>
 
-#include "machine/descriptors.h"
-#include "machine/renderer.h"
+#include "device/descriptors.h"
+#include "frame/renderer.h"
 
 namespace opsila::test {
 

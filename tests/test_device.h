@@ -6,7 +6,7 @@
 #include <cstdlib>
 #include <memory>
 
-#include "machine/cl_runtime.h"
+#include "device/cl_runtime.h"
 
 namespace opsila::test {
 

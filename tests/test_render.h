@@ -7,8 +7,9 @@
 
 #include <string>
 
-#include "input/scene_file.h"
-#include "machine/renderer.h"
+#include "prepare/prepare_banks.h"
+#include "formats/json/scene_file.h"
+#include "frame/renderer.h"
 #include "reference/reference.h"
 #include "test_device.h"
 #include "test_util.h"

@@ -10,7 +10,7 @@
 #include <utility>
 #include <vector>
 
-#include "core/scene.h"
+#include "scene/scene.h"
 
 namespace opsila::test {
 

@@ -29,8 +29,8 @@
 #include <string>
 #include <vector>
 
-#include "core/image_io.h"
-#include "core/scene.h"
+#include "formats/image/image_io.h"
+#include "scene/scene.h"
 
 extern char** environ;
 

@@ -1,39 +1,47 @@
-# The rule of each room of host/ (docs/ARCHITECTURE.md): which other rooms
-# its files may include. Run by ctest (RoomIncludes); fails naming the file
-# and the include that breaks the rule.
+cmake_policy(VERSION 3.20)  # IN_LIST, POP_FRONT
+# Every #include of host/ against the rooms' table (host/rooms.cmake, the
+# same table that links the rooms' libraries): a room's files include only
+# its own room and the rooms it uses, directly or not. Run by ctest
+# (RoomIncludes); fails naming the file and the include that breaks the rule.
 #   cmake -DSRC=<source dir> -P tools/check_rooms.cmake
-set(allowed_core core)
-set(allowed_input core input)
-set(allowed_machine core machine)
-set(allowed_reference core reference)
-set(allowed_bench core input machine reference bench cli)
-set(allowed_cli core input machine reference bench cli)
+include(${SRC}/host/rooms.cmake)
 set(bad "")
-foreach(room core input machine reference bench cli)
+foreach(room ${OPSILA_ROOMS})
+  opsila_room_closure(${room} allowed)
   file(GLOB files ${SRC}/host/${room}/*.h ${SRC}/host/${room}/*.cpp)
+  # The executable's main (host/app/main.cpp) runs the bench command too.
+  list(REMOVE_ITEM files ${SRC}/host/app/main.cpp)
   foreach(f ${files})
     file(STRINGS ${f} lines REGEX "^#include \"[a-z_]+/")
     foreach(line ${lines})
-      string(REGEX REPLACE "^#include \"([a-z_]+)/.*" "\\1" target "${line}")
-      list(FIND allowed_${room} ${target} at)
+      # The room of an include: its folder ("formats/obj" for formats/obj/x.h).
+      string(REGEX REPLACE "^#include \"(.*)/[a-z_]+\\.h\".*" "\\1" target "${line}")
+      list(FIND allowed ${target} at)
       if(at EQUAL -1)
         file(RELATIVE_PATH rel ${SRC} ${f})
-        string(APPEND bad "  ${rel}: ${line} (${room} may include: ${allowed_${room}})\n")
+        string(APPEND bad "  ${rel}: ${line} (${room} may include: ${allowed})\n")
       endif()
     endforeach()
   endforeach()
 endforeach()
-# Below the renderer nothing includes it: the types other rooms need are in
-# machine/render_types.h. Only the renderer itself (renderer.cpp, its
-# private frame.h and frame_*.cpp stages) and the pilot frames (which run
-# renderers) include machine/renderer.h inside the machine room.
-file(GLOB files ${SRC}/host/machine/*.h ${SRC}/host/machine/*.cpp)
+# Every folder of host/ with sources is a room of the table.
+file(GLOB_RECURSE sources RELATIVE ${SRC}/host ${SRC}/host/*.cpp ${SRC}/host/*.h)
+foreach(s ${sources})
+  get_filename_component(dir ${s} DIRECTORY)
+  if(NOT dir IN_LIST OPSILA_ROOMS)
+    string(APPEND bad "  host/${s}: in host/${dir}, which is not a room of host/rooms.cmake\n")
+  endif()
+endforeach()
+# Inside frame/, only the renderer (renderer.cpp, its private frame.h and
+# the frame_*.cpp stages) includes frame/renderer.h; the types other rooms
+# need are in scene/render_types.h.
+file(GLOB files ${SRC}/host/frame/*.h ${SRC}/host/frame/*.cpp)
 foreach(f ${files})
   get_filename_component(name ${f} NAME)
-  if(NOT name MATCHES "^(renderer\\.cpp|pilot\\.cpp|frame\\.h|frame_[a-z_]+\\.cpp)$")
-    file(STRINGS ${f} lines REGEX "^#include \"machine/renderer\\.h\"")
+  if(NOT name MATCHES "^(renderer\\.cpp|frame\\.h|frame_[a-z_]+\\.cpp)$")
+    file(STRINGS ${f} lines REGEX "^#include \"frame/renderer\\.h\"")
     if(lines)
-      string(APPEND bad "  host/machine/${name}: includes machine/renderer.h (below the renderer: use machine/render_types.h)\n")
+      string(APPEND bad "  host/frame/${name}: includes frame/renderer.h (use scene/render_types.h)\n")
     endif()
   endif()
 endforeach()

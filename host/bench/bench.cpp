@@ -16,14 +16,14 @@
 #include "bench/measure.h"
 #include "bench/options.h"
 #include "bench/report.h"
-#include "cli/startup.h"
+#include "prepare/startup.h"
 #include "core/progress.h"
 #include "core/stage_clock.h"
-#include "core/image_io.h"
-#include "core/output_files.h"
-#include "input/scene_file.h"
-#include "machine/pe_group.h"
-#include "machine/ranks.h"
+#include "formats/image/image_io.h"
+#include "formats/image/output_files.h"
+#include "formats/json/scene_file.h"
+#include "partition/pe_group.h"
+#include "mpi/ranks.h"
 
 namespace opsila {
 

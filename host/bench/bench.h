@@ -12,11 +12,11 @@
 #include <string>
 #include <vector>
 
-#include "machine/cl_runtime.h"
-#include "machine/descriptors.h"
-#include "core/image.h"
+#include "device/cl_runtime.h"
+#include "device/descriptors.h"
+#include "scene/image.h"
 #include "core/util.h"
-#include "core/scene.h"
+#include "scene/scene.h"
 
 namespace opsila {
 

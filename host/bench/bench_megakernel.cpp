@@ -8,14 +8,14 @@
 #include <tuple>
 
 #include "bench/bench.h"
-#include "core/camera.h"
+#include "scene/camera.h"
 #include "core/fixed_point.h"
 #include "core/parallel.h"
 #include "opsila_shared.h"
-#include "machine/bank_bvh.h"
-#include "machine/partition.h"
-#include "machine/kernel_args.h"
-#include "machine/renderer.h"
+#include "partition/bank_bvh.h"
+#include "partition/partition.h"
+#include "device/kernel_args.h"
+#include "frame/renderer.h"
 
 namespace opsila {
 

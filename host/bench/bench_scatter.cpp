@@ -7,9 +7,9 @@
 
 #include "bench/bench.h"
 #include "core/util.h"
-#include "machine/host_scatter.h"
-#include "machine/kernel_args.h"
-#include "machine/render_types.h"
+#include "frame/host_scatter.h"
+#include "device/kernel_args.h"
+#include "scene/render_types.h"
 
 namespace opsila {
 

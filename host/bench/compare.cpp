@@ -5,7 +5,7 @@
 
 #include "bench/report.h"
 #include "core/input_file.h"
-#include "core/scene.h"
+#include "scene/scene.h"
 
 namespace opsila {
 

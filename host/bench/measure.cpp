@@ -12,8 +12,8 @@
 
 #include "core/progress.h"
 #include "core/util.h"
-#include "machine/prepare_banks.h"
-#include "machine/renderer.h"
+#include "prepare/prepare_banks.h"
+#include "frame/renderer.h"
 #include "reference/reference.h"
 
 namespace opsila {
@@ -234,7 +234,7 @@ void measure_renders(BenchReport& report, Scene& scene, const RenderSettings& se
   with_progress.switch_counting = true;
   RenderSettings prepare = settings;
   prepare.pilot_warm_up = true;  // as the timed frames follow a warm-up frame
-  Renderer renderer(scene, prepare_banks(scene, prepare, rt), with_progress, rt);
+  Renderer renderer(scene, prepare_banks_consuming(scene, prepare, rt), with_progress, rt);
   Baselines base;
   if (baselines) base = Baselines(report, scene, rt, embree, progress);
   RenderResult frame, first;

@@ -3,9 +3,9 @@
 #pragma once
 
 #include "bench/report.h"
-#include "core/scene.h"
-#include "machine/cl_runtime.h"
-#include "machine/render_types.h"
+#include "scene/scene.h"
+#include "device/cl_runtime.h"
+#include "scene/render_types.h"
 
 namespace opsila {
 

@@ -7,7 +7,7 @@
 #include <cstring>
 #include <thread>
 
-#include "core/image_io.h"
+#include "formats/image/image_io.h"
 
 namespace opsila {
 

@@ -1,12 +1,12 @@
 // `opsila bench` arguments: the view group shared with `opsila render`
-// (cli/args.h) and the bench's own flags, with the defaults they imply.
+// (app/args.h) and the bench's own flags, with the defaults they imply.
 #pragma once
 
 #include <optional>
 #include <string>
 #include <vector>
 
-#include "cli/args.h"
+#include "app/args.h"
 
 namespace opsila {
 

@@ -5,8 +5,8 @@
 #include <algorithm>
 #include <cmath>
 
-#include "core/image_io.h"
-#include "machine/pe_group.h"
+#include "formats/image/image_io.h"
+#include "partition/pe_group.h"
 #include "opsila_shared.h"
 
 namespace opsila {

@@ -14,9 +14,9 @@
 #include <nlohmann/json.hpp>
 
 #include "bench/bench.h"
-#include "core/output_files.h"
-#include "machine/render_types.h"
-#include "machine/stats.h"
+#include "formats/image/output_files.h"
+#include "scene/render_types.h"
+#include "frame/stats.h"
 
 namespace opsila {
 

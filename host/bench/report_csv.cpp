@@ -4,8 +4,8 @@
 #include <sstream>
 
 #include "bench/report.h"
-#include "core/image_io.h"
-#include "core/output_files.h"
+#include "formats/image/image_io.h"
+#include "formats/image/output_files.h"
 
 namespace opsila {
 

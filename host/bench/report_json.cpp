@@ -6,7 +6,7 @@
 
 #include "bench/report.h"
 #include "core/util.h"
-#include "machine/stats.h"
+#include "frame/stats.h"
 #include "opsila_shared.h"
 
 namespace opsila {

@@ -2,7 +2,7 @@
 // for tests, CI and experiments, not settings: the command line is the
 // interface. A newcomer adding one adds a row here (name, what it does) and
 // reads it with env_hook(); README's "Environment" section lists them too.
-// (The MPI launchers' own variables are read by launched_by_mpi, machine/ranks.h.)
+// (The MPI launchers' own variables are read by launched_by_mpi, mpi/ranks.h.)
 // An empty value counts as unset. Each reader checks its value and refuses a
 // bad one with InputError naming NAME=value, or ignores it where said.
 #pragma once

@@ -1,6 +1,6 @@
 // The errors a run ends with, by whose fault: bad input here (exit 2); a
-// failed OpenCL call or driver fault is ClError (machine/cl_runtime.h, exit
-// 3); the exit codes themselves are in cli/args.h.
+// failed OpenCL call or driver fault is ClError (device/cl_runtime.h, exit
+// 3); the exit codes themselves are in app/args.h.
 #pragma once
 
 #include <stdexcept>

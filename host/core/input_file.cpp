@@ -2,6 +2,7 @@
 
 #include <sys/stat.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstring>
 #include <filesystem>
@@ -101,5 +102,24 @@ std::vector<std::uint64_t> FileReadStamp::after(std::uint64_t fans, std::uint64_
   figures.insert(figures.end(), {fans, triangles, facets});
   return figures;
 }
+
+std::string read_input_file(const std::string& path) {
+  return read_input_file(path, kMaxInputFileBytes, [](const char*, std::size_t, std::size_t) {});
+}
+
+ChunkCheck text_check(const std::string& path) {
+  return [path, line = 1](const char* data, std::size_t n, std::size_t at) mutable {
+    if (at == 0 && n >= 2 && ((data[0] == '\xff' && data[1] == '\xfe') || (data[0] == '\xfe' && data[1] == '\xff')))
+      throw InputError(path + ":1: UTF-16 text is not supported (save the file as UTF-8 or ASCII)");
+    // Counted, not looped over byte by byte: this runs at memory speed.
+    if (const char* nul = static_cast<const char*>(std::memchr(data, 0, n))) {
+      line += static_cast<int>(std::count(data, nul, '\n'));
+      throw InputError(path + ":" + std::to_string(line) + ": NUL byte (binary file?)");
+    }
+    line += static_cast<int>(std::count(data, data + n, '\n'));
+  };
+}
+
+std::string read_text_file(const std::string& path) { return read_input_file(path, kMaxInputFileBytes, text_check(path)); }
 
 }  // namespace opsila

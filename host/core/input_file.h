@@ -29,6 +29,13 @@ void read_file_chunks(const std::string& path, std::size_t max_bytes, const Chun
 // oversized files give an InputError naming the path.
 std::string read_input_file(const std::string& path, std::size_t max_bytes,
                             const ChunkCheck& check = {});
+// Any file (an image) of at most kMaxInputFileBytes.
+std::string read_input_file(const std::string& path);
+// A text file (OBJ, MTL) of at most kMaxInputFileBytes: a NUL byte (a binary
+// file) is refused as soon as it is read, not after gigabytes.
+std::string read_text_file(const std::string& path);
+// That check, for a file read in chunks: UTF-16 and NUL bytes, by line.
+ChunkCheck text_check(const std::string& path);
 // The same for a file named by `origin` (an environment variable or a
 // flag): every message starts "ORIGIN=PATH: " ("--compare PATH: ").
 std::string read_named_file(const std::string& origin, const std::string& path, std::size_t max_bytes);

@@ -20,9 +20,11 @@
 #include <string>
 #include <thread>
 
-#include "core/scene.h"
 
 namespace opsila {
+
+// A count for people: "12.3 M", "4.56 G".
+std::string count_text(double n);
 
 class Progress {
  public:
@@ -79,18 +81,5 @@ class SlowNote {
   bool done_ = false;
   std::thread watcher_;
 };
-
-// Upper bound of the rays a render can cast: pixels x spp x the largest ray
-// tree (a radiance ray per level per reflective/transmissive branch, each
-// with a shadow ray per light). Worth saying up front when it is large.
-struct WorkBound {
-  double rays = 0;           // the bound (double: 2^31-node trees overflow 64 bits)
-  double rays_per_sample = 0;
-  int branches = 0;          // 0, 1 or 2: reflected and/or transmitted children possible
-};
-WorkBound work_bound(const Scene& scene);
-// One line for stderr when the bound is at least kLargeWork rays, else "".
-constexpr double kLargeWork = 1e9;
-std::string large_work_note(const Scene& scene);
 
 }  // namespace opsila

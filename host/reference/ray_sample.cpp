@@ -1,4 +1,4 @@
-// The ray sample of --balance work (core/ray_sample.h), traced by the
+// The ray sample of --balance work (scene/ray_sample.h), traced by the
 // reference tracer, level by level, and joined over the holders of a scene
 // read in shares in the hit order (kernels/hit_order.h).
 #include <algorithm>

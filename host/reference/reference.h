@@ -10,10 +10,10 @@
 #include <memory>
 #include <vector>
 
-#include "core/camera.h"
-#include "core/image.h"
-#include "core/ray_sample.h"
-#include "core/scene.h"
+#include "scene/camera.h"
+#include "scene/image.h"
+#include "scene/ray_sample.h"
+#include "scene/scene.h"
 
 namespace opsila {
 
@@ -63,7 +63,7 @@ class ReferenceTracer {
   Vec3 render_pixel(int x, int y, std::int32_t* object_facet, RayCounts& counts) const;
   float epsilon() const { return epsilon_; }
   // The ray trees of about `target_primary` centre rays on a regular pixel
-  // lattice, every ray as a segment (core/ray_sample.h): what the partition
+  // lattice, every ray as a segment (scene/ray_sample.h): what the partition
   // weighs the clusters with. Traced a level at a time (the primary rays,
   // then every ray they spawn, ...), each level's segments in its rays'
   // order; at most kMaxSampleRays segments (a deep tree of glass and

@@ -6,7 +6,7 @@
 
 #include <vector>
 
-#include "core/scene.h"
+#include "scene/scene.h"
 #include "core/vec.h"
 
 namespace opsila::reference {

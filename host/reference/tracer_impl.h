@@ -8,8 +8,8 @@
 #include <cstdint>
 #include <vector>
 
-#include "core/camera.h"
-#include "core/texture.h"
+#include "scene/camera.h"
+#include "scene/texture.h"
 #include "hit_order.h"
 #include "reference/reference.h"
 #include "reference/reference_bvh.h"

@@ -1,6 +1,6 @@
 /* The SPEC camera on the device: the primary rays of the item buffer, the
  * primary descriptors and the replicated megakernel. The basis comes from
- * the host (FrameParams, computed once by host/core/camera.cpp, which also
+ * the host (FrameParams, computed once by host/scene/camera.cpp, which also
  * holds the host's copy of these two functions). */
 #include "geometry.cl"
 

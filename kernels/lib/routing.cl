@@ -4,7 +4,7 @@
  * paper's scheme, OPSILA_ROUTING_SPHERES: a linear scan of each PE's
  * spheres, behind the box around them) or its box (OPSILA_ROUTING_BOXES: the
  * cluster boxes of each PE under a small wide BVH, BankNode with one cluster
- * per leaf, built by host/machine/bank_bvh.cpp; PE q's root is route[q],
+ * per leaf, built by host/partition/bank_bvh.cpp; PE q's root is route[q],
  * and route[P + i] holds the boxes of PEs i*W .. i*W + W-1, the top level
  * the walks start from).
  * The boxes are padded on the host so that rounding never puts a facet's

@@ -1,5 +1,5 @@
 /* SPEC "Texture maps": the bilinear, repeating lookup of a bank's texture
- * copy. host/core/texture.cpp is the same lookup, expression for
+ * copy. host/scene/texture.cpp is the same lookup, expression for
  * expression; srgb is the host's 256-entry sRGB decode table. */
 #include "geometry.cl"
 

@@ -8,13 +8,13 @@
  *   - the traverser: OPSILA_DEFINE_WALK, the stack, the order of the visit
  *     and what is pushed, written once; a walk brings its state and hooks.
  *
- * Node layout (built by host/machine/bank_bvh.cpp): OPSILA_BVH_WIDTH
+ * Node layout (built by host/partition/bank_bvh.cpp): OPSILA_BVH_WIDTH
  * children per node, their boxes stored per plane (lo_x[W], hi_x[W],
  * lo_y[W], ... ), then child[W] and count[W]:
  *   count == 0: inner node, child = node index;
  *   count >  0: leaf, items child .. child + count - 1;
  *   count <  0: empty slot, its box inverted (lo = +inf, hi = -inf,
- *              empty_node in host/machine/bank_bvh.h), which no ray meets:
+ *              empty_node in host/partition/bank_bvh.h), which no ray meets:
  *              the node tests never read the counts.
  * A root has no box of its own: a walk starts by testing its children.
  *

@@ -11,16 +11,17 @@
 
 #include <nlohmann/json.hpp>
 
+#include "prepare/prepare_banks.h"
 #include "bench/bench.h"
 #include "bench/compare.h"
-#include "machine/host_scatter.h"
-#include "machine/partition.h"
-#include "input/scene_file.h"
+#include "frame/host_scatter.h"
+#include "partition/partition.h"
+#include "formats/json/scene_file.h"
 #include "reference/reference.h"
-#include "machine/renderer.h"
+#include "frame/renderer.h"
 #include "exchange_check.h"
 #include "test_device.h"
-#include "core/scene.h"
+#include "scene/scene.h"
 #include "test_scenes.h"
 #include "test_util.h"
 

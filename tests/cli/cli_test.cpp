@@ -4,7 +4,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "core/image_io.h"
+#include "formats/image/image_io.h"
 #include "test_util.h"
 
 namespace opsila {

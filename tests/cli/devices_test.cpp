@@ -11,9 +11,9 @@
 #include <string>
 #include <vector>
 
-#include "core/image_io.h"
+#include "formats/image/image_io.h"
 #include "core/util.h"
-#include "machine/cl_runtime.h"
+#include "device/cl_runtime.h"
 #include "test_util.h"
 
 namespace opsila {

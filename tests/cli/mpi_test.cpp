@@ -500,7 +500,7 @@ TEST_F(MpiFixture, ObjFilesReadInWindowsAreTheSameAsOneProcess) {
 
 #ifdef OPSILA_HAVE_ASSIMP
 // One big binary PLY, bare: every rank reads its vertices and streams its
-// faces, keeping only its window (host/input/ply_window.cpp). The same
+// faces, keeping only its window (host/formats/ply/ply_window.cpp). The same
 // image, item buffer and banks as one process (which reads it through the
 // importer); each rank read about 1/R of the facets.
 TEST_F(MpiFixture, ABarePlyReadInWindowsIsTheSameAsOneProcess) {
@@ -558,7 +558,7 @@ TEST_F(MpiFixture, ABrokenPlyEndsEveryRankWithOneLine) {
 }
 
 // One big binary STL, bare: every rank streams its records, keeping only
-// its window (host/input/stl_window.cpp). The same image, item buffer and
+// its window (host/formats/stl/stl_window.cpp). The same image, item buffer and
 // banks as one process (which reads it through the importer); each rank
 // read about 1/R of the facets.
 TEST_F(MpiFixture, ABareStlReadInWindowsIsTheSameAsOneProcess) {

@@ -19,7 +19,7 @@
 #include <OpenEXR/ImfInputFile.h>
 #include <OpenEXR/ImfStdIO.h>
 
-#include "core/image_io.h"
+#include "formats/image/image_io.h"
 #include "test_util.h"
 
 namespace opsila {

@@ -1,12 +1,12 @@
 // Output formats: PFM, NPY, PNG, sRGB, atomic writes.
-#include "core/image_io.h"
+#include "formats/image/image_io.h"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <cstring>
 
-#include "core/scene.h"
+#include "scene/scene.h"
 #include "test_util.h"
 
 namespace opsila {

@@ -10,9 +10,9 @@
 #include <chrono>
 #include <thread>
 
-#include "core/image_io.h"
-#include "core/output_files.h"
-#include "core/scene.h"
+#include "formats/image/image_io.h"
+#include "formats/image/output_files.h"
+#include "scene/scene.h"
 #include "test_util.h"
 
 namespace opsila {

@@ -7,7 +7,7 @@
 #include <cstddef>
 #include <cstdlib>
 
-#include "core/scene.h"
+#include "scene/scene.h"
 
 namespace fuzz {
 

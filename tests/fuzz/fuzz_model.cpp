@@ -3,7 +3,7 @@
 // told to expect (STL, OFF, glTF, GLB or PLY); bytes after the first
 // "#EXTERNAL#" are every other file the importer opens (a glTF's external
 // buffers), so crafted buffers take the path files on disk take. The checks
-// before the importer (input/model_checks.h) and the conversion layer must
+// before the importer (formats/assimp/model_checks.h) and the conversion layer must
 // turn whatever the importer accepts into a valid scene or one InputError.
 // Nothing is read from disk.
 #include <cmath>
@@ -12,8 +12,8 @@
 #include <cstdlib>
 #include <string>
 
-#include "core/scene.h"
-#include "input/model_import.h"
+#include "scene/scene.h"
+#include "formats/assimp/model_import.h"
 #include "fuzz_checks.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {

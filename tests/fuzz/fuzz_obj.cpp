@@ -7,9 +7,9 @@
 #include <cstdlib>
 #include <string>
 
-#include "input/obj_loader.h"
+#include "formats/obj/obj_loader.h"
 #include "fuzz_checks.h"
-#include "core/scene.h"
+#include "scene/scene.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const std::string text(reinterpret_cast<const char*>(data), size);

@@ -8,8 +8,8 @@
 #include <cstdlib>
 #include <string>
 
-#include "core/scene.h"
-#include "input/scene_file.h"
+#include "scene/scene.h"
+#include "formats/json/scene_file.h"
 #include "fuzz_checks.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {

@@ -50,7 +50,7 @@ export LSAN_OPTIONS="suppressions=$root/.ci/lsan.supp:print_suppressions=0"
 # A small stack for the targets (2 MiB, a quarter of the usual default):
 # recursion that grows with the input must be bounded by the checks, and
 # the model importer's own runs on its thread with a stack of its own
-# (input/model_files.h), which this limit does not reach.
+# (formats/common/model_files.h), which this limit does not reach.
 ulimit -s 2048 || exit 1
 
 status=0

@@ -9,12 +9,12 @@
 #include <string>
 #include <vector>
 
-#include "core/image_io.h"
-#include "core/texture.h"
-#include "input/obj_loader.h"
-#include "input/scene_file.h"
-#include "input/texture_file.h"
-#include "machine/partition.h"
+#include "formats/image/image_io.h"
+#include "scene/texture.h"
+#include "formats/obj/obj_loader.h"
+#include "formats/json/scene_file.h"
+#include "formats/image/texture_file.h"
+#include "partition/partition.h"
 #include "test_scenes.h"
 #include "test_util.h"
 

@@ -6,9 +6,9 @@
 #include <string>
 #include <vector>
 
-#include "core/scene.h"
-#include "input/obj_loader.h"
-#include "input/scene_file.h"
+#include "scene/scene.h"
+#include "formats/obj/obj_loader.h"
+#include "formats/json/scene_file.h"
 #include "test_util.h"
 
 namespace opsila {

@@ -16,9 +16,9 @@
 #include <utility>
 #include <vector>
 
-#include "input/model_checks.h"
-#include "input/model_import.h"
-#include "input/scene_file.h"
+#include "formats/assimp/model_checks.h"
+#include "formats/assimp/model_import.h"
+#include "formats/json/scene_file.h"
 #include "test_util.h"
 
 namespace opsila {

@@ -1,4 +1,4 @@
-// OBJ files read in chunks on several threads (host/input/obj_chunks.cpp):
+// OBJ files read in chunks on several threads (host/formats/obj/obj_chunks.cpp):
 // whatever the chunk size (down to one line a chunk, so that every line
 // is at a chunk border) and the threads, the same scene, warnings and error
 // messages as one parser reading the lines in turn.
@@ -11,9 +11,9 @@
 #include <string>
 #include <vector>
 
-#include "core/scene.h"
-#include "input/obj_loader.h"
-#include "input/obj_parser.h"
+#include "scene/scene.h"
+#include "formats/obj/obj_loader.h"
+#include "formats/obj/obj_parser.h"
 #include "test_util.h"
 
 namespace opsila {

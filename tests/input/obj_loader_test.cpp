@@ -15,8 +15,8 @@
 #include <vector>
 
 #include "test_util.h"
-#include "input/obj_loader.h"
-#include "core/scene.h"
+#include "formats/obj/obj_loader.h"
+#include "scene/scene.h"
 
 namespace opsila {
 namespace {

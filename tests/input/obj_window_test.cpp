@@ -14,8 +14,8 @@
 #include <string>
 #include <vector>
 
-#include "core/scene.h"
-#include "input/obj_loader.h"
+#include "scene/scene.h"
+#include "formats/obj/obj_loader.h"
 #include "test_util.h"
 #include "window_text.h"
 
@@ -35,7 +35,7 @@ std::string one_process(const std::string& path) {
 
 // R ranks, each reading its window with blocks of `how`.
 std::string on_ranks(const std::string& path, int R, const ObjStreaming& how) {
-  return test::windows_text(R, [&](const ObjWindow& w, std::uint64_t& fans) {
+  return test::windows_text(R, [&](const ModelWindow& w, std::uint64_t& fans) {
     return load_obj_window(path, std::size_t(1) << 24, w, fans, how);
   });
 }
@@ -60,7 +60,7 @@ const std::string kBody =
     "f 1 2\nf 1 1 1\nwhatever 1 2\nusemtl blue\no second\n# comment\nv 2 2 2\nf -1 -2 -3 -4\n"
     "f 1 2 6 3\nv 3 0 1\no third\nf 5 1 2 4 3\nusemtl red\nf 5 1 2\nf 1/9 2/1 3/2\nf 2 4 5 6\n";
 
-TEST(ObjWindow, WindowsTogetherAreOneProcess) {
+TEST(ModelWindow, WindowsTogetherAreOneProcess) {
   test::TempDir dir;
   expect_same_windows(dir.write("lf.obj", kBody), "LF");
   std::string crlf;
@@ -72,7 +72,7 @@ TEST(ObjWindow, WindowsTogetherAreOneProcess) {
                       "groups");
 }
 
-TEST(ObjWindow, ErrorsAreOneProcessesOnEveryRank) {
+TEST(ModelWindow, ErrorsAreOneProcessesOnEveryRank) {
   test::TempDir dir;
   const std::string good = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 1 2 3\n";
   expect_same_windows(dir.write("number.obj", good + "v 1 x 2\nf 1 2 3\nv nan 0 0\n"), "a bad number");
@@ -86,7 +86,7 @@ TEST(ObjWindow, ErrorsAreOneProcessesOnEveryRank) {
 }
 
 // The repository's OBJ files, good and bad, with their material libraries.
-TEST(ObjWindow, SameResultForEveryTestFile) {
+TEST(ModelWindow, SameResultForEveryTestFile) {
   int files = 0;
   for (const std::string dir : {kData, kData + "/bad"}) {
     for (const auto& e : fs::directory_iterator(dir)) {

@@ -10,8 +10,8 @@
 
 #include <nlohmann/json.hpp>
 
-#include "input/model_import.h"
-#include "input/ply_reader.h"
+#include "formats/assimp/model_import.h"
+#include "formats/ply/ply_reader.h"
 #include "ply_file.h"
 #include "test_util.h"
 #include "window_text.h"
@@ -53,7 +53,7 @@ struct PlyStrips : ::testing::Test {
     EXPECT_NE(whole.find("triangles " + std::to_string(triangles) + "\n"), std::string::npos) << whole;
     EXPECT_EQ(replaced(whole, strips, faces), test::imported_text(faces));
     for (int R : {1, 2, 3}) {
-      const std::string windows = test::windows_text(R, [&](const ObjWindow& w, std::uint64_t& fans) {
+      const std::string windows = test::windows_text(R, [&](const ModelWindow& w, std::uint64_t& fans) {
         return load_ply_window(strips, std::size_t(1) << 24, w, fans, 5);
       });
       EXPECT_EQ(windows, whole) << R << " ranks";

@@ -16,9 +16,9 @@
 #include <string>
 #include <vector>
 
-#include "core/scene.h"
-#include "input/model_import.h"
-#include "input/ply_reader.h"
+#include "scene/scene.h"
+#include "formats/assimp/model_import.h"
+#include "formats/ply/ply_reader.h"
 #include "ply_file.h"
 #include "test_util.h"
 #include "window_text.h"
@@ -37,7 +37,7 @@ using test::write_ply;
 std::string one_process(const std::string& path) { return test::imported_text(path); }
 
 std::string on_ranks(const std::string& path, int R, std::size_t block) {
-  return test::windows_text(R, [&](const ObjWindow& w, std::uint64_t& fans) {
+  return test::windows_text(R, [&](const ModelWindow& w, std::uint64_t& fans) {
     return load_ply_window(path, std::size_t(1) << 24, w, fans, block);
   });
 }

@@ -12,10 +12,10 @@
 #include <vector>
 
 #include "test_util.h"
-#include "input/obj_loader.h"
-#include "input/primitives.h"
-#include "core/scene.h"
-#include "input/scene_file.h"
+#include "formats/obj/obj_loader.h"
+#include "formats/json/primitives.h"
+#include "scene/scene.h"
+#include "formats/json/scene_file.h"
 
 namespace opsila {
 namespace {

@@ -4,7 +4,7 @@
 
 #include <string>
 
-#include "input/scene_file.h"
+#include "formats/json/scene_file.h"
 #include "test_util.h"
 
 namespace opsila {

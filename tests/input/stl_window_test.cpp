@@ -18,8 +18,9 @@
 #include <string>
 #include <vector>
 
-#include "core/scene.h"
-#include "input/model_window.h"
+#include "scene/scene.h"
+#include "formats/assimp/model_window.h"
+#include "formats/stl/stl_reader.h"
 #include "stl_file.h"
 #include "test_util.h"
 #include "window_text.h"
@@ -35,7 +36,7 @@ using test::StlFile;
 #ifdef OPSILA_HAVE_ASSIMP
 
 std::string on_ranks(const std::string& path, int R, std::size_t block, std::size_t limit = std::size_t(1) << 24) {
-  return test::windows_text(R, [&](const ObjWindow& w, std::uint64_t& fans) {
+  return test::windows_text(R, [&](const ModelWindow& w, std::uint64_t& fans) {
     return load_stl_window(path, limit, w, fans, block);
   });
 }

@@ -14,9 +14,9 @@
 #include <string>
 #include <vector>
 
-#include "core/scene.h"
-#include "input/model_import.h"
-#include "input/obj_loader.h"
+#include "scene/scene.h"
+#include "formats/assimp/model_import.h"
+#include "formats/obj/obj_loader.h"
 #include "test_util.h"
 
 namespace opsila {
@@ -109,13 +109,13 @@ inline std::string imported_text(const std::string& path) {
 // window, then keeping its window): each one's figures (which must agree),
 // then the windows' triangles in rank order; the spread objects each rank
 // names must be those whose triangles lie on several ranks.
-inline std::string windows_text(int R, const std::function<Scene(const ObjWindow&, std::uint64_t&)>& load) {
+inline std::string windows_text(int R, const std::function<Scene(const ModelWindow&, std::uint64_t&)>& load) {
   std::string figures, triangles;
   std::vector<std::set<int>> holders;  // by object: ranks holding its triangles
   std::vector<int> spread;
   for (int r = 0; r < R; ++r) {
     try {
-      ObjWindow w;
+      ModelWindow w;
       w.rank = r, w.ranks = R;
       w.load_maps = false;
       std::uint64_t fans = 0;

@@ -10,8 +10,8 @@
 #include <random>
 #include <vector>
 
-#include "core/scene.h"
-#include "machine/cl_runtime.h"
+#include "scene/scene.h"
+#include "device/cl_runtime.h"
 #include "test_device.h"
 #include "test_scenes.h"
 

@@ -13,7 +13,7 @@
 #include <vector>
 
 #include "batch.h"
-#include "machine/partition.h"
+#include "partition/partition.h"
 #include "hit_order.h"
 #include "opsila_shared.h"
 

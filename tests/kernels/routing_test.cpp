@@ -14,7 +14,7 @@
 #include <vector>
 
 #include "batch.h"
-#include "machine/partition.h"
+#include "partition/partition.h"
 #include "opsila_shared.h"
 
 namespace opsila {

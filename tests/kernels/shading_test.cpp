@@ -14,8 +14,9 @@
 #include <string>
 #include <vector>
 
+#include "prepare/prepare_banks.h"
 #include "batch.h"
-#include "machine/renderer.h"
+#include "frame/renderer.h"
 
 namespace opsila {
 namespace {

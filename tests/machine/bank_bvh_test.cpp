@@ -1,4 +1,4 @@
-// The wide bank and routing BVHs (host/machine/bank_bvh.cpp) as the kernels
+// The wide bank and routing BVHs (host/partition/bank_bvh.cpp) as the kernels
 // read them: every facet under exactly one leaf, every child box around what
 // it holds, cluster roots over their own facets, paths within the stack.
 #include <gtest/gtest.h>
@@ -9,9 +9,9 @@
 #include <string>
 #include <vector>
 
-#include "input/scene_file.h"
-#include "machine/bank_bvh.h"
-#include "machine/partition.h"
+#include "formats/json/scene_file.h"
+#include "partition/bank_bvh.h"
+#include "partition/partition.h"
 #include "opsila_shared.h"
 #include "test_scenes.h"
 

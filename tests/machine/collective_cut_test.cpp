@@ -11,8 +11,8 @@
 #include <utility>
 #include <vector>
 
-#include "input/primitives.h"
-#include "machine/collective_cut.h"
+#include "formats/json/primitives.h"
+#include "dist/collective_cut.h"
 
 namespace opsila {
 namespace {

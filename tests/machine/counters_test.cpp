@@ -1,5 +1,5 @@
 // The device's counters (kernels/lib/accum.cl count_add, read back by
-// machine/counters.h): 64 bits each, so that the largest frame opsila
+// device/counters.h): 64 bits each, so that the largest frame opsila
 // accepts cannot wrap them. A counter-only kernel adds, from many
 // work-items at once, what the largest frame could put in one PE x PE
 // traffic cell, and the host must read it back exactly.
@@ -10,11 +10,11 @@
 #include <string>
 #include <vector>
 
-#include "core/scene.h"
-#include "machine/counters.h"
-#include "machine/descriptors.h"
-#include "machine/prepare_banks.h"
-#include "machine/renderer.h"
+#include "scene/scene.h"
+#include "device/counters.h"
+#include "device/descriptors.h"
+#include "prepare/prepare_banks.h"
+#include "frame/renderer.h"
 #include "opsila_shared.h"
 #include "test_device.h"
 #include "test_scenes.h"

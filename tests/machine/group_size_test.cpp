@@ -5,7 +5,8 @@
 
 #include <algorithm>
 
-#include "machine/renderer.h"
+#include "prepare/prepare_banks.h"
+#include "frame/renderer.h"
 #include "test_device.h"
 #include "test_scenes.h"
 #include "test_util.h"

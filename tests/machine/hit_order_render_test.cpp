@@ -9,7 +9,8 @@
 #include <cstring>
 #include <string>
 
-#include "machine/renderer.h"
+#include "prepare/prepare_banks.h"
+#include "frame/renderer.h"
 #include "reference/reference.h"
 #include "test_device.h"
 #include "test_scenes.h"

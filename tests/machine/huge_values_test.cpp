@@ -11,11 +11,12 @@
 #include <string>
 #include <vector>
 
+#include "prepare/prepare_banks.h"
 #include "bench/bench.h"
 #include "core/fixed_point.h"
-#include "core/image_io.h"
-#include "input/scene_file.h"
-#include "machine/renderer.h"
+#include "formats/image/image_io.h"
+#include "formats/json/scene_file.h"
+#include "frame/renderer.h"
 #include "reference/reference.h"
 #include "test_device.h"
 #include "test_util.h"

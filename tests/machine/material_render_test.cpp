@@ -10,8 +10,8 @@
 #include <filesystem>
 #include <string>
 
-#include "input/scene_file.h"
-#include "machine/renderer.h"
+#include "formats/json/scene_file.h"
+#include "frame/renderer.h"
 #include "reference/reference.h"
 #include "test_device.h"
 #include "test_render.h"

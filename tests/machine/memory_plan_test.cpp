@@ -9,9 +9,9 @@
 #include <map>
 #include <string>
 
-#include "machine/device_buffers.h"
-#include "machine/prepare_banks.h"
-#include "machine/renderer.h"
+#include "device/device_buffers.h"
+#include "prepare/prepare_banks.h"
+#include "frame/renderer.h"
 #include "test_device.h"
 #include "test_scenes.h"
 

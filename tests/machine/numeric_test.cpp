@@ -11,8 +11,9 @@
 #include <string>
 #include <vector>
 
+#include "prepare/prepare_banks.h"
 #include "reference/reference.h"
-#include "machine/renderer.h"
+#include "frame/renderer.h"
 #include "test_device.h"
 #include "test_scenes.h"
 #include "test_util.h"

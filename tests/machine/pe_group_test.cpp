@@ -6,10 +6,10 @@
 #include <set>
 #include <vector>
 
-#include "core/scene.h"
-#include "machine/banks.h"
-#include "machine/pe_group.h"
-#include "machine/stats.h"
+#include "scene/scene.h"
+#include "partition/banks.h"
+#include "partition/pe_group.h"
+#include "frame/stats.h"
 #include "opsila_shared.h"
 #include "test_scenes.h"
 

@@ -8,8 +8,8 @@
 #include <cstdlib>
 #include <vector>
 
-#include "input/primitives.h"
-#include "machine/partition.h"
+#include "formats/json/primitives.h"
+#include "partition/partition.h"
 #include "test_scenes.h"
 
 namespace opsila {

@@ -20,13 +20,14 @@
 #include <tuple>
 #include <vector>
 
-#include "machine/descriptors.h"
-#include "machine/pe_group.h"
-#include "machine/rank_exchange.h"
-#include "machine/ranks.h"
-#include "core/image_io.h"
+#include "prepare/prepare_banks.h"
+#include "device/descriptors.h"
+#include "partition/pe_group.h"
+#include "frame/rank_exchange.h"
+#include "mpi/ranks.h"
+#include "formats/image/image_io.h"
 #include "opsila_shared.h"
-#include "machine/renderer.h"
+#include "frame/renderer.h"
 #include "exchange_check.h"
 #include "test_scenes.h"
 #include "test_device.h"

@@ -6,10 +6,12 @@
 #include <cmath>
 #include <cstdlib>
 
+#include "prepare/prepare_banks.h"
 #include "bench/bench.h"
 #include "core/progress.h"
-#include "input/scene_file.h"
-#include "machine/renderer.h"
+#include "scene/work_bound.h"
+#include "formats/json/scene_file.h"
+#include "frame/renderer.h"
 #include "reference/reference.h"
 #include "test_device.h"
 #include "test_scenes.h"

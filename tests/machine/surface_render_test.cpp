@@ -6,8 +6,8 @@
 #include <filesystem>
 
 #include "bench/bench.h"
-#include "input/scene_file.h"
-#include "machine/renderer.h"
+#include "formats/json/scene_file.h"
+#include "frame/renderer.h"
 #include "reference/reference.h"
 #include "test_device.h"
 #include "test_scenes.h"

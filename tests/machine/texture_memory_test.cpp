@@ -7,8 +7,8 @@
 #include <cstdint>
 #include <vector>
 
-#include "machine/partition.h"
-#include "machine/pe_group.h"
+#include "partition/partition.h"
+#include "partition/pe_group.h"
 #include "test_scenes.h"
 
 namespace opsila {

@@ -3,7 +3,7 @@
 
 #include <gtest/gtest.h>
 
-#include "input/scene_file.h"
+#include "formats/json/scene_file.h"
 
 #include <cmath>
 #include <condition_variable>
@@ -472,7 +472,7 @@ TEST(Reference, RaySampleFollowsTheTreesAndStaysBounded) {
 }
 
 // Holders of shares as threads of one process: the joins a level's hits
-// go through (the MPI ranks' in machine/collective_balance.cpp).
+// go through (the MPI ranks' in dist/collective_balance.cpp).
 class ThreadJoin {
  public:
   explicit ThreadJoin(int holders) : slots_(std::size_t(holders)) {}

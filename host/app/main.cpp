@@ -1,0 +1,26 @@
+// opsila: command-line entry point. Every failure ends here as one
+// "opsila: error: ..." line and an exit code (see cli.h); nothing escapes.
+#include <cstdio>
+#include <exception>
+#include <string>
+#include <vector>
+
+#include "app/cli.h"
+
+#include "bench/bench.h"
+#include "mpi/ranks.h"
+
+int main(int argc, char** argv) {
+  try {
+    // Under an MPI launcher, join the job first: a bad flag is then one
+    // error line from the lowest rank, not one per rank.
+    if (opsila::launched_by_mpi()) opsila::Ranks::world().start();
+    const std::vector<std::string> args(argv + 1, argv + argc);
+    if (!args.empty() && args[0] == "bench") {
+      return opsila::run_bench(std::vector<std::string>(args.begin() + 1, args.end()));
+    }
+    return opsila::run_cli(args);
+  } catch (...) {
+    return opsila::report_rank_failure(std::current_exception());
+  }
+}

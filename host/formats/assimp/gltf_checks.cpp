@@ -1,0 +1,340 @@
+// glTF and GLB checks before the importer reads the file. The importer
+// allocates a GLB chunk as long as its header says, reads external buffers
+// whole, checks bufferView ranges in arithmetic that wraps near 2^64 (and
+// then reads outside the buffer), and recurses once per node level. Both
+// glTF 2 (collections are arrays) and glTF 1 (objects keyed by id) are read.
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <filesystem>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "formats/common/json_text.h"
+#include "formats/assimp/model_checks.h"
+#include "formats/obj/obj_loader.h"
+
+namespace opsila {
+
+namespace {
+
+using Json = nlohmann::json;
+using u64 = std::uint64_t;
+
+std::uint32_t le32(const std::string& b, std::size_t at) {
+  std::uint32_t v = 0;
+  for (int k = 3; k >= 0; --k) v = v << 8 | static_cast<unsigned char>(b[at + k]);
+  return v;
+}
+
+// The JSON text of a GLB (binary glTF) and the length of its binary chunk,
+// every length checked against the bytes that are there.
+struct GltfParts {
+  std::string json;
+  u64 bin_bytes = 0;
+};
+
+GltfParts split_glb(const std::string& b, const std::string& name) {
+  const u64 size = b.size();
+  if (size < 20) throw InputError(name + ": GLB file shorter than its header (truncated file)");
+  const std::uint32_t version = le32(b, 4), length = le32(b, 8);
+  if (length > size)
+    throw InputError(name + ": GLB header says " + std::to_string(length) + " bytes; the file holds " +
+                     std::to_string(size) + " (truncated file)");
+  GltfParts parts;
+  if (version == 1) {  // 20-byte header, then the JSON content, then the binary body
+    const u64 content = le32(b, 12);
+    if (content > u64(length) - 20)
+      throw InputError(name + ": GLB content length " + std::to_string(content) + " runs past the file's " +
+                       std::to_string(length) + " bytes");
+    parts.json = b.substr(20, content);
+    parts.bin_bytes = length - 20 - content;
+    return parts;
+  }
+  if (version != 2) throw InputError(name + ": GLB version " + std::to_string(version) + " (1 or 2 are read)");
+  u64 at = 12;
+  for (int chunk = 0; at < length; ++chunk) {
+    if (u64(length) - at < 8) throw InputError(name + ": GLB chunk " + std::to_string(chunk) + ": header cut off");
+    const u64 bytes = le32(b, at), type = le32(b, at + 4);
+    if (bytes > u64(length) - at - 8)
+      throw InputError(name + ": GLB chunk " + std::to_string(chunk) + " claims " + std::to_string(bytes) +
+                       " bytes; " + std::to_string(u64(length) - at - 8) + " follow it in the file");
+    if (chunk == 0 && type != 0x4E4F534Au) throw InputError(name + ": GLB's first chunk is not JSON");
+    if (chunk == 0) parts.json = b.substr(at + 8, bytes);
+    if (chunk == 1 && type == 0x004E4942u) parts.bin_bytes = bytes;
+    at += 8 + bytes;
+  }
+  return parts;
+}
+
+// A count, offset, length or index: a whole number >= 0 (2^64 and beyond
+// read as the largest u64, which no range holds).
+u64 whole(const Json& obj, const char* key, u64 fallback, const std::string& where) {
+  const auto it = obj.find(key);
+  if (it == obj.end()) return fallback;
+  if (it->is_number_unsigned()) return it->get<u64>();
+  if (it->is_number_float()) {
+    const double d = it->get<double>();
+    if (d >= 0 && d == std::floor(d)) return d >= 18446744073709551615.0 ? ~u64(0) : u64(d);
+  }
+  throw InputError(where + ": '" + key + "' is not a whole number >= 0");
+}
+
+// The entries of a top-level collection, with the names messages give them.
+struct Entry {
+  std::string where, key;  // key: the glTF 1 id ("" in glTF 2)
+  const Json* value;
+};
+
+class Gltf {
+ public:
+  Gltf(const Json& root, const std::string& name) : root_(root), name_(name) {}
+
+  std::vector<Entry> entries(const char* collection) const {
+    std::vector<Entry> out;
+    const auto it = root_.find(collection);
+    if (it == root_.end()) return out;
+    if (it->is_array())
+      for (std::size_t i = 0; i < it->size(); ++i)
+        out.push_back({name_ + ": " + collection + "[" + std::to_string(i) + "]", "", &(*it)[i]});
+    else if (it->is_object())
+      for (auto e = it->begin(); e != it->end(); ++e)
+        out.push_back({name_ + ": " + collection + " '" + quoted_prefix(e.key()) + "'", e.key(), &e.value()});
+    return out;
+  }
+  // Index of the entry `ref` names in `collection`, or -1.
+  long index(const char* collection, const Json& ref) const {
+    const auto it = root_.find(collection);
+    if (it == root_.end()) return -1;
+    if (it->is_array() && ref.is_number_unsigned() && ref.get<u64>() < it->size()) return long(ref.get<u64>());
+    if (it->is_object() && ref.is_string()) {
+      std::unordered_map<std::string, long>& ids = ids_[collection];
+      if (ids.empty()) {
+        long k = 0;
+        for (auto e = it->begin(); e != it->end(); ++e) ids.emplace(e.key(), k++);
+      }
+      const auto k = ids.find(ref.get_ref<const std::string&>());
+      if (k != ids.end()) return k->second;
+    }
+    return -1;
+  }
+  // `obj[key]` as a reference into `collection` (an index into `lengths`).
+  long ref(const Json& obj, const char* key, const char* collection, const std::string& where) const {
+    const auto it = obj.find(key);
+    if (it == obj.end()) return -1;
+    const long k = index(collection, *it);
+    if (k < 0) throw InputError(where + ": '" + key + "' names no entry of '" + collection + "'");
+    return k;
+  }
+
+ private:
+  const Json& root_;
+  const std::string& name_;
+  mutable std::unordered_map<std::string, std::unordered_map<std::string, long>> ids_;  // glTF 1 id -> index
+};
+
+// Bytes a data: URI holds (base64 decoded, else its text).
+u64 data_uri_bytes(const std::string& uri) {
+  const std::size_t comma = uri.find(',');
+  if (comma == std::string::npos) return 0;
+  const u64 text = uri.size() - comma - 1;
+  if (uri.rfind(";base64", comma) == std::string::npos) return text;
+  u64 pad = 0;
+  for (std::size_t k = uri.size(); k > comma + 1 && uri[k - 1] == '=' && pad < 2; --k) ++pad;
+  return text / 4 * 3 - std::min<u64>(pad, text / 4 * 3);
+}
+
+std::vector<u64> buffer_lengths(const Gltf& g, ModelFiles& files, const GltfParts& parts, const std::string& path) {
+  std::vector<u64> lengths;
+  for (const Entry& e : g.entries("buffers")) {
+    u64 available = parts.bin_bytes;  // no uri: the GLB's binary chunk
+    std::string source = "the GLB binary chunk";
+    const auto uri = e.value->find("uri");
+    if (uri != e.value->end() && uri->is_string() && e.key != "binary_glTF") {
+      const std::string& u = uri->get_ref<const std::string&>();
+      if (u.compare(0, 5, "data:") == 0) {
+        available = data_uri_bytes(u);
+        source = "its data URI";
+      } else {
+        // Where the importer looks: the model's folder and the uri as written.
+        const std::string dir = std::filesystem::path(path).parent_path().string();
+        source = dir.empty() ? u : dir + "/" + u;
+        available = files.size(source);
+      }
+    }
+    const u64 length = whole(*e.value, "byteLength", available, e.where);
+    if (length > available)
+      throw InputError(e.where + ": byteLength " + std::to_string(length) + " but " + source + " holds " +
+                       std::to_string(available) + " bytes");
+    lengths.push_back(length);
+  }
+  return lengths;
+}
+
+struct View {
+  u64 length = 0, stride = 0;
+};
+
+std::vector<View> buffer_views(const Gltf& g, const std::vector<u64>& buffers) {
+  std::vector<View> views;
+  for (const Entry& e : g.entries("bufferViews")) {
+    const long b = g.ref(*e.value, "buffer", "buffers", e.where);
+    if (b < 0) throw InputError(e.where + ": no 'buffer'");
+    const u64 offset = whole(*e.value, "byteOffset", 0, e.where);
+    const u64 length = whole(*e.value, "byteLength", 0, e.where);
+    if (offset > buffers[b] || length > buffers[b] - offset)
+      throw InputError(e.where + ": byteOffset " + std::to_string(offset) + " + byteLength " + std::to_string(length) +
+                       " runs past the end of its buffer (" + std::to_string(buffers[b]) + " bytes)");
+    const u64 stride = whole(*e.value, "byteStride", 0, e.where);
+    if (stride > 255) throw InputError(e.where + ": byteStride " + std::to_string(stride) + " (at most 252)");
+    views.push_back({length, stride});
+  }
+  return views;
+}
+
+u64 component_bytes(u64 type) {
+  switch (type) {
+    case 5120: case 5121: return 1;
+    case 5122: case 5123: return 2;
+    case 5125: case 5126: return 4;
+    default: return 0;
+  }
+}
+
+u64 type_components(const Json& obj) {
+  const auto it = obj.find("type");
+  if (it == obj.end() || !it->is_string()) return 0;
+  static const std::unordered_map<std::string, u64> kCounts = {
+      {"SCALAR", 1}, {"VEC2", 2}, {"VEC3", 3}, {"VEC4", 4}, {"MAT2", 4}, {"MAT3", 9}, {"MAT4", 16}};
+  const auto k = kCounts.find(it->get<std::string>());
+  return k == kCounts.end() ? 0 : k->second;
+}
+
+// `count` elements of `elem` bytes, `stride` apart, from `offset` fit in a
+// view of `length` bytes (64-bit arithmetic that cannot wrap).
+void check_range(u64 offset, u64 count, u64 elem, u64 stride, u64 length, const std::string& where,
+                 const std::string& view) {
+  if (count == 0) return;
+  const u64 step = std::max(stride, elem);
+  if (offset > length || elem > length - offset || count - 1 > (length - offset - elem) / std::max<u64>(step, 1))
+    throw InputError(where + ": " + std::to_string(count) + " element(s) of " + std::to_string(elem) +
+                     " bytes from byteOffset " + std::to_string(offset) + " run past the end of " + view + " (" +
+                     std::to_string(length) + " bytes)");
+}
+
+void check_accessors(const Gltf& g, const std::vector<View>& views) {
+  for (const Entry& e : g.entries("accessors")) {
+    const Json& a = *e.value;
+    const u64 comp = component_bytes(whole(a, "componentType", 0, e.where)), n = type_components(a);
+    if (comp == 0 || n == 0) throw InputError(e.where + ": unknown componentType or type");
+    const u64 count = whole(a, "count", 0, e.where), elem = comp * n;
+    if (count > kMaxInputFileBytes / elem)
+      throw InputError(e.where + ": count " + std::to_string(count) + " (more than a file can hold)");
+    const long v = g.ref(a, "bufferView", "bufferViews", e.where);
+    if (v >= 0) {
+      const u64 stride = whole(a, "byteStride", views[v].stride, e.where);  // glTF 1 keeps it here
+      check_range(whole(a, "byteOffset", 0, e.where), count, elem, stride, views[v].length, e.where,
+                  "bufferViews[" + std::to_string(v) + "]");
+    }
+    const auto sparse = a.find("sparse");
+    if (sparse == a.end() || !sparse->is_object()) continue;
+    const std::string where = e.where + ".sparse";
+    const u64 changed = whole(*sparse, "count", 0, where);
+    if (changed > count) throw InputError(where + ": count " + std::to_string(changed) + " exceeds the accessor's");
+    for (const char* part : {"indices", "values"}) {
+      const auto p = sparse->find(part);
+      if (p == sparse->end() || !p->is_object()) throw InputError(where + ": no '" + part + "'");
+      const std::string at = where + "." + part;
+      const u64 bytes = part[0] == 'i' ? component_bytes(whole(*p, "componentType", 0, at)) : elem;
+      if (bytes == 0) throw InputError(at + ": unknown componentType");
+      const long pv = g.ref(*p, "bufferView", "bufferViews", at);
+      if (pv < 0) throw InputError(at + ": no 'bufferView'");
+      check_range(whole(*p, "byteOffset", 0, at), changed, bytes, bytes, views[pv].length, at,
+                  "bufferViews[" + std::to_string(pv) + "]");
+    }
+  }
+}
+
+// The node graph is a forest (glTF: "disjoint strict trees") of bounded
+// size and depth; the depth of every node is found without recursion.
+void check_nodes(const Gltf& g, const std::string& name) {
+  const std::vector<Entry> nodes = g.entries("nodes");
+  if (nodes.size() > kMaxNodes)
+    throw InputError(name + ": " + std::to_string(nodes.size()) + " nodes (the limit is " +
+                     std::to_string(kMaxNodes) + ")");
+  std::vector<long> parent(nodes.size(), -1);
+  for (std::size_t i = 0; i < nodes.size(); ++i) {
+    const auto children = nodes[i].value->find("children");
+    if (children == nodes[i].value->end() || !children->is_array()) continue;
+    for (const Json& c : *children) {
+      const long k = g.index("nodes", c);
+      if (k < 0) throw InputError(nodes[i].where + ": a child names no node");
+      if (parent[k] >= 0 || k == long(i))
+        throw InputError(nodes[k].where + ": has two parents or is its own child (nodes must form trees)");
+      parent[k] = long(i);
+    }
+  }
+  std::vector<long> depth(nodes.size(), -1), path;
+  long deepest = 0;
+  for (std::size_t i = 0; i < nodes.size(); ++i) {
+    long j = long(i);
+    path.clear();
+    while (j >= 0 && depth[j] < 0) {
+      if (path.size() > nodes.size()) throw InputError(nodes[i].where + ": is its own ancestor (a cycle)");
+      path.push_back(j);
+      j = parent[j];
+    }
+    long d = j >= 0 ? depth[j] : -1;
+    for (auto k = path.rbegin(); k != path.rend(); ++k) depth[*k] = ++d;
+    deepest = std::max(deepest, d);
+  }
+  if (deepest > kMaxNodeDepth)
+    throw InputError(name + ": node hierarchy " + std::to_string(deepest) + " levels deep (the limit is " +
+                     std::to_string(kMaxNodeDepth) + ")");
+}
+
+// Mesh compressions the importer cannot decode (Debian's assimp 5.2 reads
+// Draco, not meshopt): a file that requires one would otherwise fail on its
+// placeholder buffers, with a message about their lengths.
+void check_required_extensions(const Json& root, const std::string& name) {
+  static const char* const kUndecodable[] = {"EXT_meshopt_compression", "KHR_meshopt_compression"};
+  const auto required = root.find("extensionsRequired");
+  if (required == root.end() || !required->is_array()) return;
+  for (const Json& e : *required)
+    for (const char* extension : kUndecodable)
+      if (e.is_string() && e.get_ref<const std::string&>() == extension)
+        throw InputError(name + ": extensionsRequired names " + extension +
+                         " (meshopt-compressed meshes), which the model importer cannot decode: save the model "
+                         "without mesh compression");
+}
+
+}  // namespace
+
+void check_gltf(ModelFiles& files, const std::string& bytes, const std::string& path) {
+  GltfParts parts;
+  if (bytes.compare(0, 4, "glTF") == 0) parts = split_glb(bytes, path);
+  else parts.json = bytes;
+  // The importer's JSON reader recurses once per level of nesting.
+  check_json_shape(parts.json, path, 64, 1 << 24);
+  // Not a JSON object: no glTF reader takes it (and no other is asked).
+  const std::size_t first = parts.json.find_first_not_of(" \t\r\n");
+  if (first == std::string::npos || parts.json[first] != '{') return;
+  Json root;
+  try {
+    root = Json::parse(parts.json);
+  } catch (const Json::exception& e) {
+    const std::string why = e.what();  // "[json.exception.parse_error.101] parse error at ..."
+    throw InputError(path + ": not glTF JSON (" + why.substr(why.find(']') + 2) + ")");
+  }
+  if (!root.is_object()) throw InputError(path + ": not glTF JSON (not an object)");
+  check_required_extensions(root, path);
+  const Gltf g(root, path);
+  const std::vector<u64> buffers = buffer_lengths(g, files, parts, path);
+  check_accessors(g, buffer_views(g, buffers));
+  check_nodes(g, path);
+}
+
+}  // namespace opsila

@@ -1,0 +1,46 @@
+// What a model file promises, checked before the importer believes it: the
+// importer's readers allocate what headers ask for, follow offsets without
+// 64-bit range checks and recurse once per level of a node hierarchy, and
+// some accept files that end early. Each check throws one
+// InputError("FILE: ...") naming the element at fault.
+#pragma once
+
+#include <cstddef>
+#include <string>
+
+#include "formats/common/model_files.h"
+
+namespace opsila {
+
+// The deepest node hierarchy placed (levels below the root) and the most
+// nodes in one model; deeper or larger graphs are refused, naming the depth
+// or count, before the importer builds them.
+constexpr int kMaxNodeDepth = 1024;
+constexpr std::size_t kMaxNodes = std::size_t(1) << 20;
+// The deepest nesting of XML elements or braces in other text formats
+// (a node level takes a few).
+constexpr long kMaxNesting = 4 * kMaxNodeDepth;
+
+// The checks of the format that `ext` names (with or without its dot), for
+// the file `path` read through `files`.
+void check_model_file_shape(ModelFiles& files, const std::string& path, const std::string& ext);
+
+// PLY: the header ends, its element counts fit the file, and the data holds
+// every element the header counts (text or binary).
+void check_ply(const std::string& bytes, const std::string& name);
+// OFF: the vertex and face counts fit the file; every vertex line holds its
+// numbers and every face line a count of 1 to 9 and that many indices of
+// vertices in the file (the importer would clamp, drop or misread them).
+void check_off(const std::string& text, std::size_t file_bytes, const std::string& name);
+// STL: a binary file holds the facets its header counts; a text file ends
+// every facet and solid it opens.
+void check_stl(const std::string& bytes, const std::string& name);
+// Other text formats: XML elements or braces nested at most kMaxNesting deep.
+void check_nesting(const std::string& bytes, const std::string& name);
+// glTF (text) and GLB: chunk lengths within the file; buffers, buffer views
+// and accessors within one another, in 64-bit arithmetic; external buffers
+// within the file limit and as long as declared; node graph a forest of at
+// most kMaxNodes nodes and kMaxNodeDepth levels.
+void check_gltf(ModelFiles& files, const std::string& bytes, const std::string& path);
+
+}  // namespace opsila

@@ -1,0 +1,449 @@
+// The importer's scene -> SPEC's scene. Kept apart from the importer's own
+// post-processing: no aiProcess_Triangulate (SPEC fans polygons itself and
+// keeps one facet id per face) and no aiProcess_PreTransformVertices (it
+// joins and reorders meshes, and so would change the object ids).
+#include "formats/assimp/model_import.h"
+
+#include <signal.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cctype>
+#include <chrono>
+#include <cmath>
+#include <condition_variable>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <mutex>
+#include <new>
+#include <sstream>
+#include <stdexcept>
+#include <thread>
+#include <vector>
+
+#include "core/env_hooks.h"
+#include "core/util.h"
+#include "formats/assimp/model_checks.h"
+#include "formats/common/model_fan.h"
+#include "formats/common/model_files.h"
+#include "formats/obj/obj_loader.h"
+#include "formats/assimp/model_materials.h"
+#include "formats/assimp/model_window.h"
+#include "formats/ply/ply_reader.h"
+
+#ifdef OPSILA_HAVE_ASSIMP
+#include <assimp/Importer.hpp>
+#include <assimp/BaseImporter.h>
+#include <assimp/importerdesc.h>
+#include <assimp/postprocess.h>
+#include <assimp/scene.h>
+#endif
+
+namespace opsila {
+
+namespace fs = std::filesystem;
+
+#ifdef OPSILA_HAVE_ASSIMP
+namespace {
+
+// Every placement of every mesh: the product of the node transforms from the
+// root down to each node that lists the mesh, in depth-first order. Without
+// recursion; a hierarchy deeper than kMaxNodeDepth is refused (the glTF
+// checks refuse one before the importer builds it). The importer may add
+// one root above the file's own.
+void collect_placements(const aiNode* root, unsigned num_meshes, std::vector<std::vector<aiMatrix4x4>>& out,
+                        const std::string& name) {
+  struct Pending {
+    const aiNode* node;
+    aiMatrix4x4 parent;
+    int depth;
+  };
+  std::vector<Pending> stack{{root, aiMatrix4x4(), 0}};
+  while (!stack.empty()) {
+    const Pending at = stack.back();
+    stack.pop_back();
+    if (!at.node) continue;
+    if (at.depth > kMaxNodeDepth + 1)
+      throw InputError(name + ": node hierarchy more than " + std::to_string(kMaxNodeDepth) +
+                       " levels deep (the limit)");
+    const aiMatrix4x4 world = at.parent * at.node->mTransformation;
+    for (unsigned k = 0; k < at.node->mNumMeshes; ++k)
+      if (at.node->mMeshes[k] < num_meshes) out[at.node->mMeshes[k]].push_back(world);
+    for (unsigned c = at.node->mNumChildren; c-- > 0;) stack.push_back({at.node->mChildren[c], world, at.depth + 1});
+  }
+}
+
+class ModelReader {
+ public:
+  ModelReader(const aiScene& ai, const std::string& name, const std::string& base_dir)
+      : ai_(ai), name_(name), base_dir_(base_dir) {}
+
+  Scene run() {
+    scene_.has_camera = false;
+    scene_.has_lights = false;
+    scene_.materials.push_back(MaterialDesc::default_material());
+    material_index_ = import_materials(ai_, name_, base_dir_, scene_);
+    std::vector<std::vector<aiMatrix4x4>> placements(ai_.mNumMeshes);
+    collect_placements(ai_.mRootNode, ai_.mNumMeshes, placements, name_);
+    int unplaced = 0, facet = 0, skipped = 0;
+    FanTally tally;
+    for (unsigned m = 0; m < ai_.mNumMeshes; ++m) {
+      const aiMesh* mesh = ai_.mMeshes[m];
+      if (placements[m].empty()) ++unplaced;
+      const int first_facet = facet;
+      for (unsigned f = 0; f < mesh->mNumFaces; ++f) {
+        if (mesh->mFaces[f].mNumIndices >= 3) ++facet;
+        else ++skipped;
+        if (facet < 0) throw InputError(name_ + ": too many facets for 32-bit ids");
+      }
+      for (std::size_t k = 0; k < placements[m].size(); ++k)
+        emit_mesh(*mesh, static_cast<int>(m), first_facet, placements[m][k], static_cast<int>(k), tally);
+    }
+    scene_.num_objects = std::max(1, static_cast<int>(ai_.mNumMeshes));
+    scene_.num_facets = facet;
+    for (std::string& w : fan_warnings(name_, skipped, unplaced, tally.degenerate)) scene_.warnings.push_back(std::move(w));
+    if (scene_.triangles.empty()) throw InputError(name_ + ": no facets (the model has no drawable polygons)");
+    check_scene_extent(scene_, name_);
+    Vec3 lo, hi;
+    scene_.bounds(lo, hi);
+    scene_.camera = frame_bounds(lo, hi, 45.0f, float(scene_.width) / float(scene_.height));
+    return std::move(scene_);
+  }
+
+ private:
+  // One placement of a mesh (model_fan.h).
+  void emit_mesh(const aiMesh& mesh, int object, int facet, const aiMatrix4x4& place, int placement,
+                 FanTally& tally) {
+    const int material = mesh.mMaterialIndex < material_index_.size() ? material_index_[mesh.mMaterialIndex] : 0;
+    MeshFan fan(name_, mesh, place, kMaxTriangles, tally);
+    fan.placement = placement;
+    for (unsigned f = 0; f < mesh.mNumFaces; ++f) {
+      const aiFace& face = mesh.mFaces[f];
+      if (face.mNumIndices < 3) continue;
+      fan.face(face.mIndices, face.mNumIndices, f, object, facet++, material, &scene_);
+    }
+  }
+
+  const aiScene& ai_;
+  const std::string& name_;
+  std::string base_dir_;
+  Scene scene_;
+  std::vector<int> material_index_;  // importer material -> Scene::materials
+};
+
+// The importer's readers are not ours and some loop forever on malformed
+// files (Debian's PLY reader on some headers). A read that outlives its
+// budget ends the run with one error line instead of a hang; nothing has been
+// written yet while a scene loads, so there is no output to clean up.
+// Budget: OPSILA_IMPORT_TIMEOUT seconds if set, else 60 s + 1 s per MiB.
+//
+// Memory too: a corrupted Q3O file made the library's reader take 19 GB in
+// its 60 s. The resident memory the read adds is polled every 20 ms and
+// bounded by 4 GiB or 64 times the file, whichever is larger, but at most
+// three quarters of the machine's memory (or OPSILA_IMPORT_MEMORY bytes).
+std::uint64_t resident_bytes() {
+  std::ifstream statm("/proc/self/statm");
+  unsigned long long size = 0, resident = 0;
+  if (!(statm >> size >> resident)) return 0;
+  return resident * static_cast<std::uint64_t>(sysconf(_SC_PAGESIZE));
+}
+
+std::uint64_t import_memory_budget(std::uintmax_t bytes) {
+  if (const auto v = env_hook_number(EnvHook::import_memory, 1, std::uint64_t(1) << 50, "a number of bytes"))
+    return *v;
+  const std::uint64_t ram = static_cast<std::uint64_t>(sysconf(_SC_PHYS_PAGES)) *
+                            static_cast<std::uint64_t>(sysconf(_SC_PAGESIZE));
+  const std::uint64_t want = std::max<std::uint64_t>(std::uint64_t(4) << 30, 64 * std::uint64_t(bytes));
+  return ram > 0 ? std::max<std::uint64_t>(std::min(want, ram / 4 * 3), std::uint64_t(1) << 30) : want;
+}
+
+class ImportWatchdog {
+ public:
+  ImportWatchdog(const std::string& name, std::uintmax_t bytes) {
+    double budget = 60.0 + double(bytes) / (1024.0 * 1024.0);
+    if (const char* env = env_hook(EnvHook::import_timeout)) {
+      char* end = nullptr;
+      const double v = std::strtod(env, &end);
+      if (end != env && v >= 0) budget = v;
+    }
+    const std::uint64_t memory = import_memory_budget(bytes);
+    message_ = "opsila: error: " + name + ": the model importer did not finish within " +
+               std::to_string(static_cast<long long>(budget + 0.5)) + " s (malformed file?)\n";
+    memory_message_ = "opsila: error: " + name + ": the model importer took more than " +
+                      std::to_string(memory >> 20) + " MiB of memory reading a file of " + std::to_string(bytes) +
+                      " bytes (malformed file?)\n";
+    const std::uint64_t base = resident_bytes();
+    thread_ = std::thread([this, budget, memory, base] {
+      std::unique_lock<std::mutex> lock(mutex_);
+      const auto deadline = std::chrono::steady_clock::now() +
+                            std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                                std::chrono::duration<double>(std::min(budget, 1e9)));
+      for (;;) {
+        const auto next = std::min<std::chrono::steady_clock::time_point>(
+            deadline, std::chrono::steady_clock::now() + std::chrono::milliseconds(20));
+        if (done_cv_.wait_until(lock, next, [this] { return done_; })) return;
+        const bool late = std::chrono::steady_clock::now() >= deadline;
+        const std::uint64_t now = resident_bytes();
+        if (late || now > base + memory) {
+          std::fputs((late ? message_ : memory_message_).c_str(), stderr);
+          std::fflush(stderr);
+          std::_Exit(2);  // the exit code of bad input (app/args.h)
+        }
+      }
+    });
+  }
+  ~ImportWatchdog() {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      done_ = true;
+    }
+    done_cv_.notify_one();
+    thread_.join();
+  }
+  ImportWatchdog(const ImportWatchdog&) = delete;
+  ImportWatchdog& operator=(const ImportWatchdog&) = delete;
+
+ private:
+  std::string message_, memory_message_;
+  std::mutex mutex_;
+  std::condition_variable done_cv_;
+  bool done_ = false;
+  std::thread thread_;
+};
+
+// Some of the importer's readers (Half-Life MDL, LightWave, ... : the
+// formats opsila does not check first, so not fuzzed) fault or assert on
+// truncated or corrupt files. While such a read runs on the import
+// thread, a fault there (SIGSEGV, SIGBUS, SIGFPE, SIGILL) or an abort
+// (a failed assertion, an exception no one catches) ends the run with one
+// error line naming the file and exit code 2, like the watchdog: nothing
+// has been written yet while a scene loads. The handler runs on its own
+// stack (the fault may be a stack overflow) and calls only write and
+// _exit. Models read from memory (the fuzzers) get no guard, so that a
+// fault there is still found.
+class ImportFaultGuard {
+ public:
+  explicit ImportFaultGuard(const std::string& name) {
+    std::snprintf(message_, sizeof message_,
+                  "opsila: error: %s: the model importer failed while reading it (malformed file?)\n",
+                  name.size() < 3000 ? name.c_str() : "the model");
+    length_ = std::strlen(message_);
+    alt_.resize(std::max<std::size_t>(SIGSTKSZ, 64 * 1024));
+    stack_t st{};
+    st.ss_sp = alt_.data();
+    st.ss_size = alt_.size();
+    sigaltstack(&st, &old_stack_);
+    struct sigaction sa {};
+    sa.sa_handler = &ImportFaultGuard::on_fault;
+    sa.sa_flags = SA_ONSTACK;
+    sigemptyset(&sa.sa_mask);
+    for (int k = 0; k < kSignals; ++k) sigaction(kSignal[k], &sa, &old_[k]);
+  }
+  ~ImportFaultGuard() {
+    for (int k = 0; k < kSignals; ++k) sigaction(kSignal[k], &old_[k], nullptr);
+    sigaltstack(&old_stack_, nullptr);
+  }
+  ImportFaultGuard(const ImportFaultGuard&) = delete;
+  ImportFaultGuard& operator=(const ImportFaultGuard&) = delete;
+
+ private:
+  static void on_fault(int) {
+    const ssize_t ignored = write(2, message_, length_);
+    (void)ignored;
+    _exit(2);  // the exit code of bad input (app/args.h)
+  }
+  static constexpr int kSignals = 5;
+  static constexpr int kSignal[kSignals] = {SIGSEGV, SIGBUS, SIGFPE, SIGILL, SIGABRT};
+  static inline char message_[4096];
+  static inline std::size_t length_ = 0;
+  std::vector<char> alt_;
+  stack_t old_stack_{};
+  struct sigaction old_[kSignals] {};
+};
+
+// The extension without its dot, in lower case.
+std::string bare_extension(const std::string& ext) {
+  std::string e = lower(ext);
+  if (!e.empty() && e[0] == '.') e.erase(0, 1);
+  return e;
+}
+
+// Only the readers that claim the file's extension may read it. Where
+// several claim it (.gltf and .glb in libassimp 5.2) the importer would
+// otherwise try, when those refuse the content, every reader whose keyword
+// appears in the first bytes, and some of them allocate whatever a header
+// asks before reading anything (fuzz_model: OFF text and a Quick3D header,
+// both named .gltf, asked for 45 GB and 1.2 TB). The others are unregistered
+// (and deleted: the importer no longer owns them). Not for .xml: several
+// XML formats (Ogre's .mesh.xml, XGL, ...) are told apart only by content.
+void keep_readers_for(Assimp::Importer& importer, const std::string& ext) {
+  const std::string e = bare_extension(ext);
+  if (e == "xml") return;
+  std::vector<Assimp::BaseImporter*> others;
+  for (std::size_t i = 0; i < importer.GetImporterCount(); ++i) {
+    std::istringstream list(importer.GetImporterInfo(i)->mFileExtensions);
+    std::string one;
+    bool claims = false;
+    while (list >> one) claims = claims || lower(one) == e;
+    if (!claims) others.push_back(importer.GetImporter(i));
+  }
+  for (Assimp::BaseImporter* reader : others)
+    if (importer.UnregisterLoader(reader) == aiReturn_SUCCESS) delete reader;
+}
+
+// aiProcess_ValidateDataStructure refuses inconsistent data (indices out of
+// range, ...) instead of handing it on.
+constexpr unsigned kImportFlags = aiProcess_ValidateDataStructure;
+
+// STL is read without that step: it also refuses a mesh without vertices,
+// and a text STL makes one of every solid, so one empty solid beside a
+// full one ("solid a ... endsolid", "solid b endsolid") refused the whole
+// file. What the step would check of the STL reader's scene is checked
+// here; an empty solid keeps its mesh's place, hence the object ids of the
+// solids after it (SPEC: the index of the mesh in the importer's list).
+bool validated_by_us(const std::string& ext) { return lower(ext) == ".stl"; }
+
+void check_stl_scene(const aiScene& ai, const std::string& name) {
+  const auto bad = [&](const std::string& what) {
+    throw InputError(name + ": the STL reader's scene is inconsistent (" + what + ")");
+  };
+  if (!ai.mRootNode || (ai.mNumMeshes > 0 && !ai.mMeshes)) bad("no root node or mesh list");
+  for (unsigned m = 0; m < ai.mNumMeshes; ++m) {
+    const aiMesh* mesh = ai.mMeshes[m];
+    if (!mesh) bad("mesh " + std::to_string(m) + " missing");
+    if ((mesh->mNumVertices > 0 && !mesh->mVertices) || (mesh->mNumFaces > 0 && !mesh->mFaces))
+      bad("mesh " + std::to_string(m) + " without its arrays");
+    for (unsigned f = 0; f < mesh->mNumFaces; ++f) {
+      const aiFace& face = mesh->mFaces[f];
+      if (face.mNumIndices > 0 && !face.mIndices) bad("a face without indices");
+      for (unsigned k = 0; k < face.mNumIndices; ++k)
+        if (face.mIndices[k] >= mesh->mNumVertices) bad("a vertex index out of range");
+    }
+  }
+  for (unsigned k = 0; k < ai.mNumMaterials; ++k)
+    if (!ai.mMaterials || !ai.mMaterials[k]) bad("a material missing");
+}
+
+Scene convert(Assimp::Importer& importer, const aiScene* ai, const std::string& name, const std::string& base_dir,
+              const ModelFiles& files) {
+  if (!ai) {
+    std::string why = importer.GetErrorString();
+    std::replace(why.begin(), why.end(), '\n', ' ');
+    if (why.empty()) why = "cannot read the model";
+    throw InputError(name + ": " + why + (files.refusal().empty() ? "" : " (" + files.refusal() + ")"));
+  }
+  if (!ai->mRootNode || ai->mNumMeshes == 0 || (ai->mFlags & AI_SCENE_FLAGS_INCOMPLETE))
+    throw InputError(name + ": no facets (the model has no meshes)");
+  try {
+    return ModelReader(*ai, name, base_dir).run();
+  } catch (const std::bad_alloc&) {
+    throw InputError(name + ": out of memory while loading (model too large)");
+  } catch (const std::length_error&) {
+    throw InputError(name + ": model too large to load");
+  }
+}
+
+// When the importer refuses a PLY or STL file that the project's own stream
+// reads (formats/assimp/model_window.h), the stream's counting read names the line
+// and the key of the first problem, the message a rank reading its share
+// gives; the importer's own text stays where the stream finds nothing
+// wrong. Only on the way to an error: a file the importer reads is never
+// read twice.
+void explain_with_stream(const std::string& path) {
+  if (!is_streamed_model(path) || !model_stream_refusal(path).empty()) return;
+  std::uint64_t fans = 0;
+  (void)load_model_window(path, std::size_t(1) << 40, ModelWindow{}, fans);
+}
+
+// The stack of the import thread: the importer's readers, its validation
+// and its scene's destructor recurse once per node level (kMaxNodeDepth at
+// most from glTF; other formats are not checked before the importer builds
+// them) and once per level of JSON or XML nesting. Reserved, not touched,
+// until used.
+constexpr std::size_t kImportStackBytes = std::size_t(256) << 20;
+
+// The file's shape checks, then the importer, through `files` (which
+// records every file read as an input of the scene), on a thread with a
+// large stack.
+Scene import_model(ModelFiles& files, const std::string& path, const std::string& base_dir, bool watched) {
+  Scene scene;
+  run_with_stack(kImportStackBytes, [&] {
+    const std::string ext = fs::path(path).extension().string();
+    check_model_file_shape(files, path, ext);
+    Assimp::Importer importer;
+    importer.SetIOHandler(files.io_system());  // the importer owns it
+    keep_readers_for(importer, ext);
+    const aiScene* ai = nullptr;
+    const bool our_checks = validated_by_us(ext);
+    const unsigned flags = our_checks ? 0u : kImportFlags;
+    if (watched) {
+      const ImportWatchdog watchdog(path, files.size(path));
+      const ImportFaultGuard guard(path);
+      ai = importer.ReadFile(path, flags);
+    } else {
+      ai = importer.ReadFile(path, flags);
+    }
+    if (!ai && !base_dir.empty()) explain_with_stream(path);  // a file on disk (not a model in memory)
+    if (ai && our_checks) check_stl_scene(*ai, path);
+    scene = convert(importer, ai, path, base_dir, files);
+  });
+  scene.input_files.insert(scene.input_files.begin(), files.files().begin(), files.files().end());
+  return scene;
+}
+
+}  // namespace
+
+bool is_imported_model(const std::string& path) {
+  const std::string ext = lower(fs::path(path).extension().string());
+  if (ext.size() < 2 || ext == ".obj" || ext == ".json") return false;
+  Assimp::Importer importer;
+  return importer.IsExtensionSupported(ext.c_str());
+}
+
+Scene load_model(const std::string& path) {
+  ModelFiles files;
+  files.size(path);  // the usual messages for a missing, special or huge file
+  const bool ply = lower(fs::path(path).extension().string()) == ".ply";
+  if (ply && ply_has_strips(path)) return load_ply_whole(path, kMaxTriangles);  // the importer keeps one triangle
+  std::string dir = fs::path(path).parent_path().string();
+  if (dir.empty()) dir = ".";
+  Scene scene = import_model(files, path, dir, true);
+  if (ply)
+    for (std::string& w : ply_unread_elements(path)) scene.warnings.push_back(std::move(w));
+  return scene;
+}
+
+Scene load_model_from_memory(const std::string& bytes, const std::string& name, const std::string& hint,
+                             const std::string& other) {
+  // The importer picks its reader by the name's extension.
+  const std::string path = bare_extension(fs::path(name).extension().string()) == lower(hint) ? name : name + "." + hint;
+  ModelFiles files(path, bytes, other);
+  return import_model(files, path, "", false);
+}
+
+#else  // built without the Open Asset Import Library
+
+bool is_imported_model(const std::string& path) {
+  static const char* const kCommon[] = {".ply", ".stl", ".gltf", ".glb", ".fbx", ".dae", ".3ds", ".off", ".blend"};
+  const std::string ext = lower(fs::path(path).extension().string());
+  for (const char* e : kCommon)
+    if (ext == e) return true;
+  return false;
+}
+
+Scene load_model(const std::string& path) {
+  ModelFiles().size(path);  // the usual messages for a missing, special or huge file
+  throw InputError(path + ": this build has no Open Asset Import Library (install libassimp-dev and rebuild)");
+}
+
+Scene load_model_from_memory(const std::string&, const std::string& name, const std::string&, const std::string&) {
+  throw InputError(name + ": this build has no Open Asset Import Library");
+}
+
+#endif
+
+}  // namespace opsila

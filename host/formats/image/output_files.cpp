@@ -1,0 +1,229 @@
+#include "formats/image/output_files.h"
+
+#include <fcntl.h>
+#include <pthread.h>
+#include <signal.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <climits>
+#include <cstring>
+#include <filesystem>
+#include <stdexcept>
+
+#include "formats/image/image_io.h"
+#include "scene/scene.h"
+#include "core/util.h"
+
+namespace opsila {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+// What the signal handler removes: fixed-size storage written before the
+// slot is marked used, so the handler never sees a half-written name.
+constexpr int kSlots = 64;
+char g_temp[kSlots][PATH_MAX];
+volatile sig_atomic_t g_used[kSlots];
+char g_folder[PATH_MAX];
+volatile sig_atomic_t g_folder_used = 0;
+
+extern "C" void remove_temporaries_and_exit(int sig) {
+  for (int i = 0; i < kSlots; ++i)
+    if (g_used[i]) ::unlink(g_temp[i]);
+  if (g_folder_used) ::rmdir(g_folder);  // only if still empty
+  ::_exit(128 + sig);
+}
+
+int claim_slot(const std::string& temp) {
+  if (temp.size() >= PATH_MAX) return -1;
+  for (int i = 0; i < kSlots; ++i) {
+    if (g_used[i]) continue;
+    std::memcpy(g_temp[i], temp.c_str(), temp.size() + 1);
+    g_used[i] = 1;
+    return i;
+  }
+  return -1;
+}
+
+void release_slot(int& slot) {
+  if (slot >= 0) g_used[slot] = 0;
+  slot = -1;
+}
+
+[[noreturn]] void cannot_write(const std::string& path, const std::string& reason) {
+  throw InputError(path + ": cannot write (" + reason + ")");
+}
+
+// Signals held back while the outputs are renamed into place.
+class HoldSignals {
+ public:
+  HoldSignals() {
+    sigset_t set;
+    sigemptyset(&set);
+    sigaddset(&set, SIGINT);
+    sigaddset(&set, SIGTERM);
+    pthread_sigmask(SIG_BLOCK, &set, &old_);
+  }
+  ~HoldSignals() { pthread_sigmask(SIG_SETMASK, &old_, nullptr); }
+
+ private:
+  sigset_t old_;
+};
+
+}  // namespace
+
+void install_interrupt_cleanup() {
+  struct sigaction action {};
+  action.sa_handler = remove_temporaries_and_exit;
+  sigemptyset(&action.sa_mask);
+  sigaddset(&action.sa_mask, SIGINT);
+  sigaddset(&action.sa_mask, SIGTERM);
+  ::sigaction(SIGINT, &action, nullptr);
+  ::sigaction(SIGTERM, &action, nullptr);
+}
+
+bool same_file(const std::string& a, const std::string& b) {
+  struct stat sa, sb;
+  if (::stat(a.c_str(), &sa) == 0 && ::stat(b.c_str(), &sb) == 0)
+    return sa.st_dev == sb.st_dev && sa.st_ino == sb.st_ino;
+  std::error_code ea, eb;
+  const fs::path ca = fs::weakly_canonical(fs::absolute(a, ea), ea);
+  const fs::path cb = fs::weakly_canonical(fs::absolute(b, eb), eb);
+  if (ea || eb) return fs::path(a).lexically_normal() == fs::path(b).lexically_normal();
+  return ca == cb;
+}
+
+OutputFiles::~OutputFiles() { discard(); }
+
+void OutputFiles::declare(const std::string& flag, const std::string& path) {
+  check_output_path(path);
+  for (const Entry& e : entries_)
+    if (same_file(e.path, path)) throw InputError(flag + " " + path + ": same file as " + e.flag);
+  if (!folder_.empty() && same_file(path, folder_))
+    throw InputError(flag + " " + path + ": same as the folder of " + folder_flag_);
+  entries_.push_back(Entry{flag, path, "", -1, false});
+}
+
+void OutputFiles::declare_folder(const std::string& flag, const std::string& folder) {
+  struct stat st;
+  if (::stat(folder.c_str(), &st) == 0) {
+    if (!S_ISDIR(st.st_mode)) throw InputError(flag + " " + folder + ": exists and is not a folder");
+    check_output_path(folder + "/x");
+  } else {
+    check_output_path(folder);  // its parent exists and is writable
+  }
+  for (const Entry& e : entries_)
+    if (same_file(e.path, folder)) throw InputError(flag + " " + folder + ": same file as " + e.flag);
+  folder_flag_ = flag;
+  folder_ = folder;
+}
+
+void OutputFiles::refuse_inputs(const std::vector<std::string>& inputs) {
+  for (const std::string& in : inputs) {
+    for (const Entry& e : entries_)
+      if (same_file(e.path, in))
+        throw InputError(e.flag + " " + e.path + ": is an input of this run (" + in +
+                         "); choose another output file");
+    if (!folder_.empty() && same_file(folder_, in))
+      throw InputError(folder_flag_ + " " + folder_ + ": is an input of this run");
+    inputs_.push_back(in);
+  }
+}
+
+OutputFiles::Entry& OutputFiles::entry_for(const std::string& path) {
+  for (Entry& e : entries_)
+    if (e.path == path) return e;
+  if (folder_.empty() || folder_of(path) != folder_)
+    throw std::logic_error("OutputFiles: " + path + " was not declared");
+  for (const std::string& in : inputs_)
+    if (same_file(path, in)) {
+      discard();
+      throw InputError(folder_flag_ + " " + path + ": is an input of this run (" + in + ")");
+    }
+  entries_.push_back(Entry{folder_flag_, path, "", -1, true});
+  return entries_.back();
+}
+
+void OutputFiles::write(const std::string& path, const std::string& bytes) {
+  Entry& e = entry_for(path);
+  const auto fail = [&](const std::string& reason) {
+    discard();
+    cannot_write(path, reason);
+  };
+  if (e.in_folder && !folder_created_ && ::mkdir(folder_.c_str(), 0777) == 0) {
+    folder_created_ = true;
+    if (folder_.size() < PATH_MAX) {
+      std::memcpy(g_folder, folder_.c_str(), folder_.size() + 1);
+      g_folder_used = 1;
+    }
+  }
+  if (!e.temp.empty()) fail("written twice");
+  // Next to the destination, so that rename() is atomic; mode 0666 lets the
+  // umask decide the final permissions.
+  static unsigned counter = 0;
+  int fd = -1;
+  for (int attempt = 0; attempt < 100 && fd < 0; ++attempt) {
+    e.temp = folder_of(path) + "/." + name_of(path) + ".tmp-" + std::to_string(::getpid()) + "-" +
+             std::to_string(counter++);
+    e.slot = claim_slot(e.temp);  // before the file exists: a signal may come any time
+    if (e.slot < 0) {
+      e.temp.clear();
+      fail("too many output files");
+    }
+    fd = ::open(e.temp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
+    if (fd < 0) {
+      const int err = errno;
+      release_slot(e.slot);
+      e.temp.clear();
+      if (err != EEXIST) fail(std::strerror(err));
+    }
+  }
+  if (fd < 0) fail("no free temporary file name");
+  if (const int err = write_all(fd, bytes.data(), bytes.size())) {
+    ::close(fd);
+    fail(std::strerror(err));
+  }
+  if (::fsync(fd) != 0 && errno != EINVAL && errno != EROFS) {
+    const int err = errno;
+    ::close(fd);
+    fail(std::strerror(err));
+  }
+  if (::close(fd) != 0) fail(std::strerror(errno));
+}
+
+void OutputFiles::commit() {
+  HoldSignals hold;
+  for (std::size_t k = 0; k < entries_.size(); ++k) {
+    Entry& e = entries_[k];
+    if (e.temp.empty()) continue;  // declared, but this run has nothing for it
+    if (::rename(e.temp.c_str(), e.path.c_str()) != 0) {
+      const int err = errno;
+      // Those already in place go again: the set appears whole or not at all.
+      for (std::size_t j = 0; j < k; ++j)
+        if (!entries_[j].temp.empty()) ::unlink(entries_[j].path.c_str());
+      for (std::size_t j = 0; j < k; ++j) entries_[j].temp.clear();
+      discard();
+      cannot_write(e.path, std::strerror(err));
+    }
+    release_slot(e.slot);
+  }
+  for (Entry& e : entries_) e.temp.clear();
+  g_folder_used = 0;
+  folder_created_ = false;
+}
+
+void OutputFiles::discard() noexcept {
+  for (Entry& e : entries_) {
+    if (!e.temp.empty()) ::unlink(e.temp.c_str());
+    e.temp.clear();
+    release_slot(e.slot);
+  }
+  if (folder_created_) ::rmdir(folder_.c_str());
+  folder_created_ = false;
+  g_folder_used = 0;
+}
+
+}  // namespace opsila

@@ -1,0 +1,132 @@
+// stb_image is compiled here, once, with only the decoders SPEC names.
+#include "formats/image/texture_file.h"
+
+#include <algorithm>
+#include <cstdint>
+#include <filesystem>
+#include <limits>
+#include <system_error>
+
+#define STBI_ONLY_PNG
+#define STBI_ONLY_JPEG
+#define STBI_ONLY_TGA
+#define STBI_ONLY_BMP
+#define STBI_NO_STDIO
+#define STBI_MAX_DIMENSIONS 16384
+// Failure reasons as sentences ("Corrupt PNG"), not stb's short codes.
+#define STBI_FAILURE_USERMSG
+#define STB_IMAGE_IMPLEMENTATION
+#include <stb/stb_image.h>
+
+#include "core/input_file.h"
+
+namespace opsila {
+
+namespace fs = std::filesystem;
+
+bool decode_texture_memory(const unsigned char* data, std::size_t size, const std::string& name,
+                           Texture& out, std::string& problem) {
+  if (size == 0 || size > static_cast<std::size_t>(std::numeric_limits<int>::max())) {
+    problem = size == 0 ? "empty image file" : "image file too large";
+    return false;
+  }
+  const int len = static_cast<int>(size);
+  int w = 0, h = 0, channels = 0;
+  // A PNG's size is in its first chunk (IHDR, big-endian width and height):
+  // stb refuses one past its limit, then tries the other formats, and its
+  // last reason ("unknown type") would hide why.
+  static const unsigned char kPngSignature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+  const bool png = size >= 8 && std::equal(kPngSignature, kPngSignature + 8, data);
+  if (png && size >= 24) {
+    const auto be32 = [&](std::size_t at) {
+      return std::uint32_t(data[at]) << 24 | std::uint32_t(data[at + 1]) << 16 | std::uint32_t(data[at + 2]) << 8 |
+             std::uint32_t(data[at + 3]);
+    };
+    const std::uint32_t pw = be32(16), ph = be32(20);
+    if (pw > std::uint32_t(kMaxTextureSide) || ph > std::uint32_t(kMaxTextureSide)) {
+      problem = "image too large (" + std::to_string(pw) + "x" + std::to_string(ph) + ")";
+      return false;
+    }
+  }
+  if (!stbi_info_from_memory(data, len, &w, &h, &channels)) {
+    const char* why = stbi_failure_reason();
+    problem = std::string("not a readable PNG, JPEG, TGA or BMP image") + (why ? std::string(" (") + why + ")" : "");
+    return false;
+  }
+  if (w <= 0 || h <= 0 || w > kMaxTextureSide || h > kMaxTextureSide ||
+      static_cast<std::size_t>(w) * static_cast<std::size_t>(h) > kMaxTextureTexels) {
+    problem = "image too large (" + std::to_string(w) + "x" + std::to_string(h) + ")";
+    return false;
+  }
+  if (stbi_is_16_bit_from_memory(data, len)) {
+    problem = "16-bit images are not supported (8 bits per channel)";
+    return false;
+  }
+  unsigned char* pixels = stbi_load_from_memory(data, len, &w, &h, &channels, 3);
+  if (!pixels) {
+    const char* why = stbi_failure_reason();
+    problem = std::string("cannot decode the image") + (why ? std::string(" (") + why + ")" : "");
+    // stb names the chunk it could not read, not the truncation.
+    static const char kIend[4] = {'I', 'E', 'N', 'D'};
+    if (png && std::search(data, data + size, kIend, kIend + 4) == data + size)
+      problem = "cannot decode the image (truncated PNG: it ends before its IEND chunk)";
+    return false;
+  }
+  out.path = name;
+  out.width = w;
+  out.height = h;
+  out.texels.resize(static_cast<std::size_t>(w) * h);
+  for (std::size_t i = 0; i < out.texels.size(); ++i)
+    out.texels[i] = std::uint32_t(pixels[3 * i]) | std::uint32_t(pixels[3 * i + 1]) << 8 |
+                    std::uint32_t(pixels[3 * i + 2]) << 16;
+  stbi_image_free(pixels);
+  return true;
+}
+
+bool decode_texture_file(const std::string& path, Texture& out, std::string& problem) {
+  std::string bytes;
+  try {
+    bytes = read_input_file(path);
+  } catch (const InputError& e) {
+    problem = e.what();
+    const std::string prefix = path + ": ";
+    if (problem.compare(0, prefix.size(), prefix) == 0) problem = problem.substr(prefix.size());
+    return false;
+  }
+  return decode_texture_memory(reinterpret_cast<const unsigned char*>(bytes.data()), bytes.size(), path, out,
+                               problem);
+}
+
+std::string resolve_texture_path(const std::string& written, const std::string& base_dir) {
+  std::string name = written;
+  for (char& c : name)
+    if (c == '\\') c = '/';
+  while (name.compare(0, 2, "./") == 0) name.erase(0, 2);
+  const fs::path p(name);
+  const fs::path base = base_dir.empty() ? fs::path(".") : fs::path(base_dir);
+  const fs::path full = (p.is_absolute() ? p : base / p).lexically_normal();
+  std::error_code ec;
+  if (fs::is_regular_file(full, ec)) return full.string();
+  // "C:/textures/wood.jpg" or a folder that did not travel with the model.
+  const fs::path beside = (base / p.filename()).lexically_normal();
+  if (!p.filename().empty() && fs::is_regular_file(beside, ec)) return beside.string();
+  return full.string();
+}
+
+int add_texture_file(Scene& scene, const std::string& path, const std::string& where) {
+  if (int later = -1; list_map_for_later(scene, path, where, later)) return later;
+  for (std::size_t i = 0; i < scene.textures.size(); ++i)
+    if (scene.textures[i].path == path) return static_cast<int>(i);
+  // An input, whether or not it decodes: no output may overwrite it.
+  scene.input_files.push_back(path);
+  Texture t;
+  std::string problem;
+  if (!decode_texture_file(path, t, problem)) {
+    scene.warnings.push_back(where + "texture map '" + path + "' ignored: " + problem);
+    return -1;
+  }
+  scene.textures.push_back(std::move(t));
+  return static_cast<int>(scene.textures.size()) - 1;
+}
+
+}  // namespace opsila

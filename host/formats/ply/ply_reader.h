@@ -1,0 +1,46 @@
+// One rank's window of a PLY model read as a stream (docs/DISTRIBUTED.md,
+// "One big model file"): the vertex element is read whole by every rank,
+// the face element in bounded blocks, keeping only the faces of the
+// window (ModelWindow: the rule is the OBJ stream's). The triangles are
+// bit for bit those the importer path (model_import.cpp) makes of the
+// file, with the same ids, materials and attributes.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "scene/scene.h"
+#include "formats/common/window.h"
+
+namespace opsila {
+
+// Why the PLY stream does not read this file exactly as the importer does
+// (other elements than 'vertex' then 'face', face properties other than
+// one index list, a texture named in a comment, ...), "" when it does. The
+// importer path reads the others whole, and judges a file or header the
+// stream cannot read (the reason then says why).
+std::string ply_stream_refusal(const std::string& path);
+
+// True for a PLY with a 'tristrips' element: the importer keeps one
+// triangle of its strips, so one process reads such a file with the stream
+// too (load_ply_whole). Throws, naming the file and why, when the stream
+// cannot read it; false for a header the stream cannot read at all (the
+// importer path then judges it).
+bool ply_has_strips(const std::string& path);
+
+// The whole file as one process reads it, by the stream.
+Scene load_ply_whole(const std::string& path, std::size_t max_triangles);
+
+// One warning for each element of a PLY read through the importer that
+// gives no facets and is not the importer's 'material' (an 'edge', a
+// 'range_grid', ...): a file declaring more faces than get drawn says so.
+std::vector<std::string> ply_unread_elements(const std::string& path);
+
+// As load_obj_window, for a PLY file the stream reads (ply_stream_refusal
+// is ""): `fans` gets the file's fan triangles; 0 in window.fans keeps no
+// face (the counting read).
+Scene load_ply_window(const std::string& path, std::size_t max_triangles, const ModelWindow& window,
+                      std::uint64_t& fans, std::size_t block_bytes = std::size_t(32) << 20);
+
+}  // namespace opsila

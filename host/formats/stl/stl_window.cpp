@@ -1,0 +1,162 @@
+// One rank's window of a binary STL read as a stream (model_window.h): an
+// 80-byte header, a little-endian uint32 facet count, then 50 bytes a facet
+// (a float32 normal, three float32 corners, a uint16 attribute). The
+// records are read in blocks (64 Ki records at most) into a mesh of the
+// block's corners, each corner with its facet's normal, as the importer's
+// STL reader makes the whole file's mesh, and fanned by WindowFan
+// (model_fan.h): a facet is kept only when it falls in this rank's slice of
+// the plan; the others are only counted into the whole file's figures, so
+// counts, warnings and errors are one process's on every rank. The
+// attribute (a colour to some writers) is read and let go: the importer
+// path keeps no vertex colour.
+#include "formats/stl/stl_reader.h"
+
+#include <algorithm>
+#include <cctype>
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <memory>
+#include <new>
+#include <vector>
+
+#include "core/errors.h"
+#include "formats/common/model_files.h"
+
+#ifdef OPSILA_HAVE_ASSIMP
+#include <assimp/mesh.h>
+
+#include "formats/common/model_fan.h"
+#endif
+
+namespace opsila {
+
+#ifdef OPSILA_HAVE_ASSIMP
+
+namespace {
+
+constexpr std::uint64_t kStlHeader = 84;  // 80 bytes of text, the facet count
+constexpr std::uint64_t kStlRecord = 50;
+constexpr std::uint64_t kBlockRecords = std::uint64_t(1) << 16;
+
+std::uint32_t le32(const unsigned char* b) {
+  return std::uint32_t(b[0]) | std::uint32_t(b[1]) << 8 | std::uint32_t(b[2]) << 16 | std::uint32_t(b[3]) << 24;
+}
+
+// The file's facet count, or why the stream leaves the file to the
+// importer. The importer takes a file as binary exactly when its size is
+// 84 + 50 x the count (whatever its first bytes), else as text when it
+// starts with "solid"; it reads a header naming "COLOR=" as Materialise's,
+// with colours. A name is looked for wherever it starts in the 80 bytes
+// (the importer's search may run a few bytes past them).
+std::string refusal(const std::string& path, std::uint64_t& count) {
+  std::uint64_t size = 0;
+  std::string head;
+  try {
+    ModelFiles files;
+    size = files.size(path);
+    head = files.head(path, kStlHeader + 16);
+  } catch (const InputError& e) {
+    return std::string("its size: ") + e.what();
+  }
+  if (size < kStlHeader) return "it is shorter than a binary STL's 84-byte header";
+  count = le32(reinterpret_cast<const unsigned char*>(head.data()) + 80);
+  if (size != kStlHeader + kStlRecord * count) {
+    std::size_t at = 0;
+    while (at < head.size() && std::isspace(static_cast<unsigned char>(head[at]))) ++at;
+    if (head.compare(at, 5, "solid") == 0) return "an ASCII STL";
+    return "its size, " + std::to_string(size) + " bytes, is not 84 + 50 x the " + std::to_string(count) +
+           " facets its header counts";
+  }
+  if (count == 0) return "its header counts no facets";
+  for (const char* name : {"COLOR=", "MATERIAL="}) {
+    const std::size_t at = head.find(name);
+    if (at != std::string::npos && at < 80) return std::string("its header names Materialise colours (") + name + ")";
+  }
+  return "";
+}
+
+float le_float(const unsigned char* b) {
+  const std::uint32_t bits = le32(b);
+  float f;
+  std::memcpy(&f, &bits, sizeof f);
+  return f;
+}
+
+aiVector3D le_vector(const unsigned char* b) { return aiVector3D(le_float(b), le_float(b + 4), le_float(b + 8)); }
+
+struct FileCloser {
+  void operator()(std::FILE* f) const { std::fclose(f); }
+};
+
+Scene read_window(const std::string& path, std::size_t max_triangles, const ModelWindow& window, std::uint64_t& fans,
+                  std::size_t block_bytes) {
+  std::uint64_t count = 0;
+  const std::string why = refusal(path, count);
+  if (!why.empty()) throw InputError(path + ": the STL stream cannot read this file: " + why);
+  const std::unique_ptr<std::FILE, FileCloser> file(std::fopen(path.c_str(), "rb"));
+  if (!file || std::fseek(file.get(), long(kStlHeader), SEEK_SET) != 0)
+    throw InputError(path + ": cannot read: " + std::strerror(errno));
+  // A block of records, and the mesh of its corners (the importer's, for
+  // these facets: corner 3j + c of record j, each with the record's normal):
+  // 122 bytes a record, so at most kBlockRecords of them (8 MB).
+  const std::size_t block = static_cast<std::size_t>(std::min<std::uint64_t>(
+      {count, std::max<std::size_t>(block_bytes / kStlRecord, 1), kBlockRecords}));
+  std::vector<unsigned char> bytes(block * kStlRecord);
+  aiMesh mesh;
+  mesh.mNumVertices = static_cast<unsigned>(3 * block);
+  mesh.mVertices = new aiVector3D[3 * block];
+  mesh.mNormals = new aiVector3D[3 * block];
+  Scene scene;
+  WindowFan fan(path, mesh, max_triangles, window, scene);
+  for (std::uint64_t first = 0; first < count; first += block) {
+    const std::size_t n = static_cast<std::size_t>(std::min<std::uint64_t>(block, count - first));
+    const std::size_t got = std::fread(bytes.data(), 1, n * kStlRecord, file.get());
+    if (got < n * kStlRecord)  // shorter than when its size was read: it changed
+      throw InputError(path + ": STL facet " + std::to_string(first + got / kStlRecord + 1) + " of " +
+                       std::to_string(count) + " at byte " + std::to_string(kStlHeader + first * kStlRecord + got) +
+                       ": the file ends early (truncated)");
+    for (std::size_t j = 0; j < n; ++j) {
+      const unsigned char* r = bytes.data() + j * kStlRecord;
+      const aiVector3D normal = le_vector(r);
+      const unsigned corner[3] = {unsigned(3 * j), unsigned(3 * j + 1), unsigned(3 * j + 2)};
+      for (int c = 0; c < 3; ++c) {
+        mesh.mNormals[corner[c]] = normal;
+        mesh.mVertices[corner[c]] = le_vector(r + 12 + 12 * c);
+      }
+      fan.face(corner, 3, static_cast<unsigned>(first + j));
+    }
+  }
+  fan.finish(fans);
+  return scene;
+}
+
+}  // namespace
+
+std::string stl_stream_refusal(const std::string& path) {
+  std::uint64_t count = 0;
+  return refusal(path, count);
+}
+
+Scene load_stl_window(const std::string& path, std::size_t max_triangles, const ModelWindow& window,
+                      std::uint64_t& fans, std::size_t block_bytes) {
+  try {
+    return read_window(path, max_triangles, window, fans, block_bytes);
+  } catch (const std::bad_alloc&) {
+    throw InputError(path + ": out of memory while loading (model too large)");
+  } catch (const std::length_error&) {
+    throw InputError(path + ": model too large to load");
+  }
+}
+
+#else  // built without the Open Asset Import Library: the importer path says so
+
+std::string stl_stream_refusal(const std::string&) { return "this build has no Open Asset Import Library"; }
+
+Scene load_stl_window(const std::string& path, std::size_t, const ModelWindow&, std::uint64_t&, std::size_t) {
+  throw InputError(path + ": this build has no Open Asset Import Library (install libassimp-dev and rebuild)");
+}
+
+#endif
+
+}  // namespace opsila

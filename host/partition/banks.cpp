@@ -1,0 +1,53 @@
+#include "partition/banks.h"
+
+#include <stdexcept>
+#include <string>
+
+#include "core/fixed_point.h"
+#include "opsila_shared.h"
+
+namespace opsila {
+
+void check_kernel_limits(const Scene& scene) {
+  if (scene.max_depth < 1 || scene.max_depth > OPSILA_MAX_DEPTH)
+    throw InputError("--depth " + std::to_string(scene.max_depth) + ": must be 1.." +
+                     std::to_string(OPSILA_MAX_DEPTH));
+  if (static_cast<int>(scene.lights.size()) > OPSILA_MAX_LIGHTS)
+    throw InputError("scene has " + std::to_string(scene.lights.size()) + " lights; at most " +
+                     std::to_string(OPSILA_MAX_LIGHTS) + " are supported");
+  if (scene.total_triangles() == 0) throw InputError("scene has no facets");
+  if (const std::string problem = spp_problem(scene.spp); !problem.empty())
+    throw InputError("--spp " + std::to_string(scene.spp) + ": " + problem);
+}
+
+void check_machine_request(const Scene& scene, int num_pes) {
+  if (num_pes < 1 || num_pes > OPSILA_MAX_PES)
+    throw InputError("--pes " + std::to_string(num_pes) + ": must be 1.." + std::to_string(OPSILA_MAX_PES));
+  check_kernel_limits(scene);
+}
+
+PreparedBanks bank_scene(const Scene& scene, int num_pes, int routing, const BalancePolicy& policy,
+                         const PeGroup& group) {
+  const RaySample* sample = nullptr;
+  const MeasuredWork* measured = nullptr;
+  if (policy.balance == Balance::work) {
+    if (!policy.sample) throw std::invalid_argument("bank_scene: --balance work needs its ray sample");
+    sample = policy.sample;
+  } else if (policy.balance == Balance::measured) {
+    if (!policy.measured) throw std::invalid_argument("bank_scene: --balance measured needs the measured work");
+    measured = policy.measured;
+  }
+  PreparedBanks b;
+  b.scene = partition_scene(scene, num_pes, routing == OPSILA_ROUTING_SPHERES, sample, measured);
+  b.balance = policy.balance;
+  b.group = group;
+  b.facet_cluster.assign(scene.triangles.size(), -1);
+  for (std::size_t k = 0; k < b.scene.source.size(); ++k)
+    b.facet_cluster[std::size_t(b.scene.source[k])] = b.scene.tri_cluster[k];
+  b.cluster_facets.assign(b.scene.clusters.size(), 0);
+  for (int c : b.scene.tri_cluster) ++b.cluster_facets[std::size_t(c)];
+  b.tri_base = keep_group_banks(b.scene, group);
+  return b;
+}
+
+}  // namespace opsila

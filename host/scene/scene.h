@@ -1,0 +1,220 @@
+// The scene as loaded: what SPEC.md talks about (facets, objects, materials,
+// camera, lights), before it is split into banks. Loaders fill it; the
+// partitioner, the OpenCL renderer and the sequential reference read it.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <functional>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "core/errors.h"
+#include "core/vec.h"
+
+namespace opsila {
+
+// SPEC "Materials": an illumination model reflects (kr = Ks) for illum
+// 3..7 and transmits (kt = Tf) for illum 4, 6 and 7.
+bool illum_reflects(int illum);
+bool illum_transmits(int illum);
+
+// SPEC.md "Materials", as read from MTL or a scene file.
+struct MaterialDesc {
+  std::string name;
+  Vec3 ka{0, 0, 0}, kd{0, 0, 0}, ks{0, 0, 0}, tf{0, 0, 0};
+  float ns = 1.0f, ni = 1.0f;
+  int illum = 0;
+  // SPEC "Texture maps": index into Scene::textures, -1 = no map (or the
+  // image could not be read).
+  int map_kd = -1, map_ka = -1;
+  // The map files as an MTL file names them (options removed, not yet
+  // looked up): the OBJ reader resolves and loads them.
+  std::string map_kd_file, map_ka_file;
+  // SPEC: kr = Ks when illum in {3..7}; kt = Tf when illum in {4,6,7}.
+  Vec3 kr() const;
+  Vec3 kt() const;
+  static MaterialDesc default_material();  // the "face with no material" one
+};
+
+// SPEC "Materials": the Ka (Kd) of a material that leaves the key out:
+// (1, 1, 1) when the material has a map_Ka (map_Kd), so that the texture
+// alone gives the colour (glTF 1, IQM, SMD and MDL materials often carry
+// only a texture), else 0. Every reader of materials (MTL, other model
+// formats) fills left-out colours from here.
+Vec3 left_out_colour(bool has_map);
+
+// The one rule every reader (MTL, scene files, other model formats) applies
+// to a material value: colours (Ka, Kd, Ks, Tf) and Ns must not be negative.
+// So every term of SPEC's pixel sum is >= 0 (what the saturating pixel sums
+// rely on) and pow(x, Ns) is never infinite. Returns "" or the problem,
+// e.g. "must not be negative (-1)".
+std::string material_value_problem(const std::string& key, float value);
+
+// One triangle of a facet (polygons are fan-triangulated; all triangles of a
+// polygon keep the polygon's facet id).
+struct Triangle {
+  Vec3 v0, v1, v2;
+  int facet_id = 0;
+  int object_id = 0;
+  int material = 0;     // index into Scene::materials
+  int attributes = -1;  // index into Scene::attributes, -1 = none
+  int fan = 0;          // index in the facet's fan, 0 first: the hit order's last key (kernels/hit_order.h)
+};
+
+// What the vertices of one triangle carry besides their position (SPEC
+// "barycentric attributes"): normals (OBJ vn) and texture coordinates (OBJ
+// vt), in the triangle's vertex order. Kept apart from Triangle, since most
+// scenes have neither.
+struct VertexAttributes {
+  std::array<Vec3, 3> normal{};
+  std::array<std::array<float, 2>, 3> uv{};
+  bool has_normals = false;
+  bool has_uv = false;
+};
+
+// A decoded texture map: 8-bit sRGB texels packed as r | g << 8 | b << 16,
+// row 0 = the top row of the image (SPEC's j = 0).
+struct Texture {
+  std::string path;  // as found on disk (or "file#name" for an embedded one)
+  int width = 0, height = 0;
+  std::vector<std::uint32_t> texels;
+  // A scene read in shares: the image was checked, but its texels are
+  // decoded only by the ranks whose facets use it (docs/DISTRIBUTED.md).
+  bool pixels_later = false;
+};
+
+struct LightDesc {
+  Vec3 position{0, 0, 0};
+  Vec3 intensity{1, 1, 1};
+};
+
+struct CameraDesc {
+  Vec3 eye{0, 0, 5}, look_at{0, 0, 0}, up{0, 1, 0};
+  float fov_deg = 45.0f;
+};
+
+// A rank's share of a scene read by several MPI ranks (docs/DISTRIBUTED.md):
+// Scene::triangles then holds only the objects dealt to this rank, and
+// these figures describe the whole scene.
+struct Scene;
+
+// What the hit order (kernels/hit_order.h) needs of a scene's ids, checked
+// by whoever builds a structure to search it (the banks, the reference
+// tracer): material and fan indices that fit BankTriangle::material_fan
+// (else InputError naming the limit), and facet ids that never decrease as
+// object ids increase (else std::logic_error: every reader numbers them so).
+void check_hit_order_ids(const Scene& scene);
+
+struct SceneShare {
+  int rank = 0, ranks = 1;         // ranks == 1: the scene is whole
+  std::size_t total_triangles = 0;  // every rank's, together
+  Vec3 lo{0, 0, 0}, hi{0, 0, 0};    // bounds of every rank's triangles
+  double read_seconds = 0;          // this rank's time to read its share
+  // Objects made in windows (a terrain: each rank makes only its slice of
+  // its triangles) whose triangles lie on several ranks, in id order; the
+  // partition cuts them collectively (dist/collective_cut.h).
+  std::vector<int> spread;
+  // This rank's triangles of windowed objects: counted in total_triangles
+  // and the bounds above until `combine` adds up every rank's.
+  std::size_t window_triangles = 0;
+  // Zero-area triangles each windowed entry dropped here, in entry order
+  // (summed by `combine`, then warned about once).
+  std::vector<std::uint64_t> window_dropped;
+  // Set by whoever knows the ranks: sums window_triangles and joins the
+  // bounds over every rank (a collective call, made by the reader once
+  // every entry is built). Unset: the figures stay this rank's.
+  std::function<void(SceneShare&)> combine;
+  // What this rank read of each file it streamed (FileReadStamp::after),
+  // in read order: `combine` refuses the scene, naming the file, unless
+  // every rank's are the same (the file changed while the ranks read it,
+  // or they see different copies of it), before anything is exchanged.
+  std::vector<std::pair<std::string, std::vector<std::uint64_t>>> reads;
+  // Set with it: decodes the texture maps the given facets use (their
+  // images were checked while reading, formats/image/texture_file.h) and returns
+  // the texel bytes held; the partition calls it on the facets a rank's
+  // banks received. Unset: every map is decoded already.
+  std::function<std::uint64_t(Scene&)> decode_maps;
+};
+
+struct Scene {
+  std::vector<Triangle> triangles;  // all of them, or this rank's share
+  SceneShare share;
+  std::vector<VertexAttributes> attributes;  // referenced by Triangle::attributes
+  std::vector<MaterialDesc> materials;  // never empty after loading
+  std::vector<Texture> textures;        // referenced by MaterialDesc::map_kd / map_ka
+  std::vector<LightDesc> lights;
+  CameraDesc camera;
+  int width = 640, height = 480;
+  int max_depth = 5;
+  int spp = 1;  // samples per pixel, N = k*k (SPEC "Camera"); see spp_problem
+  bool smooth = false;  // SPEC "Smooth shading": interpolated vertex normals
+  Vec3 ambient{0.1f, 0.1f, 0.1f};
+  Vec3 background{0.0f, 0.0f, 0.0f};
+  int num_objects = 0;  // object ids are 0 .. num_objects-1
+  int num_facets = 0;   // facet ids are 0 .. num_facets-1
+  // What the loader set explicitly (so a bare .obj can frame itself).
+  bool has_camera = false;
+  bool has_lights = false;
+  std::vector<std::string> warnings;  // printed once each by the CLI
+  // Every file the scene was read from (scene file, OBJ, MTL, textures): a
+  // loader that reads a file adds it here, so that no output can overwrite it.
+  std::vector<std::string> input_files;
+
+  // Axis-aligned bounds of all triangles (every rank's, for a share).
+  void bounds(Vec3& lo, Vec3& hi) const;
+  bool is_share() const { return share.ranks > 1; }
+  // Triangles of the whole scene (every rank's, for a share).
+  std::size_t total_triangles() const { return is_share() ? share.total_triangles : triangles.size(); }
+  // SPEC: epsilon = 1e-4 x the diagonal of the scene's bounding box.
+  float epsilon() const;
+  // Length of the bounding box diagonal (computed in double, so a scene too
+  // big for float shows up as infinity rather than as a wrong number).
+  double diagonal() const;
+};
+
+// The diagonal of the box [lo, hi] in double, and SPEC's epsilon for it:
+// one home for both, so that code that already holds the bounds (a scan of
+// every facet) need not scan again.
+double box_diagonal(const Vec3& lo, const Vec3& hi);
+inline float epsilon_for(double diagonal) { return static_cast<float>(1e-4 * diagonal); }
+
+// Samples per pixel (SPEC "Camera"): N = k*k with 1 <= N <= kMaxSpp. The
+// bound (k <= 32) keeps every pixel's 64-bit fixed-point sum of N samples far
+// from overflow and a render's cost (N times the rays of N = 1) sane.
+constexpr int kMaxSpp = 1024;
+// Empty when n is an accepted sample count, else the problem, for a message
+// that names the flag or key ("must be a square: 1, 4, 9, ..., 1024").
+std::string spp_problem(long long n);
+// k for N = k*k (N accepted by spp_problem). The grid: scene/camera.h.
+int spp_side(int n);
+
+// A camera that sees the whole box [lo, hi]: looks at the box centre from +z
+// with up = +y, at distance d = r / sin(min(fov_v, fov_h) / 2), where r is
+// half the box diagonal (the bounding sphere touches the narrower side of the
+// view). fov_deg is the vertical field of view; aspect = width / height.
+CameraDesc frame_bounds(const Vec3& lo, const Vec3& hi, float fov_deg = 45.0f,
+                        float aspect = 4.0f / 3.0f);
+
+// Largest image (scenes/FORMAT.md "Limits"): per side, and in pixels.
+// Upper bound on the triangles of one scene, all objects together (scenes/
+// FORMAT.md "Limits"), checked by every reader as it counts: beyond it the
+// input is refused before it is built.
+constexpr std::size_t kMaxTriangles = std::size_t(1) << 24;
+constexpr int kMaxImageSide = 16384;
+constexpr long long kMaxImagePixels = 1LL << 26;
+
+// Largest accepted bounding-box diagonal: far beyond any real scene, yet small
+// enough that eye positions, distances and epsilon all stay finite in float.
+constexpr double kMaxSceneExtent = 1e30;
+
+// Throws InputError("<where>: ...") unless the scene has a facet and its
+// bounding-box diagonal is positive, at most kMaxSceneExtent, and gives a
+// positive epsilon in float.
+void check_scene_extent(const Scene& scene, const std::string& where);
+// The same from the figures: triangle count and bounds.
+void check_scene_extent(std::size_t triangles, const Vec3& lo, const Vec3& hi, const std::string& where);
+
+}  // namespace opsila

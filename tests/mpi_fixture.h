@@ -1,4 +1,4 @@
-// The MPI tests' fixture (tests/cli/mpi_*_test.cpp): launching R ranks of
+// The MPI tests' fixture (tests/app/mpi_*_test.cpp): launching R ranks of
 // opsila under mpiexec (Open MPI or MPICH), one process beside them, and
 // comparing their outputs. Skipped, with the reason, in a build without MPI
 // or without mpirun.

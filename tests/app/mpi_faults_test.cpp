@@ -1,4 +1,4 @@
-// MPI runs beside tests/cli/mpi_test.cpp (same fixture, tests/mpi_fixture.h):
+// MPI runs beside tests/app/mpi_test.cpp (same fixture, tests/mpi_fixture.h):
 // PLY triangle strips streamed by ranks, and the faults several ranks meet
 // at once, or a file the ranks do not see alike, each one error line.
 #include <gtest/gtest.h>

@@ -266,9 +266,9 @@ void check_view_flags(const ViewOptions& o) {
   }
 }
 
-DeviceEntry choose_device_flag(const std::string& spec) {
+DeviceEntry choose_device_flag(const std::string& spec, const Ranks& ranks) {
   try {
-    return choose_rank_device(spec, Ranks::world().local_rank());
+    return choose_rank_device(spec, ranks.local_rank());
   } catch (const InputError& e) {
     const std::string message = e.what();
     if (spec.empty() || message.rfind("--device", 0) == 0) throw;

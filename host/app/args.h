@@ -87,7 +87,7 @@ void check_view_flags(const ViewOptions& o);
 // The device --device names (the default when empty: under mpirun, the
 // ranks of a machine take its GPUs in turn); a problem with the name
 // becomes "--device SPEC: problem".
-DeviceEntry choose_device_flag(const std::string& spec);
+DeviceEntry choose_device_flag(const std::string& spec, const Ranks& ranks);
 
 // ------------------------------------------------------------ walk_args
 

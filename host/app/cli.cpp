@@ -1,6 +1,6 @@
 #include "app/cli.h"
 #include "prepare/prepare_banks.h"
-#include "prepare/startup.h"
+#include "prepare/prepare.h"
 
 #include <sys/stat.h>
 #include <unistd.h>
@@ -218,14 +218,13 @@ void write_render_outputs(const RenderOptions& o, OutputFiles& outputs, const Re
 
 }  // namespace
 
-int run_render(const std::vector<std::string>& args) {
+int run_render(const std::vector<std::string>& args, Ranks& ranks) {
   const RenderOptions o = parse_render_options(args);
   if (o.help) {
     std::fputs(render_usage().c_str(), stdout);
     return kExitOk;
   }
   // Under mpirun every rank renders its group of PEs; rank 0 alone writes.
-  Ranks& ranks = Ranks::world();
   ranks.start();
   const bool writer = ranks.rank() == 0;
   // Everything that can be checked without rendering is checked first;
@@ -244,38 +243,42 @@ int run_render(const std::vector<std::string>& args) {
 
   std::optional<ClRuntime> runtime;
   if (!o.reference) {
-    runtime.emplace(choose_device_flag(o.device_spec));
+    runtime.emplace(choose_device_flag(o.device_spec, ranks));
     if (!o.quiet && writer) runtime->on_slow_build([](const std::string& note) { print_line("note", note); });
   } else if (!o.quiet) {
     if (!o.device_spec.empty()) print_line("warning", "--device is ignored with --reference");
     if (o.balance) print_line("warning", "--balance is ignored with --reference (one processor, no banks)");
   }
 
-  const SceneShare share = scene_share_for(ranks);
-  // Not const: a share gives up its facets to the partition (render_consuming).
-  Scene scene = load_view_scene(o.scene_path, o, o.quiet || !writer, outputs,
-                                      [](const std::string& note) { print_line("note", note); }, share);
-  ViewOptions machine = o;
-  if (o.reference) machine.balance = Balance::facets;  // one processor, no banks to balance
-  RenderSettings settings = render_settings(machine);
   Progress progress("render", !o.quiet && writer);
-  settings.progress = &progress;
-  settings.count_work = !o.stats_path.empty();  // only --stats reads the work counters
-  settings.item_buffer_output = !o.item_buffer_path.empty();
+  PrepareRequest request;
+  request.view = o;
+  request.quiet = o.quiet || !writer;
+  request.reference = o.reference;
+  request.ranks = &ranks;
+  request.outputs = &outputs;
+  request.note = [](const std::string& note) { print_line("note", note); };
+  request.progress = &progress;
+  request.count_work = !o.stats_path.empty();  // only --stats reads the work counters
+  request.item_buffer_output = !o.item_buffer_path.empty();
+  std::string device;
+  if (runtime) {
+    device = runtime->description();
+    const int pes = prepared_settings(request).num_pes;
+    if (!o.quiet) print_line("device", device_text(ranks, pes, device));
+    if (ranks.size() > 1 && writer) device = std::to_string(ranks.size()) + " MPI ranks; rank 0: " + device;
+  }
+  PreparedScene prepared = prepare_scene(request, runtime ? &*runtime : nullptr);
 
   RenderResult result;
-  std::string device;
   if (o.reference) {
-    result = render_on_host(scene, o.quiet, progress, device);
-    settings.num_pes = 1;
+    result = render_on_host(prepared.scene, o.quiet, progress, device);
+    prepared.settings.num_pes = 1;
   } else {
-    device = runtime->description();
-    if (!o.quiet) print_line("device", device_text(ranks, settings.num_pes, device));
-    if (ranks.size() > 1 && writer) device = std::to_string(ranks.size()) + " MPI ranks; rank 0: " + device;
-    result = render_consuming(scene, settings, *runtime);
+    result = Renderer(prepared.scene, std::move(*prepared.banks), prepared.settings, *runtime).render();
   }
   progress.finish();
-  if (writer) write_render_outputs(o, outputs, result, scene, settings, device);
+  if (writer) write_render_outputs(o, outputs, result, prepared.scene, prepared.settings, device);
   ranks.checkpoint();  // rank 0 writes the outputs; a failure there ends every rank alike
   return kExitOk;
 }
@@ -333,7 +336,7 @@ int run_devices(const std::vector<std::string>& args) {
 
 // ---------------------------------------------------------------- dispatch
 
-int run_cli(const std::vector<std::string>& args) {
+int run_cli(const std::vector<std::string>& args, Ranks& ranks) {
   if (args.empty()) throw InputError("no command (see 'opsila --help')");
   const std::string& command = args[0];
   const std::vector<std::string> rest(args.begin() + 1, args.end());
@@ -345,38 +348,37 @@ int run_cli(const std::vector<std::string>& args) {
     std::puts("opsila " OPSILA_VERSION);
     return kExitOk;
   }
-  if (command == "render") return run_render(rest);
+  if (command == "render") return run_render(rest, ranks);
   if (command == "devices") return run_devices(rest);
   throw InputError("unknown command '" + command + "' (see 'opsila --help')");
 }
 
-int report_exception(std::exception_ptr error) {
+int report_exception(std::exception_ptr error, const Ranks& ranks) {
   std::string message;
   const int code = describe_exception(error, message);
   // One error line; a multi-line message (a kernel build log) follows it indented.
   std::istringstream lines(message);
   std::string line;
   std::getline(lines, line);
-  print_line("error", Ranks::world().label() + (line.empty() ? "unknown failure" : line));
+  print_line("error", ranks.label() + (line.empty() ? "unknown failure" : line));
   while (std::getline(lines, line)) std::fprintf(stderr, "    %s\n", line.c_str());
   std::fflush(stderr);
   return code;
 }
 
-int report_rank_failure(std::exception_ptr error) {
-  Ranks& ranks = Ranks::world();
+int report_rank_failure(std::exception_ptr error, Ranks& ranks) {
   try {
     std::rethrow_exception(error);
   } catch (const OtherRankFailed& e) {
     return e.code;  // that rank printed the message
   } catch (...) {
   }
-  if (ranks.size() == 1) return report_exception(error);
+  if (ranks.size() == 1) return report_exception(error, ranks);
   // The others may wait for this rank in a collective: end them all.
   std::string message;
   int code = describe_exception(error, message);
-  if (ranks.in_collective()) ranks.abort(code, [&] { report_exception(error); });
-  if (ranks.agree(code) == ranks.rank()) report_exception(error);
+  if (ranks.in_collective()) ranks.abort(code, [&] { report_exception(error, ranks); });
+  if (ranks.agree(code) == ranks.rank()) report_exception(error, ranks);
   return code;
 }
 

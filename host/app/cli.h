@@ -30,20 +30,20 @@ RenderOptions parse_render_options(const std::vector<std::string>& args);
 std::string main_usage();
 std::string render_usage();
 
-int run_render(const std::vector<std::string>& args);
+int run_render(const std::vector<std::string>& args, Ranks& ranks);
 int run_devices(const std::vector<std::string>& args);
 // Everything but `bench`: args are argv[1..].
-int run_cli(const std::vector<std::string>& args);
+int run_cli(const std::vector<std::string>& args, Ranks& ranks);
 
 // Prints "opsila: error: ..." (one line) for the exception and returns its
 // exit code. Used by main() around every command.
-int report_exception(std::exception_ptr error);
+int report_exception(std::exception_ptr error, const Ranks& ranks);
 // The exit code for the exception and its message, printing nothing.
 int describe_exception(std::exception_ptr error, std::string& message);
 // main()'s handler: report_exception for one process. With several MPI
 // ranks, a failure in set-up is agreed on (the lowest failing rank prints,
 // every rank exits with its code); a failure while ranks wait on each other
 // prints and ends every rank (MPI_Abort). Never a hang.
-int report_rank_failure(std::exception_ptr error);
+int report_rank_failure(std::exception_ptr error, Ranks& ranks);
 
 }  // namespace opsila

@@ -11,16 +11,18 @@
 #include "mpi/ranks.h"
 
 int main(int argc, char** argv) {
+  // The one read of the run's process group: every command is handed it.
+  opsila::Ranks& world = opsila::Ranks::world();
   try {
     // Under an MPI launcher, join the job first: a bad flag is then one
     // error line from the lowest rank, not one per rank.
-    if (opsila::launched_by_mpi()) opsila::Ranks::world().start();
+    if (opsila::launched_by_mpi()) world.start();
     const std::vector<std::string> args(argv + 1, argv + argc);
     if (!args.empty() && args[0] == "bench") {
-      return opsila::run_bench(std::vector<std::string>(args.begin() + 1, args.end()));
+      return opsila::run_bench(std::vector<std::string>(args.begin() + 1, args.end()), world);
     }
-    return opsila::run_cli(args);
+    return opsila::run_cli(args, world);
   } catch (...) {
-    return opsila::report_rank_failure(std::current_exception());
+    return opsila::report_rank_failure(std::current_exception(), world);
   }
 }

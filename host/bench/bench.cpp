@@ -16,7 +16,7 @@
 #include "bench/measure.h"
 #include "bench/options.h"
 #include "bench/report.h"
-#include "prepare/startup.h"
+#include "prepare/prepare.h"
 #include "core/progress.h"
 #include "core/stage_clock.h"
 #include "formats/image/image_io.h"
@@ -74,9 +74,23 @@ BenchReport start_report(const BenchOptions& o, const Scene& scene, int pes) {
   return r;
 }
 
+// What the bench asks the preparation for: the view group, balanced by
+// measured work unless told otherwise.
+PrepareRequest bench_request(const BenchOptions& o, bool silent, Ranks& ranks, OutputFiles& outputs,
+                             const BenchProgress& progress) {
+  PrepareRequest request;
+  request.view = static_cast<const ViewOptions&>(o);
+  request.balance = kBenchBalance;
+  request.quiet = o.quiet || silent;
+  request.ranks = &ranks;
+  request.outputs = &outputs;
+  request.note = [progress](const std::string& text) { progress("note: %s", text.c_str()); };
+  return request;
+}
+
 }  // namespace
 
-int run_bench(const std::vector<std::string>& args) {
+int run_bench(const std::vector<std::string>& args, Ranks& ranks) {
   const BenchOptions o = parse_bench_options(args);
   if (o.help) {
     std::fputs(bench_usage().c_str(), stdout);
@@ -86,7 +100,6 @@ int run_bench(const std::vector<std::string>& args) {
   // the OPSILA render; rank 0 alone reports and writes. The baselines and the
   // scatter curve need one process: with several ranks they are left out
   // (kSingleProcessOnly says why in the report).
-  Ranks& ranks = Ranks::world();
   if (launched_by_mpi()) ranks.start();
   const bool writer = ranks.rank() == 0;
   // Checked, not created: the CSV folder, its tables and the JSON file
@@ -103,7 +116,7 @@ int run_bench(const std::vector<std::string>& args) {
   }
   const BenchProgress progress{o.quiet || !writer};
 
-  ClRuntime rt(choose_device_flag(o.device_spec));
+  ClRuntime rt(choose_device_flag(o.device_spec, ranks));
   // Every rank names its device (as render does), each on its own line.
   const std::string device = device_text(ranks, o.pes.value_or(RenderSettings().num_pes), rt.description());
   if (ranks.size() > 1) {
@@ -114,14 +127,12 @@ int run_bench(const std::vector<std::string>& args) {
   // The bench measures the scheme with its PEs balanced by measured work
   // unless told otherwise, on one process or on ranks that each read only
   // their share of the scene (docs/DISTRIBUTED.md).
-  ViewOptions view = static_cast<const ViewOptions&>(o);
-  view.balance = o.balance.value_or(kBenchBalance);
-  const auto note = [&](const std::string& text) { progress("note: %s", text.c_str()); };
-  Scene scene = load_view_scene(o.scene_path, o, o.quiet || !writer, outputs, note,
-                                scene_share_for(ranks));
-  if (view.balance == Balance::work) progress("sampling the frame's rays for --balance work");
-  if (view.balance == Balance::measured) progress("pilot frames for --balance measured");
-  const RenderSettings settings = render_settings(view);
+  const PrepareRequest request = bench_request(o, !writer, ranks, outputs, progress);
+  const RenderSettings settings = prepared_settings(request);
+  // The bench prepares the banks of each measured renderer itself (measure.cpp).
+  Scene scene = std::move(prepare_scene(request, nullptr).scene);
+  if (settings.balance == Balance::work) progress("sampling the frame's rays for --balance work");
+  if (settings.balance == Balance::measured) progress("pilot frames for --balance measured");
 
   BenchReport report = start_report(o, scene, settings.num_pes);
   report.device = device_facts(rt);

@@ -14,6 +14,7 @@
 
 #include "device/cl_runtime.h"
 #include "device/descriptors.h"
+#include "mpi/ranks.h"
 #include "scene/image.h"
 #include "core/util.h"
 #include "scene/scene.h"
@@ -22,7 +23,7 @@ namespace opsila {
 
 // Entry point of `opsila bench ARGS...` (ARGS = everything after "bench").
 // Returns the exit code; throws InputError / ClError like the other commands.
-int run_bench(const std::vector<std::string>& args);
+int run_bench(const std::vector<std::string>& args, Ranks& ranks);
 
 // One point of the scatter curve (the paper's figure 6): the scatter kernels
 // (count + scan + plan + move, OpenCL-profiled) against host_scatter on the

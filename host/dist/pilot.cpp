@@ -18,11 +18,11 @@ namespace {
 // The pilot's occupancy, the same on every rank: a rank's counters hold its
 // own PEs (rank 0's, every PE's), so the largest count over the ranks is
 // each PE's count.
-double shared_occupancy(RenderStats st) {
+double shared_occupancy(RenderStats st, Ranks& ranks) {
   std::vector<std::uint64_t> flat;
   for (const auto& level : st.counters)
     for (const auto& pe : level) flat.insert(flat.end(), pe.begin(), pe.end());
-  Ranks::world().max(flat);
+  ranks.max(flat);
   std::size_t k = 0;
   for (auto& level : st.counters)
     for (auto& pe : level)
@@ -79,6 +79,7 @@ namespace {
 // they read the work, not the item buffer.
 RenderSettings pilot_settings(const RenderSettings& settings) {
   RenderSettings ps;
+  ps.ranks = settings.ranks;
   ps.num_pes = settings.num_pes;
   ps.work_groups_per_pe = settings.work_groups_per_pe;
   ps.routing = settings.routing;
@@ -100,6 +101,8 @@ MeasuredWork run_pilots(const Scene& view, const RenderSettings& ps, const Pilot
   // pilot; best: the input whose partition measured the best occupancy.
   MeasuredWork mean, best;
   double best_occupancy = -1;
+  Ranks solo;  // one process, when the settings name no ranks
+  Ranks& ranks = ps.ranks ? *ps.ranks : solo;
   int k = 0;
   for (; k < kPilotFrames; ++k) {
     clock.progress(double(k) / kPilotFrames);
@@ -118,7 +121,7 @@ MeasuredWork run_pilots(const Scene& view, const RenderSettings& ps, const Pilot
       t0 += w1 - w0;
     }
     const RenderResult r = pilot.render();
-    if (const double occ = shared_occupancy(r.stats); occ > best_occupancy) {
+    if (const double occ = shared_occupancy(r.stats, ranks); occ > best_occupancy) {
       best_occupancy = occ;
       best = k == 0 ? MeasuredWork{} : mean;  // k = 0: the facets' partition
     }
@@ -144,7 +147,8 @@ namespace {
 MeasuredWork whole_scene_pilots(const Scene& scene, const Scene& view, const RenderSettings& settings,
                                 ClRuntime& runtime, PilotFigures& figures) {
   const RenderSettings ps = pilot_settings(settings);
-  Ranks& ranks = Ranks::world();
+  Ranks solo;  // one process, when the settings name no ranks
+  Ranks& ranks = settings.ranks ? *settings.ranks : solo;
   const PeGroup group = pe_group(ps.num_pes, ranks.size(), ranks.rank());
   return run_pilots(
       view, ps,
@@ -193,7 +197,8 @@ MeasuredWork pilot_work(Scene& share, const RenderSettings& settings, ClRuntime&
   const Scene view = view_without_facets(share);
   if (!share.is_share()) return whole_scene_pilots(share, view, settings, runtime, figures);
   const RenderSettings ps = pilot_settings(settings);
-  Ranks& ranks = Ranks::world();
+  Ranks solo;  // one process, when the settings name no ranks
+  Ranks& ranks = settings.ranks ? *settings.ranks : solo;
   const PeGroup group = pe_group(ps.num_pes, ranks.size(), ranks.rank());
   ShareBalance how;
   how.keep_share = true;

@@ -70,7 +70,8 @@ struct Renderer::Machine {
   ClRuntime& rt;
   // P PEs in all; with several MPI ranks this device holds the G PEs of its
   // group (pe_group.h) and only their banks.
-  Ranks& ranks = Ranks::world();
+  Ranks solo;    // one process, when the settings name no ranks
+  Ranks& ranks;  // settings.ranks, else solo
   PeGroup group;
   int G = 0;
   DevicePlan plan;

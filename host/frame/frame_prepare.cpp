@@ -20,7 +20,7 @@ namespace opsila {
 
 Renderer::Machine::Machine(const Scene& scene, PreparedBanks banks, const RenderSettings& settings,
                            ClRuntime& runtime)
-    : rt(runtime) {
+    : rt(runtime), ranks(settings.ranks ? *settings.ranks : solo) {
   P = settings.num_pes;
   check_machine_request(scene, P);
   if (banks.scene.num_pes != P || banks.group.begin < 0 || banks.group.end > P)

@@ -23,6 +23,12 @@ struct OtherRankFailed : std::runtime_error {
 
 class Ranks {
  public:
+  // A Ranks never started is one process (rank 0 of 1): what a caller that
+  // names no ranks gets. Only the program's entry (app/main.cpp) reads the
+  // world's; every other room is handed its Ranks.
+  Ranks() = default;
+  Ranks(const Ranks&) = delete;
+  Ranks& operator=(const Ranks&) = delete;
   // The run's process group: one process until start() joins an MPI job.
   static Ranks& world();
 
@@ -91,7 +97,6 @@ class Ranks {
   double mpi_seconds() const { return mpi_seconds_; }
 
  private:
-  Ranks() = default;
   bool started_ = false, finished_ = false, collective_ = false;
   int rank_ = 0, size_ = 1, local_rank_ = 0, local_size_ = 1;
   std::string host_;

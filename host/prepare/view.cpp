@@ -104,7 +104,7 @@ void print_warnings(const std::vector<std::string>& warnings, bool quiet) {
     std::fprintf(stderr, "opsila: warning: ... and more (only the first %zu are shown)\n", kMaxShown);
 }
 
-Scene load_scene_or_explain(const std::string& path, bool quiet, const SceneShare& share) {
+Scene load_scene_or_explain(const std::string& path, bool quiet, Ranks& ranks, const SceneShare& share) {
   Scene scene;
   // Read in shares: texture images are checked once over the ranks, then
   // decoded only where used (settle_maps, docs/DISTRIBUTED.md).
@@ -117,7 +117,7 @@ Scene load_scene_or_explain(const std::string& path, bool quiet, const SceneShar
     print_warnings(e.warnings, quiet);  // a misspelt key explains many errors
     throw;
   }
-  if (shares) settle_maps(scene, Ranks::world());
+  if (shares) settle_maps(scene, ranks);
   print_warnings(scene.warnings, quiet);
   return scene;
 }

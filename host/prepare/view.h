@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "formats/json/scene_file.h"
+#include "mpi/ranks.h"
 #include "scene/ray_sample.h"
 #include "scene/render_types.h"
 #include "scene/scene.h"
@@ -52,6 +53,6 @@ void check_scene_file(const std::string& path);
 // Prints each distinct warning once ("opsila: warning: ..."), at most 100.
 void print_warnings(const std::vector<std::string>& warnings, bool quiet);
 // load_scene, with its warnings printed, also those found before an error.
-Scene load_scene_or_explain(const std::string& path, bool quiet, const SceneShare& share = SceneShare{});
+Scene load_scene_or_explain(const std::string& path, bool quiet, Ranks& ranks, const SceneShare& share);
 
 }  // namespace opsila

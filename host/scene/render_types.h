@@ -19,6 +19,7 @@
 namespace opsila {
 
 class Progress;
+class Ranks;
 
 // How the scene is split over the PEs (--balance): equal shares of facets;
 // shares of the frame's rays, sampled on the host first (scene/ray_sample.h);
@@ -28,6 +29,8 @@ enum class Balance { facets, work, measured };
 const char* balance_name(Balance b);
 
 struct RenderSettings {
+  // The processes of the run (mpi/ranks.h): null is one process.
+  Ranks* ranks = nullptr;
   int num_pes = 16;
   // n: bank slots per PE on average; P * n descriptors are in flight in each
   // SPMD phase, shared out by demand. 0 = choose from the device.

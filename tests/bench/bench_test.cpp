@@ -331,19 +331,20 @@ TEST(Bench, ScatterPointIsSane) {
 }
 
 TEST(Bench, FlagErrorsAreInputErrors) {
-  EXPECT_THROW(run_bench({}), InputError);
-  EXPECT_THROW(run_bench({"scene.json", "-o", "x.png"}), InputError);
-  EXPECT_THROW(run_bench({"scene.json", "--stats", "x.json"}), InputError);
-  EXPECT_THROW(run_bench({"scene.json", "--repeats", "0"}), InputError);
-  EXPECT_THROW(run_bench({"scene.json", "--warmup", "x"}), InputError);
-  EXPECT_THROW(run_bench({"scene.json", "--json", "out.txt"}), InputError);
-  EXPECT_THROW(run_bench({"scene.json", "--json"}), InputError);
-  EXPECT_THROW(run_bench({"scene.json", "--quick=1"}), InputError);
-  EXPECT_THROW(run_bench({"scene.json", "--repeats", "2", "--repeats", "3"}), InputError);
-  EXPECT_THROW(run_bench({"scene.json", "--pes", "0"}), InputError);
-  EXPECT_THROW(run_bench({"scene.json", "--size", "10"}), InputError);
-  EXPECT_THROW(run_bench({"a.json", "b.json"}), InputError);
-  EXPECT_THROW(run_bench({"scene.json", "--frobnicate"}), InputError);
+  Ranks solo;  // one process
+  EXPECT_THROW(run_bench({}, solo), InputError);
+  EXPECT_THROW(run_bench({"scene.json", "-o", "x.png"}, solo), InputError);
+  EXPECT_THROW(run_bench({"scene.json", "--stats", "x.json"}, solo), InputError);
+  EXPECT_THROW(run_bench({"scene.json", "--repeats", "0"}, solo), InputError);
+  EXPECT_THROW(run_bench({"scene.json", "--warmup", "x"}, solo), InputError);
+  EXPECT_THROW(run_bench({"scene.json", "--json", "out.txt"}, solo), InputError);
+  EXPECT_THROW(run_bench({"scene.json", "--json"}, solo), InputError);
+  EXPECT_THROW(run_bench({"scene.json", "--quick=1"}, solo), InputError);
+  EXPECT_THROW(run_bench({"scene.json", "--repeats", "2", "--repeats", "3"}, solo), InputError);
+  EXPECT_THROW(run_bench({"scene.json", "--pes", "0"}, solo), InputError);
+  EXPECT_THROW(run_bench({"scene.json", "--size", "10"}, solo), InputError);
+  EXPECT_THROW(run_bench({"a.json", "b.json"}, solo), InputError);
+  EXPECT_THROW(run_bench({"scene.json", "--frobnicate"}, solo), InputError);
 }
 
 TEST(Bench, CommandLineErrorIsOneLineExitTwo) {

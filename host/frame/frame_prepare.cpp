@@ -22,7 +22,6 @@ Renderer::Machine::Machine(const Scene& scene, PreparedBanks banks, const Render
                            ClRuntime& runtime)
     : rt(runtime), ranks(settings.ranks ? *settings.ranks : solo) {
   P = settings.num_pes;
-  check_machine_request(scene, P);
   if (banks.scene.num_pes != P || banks.group.begin < 0 || banks.group.end > P)
     throw std::invalid_argument("Renderer: the banks were prepared for another machine");
   width = scene.width;

@@ -9,15 +9,12 @@
 namespace opsila {
 
 void check_kernel_limits(const Scene& scene) {
-  if (scene.max_depth < 1 || scene.max_depth > OPSILA_MAX_DEPTH)
-    throw InputError("--depth " + std::to_string(scene.max_depth) + ": must be 1.." +
-                     std::to_string(OPSILA_MAX_DEPTH));
+  // Depth and spp are the view's, checked once where it is applied
+  // (prepare/view.cpp); here what only the banks' kernels limit.
   if (static_cast<int>(scene.lights.size()) > OPSILA_MAX_LIGHTS)
     throw InputError("scene has " + std::to_string(scene.lights.size()) + " lights; at most " +
                      std::to_string(OPSILA_MAX_LIGHTS) + " are supported");
   if (scene.total_triangles() == 0) throw InputError("scene has no facets");
-  if (const std::string problem = spp_problem(scene.spp); !problem.empty())
-    throw InputError("--spp " + std::to_string(scene.spp) + ": " + problem);
 }
 
 void check_machine_request(const Scene& scene, int num_pes) {

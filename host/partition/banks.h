@@ -47,12 +47,14 @@ struct PreparedBanks {
   ShareFigures share;  // a scene read in shares: what the collective partition did here
 };
 
-// Throws InputError when the scene exceeds what the kernels support (depth,
-// lights, --spp) or has no facet. Shared by every OpenCL renderer.
+// Throws InputError when the scene has more lights than the kernels take, or
+// no facet. Shared by every OpenCL renderer. (Depth and spp are checked
+// where the view is applied, prepare/view.h.)
 void check_kernel_limits(const Scene& scene);
 
 // Refuses (InputError) a machine the kernels cannot run: --pes out of range,
-// depth or lights beyond the kernels' limits, no facet, a bad --spp.
+// lights beyond the kernels' limits, no facet. Checked once, when the banks
+// are prepared (prepare/prepare_banks.h); the renderer takes them as they are.
 void check_machine_request(const Scene& scene, int num_pes);
 
 // Partitions `scene` over `num_pes` PEs as `policy` says (spheres routing

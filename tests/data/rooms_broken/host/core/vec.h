@@ -1,0 +1,2 @@
+#pragma once
+#include "scene/scene.h"  // core may not include scene

@@ -94,7 +94,7 @@ check render-measured-balance-optimised "${optimised_checks[@]}" -- \
   --device oclgrind -q "${view[@]}"
 
 # 3. The scatter on its own: SPMD output slots with holes and unused slots,
-#    a waiting queue, banks that overflow (tests/frame/reliability_test.cpp).
+#    a waiting queue, banks that overflow (tests/frame/small_scatter_test.cpp).
 check scatter-all-checks "${all_checks[@]}" -- \
   env OPSILA_TEST_DEVICE=oclgrind "$build/opsila_tests" --gtest_filter='SmallScatter.*'
 check scatter-optimised "${optimised_checks[@]}" -- \

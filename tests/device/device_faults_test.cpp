@@ -1,0 +1,208 @@
+// Device and driver faults (docs/RELIABILITY.md): no platform, missing
+// capabilities, memory beyond the device, each one clear message and a
+// non-zero exit, never a hang or a garbage image.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cstdlib>
+#include <cstring>
+#include <map>
+#include <optional>
+#include <random>
+#include <sstream>
+#include <string>
+#include <tuple>
+#include <vector>
+
+#include "prepare/prepare_banks.h"
+#include "device/descriptors.h"
+#include "partition/pe_group.h"
+#include "frame/rank_exchange.h"
+#include "mpi/ranks.h"
+#include "formats/image/image_io.h"
+#include "opsila_shared.h"
+#include "frame/renderer.h"
+#include "exchange_check.h"
+#include "test_scenes.h"
+#include "test_device.h"
+#include "test_util.h"
+#include "fault_checks.h"
+
+namespace opsila {
+
+const std::string& kernel_source();  // the embedded kernels (generated from kernels/*.cl)
+
+namespace {
+
+using test::contains;
+using test::error_line;
+using test::expect_one_error;
+using test::first_line;
+using test::opsila;
+using test::plain_options;
+using test::render_args;
+using test::RunResult;
+using test::TempDir;
+using test::test_device;
+using test::test_device_spec;
+
+// -------------------------------------------------------------- no platform
+
+TEST(DeviceFaults, NoOpenClPlatformIsOneClearError) {
+  TempDir dir, empty_vendors;
+  const std::map<std::string, std::optional<std::string>> env = {{"OCL_ICD_VENDORS", empty_vendors.path()}};
+  std::vector<std::string> args = render_args(dir.file("out.pfm"));
+  RunResult r = opsila(args, env);
+  expect_one_error(r, 3, "no OpenCL platform");
+  EXPECT_EQ(r.err, error_line(r) + "\n") << "nothing but the error line";
+  EXPECT_FALSE(test::file_exists(dir.file("out.pfm")));
+  EXPECT_TRUE(dir.entries().empty()) << "no partial output";
+
+  RunResult devices = opsila({"devices"}, env);
+  expect_one_error(devices, 3, "no OpenCL platform");
+
+  // The sequential reference needs no OpenCL at all.
+  args.insert(args.end(), "--reference");
+  RunResult reference = opsila(args, env);
+  EXPECT_EQ(reference.exit_code, 0) << reference.err;
+  EXPECT_TRUE(test::file_exists(dir.file("out.pfm")));
+}
+
+// ------------------------------------------------------- device capabilities
+
+DeviceCapabilities capable() {
+  DeviceCapabilities c;
+  c.name = "test device";
+  c.version = "OpenCL 1.2 test";
+  c.opencl_c_version = "OpenCL C 1.2 test";
+  c.profile = "FULL_PROFILE";
+  c.local_mem_size = 32768;
+  c.max_work_group_size = 256;
+  return c;
+}
+
+TEST(DeviceChecks, TheTestDeviceHasWhatOpsilaNeeds) {
+  const DeviceEntry d = test_device();
+  const std::vector<std::string> missing = missing_capabilities(query_capabilities(d.device));
+  EXPECT_TRUE(missing.empty()) << d.device_name << " lacks " << (missing.empty() ? "" : missing.front());
+}
+
+TEST(DeviceChecks, EachMissingCapabilityIsNamed) {
+  EXPECT_TRUE(missing_capabilities(capable()).empty());
+  for (const char* v : {"OpenCL 2.0 x", "OpenCL 3.0", "OpenCL 1.2"}) {
+    DeviceCapabilities c = capable();
+    c.version = v;
+    EXPECT_TRUE(missing_capabilities(c).empty()) << v;
+  }
+  struct Case {
+    void (*change)(DeviceCapabilities&);
+    const char* named;
+  } cases[] = {
+      {[](DeviceCapabilities& c) { c.version = "OpenCL 1.1 old"; }, "OpenCL 1.2 (it reports 'OpenCL 1.1 old')"},
+      {[](DeviceCapabilities& c) { c.version = "garbage"; }, "OpenCL 1.2"},
+      {[](DeviceCapabilities& c) { c.opencl_c_version = "OpenCL C 1.1"; }, "OpenCL C 1.2"},
+      {[](DeviceCapabilities& c) { c.compiler_available = false; }, "compiler"},
+      {[](DeviceCapabilities& c) { c.local_mem_size = 1024; }, "local memory"},
+      {[](DeviceCapabilities& c) { c.max_work_group_size = 0; }, "CL_DEVICE_MAX_WORK_GROUP_SIZE"},
+      {[](DeviceCapabilities& c) { c.available = false; }, "not available"},
+      {[](DeviceCapabilities& c) { c.profile = "EMBEDDED_PROFILE"; }, "64-bit integers"},
+  };
+  for (const Case& k : cases) {
+    DeviceCapabilities c = capable();
+    k.change(c);
+    const std::vector<std::string> missing = missing_capabilities(c);
+    ASSERT_EQ(missing.size(), 1u) << k.named;
+    EXPECT_TRUE(contains(missing[0], k.named)) << missing[0];
+  }
+  DeviceCapabilities embedded = capable();
+  embedded.profile = "EMBEDDED_PROFILE";
+  embedded.extensions = "cl_khr_byte_addressable_store cles_khr_int64";
+  EXPECT_TRUE(missing_capabilities(embedded).empty());
+  // The SPMD kernel's per-level stats and traffic live in local memory.
+  EXPECT_EQ(required_local_mem(), std::size_t(OPSILA_MAX_DEPTH) * (OPSILA_STAT_COUNT + OPSILA_TRAFFIC_MAX_PES) * 4);
+  DeviceCapabilities all_wrong = capable();
+  all_wrong.version = "OpenCL 1.0";
+  all_wrong.compiler_available = false;
+  all_wrong.local_mem_size = 0;
+  EXPECT_EQ(missing_capabilities(all_wrong).size(), 3u);
+}
+
+// ------------------------------------------------------------ device memory
+
+TEST(DeviceMemory, OneBufferBeyondTheLargestAllocationIsRefused) {
+  ClRuntimeOptions o = plain_options();
+  o.memory_limit = 1 << 20;
+  ClRuntime rt(test_device(), o);
+  EXPECT_EQ(rt.max_alloc(), cl_ulong(1) << 20);
+  EXPECT_EQ(rt.global_mem(), cl_ulong(1) << 20);
+  // "<no error>" when a buffer beyond the limit was created.
+  const std::string m = test::error_of<ClError>([&] { device_buffer(rt, 3u << 20, "huge test buffer"); });
+  EXPECT_TRUE(contains(m, "huge test buffer") && contains(m, "3145728") && contains(m, "1048576") &&
+              contains(m, "CL_DEVICE_MAX_MEM_ALLOC_SIZE"))
+      << m;
+  EXPECT_NO_THROW(device_buffer(rt, 1 << 20, "buffer at the limit"));
+}
+
+TEST(DeviceMemory, TheWholeRenderIsCheckedBeforeAllocating) {
+  Scene s = test::mirror_glass_scene(64, 3);  // 64x48
+  RenderSettings settings;
+  settings.num_pes = 4;
+  RenderResult unlimited;
+  int default_capacity = 0;
+  {
+    ClRuntime rt(test_device(), plain_options());
+    unlimited = render(s, settings, rt);
+    default_capacity = unlimited.stats.bank_capacity;
+  }
+  ASSERT_GT(default_capacity, 64);
+  ClRuntimeOptions o = plain_options();
+  o.memory_limit = 1 << 20;  // below what the automatic bank size plans, above what n = 1 needs
+  {
+    ClRuntime rt(test_device(), o);
+    // An automatic bank size shrinks until the render fits; the image does not change.
+    RenderResult fitted = render(s, settings, rt);
+    EXPECT_LT(fitted.stats.bank_capacity, default_capacity);
+    EXPECT_GE(fitted.stats.bank_capacity, 1);
+    EXPECT_GE(test::clamped_psnr(fitted.rgb, unlimited.rgb), 60.0);
+    EXPECT_EQ(fitted.item_buffer, unlimited.item_buffer);
+    // An explicit one is refused with the numbers, before any allocation.
+    RenderSettings explicit_capacity = settings;
+    explicit_capacity.bank_capacity = default_capacity;
+    // "<no error>" when a render beyond the device's memory started.
+    const std::string m = test::error_of<ClError>([&] { render(s, explicit_capacity, rt); });
+    EXPECT_TRUE(contains(m, "device memory") && contains(m, "1024.0 KiB") && contains(m, "OPSILA_DEVICE_MEMORY_LIMIT") &&
+                contains(m, "--bank-capacity"))
+        << m;
+  }
+  // An image that cannot fit even with one slot per bank.
+  o.memory_limit = 64 << 10;
+  ClRuntime tiny(test_device(), o);
+  EXPECT_THROW(render(s, settings, tiny), ClError);
+}
+
+TEST(DeviceMemory, EnvironmentLimitEndToEnd) {
+  TempDir dir;
+  RunResult r = opsila(render_args(dir.file("out.pfm")), {{"OPSILA_DEVICE_MEMORY_LIMIT", "20000"}});
+  expect_one_error(r, 3, "device memory");
+  EXPECT_TRUE(contains(r.err, "OPSILA_DEVICE_MEMORY_LIMIT")) << r.err;
+  EXPECT_FALSE(test::file_exists(dir.file("out.pfm")));
+
+  RunResult bad = opsila(render_args(dir.file("out.pfm")), {{"OPSILA_DEVICE_MEMORY_LIMIT", "lots"}});
+  expect_one_error(bad, 2, "OPSILA_DEVICE_MEMORY_LIMIT=lots");
+  EXPECT_FALSE(test::file_exists(dir.file("out.pfm")));
+}
+
+// OPSILA_WAITING_LIMIT: a whole number, or one clear error before anything
+// is written.
+TEST(WaitingLimit, ABadValueIsAnInputError) {
+  TempDir dir;
+  RunResult bad = opsila(render_args(dir.file("out.pfm")), {{"OPSILA_WAITING_LIMIT", "lots"}});
+  expect_one_error(bad, 2, "OPSILA_WAITING_LIMIT=lots");
+  EXPECT_FALSE(test::file_exists(dir.file("out.pfm")));
+  RunResult tight = opsila(render_args(dir.file("out.pfm")), {{"OPSILA_WAITING_LIMIT", "1"}});
+  EXPECT_EQ(tight.exit_code, 0) << tight.err;
+  EXPECT_TRUE(test::file_exists(dir.file("out.pfm")));
+}
+
+}  // namespace
+}  // namespace opsila

@@ -1,0 +1,96 @@
+// Determinism: the same inputs give the same bytes run after run, whatever
+// the bank capacity or the item buffer's tiles.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cstdlib>
+#include <cstring>
+#include <map>
+#include <optional>
+#include <random>
+#include <sstream>
+#include <string>
+#include <tuple>
+#include <vector>
+
+#include "prepare/prepare_banks.h"
+#include "device/descriptors.h"
+#include "partition/pe_group.h"
+#include "frame/rank_exchange.h"
+#include "mpi/ranks.h"
+#include "formats/image/image_io.h"
+#include "opsila_shared.h"
+#include "frame/renderer.h"
+#include "exchange_check.h"
+#include "test_scenes.h"
+#include "test_device.h"
+#include "test_util.h"
+#include "fault_checks.h"
+
+namespace opsila {
+
+const std::string& kernel_source();  // the embedded kernels (generated from kernels/*.cl)
+
+namespace {
+
+using test::contains;
+using test::error_line;
+using test::expect_one_error;
+using test::first_line;
+using test::opsila;
+using test::plain_options;
+using test::render_args;
+using test::RunResult;
+using test::TempDir;
+using test::test_device;
+using test::test_device_spec;
+
+// ---------------------------------------------------------------- determinism
+
+TEST(Determinism, SameInputsGiveTheSameBytesRunToRun) {
+  TempDir dir;
+  RunResult a = opsila(render_args(dir.file("a.pfm"), {"--item-buffer", dir.file("a.npy")}));
+  RunResult b = opsila(render_args(dir.file("b.pfm"), {"--item-buffer", dir.file("b.npy")}));
+  ASSERT_EQ(a.exit_code, 0) << a.err;
+  ASSERT_EQ(b.exit_code, 0) << b.err;
+  const std::string pa = test::read_file(dir.file("a.pfm")), pb = test::read_file(dir.file("b.pfm"));
+  ASSERT_GT(pa.size(), 40u * 30u * 12u);
+  EXPECT_TRUE(pa == pb) << "two runs of the same render differ";
+  EXPECT_TRUE(test::read_file(dir.file("a.npy")) == test::read_file(dir.file("b.npy")));
+}
+
+TEST(Determinism, BankCapacityDownToOneGivesTheSameImage) {
+  TempDir dir;
+  RunResult base = opsila(render_args(dir.file("auto.pfm")));
+  ASSERT_EQ(base.exit_code, 0) << base.err;
+  const FloatImage reference = read_pfm(dir.file("auto.pfm"));
+  for (const char* capacity : {"1", "2", "5", "64"}) {
+    const std::string out = dir.file(std::string("n") + capacity + ".pfm");
+    RunResult r = opsila(render_args(out, {"--bank-capacity", capacity}));
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const FloatImage img = read_pfm(out);
+    EXPECT_GE(test::clamped_psnr(img.rgb, reference.rgb), 60.0) << "--bank-capacity " << capacity;
+  }
+}
+
+// The item buffer is launched in tiles (bounded work per launch): the tile
+// size changes the launches, never the image.
+TEST(Determinism, ItemBufferTilesDoNotChangeTheImage) {
+  ClRuntime rt(test_device(), plain_options());
+  Scene s = test::mirror_glass_scene(40, 3);  // 40x30
+  RenderSettings settings;
+  settings.num_pes = 4;
+  RenderResult whole = render(s, settings, rt);
+  settings.item_buffer_tile = 97;
+  RenderResult tiled = render(s, settings, rt);
+  ASSERT_EQ(whole.rgb.size(), tiled.rgb.size());
+  EXPECT_EQ(0, std::memcmp(whole.rgb.data(), tiled.rgb.data(), whole.rgb.size() * sizeof(float)));
+  EXPECT_EQ(whole.item_buffer, tiled.item_buffer);
+  const auto item_launches = std::count_if(tiled.stats.launches.begin(), tiled.stats.launches.end(),
+                                           [](const LaunchRecord& l) { return l.name == "item_buffer"; });
+  // Bounded work: no launch covers more than item_buffer_tile pixels.
+  EXPECT_GE(item_launches, (40 * 30 + 96) / 97);
+}
+
+}  // namespace
+}  // namespace opsila

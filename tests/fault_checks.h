@@ -75,3 +75,18 @@ inline std::string error_line(const RunResult& r) {
 }
 
 }  // namespace opsila::test
+
+// The fault tests' vocabulary, by its short names.
+namespace opsila {
+using test::contains;
+using test::error_line;
+using test::expect_one_error;
+using test::first_line;
+using test::opsila;
+using test::plain_options;
+using test::render_args;
+using test::RunResult;
+using test::TempDir;
+using test::test_device;
+using test::test_device_spec;
+}  // namespace opsila

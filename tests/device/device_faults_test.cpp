@@ -34,18 +34,6 @@ const std::string& kernel_source();  // the embedded kernels (generated from ker
 
 namespace {
 
-using test::contains;
-using test::error_line;
-using test::expect_one_error;
-using test::first_line;
-using test::opsila;
-using test::plain_options;
-using test::render_args;
-using test::RunResult;
-using test::TempDir;
-using test::test_device;
-using test::test_device_spec;
-
 // -------------------------------------------------------------- no platform
 
 TEST(DeviceFaults, NoOpenClPlatformIsOneClearError) {

@@ -32,19 +32,19 @@ void Renderer::Machine::item_buffer(Launcher& launch, int sample) {
   const int tiles = tiles_x * tiles_y;
   int per_launch = std::max(1, item_launch_pixels / (tile_w * tile_w));
   if (!group.all()) per_launch = std::max(1, per_launch / tiles_x) * tiles_x;
-  const ItemBuffers relay{&b_items, &b_item_tri, &b_item_t, &b_item_key, items};
+  ItemRelay relay(ranks, rt, ItemBuffers{&b_items, &b_item_tri, &b_item_t, &b_item_key, items});
   for (int begin = 0; begin < tiles; begin += per_launch) {
     const int count = std::min(per_launch, tiles - begin);
     const std::size_t px0 = std::size_t(origin.s[1] + begin / tiles_x) * tile_w * width;
     const std::size_t px1 = std::min(npix, std::size_t(origin.s[1] + (begin + count) / tiles_x) * tile_w * width);
-    if (!group.all()) relay_receive(ranks, rt, relay, px0, px1 - px0);
+    if (!group.all()) relay.receive(px0, px1 - px0);
     kernels().item.bind(fp, b_item_clusters, b_item_near, b_rects, listed_rect, b_nodes, b_tris, tile_w, origin, tiles_x, begin, ox, oy,
                         mode, b_items, b_item_tri, b_item_t, b_item_key);
     launch.run(kernels().item.kernel(), "item_buffer", std::size_t(count) * tile_w * tile_w,
                std::size_t(tile_w) * tile_w, -1);
-    if (!group.all()) relay_send(ranks, rt, relay, px0, px1 - px0);
+    if (!group.all()) relay.send(px0, px1 - px0);
   }
-  if (!group.all()) relay_share(ranks, rt, relay, npix);
+  if (!group.all()) relay.share(npix);
 }
 
 }  // namespace opsila

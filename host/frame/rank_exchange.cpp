@@ -13,17 +13,6 @@ double since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
-// One pixel of the item buffer as the relay carries it: the nearest hit so
-// far (distance, global triangle, (facet, fan) key) and the (object, facet)
-// output.
-struct ItemState {
-  cl_float t;
-  cl_int tri;
-  cl_int2 key;
-  cl_int object, item_facet;
-};
-static_assert(sizeof(ItemState) == 24, "ItemState layout");
-
 constexpr int kRelayTag = 12;
 
 template <typename T>
@@ -66,31 +55,31 @@ void write_states(ClRuntime& rt, const ItemBuffers& b, std::size_t begin, const 
   write_range(rt, *b.t, begin, t, "clEnqueueWriteBuffer(item buffer distances)");
 }
 
-// Send buffers stay alive until the sends complete (Ranks::wait_sends).
-std::vector<std::vector<ItemState>>& relay_outbox() {
-  static std::vector<std::vector<ItemState>> outbox;
-  return outbox;
-}
-
 }  // namespace
 
-void relay_receive(Ranks& ranks, ClRuntime& rt, const ItemBuffers& b, std::size_t begin, std::size_t count) {
+void ItemRelay::receive(std::size_t begin, std::size_t count) {
+  Ranks& ranks = ranks_;
+  ClRuntime& rt = rt_;
+  const ItemBuffers& b = buffers_;
   if (ranks.rank() == 0 || count == 0) return;
   std::vector<ItemState> state(count);
   ranks.receive(state.data(), count * sizeof(ItemState), ranks.rank() - 1, kRelayTag);
   write_states(rt, b, begin, state);
 }
 
-void relay_send(Ranks& ranks, ClRuntime& rt, const ItemBuffers& b, std::size_t begin, std::size_t count) {
-  if (ranks.rank() + 1 >= ranks.size() || count == 0) return;
-  relay_outbox().emplace_back();
-  read_states(rt, b, begin, count, relay_outbox().back());
-  ranks.send(relay_outbox().back().data(), count * sizeof(ItemState), ranks.rank() + 1, kRelayTag);
+void ItemRelay::send(std::size_t begin, std::size_t count) {
+  if (ranks_.rank() + 1 >= ranks_.size() || count == 0) return;
+  outbox_.emplace_back();
+  read_states(rt_, buffers_, begin, count, outbox_.back());
+  ranks_.send(outbox_.back().data(), count * sizeof(ItemState), ranks_.rank() + 1, kRelayTag);
 }
 
-void relay_share(Ranks& ranks, ClRuntime& rt, const ItemBuffers& b, std::size_t npix) {
+void ItemRelay::share(std::size_t npix) {
+  Ranks& ranks = ranks_;
+  ClRuntime& rt = rt_;
+  const ItemBuffers& b = buffers_;
   ranks.wait_sends();
-  relay_outbox().clear();
+  outbox_.clear();
   const int last = ranks.size() - 1;
   std::vector<ItemState> state(npix);
   if (ranks.rank() == last) read_states(rt, b, 0, npix, state);

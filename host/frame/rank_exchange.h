@@ -31,14 +31,36 @@ struct ItemBuffers {
   const cl::Buffer* key = nullptr;    // int2, its (facet id, fan index): the hit order's keys
   bool with_items = false;
 };
-// Before the item-buffer launch over pixels [begin, begin + count): ranks
-// after the first receive the state left by the rank before them.
-void relay_receive(Ranks& ranks, ClRuntime& rt, const ItemBuffers& b, std::size_t begin, std::size_t count);
-// After it: ranks before the last pass their state on (without waiting).
-void relay_send(Ranks& ranks, ClRuntime& rt, const ItemBuffers& b, std::size_t begin, std::size_t count);
-// After the last band: the last rank holds the final item buffer; every
-// rank gets its hits (to build the primary descriptors of its PEs).
-void relay_share(Ranks& ranks, ClRuntime& rt, const ItemBuffers& b, std::size_t npix);
+// One pixel of the item buffer as the relay carries it: the nearest hit so
+// far (distance, global triangle, (facet, fan) key) and the (object, facet)
+// output.
+struct ItemState {
+  cl_float t;
+  cl_int tri;
+  cl_int2 key;
+  cl_int object, item_facet;
+};
+static_assert(sizeof(ItemState) == 24, "ItemState layout");
+
+// The item buffer's relay along the ranks, band after band of pixels.
+class ItemRelay {
+ public:
+  ItemRelay(Ranks& ranks, ClRuntime& rt, const ItemBuffers& buffers) : ranks_(ranks), rt_(rt), buffers_(buffers) {}
+  // Before the item-buffer launch over pixels [begin, begin + count): ranks
+  // after the first receive the state left by the rank before them.
+  void receive(std::size_t begin, std::size_t count);
+  // After it: ranks before the last pass their state on (without waiting).
+  void send(std::size_t begin, std::size_t count);
+  // After the last band: the last rank holds the final item buffer; every
+  // rank gets its hits (to build the primary descriptors of its PEs).
+  void share(std::size_t npix);
+
+ private:
+  Ranks& ranks_;
+  ClRuntime& rt_;
+  ItemBuffers buffers_;
+  std::vector<std::vector<ItemState>> outbox_;  // sent bands, alive until the sends complete
+};
 
 // One round's figures kept per round for the first `cap` rounds of a
 // frame; later rounds are added into the last kept one, so that an endless

@@ -418,6 +418,7 @@ nlohmann::json bench_json(const BenchReport& r) {
   j["copy_buffer_gbytes_per_s"] = r.curve.empty() ? json(nullptr) : json(r.curve.back().copy_buffer_gbytes_per_s());
   j["bytes_per_descriptor"] = DescriptorSet::kBytes;
   j["memory"] = memory_json(r);
+  j["triangle_cost"] = triangle_cost_json(r.stats(), r.triangles);
   j["prepare"] = prepare_bench_json(r);
   j["baselines"] = baselines_json(r);
   j["baselines_left_out"] = r.single_process_only.empty() ? json(nullptr) : json(r.single_process_only);

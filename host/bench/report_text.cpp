@@ -128,7 +128,10 @@ void prepare_text(std::string& out, const BenchReport& r) {
           r.prepare_seconds(), t[PrepareStage::read], t[PrepareStage::parse], t[PrepareStage::partition],
           t[PrepareStage::bank_build], t[PrepareStage::upload]);
   if (t[PrepareStage::pilots] > 0) appendf(out, "; pilot frames %.2f apart", t[PrepareStage::pilots]);
-  appendf(out, "), peak host memory %s\n", bench_bytes(double(t.peak_host_bytes)).c_str());
+  const double per = r.triangles ? 1.0 / double(r.triangles) : 0.0;
+  appendf(out, "), peak host memory %s (%.0f B a triangle), device memory %s (%.0f B a triangle)\n",
+          bench_bytes(double(t.peak_host_bytes)).c_str(), double(t.peak_host_bytes) * per,
+          bench_bytes(double(r.stats().device_bytes)).c_str(), double(r.stats().device_bytes) * per);
   if (r.embree.present) {
     const double e = r.embree.median_run.build_seconds;
     appendf(out, "             Embree BVH build %.2f s", e);

@@ -108,6 +108,7 @@ void Renderer::Machine::describe_prepared(const PreparedBanks& banks) {
   prepared.replicated_bytes = bs.replicated_bytes;
   prepared.texture_bytes = bs.texture_bytes;
   prepared.texture_replicated_bytes = bs.texture_replicated_bytes;
+  prepared.device_bytes = plan.total();
 }
 
 // n, the paper's bank size: P * n descriptors in flight fill the device

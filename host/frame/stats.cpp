@@ -99,6 +99,7 @@ nlohmann::json memory_json(const RenderStats& s) {
   return m;
 }
 
+
 nlohmann::json traffic_json(const RenderStats& s) {
   // traffic[level] is a flat P x P array (src * P + dst): emit it as rows.
   nlohmann::json traffic = nlohmann::json::array();
@@ -124,6 +125,18 @@ nlohmann::json prepare_json(const PrepareTimes& t) {
     j[std::string(stage_key(static_cast<PrepareStage>(k))) + "_seconds"] = t.seconds[k];
   j["peak_host_bytes"] = t.peak_host_bytes;
   return j;
+}
+
+// What a triangle costs: this device's planned memory and this process's
+// peak resident set, over the scene's triangles (every rank's). Apart from
+// "memory", which is the same for any rank count.
+nlohmann::json triangle_cost_json(const RenderStats& s, std::size_t triangles) {
+  const double per = triangles ? 1.0 / double(triangles) : 0.0;
+  return {{"triangles", triangles},
+          {"device_bytes", s.device_bytes},
+          {"device_bytes_per_triangle", double(s.device_bytes) * per},
+          {"host_peak_bytes", s.prepare.peak_host_bytes},
+          {"host_peak_bytes_per_triangle", double(s.prepare.peak_host_bytes) * per}};
 }
 
 nlohmann::json stats_json(const RenderResult& result, const Scene& scene,
@@ -188,6 +201,7 @@ nlohmann::json stats_json(const RenderResult& result, const Scene& scene,
   add_launches(j, s);
 
   j["memory"] = memory_json(s);
+  j["triangle_cost"] = triangle_cost_json(s, scene.total_triangles());
 
   j["traffic"] = traffic_json(s);
   if (!s.ranks.empty()) j["mpi"] = ranks_json(s.ranks);

@@ -29,6 +29,9 @@ namespace opsila {
 // launch_summary {name: {count, total_seconds}},
 // memory {bank_bytes[], bank_bytes_max, bank_bytes_mean, global_bytes, replicated_bytes},
 // traffic [level][src][dst]; with several MPI ranks, mpi {...} (ranks_json).
+// The bytes a triangle costs on this device and this host (--stats and the
+// bench's "triangle_cost").
+nlohmann::json triangle_cost_json(const RenderStats& s, std::size_t triangles);
 nlohmann::json stats_json(const RenderResult& result, const Scene& scene,
                           const RenderSettings& settings, const std::string& device_description);
 

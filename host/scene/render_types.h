@@ -143,6 +143,7 @@ struct RenderStats {
   std::uint64_t texture_replicated_bytes = 0;  // one copy of every texture used
   std::uint64_t global_bytes = 0;         // replicated per PE: spheres, PE boxes, materials, lights
   std::uint64_t replicated_bytes = 0;     // what a replicated scene would cost on each PE
+  std::uint64_t device_bytes = 0;         // this device's planned memory (the frame's buffer table)
   // traffic[level][src_pe * P + dst_pe]: descriptors sent (scatter)
   std::vector<std::vector<std::uint64_t>> traffic;
   int bank_capacity = 0;

@@ -238,6 +238,13 @@ TEST_F(CliFixture, OpenClRenderMatchesReference) {
   EXPECT_TRUE(stats["balanced"].get<bool>()) << stats["descriptors"].dump();
   EXPECT_EQ(stats["pes"], 2);
   EXPECT_EQ(stats["levels"][0]["pes"].size(), 2u);
+  // What a triangle costs on this device (its planned buffers) and this host.
+  const nlohmann::json& cost = stats["triangle_cost"];
+  EXPECT_GT(cost["triangles"].get<double>(), 0.0);
+  EXPECT_GT(cost["device_bytes"].get<std::uint64_t>(), stats["memory"]["bank_bytes_max"].get<std::uint64_t>());
+  EXPECT_NEAR(cost["device_bytes_per_triangle"].get<double>(),
+              cost["device_bytes"].get<double>() / cost["triangles"].get<double>(), 1e-6);
+  EXPECT_GT(cost["host_peak_bytes"].get<std::uint64_t>(), 0u);
   const RunResult ref = run_opsila({"render", obj, "-o", out("ref.pfm"), "--size", "40x30", "--reference",
                                     "--item-buffer", out("ref.npy")});
   ASSERT_EQ(ref.exit_code, 0) << ref.err;

@@ -471,6 +471,13 @@ TEST(Bench, QuickRunWritesEveryJsonKey) {
   EXPECT_GT(j["copy_gbytes_per_s"].get<double>(), 0.0);
   EXPECT_GT(j["memory"]["bank_bytes_max"].get<std::uint64_t>(), 0u);
   EXPECT_GT(j["memory"]["replicated_bytes"].get<std::uint64_t>(), j["memory"]["bank_bytes_max"].get<std::uint64_t>());
+  // What a triangle costs: the device's planned bytes (banks, image, descriptors) and the peak host set.
+  const nlohmann::json& cost = j["triangle_cost"];
+  EXPECT_EQ(cost["triangles"], j["scene"]["triangles"]);
+  EXPECT_GT(cost["device_bytes"].get<std::uint64_t>(), j["memory"]["bank_bytes_max"].get<std::uint64_t>());
+  EXPECT_NEAR(cost["device_bytes_per_triangle"].get<double>(),
+              cost["device_bytes"].get<double>() / cost["triangles"].get<double>(), 1e-6);
+  EXPECT_GT(cost["host_peak_bytes_per_triangle"].get<double>(), 0.0);
 
   const nlohmann::json& b = j["baselines"];
   EXPECT_GT(b["replicated_megakernel"]["mrays_per_s"].get<double>(), 0.0);

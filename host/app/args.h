@@ -5,6 +5,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdio>
 #include <optional>
 #include <string>
 #include <vector>
@@ -79,6 +80,12 @@ bool parse_common_flag(const std::string& name, Options& o) {
   else
     return false;
   return true;
+}
+// With --help: prints the command's usage on stdout and says so.
+template <class Options>
+bool answered_help(const Options& o, const std::string& usage) {
+  if (o.help) std::fputs(usage.c_str(), stdout);
+  return o.help;
 }
 // Camera flags that contradict each other on their own (the rest is checked
 // against the scene's camera after loading).

@@ -220,10 +220,7 @@ void write_render_outputs(const RenderOptions& o, OutputFiles& outputs, const Re
 
 int run_render(const std::vector<std::string>& args, Ranks& ranks) {
   const RenderOptions o = parse_render_options(args);
-  if (o.help) {
-    std::fputs(render_usage().c_str(), stdout);
-    return kExitOk;
-  }
+  if (answered_help(o, render_usage())) return kExitOk;
   // Under mpirun every rank renders its group of PEs; rank 0 alone writes.
   ranks.start();
   const bool writer = ranks.rank() == 0;

@@ -92,10 +92,7 @@ PrepareRequest bench_request(const BenchOptions& o, bool silent, Ranks& ranks, O
 
 int run_bench(const std::vector<std::string>& args, Ranks& ranks) {
   const BenchOptions o = parse_bench_options(args);
-  if (o.help) {
-    std::fputs(bench_usage().c_str(), stdout);
-    return kExitOk;
-  }
+  if (answered_help(o, bench_usage())) return kExitOk;
   // Under mpirun every rank drives its device and its group of PEs through
   // the OPSILA render; rank 0 alone reports and writes. The baselines and the
   // scatter curve need one process: with several ranks they are left out

@@ -92,7 +92,8 @@ inline std::vector<cl_int> check_exchange(ClRuntime& rt, const ExchangeCase& c) 
   next.allocate(rt, valid + 1, "test next pool");
   d_pool.write(rt, pool, 0, c.depth);
   d_out.write(rt, out, 0, c.depth);
-  cl::Buffer counts_in = upload(rt, out_count, "test output counts");
+  OutputCounts counts_in;
+  counts_in.buffer = upload(rt, out_count, "test output counts");
   std::vector<LaunchRecord> records;
   Launcher launch(rt, records);
   ScatterPass scatter(rt, c.pes);
@@ -121,7 +122,7 @@ inline std::vector<cl_int> check_exchange(ClRuntime& rt, const ExchangeCase& c) 
     return v;
   };
   const auto counts = read_ints(scatter.counts, 3);
-  const auto begin = read_ints(scatter.bank_begin, c.pes), fill = read_ints(scatter.bank_count, c.pes);
+  const auto begin = read_ints(scatter.bank_ranges.begin, c.pes), fill = read_ints(scatter.bank_ranges.count, c.pes);
   const auto group_pe = read_ints(scatter.group_pe.buffer, counts[2]),
              group_first = read_ints(scatter.group_first.buffer, counts[2]);
   const auto bank = banks.read(rt, banks.capacity), waiting = next.read(rt, counts[0]);

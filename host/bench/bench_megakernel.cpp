@@ -14,6 +14,7 @@
 #include "opsila_shared.h"
 #include "partition/bank_bvh.h"
 #include "partition/partition.h"
+#include "bench/bench_kernels.h"
 #include "device/kernel_args.h"
 #include "frame/renderer.h"
 
@@ -22,22 +23,14 @@ namespace opsila {
 namespace {
 
 using Buf = cl::Buffer;
-// kernels/baselines/megakernel.cl: frame, bank nodes and facets, materials,
-// lights, surface, root node and its children's box, sample grid side and
-// offsets, pixels, pixel sums, ray counts, whether to write the item buffer
-// and the item buffer; megakernel_rays adds
-// where each pixel's rays go and the ray log.
-using MegaKernel = KernelBinding<FrameParams, Buf, Buf, Buf, Buf, SurfaceBuffers, int, cl_float4, cl_float4, int, Buf,
-                                 int, int, Buf, Buf, int, Buf>;
-using MegaRaysKernel = KernelBinding<FrameParams, Buf, Buf, Buf, Buf, SurfaceBuffers, int, cl_float4, cl_float4, int,
-                                     Buf, int, int, Buf, Buf, int, Buf, Buf, Buf>;
+using MegaKernel = KernelBinding<MegaArgs>;
+using MegaRaysKernel = KernelBinding<MegaRaysArgs>;
 
 // The whole scene on one PE: bank 0 under one BVH (clusters on top).
 struct MegaScene {
   BankedScene bs;
   FrameParams fp{};
-  int root = 0;
-  cl_float4 root_lo{}, root_hi{};  // the union of the root's child boxes (kernels/lib/bvh.cl, scene_nearest)
+  SceneRoot root;
   double build_seconds = 0;
 };
 
@@ -46,35 +39,55 @@ MegaScene mega_scene(const Scene& scene) {
   MegaScene m;
   m.bs = partition_scene(scene, 1);
   m.fp = frame_params(scene, m.bs, 0);
-  m.root = m.bs.pes[0].node_begin;
+  m.root.node = m.bs.pes[0].node_begin;
   Box box;
-  if (children_box(m.bs.nodes[std::size_t(m.root)], box))
-    for (int a = 0; a < 3; ++a) m.root_lo.s[a] = box.lo[a], m.root_hi.s[a] = box.hi[a];
+  if (children_box(m.bs.nodes[std::size_t(m.root.node)], box))
+    for (int a = 0; a < 3; ++a) m.root.lo.s[a] = box.lo[a], m.root.hi.s[a] = box.hi[a];
   m.build_seconds = seconds_since(t_build);
   return m;
 }
 
 // The megakernel's inputs and outputs on the device.
 struct MegaBuffers {
-  Buf tris, nodes, mats, lights, offsets, accum, counts, items;
-  SurfaceBuffers surface;
+  BankGeometry geometry;
+  ShadingTables shading;
+  SampleOffsets offsets;
+  MegaPixelSums accum;
+  MegaRayCounts counts;
+  MegaItems items;
 };
 
 MegaBuffers mega_buffers(ClRuntime& rt, const Scene& scene, const BankedScene& bs) {
   const std::size_t npix = std::size_t(scene.width) * scene.height;
   MegaBuffers b;
-  b.tris = upload(rt, bs.triangles, "facets");
-  b.nodes = upload(rt, bs.nodes, "BVH nodes");
-  b.mats = upload(rt, bs.materials, "materials");
+  b.geometry.tris.buffer = upload(rt, bs.triangles, "facets");
+  b.geometry.nodes.buffer = upload(rt, bs.nodes, "BVH nodes");
+  b.shading.materials.buffer = upload(rt, bs.materials, "materials");
   std::vector<Light> lights = bs.lights;
   if (lights.empty()) lights.push_back(Light{});
-  b.lights = upload(rt, lights, "lights");
-  b.surface = upload_surface(rt, bs);
-  b.accum = device_buffer(rt, npix * 3 * sizeof(cl_long), "pixel sums");
-  b.counts = device_buffer(rt, npix * sizeof(cl_uint4), "ray counts");
-  b.items = device_buffer(rt, npix * sizeof(cl_int2), "item buffer");
-  b.offsets = upload(rt, sample_offsets(scene.spp), "sample offsets");
+  b.shading.lights.buffer = upload(rt, lights, "lights");
+  b.shading.surface = upload_surface(rt, bs);
+  b.accum.buffer = device_buffer(rt, npix * 3 * sizeof(cl_long), "pixel sums");
+  b.counts.buffer = device_buffer(rt, npix * sizeof(cl_uint4), "ray counts");
+  b.items.buffer = device_buffer(rt, npix * sizeof(cl_int2), "item buffer");
+  b.offsets.buffer = upload(rt, sample_offsets(scene.spp), "sample offsets");
   return b;
+}
+
+// A megakernel launch's arguments, all but its pixels.
+MegaArgs mega_args(const MegaScene& ms, const MegaBuffers& b, int spp_k, bool items) {
+  MegaArgs a;
+  a.fp = ms.fp;
+  a.geometry = b.geometry;
+  a.shading = b.shading;
+  a.root = ms.root;
+  a.spp_k = spp_k;
+  a.offsets = b.offsets;
+  a.accum = b.accum;
+  a.counts = b.counts;
+  a.write_items = items ? 1 : 0;
+  a.items = b.items;
+  return a;
 }
 
 // One fixed work-group size, so a driver that specialises kernels per size
@@ -162,9 +175,11 @@ void Megakernel::frame(BaselineImage& out) {
   std::vector<LaunchRecord> launches;
   Launcher launch(rt, launches);
   MegaKernel& mega = s_->count ? s_->mega : *s_->uncounted;
+  MegaArgs args = mega_args(ms, b, spp_side(scene.spp), s_->items);
   launch_tiles(rt, launch, mega.kernel(), "megakernel", npix, s_->tile, [&](int begin, int count) {
-    mega.bind(ms.fp, b.nodes, b.tris, b.mats, b.lights, b.surface, ms.root, ms.root_lo, ms.root_hi,
-              spp_side(scene.spp), b.offsets, begin, count, b.accum, b.counts, s_->items ? 1 : 0, b.items);
+    args.pixel_begin = begin;
+    args.pixel_count = count;
+    mega.bind(args);
   });
   cl_long* accum = nullptr;
   cl_uint4* counts = nullptr;
@@ -235,9 +250,12 @@ bool log_megakernel_rays(const Scene& scene, ClRuntime& rt, const MegaScene& ms,
   const int side = spp_side(scene.spp);
   std::vector<LaunchRecord> launches;
   Launcher launch(rt, launches);
+  MegaRaysArgs args;
+  args.frame = mega_args(ms, b, side, false);
   launch_tiles(rt, launch, mega.kernel(), "megakernel", npix, tile, [&](int begin, int count) {
-    mega.bind(ms.fp, b.nodes, b.tris, b.mats, b.lights, b.surface, ms.root, ms.root_lo, ms.root_hi, side, b.offsets,
-              begin, count, b.accum, b.counts, 0, b.items);
+    args.frame.pixel_begin = begin;
+    args.frame.pixel_count = count;
+    mega.bind(args.frame);
   });
   std::vector<cl_uint4> counts(npix);
   launch.check(rt.queue().enqueueReadBuffer(b.counts, CL_TRUE, 0, npix * sizeof(cl_uint4), counts.data()),
@@ -254,15 +272,16 @@ bool log_megakernel_rays(const Scene& scene, ClRuntime& rt, const MegaScene& ms,
           format_size(rt.max_alloc());
     return false;
   }
-  const Buf b_first = upload(rt, first, "ray log offsets");
-  const Buf b_log = device_buffer(rt, std::max<std::uint64_t>(bytes, 1), "ray log");
+  args.log_first.buffer = upload(rt, first, "ray log offsets");
+  args.log.buffer = device_buffer(rt, std::max<std::uint64_t>(bytes, 1), "ray log");
   launch_tiles(rt, launch, rays.kernel(), "megakernel_rays", npix, tile, [&](int begin, int count) {
-    rays.bind(ms.fp, b.nodes, b.tris, b.mats, b.lights, b.surface, ms.root, ms.root_lo, ms.root_hi, side, b.offsets,
-              begin, count, b.accum, b.counts, 0, b.items, b_first, b_log);
+    args.frame.pixel_begin = begin;
+    args.frame.pixel_count = count;
+    rays.bind(args);
   });
   std::vector<cl_float4> all(total * 2);
   if (total > 0)
-    launch.check(rt.queue().enqueueReadBuffer(b_log, CL_TRUE, 0, bytes, all.data()),
+    launch.check(rt.queue().enqueueReadBuffer(args.log, CL_TRUE, 0, bytes, all.data()),
                  "clEnqueueReadBuffer(ray log)");
   launch.harvest();
   for (std::size_t i = 0; i < all.size(); i += 2) {
@@ -275,8 +294,7 @@ bool log_megakernel_rays(const Scene& scene, ClRuntime& rt, const MegaScene& ms,
 
 }  // namespace
 
-// kernels/baselines/traversal.cl: nodes, facets, root and its children's box, slack, rays, count, one word per ray.
-using BatchKernel = KernelBinding<Buf, Buf, int, cl_float4, cl_float4, float, Buf, int, Buf>;
+using BatchKernel = KernelBinding<TraversalArgs>;
 
 struct TraversalBatch::State {
   State(ClRuntime& rt, const Scene& scene)
@@ -288,7 +306,8 @@ struct TraversalBatch::State {
   MegaScene ms;
   MegaBuffers b;
   BatchKernel nearest, any;
-  Buf b_nearest, b_any, b_hits;
+  TraversalArgs args;  // the rays and their count are each kernel's
+  Buf b_nearest, b_any;
   std::size_t nearest_rays = 0, any_rays = 0;
 };
 
@@ -304,8 +323,11 @@ TraversalBatch::TraversalBatch(const Scene& scene, ClRuntime& rt, TraversalAlone
   s->any_rays = record.any_rays = log.any.size() / 2;
   s->b_nearest = upload(rt, log.nearest, "nearest-hit rays");
   s->b_any = upload(rt, log.any, "any-hit rays");
-  s->b_hits = device_buffer(rt, std::max<std::size_t>(s->nearest_rays, s->any_rays) * sizeof(cl_int) + 4,
-                            "traversal answers");
+  s->args.geometry = s->b.geometry;
+  s->args.root = s->ms.root;
+  s->args.slack = s->ms.fp.box_slack;
+  s->args.hits.buffer = device_buffer(rt, std::max<std::size_t>(s->nearest_rays, s->any_rays) * sizeof(cl_int) + 4,
+                                      "traversal answers");
   s_ = std::move(s);
 }
 
@@ -318,8 +340,9 @@ std::pair<double, double> TraversalBatch::run() {
   for (auto [k, rays, count] : {std::tuple{&s.nearest, &s.b_nearest, s.nearest_rays},
                                 std::tuple{&s.any, &s.b_any, s.any_rays}}) {
     if (count == 0) continue;
-    cl::Kernel& kk = k->bind(s.b.nodes, s.b.tris, s.ms.root, s.ms.root_lo, s.ms.root_hi, s.ms.fp.box_slack, *rays,
-                             static_cast<int>(count), s.b_hits);
+    s.args.rays.buffer = *rays;
+    s.args.count = static_cast<int>(count);
+    cl::Kernel& kk = k->bind(s.args);
     launch.run(kk, k->name().c_str(), round_up(static_cast<int>(count), 64), fixed_local(s.rt, kk), -1);
   }
   launch.check(s.rt.queue().finish(), "clFinish");

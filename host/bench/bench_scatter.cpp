@@ -6,6 +6,7 @@
 #include <random>
 
 #include "bench/bench.h"
+#include "bench/bench_kernels.h"
 #include "core/util.h"
 #include "frame/host_scatter.h"
 #include "device/kernel_args.h"
@@ -70,28 +71,30 @@ std::vector<cl_int> placement_index(const HostDescriptors& src, const HostScatte
 void measure_paper_scatter(ClRuntime& rt, const HostDescriptors& src, const std::vector<cl_int>& index,
                            std::size_t dest_len, int warmup, ScatterPoint& pt) {
   const std::size_t n = src.size();
-  cl::Buffer b_index = upload(rt, index, "paper scatter index");
+  SixVectorsArgs six_args;
+  six_args.count = static_cast<int>(n);
+  six_args.index.buffer = upload(rt, index, "paper scatter index");
   const std::size_t field_bytes[6] = {sizeof(cl_int2), sizeof(cl_int), sizeof(cl_float4),
                                       sizeof(cl_float4), sizeof(cl_float4), sizeof(cl_int)};
-  std::vector<cl::Buffer> from, to;
-  for (std::size_t bytes : field_bytes) {
-    from.push_back(device_buffer(rt, std::max<std::size_t>(n, 1) * bytes, "paper scatter source"));
-    to.push_back(device_buffer(rt, std::max<std::size_t>(dest_len, 1) * bytes, "paper scatter destination"));
-    zero_buffer(rt, from.back(), std::max<std::size_t>(n, 1) * bytes, "paper scatter source");
+  for (std::size_t f = 0; f < 6; ++f) {
+    const std::size_t bytes = field_bytes[f];
+    six_args.from.v[f] = device_buffer(rt, std::max<std::size_t>(n, 1) * bytes, "paper scatter source");
+    six_args.to.v[f] = device_buffer(rt, std::max<std::size_t>(dest_len, 1) * bytes, "paper scatter destination");
+    zero_buffer(rt, six_args.from.v[f], std::max<std::size_t>(n, 1) * bytes, "paper scatter source");
   }
   DescriptorSet rec_from, rec_to;
   rec_from.allocate(rt, n, "paper scatter records");
   rec_to.allocate(rt, dest_len, "paper scatter records");
   rec_from.write(rt, src, 0, kBenchDepth);
-  // kernels/baselines/copy.cl: count, index, then six source and six
-  // destination vectors; or one source and one destination of records.
-  using Buf = cl::Buffer;
-  KernelBinding<int, Buf, Buf, Buf, Buf, Buf, Buf, Buf, Buf, Buf, Buf, Buf, Buf, Buf> six_vectors(
-      rt, "scatter_six_vectors", KernelProgram::baselines);
-  KernelBinding<int, Buf, Buf, Buf> one_record(rt, "scatter_one_record", KernelProgram::baselines);
-  cl::Kernel& six = six_vectors.bind(static_cast<int>(n), b_index, from[0], from[1], from[2], from[3], from[4], from[5],
-                                     to[0], to[1], to[2], to[3], to[4], to[5]);
-  cl::Kernel& one = one_record.bind(static_cast<int>(n), b_index, rec_from.records, rec_to.records);
+  OneRecordArgs one_args;
+  one_args.count = six_args.count;
+  one_args.index = six_args.index;
+  one_args.from = rec_from.records;
+  one_args.to = rec_to.records;
+  KernelBinding<SixVectorsArgs> six_vectors(rt, "scatter_six_vectors", KernelProgram::baselines);
+  KernelBinding<OneRecordArgs> one_record(rt, "scatter_one_record", KernelProgram::baselines);
+  cl::Kernel& six = six_vectors.bind(six_args);
+  cl::Kernel& one = one_record.bind(one_args);
   std::vector<double> t6, t1;
   for (int r = 0; r < warmup + pt.repeats; ++r) {
     cl::Event e6, e1;
@@ -174,7 +177,7 @@ void measure_device_scatter(ClRuntime& rt, const HostDescriptors& src, int pes, 
   cl_int counts[3] = {0, 0, 0};
   std::vector<cl_int> bank_count(pes);
   cl_check(q.enqueueReadBuffer(scatter.counts, CL_TRUE, 0, sizeof(counts), counts), "clEnqueueReadBuffer(counts)");
-  cl_check(q.enqueueReadBuffer(scatter.bank_count, CL_TRUE, 0, pes * sizeof(cl_int), bank_count.data()),
+  cl_check(q.enqueueReadBuffer(scatter.bank_ranges.count, CL_TRUE, 0, pes * sizeof(cl_int), bank_count.data()),
            "clEnqueueReadBuffer(bank counts)");
   pt.verified = bank_count == host_result.bank_count && std::size_t(counts[0]) == host_result.waiting &&
                 std::size_t(counts[1]) == host_result.placed && counts[2] == host_result.groups;
@@ -186,12 +189,14 @@ void measure_copy_ceiling(ClRuntime& rt, int warmup, ScatterPoint& pt) {
   cl::CommandQueue& q = rt.queue();
   const std::size_t bytes = std::max<std::size_t>(pt.moved, 1) * DescriptorSet::kBytes;
   const std::size_t n4 = (bytes + sizeof(cl_float4) - 1) / sizeof(cl_float4);
-  cl::Buffer from = device_buffer(rt, n4 * sizeof(cl_float4), "copy bench source");
-  cl::Buffer to = device_buffer(rt, n4 * sizeof(cl_float4), "copy bench destination");
-  zero_buffer(rt, from, n4 * sizeof(cl_float4), "copy bench source");
-  zero_buffer(rt, to, n4 * sizeof(cl_float4), "copy bench destination");
-  KernelBinding<cl::Buffer, cl::Buffer, int> copy_float4(rt, "copy_float4", KernelProgram::baselines);
-  cl::Kernel& copy = copy_float4.bind(from, to, static_cast<int>(n4));
+  CopyArgs a;
+  a.from = device_buffer(rt, n4 * sizeof(cl_float4), "copy bench source");
+  a.to = device_buffer(rt, n4 * sizeof(cl_float4), "copy bench destination");
+  a.count = static_cast<int>(n4);
+  zero_buffer(rt, a.from, n4 * sizeof(cl_float4), "copy bench source");
+  zero_buffer(rt, a.to, n4 * sizeof(cl_float4), "copy bench destination");
+  KernelBinding<CopyArgs> copy_float4(rt, "copy_float4", KernelProgram::baselines);
+  cl::Kernel& copy = copy_float4.bind(a);
   const std::size_t local = group_size_for(rt, copy);
   std::vector<double> kt, bt;
   for (int r = 0; r < warmup + pt.repeats; ++r) {
@@ -199,7 +204,7 @@ void measure_copy_ceiling(ClRuntime& rt, int warmup, ScatterPoint& pt) {
     cl_check(
         q.enqueueNDRangeKernel(copy, cl::NullRange, cl::NDRange(round_up(n4, 64)), cl::NDRange(local), nullptr, &ek),
         "clEnqueueNDRangeKernel(copy_float4)");
-    cl_check(q.enqueueCopyBuffer(from, to, 0, 0, n4 * sizeof(cl_float4), nullptr, &eb), "clEnqueueCopyBuffer");
+    cl_check(q.enqueueCopyBuffer(a.from, a.to, 0, 0, n4 * sizeof(cl_float4), nullptr, &eb), "clEnqueueCopyBuffer");
     cl_check(q.finish(), "clFinish(copy bench)");
     if (r >= warmup) kt.push_back(event_seconds(ek)), bt.push_back(event_seconds(eb));
   }

@@ -8,8 +8,8 @@ namespace opsila {
 
 void DescriptorSet::allocate(ClRuntime& rt, std::size_t n, const char* what) {
   n = std::max<std::size_t>(n, 1);
-  records = device_buffer(rt, n * kBytes, what);
-  dests = device_buffer(rt, n * sizeof(cl_int), what);
+  records.buffer = device_buffer(rt, n * kBytes, what);
+  dests.buffer = device_buffer(rt, n * sizeof(cl_int), what);
   capacity = n;
 }
 
@@ -73,21 +73,43 @@ ScatterPass::ScatterPass(ClRuntime& rt, int num_pes) : rt_(rt), num_pes_(num_pes
   const std::size_t cap = std::min<std::size_t>(rt.group_size(), OPSILA_SCATTER_GROUP_MAX);
   wg_scan_ = queried_group_size(rt, scan_.kernel(), cap);
   wg_plan_ = queried_group_size(rt, plan_.kernel(), cap);
-  bank_begin = device_buffer(rt, num_pes * sizeof(cl_int), "bank offsets");
-  bank_count = device_buffer(rt, num_pes * sizeof(cl_int), "bank counts");
-  pe_total = device_buffer(rt, num_pes * sizeof(cl_int), "scatter totals");
-  key_total = device_buffer(rt, 2 * num_pes * sizeof(cl_int), "scatter key totals");
-  key_begin = device_buffer(rt, 2 * num_pes * sizeof(cl_int), "scatter key offsets");
-  key_count = device_buffer(rt, 2 * num_pes * sizeof(cl_int), "scatter key counts");
-  key_base = device_buffer(rt, 2 * num_pes * sizeof(cl_int), "scatter overflow bases");
-  counts = device_buffer(rt, 3 * sizeof(cl_int), "scatter counts");
-  dummy_ = device_buffer(rt, sizeof(cl_int), "no SPMD outputs");
+  for (const Table& t : own_tables()) *t.buffer = device_buffer(rt, t.ints * sizeof(cl_int), t.name);
+  no_outputs_.records.buffer = no_outputs_.dests.buffer = no_counts_.buffer = dummy_;
 }
 
-void ScatterPass::grow(Grown& g, std::size_t need, std::size_t size, const char* what) {
-  if (g.capacity >= need) return;
-  g.capacity = size;
-  g.buffer = device_buffer(rt_, size * sizeof(cl_int), what);
+std::vector<ScatterPass::Table> ScatterPass::grown_tables(const Needs& n) {
+  return {{"scatter ranks", n.ranks, &ranks.buffer.buffer, &ranks.capacity},
+          {"scatter block counts", n.block_counts, &block_counts.buffer.buffer, &block_counts.capacity},
+          {"SPMD work-group PEs", n.groups, &group_pe.buffer.buffer, &group_pe.capacity},
+          {"SPMD work-group slots", n.groups, &group_first.buffer.buffer, &group_first.capacity}};
+}
+
+std::vector<ScatterPass::Table> ScatterPass::own_tables() {
+  const std::size_t P = std::size_t(num_pes_), K = 2 * P;  // two sort keys a PE (OPSILA_STREAM_KEY)
+  return {{"bank offsets", P, &bank_ranges.begin.buffer, nullptr},
+          {"bank counts", P, &bank_ranges.count.buffer, nullptr},
+          {"scatter totals", P, &pe_total.buffer, nullptr},
+          {"scatter key totals", K, &key_total.buffer, nullptr},
+          {"scatter key offsets", K, &key_ranges.begin.buffer, nullptr},
+          {"scatter key counts", K, &key_ranges.count.buffer, nullptr},
+          {"scatter overflow bases", K, &key_ranges.base.buffer, nullptr},
+          {"scatter counts", 3, &counts.buffer, nullptr},
+          {"no SPMD outputs", 1, &dummy_, nullptr}};
+}
+
+ScatterPass::Needs ScatterPass::needs(std::size_t sources, std::size_t blocks, std::size_t slots,
+                                      std::size_t group_size, int num_pes) {
+  Needs n;
+  n.ranks = sources;
+  n.block_counts = (blocks + 1) * 2 * std::size_t(num_pes);  // two sort keys a PE
+  n.groups = slots / group_size + std::size_t(num_pes) + 1;
+  return n;
+}
+
+void ScatterPass::grow(const Table& need, std::size_t size) {
+  if (*need.capacity >= need.ints) return;
+  *need.capacity = size;
+  *need.buffer = device_buffer(rt_, size * sizeof(cl_int), need.name);
 }
 
 ScatterPass::Args ScatterPass::pool_only(const DescriptorSet& pool, std::size_t pool_len, const DescriptorSet& banks,
@@ -103,66 +125,121 @@ ScatterPass::Args ScatterPass::pool_only(const DescriptorSet& pool, std::size_t 
 }
 
 int ScatterPass::blocks(const Args& a) const {
-  return (a.pool_len + kBlock - 1) / kBlock + a.out_groups;
+  return static_cast<int>(blocks_of(std::size_t(a.pool_len))) + a.out_groups;
+}
+
+scatter_kernels::Sources ScatterPass::sources_of(const Args& a) const {
+  scatter_kernels::Sources s;
+  s.pool_len = a.pool_len;
+  s.pool_blocks = static_cast<int>(blocks_of(std::size_t(a.pool_len)));
+  s.num_blocks = blocks(a);
+  s.items_per_group = a.group_size;
+  s.spawn_slots = a.spawn_slots;
+  s.num_keys = 2 * num_pes_;  // two sort keys a PE (OPSILA_STREAM_KEY)
+  s.pool = *a.pool;
+  s.outputs = a.outputs ? *a.outputs : no_outputs_;
+  s.out_count = a.out_item_count ? *a.out_item_count : no_counts_;
+  return s;
+}
+
+scatter_kernels::Placement ScatterPass::placement(const Args& a) const {
+  scatter_kernels::Placement to;
+  to.keys = key_ranges;
+  to.banks = *a.banks;
+  to.next = *a.next_pool;
+  return to;
 }
 
 void ScatterPass::plan(Launcher& launch, const Args& a, int round) {
-  const int P = num_pes_, K = 2 * P;  // two sort keys a PE (OPSILA_STREAM_KEY)
-  const int pool_blocks = (a.pool_len + kBlock - 1) / kBlock, nblocks = blocks(a);
+  const int P = num_pes_;
+  const std::size_t nblocks = std::size_t(blocks(a));
   const std::size_t sources = std::size_t(a.pool_len) + std::size_t(a.out_groups) * a.group_size * a.spawn_slots;
   // Grown by half again, so that a frame's slowly rising needs do not
   // reallocate every round.
-  grow(ranks, sources, sources + sources / 2, "scatter ranks");
-  grow(block_counts, (std::size_t(nblocks) + 1) * K, (std::size_t(nblocks) + nblocks / 2 + 1) * K,
-       "scatter block counts");
-  const std::size_t groups = std::size_t(a.slots) / a.group_size + P + 1;
-  grow(group_pe, groups, groups, "SPMD work-group PEs");
-  grow(group_first, groups, groups, "SPMD work-group slots");
-  const cl::Buffer& out = a.outputs ? a.outputs->records : dummy_;
-  const cl::Buffer& out_dest = a.outputs ? a.outputs->dests : dummy_;
-  const cl::Buffer& out_count = a.out_item_count ? *a.out_item_count : dummy_;
-  count_.bind(a.pool_len, pool_blocks, nblocks, a.group_size, a.spawn_slots, K, *a.pool, out, out_dest, out_count, block_counts.buffer,
-              ranks.buffer, by_block_ ? 0 : 1);
-  launch.run(count_.kernel(), "scatter_count", std::max(nblocks, 1), 0, round);
-  scan_.bind(nblocks, K, block_counts.buffer, key_total);
+  const std::size_t slots = std::size_t(a.slots), wg = std::size_t(a.group_size);
+  const std::vector<Table> need = grown_tables(needs(sources, nblocks, slots, wg, P));
+  const std::vector<Table> roomy = grown_tables(needs(sources + sources / 2, nblocks + nblocks / 2, slots, wg, P));
+  for (std::size_t i = 0; i < need.size(); ++i) grow(need[i], roomy[i].ints);
+  scatter_kernels::CountArgs c;
+  c.sources = sources_of(a);
+  c.hist = block_counts.buffer;
+  c.ranks = ranks.buffer;
+  c.write_rank = by_block_ ? 0 : 1;
+  count_.bind(c);
+  launch.run(count_.kernel(), "scatter_count", std::max<std::size_t>(nblocks, 1), 0, round);
+  scatter_kernels::ScanArgs s;
+  s.num_blocks = static_cast<int>(nblocks);
+  s.num_keys = c.sources.num_keys;
+  s.values = block_counts.buffer;
+  s.total = key_total;
+  scan_.bind(s);
   // One work-group per key on a GPU, one in all on a CPU (see scatter_scan).
-  const std::size_t scan_groups = by_block_ ? 1 : std::size_t(K);
+  const std::size_t scan_groups = by_block_ ? 1 : std::size_t(s.num_keys);
   launch.run(scan_.kernel(), "scatter_scan", scan_groups * wg_scan_, wg_scan_, round);
-  const int cap = a.cap > 0 ? a.cap : a.slots;
-  const int group_end = a.group_end < 0 ? P : a.group_end;
-  plan_.bind(P, a.group_begin, group_end, a.slots, cap, a.group_size, a.throttle ? 1 : 0, key_total, pe_total,
-             bank_begin, bank_count, key_begin, key_count, key_base, group_pe.buffer, group_first.buffer, counts);
+  scatter_kernels::PlanArgs p;
+  p.num_pes = P;
+  p.group_begin = a.group_begin;
+  p.group_end = a.group_end < 0 ? P : a.group_end;
+  p.slots = a.slots;
+  p.cap = a.cap > 0 ? a.cap : a.slots;
+  p.group_size = a.group_size;
+  p.throttle = a.throttle ? 1 : 0;
+  p.key_total = key_total;
+  p.pe_total = pe_total;
+  p.banks = bank_ranges;
+  p.keys = key_ranges;
+  p.groups = group_table();
+  p.counts = counts;
+  plan_.bind(p);
   launch.run(plan_.kernel(), "scatter_plan", wg_plan_, wg_plan_, round);
 }
 
 void ScatterPass::scan(Launcher& launch, const char* name, const cl::Buffer& values, int n, const cl::Buffer& total,
                        int round) {
-  scan_.bind(n, 1, values, total);
+  scatter_kernels::ScanArgs s;
+  s.num_blocks = n;
+  s.values = values;
+  s.total = total;
+  scan_.bind(s);
   launch.run(scan_.kernel(), name, wg_scan_, wg_scan_, round);
 }
 
 void ScatterPass::move(Launcher& launch, const Args& a, int round) {
-  const int K = 2 * num_pes_;
-  const int pool_blocks = (a.pool_len + kBlock - 1) / kBlock;
   if (by_block_) {
-    const cl::Buffer& out = a.outputs ? a.outputs->records : dummy_;
-    const cl::Buffer& out_dest = a.outputs ? a.outputs->dests : dummy_;
-    const cl::Buffer& out_count = a.out_item_count ? *a.out_item_count : dummy_;
-    move_blocks_.bind(a.pool_len, pool_blocks, blocks(a), a.group_size, a.spawn_slots, K, *a.pool, out, out_dest,
-                      out_count, block_counts.buffer, key_begin, key_count, key_base, *a.banks, *a.next_pool);
+    scatter_kernels::MoveBlocksArgs m;
+    m.sources = sources_of(a);
+    m.hist = block_counts.buffer;
+    m.to = placement(a);
+    move_blocks_.bind(m);
     if (blocks(a) > 0) launch.run(move_blocks_.kernel(), "scatter_move", std::size_t(blocks(a)), 0, round);
     return;
   }
   if (a.pool_len > 0) {
-    move_pool_.bind(a.pool_len, a.out_groups, K, *a.pool, ranks.buffer, block_counts.buffer, key_begin, key_count,
-                    key_base, *a.banks, *a.next_pool);
+    scatter_kernels::MovePoolArgs m;
+    m.pool_len = a.pool_len;
+    m.out_blocks = a.out_groups;
+    m.num_keys = 2 * num_pes_;
+    m.pool = *a.pool;
+    m.ranks = ranks.buffer;
+    m.hist = block_counts.buffer;
+    m.to = placement(a);
+    move_pool_.bind(m);
     launch.run(move_pool_.kernel(), "scatter_move", std::size_t(a.pool_len), 0, round);
   }
   if (a.out_groups > 0) {
-    const int items = a.out_groups * a.group_size;
-    move_out_.bind(items, a.group_size, a.spawn_slots, a.pool_len, K, *a.outputs, *a.out_item_count, ranks.buffer,
-                   block_counts.buffer, key_begin, key_count, key_base, *a.banks, *a.next_pool);
-    launch.run(move_out_.kernel(), "scatter_move", std::size_t(items), 0, round);
+    scatter_kernels::MoveOutputsArgs m;
+    m.out_items = a.out_groups * a.group_size;
+    m.items_per_group = a.group_size;
+    m.spawn_slots = a.spawn_slots;
+    m.pool_len = a.pool_len;
+    m.num_keys = 2 * num_pes_;
+    m.outputs = *a.outputs;
+    m.out_count = *a.out_item_count;
+    m.ranks = ranks.buffer;
+    m.hist = block_counts.buffer;
+    m.to = placement(a);
+    move_out_.bind(m);
+    launch.run(move_out_.kernel(), "scatter_move", std::size_t(m.out_items), 0, round);
   }
 }
 

@@ -1,14 +1,25 @@
-// One typed, checked way to bind a kernel's arguments. A KernelBinding's
-// type lists the kernel's parameters as the host passes them, once: its
-// constructor compares their number with CL_KERNEL_NUM_ARGS as soon as the
-// program is built (a kernel whose signature changed fails there, naming
-// it, not as a wrong pixel), and bind() sets them all in order, each call
-// checked. A value that stands for several parameters (a descriptor vector
-// and its destination stream, the surface buffers) says so with
-// kernel_args(), a tuple of its parts. Nowhere else does the host call
-// clSetKernelArg.
+// One typed, checked way to bind a kernel's arguments, and the rule that
+// makes a misplaced buffer a compile error:
+//  - every kernel has an argument struct of named fields, and its
+//    KernelBinding<Args> takes that struct alone; kernel_args() returns the
+//    fields, in the order of the kernel's signature, as a tuple. That
+//    order is written once, there; a call site only names fields
+//    (`a.pool = pool;`), so no call site can put them out of order;
+//  - each buffer in such a struct is a DeviceArray of its own role (below),
+//    so a buffer given where another is expected (the descriptors where
+//    the bank's facets go, two counters swapped) does not compile;
+//  - parts that always travel together (a bank's nodes and facets, a
+//    descriptor vector and its sort keys, the surface buffers) are one
+//    struct with kernel_args() of their own, nested as they are: a value
+//    with kernel_args() stands for its parts, at any depth.
+// The binding's constructor compares the number of parts with
+// CL_KERNEL_NUM_ARGS as soon as the program is built (a kernel whose
+// signature changed fails there, naming it, not as a wrong pixel), and
+// bind() sets them all in order, each call checked. Nowhere else does the
+// host call clSetKernelArg.
 #pragma once
 
+#include <cstddef>
 #include <string>
 #include <tuple>
 #include <type_traits>
@@ -18,6 +29,21 @@
 
 namespace opsila {
 
+// A device buffer in one role: `using BankFacets = DeviceArray<struct
+// BankFacetsRole>;` declares a role, once, beside the code that owns the
+// buffer. The role is only a tag; one kernel argument.
+template <class Role>
+struct DeviceArray {
+  cl::Buffer buffer;
+  DeviceArray() = default;
+  // Explicit, and no aggregate: a handle of another role (which converts to
+  // its buffer, below) neither initializes nor is assigned to this one.
+  explicit DeviceArray(cl::Buffer b) : buffer(std::move(b)) {}
+  auto kernel_args() const { return std::tie(buffer); }
+  // Copies, reads and maps take it as the plain buffer it is.
+  operator const cl::Buffer&() const { return buffer; }
+};
+
 namespace kernel_args_detail {
 
 template <typename T, typename = void>
@@ -26,11 +52,22 @@ template <typename T>
 struct Parts<T, std::void_t<decltype(std::declval<const T&>().kernel_args())>> : std::true_type {};
 
 template <typename T>
+constexpr int count();
+
+template <typename Tuple, std::size_t... I>
+constexpr int count_each(std::index_sequence<I...>) {
+  return (count<std::decay_t<std::tuple_element_t<I, Tuple>>>() + ... + 0);
+}
+
+// The kernel arguments a value stands for: its parts', or one.
+template <typename T>
 constexpr int count() {
-  if constexpr (Parts<T>::value)
-    return static_cast<int>(std::tuple_size_v<decltype(std::declval<const T&>().kernel_args())>);
-  else
+  if constexpr (Parts<T>::value) {
+    using Tuple = decltype(std::declval<const T&>().kernel_args());
+    return count_each<Tuple>(std::make_index_sequence<std::tuple_size_v<Tuple>>{});
+  } else {
     return 1;
+  }
 }
 
 void check_set(cl_int err, const std::string& kernel, int index);

@@ -1,6 +1,7 @@
 // The frame machine's private header: the state the renderer keeps between
 // frames (Renderer::Machine) and the stages of a frame, one file each, each
 // named after the kernel file it drives:
+//   frame_kernels.h        the kernels' argument structs and buffer roles
 //   frame_prepare.cpp      the machine for one scene and view (bank size n,
 //                          work-group sizes, the program's kernels)
 //   frame_buffers.cpp      the buffer table: scene uploads, frame buffers, clearing
@@ -17,8 +18,8 @@
 
 #include "partition/banks.h"
 #include "device/descriptors.h"
-#include "device/kernel_args.h"
 #include "device/memory_plan.h"
+#include "frame/frame_kernels.h"
 #include "partition/pe_group.h"
 #include "frame/rank_exchange.h"
 #include "mpi/ranks.h"
@@ -26,44 +27,6 @@
 #include "opsila_shared.h"
 
 namespace opsila {
-
-namespace frame_kernels {
-using Buf = cl::Buffer;
-// The kernels of the frame, their parameters as the host passes them.
-// kernels/item_buffer.cl: frame, clusters (nearest first), their distances
-// from the eye, projected boxes and their union, bank nodes and facets, tile
-// side, the traced tiles' first column and row, tiles per row, first tile,
-// sample offsets, mode, and the item buffer with its hits, distances and
-// hit order keys.
-using ItemBufferKernel = KernelBinding<FrameParams, Buf, Buf, Buf, cl_int4, Buf, Buf, int, cl_int2, int, int, float,
-                                       float, int, Buf, Buf, Buf, Buf>;
-// kernels/primary.cl: the hit list's two passes (frame, item buffer hits,
-// pixels, traced rectangle, first pass, per-block hits, pixel sums; item
-// buffer hits, pixels, traced rectangle, per-block prefixes, hit list);
-// then frame, PE table, hit list, item hits and
-// distances, hits in the list, sample offsets, pool offset, the pool,
-// primary hit count.
-using CountHitsKernel = KernelBinding<FrameParams, Buf, int, cl_int4, int, Buf, Buf>;
-using ListHitsKernel = KernelBinding<Buf, int, int, cl_int4, Buf, Buf>;
-using PrimaryKernel = KernelBinding<FrameParams, Buf, Buf, Buf, Buf, int, int, float, float, int, DescriptorSet, Buf>;
-// kernels/spmd_phase.cl: frame, PE table, clusters, routing boxes, routing,
-// bank nodes, facets, materials, lights, surface, banks, the exchange's
-// work-group table and bank ranges, outputs and their counts, pixel sums,
-// statistics, traffic and its levels, and the pilots' cluster work.
-using SpmdKernel = KernelBinding<FrameParams, Buf, Buf, Buf, int, Buf, Buf, Buf, Buf, SurfaceBuffers, DescriptorSet,
-                                 Buf, Buf, Buf, Buf, DescriptorSet, Buf, Buf, Buf, Buf, int, Buf, Buf, Buf>;
-// All of them, from one program (frame_prepare.cpp).
-struct Set {
-  ItemBufferKernel item;
-  CountHitsKernel count_hits;
-  ListHitsKernel list_hits;
-  PrimaryKernel primary;
-  SpmdKernel spmd;
-  bool built = false;
-  Set() = default;
-  Set(ClRuntime& rt, KernelProgram program);
-};
-}  // namespace frame_kernels
 
 // Everything the machine keeps between frames, and the stages of a frame.
 struct Renderer::Machine {
@@ -113,14 +76,25 @@ struct Renderer::Machine {
   int counted_traffic_levels = 0;  // traffic_levels of a counting frame (the buffer's size)
   frame_kernels::Set& kernels() { return counting ? work_kernels : ray_kernels; }
   std::unique_ptr<ScatterPass> scatter;
-  cl::Buffer b_tris, b_nodes, b_clusters, b_route, b_pes, b_mats, b_lights, b_rects, b_item_clusters, b_item_near;
-  SurfaceBuffers surface;  // vertex attributes and texture copies of the banks
-  cl::Buffer b_items, b_item_tri, b_item_t, b_item_key, b_accum, b_stats, b_traffic, b_out_count, b_hits;
-  cl::Buffer b_hit_pixels, b_hit_blocks, b_hit_total;  // the hit list (kernels/primary.cl)
+  // The device buffers, typed by role (frame_kernels.h), as the buffer
+  // table declares them.
+  BankGeometry geometry;
+  ShadingTables shading;  // materials, lights, and the banks' vertex attributes and textures
+  RoutingTables routing_tables;
+  ItemClusterList item_list;  // its `listed`: the projected boxes' union, a tile outside it lists no cluster
+  ItemArrays item;
+  HitList b_hit_pixels;  // the hit list (kernels/primary.cl)
+  HitBlocks b_hit_blocks;
+  HitListLength b_hit_total;
+  PixelSums b_accum;
+  StatCounters b_stats;
+  TrafficCounters b_traffic;
+  OutputCounts b_out_count;
+  PrimaryHitCount b_hits;
   // Pilot frames (measure_cost): each cluster's tests per level, and what
   // maps them back to the scene's facets (every cluster's, on every rank).
   bool measure = false;
-  cl::Buffer b_node_cluster, b_tri_cluster, b_cost;
+  ClusterWork work;
   std::size_t ncost = 1;
   DescriptorSet banks, outputs, pool, next_pool;
 
@@ -135,10 +109,9 @@ struct Renderer::Machine {
   std::vector<Cluster> item_clusters;
   std::vector<float> item_near;  // each one's distance from the eye, rounded down
   std::vector<cl_int4> rects;
-  cl_int4 listed_rect{};         // their union: a tile outside it lists no cluster
   // The pixels the item buffer traces (x0, y0, x1, y1, inclusive): on one
-  // device, when the frame gives no item buffer, the union above within the
-  // image (empty when no cluster is listed); else the whole image. A pixel
+  // device, when the frame gives no item buffer, their union (item_list.listed)
+  // within the image (empty when no cluster is listed); else the whole image. A pixel
   // outside it is a miss that no kernel touches: read_image gives it the
   // background's sum.
   cl_int4 traced_rect{};

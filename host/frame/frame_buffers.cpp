@@ -103,11 +103,11 @@ cl_int4 rects_union(const std::vector<cl_int4>& rects) {
 // The bench's megakernel reads the same surface tables (its own uploads).
 SurfaceBuffers upload_surface(ClRuntime& rt, const BankedScene& bs) {
   SurfaceBuffers b;
-  b.attributes = upload(rt, bs.attributes, "vertex attributes");
-  b.textures = upload(rt, bs.textures, "texture copies");
-  b.texels = upload(rt, bs.texels, "texels");
+  b.attributes.buffer = upload(rt, bs.attributes, "vertex attributes");
+  b.textures.buffer = upload(rt, bs.textures, "texture copies");
+  b.texels.buffer = upload(rt, bs.texels, "texels");
   const std::array<float, 256>& table = srgb_decode_table();
-  b.srgb = upload(rt, std::vector<float>(table.begin(), table.end()), "sRGB decode table");
+  b.srgb.buffer = upload(rt, std::vector<float>(table.begin(), table.end()), "sRGB decode table");
   return b;
 }
 
@@ -130,13 +130,13 @@ void Renderer::Machine::host_tables(const Scene& scene, BankedScene& bs) {
     if (double(near) > distance[std::size_t(c)]) near = std::nextafter(near, 0.0f);
     item_near.push_back(near);
   }
-  listed_rect = rects_union(rects);
+  const cl_int4 listed = item_list.listed = rects_union(rects);
   // Several ranks relay the item buffer in bands of whole tile rows, and
   // each lists only its own clusters: they trace the whole image alike.
   traced_rect = {{0, 0, width - 1, height - 1}};
   if (group.all() && !item_output)
-    traced_rect = {{std::max(listed_rect.s[0], 0), std::max(listed_rect.s[1], 0),
-                    std::min(listed_rect.s[2], width - 1), std::min(listed_rect.s[3], height - 1)}};
+    traced_rect = {{std::max(listed.s[0], 0), std::max(listed.s[1], 0), std::min(listed.s[2], width - 1),
+                    std::min(listed.s[3], height - 1)}};
   const std::array<float, 256>& table = srgb_decode_table();
   srgb.assign(table.begin(), table.end());
   const HostSharing sharing = host_sharing(rt);
@@ -169,44 +169,44 @@ std::vector<BufferSpec> Renderer::Machine::buffer_table(const BankedScene& bs, c
   std::vector<BufferSpec> t = {
       // Scene: the banks (read in place where the device shares host memory)
       // and the global (every-PE) tables, uploaded once.
-      kept_host_buffer("bank facets", P_::scene, host_tris, &b_tris),
-      kept_host_buffer("bank BVH nodes", P_::scene, host_nodes, &b_nodes),
-      host_buffer("cluster spheres", P_::scene, bs.clusters, &b_clusters),
-      host_buffer("routing boxes", P_::scene, bs.route_nodes, &b_route),
-      host_buffer("PE table", P_::scene, bs.pes, &b_pes),
-      host_buffer("materials", P_::scene, bs.materials, &b_mats),
-      host_buffer("lights", P_::scene, lights, &b_lights),
-      kept_host_buffer("vertex attributes", P_::scene, host_attributes, &surface.attributes),
-      host_buffer("texture copies", P_::scene, bs.textures, &surface.textures),
-      kept_host_buffer("texels", P_::scene, host_texels, &surface.texels),
-      host_buffer("sRGB decode table", P_::scene, srgb, &surface.srgb),
-      host_buffer("projected cluster boxes", P_::scene, rects, &b_rects),
-      host_buffer("item buffer clusters", P_::scene, item_clusters, &b_item_clusters),
-      host_buffer("item buffer cluster distances", P_::scene, item_near, &b_item_near),
+      kept_host_buffer("bank facets", P_::scene, host_tris, &geometry.tris.buffer),
+      kept_host_buffer("bank BVH nodes", P_::scene, host_nodes, &geometry.nodes.buffer),
+      host_buffer("cluster spheres", P_::scene, bs.clusters, &routing_tables.clusters.buffer),
+      host_buffer("routing boxes", P_::scene, bs.route_nodes, &routing_tables.route.buffer),
+      host_buffer("PE table", P_::scene, bs.pes, &routing_tables.pes.buffer),
+      host_buffer("materials", P_::scene, bs.materials, &shading.materials.buffer),
+      host_buffer("lights", P_::scene, lights, &shading.lights.buffer),
+      kept_host_buffer("vertex attributes", P_::scene, host_attributes, &shading.surface.attributes.buffer),
+      host_buffer("texture copies", P_::scene, bs.textures, &shading.surface.textures.buffer),
+      kept_host_buffer("texels", P_::scene, host_texels, &shading.surface.texels.buffer),
+      host_buffer("sRGB decode table", P_::scene, srgb, &shading.surface.srgb.buffer),
+      host_buffer("projected cluster boxes", P_::scene, rects, &item_list.rects.buffer),
+      host_buffer("item buffer clusters", P_::scene, item_clusters, &item_list.clusters.buffer),
+      host_buffer("item buffer cluster distances", P_::scene, item_near, &item_list.near.buffer),
       // Only the pilot's program reads these; others get one-entry stand-ins.
-      host_buffer("node clusters", P_::scene, measure ? bs.node_cluster : no_cluster, &b_node_cluster),
-      host_buffer("facet clusters", P_::scene, measure ? bs.tri_cluster : no_cluster, &b_tri_cluster),
+      host_buffer("node clusters", P_::scene, measure ? bs.node_cluster : no_cluster, &work.node_cluster.buffer),
+      host_buffer("facet clusters", P_::scene, measure ? bs.tri_cluster : no_cluster, &work.tri_cluster.buffer),
       // Item buffer (pair, triangle, distance, the hit order's (facet, fan)
       // key) and 64-bit fixed-point RGB sums.
-      frame_buffer("item buffer", P_::image, sizeof(cl_int2), npix, Fill::device, &b_items),
-      frame_buffer("item buffer hits", P_::image, sint, npix, Fill::device, &b_item_tri),
-      frame_buffer("item buffer distances", P_::image, sizeof(cl_float), npix, Fill::device, &b_item_t),
-      frame_buffer("item buffer keys", P_::image, sizeof(cl_int2), npix, Fill::device, &b_item_key),
+      frame_buffer("item buffer", P_::image, sizeof(cl_int2), npix, Fill::device, &item.items.buffer),
+      frame_buffer("item buffer hits", P_::image, sint, npix, Fill::device, &item.tri.buffer),
+      frame_buffer("item buffer distances", P_::image, sizeof(cl_float), npix, Fill::device, &item.t.buffer),
+      frame_buffer("item buffer keys", P_::image, sizeof(cl_int2), npix, Fill::device, &item.key.buffer),
       // The hit list of a sample pass (kernels/primary.cl): its pixels, the
       // hits per block of pixels (then their prefixes), and their total.
-      frame_buffer("hit list", P_::image, sint, npix, Fill::device, &b_hit_pixels),
-      frame_buffer("hit list blocks", P_::image, sint, (npix + ScatterPass::kBlock - 1) / ScatterPass::kBlock,
-                   Fill::device, &b_hit_blocks),
-      frame_buffer("hit list length", P_::other, sint, 1, Fill::device, &b_hit_total),
+      frame_buffer("hit list", P_::image, sint, npix, Fill::device, &b_hit_pixels.buffer),
+      frame_buffer("hit list blocks", P_::image, sint, ScatterPass::blocks_of(npix), Fill::device,
+                   &b_hit_blocks.buffer),
+      frame_buffer("hit list length", P_::other, sint, 1, Fill::device, &b_hit_total.buffer),
       // Not cleared: the frame's first hit list writes every pixel's sums.
-      frame_buffer("pixel sums", P_::image, OPSILA_ACCUM_WORDS * sizeof(cl_uint), npix, Fill::device, &b_accum),
+      frame_buffer("pixel sums", P_::image, OPSILA_ACCUM_WORDS * sizeof(cl_uint), npix, Fill::device, &b_accum.buffer),
       // Counters: statistics, PE x PE traffic, primary hits; the pilots'
       // cluster work; the SPMD phase's output counts.
-      frame_buffer("stats", P_::other, 1, counter_bytes(nstats), Fill::zero, &b_stats),
-      frame_buffer("traffic", P_::other, 1, counter_bytes(ntraffic), Fill::zero, &b_traffic),
-      frame_buffer("primary hit count", P_::other, 1, counter_bytes(1), Fill::zero, &b_hits),
-      frame_buffer("cluster work", P_::other, sizeof(cl_uint), ncost, Fill::zero, &b_cost),
-      frame_buffer("SPMD output counts", P_::other, sint, f.groups * f.group_size, Fill::device, &b_out_count),
+      frame_buffer("stats", P_::other, 1, counter_bytes(nstats), Fill::zero, &b_stats.buffer),
+      frame_buffer("traffic", P_::other, 1, counter_bytes(ntraffic), Fill::zero, &b_traffic.buffer),
+      frame_buffer("primary hit count", P_::other, 1, counter_bytes(1), Fill::zero, &b_hits.buffer),
+      frame_buffer("cluster work", P_::other, sizeof(cl_uint), ncost, Fill::zero, &work.cost.buffer),
+      frame_buffer("SPMD output counts", P_::other, sint, f.groups * f.group_size, Fill::device, &b_out_count.buffer),
   };
   // Descriptor vectors: banks (the slots in flight, each bank padded to
   // whole work-groups), SPMD output places, the waiting pool (ping-pong).
@@ -222,25 +222,16 @@ std::vector<BufferSpec> Renderer::Machine::buffer_table(const BankedScene& bs, c
   // The exchange (ScatterPass): what plan() would grow to, allocated ahead
   // (a pass ranks at most the pool and the outputs, in at most this many
   // blocks, for at most this many SPMD work-groups of all P PEs) ...
-  const std::size_t sources = f.pool + f.outputs;
-  const std::size_t blocks = (f.pool + ScatterPass::kBlock - 1) / ScatterPass::kBlock + f.groups;
-  const std::size_t groups = f.slots / f.group_size + P + 1;
-  auto grown = [&](const char* name, std::size_t count, ScatterPass::Grown* g) {
-    BufferSpec d = frame_buffer(name, P_::other, sint, count, Fill::device, &g->buffer);
-    d.capacity = &g->capacity;
+  const ScatterPass::Needs most = ScatterPass::needs(f.pool + f.outputs, ScatterPass::blocks_of(f.pool) + f.groups,
+                                                     f.slots, f.group_size, P);
+  for (const ScatterPass::Table& s : scatter->grown_tables(most)) {
+    BufferSpec d = frame_buffer(s.name, P_::other, sint, s.ints, Fill::device, s.buffer);
+    d.capacity = s.capacity;
     t.push_back(d);
-  };
-  grown("scatter ranks", sources, &scatter->ranks);
-  grown("scatter block counts", (blocks + 1) * 2 * P, &scatter->block_counts);  // two sort keys a PE
-  grown("SPMD work-group PEs", groups, &scatter->group_pe);
-  grown("SPMD work-group slots", groups, &scatter->group_first);
-  // ... and its per-PE tables, which it allocates when it is made.
-  for (const char* name : {"bank offsets", "bank counts", "scatter totals"})
-    t.push_back(frame_buffer(name, P_::other, sint, P, Fill::device, nullptr));
-  for (const char* name : {"scatter key totals", "scatter key offsets", "scatter key counts", "scatter overflow bases"})
-    t.push_back(frame_buffer(name, P_::other, sint, 2 * std::size_t(P), Fill::device, nullptr));
-  t.push_back(frame_buffer("scatter counts", P_::other, sint, 3, Fill::device, nullptr));
-  t.push_back(frame_buffer("no SPMD outputs", P_::other, sint, 1, Fill::device, nullptr));
+  }
+  // ... and the tables it allocates when it is made.
+  for (const ScatterPass::Table& s : scatter->own_tables())
+    t.push_back(frame_buffer(s.name, P_::other, sint, s.ints, Fill::device, nullptr));
   return t;
 }
 

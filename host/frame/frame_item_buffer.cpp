@@ -32,14 +32,25 @@ void Renderer::Machine::item_buffer(Launcher& launch, int sample) {
   const int tiles = tiles_x * tiles_y;
   int per_launch = std::max(1, item_launch_pixels / (tile_w * tile_w));
   if (!group.all()) per_launch = std::max(1, per_launch / tiles_x) * tiles_x;
-  ItemRelay relay(ranks, rt, ItemBuffers{&b_items, &b_item_tri, &b_item_t, &b_item_key, items});
+  ItemRelay relay(ranks, rt, ItemBuffers{&item.items.buffer, &item.tri.buffer, &item.t.buffer, &item.key.buffer, items});
+  frame_kernels::ItemBufferArgs a;
+  a.fp = fp;
+  a.clusters = item_list;
+  a.geometry = geometry;
+  a.tile_w = tile_w;
+  a.tile_origin = origin;
+  a.tiles_x = tiles_x;
+  a.ox = ox;
+  a.oy = oy;
+  a.mode = mode;
+  a.item = item;
   for (int begin = 0; begin < tiles; begin += per_launch) {
     const int count = std::min(per_launch, tiles - begin);
     const std::size_t px0 = std::size_t(origin.s[1] + begin / tiles_x) * tile_w * width;
     const std::size_t px1 = std::min(npix, std::size_t(origin.s[1] + (begin + count) / tiles_x) * tile_w * width);
     if (!group.all()) relay.receive(px0, px1 - px0);
-    kernels().item.bind(fp, b_item_clusters, b_item_near, b_rects, listed_rect, b_nodes, b_tris, tile_w, origin, tiles_x, begin, ox, oy,
-                        mode, b_items, b_item_tri, b_item_t, b_item_key);
+    a.tile_begin = begin;
+    kernels().item.bind(a);
     launch.run(kernels().item.kernel(), "item_buffer", std::size_t(count) * tile_w * tile_w,
                std::size_t(tile_w) * tile_w, -1);
     if (!group.all()) relay.send(px0, px1 - px0);

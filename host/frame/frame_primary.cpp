@@ -12,11 +12,26 @@ namespace opsila {
 // sums, which are not cleared before the frame (frame_buffers.cpp).
 std::size_t Renderer::Machine::list_hits(Launcher& launch, int sample) {
   const int pixels = static_cast<int>(npix);
-  const int blocks = (pixels + ScatterPass::kBlock - 1) / ScatterPass::kBlock;
-  kernels().count_hits.bind(fp, b_item_tri, pixels, traced_rect, sample == 0 ? 1 : 0, b_hit_blocks, b_accum);
+  const int blocks = static_cast<int>(ScatterPass::blocks_of(npix));
+  frame_kernels::CountHitsArgs c;
+  c.fp = fp;
+  c.hits = item.tri;
+  c.npix = pixels;
+  c.traced = traced_rect;
+  c.first_pass = sample == 0 ? 1 : 0;
+  c.block_hits = b_hit_blocks;
+  c.accum = b_accum;
+  kernels().count_hits.bind(c);
   launch.run(kernels().count_hits.kernel(), "count_hits", round_up(blocks, 64), 0, -1);
   scatter->scan(launch, "hit_list_scan", b_hit_blocks, blocks, b_hit_total, -1);
-  kernels().list_hits.bind(b_item_tri, pixels, width, traced_rect, b_hit_blocks, b_hit_pixels);
+  frame_kernels::ListHitsArgs l;
+  l.hits = item.tri;
+  l.npix = pixels;
+  l.width = width;
+  l.traced = traced_rect;
+  l.block_first = b_hit_blocks;
+  l.list = b_hit_pixels;
+  kernels().list_hits.bind(l);
   launch.run(kernels().list_hits.kernel(), "list_hits", round_up(blocks, 64), 0, -1);
   cl_int listed = 0;
   launch.check(rt.queue().enqueueReadBuffer(b_hit_total, CL_TRUE, 0, sizeof(cl_int), &listed),
@@ -49,9 +64,20 @@ void Renderer::Machine::primary_descriptors(Launcher& launch, Frame& f, int roun
     pool = bigger;
   }
   if (f.pool_len + count > pool.capacity) count = pool.capacity - f.pool_len;
-  kernels().primary.bind(fp, b_pes, b_hit_pixels, b_item_tri, b_item_t, static_cast<int>(f.next_hit),
-                         static_cast<int>(count), offsets[std::size_t(f.sample % spp_k)],
-                         offsets[std::size_t(f.sample / spp_k)], static_cast<int>(f.pool_len), pool, b_hits);
+  frame_kernels::PrimaryArgs a;
+  a.fp = fp;
+  a.pes = routing_tables.pes;
+  a.list = b_hit_pixels;
+  a.hits = item.tri;
+  a.distances = item.t;
+  a.first = static_cast<int>(f.next_hit);
+  a.count = static_cast<int>(count);
+  a.ox = offsets[std::size_t(f.sample % spp_k)];
+  a.oy = offsets[std::size_t(f.sample / spp_k)];
+  a.offset = static_cast<int>(f.pool_len);
+  a.pool = pool;
+  a.hit_count = b_hits;
+  kernels().primary.bind(a);
   launch.run(kernels().primary.kernel(), "build_primary", round_up(count, 64), 0, round);
   f.next_hit += count;
   f.pool_len += count;

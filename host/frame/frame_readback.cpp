@@ -75,7 +75,7 @@ void Renderer::Machine::read_image(Launcher& launch, RenderResult& result) {
     words = accum->data<cl_uint>() + row0 * width * OPSILA_ACCUM_WORDS;
   }
   if (item_output) {
-    MappedRead items(launch, q, b_items, npix * sizeof(cl_int2), "clEnqueueMapBuffer(item buffer)");
+    MappedRead items(launch, q, item.items, npix * sizeof(cl_int2), "clEnqueueMapBuffer(item buffer)");
     const cl_int* item = items.data<cl_int>();
     result.item_buffer.assign(item, item + npix * 2);
     items.unmap(launch, "clEnqueueUnmapMemObject(item buffer)");

@@ -4,10 +4,23 @@ namespace opsila {
 
 // SPMD phase: the plan's work-groups, each on one PE's bank.
 void Renderer::Machine::spmd_phase(Launcher& launch, Frame& f, int round) {
-  kernels().spmd.bind(fp, b_pes, b_clusters, b_route, routing, b_nodes, b_tris, b_mats, b_lights, surface, banks,
-                      scatter->group_pe.buffer, scatter->group_first.buffer, scatter->bank_begin,
-                      scatter->bank_count, outputs, b_out_count, b_accum, b_stats, b_traffic, traffic_levels,
-                      b_node_cluster, b_tri_cluster, b_cost);
+  frame_kernels::SpmdArgs a;
+  a.fp = fp;
+  a.routing = routing_tables;
+  a.routing_mode = routing;
+  a.geometry = geometry;
+  a.shading = shading;
+  a.banks = banks;
+  a.groups = scatter->group_table();
+  a.bank_ranges = scatter->bank_ranges;
+  a.outputs = outputs;
+  a.out_count = b_out_count;
+  a.accum = b_accum;
+  a.stats = b_stats;
+  a.traffic = b_traffic;
+  a.traffic_levels = traffic_levels;
+  a.work = work;
+  kernels().spmd.bind(a);
   launch.run(kernels().spmd.kernel(), "spmd_phase", std::size_t(f.groups) * spmd_wg, spmd_wg, round);
   f.out_groups = f.groups;
   if (round % 16 == 15) launch.harvest();

@@ -109,7 +109,7 @@ std::vector<std::uint64_t> Renderer::cluster_work() {
   Machine& m = *m_;
   if (!m.measure) return {};
   std::vector<cl_uint> raw(m.ncost);
-  cl_check(m.rt.queue().enqueueReadBuffer(m.b_cost, CL_TRUE, 0, raw.size() * sizeof(cl_uint), raw.data()),
+  cl_check(m.rt.queue().enqueueReadBuffer(m.work.cost, CL_TRUE, 0, raw.size() * sizeof(cl_uint), raw.data()),
            "clEnqueueReadBuffer(cluster work)");
   // A cluster is counted by the rank that holds it alone (the others count
   // 0 for it), so the largest count over the ranks is its count.

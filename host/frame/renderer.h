@@ -19,17 +19,6 @@
 
 namespace opsila {
 
-struct BankedScene;
-
-// The bank data shading reads besides facets and materials (the kernels'
-// SURFACE_PARAMS): vertex attributes, texture copies, texels, and the sRGB
-// decode table. Empty parts are one-element placeholders never read.
-struct SurfaceBuffers {
-  cl::Buffer attributes, textures, texels, srgb;
-  auto kernel_args() const { return std::tie(attributes, textures, texels, srgb); }  // device/kernel_args.h
-};
-SurfaceBuffers upload_surface(ClRuntime& rt, const BankedScene& bs);
-
 // The OPSILA machine, prepared once for one scene and one view, then run for
 // as many frames as wanted (the bench's repeats reuse one Renderer).
 //   prepare (the constructor): validation, partition into banks, bank size n

@@ -228,8 +228,8 @@ PoolScatter scatter_pool(const HostDescriptors& src, int pes, int slots, int cap
     return v;
   };
   PoolScatter r;
-  r.bank_begin = ints(scatter.bank_begin, pes);
-  r.bank_count = ints(scatter.bank_count, pes);
+  r.bank_begin = ints(scatter.bank_ranges.begin, pes);
+  r.bank_count = ints(scatter.bank_ranges.count, pes);
   r.counts = ints(scatter.counts, 3);
   r.banks = banks.read(rt, bank_slots);
   r.next = next.read(rt, std::size_t(r.counts[0]));

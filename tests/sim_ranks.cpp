@@ -5,31 +5,10 @@
 #include <exception>
 #include <thread>
 
+#include "core/util.h"
+#include "dist/collective_balance.h"  // bytes_of, records_of
+
 namespace opsila::test {
-
-namespace {
-
-Bytes words_to_bytes(const std::vector<std::uint64_t>& v) {
-  Bytes b(v.size() * sizeof(std::uint64_t));
-  if (!v.empty()) std::memcpy(b.data(), v.data(), b.size());
-  return b;
-}
-
-std::vector<std::uint64_t> bytes_to_words(const Bytes& b) {
-  std::vector<std::uint64_t> v(b.size() / sizeof(std::uint64_t));
-  if (!v.empty()) std::memcpy(v.data(), b.data(), v.size() * sizeof(std::uint64_t));
-  return v;
-}
-
-// Adds the time a call spends waiting on the other ranks to mpi_seconds().
-struct Timed {
-  double& total;
-  std::chrono::steady_clock::time_point t0 = std::chrono::steady_clock::now();
-  explicit Timed(double& seconds) : total(seconds) {}
-  ~Timed() { total += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(); }
-};
-
-}  // namespace
 
 SimGroup::SimGroup(int size, std::chrono::milliseconds timeout)
     : size_(size), timeout_(timeout), slots_(std::size_t(size)), ops_(std::size_t(size)), gone_(std::size_t(size), 0) {
@@ -126,16 +105,19 @@ Bytes SimGroup::take(int from, int to, int tag) {
   return message;
 }
 
+// The time spent waiting on the other ranks adds up in mpi_seconds().
 std::vector<Bytes> SimRanks::meet(const std::string& op, Bytes mine) {
-  const Timed t(seconds_);
-  return *group_.meet(rank_, op, std::move(mine));
+  const auto t0 = std::chrono::steady_clock::now();
+  std::vector<Bytes> all = *group_.meet(rank_, op, std::move(mine));
+  seconds_ += seconds_since(t0);
+  return all;
 }
 
 std::vector<std::uint64_t> SimRanks::reduce(const std::string& op, const std::vector<std::uint64_t>& values) {
-  const std::vector<Bytes> all = meet(op, words_to_bytes(values));
-  std::vector<std::uint64_t> out = bytes_to_words(all[0]);
+  const std::vector<Bytes> all = meet(op, bytes_of(values));
+  std::vector<std::uint64_t> out = records_of<std::uint64_t>(all[0]);
   for (int q = 0; q < size(); ++q) {
-    const std::vector<std::uint64_t> v = bytes_to_words(all[std::size_t(q)]);
+    const std::vector<std::uint64_t> v = records_of<std::uint64_t>(all[std::size_t(q)]);
     if (v.size() != values.size())
       throw std::logic_error(op + ": rank " + std::to_string(q) + " gave " + std::to_string(v.size()) +
                              " values, rank " + std::to_string(rank_) + " " + std::to_string(values.size()));
@@ -167,7 +149,7 @@ std::vector<std::uint64_t> SimRanks::all_to_all(const std::vector<unsigned char>
   // Each rank's message: the record size, its counts, then its records.
   std::vector<std::uint64_t> head = {record_bytes};
   head.insert(head.end(), send_counts.begin(), send_counts.begin() + std::ptrdiff_t(R));
-  Bytes mine = words_to_bytes(head);
+  Bytes mine = bytes_of(head);
   mine.insert(mine.end(), send.begin(), send.begin() + std::ptrdiff_t(total * record_bytes));
   const std::vector<Bytes> all = meet("all_to_all", std::move(mine));
   std::vector<std::uint64_t> recv_counts(R, 0);
@@ -175,7 +157,8 @@ std::vector<std::uint64_t> SimRanks::all_to_all(const std::vector<unsigned char>
   const std::size_t head_bytes = (R + 1) * sizeof(std::uint64_t);
   for (std::size_t q = 0; q < R; ++q) {
     const Bytes& m = all[q];
-    const std::vector<std::uint64_t> h = bytes_to_words(Bytes(m.begin(), m.begin() + std::ptrdiff_t(head_bytes)));
+    const Bytes head_of = Bytes(m.begin(), m.begin() + std::ptrdiff_t(head_bytes));
+    const std::vector<std::uint64_t> h = records_of<std::uint64_t>(head_of);
     if (h[0] != record_bytes) throw std::logic_error("all_to_all: the ranks' record sizes differ");
     std::uint64_t before = 0;
     for (std::size_t d = 0; d < std::size_t(rank()); ++d) before += h[1 + d];
@@ -214,18 +197,16 @@ std::vector<unsigned char> SimRanks::all_gather(const std::vector<unsigned char>
 }
 
 void SimRanks::send(const void* data, std::size_t bytes, int to, int tag) {
-  if (to < 0 || to >= size() || to == rank_) throw std::logic_error("send: no rank " + std::to_string(to) + " to send to");
+  if (to < 0 || to >= size() || to == rank_) throw std::logic_error("send: no rank " + std::to_string(to));
   const auto* p = static_cast<const unsigned char*>(data);
   group_.post(rank_, to, tag, Bytes(p, p + bytes));
 }
 
 void SimRanks::receive(void* data, std::size_t bytes, int from, int tag) {
   if (from < 0 || from >= size() || from == rank_) throw std::logic_error("receive: no rank " + std::to_string(from));
-  Bytes message;
-  {
-    const Timed t(seconds_);
-    message = group_.take(from, rank_, tag);
-  }
+  const auto t0 = std::chrono::steady_clock::now();
+  const Bytes message = group_.take(from, rank_, tag);
+  seconds_ += seconds_since(t0);
   if (message.size() > bytes)  // MPI_ERR_TRUNCATE
     throw std::logic_error("receive: " + std::to_string(message.size()) + " bytes into a buffer of " +
                            std::to_string(bytes));

@@ -38,7 +38,9 @@ struct SimRanksBroken : std::runtime_error {
 struct SimRanksAborted : std::runtime_error {
   int rank, code;
   SimRanksAborted(int r, int c)
-      : std::runtime_error("rank " + std::to_string(r) + " aborted, exit code " + std::to_string(c)), rank(r), code(c) {}
+      : std::runtime_error("rank " + std::to_string(r) + " aborted, exit code " + std::to_string(c)),
+        rank(r),
+        code(c) {}
 };
 
 // Long enough for any test's collective work under the sanitizers; a

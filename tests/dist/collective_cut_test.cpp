@@ -189,10 +189,10 @@ TEST(CollectiveCut, ASpreadTerrainIsCutAsOneProcessCutsIt) {
     {"type": "terrain", "size": [20, 12], "quads": [37, 23], "height": 3, "transform": {"rotate": [0, 30, 0]}}]})";
   const Scene whole = load_scene_from_string(text, "terrain.json", "");
   const int pes = 9;
-  const partition_steps::SplitLimits limits = partition_steps::split_limits(whole.triangles.size(), scene_box(whole), pes);
-  std::vector<partition_steps::ClusterBuild> one;
-  partition_steps::split_object(whole, partition_steps::triangles_by_object(whole)[1], limits.max_tris,
-                                limits.max_extent, false, one, partition_steps::split_threads());
+  using namespace partition_steps;
+  const SplitLimits limits = split_limits(whole.triangles.size(), scene_box(whole), pes);
+  std::vector<ClusterBuild> one;
+  split_object(whole, triangles_by_object(whole)[1], limits.max_tris, limits.max_extent, false, one, split_threads());
   ASSERT_GT(one.size(), 4u);
   for (int R = 2; R <= 4; ++R) {
     SCOPED_TRACE(std::to_string(R) + " ranks");
@@ -209,7 +209,8 @@ TEST(CollectiveCut, ASpreadTerrainIsCutAsOneProcessCutsIt) {
       std::lock_guard<std::mutex> hold(lock);
       for (std::size_t k = 0; k < one.size(); ++k) {
         EXPECT_EQ(split.spread[k].facets, one[k].tris.size()) << "cluster " << k;
-        const std::vector<std::uint64_t> mine = names_of(share, split.clusters[std::size_t(split.spread[k].local)].tris);
+        const std::vector<int>& tris = split.clusters[std::size_t(split.spread[k].local)].tris;
+        const std::vector<std::uint64_t> mine = names_of(share, tris);
         clusters[k].insert(clusters[k].end(), mine.begin(), mine.end());
       }
     });

@@ -20,6 +20,7 @@ namespace {
 using test::run_ranks;
 
 std::vector<unsigned char> text_bytes(const std::string& s) { return std::vector<unsigned char>(s.begin(), s.end()); }
+unsigned char byte(std::uint64_t v) { return static_cast<unsigned char>(v); }
 
 TEST(SimRanks, CollectivesGiveEveryRanksValuesInRankOrder) {
   for (int R = 1; R <= 4; ++R) {
@@ -67,14 +68,14 @@ TEST(SimRanks, AllToAllDeliversBySourceThenSourceOrder) {
       std::vector<std::uint64_t> counts;
       for (int d = 0; d < R; ++d) {
         counts.push_back(std::uint64_t((r + 2 * d) % 3));
-        for (std::uint64_t k = 0; k < counts.back(); ++k) send.insert(send.end(), {(unsigned char)r, (unsigned char)d, (unsigned char)k});
+        for (std::uint64_t k = 0; k < counts.back(); ++k) send.insert(send.end(), {byte(r), byte(d), byte(k)});
       }
       std::vector<unsigned char> recv;
       const std::vector<std::uint64_t> got = ranks.all_to_all(send, counts, 3, recv);
       std::vector<unsigned char> expected;
       for (int s = 0; s < R; ++s) {
         EXPECT_EQ(got[std::size_t(s)], std::uint64_t((s + 2 * r) % 3)) << "from rank " << s;
-        for (int k = 0; k < (s + 2 * r) % 3; ++k) expected.insert(expected.end(), {(unsigned char)s, (unsigned char)r, (unsigned char)k});
+        for (int k = 0; k < (s + 2 * r) % 3; ++k) expected.insert(expected.end(), {byte(s), byte(r), byte(k)});
       }
       EXPECT_EQ(recv, expected);
     });

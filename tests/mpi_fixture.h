@@ -1,7 +1,8 @@
-// The MPI tests' fixture (tests/app/mpi_*_test.cpp): launching R ranks of
-// opsila under mpiexec (Open MPI or MPICH), one process beside them, and
-// comparing their outputs. Skipped, with the reason, in a build without MPI
-// or without mpirun.
+// The MPI tests' fixture (tests/app/mpi_*_test.cpp,
+// tests/bench/mpi_bench_test.cpp): launching R ranks of opsila under
+// mpiexec (Open MPI or MPICH), one process beside them, and comparing their
+// outputs. Skipped, with the reason, in a build without MPI or without
+// mpirun.
 #pragma once
 
 #include <gtest/gtest.h>
@@ -199,6 +200,27 @@ inline std::uint64_t facets_read(const nlohmann::json& s, std::uint64_t most, co
     read += mine;
   }
   return read;
+}
+
+// A scene of `entries` grids of small spheres (80 triangles, one object
+// each), side by side, each grid one entry of "objects"; `files` adds that
+// many included OBJ files (a box each), the one named `broken` (if any)
+// with a face that names a missing vertex.
+inline std::string share_scene(TempDir& dir, int entries, int files = 0, int broken = -1) {
+  std::string objects;
+  for (int e = 0; e < entries; ++e)
+    objects += std::string(objects.empty() ? "" : ",\n") + R"({"type": "grid", "counts": [6, 6, 2], "min": [)" +
+               std::to_string(4 * e) + R"(, 0, 0], "max": [)" + std::to_string(4 * e + 3) +
+               R"(, 3, 1], "radius": 0.2, "subdivisions": 1, "seed": )" + std::to_string(e + 1) + "}";
+  for (int k = 0; k < files; ++k) {
+    const std::string name = "part" + std::to_string(k) + ".obj";
+    dir.write(name, std::string("o part\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\n") +
+                                         (k == broken ? "f 1 2 9\n" : "f 1 2 3 4\nf 1 2 5\nf 2 3 5\n"));
+    objects += ",\n" R"({"type": "obj", "file": ")" + name + R"(", "transform": {"translate": [)" +
+               std::to_string(2 * k) + ", -2, 0]}}";
+  }
+  dir.write("share.json", "{\"objects\": [\n" + objects + "\n]}\n");
+  return dir.file("share.json");
 }
 
 // Refused as bad input: exit 2 and one error line naming every fragment.

@@ -101,7 +101,7 @@ MeasuredWork run_pilots(const Scene& view, const RenderSettings& ps, const Pilot
   // pilot; best: the input whose partition measured the best occupancy.
   MeasuredWork mean, best;
   double best_occupancy = -1;
-  Ranks solo;  // one process, when the settings name no ranks
+  OneProcess solo;  // one process, when the settings name no ranks
   Ranks& ranks = ps.ranks ? *ps.ranks : solo;
   int k = 0;
   for (; k < kPilotFrames; ++k) {
@@ -147,7 +147,7 @@ namespace {
 MeasuredWork whole_scene_pilots(const Scene& scene, const Scene& view, const RenderSettings& settings,
                                 ClRuntime& runtime, PilotFigures& figures) {
   const RenderSettings ps = pilot_settings(settings);
-  Ranks solo;  // one process, when the settings name no ranks
+  OneProcess solo;  // one process, when the settings name no ranks
   Ranks& ranks = settings.ranks ? *settings.ranks : solo;
   const PeGroup group = pe_group(ps.num_pes, ranks.size(), ranks.rank());
   return run_pilots(
@@ -197,7 +197,7 @@ MeasuredWork pilot_work(Scene& share, const RenderSettings& settings, ClRuntime&
   const Scene view = view_without_facets(share);
   if (!share.is_share()) return whole_scene_pilots(share, view, settings, runtime, figures);
   const RenderSettings ps = pilot_settings(settings);
-  Ranks solo;  // one process, when the settings name no ranks
+  OneProcess solo;  // one process, when the settings name no ranks
   Ranks& ranks = settings.ranks ? *settings.ranks : solo;
   const PeGroup group = pe_group(ps.num_pes, ranks.size(), ranks.rank());
   ShareBalance how;

@@ -33,7 +33,7 @@ struct Renderer::Machine {
   ClRuntime& rt;
   // P PEs in all; with several MPI ranks this device holds the G PEs of its
   // group (pe_group.h) and only their banks.
-  Ranks solo;    // one process, when the settings name no ranks
+  OneProcess solo;    // one process, when the settings name no ranks
   Ranks& ranks;  // settings.ranks, else solo
   PeGroup group;
   int G = 0;

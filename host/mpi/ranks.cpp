@@ -2,15 +2,9 @@
 
 #include <unistd.h>
 
-#include <chrono>
-#include <climits>
-#include <cstdlib>
-#include <cstring>
 #include <stdexcept>
 
-#ifdef OPSILA_HAVE_MPI
-#include <mpi.h>
-#endif
+#include <cstdlib>
 
 namespace opsila {
 
@@ -21,23 +15,10 @@ bool launched_by_mpi() {
   return false;
 }
 
-Ranks& Ranks::world() {
-  static Ranks ranks;
-  return ranks;
-}
-
-std::string Ranks::label() const { return size_ > 1 ? "rank " + std::to_string(rank_) + ": " : std::string(); }
-
-bool Ranks::built_with_mpi() const {
-#ifdef OPSILA_HAVE_MPI
-  return true;
-#else
-  return false;
-#endif
-}
+std::string Ranks::label() const { return size() > 1 ? "rank " + std::to_string(rank()) + ": " : std::string(); }
 
 void Ranks::checkpoint() {
-  if (size_ == 1) return;
+  if (size() == 1) return;
   int code = 0;
   const int failed = agree(code);
   if (failed >= 0) throw OtherRankFailed(failed, code);
@@ -45,289 +26,32 @@ void Ranks::checkpoint() {
 
 void Ranks::begin_collective() {
   checkpoint();
-  collective_ = size_ > 1;
+  collective_ = size() > 1;
 }
 
-#ifdef OPSILA_HAVE_MPI
-
-struct RanksTimer {
-  Ranks& r;
-  std::chrono::steady_clock::time_point t0 = std::chrono::steady_clock::now();
-  explicit RanksTimer(Ranks& ranks) : r(ranks) {}
-  ~RanksTimer() { r.mpi_seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(); }
-};
-
-namespace {
-void finish_at_exit() { Ranks::world().finish(); }
-
-MPI_Comm failures = MPI_COMM_NULL;  // abort's messages (made by start)
-
-int checked_int(std::uint64_t n, const char* what) {
-  if (n > std::uint64_t(INT_MAX))
-    throw std::runtime_error(std::string(what) + ": " + std::to_string(n) + " items exceed one MPI message");
-  return static_cast<int>(n);
-}
-}  // namespace
-
-void Ranks::start() {
+std::string OneProcess::host() const {
   char name[256] = {};
-  if (gethostname(name, sizeof name - 1) == 0) host_ = name;
-  if (started_ || !launched_by_mpi()) return;
-  int already = 0;
-  MPI_Initialized(&already);
-  if (!already) MPI_Init(nullptr, nullptr);
-  started_ = true;
-  std::atexit(finish_at_exit);
-  MPI_Comm_rank(MPI_COMM_WORLD, &rank_);
-  MPI_Comm_size(MPI_COMM_WORLD, &size_);
-  // Ranks sharing this machine (MPI-3): the local rank picks the node's GPU.
-  MPI_Comm local;
-  MPI_Comm_split_type(MPI_COMM_WORLD, MPI_COMM_TYPE_SHARED, rank_, MPI_INFO_NULL, &local);
-  MPI_Comm_rank(local, &local_rank_);
-  MPI_Comm_size(local, &local_size_);
-  MPI_Comm_free(&local);
-  MPI_Comm_dup(MPI_COMM_WORLD, &failures);
+  return ::gethostname(name, sizeof name - 1) == 0 ? std::string(name) : std::string();
 }
 
-void Ranks::finish() {
-  if (!started_ || finished_) return;
-  finished_ = true;
-  wait_sends();
-  MPI_Finalize();
+std::vector<std::uint64_t> OneProcess::all_to_all(const std::vector<unsigned char>& send,
+                                                  const std::vector<std::uint64_t>& send_counts, std::size_t,
+                                                  std::vector<unsigned char>& recv) {
+  recv = send;  // every record is for this rank
+  return {send_counts.empty() ? 0 : send_counts[0]};
 }
 
-void Ranks::barrier() {
-  if (size_ == 1) return;
-  RanksTimer t(*this);
-  MPI_Barrier(MPI_COMM_WORLD);
+void OneProcess::send(const void*, std::size_t, int, int) {
+  throw std::logic_error("OneProcess::send: one process has no other rank");
 }
 
-std::uint64_t Ranks::sum(std::uint64_t value) {
-  if (size_ == 1) return value;
-  RanksTimer t(*this);
-  std::uint64_t total = 0;
-  MPI_Allreduce(&value, &total, 1, MPI_UINT64_T, MPI_SUM, MPI_COMM_WORLD);
-  return total;
+void OneProcess::receive(void*, std::size_t, int, int) {
+  throw std::logic_error("OneProcess::receive: one process has no other rank");
 }
 
-void Ranks::max(std::vector<std::uint64_t>& values) {
-  if (size_ == 1 || values.empty()) return;
-  RanksTimer t(*this);
-  MPI_Allreduce(MPI_IN_PLACE, values.data(), checked_int(values.size(), "values"), MPI_UINT64_T, MPI_MAX,
-                MPI_COMM_WORLD);
-}
-
-void Ranks::sum(std::vector<std::uint64_t>& values) {
-  if (size_ == 1 || values.empty()) return;
-  RanksTimer t(*this);
-  MPI_Allreduce(MPI_IN_PLACE, values.data(), checked_int(values.size(), "values"), MPI_UINT64_T, MPI_SUM,
-                MPI_COMM_WORLD);
-}
-
-std::vector<std::uint64_t> Ranks::all_to_all(const std::vector<unsigned char>& send,
-                                             const std::vector<std::uint64_t>& send_counts, std::size_t record_bytes,
-                                             std::vector<unsigned char>& recv) {
-  std::vector<std::uint64_t> recv_counts(size_, 0);
-  if (size_ == 1) {
-    recv = send;
-    recv_counts[0] = send_counts[0];
-    return recv_counts;
-  }
-  RanksTimer t(*this);
-  MPI_Alltoall(send_counts.data(), 1, MPI_UINT64_T, recv_counts.data(), 1, MPI_UINT64_T, MPI_COMM_WORLD);
-  std::vector<int> sc(size_), sd(size_), rc(size_), rd(size_);
-  std::uint64_t s_at = 0, r_at = 0;
-  for (int q = 0; q < size_; ++q) {
-    sc[q] = checked_int(send_counts[q], "descriptors sent");
-    rc[q] = checked_int(recv_counts[q], "descriptors received");
-    sd[q] = checked_int(s_at, "descriptors sent");
-    rd[q] = checked_int(r_at, "descriptors received");
-    s_at += send_counts[q];
-    r_at += recv_counts[q];
-  }
-  recv.resize(r_at * record_bytes);
-  MPI_Datatype record;
-  MPI_Type_contiguous(checked_int(record_bytes, "record size"), MPI_BYTE, &record);
-  MPI_Type_commit(&record);
-  MPI_Alltoallv(send.data(), sc.data(), sd.data(), record, recv.data(), rc.data(), rd.data(), record,
-                MPI_COMM_WORLD);
-  MPI_Type_free(&record);
-  return recv_counts;
-}
-
-void Ranks::reduce_sum(std::vector<std::uint64_t>& values, int root) {
-  if (size_ == 1) return;
-  RanksTimer t(*this);
-  // Unsigned sums wrap modulo 2^64 exactly like the device's fixed-point
-  // cells, so signed pixel sums come out right on the root.
-  const std::size_t step = std::size_t(INT_MAX) / 8;
-  for (std::size_t at = 0; at < values.size(); at += step) {
-    const int n = static_cast<int>(std::min(step, values.size() - at));
-    if (rank_ == root)
-      MPI_Reduce(MPI_IN_PLACE, values.data() + at, n, MPI_UINT64_T, MPI_SUM, root, MPI_COMM_WORLD);
-    else
-      MPI_Reduce(values.data() + at, nullptr, n, MPI_UINT64_T, MPI_SUM, root, MPI_COMM_WORLD);
-  }
-}
-
-void Ranks::broadcast(void* data, std::size_t bytes, int root) {
-  if (size_ == 1) return;
-  RanksTimer t(*this);
-  auto* p = static_cast<unsigned char*>(data);
-  for (std::size_t at = 0; at < bytes; at += INT_MAX / 2)
-    MPI_Bcast(p + at, static_cast<int>(std::min<std::size_t>(INT_MAX / 2, bytes - at)), MPI_BYTE, root,
-              MPI_COMM_WORLD);
-}
-
-std::vector<std::string> Ranks::gather(const std::string& mine, int root) {
-  if (size_ == 1) return {mine};
-  RanksTimer t(*this);
-  int n = checked_int(mine.size(), "gathered text");
-  std::vector<int> sizes(size_), at(size_);
-  MPI_Gather(&n, 1, MPI_INT, sizes.data(), 1, MPI_INT, root, MPI_COMM_WORLD);
-  std::uint64_t total = 0;
-  for (int q = 0; q < size_; ++q) at[q] = checked_int(total, "gathered text"), total += sizes[q];
-  std::string all(rank_ == root ? total : 0, '\0');
-  MPI_Gatherv(mine.data(), n, MPI_CHAR, all.data(), sizes.data(), at.data(), MPI_CHAR, root, MPI_COMM_WORLD);
-  std::vector<std::string> out;
-  if (rank_ == root)
-    for (int q = 0; q < size_; ++q) out.push_back(all.substr(at[q], sizes[q]));
-  return out;
-}
-
-std::vector<unsigned char> Ranks::all_gather(const std::vector<unsigned char>& mine) {
-  if (size_ == 1) return mine;
-  RanksTimer t(*this);
-  int n = checked_int(mine.size(), "gathered bytes");
-  std::vector<int> sizes(size_), at(size_);
-  MPI_Allgather(&n, 1, MPI_INT, sizes.data(), 1, MPI_INT, MPI_COMM_WORLD);
-  std::uint64_t total = 0;
-  for (int q = 0; q < size_; ++q) at[q] = checked_int(total, "gathered bytes"), total += sizes[q];
-  std::vector<unsigned char> all(total);
-  MPI_Allgatherv(mine.data(), n, MPI_BYTE, all.data(), sizes.data(), at.data(), MPI_BYTE, MPI_COMM_WORLD);
-  return all;
-}
-
-void Ranks::send(const void* data, std::size_t bytes, int to, int tag) {
-  RanksTimer t(*this);
-  auto* request = new MPI_Request;
-  MPI_Isend(data, checked_int(bytes, "message bytes"), MPI_BYTE, to, tag, MPI_COMM_WORLD, request);
-  pending_.push_back(request);
-}
-
-void Ranks::receive(void* data, std::size_t bytes, int from, int tag) {
-  RanksTimer t(*this);
-  MPI_Recv(data, checked_int(bytes, "message bytes"), MPI_BYTE, from, tag, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
-}
-
-void Ranks::wait_sends() {
-  if (pending_.empty()) return;
-  RanksTimer t(*this);
-  for (void* p : pending_) {
-    auto* request = static_cast<MPI_Request*>(p);
-    MPI_Wait(request, MPI_STATUS_IGNORE);
-    delete request;
-  }
-  pending_.clear();
-}
-
-int Ranks::agree(int& code) {
-  if (size_ == 1) return code != 0 ? 0 : -1;
-  RanksTimer t(*this);
-  const int mine = code != 0 ? rank_ : size_;
-  int first = size_;
-  MPI_Allreduce(&mine, &first, 1, MPI_INT, MPI_MIN, MPI_COMM_WORLD);
-  if (first == size_) return -1;
-  MPI_Bcast(&code, 1, MPI_INT, first, MPI_COMM_WORLD);
-  return first;
-}
-
-namespace {
-
-// The failures of the collective part are told on a communicator of their
-// own (no collective can match them): a failing rank tells every other
-// that it failed, then listens for kReportGrace seconds. It stays silent
-// when a lower rank failed too or another already reports; else it says it
-// reports, and does. A message takes far less than half the grace, so of
-// ranks failing at once only one reports, and the lowest failing rank is
-// silent only when another reports.
-constexpr int kFailedTag = 1, kReportsTag = 2;
-constexpr double kReportGrace = 1.0;
-constexpr double kSilentWait = 30.0;  // then a silent rank ends the job itself
-
-void tell_others(int rank, int size, int tag) {
-  static int token = 0;  // what is sent is the tag and the source; the buffer outlives the sends
-  for (int q = 0; q < size; ++q) {
-    if (q == rank) continue;
-    MPI_Request request;
-    MPI_Isend(&token, 1, MPI_INT, q, tag, failures, &request);
-    MPI_Request_free(&request);
-  }
-}
-
-bool reports_the_failure(int rank, int size) {
-  tell_others(rank, size, kFailedTag);
-  const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(kReportGrace);
-  while (std::chrono::steady_clock::now() < end) {
-    int arrived = 0;
-    MPI_Status status;
-    MPI_Iprobe(MPI_ANY_SOURCE, MPI_ANY_TAG, failures, &arrived, &status);
-    if (!arrived) {
-      usleep(1000);
-      continue;
-    }
-    int token = 0;
-    MPI_Recv(&token, 1, MPI_INT, status.MPI_SOURCE, status.MPI_TAG, failures, MPI_STATUS_IGNORE);
-    if (status.MPI_TAG == kReportsTag || status.MPI_SOURCE < rank) return false;
-  }
-  tell_others(rank, size, kReportsTag);
-  return true;
-}
-
-}  // namespace
-
-void Ranks::abort(int code, const std::function<void()>& report) {
-  if (!started_ || size_ == 1 || failures == MPI_COMM_NULL) {
-    report();
-    if (started_) MPI_Abort(MPI_COMM_WORLD, code);
-    std::_Exit(code);
-  }
-  if (reports_the_failure(rank_, size_)) {
-    report();
-  } else {
-    usleep(useconds_t(kSilentWait * 1e6));  // the reporting rank ends the job before
-  }
-  MPI_Abort(MPI_COMM_WORLD, code);
-  std::_Exit(code);
-}
-
-#else  // no MPI: one process
-
-void Ranks::start() {}
-void Ranks::finish() {}
-void Ranks::barrier() {}
-std::uint64_t Ranks::sum(std::uint64_t value) { return value; }
-void Ranks::max(std::vector<std::uint64_t>&) {}
-void Ranks::sum(std::vector<std::uint64_t>&) {}
-std::vector<std::uint64_t> Ranks::all_to_all(const std::vector<unsigned char>& send,
-                                             const std::vector<std::uint64_t>& send_counts, std::size_t,
-                                             std::vector<unsigned char>& recv) {
-  recv = send;
-  return {send_counts.at(0)};
-}
-void Ranks::reduce_sum(std::vector<std::uint64_t>&, int) {}
-void Ranks::broadcast(void*, std::size_t, int) {}
-std::vector<std::string> Ranks::gather(const std::string& mine, int) { return {mine}; }
-std::vector<unsigned char> Ranks::all_gather(const std::vector<unsigned char>& mine) { return mine; }
-void Ranks::send(const void*, std::size_t, int, int) { throw std::logic_error("Ranks::send without MPI"); }
-void Ranks::receive(void*, std::size_t, int, int) { throw std::logic_error("Ranks::receive without MPI"); }
-void Ranks::wait_sends() {}
-int Ranks::agree(int& code) { return code != 0 ? 0 : -1; }
-void Ranks::abort(int code, const std::function<void()>& report) {
+void OneProcess::abort(int code, const std::function<void()>& report) {
   report();
   std::_Exit(code);
 }
-
-#endif
 
 }  // namespace opsila

@@ -1,8 +1,10 @@
 // The processes of one run. Under `mpirun -np R` each MPI rank is one
 // process driving one OpenCL device and one contiguous group of PEs; the
-// ranks exchange descriptors between rounds. This is the one home of every
-// MPI call: a build without MPI (or a run not started by an MPI launcher)
-// gets the single-process implementation, and the renderer never sees MPI.
+// ranks exchange descriptors between rounds. Ranks is the transport as the
+// collective code sees it; MpiRanks (mpi/mpi_ranks.h) is the one home of
+// every MPI call: a build without MPI (or a run not started by an MPI
+// launcher) gets one process, and the renderer never sees MPI. The tests
+// run the collective code on simulated ranks (threads of one process).
 #pragma once
 
 #include <cstddef>
@@ -23,64 +25,60 @@ struct OtherRankFailed : std::runtime_error {
 
 class Ranks {
  public:
-  // A Ranks never started is one process (rank 0 of 1): what a caller that
-  // names no ranks gets. Only the program's entry (app/main.cpp) reads the
-  // world's; every other room is handed its Ranks.
-  Ranks() = default;
-  Ranks(const Ranks&) = delete;
-  Ranks& operator=(const Ranks&) = delete;
-  // The run's process group: one process until start() joins an MPI job.
+  virtual ~Ranks() = default;
+  // The run's process group: the MPI transport (MpiRanks), one process
+  // until start() joins an MPI job.
   static Ranks& world();
 
-  // Joins the MPI job when this process was started by an MPI launcher
-  // (mpirun, mpiexec, srun); otherwise stays a single process, exactly as a
-  // build without MPI. Safe to call more than once. Registers finish() at exit.
-  void start();
-  void finish();  // MPI_Finalize when started
+  // Joins the group when the transport needs it (MPI: when an MPI launcher
+  // started this process; otherwise it stays one process). Safe to call
+  // more than once.
+  virtual void start() = 0;
 
-  bool built_with_mpi() const;
-  int rank() const { return rank_; }
-  int size() const { return size_; }
-  int local_rank() const { return local_rank_; }  // among the ranks on this machine
-  int local_size() const { return local_size_; }
-  std::string host() const { return host_; }
+  virtual bool built_with_mpi() const = 0;
+  virtual int rank() const = 0;
+  virtual int size() const = 0;
+  virtual int local_rank() const = 0;  // among the ranks on this machine
+  virtual int local_size() const = 0;
+  virtual std::string host() const = 0;
   // "rank 2: " in runs of several ranks, "" otherwise: prefixes messages.
   std::string label() const;
 
   // Collectives (every rank calls them in the same order). Times spent in
   // them add up in mpi_seconds().
-  void barrier();
-  std::uint64_t sum(std::uint64_t value);        // over all ranks, result on all
-  void max(std::vector<std::uint64_t>& values);  // element-wise over all ranks, in place, on all
-  void sum(std::vector<std::uint64_t>& values);  // element-wise over all ranks, in place, on all
+  virtual void barrier() = 0;
+  virtual std::uint64_t sum(std::uint64_t value) = 0;        // over all ranks, result on all
+  virtual void max(std::vector<std::uint64_t>& values) = 0;  // element-wise over all ranks, in place, on all
+  virtual void sum(std::vector<std::uint64_t>& values) = 0;  // element-wise over all ranks, in place, on all
   // send[d] records of `record_bytes` bytes for rank d (laid out in rank
   // order); returns the counts received from each rank and fills `recv`
   // (also in rank order, then in the order each source sent them).
-  std::vector<std::uint64_t> all_to_all(const std::vector<unsigned char>& send,
-                                        const std::vector<std::uint64_t>& send_counts, std::size_t record_bytes,
-                                        std::vector<unsigned char>& recv);
-  void reduce_sum(std::vector<std::uint64_t>& values, int root);  // in place; valid on root
-  void broadcast(void* data, std::size_t bytes, int root);
-  std::vector<std::string> gather(const std::string& mine, int root);  // all ranks' strings on root
+  virtual std::vector<std::uint64_t> all_to_all(const std::vector<unsigned char>& send,
+                                                const std::vector<std::uint64_t>& send_counts,
+                                                std::size_t record_bytes, std::vector<unsigned char>& recv) = 0;
+  virtual void reduce_sum(std::vector<std::uint64_t>& values, int root) = 0;  // in place; valid on root
+  virtual void broadcast(void* data, std::size_t bytes, int root) = 0;
+  virtual std::vector<std::string> gather(const std::string& mine, int root) = 0;  // all ranks' strings on root
   // Every rank's bytes, concatenated in rank order, on every rank.
-  std::vector<unsigned char> all_gather(const std::vector<unsigned char>& mine);
+  virtual std::vector<unsigned char> all_gather(const std::vector<unsigned char>& mine) = 0;
 
-  // Point to point (the item-buffer pipeline). send() does not wait; the
-  // data must stay untouched until wait_sends().
-  void send(const void* data, std::size_t bytes, int to, int tag);
-  void receive(void* data, std::size_t bytes, int from, int tag);
-  void wait_sends();
+  // Point to point (the item-buffer pipeline), in order between two ranks
+  // for one tag. send() does not wait; the data must stay untouched until
+  // wait_sends().
+  virtual void send(const void* data, std::size_t bytes, int to, int tag) = 0;
+  virtual void receive(void* data, std::size_t bytes, int from, int tag) = 0;
+  virtual void wait_sends() = 0;
 
   // Failure agreement at a point every rank reaches: each passes its exit
   // code (0 = fine). Returns the lowest failing rank (-1 when none) and sets
   // `code` to that rank's code on every rank.
-  int agree(int& code);
-  // Ends every rank (MPI_Abort) after a failure seen by this rank, while
-  // the others may wait in a collective. Several ranks may fail at once
-  // (every rank's device faults in one round): they settle which one calls
-  // `report` (prints the one error line) without any collective, and the
-  // others end silently with it. Never returns.
-  [[noreturn]] void abort(int code, const std::function<void()>& report);
+  virtual int agree(int& code) = 0;
+  // Ends every rank after a failure seen by this rank, while the others
+  // may wait in a collective. Several ranks may fail at once (every rank's
+  // device faults in one round): they settle which one calls `report`
+  // (prints the one error line) without any collective, and the others end
+  // silently with it. Never returns.
+  [[noreturn]] virtual void abort(int code, const std::function<void()>& report) = 0;
 
   // Phases of a run. Before begin_collective() each rank works alone
   // (reading, partitioning, uploading): a rank that fails there joins the
@@ -94,15 +92,41 @@ class Ranks {
   void end_collective() { collective_ = false; }
   bool in_collective() const { return collective_; }
 
-  double mpi_seconds() const { return mpi_seconds_; }
+  virtual double mpi_seconds() const = 0;
 
  private:
-  bool started_ = false, finished_ = false, collective_ = false;
-  int rank_ = 0, size_ = 1, local_rank_ = 0, local_size_ = 1;
-  std::string host_;
-  double mpi_seconds_ = 0;
-  std::vector<void*> pending_;  // MPI_Request handles of send()
-  friend struct RanksTimer;
+  bool collective_ = false;
+};
+
+// One process alone (rank 0 of 1): what a caller that names no ranks gets,
+// and a library user's. Only the program's entry (app/main.cpp) reads the
+// world's Ranks; every other room is handed its Ranks.
+class OneProcess final : public Ranks {
+ public:
+  void start() override {}
+  bool built_with_mpi() const override { return false; }
+  int rank() const override { return 0; }
+  int size() const override { return 1; }
+  int local_rank() const override { return 0; }
+  int local_size() const override { return 1; }
+  std::string host() const override;
+  void barrier() override {}
+  std::uint64_t sum(std::uint64_t value) override { return value; }
+  void max(std::vector<std::uint64_t>&) override {}
+  void sum(std::vector<std::uint64_t>&) override {}
+  std::vector<std::uint64_t> all_to_all(const std::vector<unsigned char>& send,
+                                        const std::vector<std::uint64_t>& send_counts, std::size_t record_bytes,
+                                        std::vector<unsigned char>& recv) override;
+  void reduce_sum(std::vector<std::uint64_t>&, int) override {}
+  void broadcast(void*, std::size_t, int) override {}
+  std::vector<std::string> gather(const std::string& mine, int) override { return {mine}; }
+  std::vector<unsigned char> all_gather(const std::vector<unsigned char>& mine) override { return mine; }
+  void send(const void*, std::size_t, int, int) override;
+  void receive(void*, std::size_t, int, int) override;
+  void wait_sends() override {}
+  int agree(int& code) override { return code != 0 ? 0 : -1; }
+  [[noreturn]] void abort(int code, const std::function<void()>& report) override;
+  double mpi_seconds() const override { return 0; }
 };
 
 // True when an MPI launcher started this process (its environment says so).

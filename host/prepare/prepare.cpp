@@ -12,17 +12,6 @@ namespace opsila {
 
 namespace {
 
-// Under several ranks each reads only its share of the scene and the ranks
-// partition it together, with any --balance (docs/DISTRIBUTED.md). One
-// process: the scene is whole.
-SceneShare scene_share_for(Ranks& ranks) {
-  SceneShare share;
-  if (ranks.size() <= 1) return share;
-  share.rank = ranks.rank(), share.ranks = ranks.size();
-  share.combine = [&ranks](SceneShare& s) { combine_share(s, ranks); };  // a terrain's windows, added up
-  share.decode_maps = decode_used_maps;  // texture images: only where the banks use them
-  return share;
-}
 
 // The scene read (this rank's share when there are several), refused as an
 // output, the view applied and checked; notes on a large frame or a model
@@ -44,6 +33,18 @@ Scene read_view_scene(const PrepareRequest& r, Ranks& ranks) {
 
 }  // namespace
 
+// Under several ranks each reads only its share of the scene and the ranks
+// partition it together, with any --balance (docs/DISTRIBUTED.md). One
+// process: the scene is whole.
+SceneShare scene_share_for(Ranks& ranks) {
+  SceneShare share;
+  if (ranks.size() <= 1) return share;
+  share.rank = ranks.rank(), share.ranks = ranks.size();
+  share.combine = [&ranks](SceneShare& s) { combine_share(s, ranks); };  // a terrain's windows, added up
+  share.decode_maps = decode_used_maps;  // texture images: only where the banks use them
+  return share;
+}
+
 RenderSettings prepared_settings(const PrepareRequest& r) {
   ViewOptions machine = r.view;
   machine.balance = r.reference ? Balance::facets  // one processor, no banks to balance
@@ -57,7 +58,7 @@ RenderSettings prepared_settings(const PrepareRequest& r) {
 }
 
 PreparedScene prepare_scene(const PrepareRequest& r, ClRuntime* runtime) {
-  Ranks solo;  // one process when the request names no ranks
+  OneProcess solo;  // one process when the request names no ranks
   Ranks& ranks = r.ranks ? *r.ranks : solo;
   PreparedScene p;
   p.settings = prepared_settings(r);

@@ -60,6 +60,11 @@ PreparedScene prepare_scene(const PrepareRequest& request, ClRuntime* runtime);
 // outputs), for a caller that prepares its banks itself (the bench).
 RenderSettings prepared_settings(const PrepareRequest& request);
 
+// What this rank reads of a scene: under several ranks only its share, the
+// ranks adding up a terrain's windows and decoding texture maps only where
+// their banks use them (docs/DISTRIBUTED.md); one process: all of it.
+SceneShare scene_share_for(Ranks& ranks);
+
 // "DEVICE", or under mpirun "rank R of N (HOST), PEs A..B: DEVICE" for this
 // rank's group of num_pes PEs.
 std::string device_text(Ranks& ranks, int num_pes, const std::string& description);

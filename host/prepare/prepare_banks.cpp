@@ -20,7 +20,7 @@ PreparedBanks prepare_whole(const Scene& scene, Scene* lendable, const RenderSet
                             ClRuntime& runtime) {
   check_machine_request(scene, settings.num_pes);
   const PrepareTimes before = prepare_times();
-  Ranks solo;  // one process, when the settings name no ranks
+  OneProcess solo;  // one process, when the settings name no ranks
   Ranks& ranks = settings.ranks ? *settings.ranks : solo;
   const PeGroup group = pe_group(settings.num_pes, ranks.size(), ranks.rank());
   BalancePolicy policy;
@@ -54,7 +54,7 @@ PreparedBanks prepare_banks_consuming(Scene& scene, const RenderSettings& settin
   // Read in shares: the ranks partition it together, and it gives up its facets once they are sent.
   check_machine_request(scene, settings.num_pes);
   const PrepareTimes before = prepare_times();
-  Ranks solo;  // one process, when the settings name no ranks
+  OneProcess solo;  // one process, when the settings name no ranks
   Ranks& ranks = settings.ranks ? *settings.ranks : solo;
   ShareBalance how;
   MeasuredWork measured;

@@ -1,6 +1,7 @@
-// MPI runs beside tests/app/mpi_test.cpp (same fixture, tests/mpi_fixture.h):
-// PLY triangle strips streamed by ranks, and the faults several ranks meet
-// at once, or a file the ranks do not see alike, each one error line.
+// Faults across MPI ranks: a bad flag, too many ranks, a bad device, a
+// broken file, a device fault mid-frame, on one rank or on every rank at
+// once, and files the ranks do not see alike: one error line, every rank
+// ended, nothing written, no hang. The fixture: tests/mpi_fixture.h.
 #include <gtest/gtest.h>
 
 #include <string>
@@ -17,21 +18,82 @@ using namespace test_mpi;
 using test::RunResult;
 using test::TempDir;
 
-#ifdef OPSILA_HAVE_ASSIMP
-// A bare PLY of strips: each rank streams its window of the strips'
-// triangles; the image, item buffer and banks of one process, which reads
-// it with the same stream.
-TEST_F(MpiFixture, PlyStripsReadInWindowsAreTheSameAsOneProcess) {
-  test::PlyFile p = test::ply_grid(21, 11, 0);
-  p.faces.clear();
-  p.face_element = false;
-  std::vector<std::vector<long long>> faces;
-  p.strips = test::grid_strips(21, 11, faces);
-  const std::string path = dir.file("strips.ply");
-  test::write_ply(path, p);
-  expect_windows_as_one(path, faces.size());
+// A bad flag is the same on every rank: one line, from the lowest, once.
+TEST_F(MpiFixture, ABadFlagOnEveryRankIsOneLine) {
+  for (const char* command : {"render", "bench"}) {
+    std::vector<std::string> a = launch(3);
+    a.insert(a.end(), {OPSILA_BINARY, command, scene("whitted.json"), "-o", dir.file("x.png"), "--pes", "0"});
+    if (std::string(command) == "bench") a.erase(a.end() - 4, a.end() - 2);  // bench has no -o
+    const RunResult r = test::run_program("/usr/bin/timeout", a, env);
+    EXPECT_EQ(r.exit_code, 2) << command << ": " << r.err;
+    const auto errors = r.error_lines();
+    ASSERT_EQ(errors.size(), 1u) << command << ": " << r.err;
+    EXPECT_EQ(errors[0].rfind("opsila: error: rank 0: --pes 0", 0), 0u) << errors[0];
+    EXPECT_TRUE(dir.entries().empty()) << "an output file was left behind";
+  }
 }
-#endif
+
+TEST_F(MpiFixture, MoreRanksThanPesAreRefused) {
+  const RunResult r = ranks(3, {scene("whitted.json"), "-o", dir.file("x.pfm"), "--size", "32x24", "--pes", "2"});
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  const auto errors = r.error_lines();
+  ASSERT_EQ(errors.size(), 1u) << r.err;
+  EXPECT_NE(errors[0].find("3 MPI ranks for 2 PEs"), std::string::npos) << errors[0];
+  EXPECT_TRUE(dir.entries().empty()) << "an output file was left behind";
+}
+
+// A broken file among many, which one rank reads (its scene names it) and
+// the others do not: one error line naming the file, every rank ended, no
+// output left behind.
+TEST_F(MpiFixture, ABrokenFileOnOneRankEndsEveryRank) {
+  const std::string good = share_scene(dir, 2, 4);
+  TempDir other;
+  const std::string bad = share_scene(other, 2, 4, 3);
+  const std::vector<std::string> args = {"--size", "32x24", "--pes", "6", "-o", dir.file("x.pfm")};
+  std::vector<std::string> mine = {good}, theirs = {bad};
+  mine.insert(mine.end(), args.begin(), args.end());
+  theirs.insert(theirs.end(), args.begin(), args.end());
+  const RunResult r = ranks(2, mine, {theirs});  // rank 2 reads the broken scene
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  const auto errors = r.error_lines();
+  ASSERT_EQ(errors.size(), 1u) << r.err;
+  EXPECT_EQ(errors[0].rfind("opsila: error: rank 2: ", 0), 0u) << errors[0];
+  EXPECT_NE(errors[0].find("part3.obj"), std::string::npos) << errors[0];
+  EXPECT_EQ(dir.entries().size(), 5u) << "an output file was left behind (the folder held the scene and 4 OBJ files)";
+}
+
+TEST_F(MpiFixture, BadDeviceOnOneRankEndsEveryRankCleanly) {
+  const std::vector<std::string> args = {scene("whitted.json"), "-o", dir.file("x.pfm"), "--size", "32x24"};
+  std::vector<std::string> bad = args;
+  bad.insert(bad.end(), {"--device", "no-such-device"});
+  const RunResult r = ranks(2, args, {bad});  // ranks 0 and 1 fine, rank 2 bad
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  const auto errors = r.error_lines();
+  ASSERT_EQ(errors.size(), 1u) << r.err;
+  EXPECT_EQ(errors[0].rfind("opsila: error: rank 2: --device no-such-device", 0), 0u) << errors[0];
+  EXPECT_TRUE(dir.entries().empty()) << "an output file was left behind";
+}
+
+// A device fault on one rank in the middle of a frame, while the others
+// wait for it in the exchange: one error line naming that rank, every rank
+// ended (MPI_Abort), a non-zero exit, no output, no hang.
+TEST_F(MpiFixture, AFaultOnOneRankMidFrameEndsEveryRank) {
+  const std::vector<std::string> args = {scene("hundreds.json"), "-o", dir.file("x.pfm"), "--size", "64x48"};
+  std::vector<std::string> faulty = {"OPSILA_FAULT_ROUND=2", OPSILA_BINARY, "render"};
+  faulty.insert(faulty.end(), args.begin(), args.end());
+  std::vector<std::string> a = launch(2);
+  a.insert(a.end(), {OPSILA_BINARY, "render"});
+  a.insert(a.end(), args.begin(), args.end());
+  a.insert(a.end(), {":", "-np", "1", "/usr/bin/env"});  // rank 2 runs with the fault
+  a.insert(a.end(), faulty.begin(), faulty.end());
+  const RunResult r = test::run_program("/usr/bin/timeout", a, env);
+  EXPECT_NE(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.exit_code, 124) << "the ranks hung";
+  const auto errors = r.error_lines();
+  ASSERT_EQ(errors.size(), 1u) << r.err;
+  EXPECT_EQ(errors[0].rfind("opsila: error: rank 2: OpenCL: device fault at round 2", 0), 0u) << errors[0];
+  EXPECT_TRUE(dir.entries().empty()) << "an output file was left behind";
+}
 
 // Every rank failing at once, each its own error: one error line, from one
 // rank, whether the ranks fail while reading (the same broken file) or in

@@ -331,7 +331,7 @@ TEST(Bench, ScatterPointIsSane) {
 }
 
 TEST(Bench, FlagErrorsAreInputErrors) {
-  Ranks solo;  // one process
+  OneProcess solo;  // one process
   EXPECT_THROW(run_bench({}, solo), InputError);
   EXPECT_THROW(run_bench({"scene.json", "-o", "x.png"}, solo), InputError);
   EXPECT_THROW(run_bench({"scene.json", "--stats", "x.json"}, solo), InputError);

@@ -1,18 +1,24 @@
 // The collective median cut without MPI: the radix select run by 1..4
 // simulated ranks in one process finds the key nth_element puts in the
-// middle, so the halves are the same; and a terrain made in windows is
-// bit for bit the whole terrain's triangles.
+// middle, so the halves are the same; a terrain spread over simulated
+// ranks (tests/sim_ranks.h) is cut into one process's clusters; and a
+// terrain made in windows is bit for bit the whole terrain's triangles.
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <mutex>
+#include <string>
 #include <random>
 #include <utility>
 #include <vector>
 
-#include "formats/json/primitives.h"
 #include "dist/collective_cut.h"
+#include "formats/json/primitives.h"
+#include "formats/json/scene_file.h"
+#include "prepare/prepare.h"
+#include "sim_ranks.h"
 
 namespace opsila {
 namespace {
@@ -150,6 +156,69 @@ TEST(CollectiveCut, KeysOrderAsCentroidsThenIndex) {
   EXPECT_LT(cut_key(0.0f, 9), cut_key(1e-30f, 0));
   EXPECT_LT(cut_key(2.0f, 3), cut_key(2.0f, 4));
   EXPECT_LT(cut_key(2.0f, 0xffffffffu), cut_key(std::nextafter(2.0f, 3.0f), 0));
+}
+
+// A facet's triangle by what names it in any share: (facet id, fan index).
+std::vector<std::uint64_t> names_of(const Scene& scene, const std::vector<int>& tris) {
+  std::vector<std::uint64_t> names;
+  for (int t : tris) {
+    const Triangle& tri = scene.triangles[std::size_t(t)];
+    names.push_back(std::uint64_t(std::uint32_t(tri.facet_id)) << 32 | std::uint32_t(tri.fan));
+  }
+  std::sort(names.begin(), names.end());
+  return names;
+}
+
+Box scene_box(const Scene& scene) {
+  Vec3 lo, hi;
+  scene.bounds(lo, hi);
+  Box b;
+  b.grow(lo);
+  b.grow(hi);
+  return b;
+}
+
+// split_share on 2..4 simulated ranks: the terrain spread over them is cut
+// by every rank together (spread_bounds, cut_spread_at_median) into the
+// clusters one process's split_object makes of it, in the same order, each
+// cluster's facets spread over the ranks; the shares' figures add up to
+// the whole scene's (combine_share).
+TEST(CollectiveCut, ASpreadTerrainIsCutAsOneProcessCutsIt) {
+  const std::string text = R"({"objects": [
+    {"type": "sphere", "center": [0, 4, 0], "radius": 1, "subdivisions": 2},
+    {"type": "terrain", "size": [20, 12], "quads": [37, 23], "height": 3, "transform": {"rotate": [0, 30, 0]}}]})";
+  const Scene whole = load_scene_from_string(text, "terrain.json", "");
+  const int pes = 9;
+  using namespace partition_steps;
+  const SplitLimits limits = split_limits(whole.triangles.size(), scene_box(whole), pes);
+  std::vector<ClusterBuild> one;
+  split_object(whole, triangles_by_object(whole)[1], limits.max_tris, limits.max_extent, false, one, split_threads());
+  ASSERT_GT(one.size(), 4u);
+  for (int R = 2; R <= 4; ++R) {
+    SCOPED_TRACE(std::to_string(R) + " ranks");
+    std::vector<std::vector<std::uint64_t>> clusters(one.size());  // every rank's facets of each
+    std::mutex lock;
+    test::run_ranks(R, [&](Ranks& ranks) {
+      const Scene share = load_scene_from_string(text, "terrain.json", "", kMaxTriangles, scene_share_for(ranks));
+      ASSERT_EQ(share.share.spread, std::vector<int>{1});
+      EXPECT_EQ(share.total_triangles(), whole.triangles.size());
+      const Box box = scene_box(share), whole_box = scene_box(whole);
+      EXPECT_EQ(std::memcmp(&box, &whole_box, sizeof(Box)), 0) << "every rank's bounds";
+      const ShareClusters split = split_share(share, box, pes, false, ranks, {});
+      ASSERT_EQ(split.spread.size(), one.size());
+      std::lock_guard<std::mutex> hold(lock);
+      for (std::size_t k = 0; k < one.size(); ++k) {
+        EXPECT_EQ(split.spread[k].facets, one[k].tris.size()) << "cluster " << k;
+        const std::vector<int>& tris = split.clusters[std::size_t(split.spread[k].local)].tris;
+        const std::vector<std::uint64_t> mine = names_of(share, tris);
+        clusters[k].insert(clusters[k].end(), mine.begin(), mine.end());
+      }
+    });
+    for (std::size_t k = 0; k < one.size(); ++k) {
+      std::sort(clusters[k].begin(), clusters[k].end());
+      EXPECT_EQ(clusters[k], names_of(whole, one[k].tris)) << "cluster " << k;
+    }
+  }
 }
 
 bool same_bits(const Triangle& a, const Triangle& b) { return std::memcmp(&a, &b, sizeof a) == 0; }

@@ -3,7 +3,7 @@
 // objects give the same bytes, image and item buffer, whatever the PE
 // count, balance, bank capacity and routing (each changes which bank holds
 // a facet and the order in which a ray meets them). The MPI ranks' share of
-// this is in tests/app/mpi_test.cpp (HitOrderAcrossRanks).
+// this is in tests/app/mpi_render_test.cpp (HitOrderAcrossRanks).
 #include <gtest/gtest.h>
 
 #include <cstring>

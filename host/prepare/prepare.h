@@ -32,7 +32,7 @@ struct PrepareRequest {
   Balance balance = kDefaultBalance;
   bool quiet = false;      // no progress, notes or warnings on stderr (errors still throw)
   bool reference = false;  // the host reference renders: one processor, no banks
-  // This process's place among the ranks (a Ranks never started is one process).
+  // This process's place among the ranks (null: one process alone, OneProcess).
   Ranks* ranks = nullptr;
   // The run's outputs: no input file may be one of them.
   OutputFiles* outputs = nullptr;

@@ -20,6 +20,7 @@
 
 #include "device/descriptors.h"
 #include "frame/renderer.h"
+#include "test_device.h"
 
 namespace opsila::test {
 
@@ -35,6 +36,17 @@ struct ExchangeCase {
   bool throttle = false;
 };
 
+// A case of `pes` PEs and `slots` bank slots, over a pool of `pool_len`
+// behind `out_groups` SPMD work-groups' outputs (0: the pool alone).
+inline ExchangeCase exchange_case(int pes, int slots, int pool_len, int out_groups) {
+  ExchangeCase c;
+  c.pes = pes;
+  c.slots = slots;
+  c.pool_len = pool_len;
+  c.out_groups = out_groups;
+  return c;
+}
+
 inline HostDescriptor exchange_entry(int k, int dest) {
   HostDescriptor d{};
   d.org = {{float(k), 1.5f * k, -2.0f, 0.25f * k}};
@@ -46,6 +58,16 @@ inline HostDescriptor exchange_entry(int k, int dest) {
 
 inline bool same_record(const HostDescriptor& a, const HostDescriptor& b) {
   return std::memcmp(&a, &b, sizeof a) == 0;
+}
+
+// One exchange pass (plan, then move), to its end on the device.
+inline void run_exchange_pass(ClRuntime& rt, ScatterPass& scatter, const ScatterPass::Args& a) {
+  std::vector<LaunchRecord> records;
+  Launcher launch(rt, records);
+  scatter.plan(launch, a, 0);
+  scatter.move(launch, a, 0);
+  launch.check(rt.queue().finish(), "clFinish(test exchange)");
+  launch.harvest();
 }
 
 // Runs one exchange and checks it; returns the counts {waiting, placed, groups}.
@@ -94,8 +116,6 @@ inline std::vector<cl_int> check_exchange(ClRuntime& rt, const ExchangeCase& c) 
   d_out.write(rt, out, 0, c.depth);
   OutputCounts counts_in;
   counts_in.buffer = upload(rt, out_count, "test output counts");
-  std::vector<LaunchRecord> records;
-  Launcher launch(rt, records);
   ScatterPass scatter(rt, c.pes);
   if (c.move_by_block >= 0) scatter.set_move_by_block(c.move_by_block == 1);
   ScatterPass::Args a;
@@ -111,16 +131,9 @@ inline std::vector<cl_int> check_exchange(ClRuntime& rt, const ExchangeCase& c) 
   a.banks = &banks;
   a.next_pool = &next;
   a.throttle = c.throttle;
-  scatter.plan(launch, a, 0);
-  scatter.move(launch, a, 0);
-  launch.check(rt.queue().finish(), "clFinish(test exchange)");
-  launch.harvest();
+  run_exchange_pass(rt, scatter, a);
 
-  auto read_ints = [&](const cl::Buffer& b, std::size_t n) {
-    std::vector<cl_int> v(n);
-    if (n) cl_check(rt.queue().enqueueReadBuffer(b, CL_TRUE, 0, n * sizeof(cl_int), v.data()), "read");
-    return v;
-  };
+  auto read_ints = [&](const cl::Buffer& b, std::size_t n) { return from_device<cl_int>(rt, b, n); };
   const auto counts = read_ints(scatter.counts, 3);
   const auto begin = read_ints(scatter.bank_ranges.begin, c.pes), fill = read_ints(scatter.bank_ranges.count, c.pes);
   const auto group_pe = read_ints(scatter.group_pe.buffer, counts[2]),

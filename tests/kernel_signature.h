@@ -7,6 +7,7 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cstddef>
 #include <string>
 #include <tuple>
@@ -114,6 +115,15 @@ void expect_follows_signature(ClRuntime& rt, const char* kernel, KernelProgram p
   const auto declared = kernel_parts(cl::Kernel(described_program(rt, baselines), kernel), n);
   for (std::size_t i = 0; i < declared.size(); ++i)
     EXPECT_EQ(host[i], declared[i].first) << "argument " << i << " (" << declared[i].second << ")";
+}
+
+// Several structs, each against the kernel named in the same place of
+// `kernels`, in `program`.
+template <class... Args>
+void expect_follow_signatures(ClRuntime& rt, KernelProgram program,
+                              const std::array<const char*, sizeof...(Args)>& kernels) {
+  std::size_t i = 0;
+  (expect_follows_signature<Args>(rt, kernels[i++], program), ...);
 }
 
 }  // namespace opsila::test

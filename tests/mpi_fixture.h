@@ -49,6 +49,7 @@ inline std::vector<std::string> launch(int R) {
 }
 
 inline std::uint64_t facets_read(const nlohmann::json& s, std::uint64_t most, const char* why);
+inline void expect_refused(const RunResult& r, const std::vector<std::string>& fragments);
 
 struct MpiFixture : ::testing::Test {
   TempDir dir;
@@ -94,6 +95,23 @@ struct MpiFixture : ::testing::Test {
       a.insert(a.end(), m.begin(), m.end());
     }
     return test::run_program("/usr/bin/timeout", a, env);
+  }
+  // The run ended well, and its image TAG.pfm is REFERENCE.pfm byte for byte.
+  void expect_image_as(const RunResult& r, const std::string& tag, const std::string& reference) {
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_TRUE(test::read_file(dir.file(tag + ".pfm")) == test::read_file(dir.file(reference + ".pfm"))) << tag;
+  }
+  // One rank's triangle limit lowered to `limit` (OPSILA_RANK_TRIANGLE_LIMIT)
+  // and a scene over it: one process refuses it, before anything is built,
+  // with one line naming every fragment, and leaves no image; two ranks
+  // render it, the image REFERENCE.pfm. with(TAG): the arguments writing TAG.pfm.
+  void expect_two_ranks_past_the_limit(const std::string& limit,
+                                       const std::function<std::vector<std::string>(const std::string&)>& with,
+                                       const std::vector<std::string>& fragments, const std::string& reference) {
+    env["OPSILA_RANK_TRIANGLE_LIMIT"] = limit;
+    expect_refused(one(with("alone")), fragments);
+    EXPECT_FALSE(test::file_exists(dir.file("alone.pfm")));
+    expect_image_as(ranks(2, with("two")), "two", reference);
   }
   std::string scene(const std::string& name) const { return std::string(OPSILA_SOURCE_DIR) + "/scenes/" + name; }
   static nlohmann::json stats(const std::string& path) { return nlohmann::json::parse(test::read_file(path)); }

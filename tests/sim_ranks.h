@@ -47,7 +47,7 @@ struct SimRanksAborted : std::runtime_error {
 // deadlock is usually seen at once (a rank that left).
 constexpr std::chrono::milliseconds kSimTimeout{60000};
 
-using Bytes = std::vector<unsigned char>;
+using Bytes = Ranks::Bytes;
 
 // What the ranks share: the meeting place of the collectives and the
 // mailboxes of the point-to-point messages.
@@ -89,47 +89,21 @@ class SimGroup {
   bool reported_ = false;
 };
 
+// One rank: the collectives are the meetings Ranks makes them of.
 class SimRanks final : public Ranks {
  public:
-  SimRanks(SimGroup& group, int rank) : group_(group), rank_(rank) {}
-  void start() override {}
-  bool built_with_mpi() const override { return false; }
-  int rank() const override { return rank_; }
-  int size() const override { return group_.size(); }
-  int local_rank() const override { return rank_; }  // every rank on this machine
-  int local_size() const override { return group_.size(); }
-  std::string host() const override { return "simulated"; }
-
-  void barrier() override;
-  std::uint64_t sum(std::uint64_t value) override;
-  void max(std::vector<std::uint64_t>& values) override;
-  void sum(std::vector<std::uint64_t>& values) override;
-  std::vector<std::uint64_t> all_to_all(const std::vector<unsigned char>& send,
-                                        const std::vector<std::uint64_t>& send_counts, std::size_t record_bytes,
-                                        std::vector<unsigned char>& recv) override;
-  void reduce_sum(std::vector<std::uint64_t>& values, int root) override;
-  void broadcast(void* data, std::size_t bytes, int root) override;
-  std::vector<std::string> gather(const std::string& mine, int root) override;
-  std::vector<unsigned char> all_gather(const std::vector<unsigned char>& mine) override;
-
+  SimRanks(SimGroup& group, int rank);
   // Sends are copied at once: wait_sends() has nothing to wait for.
   void send(const void* data, std::size_t bytes, int to, int tag) override;
   void receive(void* data, std::size_t bytes, int from, int tag) override;
   void wait_sends() override {}
-
-  int agree(int& code) override;
   [[noreturn]] void abort(int code, const std::function<void()>& report) override;
 
-  double mpi_seconds() const override { return seconds_; }
+ protected:
+  std::vector<Bytes> meet(const std::string& op, Bytes mine) override;
 
  private:
-  std::vector<Bytes> meet(const std::string& op, Bytes mine);
-  // Every rank's values, element-wise by `op` ("sum" wraps modulo 2^64 as MPI's does).
-  std::vector<std::uint64_t> reduce(const std::string& op, const std::vector<std::uint64_t>& values);
-
   SimGroup& group_;
-  const int rank_;
-  double seconds_ = 0;
 };
 
 // Runs body(ranks) on `size` simulated ranks, each on a thread of its own,

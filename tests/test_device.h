@@ -5,6 +5,7 @@
 
 #include <cstdlib>
 #include <memory>
+#include <vector>
 
 #include "device/cl_runtime.h"
 
@@ -36,5 +37,13 @@ class RuntimeRelease : public ::testing::Environment {
   void TearDown() override { runtime_slot().reset(); }
 };
 inline ::testing::Environment* const kRuntimeRelease = ::testing::AddGlobalTestEnvironment(new RuntimeRelease);
+
+// The first n values of a device buffer.
+template <typename T>
+std::vector<T> from_device(ClRuntime& rt, const cl::Buffer& b, std::size_t n) {
+  std::vector<T> v(n);
+  if (n) cl_check(rt.queue().enqueueReadBuffer(b, CL_TRUE, 0, n * sizeof(T), v.data()), "clEnqueueReadBuffer");
+  return v;
+}
 
 }  // namespace opsila::test

@@ -10,9 +10,19 @@
 #include <utility>
 #include <vector>
 
+#include "scene/camera.h"
 #include "scene/scene.h"
 
 namespace opsila::test {
+
+// Every pixel's primary ray (through its centre), row by row:
+// body(x, y, direction), the rays the tests work out by hand.
+template <class Body>
+void for_each_primary_ray(const Scene& s, const Body& body) {
+  const CameraFrame frame = camera_frame(s.camera, s.width, s.height);
+  for (int y = 0; y < s.height; ++y)
+    for (int x = 0; x < s.width; ++x) body(x, y, primary_direction(frame, s.width, s.height, x, y));
+}
 
 inline int add_material(Scene& s, Vec3 ka, Vec3 kd, Vec3 ks, float ns, Vec3 tf, float ni, int illum) {
   MaterialDesc m;

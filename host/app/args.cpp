@@ -148,6 +148,12 @@ std::string extension_of(const std::string& path) {
   return lower(path.substr(dot));
 }
 
+std::string path_ending_in(const std::string& flag, const std::string& path, const std::string& ext,
+                           const std::string& problem) {
+  if (extension_of(path) != ext) bad_flag(flag, path, problem);
+  return path;
+}
+
 void walk_positional(const std::string& value, std::string& scene_path, const CommandSyntax& syntax) {
   if (!scene_path.empty())
     throw InputError("unexpected argument '" + value + "' (one SCENE only; see 'opsila " + syntax.command +

@@ -42,6 +42,9 @@ std::string flag_value(const std::vector<std::string>& args, std::size_t& i, con
 int int_in_range(const std::string& flag, const std::string& text, long long lo, long long hi);
 // The lower-case extension of a file name, with its dot ("" when none).
 std::string extension_of(const std::string& path);
+// The path when its extension is `ext`, else bad_flag(problem).
+std::string path_ending_in(const std::string& flag, const std::string& path, const std::string& ext,
+                           const std::string& problem);
 
 // A command's flags: name, the name repeats are counted under, whether it
 // takes a value and whether it may be given several times.
@@ -80,6 +83,19 @@ bool parse_common_flag(const std::string& name, Options& o) {
   else
     return false;
   return true;
+}
+// The words of a command that renders a scene (render, bench): its SCENE
+// (required but with --help), the view group's and the common flags into
+// `o`, and each of the command's own flags to own(canonical, name, value).
+template <class Options, typename OnFlag>
+void walk_scene_command(const std::vector<std::string>& args, const CommandSyntax& syntax, Options& o,
+                        OnFlag&& own) {
+  o.scene_path = walk_args(args, syntax, [&](const std::string& flag, const std::string& name,
+                                             const std::string& value) {
+    if (!parse_view_flag(flag, value, o) && !parse_common_flag(flag, o)) own(flag, name, value);
+  });
+  if (!o.help && o.scene_path.empty())
+    throw InputError(std::string("missing SCENE (see 'opsila ") + syntax.command + " --help')");
 }
 // With --help: prints the command's usage on stdout and says so.
 template <class Options>

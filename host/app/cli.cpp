@@ -140,29 +140,25 @@ CommandSyntax render_syntax() {
 
 RenderOptions parse_render_options(const std::vector<std::string>& args) {
   RenderOptions o;
-  o.scene_path = walk_args(args, render_syntax(), [&](const std::string& flag, const std::string& name,
-                                                       const std::string& value) {
-    if (parse_view_flag(flag, value, o) || parse_common_flag(flag, o)) return;
-    if (flag == "--reference") {
-      o.reference = true;
-    } else if (flag == "--exr-half") {
-      o.exr_half = true;
-    } else if (flag == "-o") {
+  walk_scene_command(args, render_syntax(), o, [&](const std::string& flag, const std::string& name,
+                                                   const std::string& value) {
+    if (flag == "-o") {
       const std::string ext = extension_of(value);
       if (ext != ".png" && ext != ".pfm" && ext != ".exr") bad_flag(name, value, "output must end in .png, .pfm or .exr");
       if (ext == ".exr" && !exr_available())
         bad_flag(name, value, "this build has no OpenEXR (install libopenexr-dev and rebuild)");
       o.output_path = value;
     } else if (flag == "--item-buffer") {
-      if (extension_of(value) != ".npy") bad_flag(name, value, "item buffer must end in .npy");
-      o.item_buffer_path = value;
+      o.item_buffer_path = path_ending_in(name, value, ".npy", "item buffer must end in .npy");
     } else if (flag == "--stats") {
-      if (extension_of(value) != ".json") bad_flag(name, value, "stats must end in .json");
-      o.stats_path = value;
+      o.stats_path = path_ending_in(name, value, ".json", "stats must end in .json");
+    } else if (flag == "--reference") {
+      o.reference = true;
+    } else if (flag == "--exr-half") {
+      o.exr_half = true;
     }
   });
   if (o.help) return o;
-  if (o.scene_path.empty()) throw InputError("missing SCENE (see 'opsila render --help')");
   if (o.output_path.empty()) throw InputError("-o: missing output file OUT.png, OUT.pfm or OUT.exr");
   if (o.exr_half && extension_of(o.output_path) != ".exr")
     throw InputError("--exr-half: the output " + o.output_path + " is not .exr");

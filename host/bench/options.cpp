@@ -40,17 +40,12 @@ int BenchOptions::host_repeats() const { return std::min(timed_repeats(), 3); }
 
 BenchOptions parse_bench_options(const std::vector<std::string>& args) {
   BenchOptions o;
-  o.scene_path = walk_args(args, bench_syntax(), [&](const std::string& flag, const std::string& name,
-                                                      const std::string& value) {
-    if (parse_view_flag(flag, value, o) || parse_common_flag(flag, o)) return;
-    if (flag == "--quick") {
-      o.quick = true;
-    } else if (flag == "--json") {
-      if (extension_of(value) != ".json") bad_flag(name, value, "must end in .json");
-      o.json_path = value;
+  walk_scene_command(args, bench_syntax(), o, [&](const std::string& flag, const std::string& name,
+                                                  const std::string& value) {
+    if (flag == "--json") {
+      o.json_path = path_ending_in(name, value, ".json", "must end in .json");
     } else if (flag == "--compare") {
-      if (extension_of(value) != ".json") bad_flag(name, value, "must end in .json (a saved --json result)");
-      o.compare_path = value;
+      o.compare_path = path_ending_in(name, value, ".json", "must end in .json (a saved --json result)");
     } else if (flag == "--csv") {
       if (value.empty()) bad_flag(name, value, "empty folder name");
       o.csv_dir = value;
@@ -62,11 +57,11 @@ BenchOptions parse_bench_options(const std::vector<std::string>& args) {
       o.threads = int_in_range(name, value, 1, 1024);
     } else if (flag == "--scatter-max") {
       o.scatter_max_log2 = int_in_range(name, value, 4, 24);
+    } else if (flag == "--quick") {
+      o.quick = true;
     }
   });
-  if (o.help) return o;
-  if (o.scene_path.empty()) throw InputError("missing SCENE (see 'opsila bench --help')");
-  check_view_flags(o);
+  if (!o.help) check_view_flags(o);
   return o;
 }
 

@@ -188,59 +188,61 @@ json render_json(const BenchReport& r) {
   return j;
 }
 
+// One point of the curve, every figure.
+json scatter_point_json(const ScatterPoint& p) {
+  return {{"length", p.length},
+          {"moved", p.moved},
+          {"waiting", p.waiting},
+          {"pes", p.pes},
+          {"bank_capacity", p.n},
+          {"repeats", p.repeats},
+          {"bytes", p.bytes()},
+          {"host_seconds", p.host_seconds},
+          {"kernel_seconds", p.kernel_seconds},
+          {"kernels", {{"scatter_count", p.count_seconds},
+                       {"scatter_scan", p.scan_seconds},
+                       {"scatter_plan", p.plan_seconds},
+                       {"scatter_move", p.move_seconds}}},
+          {"speedup", p.speedup()},
+          {"gbytes_per_s", p.gbytes_per_s()},
+          {"host_gbytes_per_s", p.host_gbytes_per_s()},
+          {"copy_kernel_seconds", p.copy_kernel_seconds},
+          {"copy_kernel_gbytes_per_s", p.copy_kernel_gbytes_per_s()},
+          {"copy_buffer_seconds", p.copy_buffer_seconds},
+          {"copy_buffer_gbytes_per_s", p.copy_buffer_gbytes_per_s()},
+          {"fraction_of_copy", fraction_of_copy(p)},
+          {"six_vectors_seconds", p.six_vectors_seconds},
+          {"six_vectors_gbytes_per_s", p.six_vectors_gbytes_per_s()},
+          {"one_record_seconds", p.one_record_seconds},
+          {"one_record_gbytes_per_s", p.one_record_gbytes_per_s()},
+          {"verified", p.verified},
+          {"host_seconds_spread", spread_json(p.host_spread)},
+          {"kernel_seconds_spread", spread_json(p.kernel_spread)},
+          {"copy_kernel_seconds_spread", spread_json(p.copy_kernel_spread)},
+          {"copy_buffer_seconds_spread", spread_json(p.copy_buffer_spread)},
+          {"six_vectors_seconds_spread", spread_json(p.six_vectors_spread)},
+          {"one_record_seconds_spread", spread_json(p.one_record_spread)}};
+}
+
 json scatter_json(const std::vector<ScatterPoint>& curve) {
   json scatter = json::array();
-  for (const ScatterPoint& p : curve)
-    scatter.push_back({{"length", p.length},
-                       {"moved", p.moved},
-                       {"waiting", p.waiting},
-                       {"pes", p.pes},
-                       {"bank_capacity", p.n},
-                       {"repeats", p.repeats},
-                       {"bytes", p.bytes()},
-                       {"host_seconds", p.host_seconds},
-                       {"kernel_seconds", p.kernel_seconds},
-                       {"kernels", {{"scatter_count", p.count_seconds},
-                                    {"scatter_scan", p.scan_seconds},
-                                    {"scatter_plan", p.plan_seconds},
-                                    {"scatter_move", p.move_seconds}}},
-                       {"speedup", p.speedup()},
-                       {"gbytes_per_s", p.gbytes_per_s()},
-                       {"host_gbytes_per_s", p.host_gbytes_per_s()},
-                       {"copy_kernel_seconds", p.copy_kernel_seconds},
-                       {"copy_kernel_gbytes_per_s", p.copy_kernel_gbytes_per_s()},
-                       {"copy_buffer_seconds", p.copy_buffer_seconds},
-                       {"copy_buffer_gbytes_per_s", p.copy_buffer_gbytes_per_s()},
-                       {"fraction_of_copy", fraction_of_copy(p)},
-                       {"six_vectors_seconds", p.six_vectors_seconds},
-                       {"six_vectors_gbytes_per_s", p.six_vectors_gbytes_per_s()},
-                       {"one_record_seconds", p.one_record_seconds},
-                       {"one_record_gbytes_per_s", p.one_record_gbytes_per_s()},
-                       {"verified", p.verified},
-                       {"host_seconds_spread", spread_json(p.host_spread)},
-                       {"kernel_seconds_spread", spread_json(p.kernel_spread)},
-                       {"copy_kernel_seconds_spread", spread_json(p.copy_kernel_spread)},
-                       {"copy_buffer_seconds_spread", spread_json(p.copy_buffer_spread)},
-                       {"six_vectors_seconds_spread", spread_json(p.six_vectors_spread)},
-                       {"one_record_seconds_spread", spread_json(p.one_record_spread)}});
+  for (const ScatterPoint& p : curve) scatter.push_back(scatter_point_json(p));
   return scatter;
 }
 
+// One length over several PE counts: of each point, the figures that
+// compare the counts.
 json scatter_by_pes_json(const std::vector<ScatterPoint>& by_pes) {
   json sp = json::array();
-  for (const ScatterPoint& p : by_pes)
-    sp.push_back({{"pes", p.pes},
-                  {"length", p.length},
-                  {"kernel_seconds", p.kernel_seconds},
-                  {"host_seconds", p.host_seconds},
-                  {"speedup", p.speedup()},
-                  {"gbytes_per_s", p.gbytes_per_s()},
-                  {"host_gbytes_per_s", p.host_gbytes_per_s()},
-                  {"copy_kernel_gbytes_per_s", p.copy_kernel_gbytes_per_s()},
-                  {"fraction_of_copy", fraction_of_copy(p)},
-                  {"verified", p.verified},
-                  {"host_seconds_spread", spread_json(p.host_spread)},
-                  {"kernel_seconds_spread", spread_json(p.kernel_spread)}});
+  for (const ScatterPoint& p : by_pes) {
+    const json all = scatter_point_json(p);
+    json row;
+    for (const char* key : {"pes", "length", "kernel_seconds", "host_seconds", "speedup", "gbytes_per_s",
+                            "host_gbytes_per_s", "copy_kernel_gbytes_per_s", "fraction_of_copy", "verified",
+                            "host_seconds_spread", "kernel_seconds_spread"})
+      row[key] = all.at(key);
+    sp.push_back(std::move(row));
+  }
   return sp;
 }
 

@@ -150,6 +150,20 @@ scatter_kernels::Placement ScatterPass::placement(const Args& a) const {
   return to;
 }
 
+// What the moves by entry (the pool's, the outputs') share: the pool's
+// length, the sort keys, each entry's rank (stored by the count), the
+// block counts, and where records go.
+template <class Move>
+Move ScatterPass::by_entry(const Args& a) const {
+  Move m;
+  m.pool_len = a.pool_len;
+  m.num_keys = 2 * num_pes_;
+  m.ranks = ranks.buffer;
+  m.hist = block_counts.buffer;
+  m.to = placement(a);
+  return m;
+}
+
 void ScatterPass::plan(Launcher& launch, const Args& a, int round) {
   const int P = num_pes_;
   const std::size_t nblocks = std::size_t(blocks(a));
@@ -215,29 +229,19 @@ void ScatterPass::move(Launcher& launch, const Args& a, int round) {
     return;
   }
   if (a.pool_len > 0) {
-    scatter_kernels::MovePoolArgs m;
-    m.pool_len = a.pool_len;
+    auto m = by_entry<scatter_kernels::MovePoolArgs>(a);
     m.out_blocks = a.out_groups;
-    m.num_keys = 2 * num_pes_;
     m.pool = *a.pool;
-    m.ranks = ranks.buffer;
-    m.hist = block_counts.buffer;
-    m.to = placement(a);
     move_pool_.bind(m);
     launch.run(move_pool_.kernel(), "scatter_move", std::size_t(a.pool_len), 0, round);
   }
   if (a.out_groups > 0) {
-    scatter_kernels::MoveOutputsArgs m;
+    auto m = by_entry<scatter_kernels::MoveOutputsArgs>(a);
     m.out_items = a.out_groups * a.group_size;
     m.items_per_group = a.group_size;
     m.spawn_slots = a.spawn_slots;
-    m.pool_len = a.pool_len;
-    m.num_keys = 2 * num_pes_;
     m.outputs = *a.outputs;
     m.out_count = *a.out_item_count;
-    m.ranks = ranks.buffer;
-    m.hist = block_counts.buffer;
-    m.to = placement(a);
     move_out_.bind(m);
     launch.run(move_out_.kernel(), "scatter_move", std::size_t(m.out_items), 0, round);
   }

@@ -265,6 +265,8 @@ class ScatterPass {
   int blocks(const Args& a) const;
   scatter_kernels::Sources sources_of(const Args& a) const;
   scatter_kernels::Placement placement(const Args& a) const;
+  template <class Move>
+  Move by_entry(const Args& a) const;
   void grow(const Table& need, std::size_t size);
 };
 

@@ -8,7 +8,6 @@
 #pragma once
 
 #include <cstdint>
-#include <cstring>
 #include <vector>
 
 #include "scene/ray_sample.h"
@@ -16,21 +15,6 @@
 #include "mpi/ranks.h"
 
 namespace opsila {
-
-// Records sent between ranks as bytes (trivially copyable types).
-template <typename T>
-std::vector<unsigned char> bytes_of(const std::vector<T>& v) {
-  std::vector<unsigned char> b(v.size() * sizeof(T));
-  if (!v.empty()) std::memcpy(b.data(), v.data(), b.size());
-  return b;
-}
-
-template <typename T>
-std::vector<T> records_of(const std::vector<unsigned char>& b) {
-  std::vector<T> v(b.size() / sizeof(T));
-  if (!v.empty()) std::memcpy(v.data(), b.data(), v.size() * sizeof(T));
-  return v;
-}
 
 // One cluster as every rank learns it: enough to place it in a region and
 // to find its facets (rank, index in that rank's list).

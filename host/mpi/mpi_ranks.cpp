@@ -110,9 +110,8 @@ void MpiRanks::sum(std::vector<std::uint64_t>& values) {
                 MPI_COMM_WORLD);
 }
 
-std::vector<std::uint64_t> MpiRanks::all_to_all(const std::vector<unsigned char>& send,
-                                                const std::vector<std::uint64_t>& send_counts,
-                                                std::size_t record_bytes, std::vector<unsigned char>& recv) {
+std::vector<std::uint64_t> MpiRanks::all_to_all(const Bytes& send, const std::vector<std::uint64_t>& send_counts,
+                                                std::size_t record_bytes, Bytes& recv) {
   std::vector<std::uint64_t> recv_counts(size_, 0);
   if (size_ == 1) {
     recv = send;
@@ -165,33 +164,20 @@ void MpiRanks::broadcast(void* data, std::size_t bytes, int root) {
               MPI_COMM_WORLD);
 }
 
-std::vector<std::string> MpiRanks::gather(const std::string& mine, int root) {
-  if (size_ == 1) return {mine};
-  Timed t(mpi_seconds_);
-  int n = checked_int(mine.size(), "gathered text");
-  std::vector<int> sizes(size_), at(size_);
-  MPI_Gather(&n, 1, MPI_INT, sizes.data(), 1, MPI_INT, root, MPI_COMM_WORLD);
-  std::uint64_t total = 0;
-  for (int q = 0; q < size_; ++q) at[q] = checked_int(total, "gathered text"), total += sizes[q];
-  std::string all(rank_ == root ? total : 0, '\0');
-  MPI_Gatherv(mine.data(), n, MPI_CHAR, all.data(), sizes.data(), at.data(), MPI_CHAR, root, MPI_COMM_WORLD);
-  std::vector<std::string> out;
-  if (rank_ == root)
-    for (int q = 0; q < size_; ++q) out.push_back(all.substr(at[q], sizes[q]));
-  return out;
-}
-
-std::vector<unsigned char> MpiRanks::all_gather(const std::vector<unsigned char>& mine) {
-  if (size_ == 1) return mine;
+// Every rank's bytes, whatever their sizes: their sizes first, then the bytes.
+std::vector<Ranks::Bytes> MpiRanks::meet(const std::string&, Bytes mine) {
+  if (size_ == 1) return {std::move(mine)};
   Timed t(mpi_seconds_);
   int n = checked_int(mine.size(), "gathered bytes");
   std::vector<int> sizes(size_), at(size_);
   MPI_Allgather(&n, 1, MPI_INT, sizes.data(), 1, MPI_INT, MPI_COMM_WORLD);
   std::uint64_t total = 0;
   for (int q = 0; q < size_; ++q) at[q] = checked_int(total, "gathered bytes"), total += sizes[q];
-  std::vector<unsigned char> all(total);
+  Bytes all(total);
   MPI_Allgatherv(mine.data(), n, MPI_BYTE, all.data(), sizes.data(), at.data(), MPI_BYTE, MPI_COMM_WORLD);
-  return all;
+  std::vector<Bytes> each;
+  for (int q = 0; q < size_; ++q) each.emplace_back(all.begin() + at[q], all.begin() + at[q] + sizes[q]);
+  return each;
 }
 
 void MpiRanks::send(const void* data, std::size_t bytes, int to, int tag) {
@@ -294,16 +280,14 @@ void MpiRanks::barrier() {}
 std::uint64_t MpiRanks::sum(std::uint64_t value) { return value; }
 void MpiRanks::max(std::vector<std::uint64_t>&) {}
 void MpiRanks::sum(std::vector<std::uint64_t>&) {}
-std::vector<std::uint64_t> MpiRanks::all_to_all(const std::vector<unsigned char>& send,
-                                                const std::vector<std::uint64_t>& send_counts, std::size_t,
-                                                std::vector<unsigned char>& recv) {
+std::vector<std::uint64_t> MpiRanks::all_to_all(const Bytes& send, const std::vector<std::uint64_t>& send_counts,
+                                                std::size_t, Bytes& recv) {
   recv = send;
   return {send_counts.at(0)};
 }
 void MpiRanks::reduce_sum(std::vector<std::uint64_t>&, int) {}
 void MpiRanks::broadcast(void*, std::size_t, int) {}
-std::vector<std::string> MpiRanks::gather(const std::string& mine, int) { return {mine}; }
-std::vector<unsigned char> MpiRanks::all_gather(const std::vector<unsigned char>& mine) { return mine; }
+std::vector<Ranks::Bytes> MpiRanks::meet(const std::string&, Bytes mine) { return {std::move(mine)}; }
 void MpiRanks::send(const void*, std::size_t, int, int) { throw std::logic_error("Ranks::send without MPI"); }
 void MpiRanks::receive(void*, std::size_t, int, int) { throw std::logic_error("Ranks::receive without MPI"); }
 void MpiRanks::wait_sends() {}

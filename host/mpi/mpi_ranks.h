@@ -20,23 +20,17 @@ class MpiRanks final : public Ranks {
   void finish();  // MPI_Finalize when started
 
   bool built_with_mpi() const override;
-  int rank() const override { return rank_; }
-  int size() const override { return size_; }
-  int local_rank() const override { return local_rank_; }
-  int local_size() const override { return local_size_; }
-  std::string host() const override { return host_; }
 
+  // MPI's own collectives; gather and all_gather are meetings
+  // (MPI_Allgatherv).
   void barrier() override;
   std::uint64_t sum(std::uint64_t value) override;
   void max(std::vector<std::uint64_t>& values) override;
   void sum(std::vector<std::uint64_t>& values) override;
-  std::vector<std::uint64_t> all_to_all(const std::vector<unsigned char>& send,
-                                        const std::vector<std::uint64_t>& send_counts, std::size_t record_bytes,
-                                        std::vector<unsigned char>& recv) override;
+  std::vector<std::uint64_t> all_to_all(const Bytes& send, const std::vector<std::uint64_t>& send_counts,
+                                        std::size_t record_bytes, Bytes& recv) override;
   void reduce_sum(std::vector<std::uint64_t>& values, int root) override;
   void broadcast(void* data, std::size_t bytes, int root) override;
-  std::vector<std::string> gather(const std::string& mine, int root) override;
-  std::vector<unsigned char> all_gather(const std::vector<unsigned char>& mine) override;
 
   void send(const void* data, std::size_t bytes, int to, int tag) override;
   void receive(void* data, std::size_t bytes, int from, int tag) override;
@@ -45,7 +39,8 @@ class MpiRanks final : public Ranks {
   int agree(int& code) override;
   [[noreturn]] void abort(int code, const std::function<void()>& report) override;
 
-  double mpi_seconds() const override { return mpi_seconds_; }
+ protected:
+  std::vector<Bytes> meet(const std::string& op, Bytes mine) override;
 
  private:
   MpiRanks();
@@ -54,9 +49,6 @@ class MpiRanks final : public Ranks {
   void tell_others(int tag);
 
   bool started_ = false, finished_ = false;
-  int rank_ = 0, size_ = 1, local_rank_ = 0, local_size_ = 1;
-  std::string host_;
-  double mpi_seconds_ = 0;
   std::vector<void*> pending_;  // MPI_Request handles of send()
   // abort's own communicator (made by start), and what it sends: the tag
   // and the source say it all, the buffer outlives the sends.

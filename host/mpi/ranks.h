@@ -5,13 +5,18 @@
 // every MPI call: a build without MPI (or a run not started by an MPI
 // launcher) gets one process, and the renderer never sees MPI. The tests
 // run the collective code on simulated ranks (threads of one process).
+// Every collective is made of one meeting (each rank's bytes to every rank)
+// unless the transport has its own: MPI has; one process and the simulated
+// ranks give only the meeting and the messages.
 #pragma once
 
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
 #include <functional>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace opsila {
@@ -23,8 +28,24 @@ struct OtherRankFailed : std::runtime_error {
   OtherRankFailed(int r, int c) : std::runtime_error("rank " + std::to_string(r) + " failed"), rank(r), code(c) {}
 };
 
+// Records sent between ranks as bytes (trivially copyable types).
+template <typename T>
+std::vector<unsigned char> bytes_of(const std::vector<T>& v) {
+  std::vector<unsigned char> b(v.size() * sizeof(T));
+  if (!v.empty()) std::memcpy(b.data(), v.data(), b.size());
+  return b;
+}
+
+template <typename T>
+std::vector<T> records_of(const std::vector<unsigned char>& b) {
+  std::vector<T> v(b.size() / sizeof(T));
+  if (!v.empty()) std::memcpy(v.data(), b.data(), v.size() * sizeof(T));
+  return v;
+}
+
 class Ranks {
  public:
+  using Bytes = std::vector<unsigned char>;
   virtual ~Ranks() = default;
   // The run's process group: the MPI transport (MpiRanks), one process
   // until start() joins an MPI job.
@@ -33,34 +54,35 @@ class Ranks {
   // Joins the group when the transport needs it (MPI: when an MPI launcher
   // started this process; otherwise it stays one process). Safe to call
   // more than once.
-  virtual void start() = 0;
+  virtual void start() {}
 
-  virtual bool built_with_mpi() const = 0;
-  virtual int rank() const = 0;
-  virtual int size() const = 0;
-  virtual int local_rank() const = 0;  // among the ranks on this machine
-  virtual int local_size() const = 0;
-  virtual std::string host() const = 0;
+  virtual bool built_with_mpi() const { return false; }
+  // Where this process stands, as the transport placed it.
+  int rank() const { return rank_; }
+  int size() const { return size_; }
+  int local_rank() const { return local_rank_; }  // among the ranks on this machine
+  int local_size() const { return local_size_; }
+  const std::string& host() const { return host_; }
   // "rank 2: " in runs of several ranks, "" otherwise: prefixes messages.
   std::string label() const;
 
   // Collectives (every rank calls them in the same order). Times spent in
-  // them add up in mpi_seconds().
-  virtual void barrier() = 0;
-  virtual std::uint64_t sum(std::uint64_t value) = 0;        // over all ranks, result on all
-  virtual void max(std::vector<std::uint64_t>& values) = 0;  // element-wise over all ranks, in place, on all
-  virtual void sum(std::vector<std::uint64_t>& values) = 0;  // element-wise over all ranks, in place, on all
+  // them add up in mpi_seconds(). Each is made of meet() (below) unless the
+  // transport has its own (MPI's).
+  virtual void barrier();
+  virtual std::uint64_t sum(std::uint64_t value);        // over all ranks, result on all
+  virtual void max(std::vector<std::uint64_t>& values);  // element-wise over all ranks, in place, on all
+  virtual void sum(std::vector<std::uint64_t>& values);  // element-wise over all ranks, in place, on all
   // send[d] records of `record_bytes` bytes for rank d (laid out in rank
   // order); returns the counts received from each rank and fills `recv`
   // (also in rank order, then in the order each source sent them).
-  virtual std::vector<std::uint64_t> all_to_all(const std::vector<unsigned char>& send,
-                                                const std::vector<std::uint64_t>& send_counts,
-                                                std::size_t record_bytes, std::vector<unsigned char>& recv) = 0;
-  virtual void reduce_sum(std::vector<std::uint64_t>& values, int root) = 0;  // in place; valid on root
-  virtual void broadcast(void* data, std::size_t bytes, int root) = 0;
-  virtual std::vector<std::string> gather(const std::string& mine, int root) = 0;  // all ranks' strings on root
+  virtual std::vector<std::uint64_t> all_to_all(const Bytes& send, const std::vector<std::uint64_t>& send_counts,
+                                                std::size_t record_bytes, Bytes& recv);
+  virtual void reduce_sum(std::vector<std::uint64_t>& values, int root);  // in place; valid on root
+  virtual void broadcast(void* data, std::size_t bytes, int root);
+  virtual std::vector<std::string> gather(const std::string& mine, int root);  // all ranks' strings on root
   // Every rank's bytes, concatenated in rank order, on every rank.
-  virtual std::vector<unsigned char> all_gather(const std::vector<unsigned char>& mine) = 0;
+  virtual Bytes all_gather(const Bytes& mine);
 
   // Point to point (the item-buffer pipeline), in order between two ranks
   // for one tag. send() does not wait; the data must stay untouched until
@@ -72,7 +94,7 @@ class Ranks {
   // Failure agreement at a point every rank reaches: each passes its exit
   // code (0 = fine). Returns the lowest failing rank (-1 when none) and sets
   // `code` to that rank's code on every rank.
-  virtual int agree(int& code) = 0;
+  virtual int agree(int& code);
   // Ends every rank after a failure seen by this rank, while the others
   // may wait in a collective. Several ranks may fail at once (every rank's
   // device faults in one round): they settle which one calls `report`
@@ -92,9 +114,25 @@ class Ranks {
   void end_collective() { collective_ = false; }
   bool in_collective() const { return collective_; }
 
-  virtual double mpi_seconds() const = 0;
+  double mpi_seconds() const { return mpi_seconds_; }
+
+ protected:
+  // The one collective every transport has: each rank brings `mine` and
+  // gets every rank's bytes, in rank order. `op` names the collective it
+  // serves (a transport may check that every rank called the same).
+  virtual std::vector<Bytes> meet(const std::string& op, Bytes mine) = 0;
+
+  // Set by the transport: this process's place, and the time it spent
+  // waiting on the others.
+  int rank_ = 0, size_ = 1, local_rank_ = 0, local_size_ = 1;
+  std::string host_;
+  double mpi_seconds_ = 0;
 
  private:
+  // Every rank's values, element-wise by `op` ("sum" wraps modulo 2^64 as
+  // MPI's does).
+  std::vector<std::uint64_t> reduce(const std::string& op, const std::vector<std::uint64_t>& values);
+
   bool collective_ = false;
 };
 
@@ -103,30 +141,14 @@ class Ranks {
 // world's Ranks; every other room is handed its Ranks.
 class OneProcess final : public Ranks {
  public:
-  void start() override {}
-  bool built_with_mpi() const override { return false; }
-  int rank() const override { return 0; }
-  int size() const override { return 1; }
-  int local_rank() const override { return 0; }
-  int local_size() const override { return 1; }
-  std::string host() const override;
-  void barrier() override {}
-  std::uint64_t sum(std::uint64_t value) override { return value; }
-  void max(std::vector<std::uint64_t>&) override {}
-  void sum(std::vector<std::uint64_t>&) override {}
-  std::vector<std::uint64_t> all_to_all(const std::vector<unsigned char>& send,
-                                        const std::vector<std::uint64_t>& send_counts, std::size_t record_bytes,
-                                        std::vector<unsigned char>& recv) override;
-  void reduce_sum(std::vector<std::uint64_t>&, int) override {}
-  void broadcast(void*, std::size_t, int) override {}
-  std::vector<std::string> gather(const std::string& mine, int) override { return {mine}; }
-  std::vector<unsigned char> all_gather(const std::vector<unsigned char>& mine) override { return mine; }
+  OneProcess();
   void send(const void*, std::size_t, int, int) override;
   void receive(void*, std::size_t, int, int) override;
   void wait_sends() override {}
-  int agree(int& code) override { return code != 0 ? 0 : -1; }
   [[noreturn]] void abort(int code, const std::function<void()>& report) override;
-  double mpi_seconds() const override { return 0; }
+
+ protected:
+  std::vector<Bytes> meet(const std::string&, Bytes mine) override { return {std::move(mine)}; }
 };
 
 // True when an MPI launcher started this process (its environment says so).

@@ -84,8 +84,7 @@ TEST_F(MpiFixture, MeasuredBalanceOnSharesIsTheSameAsOneProcess) {
     env["OPSILA_RANK_TRIANGLE_LIMIT"] = "5000";
     const RunResult two = ranks(2, balanced(path, "measured")("two"));
     env.erase("OPSILA_RANK_TRIANGLE_LIMIT");
-    ASSERT_EQ(two.exit_code, 0) << two.err;
-    EXPECT_TRUE(test::read_file(dir.file("two.pfm")) == test::read_file(dir.file("one.pfm")));
+    expect_image_as(two, "two", "one");
   }
   expect_no_whole_scene_note(many, "measured");
 }

@@ -13,15 +13,11 @@ TEST(BenchKernels, EveryStructFollowsItsKernel) {
   ClRuntime& rt = test::shared_runtime();
   for (KernelProgram p : {KernelProgram::baselines, KernelProgram::baselines_uncounted}) {
     SCOPED_TRACE(static_cast<int>(p));
-    test::expect_follows_signature<MegaArgs>(rt, "megakernel", p);
-    test::expect_follows_signature<MegaRaysArgs>(rt, "megakernel_rays", p);
+    test::expect_follow_signatures<MegaArgs, MegaRaysArgs>(rt, p, {"megakernel", "megakernel_rays"});
   }
-  const KernelProgram p = KernelProgram::baselines;
-  test::expect_follows_signature<TraversalArgs>(rt, "traversal_nearest", p);
-  test::expect_follows_signature<TraversalArgs>(rt, "traversal_any", p);
-  test::expect_follows_signature<SixVectorsArgs>(rt, "scatter_six_vectors", p);
-  test::expect_follows_signature<OneRecordArgs>(rt, "scatter_one_record", p);
-  test::expect_follows_signature<CopyArgs>(rt, "copy_float4", p);
+  test::expect_follow_signatures<TraversalArgs, TraversalArgs, SixVectorsArgs, OneRecordArgs, CopyArgs>(
+      rt, KernelProgram::baselines,
+      {"traversal_nearest", "traversal_any", "scatter_six_vectors", "scatter_one_record", "copy_float4"});
 }
 
 }  // namespace

@@ -67,12 +67,10 @@ static_assert(KernelBinding<int, DescriptorSet, KeyTotals>::kArgs == 4, "and a b
 TEST(KernelArgs, TheExchangesStructsFollowTheirKernels) {
   ClRuntime& rt = test::shared_runtime();
   using namespace scatter_kernels;
-  test::expect_follows_signature<CountArgs>(rt, "scatter_count", KernelProgram::render);
-  test::expect_follows_signature<ScanArgs>(rt, "scatter_scan", KernelProgram::render);
-  test::expect_follows_signature<PlanArgs>(rt, "scatter_plan", KernelProgram::render);
-  test::expect_follows_signature<MovePoolArgs>(rt, "scatter_move_pool", KernelProgram::render);
-  test::expect_follows_signature<MoveOutputsArgs>(rt, "scatter_move_outputs", KernelProgram::render);
-  test::expect_follows_signature<MoveBlocksArgs>(rt, "scatter_move_blocks", KernelProgram::render);
+  test::expect_follow_signatures<CountArgs, ScanArgs, PlanArgs, MovePoolArgs, MoveOutputsArgs, MoveBlocksArgs>(
+      rt, KernelProgram::render,
+      {"scatter_count", "scatter_scan", "scatter_plan", "scatter_move_pool", "scatter_move_outputs",
+       "scatter_move_blocks"});
 }
 
 // The check itself: a struct one part short, or with a value where the

@@ -33,11 +33,8 @@ TEST(FrameKernels, EveryStructFollowsItsKernelInEveryProgram) {
   using namespace frame_kernels;
   for (KernelProgram p : {KernelProgram::render, KernelProgram::render_uncounted, KernelProgram::measure}) {
     SCOPED_TRACE(static_cast<int>(p));
-    test::expect_follows_signature<ItemBufferArgs>(rt, "item_buffer", p);
-    test::expect_follows_signature<CountHitsArgs>(rt, "count_hits", p);
-    test::expect_follows_signature<ListHitsArgs>(rt, "list_hits", p);
-    test::expect_follows_signature<PrimaryArgs>(rt, "build_primary", p);
-    test::expect_follows_signature<SpmdArgs>(rt, "spmd_phase", p);
+    test::expect_follow_signatures<ItemBufferArgs, CountHitsArgs, ListHitsArgs, PrimaryArgs, SpmdArgs>(
+        rt, p, {"item_buffer", "count_hits", "list_hits", "build_primary", "spmd_phase"});
   }
 }
 

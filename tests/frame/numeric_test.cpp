@@ -164,20 +164,17 @@ TEST(Numeric, NoCracksInsideAClosedMirrorBox) {
     EXPECT_EQ(red_pixels(r.rgb), 0u) << pes << " PEs";
   }
   const Scene s = mirror_box(4);
-  const CameraFrame frame = camera_frame(s.camera, s.width, s.height);
   const double reach = 2.0 * s.epsilon();
   for (int pes : {1, 8}) {
     RenderResult r = render_cl(s, pes);
     EXPECT_EQ(non_finite(r.rgb), 0u);
     std::size_t escaped = 0;
-    for (int y = 0; y < s.height; ++y)
-      for (int x = 0; x < s.width; ++x) {
-        if (r.rgb[3 * (std::size_t(y) * s.width + x)] == 0.0f) continue;
-        ++escaped;
-        EXPECT_TRUE(bounces_near_an_edge(s.camera.eye, primary_direction(frame, s.width, s.height, x, y),
-                                         s.max_depth - 1, reach))
-            << pes << " PEs: pixel " << x << "," << y << " leaked away from any edge";
-      }
+    test::for_each_primary_ray(s, [&](int x, int y, const Vec3& dir) {
+      if (r.rgb[3 * (std::size_t(y) * s.width + x)] == 0.0f) return;
+      ++escaped;
+      EXPECT_TRUE(bounces_near_an_edge(s.camera.eye, dir, s.max_depth - 1, reach))
+          << pes << " PEs: pixel " << x << "," << y << " leaked away from any edge";
+    });
     EXPECT_LE(escaped, std::size_t(s.width * s.height / 500)) << pes << " PEs";
   }
 }
@@ -336,27 +333,24 @@ TEST(Numeric, ShininessZeroGivesTheFullSpecularColour) {
 
   // Hand computation (double precision): which floor points see the
   // reflected light direction pointing away from the eye?
-  const CameraFrame frame = camera_frame(s.camera, s.width, s.height);
   std::size_t floor_pixels = 0, away = 0;
-  for (int y = 0; y < s.height; ++y)
-    for (int x = 0; x < s.width; ++x) {
-      const std::size_t i = std::size_t(y) * s.width + x;
-      if (r.item_buffer[2 * i] != 0) continue;
-      ++floor_pixels;
-      const Vec3 d = primary_direction(frame, s.width, s.height, x, y);
-      const double t = -double(s.camera.eye[1]) / d[1];
-      double p[3], l[3], len = 0;
-      for (int k = 0; k < 3; ++k) p[k] = s.camera.eye[k] + t * d[k], l[k] = light[k] - p[k], len += l[k] * l[k];
-      len = std::sqrt(len);
-      for (double& c : l) c /= len;
-      const double rl[3] = {-l[0], 2 * l[1] - l[1], -l[2]};  // 2(n.L)n - L with n = +y
-      const double r_dot_v = -(rl[0] * d[0] + rl[1] * d[1] + rl[2] * d[2]);
-      if (r_dot_v < -1e-3) ++away;
-      for (int c = 0; c < 3; ++c) {
-        EXPECT_NEAR(r.rgb[3 * i + c], ks[c], 1e-6) << "pixel " << x << "," << y;
-        EXPECT_NEAR(ref.rgb[3 * i + c], ks[c], 1e-6) << "reference pixel " << x << "," << y;
-      }
+  test::for_each_primary_ray(s, [&](int x, int y, const Vec3& d) {
+    const std::size_t i = std::size_t(y) * s.width + x;
+    if (r.item_buffer[2 * i] != 0) return;
+    ++floor_pixels;
+    const double t = -double(s.camera.eye[1]) / d[1];
+    double p[3], l[3], len = 0;
+    for (int k = 0; k < 3; ++k) p[k] = s.camera.eye[k] + t * d[k], l[k] = light[k] - p[k], len += l[k] * l[k];
+    len = std::sqrt(len);
+    for (double& c : l) c /= len;
+    const double rl[3] = {-l[0], 2 * l[1] - l[1], -l[2]};  // 2(n.L)n - L with n = +y
+    const double r_dot_v = -(rl[0] * d[0] + rl[1] * d[1] + rl[2] * d[2]);
+    if (r_dot_v < -1e-3) ++away;
+    for (int c = 0; c < 3; ++c) {
+      EXPECT_NEAR(r.rgb[3 * i + c], ks[c], 1e-6) << "pixel " << x << "," << y;
+      EXPECT_NEAR(ref.rgb[3 * i + c], ks[c], 1e-6) << "reference pixel " << x << "," << y;
     }
+  });
   EXPECT_GT(floor_pixels, std::size_t(s.width * s.height / 3));
   EXPECT_GT(away, floor_pixels / 4) << "the scene must exercise pow(0, 0)";
 }
@@ -379,22 +373,19 @@ TEST(Numeric, TotalInternalReflection) {
     s.num_objects = 1;
     const RenderResult r = render_cl(s);
     const ImageResult ref = render_reference(s);
-    const CameraFrame frame = camera_frame(s.camera, s.width, s.height);
     std::size_t tir = 0, checked = 0;
-    for (int y = 0; y < s.height; ++y)
-      for (int x = 0; x < s.width; ++x) {
-        const Vec3 dir = primary_direction(frame, s.width, s.height, x, y);
-        const double cos_t = -double(dir[2]), eta = leaving ? 1.5 : 1.0 / 1.5;
-        const double k = 1 - eta * eta * (1 - cos_t * cos_t);
-        if (std::fabs(k) < 1e-3) continue;  // too close to the critical angle to call
-        ++checked;
-        tir += k < 0;
-        const std::size_t i = std::size_t(y) * s.width + x;
-        const float blue = 0.2f + 0.5f + (k < 0 ? 0.0f : 1.0f);
-        EXPECT_NEAR(r.rgb[3 * i + 2], blue, 1e-5) << (leaving ? "leaving" : "entering") << " pixel " << x << "," << y;
-        EXPECT_NEAR(r.rgb[3 * i + 0], 0.2f, 1e-5);
-        EXPECT_NEAR(ref.rgb[3 * i + 2], blue, 1e-5) << "reference pixel " << x << "," << y;
-      }
+    test::for_each_primary_ray(s, [&](int x, int y, const Vec3& dir) {
+      const double cos_t = -double(dir[2]), eta = leaving ? 1.5 : 1.0 / 1.5;
+      const double k = 1 - eta * eta * (1 - cos_t * cos_t);
+      if (std::fabs(k) < 1e-3) return;  // too close to the critical angle to call
+      ++checked;
+      tir += k < 0;
+      const std::size_t i = std::size_t(y) * s.width + x;
+      const float blue = 0.2f + 0.5f + (k < 0 ? 0.0f : 1.0f);
+      EXPECT_NEAR(r.rgb[3 * i + 2], blue, 1e-5) << (leaving ? "leaving" : "entering") << " pixel " << x << "," << y;
+      EXPECT_NEAR(r.rgb[3 * i + 0], 0.2f, 1e-5);
+      EXPECT_NEAR(ref.rgb[3 * i + 2], blue, 1e-5) << "reference pixel " << x << "," << y;
+    });
     EXPECT_GT(checked, 41u * 41u * 9 / 10);
     if (leaving)
       EXPECT_GT(tir, checked / 4) << "the view must reach beyond the critical angle";

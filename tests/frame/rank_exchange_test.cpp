@@ -75,8 +75,7 @@ void exchange_rounds(Ranks& ranks, ClRuntime& rt, int rounds, std::size_t round_
     const std::vector<HostDescriptor> expected = expected_pool(r, R, round);
     ASSERT_EQ(len, expected.size());
     const std::vector<HostDescriptor> got = into.read(rt, len);
-    std::vector<cl_int> keys(len);
-    if (len) cl_check(rt.queue().enqueueReadBuffer(into.dests, CL_TRUE, 0, len * sizeof(cl_int), keys.data()), "read");
+    const std::vector<cl_int> keys = test::from_device<cl_int>(rt, into.dests, len);
     for (std::size_t i = 0; i < len; ++i) {
       EXPECT_TRUE(test::same_record(got[i], expected[i]))
           << "entry " << i << ": pixel " << desc_pixel(got[i]) << ", expected " << desc_pixel(expected[i]);

@@ -537,32 +537,29 @@ TEST(Renderer, ThePinnedReadBackGivesTheMappedImage) {
 TEST(Renderer, ItemBufferEqualsBruteForcePrimaryRays) {
   Scene s = test::mirror_glass_scene(72);
   RenderResult r = render_with(s, 16);
-  CameraFrame frame = camera_frame(s.camera, s.width, s.height);
   std::size_t agree = 0;
-  for (int y = 0; y < s.height; ++y)
-    for (int x = 0; x < s.width; ++x) {
-      Vec3 d = primary_direction(frame, s.width, s.height, x, y);
-      const Vec3& o = s.camera.eye;
-      double best = INFINITY;
-      int obj = -1, facet = -1;
-      for (const Triangle& t : s.triangles) {
-        double e1[3], e2[3], pv[3], tv[3], qv[3];
-        for (int a = 0; a < 3; ++a) e1[a] = double(t.v1[a]) - t.v0[a], e2[a] = double(t.v2[a]) - t.v0[a];
-        pv[0] = d[1] * e2[2] - d[2] * e2[1], pv[1] = d[2] * e2[0] - d[0] * e2[2], pv[2] = d[0] * e2[1] - d[1] * e2[0];
-        double det = e1[0] * pv[0] + e1[1] * pv[1] + e1[2] * pv[2];
-        if (std::fabs(det) < 1e-12) continue;
-        for (int a = 0; a < 3; ++a) tv[a] = double(o[a]) - t.v0[a];
-        double u = (tv[0] * pv[0] + tv[1] * pv[1] + tv[2] * pv[2]) / det;
-        if (u < 0 || u > 1) continue;
-        qv[0] = tv[1] * e1[2] - tv[2] * e1[1], qv[1] = tv[2] * e1[0] - tv[0] * e1[2], qv[2] = tv[0] * e1[1] - tv[1] * e1[0];
-        double v = (d[0] * qv[0] + d[1] * qv[1] + d[2] * qv[2]) / det;
-        if (v < 0 || u + v > 1) continue;
-        double tt = (e2[0] * qv[0] + e2[1] * qv[1] + e2[2] * qv[2]) / det;
-        if (tt > 0 && tt < best) best = tt, obj = t.object_id, facet = t.facet_id;
-      }
-      std::size_t i = 2 * (std::size_t(y) * s.width + x);
-      agree += (r.item_buffer[i] == obj && r.item_buffer[i + 1] == facet);
+  test::for_each_primary_ray(s, [&](int x, int y, const Vec3& d) {
+    const Vec3& o = s.camera.eye;
+    double best = INFINITY;
+    int obj = -1, facet = -1;
+    for (const Triangle& t : s.triangles) {
+      double e1[3], e2[3], pv[3], tv[3], qv[3];
+      for (int a = 0; a < 3; ++a) e1[a] = double(t.v1[a]) - t.v0[a], e2[a] = double(t.v2[a]) - t.v0[a];
+      pv[0] = d[1] * e2[2] - d[2] * e2[1], pv[1] = d[2] * e2[0] - d[0] * e2[2], pv[2] = d[0] * e2[1] - d[1] * e2[0];
+      double det = e1[0] * pv[0] + e1[1] * pv[1] + e1[2] * pv[2];
+      if (std::fabs(det) < 1e-12) continue;
+      for (int a = 0; a < 3; ++a) tv[a] = double(o[a]) - t.v0[a];
+      double u = (tv[0] * pv[0] + tv[1] * pv[1] + tv[2] * pv[2]) / det;
+      if (u < 0 || u > 1) continue;
+      qv[0] = tv[1] * e1[2] - tv[2] * e1[1], qv[1] = tv[2] * e1[0] - tv[0] * e1[2], qv[2] = tv[0] * e1[1] - tv[1] * e1[0];
+      double v = (d[0] * qv[0] + d[1] * qv[1] + d[2] * qv[2]) / det;
+      if (v < 0 || u + v > 1) continue;
+      double tt = (e2[0] * qv[0] + e2[1] * qv[1] + e2[2] * qv[2]) / det;
+      if (tt > 0 && tt < best) best = tt, obj = t.object_id, facet = t.facet_id;
     }
+    std::size_t i = 2 * (std::size_t(y) * s.width + x);
+    agree += (r.item_buffer[i] == obj && r.item_buffer[i + 1] == facet);
+  });
   EXPECT_GE(double(agree) / (s.width * s.height), 0.999);
 }
 

@@ -17,11 +17,7 @@ TEST(Scatter, EveryDescriptorArrivesOnceInOrder) {
   unsigned seed = 1;
   for (int length : {16, 100, 4096, 32767, 65536, 1 << 20}) {
     SCOPED_TRACE(length);
-    test::ExchangeCase c;
-    c.pes = 16;
-    c.pool_len = length;
-    c.out_groups = 0;
-    c.slots = std::max(1, length / 2);
+    test::ExchangeCase c = test::exchange_case(16, std::max(1, length / 2), length, 0);
     c.group_size = 64;
     c.hole_rate = 0.2;
     c.seed = seed++;
@@ -32,13 +28,9 @@ TEST(Scatter, EveryDescriptorArrivesOnceInOrder) {
 
 // A pool of 3000 behind 40 SPMD work-groups' outputs, over 16 PEs.
 test::ExchangeCase outputs_and_pool(int by_block, int slots) {
-  test::ExchangeCase c;
-  c.pes = 16;
-  c.pool_len = 3000;
-  c.out_groups = 40;
+  test::ExchangeCase c = test::exchange_case(16, slots, 3000, 40);
   c.group_size = 64;
   c.spawn_slots = 4;
-  c.slots = slots;
   c.move_by_block = by_block;
   return c;
 }
@@ -71,38 +63,27 @@ TEST(Scatter, ThrottledBanksTakeOnlyRaysThatEndTheirTree) {
 
 TEST(Scatter, BanksFollowDemand) {
   // A hot PE takes the slots the others do not need: the round is full.
-  test::ExchangeCase c;
-  c.pes = 8;
-  c.pool_len = 5000;
-  c.out_groups = 0;
+  test::ExchangeCase c = test::exchange_case(8, 2000, 5000, 0);
   c.hot_share = 0.8;
   c.hole_rate = 0.0;
-  c.slots = 2000;
   const auto counts = test::check_exchange(runtime(), c);
   EXPECT_EQ(counts[1], 2000);
 }
 
 TEST(Scatter, CapPerPeAndManyPes) {
-  test::ExchangeCase c;
-  c.pes = 256;
-  c.pool_len = 5000;
-  c.out_groups = 3;
+  test::ExchangeCase c = test::exchange_case(256, 4000, 5000, 3);
   c.group_size = 16;
-  c.slots = 4000;
   c.cap = 16;  // one work-group per PE
   test::check_exchange(runtime(), c);
-  c.pes = 1;
-  c.slots = 1;
-  c.cap = 0;
+  // One PE, one slot, no cap.
+  c = test::exchange_case(1, 1, 5000, 3);
   c.group_size = 1;
   c.hole_rate = 0.5;
   test::check_exchange(runtime(), c);
 }
 
 TEST(Scatter, AllHoles) {
-  test::ExchangeCase c;
-  c.pool_len = 1000;
-  c.out_groups = 0;
+  test::ExchangeCase c = test::exchange_case(4, 8, 1000, 0);
   c.hole_rate = 1.0;
   const auto counts = test::check_exchange(runtime(), c);
   EXPECT_EQ(counts[1], 0);

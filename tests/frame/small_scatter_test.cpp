@@ -39,12 +39,8 @@ namespace {
 // SPMD output places (used and stale), banks that overflow
 // (tests/exchange_check.h checks every lane of every record).
 void small_scatter(int pes, int slots, int S, int pool_len, unsigned seed) {
-  test::ExchangeCase c;
-  c.pes = pes;
-  c.slots = slots;
+  test::ExchangeCase c = test::exchange_case(pes, slots, pool_len, 2);
   c.spawn_slots = S;
-  c.pool_len = pool_len;
-  c.out_groups = 2;
   c.group_size = 2;
   c.seed = seed;
   for (int by_block : {0, 1})  // both moves under Oclgrind, throttled or not

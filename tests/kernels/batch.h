@@ -55,13 +55,6 @@ cl::Buffer to_device(ClRuntime& rt, const std::vector<T, A>& v) {
   return b;
 }
 
-template <typename T>
-std::vector<T> from_device(ClRuntime& rt, const cl::Buffer& b, std::size_t n) {
-  std::vector<T> v(n);
-  cl_check(rt.queue().enqueueReadBuffer(b, CL_TRUE, 0, n * sizeof(T), v.data()), "clEnqueueReadBuffer");
-  return v;
-}
-
 inline void run_batch(ClRuntime& rt, cl::Kernel& k, std::size_t count) {
   cl_check(rt.queue().enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(count), cl::NullRange),
            "clEnqueueNDRangeKernel");

@@ -100,7 +100,7 @@ TEST(SimRanks, MessagesArriveInOrderPerTag) {
 }
 
 // One simulated rank is one process: the same answers as the MPI
-// transport gives when no launcher started this process.
+// transport gives when no launcher started this process, and as OneProcess.
 TEST(SimRanks, OneRankAnswersAsTheMpiTransportOnOneProcess) {
   Ranks& world = Ranks::world();
   ASSERT_EQ(world.size(), 1) << "the test program runs on one process";
@@ -131,6 +131,8 @@ TEST(SimRanks, OneRankAnswersAsTheMpiTransportOnOneProcess) {
   std::vector<std::string> simulated;
   run_ranks(1, [&](Ranks& ranks) { simulated = calls(ranks); });
   EXPECT_EQ(simulated, calls(world));
+  OneProcess solo;
+  EXPECT_EQ(simulated, calls(solo));
   EXPECT_EQ(simulated.back(), "alone");
 }
 

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include "formats/json/scene_file.h"
+#include "test_scenes.h"
 
 #include <cmath>
 #include <condition_variable>
@@ -423,14 +424,12 @@ TEST(Reference, BvhFindsTheSameNearestFacetAsBruteForce) {
   s.num_facets = 3000;
   s.num_objects = 1;
   const ImageResult img = render_reference(s);
-  const CameraFrame frame = camera_frame(s.camera, s.width, s.height);
   int hits = 0;
-  for (int y = 0; y < s.height; ++y)
-    for (int x = 0; x < s.width; ++x) {
-      const int expected = brute_force_facet(s, s.camera.eye, primary_direction(frame, s.width, s.height, x, y));
-      EXPECT_EQ(img.item_buffer[2 * (y * s.width + x) + 1], expected) << "pixel " << x << "," << y;
-      hits += expected >= 0;
-    }
+  test::for_each_primary_ray(s, [&](int x, int y, const Vec3& dir) {
+    const int expected = brute_force_facet(s, s.camera.eye, dir);
+    EXPECT_EQ(img.item_buffer[2 * (y * s.width + x) + 1], expected) << "pixel " << x << "," << y;
+    hits += expected >= 0;
+  });
   EXPECT_GT(hits, 100);
 }
 

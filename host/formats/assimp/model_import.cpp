@@ -34,6 +34,7 @@
 #include "formats/assimp/model_materials.h"
 #include "formats/assimp/model_window.h"
 #include "formats/ply/ply_reader.h"
+#include "formats/stl/stl_format.h"
 
 #ifdef OPSILA_HAVE_ASSIMP
 #include <assimp/Importer.hpp>
@@ -299,34 +300,9 @@ void keep_readers_for(Assimp::Importer& importer, const std::string& ext) {
 // range, ...) instead of handing it on.
 constexpr unsigned kImportFlags = aiProcess_ValidateDataStructure;
 
-// STL is read without that step: it also refuses a mesh without vertices,
-// and a text STL makes one of every solid, so one empty solid beside a
-// full one ("solid a ... endsolid", "solid b endsolid") refused the whole
-// file. What the step would check of the STL reader's scene is checked
-// here; an empty solid keeps its mesh's place, hence the object ids of the
-// solids after it (SPEC: the index of the mesh in the importer's list).
+// STL is read without that step; its scene is checked instead
+// (stl::check_imported_scene says why).
 bool validated_by_us(const std::string& ext) { return lower(ext) == ".stl"; }
-
-void check_stl_scene(const aiScene& ai, const std::string& name) {
-  const auto bad = [&](const std::string& what) {
-    throw InputError(name + ": the STL reader's scene is inconsistent (" + what + ")");
-  };
-  if (!ai.mRootNode || (ai.mNumMeshes > 0 && !ai.mMeshes)) bad("no root node or mesh list");
-  for (unsigned m = 0; m < ai.mNumMeshes; ++m) {
-    const aiMesh* mesh = ai.mMeshes[m];
-    if (!mesh) bad("mesh " + std::to_string(m) + " missing");
-    if ((mesh->mNumVertices > 0 && !mesh->mVertices) || (mesh->mNumFaces > 0 && !mesh->mFaces))
-      bad("mesh " + std::to_string(m) + " without its arrays");
-    for (unsigned f = 0; f < mesh->mNumFaces; ++f) {
-      const aiFace& face = mesh->mFaces[f];
-      if (face.mNumIndices > 0 && !face.mIndices) bad("a face without indices");
-      for (unsigned k = 0; k < face.mNumIndices; ++k)
-        if (face.mIndices[k] >= mesh->mNumVertices) bad("a vertex index out of range");
-    }
-  }
-  for (unsigned k = 0; k < ai.mNumMaterials; ++k)
-    if (!ai.mMaterials || !ai.mMaterials[k]) bad("a material missing");
-}
 
 Scene convert(Assimp::Importer& importer, const aiScene* ai, const std::string& name, const std::string& base_dir,
               const ModelFiles& files) {
@@ -388,7 +364,7 @@ Scene import_model(ModelFiles& files, const std::string& path, const std::string
       ai = importer.ReadFile(path, flags);
     }
     if (!ai && !base_dir.empty()) explain_with_stream(path);  // a file on disk (not a model in memory)
-    if (ai && our_checks) check_stl_scene(*ai, path);
+    if (ai && our_checks) stl::check_imported_scene(*ai, path);
     scene = convert(importer, ai, path, base_dir, files);
   });
   scene.input_files.insert(scene.input_files.begin(), files.files().begin(), files.files().end());

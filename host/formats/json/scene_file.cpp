@@ -8,6 +8,7 @@
 
 #include "formats/json/scene_reader.h"
 #include "formats/assimp/model_window.h"
+#include "formats/image/texture_file.h"
 #include "core/env_hooks.h"
 #include "core/input_file.h"
 #include "core/stage_clock.h"
@@ -27,7 +28,10 @@ Scene SceneReader::run() {
     return read();
   } catch (InputError& e) {
     // Warnings found before the error still reach the user (a misspelt
-    // key explains a later "no facets").
+    // key explains a later "no facets"), those of maps listed for later
+    // with them (their images checked here: the ranks end without
+    // checking them together).
+    settle_map_warnings(scene_);
     e.warnings.insert(e.warnings.begin(), scene_.warnings.begin(), scene_.warnings.end());
     throw;
   }
@@ -299,6 +303,7 @@ Scene load_window_share(const std::string& path, const WindowRead& read, const S
   w.plan_all = w.plan_total = all;
   w.fans = fans;
   w.load_maps = true;
+  w.map_images = share.map_images;
   Scene scene = read(w, fans);
   SceneShare figures = share;
   figures.total_triangles = scene.share.total_triangles;
@@ -337,7 +342,7 @@ Scene load_scene(const std::string& path, const SceneShare& share) {
   // Parsing, and the shapes and generators it builds (a read is its own stage).
   StageClock clock(PrepareStage::parse);
   if (ext != ".json" && is_imported_model(path)) {
-    Scene scene = load_model(path);
+    Scene scene = load_model(path, share.map_images);
     scene.input_files.insert(scene.input_files.begin(), path);
     return scene;
   }

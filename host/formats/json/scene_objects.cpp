@@ -339,13 +339,13 @@ std::function<void(std::vector<Triangle>&)> SceneReader::include_obj(const Json&
       throw InputError(full + ": not a model format the importer reads (see scenes/FORMAT.md)");
     if (windowed) {
       ModelWindow counting;  // keeps no polygon
-      counting.rank = share_.rank, counting.ranks = share_.ranks;
+      counting.rank = share_.rank, counting.ranks = share_.ranks, counting.map_images = share_.map_images;
       *sub = streamed ? load_model_window(full, max_triangles_ - planned_triangles_, counting, fans)
                       : load_obj_window(full, max_triangles_ - planned_triangles_, counting, fans);
     } else if (obj || !any_format) {
       *sub = load_obj(full, std::min(entry_limit_, max_triangles_ - planned_triangles_));
     } else {
-      *sub = load_model(full);
+      *sub = load_model(full, share_.map_images);
       sub->input_files.insert(sub->input_files.begin(), full);
     }
   } catch (const InputError& e) {
@@ -365,7 +365,7 @@ std::function<void(std::vector<Triangle>&)> SceneReader::include_obj(const Json&
     }
     for (Texture& t : sub->textures) scene_.textures.push_back(std::move(t));
   }
-  for (std::string& w : sub->warnings) scene_.warnings.push_back(std::move(w));
+  append_warnings(scene_, *sub);
   for (std::string& f : sub->input_files) scene_.input_files.push_back(std::move(f));
   // A share does not hold an imported model from now until it is built:
   // it is read again then, and deal() keeps this rank's objects of it.

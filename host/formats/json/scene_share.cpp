@@ -88,7 +88,7 @@ void SceneReader::model_again(Scene& sub, const std::string& file, std::size_t t
                               const std::string& fkey) {
   Scene again;
   try {
-    again = load_model(file);
+    again = load_model(file, share_.map_images);
   } catch (const InputError& e) {
     fail(fkey, e.what());
   }

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <limits>
 #include <sstream>
+#include <string_view>
 
 #include "core/errors.h"
 #include "core/util.h"
@@ -154,14 +155,14 @@ void judge_types_for_importer(const Header& h, const std::string& path) {
 // Where the importer's header ends: the start of the first line that
 // starts with 'end_header' (a line of its own: the importer misreads one
 // that ends another line).
-std::size_t importer_end(const std::string& bytes, const std::string& path) {
+std::size_t importer_end(std::string_view bytes, const std::string& path) {
   const std::size_t end = bytes.find("\nend_header");
-  if (end == std::string::npos || end > kMaxHeaderBytes) no_end(path);
+  if (end == std::string_view::npos || end > kMaxHeaderBytes) no_end(path);
   return end + 1;
 }
 
 // The importer's body starts after 'end_header' and its line break.
-std::size_t importer_body(const std::string& bytes, std::size_t end, const std::string& path) {
+std::size_t importer_body(std::string_view bytes, std::size_t end, const std::string& path) {
   std::size_t data = end + 10;
   if (bytes.compare(data, 2, "\r\n") == 0) ++data;
   if (data >= bytes.size() || bytes[data] != '\n')
@@ -185,13 +186,13 @@ Header parse_header(const std::string& bytes, std::uint64_t file_bytes, const st
   const bool importer = how == Reading::importer;
   Header h;
   h.file_bytes = file_bytes;
-  const std::string head = importer ? bytes : bytes.substr(0, kMaxHeaderBytes);
+  const std::string_view head = std::string_view(bytes).substr(0, importer ? bytes.size() : kMaxHeaderBytes);
   std::size_t at = 0;
   // The next line, without its line break; false where none ends.
   const auto next_line = [&](std::string& text) {
     const std::size_t nl = head.find('\n', at);
-    if (nl == std::string::npos) return false;
-    text = head.substr(at, nl - at);
+    if (nl == std::string_view::npos) return false;
+    text = std::string(head.substr(at, nl - at));
     if (!text.empty() && text.back() == '\r') text.pop_back();
     at = nl + 1;
     return true;

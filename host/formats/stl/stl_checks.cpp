@@ -78,9 +78,10 @@ Shape shape_of(const std::string& head, std::uint64_t size) {
   while (start < head.size() && std::isspace(static_cast<unsigned char>(head[start]))) ++start;
   s.solid = head.compare(start, 5, "solid") == 0;
   // A name is looked for wherever it starts in the 80 bytes.
+  const std::string_view header = std::string_view(head).substr(0, kShapeBytes);
   for (const char* colours : {"COLOR=", "MATERIAL="}) {
-    const std::size_t at = head.find(colours);
-    if (s.colours.empty() && at != std::string::npos && at < 80) s.colours = colours;
+    const std::size_t at = header.find(colours);
+    if (s.colours.empty() && at != std::string_view::npos && at < 80) s.colours = colours;
   }
   return s;
 }

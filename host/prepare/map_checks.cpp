@@ -40,7 +40,7 @@ void take_checks(const std::vector<unsigned char>& all, std::vector<MapCheck>& c
 
 void settle_maps(Scene& scene, Ranks& ranks) {
   ranks.checkpoint();  // a rank that failed reading is waiting there
-  const std::vector<std::string> paths = maps_to_check(scene.warnings);
+  const std::vector<std::string> paths = maps_to_check(scene);
   std::vector<MapCheck> checks(paths.size());
   if (!scene.is_share()) {  // every rank holds the whole scene: every map, decoded here, as one process does
     for (std::size_t k = 0; k < paths.size(); ++k) checks[k] = check_texture_map(paths[k], true);

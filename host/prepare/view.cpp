@@ -8,7 +8,6 @@
 #include <cstring>
 #include <set>
 
-#include "formats/image/texture_file.h"
 #include "mpi/ranks.h"
 #include "opsila_shared.h"
 #include "prepare/map_checks.h"
@@ -109,11 +108,11 @@ Scene load_scene_or_explain(const std::string& path, bool quiet, Ranks& ranks, c
   // Read in shares: texture images are checked once over the ranks, then
   // decoded only where used (settle_maps, docs/DISTRIBUTED.md).
   const bool shares = share.ranks > 1;
+  SceneShare request = share;
+  if (shares) request.map_images = MapImages::later;
   try {
-    const MapsDecidedLater later(shares);
-    scene = load_scene(path, share);
+    scene = load_scene(path, request);
   } catch (InputError& e) {
-    if (shares && !quiet) settle_map_warnings(e.warnings);
     print_warnings(e.warnings, quiet);  // a misspelt key explains many errors
     throw;
   }

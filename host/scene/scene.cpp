@@ -66,6 +66,22 @@ MaterialDesc MaterialDesc::default_material() {
   return m;
 }
 
+void append_warnings(Scene& into, Scene& from) {
+  for (MapRequest& r : from.map_requests) {
+    r.warning += into.warnings.size();
+    into.map_requests.push_back(std::move(r));
+  }
+  for (std::string& w : from.warnings) into.warnings.push_back(std::move(w));
+  from.map_requests.clear();
+  from.warnings.clear();
+}
+
+void put_warnings_first(Scene& scene, std::vector<std::string> first) {
+  for (MapRequest& r : scene.map_requests) r.warning += first.size();
+  for (std::string& w : scene.warnings) first.push_back(std::move(w));
+  scene.warnings = std::move(first);
+}
+
 void Scene::bounds(Vec3& lo, Vec3& hi) const {
   if (is_share()) {
     lo = share.lo, hi = share.hi;

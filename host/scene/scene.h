@@ -86,6 +86,22 @@ struct Texture {
   bool pixels_later = false;
 };
 
+// What a reader does with the image of each texture map its materials
+// name: decodes it now, or only lists it (a scene read in shares,
+// docs/DISTRIBUTED.md): its image is then checked once over the ranks
+// after the read, and decoded only where used (formats/image/texture_file.h).
+enum class MapImages { now, later };
+
+// A texture map listed for its check after the read (MapImages::later):
+// should the image fail, the warning one process gives (`where`, then that
+// the map is ignored) goes before warnings[warning], or last when that is
+// every warning.
+struct MapRequest {
+  std::string path;
+  std::string where;
+  std::size_t warning = 0;
+};
+
 struct LightDesc {
   Vec3 position{0, 0, 0};
   Vec3 intensity{1, 1, 1};
@@ -137,6 +153,8 @@ struct SceneShare {
   // the texel bytes held; the partition calls it on the facets a rank's
   // banks received. Unset: every map is decoded already.
   std::function<std::uint64_t(Scene&)> decode_maps;
+  // What the readers do with the texture maps' images.
+  MapImages map_images = MapImages::now;
 };
 
 struct Scene {
@@ -159,6 +177,9 @@ struct Scene {
   bool has_camera = false;
   bool has_lights = false;
   std::vector<std::string> warnings;  // printed once each by the CLI
+  // MapImages::later: the maps whose warnings wait for their images' check,
+  // in the order of their places in `warnings`.
+  std::vector<MapRequest> map_requests;
   // Every file the scene was read from (scene file, OBJ, MTL, textures): a
   // loader that reads a file adds it here, so that no output can overwrite it.
   std::vector<std::string> input_files;
@@ -174,6 +195,11 @@ struct Scene {
   // big for float shows up as infinity rather than as a wrong number).
   double diagonal() const;
 };
+
+// `from`'s warnings after `into`'s, their map requests with them.
+void append_warnings(Scene& into, Scene& from);
+// `first` ahead of the scene's warnings, its map requests kept in their places.
+void put_warnings_first(Scene& scene, std::vector<std::string> first);
 
 // The diagonal of the box [lo, hi] in double, and SPEC's epsilon for it:
 // one home for both, so that code that already holds the bounds (a scan of

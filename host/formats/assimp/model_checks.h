@@ -22,19 +22,14 @@ constexpr std::size_t kMaxNodes = std::size_t(1) << 20;
 constexpr long kMaxNesting = 4 * kMaxNodeDepth;
 
 // The checks of the format that `ext` names (with or without its dot), for
-// the file `path` read through `files`.
+// the file `path` read through `files`. PLY's and STL's are their rooms'
+// (ply::check_ply, stl::check_stl).
 void check_model_file_shape(ModelFiles& files, const std::string& path, const std::string& ext);
 
-// PLY: the header ends, its element counts fit the file, and the data holds
-// every element the header counts (text or binary).
-void check_ply(const std::string& bytes, const std::string& name);
 // OFF: the vertex and face counts fit the file; every vertex line holds its
 // numbers and every face line a count of 1 to 9 and that many indices of
 // vertices in the file (the importer would clamp, drop or misread them).
 void check_off(const std::string& text, std::size_t file_bytes, const std::string& name);
-// STL: a binary file holds the facets its header counts; a text file ends
-// every facet and solid it opens.
-void check_stl(const std::string& bytes, const std::string& name);
 // Other text formats: XML elements or braces nested at most kMaxNesting deep.
 void check_nesting(const std::string& bytes, const std::string& name);
 // glTF (text) and GLB: chunk lengths within the file; buffers, buffer views

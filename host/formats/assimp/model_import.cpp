@@ -34,6 +34,7 @@
 #include "formats/assimp/model_materials.h"
 #include "formats/assimp/model_window.h"
 #include "formats/ply/ply_reader.h"
+#include "formats/stl/stl_format.h"
 
 #ifdef OPSILA_HAVE_ASSIMP
 #include <assimp/Importer.hpp>
@@ -79,14 +80,14 @@ void collect_placements(const aiNode* root, unsigned num_meshes, std::vector<std
 
 class ModelReader {
  public:
-  ModelReader(const aiScene& ai, const std::string& name, const std::string& base_dir)
-      : ai_(ai), name_(name), base_dir_(base_dir) {}
+  ModelReader(const aiScene& ai, const std::string& name, const std::string& base_dir, MapImages images)
+      : ai_(ai), name_(name), base_dir_(base_dir), images_(images) {}
 
   Scene run() {
     scene_.has_camera = false;
     scene_.has_lights = false;
     scene_.materials.push_back(MaterialDesc::default_material());
-    material_index_ = import_materials(ai_, name_, base_dir_, scene_);
+    material_index_ = import_materials(ai_, name_, base_dir_, scene_, images_);
     std::vector<std::vector<aiMatrix4x4>> placements(ai_.mNumMeshes);
     collect_placements(ai_.mRootNode, ai_.mNumMeshes, placements, name_);
     int unplaced = 0, facet = 0, skipped = 0;
@@ -131,6 +132,7 @@ class ModelReader {
   const aiScene& ai_;
   const std::string& name_;
   std::string base_dir_;
+  MapImages images_;
   Scene scene_;
   std::vector<int> material_index_;  // importer material -> Scene::materials
 };
@@ -299,37 +301,12 @@ void keep_readers_for(Assimp::Importer& importer, const std::string& ext) {
 // range, ...) instead of handing it on.
 constexpr unsigned kImportFlags = aiProcess_ValidateDataStructure;
 
-// STL is read without that step: it also refuses a mesh without vertices,
-// and a text STL makes one of every solid, so one empty solid beside a
-// full one ("solid a ... endsolid", "solid b endsolid") refused the whole
-// file. What the step would check of the STL reader's scene is checked
-// here; an empty solid keeps its mesh's place, hence the object ids of the
-// solids after it (SPEC: the index of the mesh in the importer's list).
+// STL is read without that step; its scene is checked instead
+// (stl::check_imported_scene says why).
 bool validated_by_us(const std::string& ext) { return lower(ext) == ".stl"; }
 
-void check_stl_scene(const aiScene& ai, const std::string& name) {
-  const auto bad = [&](const std::string& what) {
-    throw InputError(name + ": the STL reader's scene is inconsistent (" + what + ")");
-  };
-  if (!ai.mRootNode || (ai.mNumMeshes > 0 && !ai.mMeshes)) bad("no root node or mesh list");
-  for (unsigned m = 0; m < ai.mNumMeshes; ++m) {
-    const aiMesh* mesh = ai.mMeshes[m];
-    if (!mesh) bad("mesh " + std::to_string(m) + " missing");
-    if ((mesh->mNumVertices > 0 && !mesh->mVertices) || (mesh->mNumFaces > 0 && !mesh->mFaces))
-      bad("mesh " + std::to_string(m) + " without its arrays");
-    for (unsigned f = 0; f < mesh->mNumFaces; ++f) {
-      const aiFace& face = mesh->mFaces[f];
-      if (face.mNumIndices > 0 && !face.mIndices) bad("a face without indices");
-      for (unsigned k = 0; k < face.mNumIndices; ++k)
-        if (face.mIndices[k] >= mesh->mNumVertices) bad("a vertex index out of range");
-    }
-  }
-  for (unsigned k = 0; k < ai.mNumMaterials; ++k)
-    if (!ai.mMaterials || !ai.mMaterials[k]) bad("a material missing");
-}
-
 Scene convert(Assimp::Importer& importer, const aiScene* ai, const std::string& name, const std::string& base_dir,
-              const ModelFiles& files) {
+              const ModelFiles& files, MapImages images) {
   if (!ai) {
     std::string why = importer.GetErrorString();
     std::replace(why.begin(), why.end(), '\n', ' ');
@@ -339,7 +316,7 @@ Scene convert(Assimp::Importer& importer, const aiScene* ai, const std::string& 
   if (!ai->mRootNode || ai->mNumMeshes == 0 || (ai->mFlags & AI_SCENE_FLAGS_INCOMPLETE))
     throw InputError(name + ": no facets (the model has no meshes)");
   try {
-    return ModelReader(*ai, name, base_dir).run();
+    return ModelReader(*ai, name, base_dir, images).run();
   } catch (const std::bad_alloc&) {
     throw InputError(name + ": out of memory while loading (model too large)");
   } catch (const std::length_error&) {
@@ -369,7 +346,8 @@ constexpr std::size_t kImportStackBytes = std::size_t(256) << 20;
 // The file's shape checks, then the importer, through `files` (which
 // records every file read as an input of the scene), on a thread with a
 // large stack.
-Scene import_model(ModelFiles& files, const std::string& path, const std::string& base_dir, bool watched) {
+Scene import_model(ModelFiles& files, const std::string& path, const std::string& base_dir, bool watched,
+                   MapImages images) {
   Scene scene;
   run_with_stack(kImportStackBytes, [&] {
     const std::string ext = fs::path(path).extension().string();
@@ -388,8 +366,8 @@ Scene import_model(ModelFiles& files, const std::string& path, const std::string
       ai = importer.ReadFile(path, flags);
     }
     if (!ai && !base_dir.empty()) explain_with_stream(path);  // a file on disk (not a model in memory)
-    if (ai && our_checks) check_stl_scene(*ai, path);
-    scene = convert(importer, ai, path, base_dir, files);
+    if (ai && our_checks) stl::check_imported_scene(*ai, path);
+    scene = convert(importer, ai, path, base_dir, files, images);
   });
   scene.input_files.insert(scene.input_files.begin(), files.files().begin(), files.files().end());
   return scene;
@@ -404,14 +382,14 @@ bool is_imported_model(const std::string& path) {
   return importer.IsExtensionSupported(ext.c_str());
 }
 
-Scene load_model(const std::string& path) {
+Scene load_model(const std::string& path, MapImages images) {
   ModelFiles files;
   files.size(path);  // the usual messages for a missing, special or huge file
   const bool ply = lower(fs::path(path).extension().string()) == ".ply";
   if (ply && ply_has_strips(path)) return load_ply_whole(path, kMaxTriangles);  // the importer keeps one triangle
   std::string dir = fs::path(path).parent_path().string();
   if (dir.empty()) dir = ".";
-  Scene scene = import_model(files, path, dir, true);
+  Scene scene = import_model(files, path, dir, true, images);
   if (ply)
     for (std::string& w : ply_unread_elements(path)) scene.warnings.push_back(std::move(w));
   return scene;
@@ -422,7 +400,7 @@ Scene load_model_from_memory(const std::string& bytes, const std::string& name, 
   // The importer picks its reader by the name's extension.
   const std::string path = bare_extension(fs::path(name).extension().string()) == lower(hint) ? name : name + "." + hint;
   ModelFiles files(path, bytes, other);
-  return import_model(files, path, "", false);
+  return import_model(files, path, "", false, MapImages::now);
 }
 
 #else  // built without the Open Asset Import Library
@@ -435,7 +413,7 @@ bool is_imported_model(const std::string& path) {
   return false;
 }
 
-Scene load_model(const std::string& path) {
+Scene load_model(const std::string& path, MapImages) {
   ModelFiles().size(path);  // the usual messages for a missing, special or huge file
   throw InputError(path + ": this build has no Open Asset Import Library (install libassimp-dev and rebuild)");
 }

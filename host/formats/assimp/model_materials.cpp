@@ -53,8 +53,9 @@ bool is_placeholder(const aiMaterial& m) {
 
 class MaterialReader {
  public:
-  MaterialReader(const aiScene& ai, const std::string& name, const std::string& base_dir, Scene& scene)
-      : ai_(ai), name_(name), base_dir_(base_dir), scene_(scene) {}
+  MaterialReader(const aiScene& ai, const std::string& name, const std::string& base_dir, Scene& scene,
+                 MapImages images)
+      : ai_(ai), name_(name), base_dir_(base_dir), scene_(scene), images_(images) {}
 
   std::vector<int> run() {
     std::vector<int> index(ai_.mNumMaterials, 0);
@@ -119,7 +120,7 @@ class MaterialReader {
       warn("texture map '" + path + "' ignored: no files are read here");
       return -1;
     }
-    return add_texture_file(scene_, resolve_texture_path(path, base_dir_), name_ + ": ");
+    return add_texture_file(scene_, resolve_texture_path(path, base_dir_), name_ + ": ", images_);
   }
 
   int embedded_texture(const aiTexture& t, const std::string& ref) {
@@ -155,13 +156,14 @@ class MaterialReader {
   const std::string& name_;
   const std::string& base_dir_;
   Scene& scene_;
+  MapImages images_;
 };
 
 }  // namespace
 
 std::vector<int> import_materials(const aiScene& ai, const std::string& name, const std::string& base_dir,
-                                  Scene& scene) {
-  return MaterialReader(ai, name, base_dir, scene).run();
+                                  Scene& scene, MapImages images) {
+  return MaterialReader(ai, name, base_dir, scene, images).run();
 }
 
 }  // namespace opsila

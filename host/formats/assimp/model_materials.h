@@ -16,8 +16,9 @@ namespace opsila {
 // scene.textures) and returns, for each of them, its index in
 // scene.materials: 0, SPEC's default, for the importer's placeholder.
 // Warnings start with `name`; map files are found from `base_dir` ("" when
-// the model came from memory: no file is read then).
+// the model came from memory: no file is read then), their images read as
+// `images` says (add_texture_file).
 std::vector<int> import_materials(const aiScene& ai, const std::string& name, const std::string& base_dir,
-                                  Scene& scene);
+                                  Scene& scene, MapImages images);
 
 }  // namespace opsila

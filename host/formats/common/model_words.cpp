@@ -2,6 +2,7 @@
 
 #include <cctype>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <string>
 
@@ -33,6 +34,23 @@ bool number_start(std::string_view w) {
   if (digit(i) || (i < w.size() && w[i] == '.' && digit(i + 1))) return true;
   const std::string rest = lower(std::string(w.substr(i, 3)));
   return rest == "nan" || rest == "inf";
+}
+
+std::string quote(std::string_view tok) {
+  std::string out = "'";
+  const std::size_t limit = 40;
+  for (std::size_t i = 0; i < tok.size() && i < limit; ++i) {
+    const unsigned char c = static_cast<unsigned char>(tok[i]);
+    if (c < 0x20 || c >= 0x7f) {
+      char buf[8];
+      std::snprintf(buf, sizeof buf, "\\x%02x", c);
+      out += buf;
+    } else {
+      out += static_cast<char>(c);
+    }
+  }
+  if (tok.size() > limit) out += "...";
+  return out + "'";
 }
 
 }  // namespace opsila::model_words

@@ -1,8 +1,10 @@
 // The words of a text model file as the importer's readers take them
-// (PLY, OFF, text STL): shared by the checks of those formats.
+// (PLY, OFF, text STL): shared by the checks of those formats, and the
+// quoting of a word in a message, shared by every text reader.
 #pragma once
 
 #include <cstddef>
+#include <string>
 #include <string_view>
 
 namespace opsila::model_words {
@@ -18,5 +20,7 @@ bool finite_in_float(std::string_view w);
 // optional sign, then a digit, a point and a digit, or 'nan' or 'inf' (any
 // case; not finite, caught where a facet uses it).
 bool number_start(std::string_view w);
+// A word as shown in a message: quoted, shortened, control bytes escaped.
+std::string quote(std::string_view w);
 
 }  // namespace opsila::model_words

@@ -4,6 +4,8 @@
 
 #include <cstdint>
 
+#include "scene/scene.h"
+
 namespace opsila {
 
 // One rank's window of a model read as a stream (OBJ, PLY, STL; docs/DISTRIBUTED.md): the
@@ -17,6 +19,7 @@ struct ModelWindow {
   std::uint64_t plan_begin = 0, plan_all = 0, plan_total = 0;
   std::uint64_t fans = 0;
   bool load_maps = true;  // the materials' texture maps (the read that keeps the materials)
+  MapImages map_images = MapImages::now;  // and how their images are read (add_texture_file)
 };
 // The rank whose slice of the plan holds the file's fan triangle `fan`
 // (-1 when the window keeps nothing: the counting read). The PLY stream's

@@ -113,8 +113,8 @@ std::string resolve_texture_path(const std::string& written, const std::string& 
   return full.string();
 }
 
-int add_texture_file(Scene& scene, const std::string& path, const std::string& where) {
-  if (int later = -1; list_map_for_later(scene, path, where, later)) return later;
+int add_texture_file(Scene& scene, const std::string& path, const std::string& where, MapImages images) {
+  if (images == MapImages::later) return list_map_for_later(scene, path, where);
   for (std::size_t i = 0; i < scene.textures.size(); ++i)
     if (scene.textures[i].path == path) return static_cast<int>(i);
   // An input, whether or not it decodes: no output may overwrite it.

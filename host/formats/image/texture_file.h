@@ -33,28 +33,19 @@ std::string resolve_texture_path(const std::string& written, const std::string& 
 // Texture maps a scene already holds are shared: loads `path` once and
 // returns its index in scene.textures, or -1 (with one warning naming
 // `where`) when the image cannot be read. Either way the file is one of
-// scene.input_files (no output may overwrite it).
-int add_texture_file(Scene& scene, const std::string& path, const std::string& where);
+// scene.input_files (no output may overwrite it). MapImages::later reads
+// no image (list_map_for_later).
+int add_texture_file(Scene& scene, const std::string& path, const std::string& where, MapImages images);
 
-// Texture maps of a scene read in shares (docs/DISTRIBUTED.md). While a
-// MapsDecidedLater is alive, add_texture_file reads no image: it lists the
-// map (path only, pixels_later) and leaves a placeholder where its warning
-// would go. The ranks then check each image once between them
+// Texture maps of a scene read in shares (docs/DISTRIBUTED.md): with
+// MapImages::later, add_texture_file lists the map (path only,
+// pixels_later) and a MapRequest where its warning would go, and returns
+// its index. The ranks then check each image once between them
 // (check_texture_map), and settle_texture_maps gives every rank the scene
 // one process reads: the same warnings in the same places, the same maps
 // ignored, the same texture table; only the texels wait for the ranks
 // whose facets use them (decode_used_maps).
-class MapsDecidedLater {
- public:
-  explicit MapsDecidedLater(bool active);
-  ~MapsDecidedLater();
-  MapsDecidedLater(const MapsDecidedLater&) = delete;
-  MapsDecidedLater& operator=(const MapsDecidedLater&) = delete;
-};
-
-// add_texture_file's part while a MapsDecidedLater is alive: lists the map
-// in `index` and returns true; false otherwise.
-bool list_map_for_later(Scene& scene, const std::string& path, const std::string& where, int& index);
+int list_map_for_later(Scene& scene, const std::string& path, const std::string& where);
 
 // What checking one image found: its size, or why it is ignored.
 struct MapCheck {
@@ -63,17 +54,17 @@ struct MapCheck {
   std::string problem;
   std::vector<std::uint32_t> texels;  // kept only when asked
 };
-// The images the placeholders in `warnings` name, each once, in order.
-std::vector<std::string> maps_to_check(const std::vector<std::string>& warnings);
+// The images scene.map_requests name, each once, in order.
+std::vector<std::string> maps_to_check(const Scene& scene);
 // Decodes the image to check it, keeping its texels only if asked.
 MapCheck check_texture_map(const std::string& path, bool keep_texels = false);
-// Placeholders become the warnings one process gives (or go); maps whose
+// The requests become the warnings one process gives (or go); maps whose
 // image failed are ignored; the table keeps the others, sizes filled in
 // (and texels, where a check kept them).
-// `checks[k]` is maps_to_check(scene.warnings)[k]'s.
+// `checks[k]` is maps_to_check(scene)[k]'s.
 void settle_texture_maps(Scene& scene, std::vector<MapCheck>& checks);
-// A read that failed: its placeholders, checked here, as warnings.
-void settle_map_warnings(std::vector<std::string>& warnings);
+// A read that failed: its requests, checked here, as warnings.
+void settle_map_warnings(Scene& scene);
 
 // Decodes the maps that `scene`'s facets with texture coordinates use and
 // that are not decoded yet; returns the bytes of texels it holds. Throws

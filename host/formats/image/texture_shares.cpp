@@ -10,34 +10,29 @@ namespace opsila {
 
 namespace {
 
-bool maps_later = false;  // a MapsDecidedLater is alive (scenes are read on one thread)
-
-// A placeholder warning: a mark, then where the map was named, a NUL and the
-// image's path (neither holds a NUL).
-constexpr char kMark = '\x01';
-bool is_placeholder(const std::string& w) { return !w.empty() && w[0] == kMark; }
-std::string placeholder_path(const std::string& w) { return w.substr(w.find('\0') + 1); }
-std::string placeholder_where(const std::string& w) { return w.substr(1, w.find('\0') - 1); }
-
-// Each placeholder becomes the warning one process gives (its image was
-// ignored) or goes (its image is fine).
-void resolve_placeholders(std::vector<std::string>& warnings, const std::map<std::string, MapCheck*>& by_path) {
-  std::vector<std::string> kept;
-  for (std::string& w : warnings) {
-    if (!is_placeholder(w)) {
-      kept.push_back(std::move(w));
-      continue;
+// The requests become the warnings one process gives, each in its place
+// (its image was ignored), or go (its image is fine).
+void resolve_requests(Scene& scene, const std::map<std::string, MapCheck*>& by_path) {
+  std::vector<std::string> warnings;
+  std::size_t next = 0;  // the next request
+  const auto requests_before = [&](std::size_t k) {
+    for (; next < scene.map_requests.size() && scene.map_requests[next].warning <= k; ++next) {
+      const MapRequest& r = scene.map_requests[next];
+      const MapCheck& c = *by_path.at(r.path);
+      if (!c.ok) warnings.push_back(r.where + "texture map '" + r.path + "' ignored: " + c.problem);
     }
-    const std::string path = placeholder_path(w);
-    const MapCheck& c = *by_path.at(path);
-    if (!c.ok) kept.push_back(placeholder_where(w) + "texture map '" + path + "' ignored: " + c.problem);
+  };
+  for (std::size_t k = 0; k < scene.warnings.size(); ++k) {
+    requests_before(k);
+    warnings.push_back(std::move(scene.warnings[k]));
   }
-  warnings = std::move(kept);
+  requests_before(scene.warnings.size());
+  scene.warnings = std::move(warnings);
+  scene.map_requests.clear();
 }
 
-std::map<std::string, MapCheck*> checks_by_path(const std::vector<std::string>& warnings,
-                                                std::vector<MapCheck>& checks) {
-  const std::vector<std::string> paths = maps_to_check(warnings);
+std::map<std::string, MapCheck*> checks_by_path(const Scene& scene, std::vector<MapCheck>& checks) {
+  const std::vector<std::string> paths = maps_to_check(scene);
   if (paths.size() != checks.size()) throw std::logic_error("settle_texture_maps: one check per image");
   std::map<std::string, MapCheck*> by_path;
   for (std::size_t k = 0; k < paths.size(); ++k) by_path[paths[k]] = &checks[k];
@@ -46,32 +41,27 @@ std::map<std::string, MapCheck*> checks_by_path(const std::vector<std::string>& 
 
 }  // namespace
 
-MapsDecidedLater::MapsDecidedLater(bool active) { maps_later = active; }
-MapsDecidedLater::~MapsDecidedLater() { maps_later = false; }
-
-// add_texture_file's part while maps are decided later: the map is listed
-// once, a placeholder stands wherever one process could warn about it.
-bool list_map_for_later(Scene& scene, const std::string& path, const std::string& where, int& index) {
-  if (!maps_later) return false;
-  scene.warnings.push_back(std::string(1, kMark) + where + '\0' + path);
+// The map is listed once, a request stands wherever one process could warn
+// about it.
+int list_map_for_later(Scene& scene, const std::string& path, const std::string& where) {
+  scene.map_requests.push_back(MapRequest{path, where, scene.warnings.size()});
   for (std::size_t i = 0; i < scene.textures.size(); ++i)
-    if (scene.textures[i].path == path) return index = static_cast<int>(i), true;
+    if (scene.textures[i].path == path) return static_cast<int>(i);
   scene.input_files.push_back(path);
   Texture t;
   t.path = path;
   t.pixels_later = true;
   scene.textures.push_back(std::move(t));
-  index = static_cast<int>(scene.textures.size()) - 1;
-  return true;
+  return static_cast<int>(scene.textures.size()) - 1;
 }
 
-std::vector<std::string> maps_to_check(const std::vector<std::string>& warnings) {
+std::vector<std::string> maps_to_check(const Scene& scene) {
   std::vector<std::string> paths;
   std::map<std::string, bool> seen;
-  for (const std::string& w : warnings)
-    if (is_placeholder(w) && !seen[placeholder_path(w)]) {
-      seen[placeholder_path(w)] = true;
-      paths.push_back(placeholder_path(w));
+  for (const MapRequest& r : scene.map_requests)
+    if (!seen[r.path]) {
+      seen[r.path] = true;
+      paths.push_back(r.path);
     }
   return paths;
 }
@@ -86,8 +76,8 @@ MapCheck check_texture_map(const std::string& path, bool keep_texels) {
 }
 
 void settle_texture_maps(Scene& scene, std::vector<MapCheck>& checks) {
-  const std::map<std::string, MapCheck*> by_path = checks_by_path(scene.warnings, checks);
-  resolve_placeholders(scene.warnings, by_path);
+  const std::map<std::string, MapCheck*> by_path = checks_by_path(scene, checks);
+  resolve_requests(scene, by_path);
   // The table one process builds: an image that failed is not in it.
   std::vector<int> index(scene.textures.size(), -1);
   std::vector<Texture> table;
@@ -113,10 +103,10 @@ void settle_texture_maps(Scene& scene, std::vector<MapCheck>& checks) {
       if (*map >= 0) *map = index[std::size_t(*map)];
 }
 
-void settle_map_warnings(std::vector<std::string>& warnings) {
+void settle_map_warnings(Scene& scene) {
   std::vector<MapCheck> checks;
-  for (const std::string& path : maps_to_check(warnings)) checks.push_back(check_texture_map(path));
-  resolve_placeholders(warnings, checks_by_path(warnings, checks));
+  for (const std::string& path : maps_to_check(scene)) checks.push_back(check_texture_map(path));
+  resolve_requests(scene, checks_by_path(scene, checks));
 }
 
 std::uint64_t decode_used_maps(Scene& scene) {

@@ -76,6 +76,7 @@ void ObjParser::check_range(IndexedList& list, const std::vector<std::uint32_t>&
 // that cannot be read is a warning and its map is ignored.
 void ObjParser::load_maps(Scene& scene, const std::vector<int>& slot_material) {
   if (win_ && !win_->plan.load_maps) return;
+  const MapImages images = win_ ? win_->plan.map_images : MapImages::now;
   std::vector<char> mapped(library_.size() + 1, 0);
   for (const Polygon& poly : polys_)
     if (poly.has_uv && poly.slot >= 0) mapped[slot_material[poly.slot]] = 1;
@@ -86,8 +87,8 @@ void ObjParser::load_maps(Scene& scene, const std::vector<int>& slot_material) {
     if (!mapped[k + 1]) continue;
     MaterialDesc& m = scene.materials[k + 1];
     const std::string where = library_file_[k] + ": material '" + m.name + "': ";
-    if (!m.map_kd_file.empty()) m.map_kd = add_texture_file(scene, m.map_kd_file, where);
-    if (!m.map_ka_file.empty()) m.map_ka = add_texture_file(scene, m.map_ka_file, where);
+    if (!m.map_kd_file.empty()) m.map_kd = add_texture_file(scene, m.map_kd_file, where, images);
+    if (!m.map_ka_file.empty()) m.map_ka = add_texture_file(scene, m.map_ka_file, where, images);
   }
 }
 
@@ -249,8 +250,7 @@ Scene ObjParser::finish() {
   else scene.bounds(lo, hi);
   check_scene_extent(win_ ? fig.triangles : scene.triangles.size(), lo, hi, name_);
   scene.camera = frame_bounds(lo, hi, 45.0f, float(scene.width) / float(scene.height));
-  for (std::string& w : scene.warnings) warnings_.push_back(std::move(w));
-  scene.warnings = std::move(warnings_);
+  put_warnings_first(scene, std::move(warnings_));
   scene.input_files.insert(scene.input_files.begin(), input_files_.begin(), input_files_.end());
   return scene;
 }

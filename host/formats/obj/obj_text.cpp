@@ -31,24 +31,6 @@ std::string at(const std::string& file, int line) {
   return file + ":" + std::to_string(line) + ": ";
 }
 
-// A token as shown in a message: quoted, shortened, control bytes escaped.
-std::string quote(std::string_view tok) {
-  std::string out = "'";
-  const std::size_t limit = 40;
-  for (std::size_t i = 0; i < tok.size() && i < limit; ++i) {
-    const unsigned char c = static_cast<unsigned char>(tok[i]);
-    if (c < 0x20 || c >= 0x7f) {
-      char buf[8];
-      std::snprintf(buf, sizeof buf, "\\x%02x", c);
-      out += buf;
-    } else {
-      out += static_cast<char>(c);
-    }
-  }
-  if (tok.size() > limit) out += "...";
-  return out + "'";
-}
-
 bool is_blank(char c) { return c == ' ' || c == '\t'; }
 
 std::string_view trim(std::string_view s) {

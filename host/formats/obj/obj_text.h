@@ -7,6 +7,7 @@
 #include <string>
 #include <string_view>
 
+#include "formats/common/model_words.h"
 #include "scene/scene.h"
 
 namespace opsila {
@@ -15,8 +16,8 @@ namespace obj_text {
 [[noreturn]] void fail(const std::string& file, int line, const std::string& what);
 // "FILE:LINE: ", the start of a message.
 std::string at(const std::string& file, int line);
-// A token as shown in a message: quoted, shortened, control bytes escaped.
-std::string quote(std::string_view tok);
+// A token as shown in a message (model_words.h).
+using model_words::quote;
 bool is_blank(char c);
 std::string_view trim(std::string_view s);
 // Next blank-separated token of `rest` (empty at the end of the line).

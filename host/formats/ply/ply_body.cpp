@@ -16,15 +16,6 @@ namespace ply {
 
 namespace {
 
-int type_bytes(Type t) {
-  switch (t) {
-    case Type::int8: case Type::uint8: return 1;
-    case Type::int16: case Type::uint16: return 2;
-    case Type::float64: return 8;
-    default: return 4;
-  }
-}
-
 bool is_signed(Type t) { return t == Type::int8 || t == Type::int16 || t == Type::int32; }
 
 bool blank(char c) { return c == ' ' || c == '\t' || c == '\r'; }

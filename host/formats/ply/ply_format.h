@@ -1,5 +1,7 @@
-// A PLY file's header and the reading of its body in bounded blocks
-// (ply_header.cpp, ply_body.cpp), for the PLY stream (ply_window.cpp).
+// What a PLY file is: its header, read by one parser for the PLY stream
+// (ply_window.cpp) and for the checks before the importer (ply_checks.cpp),
+// and the reading of its body in bounded blocks (ply_header.cpp,
+// ply_body.cpp).
 #pragma once
 
 #include <cstdint>
@@ -11,7 +13,12 @@
 namespace opsila {
 namespace ply {
 
-enum class Type { int8, uint8, int16, uint16, int32, uint32, float32, float64 };
+// unknown: a type name the format does not have (the importer's reading
+// judges it after the header; the stream's refuses it on its line).
+enum class Type { int8, uint8, int16, uint16, int32, uint32, float32, float64, unknown };
+
+// Bytes of a value of type t in a binary body (0 for unknown).
+int type_bytes(Type t);
 
 struct Property {
   std::string name;
@@ -31,6 +38,7 @@ enum class Format { ascii, little_endian, big_endian };
 
 struct Header {
   Format format = Format::ascii;
+  std::string format_name;            // as the last 'format' line gives it
   std::vector<Element> elements;
   std::vector<std::string> comments;  // 'comment' and 'obj_info' lines
   std::uint64_t body = 0;             // byte offset of the body
@@ -38,10 +46,29 @@ struct Header {
   std::uint64_t file_bytes = 0;
 };
 
-// The header, strictly: 'ply', 'format' (ascii, binary_little_endian,
-// binary_big_endian, 1.0), 'comment', 'obj_info', 'element', 'property'
-// (scalar or list), 'end_header'. Any other line is an error naming it.
+// Who reads a header, and so what it may hold:
+// - stream: strictly 'ply', 'format' (ascii, binary_little_endian,
+//   binary_big_endian, 1.0), 'comment', 'obj_info', 'element', 'property'
+//   (scalar or list), 'end_header'; any other line is an error naming it.
+// - importer: as the importer reads it (lines it does not know are let
+//   be), refusing what it misreads: a header without an 'end_header' line
+//   of its own, an element declared twice, a property before any element,
+//   more elements than the file can hold, unknown types or formats.
+// Each error is one InputError naming `path` (and, for the stream, the line).
+enum class Reading { stream, importer };
+
+// The header at the start of `bytes` (at least the header; the whole file
+// for the importer's reading) of a file of file_bytes.
+Header parse_header(const std::string& bytes, std::uint64_t file_bytes, const std::string& path, Reading how);
+
+// The header of the file `path`, as the stream reads it.
 Header read_header(const std::string& path);
+
+// The checks before the importer reads the PLY file `bytes` (named `name`):
+// its header (Reading::importer), a body that holds every element the
+// header counts (text or binary), every vertex a face uses finite (text),
+// and faces at all.
+void check_ply(const std::string& bytes, const std::string& name);
 
 // Whether the header declares a 'tristrips' element.
 bool has_strips(const Header& h);

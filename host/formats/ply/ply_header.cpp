@@ -1,7 +1,10 @@
-// A PLY header, read strictly, and whether the PLY stream reads the file
-// exactly as the importer path does.
+// A PLY header, read by one parser for the stream (strictly) and for the
+// checks before the importer (as the importer reads it), and whether the
+// PLY stream reads the file exactly as the importer path does.
 #include <algorithm>
+#include <limits>
 #include <sstream>
+#include <string_view>
 
 #include "core/errors.h"
 #include "core/util.h"
@@ -13,115 +16,216 @@ namespace ply {
 
 namespace {
 
-constexpr std::size_t kMaxHeaderBytes = 64 * 1024;  // the importer path's check_ply limit
+// The header's end is looked for in the file's first 64 KiB.
+constexpr std::size_t kMaxHeaderBytes = 64 * 1024;
 
-bool type_named(const std::string& name, Type& t) {
+Type type_named(const std::string& name) {
   static const std::pair<const char*, Type> kTypes[] = {
       {"char", Type::int8},     {"int8", Type::int8},       {"uchar", Type::uint8},    {"uint8", Type::uint8},
       {"short", Type::int16},   {"int16", Type::int16},     {"ushort", Type::uint16},  {"uint16", Type::uint16},
       {"int", Type::int32},     {"int32", Type::int32},     {"uint", Type::uint32},    {"uint32", Type::uint32},
       {"float", Type::float32}, {"float32", Type::float32}, {"double", Type::float64}, {"float64", Type::float64}};
   for (const auto& [n, type] : kTypes)
-    if (name == n) return t = type, true;
-  return false;
+    if (name == n) return type;
+  return Type::unknown;
 }
 
+bool all_digits(const std::string& w) { return !w.empty() && w.find_first_not_of("0123456789") == std::string::npos; }
+
+[[noreturn]] void no_end(const std::string& path) {
+  throw InputError(path + ": PLY header without an 'end_header' line (truncated or not PLY)");
+}
+
+// The lines between 'ply' and 'end_header', one at a time, into `h`. The
+// stream's reading fails on the line at fault; the importer's lets be what
+// the importer lets be and judges the rest after the header (ImporterJudge).
 struct HeaderLines {
   const std::string& path;
   Header& h;
+  const bool strict;
   int line = 0;
+  bool format_seen = false;
+  bool property_first = false;  // the importer's reading: a property before any element
 
   [[noreturn]] void fail(const std::string& what) const {
     throw InputError(path + ":" + std::to_string(line) + ": PLY header: " + what);
   }
   Type type(const std::string& name) const {
-    Type t;
-    if (!type_named(name, t)) fail("unknown property type '" + name.substr(0, 20) + "'");
+    const Type t = type_named(name);
+    if (strict && t == Type::unknown) fail("unknown property type '" + name.substr(0, 20) + "'");
     return t;
   }
   void element(std::istringstream& words) {
     std::string name, count, extra;
     words >> name >> count >> extra;
-    if (name.empty() || count.empty() || !extra.empty() || count.size() > 19 ||
-        count.find_first_not_of("0123456789") != std::string::npos)
+    if (!strict) {  // a count that is not one: the importer judges it
+      const std::uint64_t n = !all_digits(count)   ? 0
+                              : count.size() <= 19 ? std::stoull(count)
+                                                   : std::numeric_limits<std::uint64_t>::max();
+      h.elements.push_back(Element{name, n, {}, line});
+      return;
+    }
+    if (!format_seen) fail("an element before the format line");
+    if (name.empty() || !extra.empty() || count.size() > 19 || !all_digits(count))
       fail("'element NAME COUNT' expected");
     for (const Element& e : h.elements)
       if (e.name == name) fail("the element '" + name.substr(0, 20) + "' is declared twice");
     h.elements.push_back(Element{name, std::stoull(count), {}, line});
   }
   void property(std::istringstream& words) {
-    if (h.elements.empty()) fail("a property before any element");
+    if (h.elements.empty()) {
+      if (strict) fail("a property before any element");
+      property_first = true;
+      return;
+    }
     std::string a, b, c, d, extra;
     words >> a >> b >> c >> d >> extra;
     Property p;
     if (a == "list") {
-      if (d.empty() || !extra.empty()) fail("'property list COUNT_TYPE TYPE NAME' expected");
+      if (strict && (d.empty() || !extra.empty())) fail("'property list COUNT_TYPE TYPE NAME' expected");
       p.list = true, p.count = type(b), p.type = type(c), p.name = d;
     } else {
-      if (b.empty() || !c.empty()) fail("'property TYPE NAME' expected");
+      if (strict && (b.empty() || !c.empty())) fail("'property TYPE NAME' expected");
       p.type = type(a), p.name = b;
     }
     h.elements.back().properties.push_back(p);
   }
-  // One line; true at 'end_header'.
-  bool read(const std::string& text, bool& format_seen) {
+  void format(std::istringstream& words) {
+    std::string f, version, extra;
+    words >> f >> version >> extra;
+    if (strict && (format_seen || version != "1.0" || !extra.empty())) fail("'format TYPE 1.0' expected once");
+    h.format_name = f;
+    if (f == "ascii") h.format = Format::ascii;
+    else if (f == "binary_little_endian") h.format = Format::little_endian;
+    else if (f == "binary_big_endian") h.format = Format::big_endian;
+    else if (strict) fail("format '" + f.substr(0, 20) + "' (ascii, binary_little_endian or binary_big_endian)");
+    format_seen = true;
+  }
+  // One line; true at the stream's 'end_header' (the importer's end is
+  // the line that starts with it, found before).
+  bool read(const std::string& text) {
     std::istringstream words(text);
     std::string keyword;
     words >> keyword;
-    if (keyword == "end_header") return true;
+    if (keyword == "end_header") return strict;
     if (keyword == "comment" || keyword == "obj_info") {
       h.comments.push_back(text.substr(std::min(text.size(), text.find(keyword) + keyword.size())));
     } else if (keyword == "format") {
-      std::string f, version, extra;
-      words >> f >> version >> extra;
-      if (format_seen || version != "1.0" || !extra.empty()) fail("'format TYPE 1.0' expected once");
-      if (f == "ascii") h.format = Format::ascii;
-      else if (f == "binary_little_endian") h.format = Format::little_endian;
-      else if (f == "binary_big_endian") h.format = Format::big_endian;
-      else fail("format '" + f.substr(0, 20) + "' (ascii, binary_little_endian or binary_big_endian)");
-      format_seen = true;
+      format(words);
     } else if (keyword == "element") {
-      if (!format_seen) fail("an element before the format line");
       element(words);
     } else if (keyword == "property") {
       property(words);
-    } else if (!keyword.empty()) {
-      fail("unknown line '" + keyword.substr(0, 20) + "'");
-    } else {
-      fail("empty line");
+    } else if (strict) {
+      fail(keyword.empty() ? "empty line" : "unknown line '" + keyword.substr(0, 20) + "'");
     }
     return false;
   }
 };
 
+// What the importer misreads in a header it reads (found by fuzz_model): it
+// allocates what the element counts ask for before reading one, frees what
+// it did not allocate when an element is declared twice, and reads binary
+// data out of bounds with unknown types and formats. In the order the
+// checks before the importer always gave them.
+void judge_for_importer(const Header& h, const HeaderLines& lines, const std::string& path) {
+  if (lines.property_first) throw InputError(path + ": PLY header has a property before any element");
+  for (std::size_t k = 0; k < h.elements.size(); ++k) {
+    const Element& e = h.elements[k];
+    for (std::size_t j = 0; j < k; ++j)
+      if (h.elements[j].name == e.name)
+        throw InputError(path + ": PLY header declares the element '" + e.name.substr(0, 20) + "' twice");
+    const std::uint64_t per = std::max<std::size_t>(1, e.properties.size());
+    if (e.count > h.file_bytes / per)
+      throw InputError(path + ": PLY header asks for " + std::to_string(e.count) + " '" + e.name +
+                       "' elements, more than a file of " + std::to_string(h.file_bytes) + " bytes can hold");
+  }
+}
+
+void judge_types_for_importer(const Header& h, const std::string& path) {
+  for (const Element& e : h.elements)
+    for (const Property& p : e.properties)
+      if (p.type == Type::unknown || (p.list && p.count == Type::unknown))
+        throw InputError(path + ": PLY '" + e.name.substr(0, 20) + "' element: a property of unknown type");
+  if (h.format_name != "ascii" && h.format_name != "binary_little_endian" && h.format_name != "binary_big_endian")
+    throw InputError(path + ": PLY format '" + h.format_name.substr(0, 20) +
+                     "' (ascii, binary_little_endian or binary_big_endian)");
+}
+
+// Where the importer's header ends: the start of the first line that
+// starts with 'end_header' (a line of its own: the importer misreads one
+// that ends another line).
+std::size_t importer_end(std::string_view bytes, const std::string& path) {
+  const std::size_t end = bytes.find("\nend_header");
+  if (end == std::string_view::npos || end > kMaxHeaderBytes) no_end(path);
+  return end + 1;
+}
+
+// The importer's body starts after 'end_header' and its line break.
+std::size_t importer_body(std::string_view bytes, std::size_t end, const std::string& path) {
+  std::size_t data = end + 10;
+  if (bytes.compare(data, 2, "\r\n") == 0) ++data;
+  if (data >= bytes.size() || bytes[data] != '\n')
+    throw InputError(path + ": PLY 'end_header' not followed by a line break");
+  return data + 1;
+}
+
 }  // namespace
+
+int type_bytes(Type t) {
+  switch (t) {
+    case Type::int8: case Type::uint8: return 1;
+    case Type::int16: case Type::uint16: return 2;
+    case Type::int32: case Type::uint32: case Type::float32: return 4;
+    case Type::float64: return 8;
+    default: return 0;
+  }
+}
+
+Header parse_header(const std::string& bytes, std::uint64_t file_bytes, const std::string& path, Reading how) {
+  const bool importer = how == Reading::importer;
+  Header h;
+  h.file_bytes = file_bytes;
+  const std::string_view head = std::string_view(bytes).substr(0, importer ? bytes.size() : kMaxHeaderBytes);
+  std::size_t at = 0;
+  // The next line, without its line break; false where none ends.
+  const auto next_line = [&](std::string& text) {
+    const std::size_t nl = head.find('\n', at);
+    if (nl == std::string_view::npos) return false;
+    text = std::string(head.substr(at, nl - at));
+    if (!text.empty() && text.back() == '\r') text.pop_back();
+    at = nl + 1;
+    return true;
+  };
+  // The 'ply' line (the importer would take "PLY" in any case, so it comes first).
+  std::string text;
+  const bool first = next_line(text);
+  if (!first && !importer) no_end(path);
+  if (!first || text != "ply") throw InputError(path + ": not PLY (a PLY file starts with the line 'ply')");
+  const std::size_t end = importer ? importer_end(head, path) : std::string::npos;
+  HeaderLines lines{path, h, !importer, 1};
+  while (at != end) {
+    ++lines.line;
+    if (!next_line(text)) no_end(path);
+    if (lines.read(text)) break;
+  }
+  if (importer) {
+    judge_for_importer(h, lines, path);
+    at = importer_body(head, end, path);
+    judge_types_for_importer(h, path);
+    h.lines = static_cast<int>(std::count(head.begin(), head.begin() + std::ptrdiff_t(at), '\n'));
+  } else {
+    if (!lines.format_seen) lines.fail("no format line");
+    h.lines = lines.line;
+  }
+  h.body = at;
+  return h;
+}
 
 Header read_header(const std::string& path) {
   ModelFiles files;
-  Header h;
-  h.file_bytes = files.size(path);
-  const std::string head = files.head(path, kMaxHeaderBytes);
-  HeaderLines lines{path, h};
-  bool format_seen = false;
-  std::size_t at = 0;
-  while (true) {
-    const std::size_t nl = head.find('\n', at);
-    ++lines.line;
-    if (nl == std::string::npos)
-      throw InputError(path + ": PLY header without an 'end_header' line (truncated or not PLY)");
-    std::string text = head.substr(at, nl - at);
-    if (!text.empty() && text.back() == '\r') text.pop_back();
-    at = nl + 1;
-    if (lines.line == 1) {
-      if (text != "ply") throw InputError(path + ": not PLY (a PLY file starts with the line 'ply')");
-      continue;
-    }
-    if (lines.read(text, format_seen)) break;
-  }
-  if (!format_seen) lines.fail("no format line");
-  h.body = at;
-  h.lines = lines.line;
-  return h;
+  const std::uint64_t size = files.size(path);
+  return parse_header(files.head(path, kMaxHeaderBytes), size, path, Reading::stream);
 }
 
 bool has_strips(const Header& h) {

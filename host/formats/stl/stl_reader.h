@@ -15,10 +15,8 @@
 namespace opsila {
 
 // Why the STL stream does not read this file exactly as the importer does,
-// "" when it does: an ASCII STL, a size other than 84 + 50 x the facet
-// count of the header, no facets, a header with Materialise colours
-// ("COLOR=", "MATERIAL="), or a file that cannot be read (the importer path
-// then judges it, with its own message).
+// "" when it does (stl::stream_refusal, stl_format.h), or that the file
+// cannot be read (the importer path then judges it, with its own message).
 std::string stl_stream_refusal(const std::string& path);
 
 // As load_ply_window, for a binary STL the stream reads: the 50-byte

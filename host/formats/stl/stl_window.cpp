@@ -1,7 +1,5 @@
-// One rank's window of a binary STL read as a stream (model_window.h): an
-// 80-byte header, a little-endian uint32 facet count, then 50 bytes a facet
-// (a float32 normal, three float32 corners, a uint16 attribute). The
-// records are read in blocks (64 Ki records at most) into a mesh of the
+// One rank's window of a binary STL (stl_format.h) read as a stream
+// (model_window.h). The records are read in blocks (64 Ki records at most) into a mesh of the
 // block's corners, each corner with its facet's normal, as the importer's
 // STL reader makes the whole file's mesh, and fanned by WindowFan
 // (model_fan.h): a facet is kept only when it falls in this rank's slice of
@@ -12,7 +10,6 @@
 #include "formats/stl/stl_reader.h"
 
 #include <algorithm>
-#include <cctype>
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
@@ -22,6 +19,7 @@
 
 #include "core/errors.h"
 #include "formats/common/model_files.h"
+#include "formats/stl/stl_format.h"
 
 #ifdef OPSILA_HAVE_ASSIMP
 #include <assimp/mesh.h>
@@ -35,8 +33,6 @@ namespace opsila {
 
 namespace {
 
-constexpr std::uint64_t kStlHeader = 84;  // 80 bytes of text, the facet count
-constexpr std::uint64_t kStlRecord = 50;
 constexpr std::uint64_t kBlockRecords = std::uint64_t(1) << 16;
 
 std::uint32_t le32(const unsigned char* b) {
@@ -44,36 +40,21 @@ std::uint32_t le32(const unsigned char* b) {
 }
 
 // The file's facet count, or why the stream leaves the file to the
-// importer. The importer takes a file as binary exactly when its size is
-// 84 + 50 x the count (whatever its first bytes), else as text when it
-// starts with "solid"; it reads a header naming "COLOR=" as Materialise's,
-// with colours. A name is looked for wherever it starts in the 80 bytes
-// (the importer's search may run a few bytes past them).
+// importer (stl_format.h), or a file that cannot be read (the importer path
+// then judges it, with its own message).
 std::string refusal(const std::string& path, std::uint64_t& count) {
   std::uint64_t size = 0;
   std::string head;
   try {
     ModelFiles files;
     size = files.size(path);
-    head = files.head(path, kStlHeader + 16);
+    head = files.head(path, stl::kShapeBytes);
   } catch (const InputError& e) {
     return std::string("its size: ") + e.what();
   }
-  if (size < kStlHeader) return "it is shorter than a binary STL's 84-byte header";
-  count = le32(reinterpret_cast<const unsigned char*>(head.data()) + 80);
-  if (size != kStlHeader + kStlRecord * count) {
-    std::size_t at = 0;
-    while (at < head.size() && std::isspace(static_cast<unsigned char>(head[at]))) ++at;
-    if (head.compare(at, 5, "solid") == 0) return "an ASCII STL";
-    return "its size, " + std::to_string(size) + " bytes, is not 84 + 50 x the " + std::to_string(count) +
-           " facets its header counts";
-  }
-  if (count == 0) return "its header counts no facets";
-  for (const char* name : {"COLOR=", "MATERIAL="}) {
-    const std::size_t at = head.find(name);
-    if (at != std::string::npos && at < 80) return std::string("its header names Materialise colours (") + name + ")";
-  }
-  return "";
+  const stl::Shape shape = stl::shape_of(head, size);
+  count = shape.facets;
+  return stl::stream_refusal(shape);
 }
 
 float le_float(const unsigned char* b) {
@@ -95,14 +76,14 @@ Scene read_window(const std::string& path, std::size_t max_triangles, const Mode
   const std::string why = refusal(path, count);
   if (!why.empty()) throw InputError(path + ": the STL stream cannot read this file: " + why);
   const std::unique_ptr<std::FILE, FileCloser> file(std::fopen(path.c_str(), "rb"));
-  if (!file || std::fseek(file.get(), long(kStlHeader), SEEK_SET) != 0)
+  if (!file || std::fseek(file.get(), long(stl::kHeaderBytes), SEEK_SET) != 0)
     throw InputError(path + ": cannot read: " + std::strerror(errno));
   // A block of records, and the mesh of its corners (the importer's, for
   // these facets: corner 3j + c of record j, each with the record's normal):
   // 122 bytes a record, so at most kBlockRecords of them (8 MB).
   const std::size_t block = static_cast<std::size_t>(std::min<std::uint64_t>(
-      {count, std::max<std::size_t>(block_bytes / kStlRecord, 1), kBlockRecords}));
-  std::vector<unsigned char> bytes(block * kStlRecord);
+      {count, std::max<std::size_t>(block_bytes / stl::kRecordBytes, 1), kBlockRecords}));
+  std::vector<unsigned char> bytes(block * stl::kRecordBytes);
   aiMesh mesh;
   mesh.mNumVertices = static_cast<unsigned>(3 * block);
   mesh.mVertices = new aiVector3D[3 * block];
@@ -111,13 +92,14 @@ Scene read_window(const std::string& path, std::size_t max_triangles, const Mode
   WindowFan fan(path, mesh, max_triangles, window, scene);
   for (std::uint64_t first = 0; first < count; first += block) {
     const std::size_t n = static_cast<std::size_t>(std::min<std::uint64_t>(block, count - first));
-    const std::size_t got = std::fread(bytes.data(), 1, n * kStlRecord, file.get());
-    if (got < n * kStlRecord)  // shorter than when its size was read: it changed
-      throw InputError(path + ": STL facet " + std::to_string(first + got / kStlRecord + 1) + " of " +
-                       std::to_string(count) + " at byte " + std::to_string(kStlHeader + first * kStlRecord + got) +
+    const std::size_t got = std::fread(bytes.data(), 1, n * stl::kRecordBytes, file.get());
+    if (got < n * stl::kRecordBytes)  // shorter than when its size was read: it changed
+      throw InputError(path + ": STL facet " + std::to_string(first + got / stl::kRecordBytes + 1) + " of " +
+                       std::to_string(count) + " at byte " +
+                       std::to_string(stl::kHeaderBytes + first * stl::kRecordBytes + got) +
                        ": the file ends early (truncated)");
     for (std::size_t j = 0; j < n; ++j) {
-      const unsigned char* r = bytes.data() + j * kStlRecord;
+      const unsigned char* r = bytes.data() + j * stl::kRecordBytes;
       const aiVector3D normal = le_vector(r);
       const unsigned corner[3] = {unsigned(3 * j), unsigned(3 * j + 1), unsigned(3 * j + 2)};
       for (int c = 0; c < 3; ++c) {

@@ -1,0 +1,65 @@
+// What the objects of a JSON scene share while they are planned and built
+// (scene_objects.cpp, scene_includes.cpp): the scene's triangle budget,
+// and the entry being built with the ids given so far. Internal to
+// formats/json.
+#pragma once
+
+#include <cstddef>
+#include <optional>
+#include <string>
+
+#include "formats/json/primitives.h"
+#include "formats/json/scene_share.h"
+#include "formats/json/scene_values.h"
+
+namespace opsila {
+namespace scene_json {
+
+// Counts each object's triangles (and facets, an upper bound for generated
+// shapes) against the scene's limits before anything is built.
+class TriangleBudget {
+ public:
+  // entry_limit: one entry of "objects" (one rank's limit); the scene may
+  // have `ranks` times it.
+  TriangleBudget(const SceneValues& values, std::size_t entry_limit, int ranks)
+      : v_(values), entry_limit_(entry_limit), most_(entry_limit * std::size_t(std::max(ranks, 1))), ranks_(ranks) {}
+
+  // windowed: an entry no rank holds whole (a terrain made in windows, a
+  // generator's items dealt as they are made), so not limited to one
+  // rank's triangles on several ranks.
+  void add(std::size_t triangles, std::size_t facets, std::size_t objects, const std::string& path,
+           bool windowed = false);
+  void add(std::size_t triangles, const std::string& path) { add(triangles, triangles, 1, path); }
+
+  std::size_t planned() const { return planned_triangles_; }  // triangles so far
+  std::size_t most() const { return most_; }                   // the whole scene's
+  std::size_t left() const { return most_ - planned_triangles_; }
+  std::size_t entry_limit() const { return entry_limit_; }
+
+ private:
+  std::string ranks_hint(std::size_t triangles, bool windowed) const;
+
+  const SceneValues& v_;
+  std::size_t entry_limit_, most_;
+  int ranks_;
+  std::size_t planned_triangles_ = 0, planned_facets_ = 0, planned_objects_ = 0;
+};
+
+// The entry of "objects" being built: what is not yet placed, settled and
+// dealt starts at `first`.
+struct Entry {
+  std::optional<Transform> placed;
+  std::string path;
+  std::size_t first = 0, first_attribute = 0, dropped = 0;
+  EntryShare share;
+};
+
+// The entry being built and the ids given so far, shared by the builds.
+struct Building {
+  Entry entry;
+  int next_object = 0;
+  int next_facet = 0;
+};
+
+}  // namespace scene_json
+}  // namespace opsila

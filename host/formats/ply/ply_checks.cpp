@@ -1,0 +1,127 @@
+// The checks of a PLY file before the importer reads it (ply_format.h):
+// its header as the importer reads it, then a body that holds what the
+// header counts.
+#include <algorithm>
+#include <string_view>
+#include <unordered_map>
+
+#include "core/errors.h"
+#include "core/util.h"
+#include "formats/common/model_words.h"
+#include "formats/ply/ply_format.h"
+
+namespace opsila {
+namespace ply {
+
+using namespace model_words;
+
+namespace {
+
+[[noreturn]] void truncated(const std::string& name, const Element& e, std::uint64_t i) {
+  throw InputError(name + ": PLY data ends early: '" + e.name + "' element " + std::to_string(i + 1) + " of " +
+                   std::to_string(e.count) + " is missing or incomplete (truncated file)");
+}
+
+// The text data: every property one word, a list its count and that many.
+// A vertex whose x, y or z is not finite in floats (as the importer stores
+// it) is named with its line where a face uses it (data starts on line
+// `first_line`); one no face uses is harmless.
+void check_text(std::string_view data, std::uint64_t first_line, const Header& h, const std::string& name) {
+  std::size_t at = 0, counted = 0;
+  std::uint64_t line = first_line;
+  const auto line_of = [&](std::string_view word) {  // words in file order
+    const std::size_t pos = std::size_t(word.data() - data.data());
+    line += std::count(data.begin() + std::ptrdiff_t(counted), data.begin() + std::ptrdiff_t(pos), '\n');
+    counted = pos;
+    return line;
+  };
+  std::unordered_map<std::uint64_t, std::uint64_t> not_finite;  // vertex -> its line
+  std::string_view w;
+  for (const Element& e : h.elements) {
+    if (e.properties.empty()) continue;
+    for (std::uint64_t i = 0; i < e.count; ++i)
+      for (const Property& p : e.properties) {
+        if (!next_word(data, at, w)) truncated(name, e, i);
+        if (!p.list) {
+          if (e.name == "vertex" && (p.name == "x" || p.name == "y" || p.name == "z") && !finite_in_float(w))
+            not_finite.emplace(i, line_of(w));
+          continue;
+        }
+        std::uint64_t n = 0;
+        if (w.size() > 19 || w.find_first_not_of("0123456789") != std::string_view::npos)
+          throw InputError(name + ": PLY '" + e.name + "' element " + std::to_string(i + 1) + ": list length '" +
+                           std::string(w.substr(0, 20)) + "' is not a count");
+        for (char c : w) n = n * 10 + unsigned(c - '0');
+        const bool corners = !not_finite.empty() && e.name == "face" &&
+                             (p.name == "vertex_indices" || p.name == "vertex_index");
+        for (std::uint64_t k = 0; k < n; ++k) {
+          if (!next_word(data, at, w)) truncated(name, e, i);
+          if (!corners || w.size() > 19 || w.find_first_not_of("0123456789") != std::string_view::npos) continue;
+          const auto bad = not_finite.find(std::stoull(std::string(w)));
+          if (bad != not_finite.end())
+            throw InputError(name + ":" + std::to_string(line_of(w)) + ": PLY 'face' element " +
+                             std::to_string(i + 1) + " of " + std::to_string(e.count) + ": vertex " + std::string(w) +
+                             " (line " + std::to_string(bad->second) + ") is not a finite number");
+        }
+      }
+  }
+}
+
+// The binary data: fixed sizes, lists read for their counts.
+void check_binary(std::string_view data, const Header& h, const std::string& name) {
+  std::uint64_t at = 0;
+  const std::uint64_t size = data.size();
+  const bool big_endian = h.format == Format::big_endian;
+  for (const Element& e : h.elements) {
+    bool lists = false;
+    std::uint64_t fixed = 0;
+    for (const Property& p : e.properties) lists = lists || p.list, fixed += std::uint64_t(type_bytes(p.type));
+    if (!lists) {  // count <= file size (the header's reading), so no overflow
+      if (fixed > 0 && e.count > (size - at) / fixed) truncated(name, e, (size - at) / fixed);
+      at += e.count * fixed;
+      continue;
+    }
+    for (std::uint64_t i = 0; i < e.count; ++i)
+      for (const Property& p : e.properties) {
+        std::uint64_t n = 1;
+        if (p.list) {
+          const int count_bytes = type_bytes(p.count);
+          if (std::uint64_t(count_bytes) > size - at) truncated(name, e, i);
+          n = 0;
+          for (int b = 0; b < count_bytes; ++b) {
+            const int k = big_endian ? b : count_bytes - 1 - b;
+            n = n << 8 | static_cast<unsigned char>(data[at + std::uint64_t(k)]);
+          }
+          at += std::uint64_t(count_bytes);
+        }
+        const int item_bytes = type_bytes(p.type);
+        if (n > (size - at) / std::uint64_t(std::max(1, item_bytes))) truncated(name, e, i);
+        at += n * std::uint64_t(item_bytes);
+      }
+  }
+}
+
+}  // namespace
+
+// The importer's PLY reader does not stop on a header that never ends (found
+// by fuzz_model), allocates what the element counts ask for before reading
+// one, and renders a file that holds fewer elements than its header counts.
+void check_ply(const std::string& bytes, const std::string& name) {
+  const Header h = parse_header(bytes, bytes.size(), name, Reading::importer);
+  const std::string_view body = std::string_view(bytes).substr(h.body);
+  if (h.format == Format::ascii) check_text(body, 1 + std::uint64_t(h.lines), h, name);
+  else check_binary(body, h, name);
+  // Points only: the importer's validation would refuse its empty mesh
+  // ("Mesh contains no faces"). Its readers take faces from these elements.
+  bool faces = false;
+  for (const Element& e : h.elements) {
+    const std::string n = lower(e.name);
+    faces = faces || (e.count > 0 && (n.rfind("face", 0) == 0 || n.rfind("tristrips", 0) == 0 ||
+                                      n.rfind("range_grid", 0) == 0));
+  }
+  if (!faces)
+    throw InputError(name + ": no facets (the PLY file has no faces: no 'face' element with entries, points only)");
+}
+
+}  // namespace ply
+}  // namespace opsila

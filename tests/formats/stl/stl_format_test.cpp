@@ -1,0 +1,73 @@
+// What an STL file is (formats/stl/stl_format.h): binary or text as the
+// importer takes it, its facet count and header colours, one shape for the
+// checks before the importer and for the stream's refusals.
+#include <gtest/gtest.h>
+
+#include <cstdint>
+#include <string>
+
+#include "core/errors.h"
+#include "formats/stl/stl_format.h"
+
+namespace opsila {
+namespace {
+
+// An 80-byte header of `text`, the count, and `facets` records of zeros.
+std::string binary(const std::string& text, std::uint32_t count, std::uint32_t facets) {
+  std::string out = text;
+  out.resize(80, ' ');
+  for (int k = 0; k < 4; ++k) out += char(count >> (8 * k) & 0xff);
+  return out + std::string(50 * std::size_t(facets), '\0');
+}
+
+std::string check_error(const std::string& bytes) {
+  try {
+    stl::check_stl(bytes, "f.stl");
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(StlFormat, ABinaryFileIsTheSizeItsCountSays) {
+  const std::string bytes = binary("solid but binary", 2, 2);  // "solid" too: the size decides
+  const stl::Shape s = stl::shape_of(bytes, bytes.size());
+  EXPECT_TRUE(s.exact);
+  EXPECT_TRUE(s.solid);
+  EXPECT_FALSE(s.text());
+  EXPECT_EQ(s.facets, 2u);
+  EXPECT_EQ(stl::stream_refusal(s), "");
+  EXPECT_EQ(check_error(bytes), "");
+}
+
+TEST(StlFormat, OtherSizesAreTextOrATruncatedBinary) {
+  const std::string text = "solid t\nendsolid t\n";
+  EXPECT_TRUE(stl::shape_of(text, text.size()).text());
+  EXPECT_EQ(stl::stream_refusal(stl::shape_of(text, text.size())), "it is shorter than a binary STL's 84-byte header");
+  const std::string padded = binary("solid t", 1, 1) + "\n";
+  EXPECT_EQ(stl::stream_refusal(stl::shape_of(padded, padded.size())), "an ASCII STL");
+  const std::string cut = binary("made by a test", 3, 2);
+  EXPECT_EQ(stl::stream_refusal(stl::shape_of(cut, cut.size())),
+            "its size, 184 bytes, is not 84 + 50 x the 3 facets its header counts");
+  EXPECT_EQ(check_error(cut), "f.stl: binary STL header counts 3 facets; the file holds 2 (truncated file)");
+  EXPECT_EQ(check_error("no"), "f.stl: binary STL shorter than its 84-byte header (truncated file)");
+}
+
+TEST(StlFormat, HeaderColoursAndEmptyFilesAreTheImportersToRead) {
+  const std::string empty = binary("made by a test", 0, 0);
+  EXPECT_EQ(stl::stream_refusal(stl::shape_of(empty, empty.size())), "its header counts no facets");
+  const std::string coloured = binary("made by Magics COLOR=abcd", 1, 1);
+  const stl::Shape s = stl::shape_of(coloured, coloured.size());
+  EXPECT_EQ(s.colours, "COLOR=");
+  EXPECT_EQ(stl::stream_refusal(s), "its header names Materialise colours (COLOR=)");
+  // Only a name that starts in the 80 bytes of text counts.
+  std::string late = binary("", 1, 1);
+  late.replace(76, 9, "MATERIAL=");
+  EXPECT_EQ(stl::shape_of(late, late.size()).colours, "MATERIAL=");
+  late = binary("", 1, 1);
+  late.replace(82, 6, "COLOR=");
+  EXPECT_EQ(stl::shape_of(late, late.size()).colours, "");
+}
+
+}  // namespace
+}  // namespace opsila

@@ -21,13 +21,8 @@ constexpr float kTol = 1e-5f;
 MaterialDesc material(Vec3 ka, Vec3 kd, Vec3 ks = {0, 0, 0}, float ns = 1, int illum = 2, Vec3 tf = {0, 0, 0},
                       float ni = 1) {
   MaterialDesc m;
-  m.ka = ka;
-  m.kd = kd;
-  m.ks = ks;
-  m.ns = ns;
-  m.illum = illum;
-  m.tf = tf;
-  m.ni = ni;
+  m.ka = ka, m.kd = kd, m.ks = ks, m.ns = ns;  // colours, then the rest
+  m.illum = illum, m.tf = tf, m.ni = ni;
   return m;
 }
 

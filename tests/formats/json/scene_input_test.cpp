@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "material_checks.h"
 #include "test_util.h"
 #include "formats/obj/obj_loader.h"
 #include "formats/json/primitives.h"
@@ -62,13 +63,8 @@ TEST(SceneModel, MaterialRulesFollowIllum) {
     EXPECT_EQ(m.kt(), t ? m.tf : (Vec3{0, 0, 0})) << illum;
   }
   const MaterialDesc d = MaterialDesc::default_material();
-  EXPECT_EQ(d.ka, (Vec3{0.8f, 0.8f, 0.8f}));
   EXPECT_EQ(d.kd, (Vec3{0.8f, 0.8f, 0.8f}));
-  EXPECT_EQ(d.ks, (Vec3{0, 0, 0}));
-  EXPECT_EQ(d.tf, (Vec3{0, 0, 0}));
-  EXPECT_EQ(d.ns, 1.0f);
-  EXPECT_EQ(d.ni, 1.0f);
-  EXPECT_EQ(d.illum, 2);
+  test::expect_optics(d, {{0.8f, 0.8f, 0.8f}, {0, 0, 0}, {0, 0, 0}, 1.0f, 1.0f, 2});
   const MaterialDesc left_out;  // MTL keys left out
   EXPECT_EQ(left_out.illum, 0);
   EXPECT_EQ(left_out.kd, (Vec3{0, 0, 0}));

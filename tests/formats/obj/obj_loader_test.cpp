@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "material_checks.h"
 #include "test_util.h"
 #include "formats/obj/obj_loader.h"
 #include "scene/scene.h"
@@ -248,12 +249,7 @@ TEST(ObjMaterials, MtlValuesDefaultsAndLibraryAfterUsemtl) {
 
   const MaterialDesc& partial = s.materials[3];
   EXPECT_EQ(partial.name, "partial");
-  EXPECT_EQ(partial.ka, (Vec3{0, 0, 0}));
-  EXPECT_EQ(partial.ks, (Vec3{0, 0, 0}));
-  EXPECT_EQ(partial.tf, (Vec3{0, 0, 0}));
-  EXPECT_EQ(partial.ns, 1.0f);
-  EXPECT_EQ(partial.ni, 1.0f);
-  EXPECT_EQ(partial.illum, 0);
+  test::expect_optics(partial, {{0, 0, 0}, {0, 0, 0}, {0, 0, 0}, 1.0f, 1.0f, 0});  // the MTL defaults
 
   // usemtl red came before mtllib: still found.
   EXPECT_EQ(s.triangles[0].material, 1);

@@ -234,7 +234,9 @@ void measure_renders(BenchReport& report, Scene& scene, const RenderSettings& se
   with_progress.switch_counting = true;
   RenderSettings prepare = settings;
   prepare.pilot_warm_up = true;  // as the timed frames follow a warm-up frame
-  Renderer renderer(scene, prepare_banks_consuming(scene, prepare, rt), with_progress, rt);
+  // The baselines read the scene's facets after the banks are made.
+  Renderer renderer(scene, prepare_banks_consuming(scene, prepare, rt, baselines ? Facets::kept : Facets::released),
+                    with_progress, rt);
   Baselines base;
   if (baselines) base = Baselines(report, scene, rt, embree, progress);
   RenderResult frame, first;

@@ -93,7 +93,9 @@ StageClock::~StageClock() {
   {
     std::lock_guard<std::mutex> hold(g_lock);
     g_times[stage_] += seconds_;
+    g_times.peak_at_end[static_cast<int>(stage_)] = host_peak_bytes();
   }
+
   if (stage_ == PrepareStage::pilots) --t_pilot_depth;
   t_innermost = outer_;
   if (outer_) outer_->resume();

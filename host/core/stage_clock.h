@@ -31,6 +31,10 @@ const char* stage_label(PrepareStage s);
 struct PrepareTimes {
   double seconds[kPrepareStages] = {};
   std::uint64_t peak_host_bytes = 0;  // peak resident set of the process when taken
+  // The peak resident set when each stage last ended (0: it never ran):
+  // where the memory went, stage by stage (a stage nested in another, the
+  // bank BVHs in the partition, ends first).
+  std::uint64_t peak_at_end[kPrepareStages] = {};
   double& operator[](PrepareStage s) { return seconds[static_cast<int>(s)]; }
   double operator[](PrepareStage s) const { return seconds[static_cast<int>(s)]; }
 };

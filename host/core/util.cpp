@@ -2,7 +2,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
+
+#include <sys/mman.h>
+#include <unistd.h>
 
 namespace opsila {
 
@@ -45,6 +49,13 @@ std::string format_bytes(double bytes, int decimals, int smallest) {
   char text[64];
   std::snprintf(text, sizeof text, "%.*f %s", decimals, bytes / std::ldexp(1.0, 10 * power), kUnits[power - 1]);
   return text;
+}
+
+void release_pages(void* begin, void* end) {
+  static const std::uintptr_t page = std::uintptr_t(sysconf(_SC_PAGESIZE));
+  const std::uintptr_t lo = (reinterpret_cast<std::uintptr_t>(begin) + page - 1) / page * page;
+  const std::uintptr_t hi = reinterpret_cast<std::uintptr_t>(end) / page * page;
+  if (hi > lo) madvise(reinterpret_cast<void*>(lo), hi - lo, MADV_DONTNEED);  // advice: a failure only keeps them
 }
 
 std::string format_size(std::uint64_t bytes) {

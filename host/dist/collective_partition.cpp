@@ -215,23 +215,21 @@ std::uint64_t decode_maps(const SceneShare& share, Scene& own) {
 
 // The group's banks from its own part: partition_scene's steps 3-4 on the
 // group's PEs only (numbered from 0, as keep_group_banks leaves them).
-BankedScene group_banks(OwnPart& own, const Box& sbox, int group_size, std::vector<char>& used) {
+BankedScene group_banks(OwnPart& own, const Box& sbox, int group_size, bool pilot, std::vector<char>& used) {
   BankedScene loc;
   loc.num_pes = group_size;
-  std::vector<Box> tri_boxes;
-  std::vector<int> source;
+  FacetMaps maps;
+  maps.pilot = pilot;
   std::vector<std::pair<int, int>> ranges;
-  fill_banks(own.scene, sbox, own.clusters, loc, tri_boxes, source, ranges);
+  fill_banks(own.scene, sbox, own.clusters, loc, maps, ranges, &own.scene.triangles);
   const std::size_t facets = own.scene.triangles.size();
-  // The bank facets are copies: without vertex attributes (which
-  // bank_attributes reads through the facets) the received ones can go
-  // before the BVHs are built.
-  for (ClusterBuild& c : own.clusters) c.tris = std::vector<int>();
-  if (own.scene.attributes.empty()) own.scene.triangles = std::vector<Triangle>();
-  describe_pes(own.clusters, tri_boxes, ranges, source, facets, loc);
-  node_clusters(loc);
-  bank_attributes(own.scene, source, loc, &used);
-  loc.source = std::move(source);
+  // The bank facets are copies (their attributes' indices in `maps`): the
+  // received ones go before the BVHs are built.
+  own.scene.triangles = std::vector<Triangle>();
+  describe_pes(own.clusters, ranges, maps, facets, loc);
+  if (pilot) node_clusters(loc);
+  bank_attributes(own.scene, maps.attributes, loc, &used);
+  loc.source = std::move(maps.source);
   return loc;
 }
 
@@ -377,7 +375,7 @@ PreparedBanks bank_share(Scene& share, int num_pes, int routing, const PeGroup& 
   t0 = std::chrono::steady_clock::now();
   figures.texture_bytes = decode_maps(share.share, own.scene);  // the maps its facets use, no others
   std::vector<char> used;
-  BankedScene loc = group_banks(own, sbox, group.size(), used);
+  BankedScene loc = group_banks(own, sbox, group.size(), how.pilot, used);
   own.scene = Scene();
   out.scene = share_tables(share, sbox, pl, group, num_pes, own.first_cluster, used, ranks, loc);
   figures.bank_seconds = seconds_since(t0);

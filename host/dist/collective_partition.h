@@ -32,6 +32,9 @@ struct ShareBalance {
   // (held beside the banks while the pilots run, about twice the rank's
   // facets), and PreparedBanks::facet_cluster gets each one's cluster.
   bool keep_share = false;
+  // The banks are a pilot frame's: they keep the maps from bank facets to
+  // clusters and share facets (BalancePolicy::pilot).
+  bool pilot = false;
   // The same: the clusters the objects are cut into before the balance's
   // cuts depend on the geometry alone, so the first call makes them into
   // *clusters (when given) and the next ones, with `reuse`, copy them (the

@@ -155,6 +155,7 @@ MeasuredWork whole_scene_pilots(const Scene& scene, const Scene& view, const Ren
       [&](const MeasuredWork* measured) {
         BalancePolicy policy;
         if (measured) policy = BalancePolicy{Balance::measured, nullptr, measured};
+        policy.pilot = true;
         return bank_scene(scene, ps.num_pes, ps.routing, policy, group);
       },
       runtime, figures);
@@ -202,6 +203,7 @@ MeasuredWork pilot_work(Scene& share, const RenderSettings& settings, ClRuntime&
   const PeGroup group = pe_group(ps.num_pes, ranks.size(), ranks.rank());
   ShareBalance how;
   how.keep_share = true;
+  how.pilot = true;
   how.clusters = &clusters;
   const MeasuredWork best = run_pilots(
       view, ps,

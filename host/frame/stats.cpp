@@ -124,6 +124,10 @@ nlohmann::json prepare_json(const PrepareTimes& t) {
   for (int k = 0; k < kPrepareStages; ++k)
     j[std::string(stage_key(static_cast<PrepareStage>(k))) + "_seconds"] = t.seconds[k];
   j["peak_host_bytes"] = t.peak_host_bytes;
+  nlohmann::json at_end = nlohmann::json::object();
+  for (int k = 0; k < kPrepareStages; ++k)
+    if (t.peak_at_end[k]) at_end[stage_key(static_cast<PrepareStage>(k))] = t.peak_at_end[k];
+  j["peak_host_bytes_at_end"] = at_end;
   return j;
 }
 

@@ -9,6 +9,8 @@
 
 #include <cstddef>
 #include <new>
+#include <type_traits>
+#include <utility>
 #include <vector>
 
 namespace opsila {
@@ -25,6 +27,19 @@ struct BankAllocator {
     return static_cast<T*>(::operator new(n * sizeof(T), std::align_val_t(kBankArrayAlignment)));
   }
   void deallocate(T* p, std::size_t) { ::operator delete(p, std::align_val_t(kBankArrayAlignment)); }
+  // resize() and emplace_back() leave a new element as it is (the bank
+  // builders write every element before anything reads it): value-
+  // initialising would touch every page of a large array at once, before
+  // its contents arrive (the partition fills the facets a batch at a time
+  // as the scene's copy gives its pages back).
+  template <typename U>
+  void construct(U* p) noexcept(std::is_nothrow_default_constructible<U>::value) {
+    ::new (static_cast<void*>(p)) U;
+  }
+  template <typename U, typename... Args>
+  void construct(U* p, Args&&... args) {
+    ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
+  }
   template <typename U>
   bool operator==(const BankAllocator<U>&) const { return true; }
   template <typename U>

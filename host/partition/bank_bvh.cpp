@@ -327,15 +327,24 @@ BankNode empty_node() {
   return n;
 }
 
-int build_bank_bvh(BankArray<BankNode>& nodes, BankArray<BankTriangle>& tris, const std::vector<Box>& tri_boxes,
-                   std::vector<Cluster>& clusters, int c_begin, int c_end,
-                   const std::vector<std::pair<int, int>>& ranges, std::vector<int>* source) {
+int build_bank_bvh(BankArray<BankNode>& nodes, BankArray<BankTriangle>& tris, std::vector<Cluster>& clusters,
+                   int c_begin, int c_end, const std::vector<std::pair<int, int>>& ranges,
+                   const FacetFollowers& follow) {
   if (c_begin == c_end) return 0;
   // Everything below is the bank's own: positions and cluster numbers count
   // from its first facet and first cluster (banks build side by side).
   const int t_begin = ranges[c_begin].first, t_end = ranges[c_end - 1].second;
   const int nt = t_end - t_begin, nc = c_end - c_begin;
-  const Box* boxes = tri_boxes.data() + t_begin;
+  // The facets' boxes, this bank's only: a scene-wide array of them would
+  // be 24 bytes a facet at the preparation's peak.
+  std::vector<Box> bank_boxes(static_cast<std::size_t>(nt));
+  for (int i = 0; i < nt; ++i) {
+    const BankTriangle& t = tris[std::size_t(t_begin + i)];
+    bank_boxes[std::size_t(i)].grow(t.v0);
+    bank_boxes[std::size_t(i)].grow(t.v1);
+    bank_boxes[std::size_t(i)].grow(t.v2);
+  }
+  const Box* boxes = bank_boxes.data();
   Builder b;
   b.bin.reserve(2 * static_cast<std::size_t>(nt) + static_cast<std::size_t>(nc));  // at most 2 nt - 1 facet nodes
   // Facets: one binary tree per cluster, over positions of the bank's order.
@@ -361,11 +370,13 @@ int build_bank_bvh(BankArray<BankNode>& nodes, BankArray<BankTriangle>& tris, co
   int root = b.build(corder, 0, nc, cboxes.data(), cweight.data(), 1, 1, &cluster_root);
 
   // Facets in their new order; leaves name global facet indices.
+  std::vector<Box>().swap(bank_boxes);
   const std::vector<BankTriangle> t(tris.begin() + t_begin, tris.begin() + t_end);
   for (int i = 0; i < nt; ++i) tris[t_begin + i] = t[order[i]];
-  if (source) {
-    const std::vector<int> s(source->begin() + t_begin, source->begin() + t_end);
-    for (int i = 0; i < nt; ++i) (*source)[t_begin + i] = s[order[i]];
+  for (std::vector<int>* f : follow) {
+    if (f->empty()) continue;
+    const std::vector<int> s(f->begin() + t_begin, f->begin() + t_end);
+    for (int i = 0; i < nt; ++i) (*f)[std::size_t(t_begin + i)] = s[std::size_t(order[i])];
   }
   std::vector<int> leaf_child(static_cast<std::size_t>(nt));
   std::iota(leaf_child.begin(), leaf_child.end(), t_begin);
@@ -383,9 +394,9 @@ int build_bank_bvh(BankArray<BankNode>& nodes, BankArray<BankTriangle>& tris, co
 }
 
 std::vector<BankBvh> build_bank_bvhs(BankArray<BankNode>& nodes, BankArray<BankTriangle>& tris,
-                                     const std::vector<Box>& tri_boxes, std::vector<Cluster>& clusters,
+                                     std::vector<Cluster>& clusters,
                                      const std::vector<std::pair<int, int>>& pe_clusters,
-                                     const std::vector<std::pair<int, int>>& ranges, std::vector<int>* source) {
+                                     const std::vector<std::pair<int, int>>& ranges, const FacetFollowers& follow) {
   const std::size_t P = pe_clusters.size();
   StageClock clock(PrepareStage::bank_build);
   std::vector<BankArray<BankNode>> own(P);
@@ -393,8 +404,8 @@ std::vector<BankBvh> build_bank_bvhs(BankArray<BankNode>& nodes, BankArray<BankT
   std::atomic<std::size_t> done{0};
   // Each task touches only its bank's facets, boxes, sources and clusters.
   parallel_for(P, [&](std::size_t p) {
-    out[p].depth = build_bank_bvh(own[p], tris, tri_boxes, clusters, pe_clusters[p].first, pe_clusters[p].second,
-                                  ranges, source);
+    out[p].depth =
+        build_bank_bvh(own[p], tris, clusters, pe_clusters[p].first, pe_clusters[p].second, ranges, follow);
     clock.progress(double(++done) / double(P));
   });
   // In PE order, as one build after another would have laid them out.

@@ -18,15 +18,16 @@
 namespace opsila {
 
 // Builds the BVH of one bank whose clusters [c_begin, c_end) own the facets
-// tris[ranges[c].first, ranges[c].second), with boxes tri_boxes (left as they
-// are: nothing reads them after the build). Facets are reordered inside each
-// cluster's range; clusters[c].root is set. The bank's
-// root is appended first, so it is the first node added. Returns the depth
-// of the wide tree (0 when the bank is empty). `source`, when given, is
-// reordered with the facets (so per-facet data elsewhere can follow them).
-int build_bank_bvh(BankArray<BankNode>& nodes, BankArray<BankTriangle>& tris, const std::vector<Box>& tri_boxes,
-                   std::vector<Cluster>& clusters, int c_begin, int c_end,
-                   const std::vector<std::pair<int, int>>& ranges, std::vector<int>* source = nullptr);
+// tris[ranges[c].first, ranges[c].second) (their boxes are made here, one
+// bank's at a time). Facets are reordered inside each cluster's range;
+// clusters[c].root is set. The bank's root is appended first, so it is the
+// first node added. Returns the depth of the wide tree (0 when the bank is
+// empty). Each non-empty array of `follow` holds one value per facet and is
+// reordered with them (so per-facet data elsewhere can follow them).
+using FacetFollowers = std::vector<std::vector<int>*>;
+int build_bank_bvh(BankArray<BankNode>& nodes, BankArray<BankTriangle>& tris, std::vector<Cluster>& clusters,
+                   int c_begin, int c_end, const std::vector<std::pair<int, int>>& ranges,
+                   const FacetFollowers& follow = {});
 
 // Every PE's bank BVH at once, on the host threads (core/parallel.h):
 // pe_clusters[p] is PE p's cluster range; its nodes are appended to `nodes`
@@ -36,9 +37,9 @@ struct BankBvh {
   int node_begin = 0, node_end = 0, depth = 0;
 };
 std::vector<BankBvh> build_bank_bvhs(BankArray<BankNode>& nodes, BankArray<BankTriangle>& tris,
-                                     const std::vector<Box>& tri_boxes, std::vector<Cluster>& clusters,
+                                     std::vector<Cluster>& clusters,
                                      const std::vector<std::pair<int, int>>& pe_clusters,
-                                     const std::vector<std::pair<int, int>>& ranges, std::vector<int>* source);
+                                     const std::vector<std::pair<int, int>>& ranges, const FacetFollowers& follow);
 
 // Builds the routing BVH of one PE over `boxes` (one per cluster, ids in
 // `cluster_ids`) into nodes[root] (already allocated; an empty PE keeps a

@@ -24,7 +24,7 @@ void check_machine_request(const Scene& scene, int num_pes) {
 }
 
 PreparedBanks bank_scene(const Scene& scene, int num_pes, int routing, const BalancePolicy& policy,
-                         const PeGroup& group) {
+                         const PeGroup& group, Scene* release) {
   const RaySample* sample = nullptr;
   const MeasuredWork* measured = nullptr;
   if (policy.balance == Balance::work) {
@@ -35,14 +35,19 @@ PreparedBanks bank_scene(const Scene& scene, int num_pes, int routing, const Bal
     measured = policy.measured;
   }
   PreparedBanks b;
-  b.scene = partition_scene(scene, num_pes, routing == OPSILA_ROUTING_SPHERES, sample, measured);
+  PartitionUse use;
+  use.pilot_maps = policy.pilot;
+  use.release = release;
+  b.scene = partition_scene(scene, num_pes, routing == OPSILA_ROUTING_SPHERES, sample, measured, use);
   b.balance = policy.balance;
   b.group = group;
-  b.facet_cluster.assign(scene.triangles.size(), -1);
-  for (std::size_t k = 0; k < b.scene.source.size(); ++k)
-    b.facet_cluster[std::size_t(b.scene.source[k])] = b.scene.tri_cluster[k];
-  b.cluster_facets.assign(b.scene.clusters.size(), 0);
-  for (int c : b.scene.tri_cluster) ++b.cluster_facets[std::size_t(c)];
+  if (policy.pilot) {
+    b.facet_cluster.assign(scene.triangles.size(), -1);
+    for (std::size_t k = 0; k < b.scene.source.size(); ++k)
+      b.facet_cluster[std::size_t(b.scene.source[k])] = b.scene.tri_cluster[k];
+    b.cluster_facets.assign(b.scene.clusters.size(), 0);
+    for (int c : b.scene.tri_cluster) ++b.cluster_facets[std::size_t(c)];
+  }
   b.tri_base = keep_group_banks(b.scene, group);
   return b;
 }

@@ -24,6 +24,10 @@ struct BalancePolicy {
   Balance balance = Balance::facets;
   const RaySample* sample = nullptr;       // work: required
   const MeasuredWork* measured = nullptr;  // measured: required (prepare/prepare_banks.h measures it)
+  // The banks are a pilot frame's: they keep the maps from bank facets to
+  // clusters and scene facets (PartitionUse::pilot_maps), and
+  // PreparedBanks::facet_cluster is filled.
+  bool pilot = false;
 };
 
 // The banks of one device (one MPI rank's group of PEs, or all of them).
@@ -61,7 +65,9 @@ void check_machine_request(const Scene& scene, int num_pes);
 // also cuts flat pieces, partition.h), then keeps `group`'s banks.
 // Deterministic: every rank that calls it with the same inputs gets the
 // same global tables.
+// `release` (null, or the scene itself): its triangles go once the banks
+// hold copies of them (PartitionUse::release).
 PreparedBanks bank_scene(const Scene& scene, int num_pes, int routing, const BalancePolicy& policy,
-                         const PeGroup& group);
+                         const PeGroup& group, Scene* release = nullptr);
 
 }  // namespace opsila

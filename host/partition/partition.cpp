@@ -8,11 +8,13 @@
 #include <iterator>
 #include <numeric>
 #include <utility>
+#include <stdexcept>
 #include <vector>
 
 #include "scene/camera.h"
 #include "core/parallel.h"
 #include "core/stage_clock.h"
+#include "core/util.h"
 
 namespace opsila {
 namespace partition_steps {
@@ -79,19 +81,18 @@ void build_routing(BankedScene& bs, const Box& sbox) {
 // a device share one copy of the texels (a copy per bank would multiply
 // device memory by the PEs for nothing: 16 banks of one 256 MB map are 4 GB).
 // Returns the bytes of one copy of every texture used.
-std::uint64_t bank_attributes(const Scene& scene, const std::vector<int>& source, BankedScene& bs,
+std::uint64_t bank_attributes(const Scene& scene, const std::vector<int>& attributes, BankedScene& bs,
                               std::vector<char>* used_out) {
-  const auto flags_of = [&](const Triangle& t) {
-    if (t.attributes < 0) return 0;
-    const VertexAttributes& a = scene.attributes[t.attributes];
-    const MaterialDesc& m = scene.materials[t.material];
+  const auto flags_of = [&](std::size_t k) {
+    if (attributes.empty() || attributes[k] < 0) return 0;
+    const VertexAttributes& a = scene.attributes[std::size_t(attributes[k])];
+    const MaterialDesc& m = scene.materials[std::size_t(OPSILA_TRI_MATERIAL(bs.triangles[k]))];
     return (scene.smooth && a.has_normals ? OPSILA_ATTR_NORMALS : 0) |
            (a.has_uv && (m.map_kd >= 0 || m.map_ka >= 0) ? OPSILA_ATTR_UV : 0);
   };
   bs.texture_bytes.assign(bs.pes.size(), 0);
   bool any = false;
-  if (!scene.attributes.empty())  // none: no facet has any (a scene read in shares may have let its facets go)
-    for (int i : source) any = any || flags_of(scene.triangles[i]) != 0;
+  for (std::size_t k = 0; k < attributes.size() && !any; ++k) any = flags_of(k) != 0;
   if (!any) {
     if (used_out) used_out->assign(scene.textures.size(), 0);
     return 0;
@@ -121,21 +122,21 @@ std::uint64_t bank_attributes(const Scene& scene, const std::vector<int>& source
     };
     const PeInfo& pe = bs.pes[p];
     for (int k = pe.tri_begin; k < pe.tri_end; ++k) {
-      const Triangle& t = scene.triangles[source[k]];
-      BankAttributes& out = bs.attributes[k];
-      out.flags = flags_of(t);
+      BankAttributes& out = bs.attributes[std::size_t(k)];
+      out.flags = flags_of(std::size_t(k));
       out.map_kd = out.map_ka = -1;
       if (out.flags == 0) continue;
-      const VertexAttributes& a = scene.attributes[t.attributes];
+      const VertexAttributes& a = scene.attributes[std::size_t(attributes[std::size_t(k)])];
       if (out.flags & OPSILA_ATTR_NORMALS) {
         put3(out.n0, a.normal[0]);
         put3(out.n1, a.normal[1]);
         put3(out.n2, a.normal[2]);
       }
       if (out.flags & OPSILA_ATTR_UV) {
+        const MaterialDesc& m = scene.materials[std::size_t(OPSILA_TRI_MATERIAL(bs.triangles[std::size_t(k)]))];
         for (int c = 0; c < 3; ++c) out.uv[2 * c] = a.uv[c][0], out.uv[2 * c + 1] = a.uv[c][1];
-        out.map_kd = bank_copy(scene.materials[t.material].map_kd);
-        out.map_ka = bank_copy(scene.materials[t.material].map_ka);
+        out.map_kd = bank_copy(m.map_kd);
+        out.map_ka = bank_copy(m.map_ka);
       }
     }
     bs.bank_bytes[p] += std::uint64_t(pe.tri_end - pe.tri_begin) * sizeof(BankAttributes) + bs.texture_bytes[p];
@@ -153,13 +154,50 @@ std::uint64_t texture_once(const Scene& scene, const std::vector<char>& used) {
   return once;
 }
 
+namespace {
+
+// The scene's triangles put in the banks' order (cluster after cluster,
+// each in its list's order) in place, following the permutation's cycles;
+// a position done is marked in the list of sources itself. The clusters'
+// lists go as they are read.
+void bank_order_in_place(std::vector<Triangle>& tris, std::vector<ClusterBuild>& cb) {
+  std::vector<int> from;
+  from.reserve(tris.size());
+  for (ClusterBuild& c : cb) {
+    from.insert(from.end(), c.tris.begin(), c.tris.end());
+    c.tris = std::vector<int>();
+  }
+  if (from.size() != tris.size()) throw std::logic_error("fill_banks: the clusters do not hold every facet once");
+  for (std::size_t k = 0; k < from.size(); ++k) {
+    if (from[k] < 0) continue;
+    const Triangle first = tris[k];
+    std::size_t j = k;
+    while (std::size_t(from[j]) != k) {
+      const std::size_t next = std::size_t(from[j]);
+      tris[j] = tris[next];
+      from[j] = -1;
+      j = next;
+    }
+    tris[j] = first;
+    from[j] = -1;
+  }
+}
+
+constexpr std::size_t kReleaseBatch = std::size_t(1) << 20;  // facets filled before their pages go
+
+}  // namespace
+
 // 3. Banks: triangles of each PE contiguous, cluster by cluster, and each
-// cluster's bounding sphere. ranges[c] is cluster c's triangle range, source[k]
-// the scene triangle of bank triangle k (all four start empty). Clusters are
-// filled side by side on the host threads, each into its own range.
-void fill_banks(const Scene& scene, const Box& sbox, const std::vector<ClusterBuild>& cb, BankedScene& bs,
-                std::vector<Box>& tri_boxes, std::vector<int>& source,
-                std::vector<std::pair<int, int>>& ranges) {
+// cluster's bounding sphere. ranges[c] is cluster c's triangle range; the
+// maps (FacetMaps) get what they were asked for. Clusters are filled side
+// by side on the host threads, each into its own range, and each gives up
+// its list of scene facets once copied. With `consume` (the scene's own
+// triangles, when it gives them up, and no pilot maps), they are first put
+// in the banks' order, then filled a batch of clusters at a time, each
+// batch's pages handed back as it is read: the scene's copy shrinks while
+// the banks' grows, instead of both being whole at once.
+void fill_banks(const Scene& scene, const Box& sbox, std::vector<ClusterBuild>& cb, BankedScene& bs,
+                FacetMaps& maps, std::vector<std::pair<int, int>>& ranges, std::vector<Triangle>* consume) {
   check_hit_order_ids(scene);
   ranges.resize(cb.size());
   int next = 0;
@@ -167,17 +205,18 @@ void fill_banks(const Scene& scene, const Box& sbox, const std::vector<ClusterBu
     ranges[c] = {next, next + static_cast<int>(cb[c].tris.size())};
     next = ranges[c].second;
   }
+  const bool in_order = consume && !maps.pilot;
+  if (in_order) bank_order_in_place(*consume, cb);
   const std::size_t total = std::size_t(next);
   bs.triangles.resize(total);
-  tri_boxes.resize(total);
-  source.resize(total);
-  bs.tri_cluster.resize(total);
+  if (maps.pilot) maps.source.resize(total), bs.tri_cluster.resize(total);
+  if (!scene.attributes.empty()) maps.attributes.resize(total);
   bs.clusters.resize(cb.size());
-  parallel_for(cb.size(), [&](std::size_t c) {
+  const auto fill_cluster = [&](std::size_t c) {
     const Vec3 ctr = cb[c].box.center();
     double r2 = 0;
-    std::size_t k = std::size_t(ranges[c].first);
-    for (int i : cb[c].tris) {
+    for (std::size_t k = std::size_t(ranges[c].first); k < std::size_t(ranges[c].second); ++k) {
+      const std::size_t i = in_order ? k : std::size_t(cb[c].tris[k - std::size_t(ranges[c].first)]);
       const Triangle& t = scene.triangles[i];
       BankTriangle bt{};
       put3(bt.v0, t.v0);
@@ -187,15 +226,15 @@ void fill_banks(const Scene& scene, const Box& sbox, const std::vector<ClusterBu
       bt.object_id = t.object_id;
       bt.material_fan = OPSILA_PACK_MATERIAL_FAN(t.material, t.fan);
       bs.triangles[k] = bt;
-      tri_boxes[k] = tri_box(t);
-      source[k] = i;
-      bs.tri_cluster[k++] = static_cast<int>(c);
+      if (maps.pilot) maps.source[k] = static_cast<int>(i), bs.tri_cluster[k] = static_cast<int>(c);
+      if (!maps.attributes.empty()) maps.attributes[k] = t.attributes;
       for (const Vec3* v : {&t.v0, &t.v1, &t.v2}) {
         double d2 = 0;
         for (int a = 0; a < 3; ++a) d2 += double((*v)[a] - ctr[a]) * double((*v)[a] - ctr[a]);
         r2 = std::max(r2, d2);
       }
     }
+    cb[c].tris = std::vector<int>();
     Cluster& cl = bs.clusters[c];
     put3(cl.center, ctr);
     // Padded so that float rounding in the sphere test never culls a facet.
@@ -206,7 +245,13 @@ void fill_banks(const Scene& scene, const Box& sbox, const std::vector<ClusterBu
     }
     cl.pe = cb[c].pe;
     cl.root = -1;
-  });
+  };
+  if (!in_order) return parallel_for(cb.size(), fill_cluster);
+  for (std::size_t c0 = 0, c1 = 0; c0 < cb.size(); c0 = c1) {
+    while (c1 < cb.size() && (c1 == c0 || std::size_t(ranges[c1].first - ranges[c0].first) < kReleaseBatch)) ++c1;
+    parallel_for(c1 - c0, [&](std::size_t c) { fill_cluster(c0 + c); });
+    release_pages(consume->data() + ranges[c0].first, consume->data() + ranges[c1 - 1].second);
+  }
 }
 
 void pe_bounds(const std::vector<Cluster>& clusters, PeInfo& pe) {
@@ -226,9 +271,8 @@ void pe_bounds(const std::vector<Cluster>& clusters, PeInfo& pe) {
 
 // Each PE's range of clusters, triangles and bank BVH nodes, its bounds and
 // its bank's size.
-void describe_pes(const std::vector<ClusterBuild>& cb, const std::vector<Box>& tri_boxes,
-                  const std::vector<std::pair<int, int>>& ranges, std::vector<int>& source,
-                  std::size_t total, BankedScene& bs) {
+void describe_pes(const std::vector<ClusterBuild>& cb, const std::vector<std::pair<int, int>>& ranges,
+                  FacetMaps& maps, std::size_t total, BankedScene& bs) {
   const int num_pes = bs.num_pes;
   bs.pes.resize(num_pes);
   std::vector<std::pair<int, int>> pe_clusters(static_cast<std::size_t>(num_pes));
@@ -238,7 +282,7 @@ void describe_pes(const std::vector<ClusterBuild>& cb, const std::vector<Box>& t
     pe_clusters[p] = {static_cast<int>(c_begin), static_cast<int>(c)};
   }
   const std::vector<BankBvh> built =
-      build_bank_bvhs(bs.nodes, bs.triangles, tri_boxes, bs.clusters, pe_clusters, ranges, &source);
+      build_bank_bvhs(bs.nodes, bs.triangles, bs.clusters, pe_clusters, ranges, maps.follow());
   for (int p = 0; p < num_pes; ++p) {
     PeInfo& pe = bs.pes[p];
     const std::size_t c_begin = static_cast<std::size_t>(pe_clusters[p].first);
@@ -313,7 +357,7 @@ void scene_bytes(BankedScene& bs, std::uint64_t texture_once) {
 using namespace partition_steps;
 
 BankedScene partition_scene(const Scene& scene, int num_pes, bool split_flat, const RaySample* sample,
-                            const MeasuredWork* measured) {
+                            const MeasuredWork* measured, const PartitionUse& use) {
   BankedScene bs;
   bs.num_pes = num_pes;
   Vec3 slo, shi;
@@ -323,19 +367,23 @@ BankedScene partition_scene(const Scene& scene, int num_pes, bool split_flat, co
   sbox.grow(shi.data());
 
   StageClock clock(PrepareStage::partition);
-  const std::vector<ClusterBuild> cb = form_clusters(scene, sbox, num_pes, split_flat, sample, measured);
+  std::vector<ClusterBuild> cb = form_clusters(scene, sbox, num_pes, split_flat, sample, measured);
   clock.progress(0.6);  // roughly: the clusters and regions are most of it
-  std::vector<Box> tri_boxes;
-  std::vector<int> source;
+  FacetMaps maps;
+  maps.pilot = use.pilot_maps;
   std::vector<std::pair<int, int>> ranges;
-  fill_banks(scene, sbox, cb, bs, tri_boxes, source, ranges);
+  const std::size_t total = scene.triangles.size();
+  if (use.release) use.release->keep_figures();  // before the fill gives the triangles' pages back
+  fill_banks(scene, sbox, cb, bs, maps, ranges, use.release ? &use.release->triangles : nullptr);
+  if (use.release) use.release->release_triangles();  // the banks hold them now
   clock.progress(0.8);
-  describe_pes(cb, tri_boxes, ranges, source, scene.triangles.size(), bs);
+  describe_pes(cb, ranges, maps, total, bs);
 
   build_routing(bs, sbox);
-  node_clusters(bs);
-  const std::uint64_t once = bank_attributes(scene, source, bs, nullptr);
-  bs.source = source;
+  if (use.pilot_maps) node_clusters(bs);
+  const std::uint64_t once = bank_attributes(scene, maps.attributes, bs, nullptr);
+  if (use.release) std::vector<VertexAttributes>().swap(use.release->attributes);
+  bs.source = std::move(maps.source);
   global_tables(scene, bs);
 
   scene_bytes(bs, once);

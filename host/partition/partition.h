@@ -45,9 +45,10 @@ struct BankedScene {
   std::uint64_t texture_replicated_bytes = 0;  // every texture the facets use, once
   std::uint64_t global_bytes = 0;         // what every PE knows: spheres, routing boxes, PE boxes, materials, lights
   std::uint64_t replicated_bytes = 0;     // one full copy of the scene (what each PE would hold if duplicated)
-  // For pilot frames (--balance measured): the cluster of each bank facet and
-  // of each bank node (-1 for a bank's nodes above its cluster roots), and
-  // the scene triangle of each bank facet.
+  // For pilot frames (--balance measured; PartitionUse::pilot_maps, else
+  // empty): the cluster of each bank facet and of each bank node (-1 for a
+  // bank's nodes above its cluster roots), and the scene triangle of each
+  // bank facet.
   std::vector<int> tri_cluster, node_cluster, source;
 };
 
@@ -59,8 +60,21 @@ struct BankedScene {
 // expected work as well as the facets. measured: the work a pilot frame
 // measured per facet and level; with it, each cut of the bisection balances
 // every level's work (and a tenth on facets). Deterministic for equal inputs.
+// use: what is kept beside the banks, and whether the scene's facets go.
+struct PartitionUse {
+  // Pilot frames (dist/pilot.h): BankedScene::source, tri_cluster and
+  // node_cluster, which take the work they count back to clusters and
+  // facets. A frame's banks need none of them (4 bytes a facet each).
+  bool pilot_maps = false;
+  // The scene itself, when its caller gives the facets up: they go once
+  // the banks hold their copies, before the BVHs are built
+  // (Scene::release_triangles keeps its figures), so that no facet is held
+  // twice at the partition's peak.
+  Scene* release = nullptr;
+};
 BankedScene partition_scene(const Scene& scene, int num_pes, bool split_flat = false,
-                            const RaySample* sample = nullptr, const MeasuredWork* measured = nullptr);
+                            const RaySample* sample = nullptr, const MeasuredWork* measured = nullptr,
+                            const PartitionUse& use = PartitionUse{});
 
 // Per-frame constants for the kernels: the SPEC camera basis computed in
 // float exactly as the formula reads, so that every renderer built on a

@@ -182,10 +182,14 @@ SplitLimits split_limits(std::size_t total, const Box& sbox, int num_pes) {
 
 std::vector<std::vector<int>> triangles_by_object(const Scene& scene) {
   std::vector<std::vector<int>> by_object(std::max(scene.num_objects, 1));
-  for (std::size_t i = 0; i < scene.triangles.size(); ++i) {
-    int o = std::clamp(scene.triangles[i].object_id, 0, static_cast<int>(by_object.size()) - 1);
-    by_object[o].push_back(static_cast<int>(i));
-  }
+  const int last = static_cast<int>(by_object.size()) - 1;
+  // Counted first, so that each list is its exact size (grown by doubling, a
+  // terrain's list could hold twice its facets at the partition's peak).
+  std::vector<std::size_t> count(by_object.size(), 0);
+  for (const Triangle& t : scene.triangles) ++count[std::size_t(std::clamp(t.object_id, 0, last))];
+  for (std::size_t o = 0; o < by_object.size(); ++o) by_object[o].reserve(count[o]);
+  for (std::size_t i = 0; i < scene.triangles.size(); ++i)
+    by_object[std::size_t(std::clamp(scene.triangles[i].object_id, 0, last))].push_back(static_cast<int>(i));
   return by_object;
 }
 

@@ -80,18 +80,32 @@ void assign_regions_measured(std::vector<ClusterBuild>& cl, std::vector<int> idx
 // by PE (partition_regions.cpp).
 std::vector<ClusterBuild> form_clusters(const Scene& scene, const Box& sbox, int num_pes, bool split_flat,
                                         const RaySample* sample, const MeasuredWork* measured);
-// 3. The banks of clusters `cb` (sorted by PE, PEs 0 .. bs.num_pes - 1).
-void fill_banks(const Scene& scene, const Box& sbox, const std::vector<ClusterBuild>& cb, BankedScene& bs,
-                std::vector<Box>& tri_boxes, std::vector<int>& source, std::vector<std::pair<int, int>>& ranges);
-void describe_pes(const std::vector<ClusterBuild>& cb, const std::vector<Box>& tri_boxes,
-                  const std::vector<std::pair<int, int>>& ranges, std::vector<int>& source, std::size_t total,
-                  BankedScene& bs);
+// Per bank facet, what follows it through the BVH build's reordering:
+// the scene triangle it came from (for pilot frames, which spread the
+// work they measure per cluster over the scene's facets) and its vertex
+// attributes' index (when the scene has any). Neither is kept otherwise,
+// so that a bank facet costs its 48 bytes and its share of the nodes.
+struct FacetMaps {
+  bool pilot = false;          // source and BankedScene::tri_cluster / node_cluster wanted
+  std::vector<int> source;     // pilot: the scene triangle of each bank facet
+  std::vector<int> attributes;  // Scene::attributes index of each bank facet, when the scene has any
+  std::vector<std::vector<int>*> follow() { return {&source, &attributes}; }
+};
+// 3. The banks of clusters `cb` (sorted by PE, PEs 0 .. bs.num_pes - 1);
+// the clusters' facet lists are given up once copied.
+// `consume`: the scene's own triangles, given up (fill_banks, partition.cpp).
+void fill_banks(const Scene& scene, const Box& sbox, std::vector<ClusterBuild>& cb, BankedScene& bs,
+                FacetMaps& maps, std::vector<std::pair<int, int>>& ranges, std::vector<Triangle>* consume = nullptr);
+void describe_pes(const std::vector<ClusterBuild>& cb, const std::vector<std::pair<int, int>>& ranges,
+                  FacetMaps& maps, std::size_t total, BankedScene& bs);
 // A PE's box: around its clusters' spheres (zero when it has none).
 void pe_bounds(const std::vector<Cluster>& clusters, PeInfo& pe);
 void node_clusters(BankedScene& bs);
-// Vertex attributes and texture copies; `used_out` (when given) gets which
-// scene textures the banks use. Returns the bytes of one copy of each.
-std::uint64_t bank_attributes(const Scene& scene, const std::vector<int>& source, BankedScene& bs,
+// Vertex attributes and texture copies, from each bank facet's attributes
+// index (FacetMaps::attributes, empty: none) and material; the scene's
+// facets are not read. `used_out` (when given) gets which scene textures
+// the banks use. Returns the bytes of one copy of each.
+std::uint64_t bank_attributes(const Scene& scene, const std::vector<int>& attributes, BankedScene& bs,
                               std::vector<char>* used_out);
 std::uint64_t texture_once(const Scene& scene, const std::vector<char>& used);
 // 4. What every PE knows.

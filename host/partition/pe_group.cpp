@@ -39,9 +39,13 @@ int keep_group_banks(BankedScene& bs, const PeGroup& group) {
   if (t0 > t1 || n0 > n1) throw std::logic_error("keep_group_banks: banks are not contiguous in PE order");
   bs.triangles = BankArray<BankTriangle>(bs.triangles.begin() + t0, bs.triangles.begin() + t1);
   bs.nodes = BankArray<BankNode>(bs.nodes.begin() + n0, bs.nodes.begin() + n1);
-  bs.tri_cluster = std::vector<int>(bs.tri_cluster.begin() + t0, bs.tri_cluster.begin() + t1);
-  bs.source = std::vector<int>(bs.source.begin() + t0, bs.source.begin() + t1);
-  bs.node_cluster = std::vector<int>(bs.node_cluster.begin() + n0, bs.node_cluster.begin() + n1);
+  // The pilots' maps, when kept (PartitionUse::pilot_maps).
+  const auto slice = [](std::vector<int>& v, int b, int e) {
+    if (!v.empty()) v = std::vector<int>(v.begin() + b, v.begin() + e);
+  };
+  slice(bs.tri_cluster, t0, t1);
+  slice(bs.source, t0, t1);
+  slice(bs.node_cluster, n0, n1);
   // Per-facet attributes follow the facets; the texture copies (grouped by
   // bank, in PE order) and their texels keep only this group's.
   if (!bs.attributes.empty())

@@ -15,9 +15,10 @@ namespace opsila {
 namespace {
 
 // A whole scene; `lendable` (null, or the scene itself) lends its facets
-// out while the pilots' view is copied, so the view costs no second copy.
+// out while the pilots' view is copied, so the view costs no second copy,
+// and with Facets::released gives its triangles up to the banks.
 PreparedBanks prepare_whole(const Scene& scene, Scene* lendable, const RenderSettings& settings,
-                            ClRuntime& runtime) {
+                            ClRuntime& runtime, Facets after) {
   check_machine_request(scene, settings.num_pes);
   const PrepareTimes before = prepare_times();
   OneProcess solo;  // one process, when the settings name no ranks
@@ -26,6 +27,7 @@ PreparedBanks prepare_whole(const Scene& scene, Scene* lendable, const RenderSet
   BalancePolicy policy;
   policy.balance = settings.balance;
   policy.sample = settings.ray_sample;
+  policy.pilot = settings.measure_cost;  // a renderer that measures reads the maps
   RaySample sample;
   if (settings.balance == Balance::work && !policy.sample) {
     sample = balance_sample(scene, settings.sampler, ranks);
@@ -39,7 +41,8 @@ PreparedBanks prepare_whole(const Scene& scene, Scene* lendable, const RenderSet
                         : pilot_work(scene, settings, runtime, pilots);
     policy.measured = &measured;
   }
-  PreparedBanks banks = bank_scene(scene, settings.num_pes, settings.routing, policy, group);
+  Scene* release = after == Facets::released ? lendable : nullptr;
+  PreparedBanks banks = bank_scene(scene, settings.num_pes, settings.routing, policy, group, release);
   banks.pilot_frames = pilots.frames;
   banks.pilot_seconds = pilots.seconds;
   banks.pilot_warm_up_seconds = pilots.warm_up_seconds;
@@ -49,14 +52,16 @@ PreparedBanks prepare_whole(const Scene& scene, Scene* lendable, const RenderSet
 
 }  // namespace
 
-PreparedBanks prepare_banks_consuming(Scene& scene, const RenderSettings& settings, ClRuntime& runtime) {
-  if (!scene.is_share()) return prepare_whole(scene, &scene, settings, runtime);
+PreparedBanks prepare_banks_consuming(Scene& scene, const RenderSettings& settings, ClRuntime& runtime,
+                                      Facets after) {
+  if (!scene.is_share()) return prepare_whole(scene, &scene, settings, runtime, after);
   // Read in shares: the ranks partition it together, and it gives up its facets once they are sent.
   check_machine_request(scene, settings.num_pes);
   const PrepareTimes before = prepare_times();
   OneProcess solo;  // one process, when the settings name no ranks
   Ranks& ranks = settings.ranks ? *settings.ranks : solo;
   ShareBalance how;
+  how.pilot = settings.measure_cost;  // a renderer that measures reads the maps
   MeasuredWork measured;
   PilotFigures pilots;
   ShareClusters clusters;  // the pilots' clusters before the balance's cuts, for the frame's partition too
@@ -89,7 +94,7 @@ PreparedBanks prepare_banks(const Scene& scene, const RenderSettings& settings, 
     Scene copy = scene;
     return prepare_banks_consuming(copy, settings, runtime);
   }
-  return prepare_whole(scene, nullptr, settings, runtime);
+  return prepare_whole(scene, nullptr, settings, runtime, Facets::kept);
 }
 
 RenderResult render(const Scene& scene, const RenderSettings& settings, ClRuntime& runtime) {

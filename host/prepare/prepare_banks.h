@@ -19,8 +19,12 @@ namespace opsila {
 PreparedBanks prepare_banks(const Scene& scene, const RenderSettings& settings, ClRuntime& runtime);
 // The same, consuming: a scene read in shares gives up its facets (triangles
 // and vertex attributes) to the partition once they are sent
-// (docs/DISTRIBUTED.md), so a rank never holds them twice.
-PreparedBanks prepare_banks_consuming(Scene& scene, const RenderSettings& settings, ClRuntime& runtime);
+// (docs/DISTRIBUTED.md), so a rank never holds them twice; a whole scene
+// gives them up once the banks hold copies (Facets::released), or keeps
+// them for a caller that still reads them (the bench's baselines).
+enum class Facets { released, kept };
+PreparedBanks prepare_banks_consuming(Scene& scene, const RenderSettings& settings, ClRuntime& runtime,
+                                      Facets after = Facets::released);
 
 // One frame with banks and a Renderer prepared for it; the scene is kept.
 RenderResult render(const Scene& scene, const RenderSettings& settings, ClRuntime& runtime);

@@ -82,8 +82,20 @@ void put_warnings_first(Scene& scene, std::vector<std::string> first) {
   scene.warnings = std::move(first);
 }
 
+void Scene::keep_figures() {
+  if (by_figures()) return;
+  bounds(share.lo, share.hi);
+  share.total_triangles = triangles.size();
+  share.banked = true;
+}
+
+void Scene::release_triangles() {
+  keep_figures();
+  std::vector<Triangle>().swap(triangles);
+}
+
 void Scene::bounds(Vec3& lo, Vec3& hi) const {
-  if (is_share()) {
+  if (by_figures()) {
     lo = share.lo, hi = share.hi;
     return;
   }

@@ -155,6 +155,10 @@ struct SceneShare {
   std::function<std::uint64_t(Scene&)> decode_maps;
   // What the readers do with the texture maps' images.
   MapImages map_images = MapImages::now;
+  // A whole scene whose triangles went to the banks
+  // (Scene::release_triangles): total_triangles and the bounds above are
+  // its figures, as they are a share's.
+  bool banked = false;
 };
 
 struct Scene {
@@ -187,8 +191,17 @@ struct Scene {
   // Axis-aligned bounds of all triangles (every rank's, for a share).
   void bounds(Vec3& lo, Vec3& hi) const;
   bool is_share() const { return share.ranks > 1; }
+  // Whether the scene is known by its figures (SceneShare) rather than its triangles.
+  bool by_figures() const { return is_share() || share.banked; }
   // Triangles of the whole scene (every rank's, for a share).
-  std::size_t total_triangles() const { return is_share() ? share.total_triangles : triangles.size(); }
+  std::size_t total_triangles() const { return by_figures() ? share.total_triangles : triangles.size(); }
+  // The count and the bounds kept as figures (SceneShare), so that the
+  // frame's epsilon and the reports stay the same once the triangles go:
+  // taken while the triangles are whole, before anything consumes them.
+  void keep_figures();
+  // Gives the triangles up once the banks hold copies of them (keeping the
+  // figures first, if not yet kept); nothing reads them after.
+  void release_triangles();
   // SPEC: epsilon = 1e-4 x the diagonal of the scene's bounding box.
   float epsilon() const;
   // Length of the bounding box diagonal (computed in double, so a scene too

@@ -100,6 +100,7 @@ void expect_shares_bank_as_one(const Case& c) {
   RaySample whole_sample;
   BalancePolicy policy;
   policy.balance = c.balance;
+  policy.pilot = true;  // the facets' clusters too (expect_same_banks)
   if (c.balance == Balance::measured) whole_work = measured_work(whole), policy.measured = &whole_work;
   if (c.balance == Balance::work) whole_sample = traced_sample(whole, nullptr), policy.sample = &whole_sample;
   if (c.balance != Balance::facets) {  // the balance cuts hot clusters: more than by facets
@@ -120,6 +121,7 @@ void expect_shares_bank_as_one(const Case& c) {
       MeasuredWork work;
       RaySample sample;
       ShareBalance how;
+      how.pilot = true;
       if (c.balance == Balance::measured) work = measured_work(share), how.measured = &work;
       if (c.balance == Balance::work) {
         sample = balance_sample(share, traced_sample, ranks);  // traced by the ranks together

@@ -176,7 +176,9 @@ TEST(BankBvh, BanksBuiltInParallelAreTheSameBytes) {
   const Scene s = test::mirror_glass_scene(40);
   auto banked = [&](const char* threads) {
     ::setenv("OPSILA_THREADS", threads, 1);
-    BankedScene bs = partition_scene(s, 13);
+    PartitionUse use;
+    use.pilot_maps = true;  // `source` follows the facets
+    BankedScene bs = partition_scene(s, 13, false, nullptr, nullptr, use);
     ::unsetenv("OPSILA_THREADS");
     return bs;
   };
@@ -190,6 +192,7 @@ TEST(BankBvh, BanksBuiltInParallelAreTheSameBytes) {
   EXPECT_EQ(bytes(one.triangles), bytes(many.triangles));
   EXPECT_EQ(bytes(one.clusters), bytes(many.clusters));
   EXPECT_EQ(bytes(one.pes), bytes(many.pes));
+  ASSERT_EQ(one.source.size(), one.triangles.size());
   EXPECT_EQ(one.source, many.source);
 }
 

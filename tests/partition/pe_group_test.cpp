@@ -39,11 +39,13 @@ TEST(PeGroup, RanksSplitThePesIntoContiguousNearlyEqualGroups) {
 TEST(PeGroup, EachRankKeepsItsOwnBanksAndTheGlobalTables) {
   const Scene s = test::mirror_glass_scene(16, 4);
   const int P = 8, R = 3;
-  const PreparedBanks whole = bank_scene(s, P, OPSILA_ROUTING_BOXES, BalancePolicy{}, pe_group(P, 1, 0));
+  BalancePolicy pilot;
+  pilot.pilot = true;  // facet_cluster too
+  const PreparedBanks whole = bank_scene(s, P, OPSILA_ROUTING_BOXES, pilot, pe_group(P, 1, 0));
   ASSERT_EQ(whole.tri_base, 0);
   std::multiset<int> facets;
   for (int r = 0; r < R; ++r) {
-    const PreparedBanks mine = bank_scene(s, P, OPSILA_ROUTING_BOXES, BalancePolicy{}, pe_group(P, R, r));
+    const PreparedBanks mine = bank_scene(s, P, OPSILA_ROUTING_BOXES, pilot, pe_group(P, R, r));
     const PeGroup& g = mine.group;
     EXPECT_EQ(mine.tri_base, whole.scene.pes[g.begin].tri_begin);
     EXPECT_EQ(int(mine.scene.triangles.size()), whole.scene.pes[g.end - 1].tri_end - mine.tri_base);

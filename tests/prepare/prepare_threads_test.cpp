@@ -48,13 +48,18 @@ TEST(PrepareThreads, TheSameBytesWhateverTheThreads) {
   const Scene one = with_threads("1", big_scene), many = with_threads("5", big_scene);
   ASSERT_GT(one.triangles.size(), std::size_t(1) << 19);
   EXPECT_EQ(bytes(one.triangles), bytes(many.triangles));  // the terrain's heights
-  const auto banks = [&](const char* threads) { return with_threads(threads, [&] { return partition_scene(one, 16); }); };
+  const auto banks = [&](const char* threads) { 
+    PartitionUse use;
+    use.pilot_maps = true;  // source and tri_cluster too
+    return with_threads(threads, [&] { return partition_scene(one, 16, false, nullptr, nullptr, use); });
+  };
   const BankedScene a = banks("1"), b = banks("5");
   EXPECT_EQ(bytes(a.triangles), bytes(b.triangles));
   EXPECT_EQ(bytes(a.nodes), bytes(b.nodes));
   EXPECT_EQ(bytes(a.clusters), bytes(b.clusters));
   EXPECT_EQ(bytes(a.route_nodes), bytes(b.route_nodes));
   EXPECT_EQ(bytes(a.pes), bytes(b.pes));
+  ASSERT_EQ(a.source.size(), a.triangles.size());
   EXPECT_EQ(a.source, b.source);
   EXPECT_EQ(a.tri_cluster, b.tri_cluster);
 }

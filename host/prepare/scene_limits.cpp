@@ -34,6 +34,9 @@ HostMemory agree_host_memory(Ranks& ranks, const HostMemory& mine) {
 TriangleLimit host_triangle_limit(Ranks& ranks, std::uint64_t flag_bytes) {
   const std::uint64_t available = flag_bytes ? 0 : available_host_memory();
   const HostMemory mine = host_memory_of(flag_bytes, available, ranks.local_size());
+  // A rank that failed before (its device, its flags) waits in the failure
+  // agreement: meet it there first, not in a collective it never joins.
+  ranks.checkpoint();
   return TriangleLimit::of_memory(agree_host_memory(ranks, mine));
 }
 

@@ -19,7 +19,8 @@ HostMemory agree_host_memory(Ranks& ranks, const HostMemory& mine);
 
 // One rank's triangle limit: `flag_bytes` (--host-memory) when nonzero,
 // else the memory available on this host shared by the ranks that run on
-// it, agreed over the ranks.
+// it, agreed over the ranks. Throws OtherRankFailed when another rank
+// failed before it (Ranks::checkpoint).
 TriangleLimit host_triangle_limit(Ranks& ranks, std::uint64_t flag_bytes);
 
 // Throws ClError, naming the scene file, when this rank's share of the

@@ -26,6 +26,7 @@
 #include <vector>
 
 #include "core/env_hooks.h"
+#include "core/host_memory.h"
 #include "core/util.h"
 #include "formats/assimp/model_checks.h"
 #include "formats/common/model_fan.h"
@@ -159,8 +160,7 @@ std::uint64_t resident_bytes() {
 std::uint64_t import_memory_budget(std::uintmax_t bytes) {
   if (const auto v = env_hook_number(EnvHook::import_memory, 1, std::uint64_t(1) << 50, "a number of bytes"))
     return *v;
-  const std::uint64_t ram = static_cast<std::uint64_t>(sysconf(_SC_PHYS_PAGES)) *
-                            static_cast<std::uint64_t>(sysconf(_SC_PAGESIZE));
+  const std::uint64_t ram = physical_memory();
   const std::uint64_t want = std::max<std::uint64_t>(std::uint64_t(4) << 30, 64 * std::uint64_t(bytes));
   return ram > 0 ? std::max<std::uint64_t>(std::min(want, ram / 4 * 3), std::uint64_t(1) << 30) : want;
 }

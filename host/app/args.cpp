@@ -13,6 +13,7 @@
 #include <sstream>
 
 #include "scene/camera.h"
+#include "core/host_memory.h"
 #include "core/util.h"
 #include "formats/json/scene_file.h"
 #include "formats/image/texture_file.h"
@@ -184,6 +185,7 @@ const std::vector<FlagSpec>& view_flags() {
       {"--balance", "--balance", true},
       {"--spp", "--spp", true},
       {"--smooth", "--smooth", false},
+      {"--host-memory", "--host-memory", true},
   };
   return flags;
 }
@@ -256,6 +258,10 @@ bool parse_view_flag(const std::string& name, const std::string& value, ViewOpti
     o.device_spec = value;
   } else if (name == "--smooth") {
     o.smooth = true;
+  } else if (name == "--host-memory") {
+    const std::optional<std::uint64_t> bytes = parse_memory_size(value);
+    if (!bytes) bad_flag(name, value, "expected a size such as 8G, 512M, 1.5G or a number of bytes");
+    o.host_memory = *bytes;
   } else {
     return false;
   }

@@ -17,6 +17,7 @@
 #include "bench/options.h"
 #include "bench/report.h"
 #include "prepare/prepare.h"
+#include "prepare/scene_limits.h"
 #include "core/progress.h"
 #include "core/stage_clock.h"
 #include "formats/image/image_io.h"
@@ -128,6 +129,7 @@ int run_bench(const std::vector<std::string>& args, Ranks& ranks) {
   const RenderSettings settings = prepared_settings(request);
   // The bench prepares the banks of each measured renderer itself (measure.cpp).
   Scene scene = std::move(prepare_scene(request, nullptr).scene);
+  check_device_room(scene, o.scene_path, ranks, rt);
   if (settings.balance == Balance::work) progress("sampling the frame's rays for --balance work");
   if (settings.balance == Balance::measured) progress("pilot frames for --balance measured");
 

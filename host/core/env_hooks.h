@@ -21,7 +21,7 @@ namespace opsila {
   X(import_timeout, "OPSILA_IMPORT_TIMEOUT")                                                                       \
   /* bytes of memory the model importer may add while it reads (default: 4 GiB or 64 x the file, at most 3/4 of RAM) */ \
   X(import_memory, "OPSILA_IMPORT_MEMORY")                                                                         \
-  /* triangles one MPI rank may hold, 1..the scene limit (tests provoke the refusal with it) */                    \
+  /* triangles one MPI rank may hold, 1..2^31-1, below its memory's (tests provoke the refusal with it) */        \
   X(rank_triangle_limit, "OPSILA_RANK_TRIANGLE_LIMIT")                                                             \
   /* work-group size the kernels ask for, a power of two 1..1024 (default 64) */                                   \
   X(group_size, "OPSILA_GROUP_SIZE")                                                                               \

@@ -18,4 +18,11 @@ struct InputError : std::runtime_error {
   std::vector<std::string> warnings;
 };
 
+// A reader that counts triangles as it goes passed the limit it was given:
+// the caller, which knows why the limit is what it is (scene/
+// triangle_limit.h), adds that to the message.
+struct TooManyTriangles : InputError {
+  using InputError::InputError;
+};
+
 }  // namespace opsila

@@ -14,6 +14,12 @@
 
 namespace opsila {
 
+// Device memory a rank's banks take per triangle of its share: the facet
+// records (48 bytes) and the bank BVH nodes (about 44), measured 92; with the
+// frame's other buffers on top. Read by the check before the partition
+// (prepare/scene_limits.h); the exact plan follows the bank build.
+constexpr std::uint64_t kDeviceBytesPerTriangle = 96;
+
 // Device memory that a frame allocates before the first launch, by part.
 struct DevicePlan {
   std::uint64_t scene = 0, image = 0, descriptors = 0, other = 0;

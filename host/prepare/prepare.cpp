@@ -6,6 +6,7 @@
 #include "formats/image/texture_file.h"
 #include "partition/pe_group.h"
 #include "prepare/prepare_banks.h"
+#include "prepare/scene_limits.h"
 #include "scene/work_bound.h"
 
 namespace opsila {
@@ -18,8 +19,9 @@ namespace {
 // every rank reads whole.
 Scene read_view_scene(const PrepareRequest& r, Ranks& ranks) {
   const SceneShare share = scene_share_for(ranks);
+  const TriangleLimit limit = host_triangle_limit(ranks, r.view.host_memory);
   show_prepare_progress(!r.quiet);
-  Scene scene = load_scene_or_explain(r.view.scene_path, r.quiet, ranks, share);
+  Scene scene = load_scene_or_explain(r.view.scene_path, r.quiet, ranks, share, limit);
   if (r.outputs) r.outputs->refuse_inputs(scene.input_files);
   apply_view_options(scene, r.view);
   if (r.quiet || !r.note) return scene;
@@ -64,7 +66,10 @@ PreparedScene prepare_scene(const PrepareRequest& r, ClRuntime* runtime) {
   p.settings = prepared_settings(r);
   p.settings.ranks = &ranks;
   p.scene = read_view_scene(r, ranks);
-  if (runtime && !r.reference) p.banks = prepare_banks_consuming(p.scene, p.settings, *runtime);
+  if (runtime && !r.reference) {
+    check_device_room(p.scene, r.view.scene_path, ranks, *runtime);
+    p.banks = prepare_banks_consuming(p.scene, p.settings, *runtime);
+  }
   p.settings.ranks = r.ranks;
   return p;
 }

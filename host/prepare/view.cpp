@@ -103,7 +103,8 @@ void print_warnings(const std::vector<std::string>& warnings, bool quiet) {
     std::fprintf(stderr, "opsila: warning: ... and more (only the first %zu are shown)\n", kMaxShown);
 }
 
-Scene load_scene_or_explain(const std::string& path, bool quiet, Ranks& ranks, const SceneShare& share) {
+Scene load_scene_or_explain(const std::string& path, bool quiet, Ranks& ranks, const SceneShare& share,
+                            const TriangleLimit& limit) {
   Scene scene;
   // Read in shares: texture images are checked once over the ranks, then
   // decoded only where used (settle_maps, docs/DISTRIBUTED.md).
@@ -111,7 +112,7 @@ Scene load_scene_or_explain(const std::string& path, bool quiet, Ranks& ranks, c
   SceneShare request = share;
   if (shares) request.map_images = MapImages::later;
   try {
-    scene = load_scene(path, request);
+    scene = load_scene(path, request, limit);
   } catch (InputError& e) {
     print_warnings(e.warnings, quiet);  // a misspelt key explains many errors
     throw;

@@ -3,6 +3,7 @@
 // they are applied to a scene read from its file.
 #pragma once
 
+#include <cstdint>
 #include <optional>
 #include <string>
 #include <vector>
@@ -29,6 +30,7 @@ struct ViewOptions {
   std::optional<int> routing;     // --routing: OPSILA_ROUTING_*
   std::optional<Balance> balance;  // --balance (default kDefaultBalance)
   bool smooth = false;            // --smooth: SPEC's smooth shading (else the scene's "smooth")
+  std::uint64_t host_memory = 0;  // --host-memory in bytes (0: what the host has available)
 };
 
 // --balance when the flag is absent: render keeps equal banks (no pilot
@@ -53,6 +55,7 @@ void check_scene_file(const std::string& path);
 // Prints each distinct warning once ("opsila: warning: ..."), at most 100.
 void print_warnings(const std::vector<std::string>& warnings, bool quiet);
 // load_scene, with its warnings printed, also those found before an error.
-Scene load_scene_or_explain(const std::string& path, bool quiet, Ranks& ranks, const SceneShare& share);
+Scene load_scene_or_explain(const std::string& path, bool quiet, Ranks& ranks, const SceneShare& share,
+                            const TriangleLimit& limit);
 
 }  // namespace opsila

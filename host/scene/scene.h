@@ -13,6 +13,7 @@
 
 #include "core/errors.h"
 #include "core/vec.h"
+#include "scene/triangle_limit.h"
 
 namespace opsila {
 
@@ -237,11 +238,8 @@ int spp_side(int n);
 CameraDesc frame_bounds(const Vec3& lo, const Vec3& hi, float fov_deg = 45.0f,
                         float aspect = 4.0f / 3.0f);
 
-// Largest image (scenes/FORMAT.md "Limits"): per side, and in pixels.
-// Upper bound on the triangles of one scene, all objects together (scenes/
-// FORMAT.md "Limits"), checked by every reader as it counts: beyond it the
-// input is refused before it is built.
-constexpr std::size_t kMaxTriangles = std::size_t(1) << 24;
+// Largest image (scenes/FORMAT.md "Limits"): per side, and in pixels. (The
+// triangles a process may take: scene/triangle_limit.h.)
 constexpr int kMaxImageSide = 16384;
 constexpr long long kMaxImagePixels = 1LL << 26;
 

@@ -26,6 +26,7 @@
 #include <vector>
 
 #include "core/env_hooks.h"
+#include "core/host_memory.h"
 #include "core/util.h"
 #include "formats/assimp/model_checks.h"
 #include "formats/common/model_fan.h"
@@ -80,8 +81,9 @@ void collect_placements(const aiNode* root, unsigned num_meshes, std::vector<std
 
 class ModelReader {
  public:
-  ModelReader(const aiScene& ai, const std::string& name, const std::string& base_dir, MapImages images)
-      : ai_(ai), name_(name), base_dir_(base_dir), images_(images) {}
+  ModelReader(const aiScene& ai, const std::string& name, const std::string& base_dir, MapImages images,
+              std::size_t max_triangles)
+      : ai_(ai), name_(name), base_dir_(base_dir), images_(images), max_triangles_(max_triangles) {}
 
   Scene run() {
     scene_.has_camera = false;
@@ -120,7 +122,7 @@ class ModelReader {
   void emit_mesh(const aiMesh& mesh, int object, int facet, const aiMatrix4x4& place, int placement,
                  FanTally& tally) {
     const int material = mesh.mMaterialIndex < material_index_.size() ? material_index_[mesh.mMaterialIndex] : 0;
-    MeshFan fan(name_, mesh, place, kMaxTriangles, tally);
+    MeshFan fan(name_, mesh, place, max_triangles_, tally);
     fan.placement = placement;
     for (unsigned f = 0; f < mesh.mNumFaces; ++f) {
       const aiFace& face = mesh.mFaces[f];
@@ -133,6 +135,7 @@ class ModelReader {
   const std::string& name_;
   std::string base_dir_;
   MapImages images_;
+  std::size_t max_triangles_;
   Scene scene_;
   std::vector<int> material_index_;  // importer material -> Scene::materials
 };
@@ -157,8 +160,7 @@ std::uint64_t resident_bytes() {
 std::uint64_t import_memory_budget(std::uintmax_t bytes) {
   if (const auto v = env_hook_number(EnvHook::import_memory, 1, std::uint64_t(1) << 50, "a number of bytes"))
     return *v;
-  const std::uint64_t ram = static_cast<std::uint64_t>(sysconf(_SC_PHYS_PAGES)) *
-                            static_cast<std::uint64_t>(sysconf(_SC_PAGESIZE));
+  const std::uint64_t ram = physical_memory();
   const std::uint64_t want = std::max<std::uint64_t>(std::uint64_t(4) << 30, 64 * std::uint64_t(bytes));
   return ram > 0 ? std::max<std::uint64_t>(std::min(want, ram / 4 * 3), std::uint64_t(1) << 30) : want;
 }
@@ -306,7 +308,7 @@ constexpr unsigned kImportFlags = aiProcess_ValidateDataStructure;
 bool validated_by_us(const std::string& ext) { return lower(ext) == ".stl"; }
 
 Scene convert(Assimp::Importer& importer, const aiScene* ai, const std::string& name, const std::string& base_dir,
-              const ModelFiles& files, MapImages images) {
+              const ModelFiles& files, MapImages images, std::size_t max_triangles) {
   if (!ai) {
     std::string why = importer.GetErrorString();
     std::replace(why.begin(), why.end(), '\n', ' ');
@@ -316,7 +318,7 @@ Scene convert(Assimp::Importer& importer, const aiScene* ai, const std::string& 
   if (!ai->mRootNode || ai->mNumMeshes == 0 || (ai->mFlags & AI_SCENE_FLAGS_INCOMPLETE))
     throw InputError(name + ": no facets (the model has no meshes)");
   try {
-    return ModelReader(*ai, name, base_dir, images).run();
+    return ModelReader(*ai, name, base_dir, images, max_triangles).run();
   } catch (const std::bad_alloc&) {
     throw InputError(name + ": out of memory while loading (model too large)");
   } catch (const std::length_error&) {
@@ -347,7 +349,7 @@ constexpr std::size_t kImportStackBytes = std::size_t(256) << 20;
 // records every file read as an input of the scene), on a thread with a
 // large stack.
 Scene import_model(ModelFiles& files, const std::string& path, const std::string& base_dir, bool watched,
-                   MapImages images) {
+                   MapImages images, std::size_t max_triangles = kMaxTriangles) {
   Scene scene;
   run_with_stack(kImportStackBytes, [&] {
     const std::string ext = fs::path(path).extension().string();
@@ -367,7 +369,7 @@ Scene import_model(ModelFiles& files, const std::string& path, const std::string
     }
     if (!ai && !base_dir.empty()) explain_with_stream(path);  // a file on disk (not a model in memory)
     if (ai && our_checks) stl::check_imported_scene(*ai, path);
-    scene = convert(importer, ai, path, base_dir, files, images);
+    scene = convert(importer, ai, path, base_dir, files, images, max_triangles);
   });
   scene.input_files.insert(scene.input_files.begin(), files.files().begin(), files.files().end());
   return scene;
@@ -382,14 +384,14 @@ bool is_imported_model(const std::string& path) {
   return importer.IsExtensionSupported(ext.c_str());
 }
 
-Scene load_model(const std::string& path, MapImages images) {
+Scene load_model(const std::string& path, MapImages images, std::size_t max_triangles) {
   ModelFiles files;
   files.size(path);  // the usual messages for a missing, special or huge file
   const bool ply = lower(fs::path(path).extension().string()) == ".ply";
-  if (ply && ply_has_strips(path)) return load_ply_whole(path, kMaxTriangles);  // the importer keeps one triangle
+  if (ply && ply_has_strips(path)) return load_ply_whole(path, max_triangles);  // the importer keeps one triangle
   std::string dir = fs::path(path).parent_path().string();
   if (dir.empty()) dir = ".";
-  Scene scene = import_model(files, path, dir, true, images);
+  Scene scene = import_model(files, path, dir, true, images, max_triangles);
   if (ply)
     for (std::string& w : ply_unread_elements(path)) scene.warnings.push_back(std::move(w));
   return scene;
@@ -413,7 +415,7 @@ bool is_imported_model(const std::string& path) {
   return false;
 }
 
-Scene load_model(const std::string& path, MapImages) {
+Scene load_model(const std::string& path, MapImages, std::size_t) {
   ModelFiles().size(path);  // the usual messages for a missing, special or huge file
   throw InputError(path + ": this build has no Open Asset Import Library (install libassimp-dev and rebuild)");
 }

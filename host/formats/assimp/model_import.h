@@ -17,8 +17,10 @@ bool is_imported_model(const std::string& path);
 
 // Loads a model file; texture maps are found relative to its folder, their
 // images read as `images` says (add_texture_file). Like a bare OBJ it sets
-// no camera or lights. Any importer failure is one InputError "FILE: problem".
-Scene load_model(const std::string& path, MapImages images = MapImages::now);
+// no camera or lights. Any importer failure is one InputError "FILE: problem";
+// more than `max_triangles` is TooManyTriangles (core/errors.h).
+Scene load_model(const std::string& path, MapImages images = MapImages::now,
+                 std::size_t max_triangles = kMaxTriangles);
 
 // The same from bytes in memory; `hint` is the format's extension (for
 // example "ply"). Reads nothing from disk: any other file the importer asks

@@ -25,7 +25,7 @@ MeshFan::MeshFan(const std::string& name, const aiMesh& mesh, const aiMatrix4x4&
 
 bool MeshFan::face(const unsigned* corners, unsigned n, unsigned f, int object, int facet, int material, Scene* out) {
   if (tally_.triangles + n > max_triangles_)
-    throw InputError(name_ + ": too many triangles (more than " + std::to_string(max_triangles_) + ")");
+    throw TooManyTriangles(name_ + ": too many triangles (more than " + std::to_string(max_triangles_) + ")");
   const auto position = [&](unsigned i) {
     const aiVector3D p = place_ * mesh_.mVertices[i];
     return Vec3{p.x, p.y, p.z};

@@ -16,11 +16,11 @@ void TriangleBudget::add(std::size_t triangles, std::size_t facets, std::size_t 
     v_.fail(path, "would make " + std::to_string(triangles) + " more triangles (" +
                       std::to_string(planned_triangles_) + " so far); a scene may have at most " +
                       std::to_string(most_) + on_ranks + " (scenes/FORMAT.md, Limits)" +
-                      ranks_hint(triangles, windowed));
+                      limit_.why_not(planned_triangles_ + triangles, ranks_) + hint(triangles, windowed));
   if (triangles > entry_limit_ && !(windowed && ranks_ > 1))  // every rank builds an entry whole
     v_.fail(path, "would make " + std::to_string(triangles) + " triangles; one entry of objects may have at most " +
                       std::to_string(entry_limit_) + (windowed ? "" : " on any number of ranks") +
-                      " (scenes/FORMAT.md, Limits)");
+                      " (scenes/FORMAT.md, Limits)" + limit_.why_not(triangles, 1) + hint(triangles, false));
   if (facets > std::size_t(INT_MAX) - planned_facets_) v_.fail(path, "too many facets for 32-bit ids");
   if (objects > std::size_t(INT_MAX) - planned_objects_) v_.fail(path, "too many objects");
   planned_triangles_ += triangles;
@@ -28,19 +28,28 @@ void TriangleBudget::add(std::size_t triangles, std::size_t facets, std::size_t 
   planned_objects_ += objects;
 }
 
-// How many MPI ranks would take the triangles counted so far, when this
-// entry can be spread over them; "" when no number of ranks would (at most
-// one per PE, 1024) or the build has no MPI.
-std::string TriangleBudget::ranks_hint(std::size_t triangles, bool windowed) const {
+std::string TriangleBudget::beyond(const InputError& e) const {
+  return dynamic_cast<const TooManyTriangles*>(&e) ? limit_.why_not(most_, ranks_, true) : std::string();
+}
+
+// What would take the triangles counted so far: as many MPI ranks, when
+// this entry can be spread over them (at most one per PE, 1024, and only in
+// a build with MPI), or as much --host-memory, when memory is what limits.
+// An entry every rank builds whole needs the memory on every rank.
+std::string TriangleBudget::hint(std::size_t triangles, bool windowed) const {
+  const bool whole = triangles > entry_limit_ && !windowed;
+  const std::size_t all = planned_triangles_ + triangles;
+  std::string ranks;
 #ifdef OPSILA_HAVE_MPI
-  const double ranks = std::ceil((double(planned_triangles_) + double(triangles)) / double(entry_limit_));
-  if ((triangles > entry_limit_ && !windowed) || ranks > 1024) return "";
-  const std::string r = std::to_string(static_cast<int>(ranks));
-  return ": with the objects so far it needs at least " + r + " MPI ranks (mpirun -n " + r + " opsila render ...)";
-#else
-  (void)triangles, (void)windowed;
-  return "";
+  const double r = std::ceil(double(all) / double(std::max<std::size_t>(entry_limit_, 1)));
+  if (!whole && r <= 1024) {
+    const std::string n = std::to_string(static_cast<int>(r));
+    ranks = "at least " + n + " MPI ranks (mpirun -n " + n + " opsila render ...)";
+  }
 #endif
+  const std::string memory = whole ? limit_.memory_hint(triangles, 1) : limit_.memory_hint(all, ranks_);
+  if (ranks.empty() && memory.empty()) return "";
+  return "; with the objects so far it needs " + ranks + (ranks.empty() || memory.empty() ? "" : " or ") + memory;
 }
 
 }  // namespace scene_json

@@ -4,6 +4,7 @@
 // formats/json.
 #pragma once
 
+#include <algorithm>
 #include <cstddef>
 #include <optional>
 #include <string>
@@ -11,6 +12,7 @@
 #include "formats/json/primitives.h"
 #include "formats/json/scene_share.h"
 #include "formats/json/scene_values.h"
+#include "scene/triangle_limit.h"
 
 namespace opsila {
 namespace scene_json {
@@ -19,10 +21,14 @@ namespace scene_json {
 // shapes) against the scene's limits before anything is built.
 class TriangleBudget {
  public:
-  // entry_limit: one entry of "objects" (one rank's limit); the scene may
-  // have `ranks` times it.
-  TriangleBudget(const SceneValues& values, std::size_t entry_limit, int ranks)
-      : v_(values), entry_limit_(entry_limit), most_(entry_limit * std::size_t(std::max(ranks, 1))), ranks_(ranks) {}
+  // limit: one rank's, so one entry's of "objects"; the scene may have
+  // `ranks` times it (under the ids ceiling).
+  TriangleBudget(const SceneValues& values, const TriangleLimit& limit, int ranks)
+      : v_(values),
+        limit_(limit),
+        entry_limit_(limit.triangles),
+        most_(std::min(limit.triangles * std::size_t(std::max(ranks, 1)), kMaxTriangles)),
+        ranks_(std::max(ranks, 1)) {}
 
   // windowed: an entry no rank holds whole (a terrain made in windows, a
   // generator's items dealt as they are made), so not limited to one
@@ -35,11 +41,15 @@ class TriangleBudget {
   std::size_t most() const { return most_; }                   // the whole scene's
   std::size_t left() const { return most_ - planned_triangles_; }
   std::size_t entry_limit() const { return entry_limit_; }
+  // Why an included file that streamed past the scene's limit does not fit
+  // (TooManyTriangles), "" for other errors: added to its message.
+  std::string beyond(const InputError& e) const;
 
  private:
-  std::string ranks_hint(std::size_t triangles, bool windowed) const;
+  std::string hint(std::size_t triangles, bool windowed) const;
 
   const SceneValues& v_;
+  TriangleLimit limit_;
   std::size_t entry_limit_, most_;
   int ranks_;
   std::size_t planned_triangles_ = 0, planned_facets_ = 0, planned_objects_ = 0;

@@ -6,6 +6,7 @@
 // fits the limits is any geometry built.
 #include "formats/json/scene_file.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cstdlib>
 #include <filesystem>
@@ -35,7 +36,7 @@ namespace {
 // The document, section after section; the objects are all checked and
 // counted before any is built.
 void read_document(Scene& scene, const std::string& text, const std::string& name, const std::string& base_dir,
-                   std::size_t max_triangles, const SceneShare& share) {
+                   const TriangleLimit& limit, const SceneShare& share) {
   const Json root = parse_scene_text(text, name);
   SceneValues values(text, name, scene.warnings);
   if (!root.is_object()) values.fail("", std::string("the scene must be a JSON object, not ") + kind(root));
@@ -61,7 +62,7 @@ void read_document(Scene& scene, const std::string& text, const std::string& nam
   if (const Json* a = find("ambient")) scene.ambient = values.colour(*a, "ambient");
   if (const Json* b = find("background")) scene.background = values.colour(*b, "background");
   if (const Json* l = find("lights")) sections.lights(*l, "lights");
-  ObjectReader objects(values, sections, scene, base_dir, max_triangles, share);
+  ObjectReader objects(values, sections, scene, base_dir, limit, share);
   if (const Json* o = find("objects")) objects.read(*o, "objects");
   // Every object is checked and the total counted: only now is geometry built.
   objects.build();
@@ -76,13 +77,13 @@ void read_document(Scene& scene, const std::string& text, const std::string& nam
     scene.camera = frame_bounds(lo, hi, 45.0f, float(scene.width) / float(scene.height));
 }
 
-// share.ranks > 1: this rank's share (scene_share.h); max_triangles is then
-// one rank's limit, and the scene may have ranks times it.
+// share.ranks > 1: this rank's share (scene_share.h); the limit is then
+// one rank's, and the scene may have ranks times it.
 Scene read_scene(const std::string& text, const std::string& name, const std::string& base_dir,
-                 std::size_t max_triangles, const SceneShare& share) {
+                 const TriangleLimit& limit, const SceneShare& share) {
   Scene scene;
   try {
-    read_document(scene, text, name, base_dir, max_triangles, share);
+    read_document(scene, text, name, base_dir, limit, share);
   } catch (InputError& e) {
     // Warnings found before the error still reach the user (a misspelt
     // key explains a later "no facets"), those of maps listed for later
@@ -102,7 +103,7 @@ Scene read_scene(const std::string& text, const std::string& name, const std::st
 using scene_json::Json;
 
 Scene load_scene_from_string(const std::string& text, const std::string& name,
-                             const std::string& base_dir, std::size_t max_triangles,
+                             const std::string& base_dir, const TriangleLimit& limit,
                              const SceneShare& share) {
   try {
     if (text.size() > kMaxSceneFileBytes)
@@ -110,7 +111,7 @@ Scene load_scene_from_string(const std::string& text, const std::string& name,
                        " bytes; the limit is " + std::to_string(kMaxSceneFileBytes) + ")");
     int line = 1;
     check_json_bytes(text.data(), text.size(), 0, line, name);
-    return scene_json::read_scene(text, name, base_dir, max_triangles, share);
+    return scene_json::read_scene(text, name, base_dir, limit, share);
   } catch (const Json::exception&) {
     // Never the library's text: the reader checks every value's type first,
     // so this is a reader bug, reported without a misleading detail.
@@ -122,9 +123,11 @@ Scene load_scene_from_string(const std::string& text, const std::string& name,
   }
 }
 
-std::size_t rank_triangle_limit() {
+TriangleLimit rank_triangle_limit(const TriangleLimit& limit) {
   const std::string expected = "a number of triangles, 1.." + std::to_string(kMaxTriangles);
-  return env_hook_number(EnvHook::rank_triangle_limit, 1, kMaxTriangles, expected.c_str()).value_or(kMaxTriangles);
+  if (const auto n = env_hook_number(EnvHook::rank_triangle_limit, 1, kMaxTriangles, expected.c_str()))
+    return limit.capped_for_tests(std::size_t(*n));
+  return limit;
 }
 
 // A bare OBJ or PLY read by several ranks: streamed once for its counts,
@@ -166,13 +169,17 @@ bool windowed(const std::string& path, const std::string& ext, const SceneShare&
   return share.ranks > 1 && (ext == ".obj" || (is_streamed_model(path) && model_stream_refusal(path).empty()));
 }
 
-}  // namespace
+// The limit of a file that several ranks read as a stream in windows: all
+// of theirs, under the ids ceiling.
+std::size_t windowed_limit(const TriangleLimit& rank, const SceneShare& share) {
+  return std::min(rank.triangles * std::size_t(share.ranks), kMaxTriangles);
+}
 
-Scene load_scene(const std::string& path, const SceneShare& share) {
+Scene read_scene_file(const std::string& path, const SceneShare& share, const TriangleLimit& rank) {
   const auto start = std::chrono::steady_clock::now();
   const std::string ext = lower(fs::path(path).extension().string());
   if (windowed(path, ext, share)) {
-    const std::size_t limit = rank_triangle_limit() * std::size_t(share.ranks);
+    const std::size_t limit = windowed_limit(rank, share);
     Scene scene = load_window_share(
         path, [&](const ModelWindow& w, std::uint64_t& fans) {
           return ext == ".obj" ? load_obj_window(path, limit, w, fans) : load_model_window(path, limit, w, fans);
@@ -181,11 +188,11 @@ Scene load_scene(const std::string& path, const SceneShare& share) {
     scene.share.read_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     return scene;
   }
-  if (ext == ".obj") return load_obj(path);
+  if (ext == ".obj") return load_obj(path, rank.triangles);
   // Parsing, and the shapes and generators it builds (a read is its own stage).
   StageClock clock(PrepareStage::parse);
   if (ext != ".json" && is_imported_model(path)) {
-    Scene scene = load_model(path, share.map_images);
+    Scene scene = load_model(path, share.map_images, rank.triangles);
     scene.input_files.insert(scene.input_files.begin(), path);
     return scene;
   }
@@ -196,10 +203,27 @@ Scene load_scene(const std::string& path, const SceneShare& share) {
       });
   std::string dir = fs::path(path).parent_path().string();
   if (dir.empty()) dir = ".";
-  Scene scene = load_scene_from_string(text, path, dir, rank_triangle_limit(), share);
+  Scene scene = load_scene_from_string(text, path, dir, rank, share);
   scene.input_files.insert(scene.input_files.begin(), path);
   scene.share.read_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return scene;
+}
+
+}  // namespace
+
+Scene load_scene(const std::string& path, const SceneShare& share, const TriangleLimit& limit) {
+  const TriangleLimit rank = rank_triangle_limit(limit);
+  try {
+    return read_scene_file(path, share, rank);
+  } catch (TooManyTriangles& e) {
+    // A reader that counts as it streams knows only that it passed its
+    // limit; what the limit comes from is said here, once.
+    const bool several = windowed(path, lower(fs::path(path).extension().string()), share);
+    InputError refusal(e.what() + rank.why_not(several ? windowed_limit(rank, share) : rank.triangles,
+                                               several ? share.ranks : 1, true));
+    refusal.warnings = std::move(e.warnings);
+    throw refusal;
+  }
 }
 
 }  // namespace opsila

@@ -85,7 +85,7 @@ void ModelIncludes::read(Scene& sub, const Reading& r, bool any_format, std::uin
     }
   } catch (const InputError& e) {
     scene_.warnings.insert(scene_.warnings.end(), e.warnings.begin(), e.warnings.end());
-    v_.fail(r.fkey, e.what());
+    v_.fail(r.fkey, e.what() + budget_.beyond(e));
   }
 }
 
@@ -118,7 +118,7 @@ void ModelIncludes::file_window(Scene& sub, const std::string& file, std::uint64
     sub.attributes = std::move(part.attributes);
     sub.share.spread = std::move(part.share.spread);
   } catch (const InputError& e) {  // the file changed since it was first read
-    v_.fail(fkey, e.what());
+    v_.fail(fkey, e.what() + budget_.beyond(e));
   }
 }
 

@@ -18,11 +18,11 @@ namespace scene_json {
 
 class ObjectReader {
  public:
-  // entry_limit: one entry's triangles (one rank's limit); share.ranks > 1
-  // reads this rank's share (scene_share.h).
+  // limit: one rank's (one entry's triangles); share.ranks > 1 reads this
+  // rank's share (scene_share.h).
   ObjectReader(SceneValues& values, SceneSections& sections, Scene& scene, const std::string& base_dir,
-               std::size_t entry_limit, const SceneShare& share)
-      : v_(values), sections_(sections), scene_(scene), budget_(values, entry_limit, share.ranks), dealer_(share),
+               const TriangleLimit& limit, const SceneShare& share)
+      : v_(values), sections_(sections), scene_(scene), budget_(values, limit, share.ranks), dealer_(share),
         includes_(values, sections, budget_, dealer_, building_, scene, base_dir) {}
 
   // Checks every object of the array `v` and counts its triangles.

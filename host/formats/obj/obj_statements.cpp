@@ -233,7 +233,7 @@ void ObjParser::face(std::string_view rest) {
     fail(name_, line_, "too many facets (more than " + std::to_string(INT_MAX) + ")");
   triangle_total_ += n - 2;
   if (triangle_total_ > max_triangles_)
-    fail(name_, line_, "too many triangles (more than " + std::to_string(max_triangles_) +
+    throw TooManyTriangles(at(name_, line_) + "too many triangles (more than " + std::to_string(max_triangles_) +
                            ", scenes/FORMAT.md, Limits)");
   if (shared_ && (pending_triangles_ += n - 2) >= 4096) {
     // All chunks together past the limit: stop early (the whole file is then

@@ -125,7 +125,7 @@ class PlyWindowReader {
     const ply::Value count = body.next(e.properties[0].count, e, f);
     if (count.i < 0) body.fail(e, f, "a negative number of corners");
     if (std::uint64_t(count.i) > most)
-      throw InputError(path_ + ": too many triangles (more than " + std::to_string(max_triangles_) + ")");
+      throw TooManyTriangles(path_ + ": too many triangles (more than " + std::to_string(max_triangles_) + ")");
     return static_cast<unsigned>(count.i);
   }
 

@@ -1,5 +1,6 @@
 // A scene over one process's triangle limit: the refusal says how many MPI
-// ranks would take it, where ranks can (scenes/huge.json on one process).
+// ranks would take it, where ranks can (scenes/huge.json on a process that
+// holds fewer triangles).
 #include <gtest/gtest.h>
 
 #include <string>

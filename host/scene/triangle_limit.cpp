@@ -1,0 +1,92 @@
+#include "scene/triangle_limit.h"
+
+#include <algorithm>
+#include <cstdio>
+
+namespace opsila {
+
+std::size_t triangles_for_memory(std::uint64_t bytes) {
+  if (bytes <= kPrepareHostBaseBytes) return 0;
+  return std::size_t(std::min<std::uint64_t>((bytes - kPrepareHostBaseBytes) / kPrepareHostBytesPerTriangle,
+                                             kMaxTriangles));
+}
+
+std::uint64_t memory_for_triangles(std::size_t triangles) {
+  return kPrepareHostBaseBytes + std::uint64_t(triangles) * kPrepareHostBytesPerTriangle;
+}
+
+HostMemory host_memory_of(std::uint64_t flag_bytes, std::uint64_t available, int local_ranks) {
+  HostMemory m;
+  m.local_ranks = std::max(local_ranks, 1);
+  if (flag_bytes > 0) {
+    m.bytes = flag_bytes, m.from_flag = true;
+  } else {
+    m.available = available;
+    m.bytes = available / std::uint64_t(m.local_ranks);
+  }
+  return m;
+}
+
+TriangleLimit TriangleLimit::of_memory(const HostMemory& memory) {
+  TriangleLimit limit;
+  limit.memory = memory;
+  limit.triangles = triangles_for_memory(memory.bytes);
+  limit.why = limit.triangles < kMaxTriangles ? Why::memory : Why::ids;
+  return limit;
+}
+
+TriangleLimit TriangleLimit::capped_for_tests(std::size_t n) const {
+  if (n >= triangles) return *this;
+  TriangleLimit limit = *this;
+  limit.triangles = n;
+  limit.why = Why::test_hook;
+  return limit;
+}
+
+namespace {
+
+std::string gib(std::uint64_t bytes) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.2f GiB", double(bytes) / double(std::uint64_t(1) << 30));
+  return text;
+}
+
+std::size_t per_rank(std::size_t triangles, int ranks) {
+  const std::size_t r = std::size_t(std::max(ranks, 1));
+  return triangles / r + (triangles % r != 0);
+}
+
+// "(--host-memory)", "(31.20 GiB available on this host, shared by 4 ranks)".
+std::string memory_source(const HostMemory& m) {
+  if (m.from_flag) return "(--host-memory)";
+  return "(" + gib(m.available) + " available on this host" +
+         (m.local_ranks > 1 ? ", shared by " + std::to_string(m.local_ranks) + " ranks" : std::string()) + ")";
+}
+
+}  // namespace
+
+std::string TriangleLimit::why_not(std::size_t n, int ranks, bool more_than) const {
+  switch (why) {
+    case Why::given: return "";
+    case Why::ids: return " (ids are 32-bit)";
+    case Why::test_hook: return " (as lowered by OPSILA_RANK_TRIANGLE_LIMIT)";
+    case Why::memory: break;
+  }
+  const bool several = ranks > 1;
+  const std::uint64_t need = memory_for_triangles(per_rank(n, ranks));
+  return std::string(": ") + (more_than ? "more than " : "") + std::to_string(n) + " triangles" +
+         (several ? " on " + std::to_string(ranks) + " ranks" : std::string()) + " need " +
+         (more_than ? "over " : "about ") + gib(need) + (several ? " a rank" : "") + " while preparing at " +
+         std::to_string(kPrepareHostBytesPerTriangle) + " bytes a triangle, and " +
+         (several ? "each rank" : "this process") + " may use " + gib(memory.bytes) + " " + memory_source(memory);
+}
+
+std::string TriangleLimit::memory_hint(std::size_t n, int ranks) const {
+  const std::size_t share = per_rank(n, ranks);
+  if (why != Why::memory || share > kMaxTriangles) return "";
+  const std::uint64_t mib = std::uint64_t(1) << 20;
+  const std::uint64_t need = (memory_for_triangles(share) + mib - 1) / mib;
+  return "--host-memory " + std::to_string(need) + "M";
+}
+
+}  // namespace opsila

@@ -1,0 +1,66 @@
+// How many triangles one process may take: what its host memory holds while
+// it prepares them (scenes/FORMAT.md "Limits"), under the ceiling that the
+// 32-bit ids set. Every reader is handed this limit by its caller; the
+// messages that refuse a scene over it are written here.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+
+namespace opsila {
+
+// Ids ceiling: facet ids, object ids and bank indices are 32-bit signed, so
+// no scene, share or entry may have more triangles, whatever the memory.
+constexpr std::size_t kMaxTriangles = (std::size_t(1) << 31) - 1;
+
+// Host memory that preparing a scene holds at its peak (reading, the
+// partition, the bank build): a fixed base for the program and its buffers,
+// and this much per triangle of the rank's share. The one figure every
+// limit and message reads; set from measurements of the preparation.
+constexpr std::uint64_t kPrepareHostBaseBytes = std::uint64_t(256) << 20;
+constexpr std::uint64_t kPrepareHostBytesPerTriangle = 120;
+
+// Triangles that `bytes` of host memory prepare (0 below the base), at most
+// kMaxTriangles; and the bytes that preparing `triangles` takes.
+std::size_t triangles_for_memory(std::uint64_t bytes);
+std::uint64_t memory_for_triangles(std::size_t triangles);
+
+// The host memory one process may use, and where the figure came from.
+struct HostMemory {
+  std::uint64_t bytes = 0;
+  bool from_flag = false;        // --host-memory; else `available` shared by the local ranks
+  std::uint64_t available = 0;   // the memory available on the host (without the flag)
+  int local_ranks = 1;           // the ranks that run on that host
+};
+// `flag_bytes` (--host-memory) when nonzero, else `available` divided
+// among the `local_ranks` on this host.
+HostMemory host_memory_of(std::uint64_t flag_bytes, std::uint64_t available, int local_ranks);
+
+// One rank's triangle limit and why it is what it is.
+struct TriangleLimit {
+  enum class Why { ids, given, memory, test_hook };
+  std::size_t triangles = kMaxTriangles;
+  Why why = Why::ids;
+  HostMemory memory;  // with Why::memory
+
+  TriangleLimit() = default;
+  // A bare number (a library caller's or a test's), so implicit: no memory
+  // story in its messages.
+  TriangleLimit(std::size_t n)
+      : triangles(n < kMaxTriangles ? n : kMaxTriangles), why(n < kMaxTriangles ? Why::given : Why::ids) {}
+  static TriangleLimit of_memory(const HostMemory& memory);
+  // The limit lowered to `n` by OPSILA_RANK_TRIANGLE_LIMIT when it is lower.
+  TriangleLimit capped_for_tests(std::size_t n) const;
+
+  // Why `triangles` (on `ranks` ranks; `more_than`: at least that many, a
+  // stream's count) do not fit: ": 1000000 triangles need about 0.37 GiB
+  // while preparing at 120 bytes a triangle, and this process may use 0.29
+  // GiB (--host-memory)"; "" for a given number.
+  std::string why_not(std::size_t triangles, int ranks, bool more_than = false) const;
+  // "--host-memory 371M" when that much memory a rank would take
+  // `triangles` on `ranks` ranks; "" when memory is not what limits.
+  std::string memory_hint(std::size_t triangles, int ranks) const;
+};
+
+}  // namespace opsila

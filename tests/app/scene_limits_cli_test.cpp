@@ -1,0 +1,98 @@
+// Scenes over what this process's memory holds, through the real binary:
+// one error line naming the file, the triangles and the memory, no output;
+// the same scene with more --host-memory renders. The memory given is the
+// flag's, never this machine's.
+#include <gtest/gtest.h>
+
+#include <sstream>
+
+#include "test_util.h"
+
+namespace opsila {
+namespace {
+
+using test::RunResult;
+using test::TempDir;
+using test::run_opsila;
+
+const std::string kMillion = std::string(OPSILA_SOURCE_DIR) + "/scenes/million.json";
+
+bool has(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
+
+// One "opsila: error:" line, exit `code`, nothing written in `dir`.
+std::string refusal(const RunResult& r, const TempDir& dir, int code = 2) {
+  EXPECT_EQ(r.exit_code, code) << r.err;
+  const std::vector<std::string> errors = r.error_lines();
+  EXPECT_EQ(errors.size(), 1u) << r.err;
+  EXPECT_TRUE(dir.entries().empty()) << "an output was written";
+  return errors.empty() ? std::string() : errors[0];
+}
+
+TEST(SceneLimitsCli, AJsonSceneOverTheMemoryIsRefusedBeforeItIsBuilt) {
+  TempDir dir;
+  const RunResult r = run_opsila({"render", kMillion, "--host-memory", "300M", "-o", dir.file("x.png")});
+  const std::string e = refusal(r, dir);
+  EXPECT_EQ(e.rfind("opsila: error: " + kMillion + ":", 0), 0u) << e;
+  EXPECT_TRUE(has(e, "objects[0]")) << e;
+  EXPECT_TRUE(has(e, "1002528 triangles need about 0.36 GiB while preparing at 120 bytes a triangle")) << e;
+  EXPECT_TRUE(has(e, "this process may use 0.29 GiB (--host-memory)")) << e;
+  EXPECT_TRUE(has(e, "--host-memory 371M")) << e;
+#ifdef OPSILA_HAVE_MPI
+  EXPECT_TRUE(has(e, "at least 3 MPI ranks (mpirun -n 3 opsila render ...)")) << e;
+#endif
+}
+
+TEST(SceneLimitsCli, TheSameSceneRendersWithMoreHostMemory) {
+  TempDir dir;
+  const RunResult r =
+      run_opsila({"render", kMillion, "--host-memory", "1G", "--size", "32x24", "--depth", "1", "-q", "-o",
+                  dir.file("x.png")});
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(test::file_exists(dir.file("x.png")));
+}
+
+TEST(SceneLimitsCli, BadSizesNameTheFlag) {
+  TempDir dir;
+  for (const char* bad : {"0", "12X", "-1G", ""}) {
+    for (const char* command : {"render", "bench"}) {
+      const RunResult r = run_opsila({command, kMillion, "--host-memory", bad});
+      const std::string e = refusal(r, dir);
+      EXPECT_TRUE(has(e, "--host-memory")) << command << ": " << e;
+    }
+  }
+}
+
+TEST(SceneLimitsCli, AStreamedObjIsRefusedAsItPassesTheLimit) {
+  // 257 MiB leave 1 MiB over the base: 8738 triangles at 120 bytes.
+  TempDir dir;
+  std::ostringstream obj;
+  for (int i = 0; i <= 100; ++i)
+    for (int j = 0; j < 2; ++j) obj << "v " << i << " " << j << " 0\n";
+  for (int k = 0; k < 50; ++k)
+    for (int i = 0; i < 100; ++i) obj << "f " << 2 * i + 1 << " " << 2 * i + 2 << " " << 2 * i + 4 << " " << 2 * i + 3 << "\n";
+  const std::string path = dir.write("strip.obj", obj.str());
+  TempDir out;
+  const RunResult r = run_opsila({"render", path, "--host-memory", "257M", "-o", out.file("x.png")});
+  const std::string e = refusal(r, out);
+  EXPECT_EQ(e.rfind("opsila: error: " + path + ":", 0), 0u) << e;
+  EXPECT_TRUE(has(e, "too many triangles (more than 8738")) << e;
+  EXPECT_TRUE(has(e, "more than 8738 triangles need over 0.25 GiB while preparing")) << e;
+  EXPECT_TRUE(has(e, "this process may use 0.25 GiB (--host-memory)")) << e;
+  const RunResult fits = run_opsila({"render", path, "--host-memory", "258M", "--size", "16x12", "-q", "-o", out.file("x.png")});
+  EXPECT_EQ(fits.exit_code, 0) << fits.err;
+}
+
+TEST(SceneLimitsCli, AShareTooLargeForTheDeviceIsRefusedBeforeThePartition) {
+  TempDir dir;
+  const RunResult r = test::run_program(OPSILA_BINARY, {"render", kMillion, "-o", dir.file("x.png")},
+                                        {{"OPSILA_DEVICE_MEMORY_LIMIT", "20000000"}});
+  const std::string e = refusal(r, dir, 3);
+  EXPECT_TRUE(has(e, kMillion + ": 1084448 triangles need about 99.3 MiB of device memory at 96 bytes a triangle")) << e;
+  EXPECT_TRUE(has(e, "as lowered by OPSILA_DEVICE_MEMORY_LIMIT")) << e;
+#ifdef OPSILA_HAVE_MPI
+  EXPECT_TRUE(has(e, "at least 6 MPI ranks")) << e;
+#endif
+}
+
+}  // namespace
+}  // namespace opsila

@@ -8,9 +8,11 @@
 #include "app/cli.h"
 
 #include "bench/bench.h"
+#include "core/util.h"
 #include "mpi/ranks.h"
 
 int main(int argc, char** argv) {
+  opsila::return_large_frees_to_system();
   // The one read of the run's process group: every command is handed it.
   opsila::Ranks& world = opsila::Ranks::world();
   try {

@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <cstdio>
 
+#include <malloc.h>
 #include <sys/mman.h>
 #include <unistd.h>
 
@@ -49,6 +50,12 @@ std::string format_bytes(double bytes, int decimals, int smallest) {
   char text[64];
   std::snprintf(text, sizeof text, "%.*f %s", decimals, bytes / std::ldexp(1.0, 10 * power), kUnits[power - 1]);
   return text;
+}
+
+void return_large_frees_to_system() {
+#ifdef __GLIBC__
+  mallopt(M_MMAP_THRESHOLD, 1 << 20);  // also stops the threshold's rise
+#endif
 }
 
 void release_pages(void* begin, void* end) {

@@ -132,6 +132,10 @@ struct Renderer::Machine {
   };
 
   Machine(const Scene& scene, PreparedBanks banks, const RenderSettings& settings, ClRuntime& runtime);
+  // Waits for the device before anything is freed: a frame that ended in
+  // an error (another rank's failure, a fault) may leave launches running,
+  // which read the host arrays below in place.
+  ~Machine();
   int choose_bank_capacity(const BankedScene& bs, const RenderSettings& settings);
   void choose_work_groups();
   void host_tables(const Scene& scene, BankedScene& bs);

@@ -28,6 +28,10 @@ Renderer::Renderer(const Scene& scene, PreparedBanks banks, const RenderSettings
 
 Renderer::~Renderer() = default;
 
+Renderer::Machine::~Machine() {
+  rt.queue().finish();  // its error, if any, was the frame's: nothing more to say here
+}
+
 // One frame, as the paper runs it.
 void Renderer::count_work(bool on) {
   Machine& m = *m_;

@@ -2,6 +2,7 @@
 
 #include "partition/bank_bvh.h"
 #include "partition/partition_steps.h"
+#include "partition/permute.h"
 
 #include <algorithm>
 #include <cmath>
@@ -157,9 +158,8 @@ std::uint64_t texture_once(const Scene& scene, const std::vector<char>& used) {
 namespace {
 
 // The scene's triangles put in the banks' order (cluster after cluster,
-// each in its list's order) in place, following the permutation's cycles;
-// a position done is marked in the list of sources itself. The clusters'
-// lists go as they are read.
+// each in its list's order) in place; the clusters' lists go as they are
+// read.
 void bank_order_in_place(std::vector<Triangle>& tris, std::vector<ClusterBuild>& cb) {
   std::vector<int> from;
   from.reserve(tris.size());
@@ -168,19 +168,8 @@ void bank_order_in_place(std::vector<Triangle>& tris, std::vector<ClusterBuild>&
     c.tris = std::vector<int>();
   }
   if (from.size() != tris.size()) throw std::logic_error("fill_banks: the clusters do not hold every facet once");
-  for (std::size_t k = 0; k < from.size(); ++k) {
-    if (from[k] < 0) continue;
-    const Triangle first = tris[k];
-    std::size_t j = k;
-    while (std::size_t(from[j]) != k) {
-      const std::size_t next = std::size_t(from[j]);
-      tris[j] = tris[next];
-      from[j] = -1;
-      j = next;
-    }
-    tris[j] = first;
-    from[j] = -1;
-  }
+  permute_in_place(
+      from, [&](std::size_t i) { return tris[i]; }, [&](std::size_t i, const Triangle& t) { tris[i] = t; });
 }
 
 constexpr std::size_t kReleaseBatch = std::size_t(1) << 20;  // facets filled before their pages go

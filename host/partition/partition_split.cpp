@@ -39,11 +39,12 @@ void bounds_of(const Scene& scene, const std::vector<int>& tris, Box& box, Box& 
 
 namespace {
 
-// A facet as the cuts see it: its box, its centroid and its index, computed
-// once and carried through the cuts (reading the scene's triangles again at
-// every level, in the order the cuts leave them, is mostly cache misses).
+// A facet as the cuts see it: its centroid, computed once and carried
+// through the cuts (the median searches compare them many times), and its
+// index. Its box is read from the scene where a run's bounds are wanted,
+// once a level: carried too, it was 24 more bytes a facet beside the whole
+// scene, the preparation's peak on large scenes.
 struct CutItem {
-  Box box;
   float c[3];
   int tri;
 };
@@ -57,7 +58,6 @@ CutItems cut_items(const Scene& scene, const std::vector<int>& tris) {
   parallel_for(chunks, [&](std::size_t k) {
     for (std::size_t i = tris.size() * k / chunks, e = tris.size() * (k + 1) / chunks; i < e; ++i) {
       const Triangle& t = scene.triangles[std::size_t(tris[i])];
-      items[i].box = tri_box(t);
       for (int a = 0; a < 3; ++a) items[i].c[a] = centroid(t, a);
       items[i].tri = tris[i];
     }
@@ -74,7 +74,7 @@ struct Run {
 // bounds_of on items: the same boxes (a tie between -0 and +0 keeps the
 // first met, so the items' order matters only there, and chunks joined in
 // order keep it).
-void item_bounds(Run run, Box& box, Box& cbox) {
+void item_bounds(const Scene& scene, Run run, Box& box, Box& cbox) {
   const std::size_t chunks = run.n < kSpreadFacets ? 1 : std::size_t(host_threads());
   std::vector<Box> part(2 * chunks);
   parallel_for(chunks, [&](std::size_t k) {
@@ -82,7 +82,7 @@ void item_bounds(Run run, Box& box, Box& cbox) {
     // went to memory and back (the items' floats may alias part's).
     Box b, c;
     for (std::size_t i = run.n * k / chunks, e = run.n * (k + 1) / chunks; i < e; ++i) {
-      b.grow(run.first[i].box);
+      b.grow(tri_box(scene.triangles[std::size_t(run.first[i].tri)]));
       c.grow(run.first[i].c);
     }
     part[2 * k] = b, part[2 * k + 1] = c;
@@ -142,9 +142,10 @@ ClusterBuild item_cluster(Run run, const Box& box) {
 // until every piece is small enough (facet count and spatial extent). The
 // upper half's clusters are listed before the lower half's. Large halves
 // are split side by side on the host threads (`spread` levels deep).
-void split_items(Run cur, const SplitLimits& limits, bool split_flat, std::vector<ClusterBuild>& out, int spread) {
+void split_items(const Scene& scene, Run cur, const SplitLimits& limits, bool split_flat,
+                 std::vector<ClusterBuild>& out, int spread) {
   Box box, cbox;
-  item_bounds(cur, box, cbox);
+  item_bounds(scene, cur, box, cbox);
   if (!(needs_cut(cur.n, box, limits, split_flat) && cut_items_at_median(cur, cbox))) {
     out.push_back(item_cluster(cur, box));
     return;
@@ -152,12 +153,12 @@ void split_items(Run cur, const SplitLimits& limits, bool split_flat, std::vecto
   const std::size_t mid = cur.n / 2;
   const Run pieces[2] = {{cur.first + mid, cur.n - mid}, {cur.first, mid}};  // upper half first
   if (spread <= 0 || pieces[0].n < kSpreadFacets) {
-    for (const Run& piece : pieces) split_items(piece, limits, split_flat, out, 0);
+    for (const Run& piece : pieces) split_items(scene, piece, limits, split_flat, out, 0);
     return;
   }
   std::vector<ClusterBuild> halves[2];
   parallel_for(
-      2, [&](std::size_t k) { split_items(pieces[k], limits, split_flat, halves[k], spread - 1); }, 2);
+      2, [&](std::size_t k) { split_items(scene, pieces[k], limits, split_flat, halves[k], spread - 1); }, 2);
   for (std::vector<ClusterBuild>& h : halves) out.insert(out.end(), std::make_move_iterator(h.begin()),
                                                           std::make_move_iterator(h.end()));
 }
@@ -168,7 +169,7 @@ void split_object(const Scene& scene, std::vector<int> cur, std::size_t max_tris
                   bool split_flat, std::vector<ClusterBuild>& out, int spread) {
   CutItems items = cut_items(scene, cur);
   cur = std::vector<int>();
-  split_items(Run{items.data(), items.size()}, SplitLimits{max_tris, max_extent}, split_flat, out, spread);
+  split_items(scene, Run{items.data(), items.size()}, SplitLimits{max_tris, max_extent}, split_flat, out, spread);
 }
 
 // Several clusters per PE so that bisection can balance; regions are about

@@ -15,8 +15,8 @@
 namespace opsila {
 
 // Device memory a rank's banks take per triangle of its share: the facet
-// records (48 bytes) and the bank BVH nodes (about 44), measured 92; with the
-// frame's other buffers on top. Read by the check before the partition
+// records (48 bytes) and the bank BVH nodes (26-32 at 16 PEs), measured 79-90
+// with the frame's other buffers (docs/DISTRIBUTED.md, "Cost model"). Read by the check before the partition
 // (prepare/scene_limits.h); the exact plan follows the bank build.
 constexpr std::uint64_t kDeviceBytesPerTriangle = 96;
 

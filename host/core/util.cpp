@@ -6,8 +6,6 @@
 #include <cstdio>
 
 #include <malloc.h>
-#include <sys/mman.h>
-#include <unistd.h>
 
 namespace opsila {
 
@@ -56,13 +54,6 @@ void return_large_frees_to_system() {
 #ifdef __GLIBC__
   mallopt(M_MMAP_THRESHOLD, 1 << 20);  // also stops the threshold's rise
 #endif
-}
-
-void release_pages(void* begin, void* end) {
-  static const std::uintptr_t page = std::uintptr_t(sysconf(_SC_PAGESIZE));
-  const std::uintptr_t lo = (reinterpret_cast<std::uintptr_t>(begin) + page - 1) / page * page;
-  const std::uintptr_t hi = reinterpret_cast<std::uintptr_t>(end) / page * page;
-  if (hi > lo) madvise(reinterpret_cast<void*>(lo), hi - lo, MADV_DONTNEED);  // advice: a failure only keeps them
 }
 
 std::string format_size(std::uint64_t bytes) {

@@ -36,12 +36,6 @@ std::string format_bytes(double bytes, int decimals, int smallest = 1);
 // "812 bytes", "35.2 KiB", "12.0 MiB": exact below 10 KiB (for limits in messages).
 std::string format_size(std::uint64_t bytes);
 
-// Hands the whole pages inside [begin, end) back to the system at once
-// (Linux: madvise MADV_DONTNEED): an array read for the last time gives up
-// its memory as it is read, not only when it is freed. Their bytes are then
-// zeros; the allocation itself stays the owner's, to be freed as usual.
-void release_pages(void* begin, void* end);
-
 // Arrays of a megabyte or more get pages of their own, handed back when
 // freed (glibc: a fixed mmap threshold). By default the threshold rises
 // after each such free, so that the partition's many per-bank arrays

@@ -4,10 +4,12 @@
 #include <chrono>
 #include <cstring>
 #include <numeric>
+#include <optional>
 #include <stdexcept>
 #include <type_traits>
 #include <utility>
 
+#include "core/page_ledger.h"
 #include "core/stage_clock.h"
 #include "dist/collective_balance.h"
 #include "partition/partition_steps.h"
@@ -134,7 +136,7 @@ struct OwnPart {
 // into `own` as they come: each cluster's from one rank in the order that
 // rank held them (a spread cluster's from several: see own_part).
 void exchange_facets(const Scene& scene, const std::vector<ClusterBuild>& local, const Placement& pl,
-                     int num_pes, Ranks& ranks, OwnPart& own) {
+                     int num_pes, Ranks& ranks, OwnPart& own, PageLedger* sent) {
   const int R = ranks.size();
   std::vector<std::uint64_t> any{scene.attributes.empty() ? 0u : 1u};  // a second stream only when needed
   ranks.max(any);
@@ -150,6 +152,7 @@ void exchange_facets(const Scene& scene, const std::vector<ClusterBuild>& local,
       for (; facet < tris.size() && n < kChunk; ++facet, ++n) {
         Shipped s;
         s.t = scene.triangles[std::size_t(tris[facet])];
+        if (sent) sent->done(std::size_t(tris[facet]));
         s.cluster = g;
         if (s.t.attributes >= 0) to_attributes[dest].push_back(scene.attributes[std::size_t(s.t.attributes)]);
         s.t.attributes = s.t.attributes >= 0 ? 0 : -1;
@@ -158,6 +161,7 @@ void exchange_facets(const Scene& scene, const std::vector<ClusterBuild>& local,
       if (facet < tris.size()) break;  // the chunk is full inside this cluster
     }
     if (ranks.sum(n) == 0) break;
+    if (sent) sent->release();  // packed: the share's pages sent whole go
     const std::vector<Shipped> got = exchange_records(ranks, to);
     own.add(got, any[0] ? exchange_records(ranks, to_attributes) : std::vector<VertexAttributes>());
   }
@@ -359,7 +363,11 @@ PreparedBanks bank_share(Scene& share, int num_pes, int routing, const PeGroup& 
 
   t0 = std::chrono::steady_clock::now();
   OwnPart own = own_part(share, pl, group);
-  exchange_facets(share, split.clusters, pl, num_pes, ranks, own);
+  // A share that is not kept gives its pages back as they are sent
+  // (core/page_ledger.h): it and the facets received are never both whole.
+  std::optional<PageLedger> sent;
+  if (!how.keep_share) sent.emplace(share.triangles.data(), share.triangles.size(), sizeof(Triangle));
+  exchange_facets(share, split.clusters, pl, num_pes, ranks, own, sent ? &*sent : nullptr);
   // Sent: the share as read is no longer needed (its materials, textures
   // and figures stay).
   split = ShareClusters();

@@ -2,7 +2,6 @@
 
 #include "partition/bank_bvh.h"
 #include "partition/partition_steps.h"
-#include "partition/permute.h"
 
 #include <algorithm>
 #include <cmath>
@@ -15,7 +14,7 @@
 #include "scene/camera.h"
 #include "core/parallel.h"
 #include "core/stage_clock.h"
-#include "core/util.h"
+#include "core/page_ledger.h"
 
 namespace opsila {
 namespace partition_steps {
@@ -157,21 +156,6 @@ std::uint64_t texture_once(const Scene& scene, const std::vector<char>& used) {
 
 namespace {
 
-// The scene's triangles put in the banks' order (cluster after cluster,
-// each in its list's order) in place; the clusters' lists go as they are
-// read.
-void bank_order_in_place(std::vector<Triangle>& tris, std::vector<ClusterBuild>& cb) {
-  std::vector<int> from;
-  from.reserve(tris.size());
-  for (ClusterBuild& c : cb) {
-    from.insert(from.end(), c.tris.begin(), c.tris.end());
-    c.tris = std::vector<int>();
-  }
-  if (from.size() != tris.size()) throw std::logic_error("fill_banks: the clusters do not hold every facet once");
-  permute_in_place(
-      from, [&](std::size_t i) { return tris[i]; }, [&](std::size_t i, const Triangle& t) { tris[i] = t; });
-}
-
 constexpr std::size_t kReleaseBatch = std::size_t(1) << 20;  // facets filled before their pages go
 
 }  // namespace
@@ -181,10 +165,10 @@ constexpr std::size_t kReleaseBatch = std::size_t(1) << 20;  // facets filled be
 // maps (FacetMaps) get what they were asked for. Clusters are filled side
 // by side on the host threads, each into its own range, and each gives up
 // its list of scene facets once copied. With `consume` (the scene's own
-// triangles, when it gives them up, and no pilot maps), they are first put
-// in the banks' order, then filled a batch of clusters at a time, each
-// batch's pages handed back as it is read: the scene's copy shrinks while
-// the banks' grows, instead of both being whole at once.
+// triangles, when it gives them up) they are filled a batch of clusters at
+// a time, and a page of the scene's triangles is handed back once every
+// triangle on it is in a bank (core/page_ledger.h): the scene's copy
+// shrinks while the banks' grows, instead of both being whole at once.
 void fill_banks(const Scene& scene, const Box& sbox, std::vector<ClusterBuild>& cb, BankedScene& bs,
                 FacetMaps& maps, std::vector<std::pair<int, int>>& ranges, std::vector<Triangle>* consume) {
   check_hit_order_ids(scene);
@@ -194,8 +178,6 @@ void fill_banks(const Scene& scene, const Box& sbox, std::vector<ClusterBuild>& 
     ranges[c] = {next, next + static_cast<int>(cb[c].tris.size())};
     next = ranges[c].second;
   }
-  const bool in_order = consume && !maps.pilot;
-  if (in_order) bank_order_in_place(*consume, cb);
   const std::size_t total = std::size_t(next);
   bs.triangles.resize(total);
   if (maps.pilot) maps.source.resize(total), bs.tri_cluster.resize(total);
@@ -204,9 +186,9 @@ void fill_banks(const Scene& scene, const Box& sbox, std::vector<ClusterBuild>& 
   const auto fill_cluster = [&](std::size_t c) {
     const Vec3 ctr = cb[c].box.center();
     double r2 = 0;
-    for (std::size_t k = std::size_t(ranges[c].first); k < std::size_t(ranges[c].second); ++k) {
-      const std::size_t i = in_order ? k : std::size_t(cb[c].tris[k - std::size_t(ranges[c].first)]);
-      const Triangle& t = scene.triangles[i];
+    std::size_t k = std::size_t(ranges[c].first);
+    for (int i : cb[c].tris) {
+      const Triangle& t = scene.triangles[std::size_t(i)];
       BankTriangle bt{};
       put3(bt.v0, t.v0);
       put3(bt.v1, t.v1);
@@ -215,15 +197,16 @@ void fill_banks(const Scene& scene, const Box& sbox, std::vector<ClusterBuild>& 
       bt.object_id = t.object_id;
       bt.material_fan = OPSILA_PACK_MATERIAL_FAN(t.material, t.fan);
       bs.triangles[k] = bt;
-      if (maps.pilot) maps.source[k] = static_cast<int>(i), bs.tri_cluster[k] = static_cast<int>(c);
+      if (maps.pilot) maps.source[k] = i, bs.tri_cluster[k] = static_cast<int>(c);
       if (!maps.attributes.empty()) maps.attributes[k] = t.attributes;
+      ++k;
       for (const Vec3* v : {&t.v0, &t.v1, &t.v2}) {
         double d2 = 0;
         for (int a = 0; a < 3; ++a) d2 += double((*v)[a] - ctr[a]) * double((*v)[a] - ctr[a]);
         r2 = std::max(r2, d2);
       }
     }
-    cb[c].tris = std::vector<int>();
+    if (!consume) cb[c].tris = std::vector<int>();
     Cluster& cl = bs.clusters[c];
     put3(cl.center, ctr);
     // Padded so that float rounding in the sphere test never culls a facet.
@@ -235,11 +218,16 @@ void fill_banks(const Scene& scene, const Box& sbox, std::vector<ClusterBuild>& 
     cl.pe = cb[c].pe;
     cl.root = -1;
   };
-  if (!in_order) return parallel_for(cb.size(), fill_cluster);
+  if (!consume) return parallel_for(cb.size(), fill_cluster);
+  PageLedger ledger(consume->data(), consume->size(), sizeof(Triangle));
   for (std::size_t c0 = 0, c1 = 0; c0 < cb.size(); c0 = c1) {
     while (c1 < cb.size() && (c1 == c0 || std::size_t(ranges[c1].first - ranges[c0].first) < kReleaseBatch)) ++c1;
     parallel_for(c1 - c0, [&](std::size_t c) { fill_cluster(c0 + c); });
-    release_pages(consume->data() + ranges[c0].first, consume->data() + ranges[c1 - 1].second);
+    for (std::size_t c = c0; c < c1; ++c) {
+      for (int i : cb[c].tris) ledger.done(std::size_t(i));
+      cb[c].tris = std::vector<int>();
+    }
+    ledger.release();
   }
 }
 

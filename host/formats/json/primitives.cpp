@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "core/page_ledger.h"
 #include "core/parallel.h"
 
 namespace opsila {
@@ -159,7 +160,10 @@ void transform_triangles(std::vector<Triangle>& tris, std::size_t first, const T
 
 void reserve_more(std::vector<Triangle>& tris, std::size_t more) {
   const std::size_t need = tris.size() + more;
-  if (need > tris.capacity()) tris.reserve(std::max(need, tris.capacity() * 2));
+  // A quarter more than the capacity, moved without two whole copies at
+  // once: a rank's windowed terrain is most of its memory, and every entry
+  // after it grows the same array.
+  if (need > tris.capacity()) move_to_capacity(tris, std::max(need, tris.capacity() + tris.capacity() / 4));
 }
 
 std::size_t icosphere_triangles(int subdivisions) {

@@ -13,6 +13,8 @@
 #include <algorithm>
 #include <limits>
 
+#include "core/page_ledger.h"
+
 namespace opsila {
 namespace scene_json {
 
@@ -122,7 +124,10 @@ void ShareDealer::finish(Scene& scene, const std::function<void(const std::strin
   }
   for (std::size_t k = 0; k < window_paths_.size(); ++k) warn_dropped(window_paths_[k], share_.window_dropped[k]);
   scene.share = share_;
-  scene.triangles.shrink_to_fit();
+  // Its entries were built whole, then dealt: what they left behind goes
+  // (moved, not copied whole: the share may be most of the memory).
+  if (scene.triangles.capacity() > scene.triangles.size() + scene.triangles.size() / 8)
+    move_to_capacity(scene.triangles, scene.triangles.size());
   scene.attributes.shrink_to_fit();
 }
 

@@ -322,26 +322,6 @@ int collapse(const std::vector<BinNode>& bin, int b, int budget, BankArray<BankN
   return depth;
 }
 
-// new[i] = old[order[i]] for a bank's facets and the arrays that follow
-// them (from position `base`), in place: a copy of a bank's facets would be
-// 48 bytes a facet at the build's peak.
-void reorder_in_place(const std::vector<int>& order, BankTriangle* tris, const FacetFollowers& follow,
-                      std::size_t base) {
-  struct Slot {
-    BankTriangle t;
-    int value[2];
-  };
-  std::vector<int*> v;  // the following arrays, at most two (FacetMaps)
-  for (std::vector<int>* f : follow)
-    if (!f->empty()) v.push_back(f->data() + base);
-  if (v.size() > 2) throw std::logic_error("build_bank_bvh: more arrays follow the facets than it moves");
-  const auto get = [&](std::size_t i) { return Slot{tris[i], {v.size() > 0 ? v[0][i] : 0, v.size() > 1 ? v[1][i] : 0}}; };
-  permute_in_place(order, get, [&](std::size_t i, const Slot& s) {
-    tris[i] = s.t;
-    for (std::size_t a = 0; a < v.size(); ++a) v[a][i] = s.value[a];
-  });
-}
-
 // Private-stack entries the traversal of nodes[n] can need at most.
 int stack_need(const BankArray<BankNode>& nodes, int n) {
   int k = 0, deeper = 0;
@@ -418,7 +398,7 @@ int build_bank_bvh(BankArray<BankNode>& nodes, BankArray<BankTriangle>& tris, st
 
   // Facets in their new order; leaves name global facet indices.
   std::vector<Box>().swap(bank_boxes);
-  reorder_in_place(order, tris.data() + t_begin, follow, std::size_t(t_begin));
+  permute_bank_facets(order, tris.data() + t_begin, follow, std::size_t(t_begin));
   std::vector<int> leaf_child(static_cast<std::size_t>(nt));
   std::iota(leaf_child.begin(), leaf_child.end(), t_begin);
 
@@ -444,11 +424,16 @@ std::vector<BankBvh> build_bank_bvhs(BankArray<BankNode>& nodes, BankArray<BankT
   std::vector<BankBvh> out(P);
   std::atomic<std::size_t> done{0};
   // Each task touches only its bank's facets, boxes, sources and clusters.
-  parallel_for(P, [&](std::size_t p) {
+  // A bank's build holds about 90 bytes of scratch a facet: at most a
+  // quarter of the banks at once keeps that under 25 bytes a facet of the
+  // process's (a rank of 4 banks on 2 threads held half its share's worth).
+  const int at_once = std::clamp(int(P) / 4, 1, host_threads());
+  const auto build = [&](std::size_t p) {
     out[p].depth =
         build_bank_bvh(own[p], tris, clusters, pe_clusters[p].first, pe_clusters[p].second, ranges, follow);
     clock.progress(double(++done) / double(P));
-  });
+  };
+  parallel_for(P, build, at_once);
   // In PE order, as one build after another would have laid them out.
   std::size_t total = nodes.size();
   for (const BankArray<BankNode>& v : own) total += v.size();

@@ -18,7 +18,7 @@ constexpr std::size_t kMaxTriangles = (std::size_t(1) << 31) - 1;
 // partition, the bank build): a fixed base for the program and its buffers,
 // and this much per triangle of the rank's share. The one figure every
 // limit and message reads; above the measured peaks at the default 16 PEs
-// (one process 87-94 bytes, a rank of 4 112: docs/DISTRIBUTED.md, "Cost
+// (one process 87-94 bytes, a rank of 4 97-110: docs/DISTRIBUTED.md, "Cost
 // model"), so that a scene accepted fits.
 constexpr std::uint64_t kPrepareHostBaseBytes = std::uint64_t(256) << 20;
 constexpr std::uint64_t kPrepareHostBytesPerTriangle = 120;

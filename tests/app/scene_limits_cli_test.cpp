@@ -5,6 +5,8 @@
 #include <gtest/gtest.h>
 
 #include <sstream>
+#include <string>
+#include <vector>
 
 #include "test_util.h"
 
@@ -19,6 +21,12 @@ const std::string kMillion = std::string(OPSILA_SOURCE_DIR) + "/scenes/million.j
 
 bool has(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
 
+// The refusal begins with the file's name and says every one of `parts`.
+void expect_says(const std::string& e, const std::string& file, const std::vector<std::string>& parts) {
+  EXPECT_EQ(e.rfind("opsila: error: " + file + ":", 0), 0u) << e;
+  for (const std::string& part : parts) EXPECT_TRUE(has(e, part)) << part << "\n" << e;
+}
+
 // One "opsila: error:" line, exit `code`, nothing written in `dir`.
 std::string refusal(const RunResult& r, const TempDir& dir, int code = 2) {
   EXPECT_EQ(r.exit_code, code) << r.err;
@@ -32,11 +40,9 @@ TEST(SceneLimitsCli, AJsonSceneOverTheMemoryIsRefusedBeforeItIsBuilt) {
   TempDir dir;
   const RunResult r = run_opsila({"render", kMillion, "--host-memory", "300M", "-o", dir.file("x.png")});
   const std::string e = refusal(r, dir);
-  EXPECT_EQ(e.rfind("opsila: error: " + kMillion + ":", 0), 0u) << e;
-  EXPECT_TRUE(has(e, "objects[0]")) << e;
-  EXPECT_TRUE(has(e, "1002528 triangles need about 0.36 GiB while preparing at 120 bytes a triangle")) << e;
-  EXPECT_TRUE(has(e, "this process may use 0.29 GiB (--host-memory)")) << e;
-  EXPECT_TRUE(has(e, "--host-memory 371M")) << e;
+  expect_says(e, kMillion,
+              {"objects[0]", "1002528 triangles need about 0.36 GiB while preparing at 120 bytes a triangle",
+               "this process may use 0.29 GiB (--host-memory)", "--host-memory 371M"});
 #ifdef OPSILA_HAVE_MPI
   EXPECT_TRUE(has(e, "at least 3 MPI ranks (mpirun -n 3 opsila render ...)")) << e;
 #endif
@@ -73,11 +79,9 @@ TEST(SceneLimitsCli, AStreamedObjIsRefusedAsItPassesTheLimit) {
   const std::string path = dir.write("strip.obj", obj.str());
   TempDir out;
   const RunResult r = run_opsila({"render", path, "--host-memory", "257M", "-o", out.file("x.png")});
-  const std::string e = refusal(r, out);
-  EXPECT_EQ(e.rfind("opsila: error: " + path + ":", 0), 0u) << e;
-  EXPECT_TRUE(has(e, "too many triangles (more than 8738")) << e;
-  EXPECT_TRUE(has(e, "more than 8738 triangles need over 0.25 GiB while preparing")) << e;
-  EXPECT_TRUE(has(e, "this process may use 0.25 GiB (--host-memory)")) << e;
+  expect_says(refusal(r, out), path,
+              {"too many triangles (more than 8738", "more than 8738 triangles need over 0.25 GiB while preparing",
+               "this process may use 0.25 GiB (--host-memory)"});
   const RunResult fits = run_opsila({"render", path, "--host-memory", "258M", "--size", "16x12", "-q", "-o", out.file("x.png")});
   EXPECT_EQ(fits.exit_code, 0) << fits.err;
 }

@@ -13,15 +13,12 @@ PageLedger::PageLedger(const void* data, std::size_t count, std::size_t size)
   end_ = begin_ + count * size;
   if (count == 0) return;
   left_.assign((end_ - 1) / page_ - begin_ / page_ + 1, 0);
-  for (std::size_t i = 0; i < count; ++i) {
-    const std::uintptr_t first = (begin_ + i * size) / page_, last = (begin_ + (i + 1) * size - 1) / page_;
-    for (std::uintptr_t p = first; p <= last; ++p) ++left_[p - begin_ / page_];
-  }
+  for (std::size_t i = 0; i < count; ++i)
+    for (std::uintptr_t p = first_page(i); p <= last_page(i); ++p) ++left_[p - begin_ / page_];
 }
 
 void PageLedger::done(std::size_t i) {
-  const std::uintptr_t first = (begin_ + i * size_) / page_, last = (begin_ + (i + 1) * size_ - 1) / page_;
-  for (std::uintptr_t p = first; p <= last; ++p)
+  for (std::uintptr_t p = first_page(i); p <= last_page(i); ++p)
     if (--left_[p - begin_ / page_] == 0) full_.push_back(p);
 }
 

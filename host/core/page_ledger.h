@@ -24,6 +24,9 @@ class PageLedger {
   void release();
 
  private:
+  // The pages element i lies on (it may straddle two).
+  std::uintptr_t first_page(std::size_t i) const { return (begin_ + i * size_) / page_; }
+  std::uintptr_t last_page(std::size_t i) const { return (begin_ + (i + 1) * size_ - 1) / page_; }
   std::uintptr_t begin_ = 0, end_ = 0, page_ = 4096;
   std::size_t size_ = 1;
   std::vector<std::uint16_t> left_;  // elements not yet done, per page

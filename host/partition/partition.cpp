@@ -8,7 +8,6 @@
 #include <iterator>
 #include <numeric>
 #include <utility>
-#include <stdexcept>
 #include <vector>
 
 #include "scene/camera.h"

@@ -94,6 +94,10 @@ struct HeaderLines {
     std::string f, version, extra;
     words >> f >> version >> extra;
     if (strict && (format_seen || version != "1.0" || !extra.empty())) fail("'format TYPE 1.0' expected once");
+    // The importer's reading judges the first format line: a later one
+    // must not stand in for a broken first (found by fuzz_model: a 4 GB
+    // allocation inside the importer).
+    if (format_seen) return;
     h.format_name = f;
     if (f == "ascii") h.format = Format::ascii;
     else if (f == "binary_little_endian") h.format = Format::little_endian;

@@ -73,6 +73,11 @@ TEST(PlyHeader, EachReadingRefusesInItsOwnWords) {
       {with("ascii 1.0", "asci 1.0"),
        "f.ply:2: PLY header: format 'asci' (ascii, binary_little_endian or binary_big_endian)",
        "f.ply: PLY format 'asci' (ascii, binary_little_endian or binary_big_endian)"},
+      // A broken first format line is not mended by a later good one (the
+      // importer allocated 4 GB on such a file: found by fuzz_model).
+      {with("ascii 1.0\n", "asci 1.0\nformat ascii 1.0\n"),
+       "f.ply:2: PLY header: format 'asci' (ascii, binary_little_endian or binary_big_endian)",
+       "f.ply: PLY format 'asci' (ascii, binary_little_endian or binary_big_endian)"},
       {with("format ascii 1.0\n", ""), "f.ply:3: PLY header: an element before the format line",
        "f.ply: PLY format '' (ascii, binary_little_endian or binary_big_endian)"},
       {with("element vertex 3", "element vertex 3000"), "",

@@ -169,6 +169,24 @@ enum { OPSILA_STAT_COUNTERS(OPSILA_STAT_WORK_FLAG) OPSILA_STAT_WORK_END };
  * rays), many times over. */
 #define OPSILA_COUNTER_WORDS 2
 
+/* Stage clocks: where the time of the SPMD phase and of the megakernel goes,
+ * in cycles per stage, counted by a program built for it alone
+ * (OPSILA_STAGE_CYCLES, kernels/lib/stage_cycles.cl; the bench's breakdown
+ * frame), declared once in index order: X(NAME, "JSON name"). A stage's
+ * cycles exclude those of the stages entered inside it. */
+#define OPSILA_STAGES(X)                                                                          \
+  X(BODY, "kernel_body")       /* the kernel's own: records loaded, rays set up, control */      \
+  X(CAMERA, "camera")          /* the megakernel's camera rays and sample loop */                \
+  X(BANK_WALK, "bank_walk")    /* nearest- and any-hit walks of a bank (megakernel: the scene) */ \
+  X(DESTINATION, "destination") /* destination choice: the routing walks */                       \
+  X(SHADING, "shading")        /* surface point, light terms, reflected and transmitted rays */  \
+  X(PIXEL_SUMS, "pixel_sums")  /* fixed-point pixel sums */                                       \
+  X(OUTPUTS, "outputs")        /* output records and their traffic counts */                      \
+  X(STATISTICS, "statistics")  /* counters into the work-group's and the frame's */
+#define OPSILA_STAGE_INDEX(name, json) OPSILA_STAGE_##name,
+enum { OPSILA_STAGES(OPSILA_STAGE_INDEX) OPSILA_STAGE_COUNT };
+#undef OPSILA_STAGE_INDEX
+
 /* One facet triangle as stored in a bank (48 bytes). Vertices are kept
  * exactly as loaded so that the watertight test sees shared edges alike.
  * material_fan: the material's index (low OPSILA_MATERIAL_BITS bits) and the

@@ -17,9 +17,13 @@
 #include "lib/routing.cl"
 #include "lib/shading.cl"
 #include "lib/accum.cl"
+#include "lib/stage_cycles.cl"
 
 typedef struct {
   uint v[OPSILA_STAT_COUNT];
+#ifdef OPSILA_STAGE_CYCLES
+  CycleClock *clock; /* the work-item's, shared by its levels' counts */
+#endif
 } PrivStats;
 
 /* A work-item's counts into its work-group's, at `level`. */
@@ -67,17 +71,22 @@ typedef struct {
 inline int shadow_visit(const Routing *rt, const Bank *bank, const RayPre *r, float eps, float tmax, int after_pe,
                         int home, float3 contrib, int pixel, int meta, volatile __global uint *accum, PrivStats *st,
                         const CostProbe *probe, Descriptor *next) {
-  bool blocked = !bank->empty && traverse_any(r, bank->nodes, bank->tris, bank->root, eps, tmax, bank->slack,
-                                              &st->v[OPSILA_STAT_TRI_TESTS], &st->v[OPSILA_STAT_BOX_TESTS], probe);
+  bool blocked = false;
+  if (!bank->empty)
+    STAGE(st->clock, OPSILA_STAGE_BANK_WALK,
+          blocked = traverse_any(r, bank->nodes, bank->tris, bank->root, eps, tmax, bank->slack,
+                                 &st->v[OPSILA_STAT_TRI_TESTS], &st->v[OPSILA_STAT_BOX_TESTS], probe));
   if (blocked) {
     STAT_INC(st, OCCLUDED);
     return VISIT_DONE;
   }
-  int dest = next_shadow_destination(rt, r, eps, tmax, after_pe, home, &st->v[OPSILA_STAT_SPHERE_TESTS],
-                                     &st->v[OPSILA_STAT_ROUTE_TESTS]);
+  int dest;
+  STAGE(st->clock, OPSILA_STAGE_DESTINATION,
+        dest = next_shadow_destination(rt, r, eps, tmax, after_pe, home, &st->v[OPSILA_STAT_SPHERE_TESTS],
+                                       &st->v[OPSILA_STAT_ROUTE_TESTS]));
   if (dest < 0) {
     STAT_INC(st, LIT);
-    accumulate(accum, pixel, contrib);
+    STAGE(st->clock, OPSILA_STAGE_PIXEL_SUMS, accumulate(accum, pixel, contrib));
     return VISIT_DONE;
   }
   STAT_INC(st, FORWARD);
@@ -97,8 +106,9 @@ inline int trace_visit(FrameParams fp, const Routing *rt, const Bank *bank, cons
   float eps = fp.epsilon;
   int found = -1; /* local index of a facet of this bank that won */
   if (!bank->empty)
-    traverse_nearest(r, bank->nodes, bank->tris, bank->root, eps, bank->slack, best, &found,
-                     &st->v[OPSILA_STAT_TRI_TESTS], &st->v[OPSILA_STAT_BOX_TESTS], probe);
+    STAGE(st->clock, OPSILA_STAGE_BANK_WALK,
+          traverse_nearest(r, bank->nodes, bank->tris, bank->root, eps, bank->slack, best, &found,
+                           &st->v[OPSILA_STAT_TRI_TESTS], &st->v[OPSILA_STAT_BOX_TESTS], probe));
   if (found >= 0) *hit = fp.tri_base + found;
   float entry, limit = hit_limit(best->t);
   int dest;
@@ -106,8 +116,9 @@ inline int trace_visit(FrameParams fp, const Routing *rt, const Bank *bank, cons
     dest = after->pe >= 0 && after->entry < limit ? after->pe : -1;
     entry = after->entry;
   } else {
-    dest = next_destination(rt, r, eps, limit, cursor_entry, bank->pe, &entry, &st->v[OPSILA_STAT_SPHERE_TESTS],
-                            &st->v[OPSILA_STAT_ROUTE_TESTS]);
+    STAGE(st->clock, OPSILA_STAGE_DESTINATION,
+          dest = next_destination(rt, r, eps, limit, cursor_entry, bank->pe, &entry,
+                                  &st->v[OPSILA_STAT_SPHERE_TESTS], &st->v[OPSILA_STAT_ROUTE_TESTS]));
   }
   if (dest >= 0) { /* a hit before the best may wait in another bank */
     STAT_INC(st, FORWARD);
@@ -117,7 +128,7 @@ inline int trace_visit(FrameParams fp, const Routing *rt, const Bank *bank, cons
   }
   if (*hit < 0) {
     STAT_INC(st, MISS);
-    accumulate(accum, pixel, w * load3(fp.background));
+    STAGE(st->clock, OPSILA_STAGE_PIXEL_SUMS, accumulate(accum, pixel, w * load3(fp.background)));
     return VISIT_DONE;
   }
   int owner = owner_pe(rt->pes, fp.num_pes, *hit);
@@ -145,7 +156,7 @@ inline void shade(FrameParams fp, const Routing *rt, const Bank *bank, __global 
   float eps = fp.epsilon;
   Descriptor next;
 
-  accumulate(accum, pixel, weight * load3(fp.ambient) * sp.ka);
+  STAGE(st->clock, OPSILA_STAGE_PIXEL_SUMS, accumulate(accum, pixel, weight * load3(fp.ambient) * sp.ka));
 
   for (int l = 0; l < fp.num_lights; ++l) {
     float3 lv;
@@ -157,7 +168,7 @@ inline void shade(FrameParams fp, const Routing *rt, const Bank *bank, __global 
     RayPre sr = make_ray(p, lv);
     if (shadow_visit(rt, bank, &sr, eps, dist, -1, bank->pe, contrib, pixel, OPSILA_META(OPSILA_KIND_SHADOW, level),
                      accum, st, probe, &next) == VISIT_SEND)
-      emit(out, next);
+      STAGE(st->clock, OPSILA_STAGE_OUTPUTS, emit(out, next));
   }
 
   if (level + 1 >= fp.max_depth) return;
@@ -182,15 +193,18 @@ inline void shade(FrameParams fp, const Routing *rt, const Bank *bank, __global 
     RayPre cr = make_ray(p, child_d[j]);
     float entry;
     NextPe after;
-    int dest = first_destination(rt, &cr, eps, &entry, &after, &st->v[OPSILA_STAT_SPHERE_TESTS],
-                                 &st->v[OPSILA_STAT_ROUTE_TESTS]);
+    int dest;
+    STAGE(st->clock, OPSILA_STAGE_DESTINATION,
+          dest = first_destination(rt, &cr, eps, &entry, &after, &st->v[OPSILA_STAT_SPHERE_TESTS],
+                                   &st->v[OPSILA_STAT_ROUTE_TESTS]));
     if (dest < 0) { /* meets no box or sphere: a miss, finished here */
-      accumulate(accum, pixel, child_w[j] * load3(fp.background));
+      STAGE(st->clock, OPSILA_STAGE_PIXEL_SUMS, accumulate(accum, pixel, child_w[j] * load3(fp.background)));
       STAT_INC(st_child, MISS);
       continue;
     }
     if (dest != bank->pe) {
-      emit(out, make_descriptor(p, OPSILA_INF, child_d[j], entry, child_w[j], pixel, child_meta, -1, dest));
+      STAGE(st->clock, OPSILA_STAGE_OUTPUTS,
+            emit(out, make_descriptor(p, OPSILA_INF, child_d[j], entry, child_w[j], pixel, child_meta, -1, dest)));
       continue;
     }
     /* Its first PE is this one: visit it now. A hit here that no other bank
@@ -207,7 +221,7 @@ inline void shade(FrameParams fp, const Routing *rt, const Bank *bank, __global 
                              OPSILA_META(OPSILA_KIND_RESOLVED, level + 1), hit, bank->pe);
       v = VISIT_SEND;
     }
-    if (v == VISIT_SEND) emit(out, next);
+    if (v == VISIT_SEND) STAGE(st->clock, OPSILA_STAGE_OUTPUTS, emit(out, next));
   }
 }
 
@@ -231,7 +245,7 @@ inline void process(FrameParams fp, const Routing *rt, const Bank *bank, __globa
     STAT_INC(st, SHADOW);
     if (shadow_visit(rt, bank, &r, eps, DESC_T_MAX(ds), bank->pe, DESC_SHADOW_HOME(ds), w, pixel, meta, accum, st,
                      probe, &next) == VISIT_SEND)
-      emit(out, next);
+      STAGE(st->clock, OPSILA_STAGE_OUTPUTS, emit(out, next));
     return;
   }
   int hit = DESC_HIT(ds);
@@ -241,12 +255,13 @@ inline void process(FrameParams fp, const Routing *rt, const Bank *bank, __globa
     NextPe unknown = {false, -1, OPSILA_INF};
     int v = trace_visit(fp, rt, bank, &r, w, pixel, meta, DESC_CURSOR_ENTRY(ds), &best, &hit, &unknown, accum, st,
                         probe, &next);
-    if (v == VISIT_SEND) emit(out, next);
+    if (v == VISIT_SEND) STAGE(st->clock, OPSILA_STAGE_OUTPUTS, emit(out, next));
     if (v != VISIT_SHADE) return;
   }
   STAT_INC(st, RESOLVED);
-  shade(fp, rt, bank, materials, lights, SURFACE_ARGS, org, d, best.t, hit - fp.tri_base, w, pixel, level, out,
-        accum, st, st_child, probe, probe_child);
+  STAGE(st->clock, OPSILA_STAGE_SHADING,
+        shade(fp, rt, bank, materials, lights, SURFACE_ARGS, org, d, best.t, hit - fp.tri_base, w, pixel, level, out,
+              accum, st, st_child, probe, probe_child));
 }
 
 __kernel void spmd_phase(FrameParams fp, __global const PeInfo *pes, __global const Cluster *clusters,
@@ -265,6 +280,12 @@ __kernel void spmd_phase(FrameParams fp, __global const PeInfo *pes, __global co
   for (int i = lid; i < depth * OPSILA_STAT_COUNT; i += lsz) lstats[i] = 0u;
   for (int i = lid; i < ntraffic; i += lsz) ltraffic[i] = 0u;
   barrier(CLK_LOCAL_MEM_FENCE);
+#ifdef OPSILA_STAGE_CYCLES
+  /* The breakdown frame's program: `cost` holds the stage counters. */
+  CycleClock clock;
+  stage_clear(&clock);
+  stage_start(&clock, OPSILA_STAGE_BODY);
+#endif
 
   int pe = group_pe[g];
   int slot = group_first[g] + lid;
@@ -277,6 +298,9 @@ __kernel void spmd_phase(FrameParams fp, __global const PeInfo *pes, __global co
     int level = OPSILA_META_LEVEL(DESC_META(ds));
     PrivStats st, st_child;
     for (int s = 0; s < OPSILA_STAT_COUNT; ++s) st.v[s] = st_child.v[s] = 0u;
+#ifdef OPSILA_STAGE_CYCLES
+    st.clock = st_child.clock = &clock;
+#endif
     CostProbe probe = no_cost_probe(), probe_child = no_cost_probe();
 #ifdef OPSILA_MEASURE_COST
     probe.node_cluster = probe_child.node_cluster = node_cluster;
@@ -285,13 +309,21 @@ __kernel void spmd_phase(FrameParams fp, __global const PeInfo *pes, __global co
     probe_child.cost = level + 1 < depth ? probe.cost + fp.num_clusters : 0;
 #endif
     process(fp, &rt, &bank, materials, lights, SURFACE_ARGS, ds, &out, accum, &st, &st_child, &probe, &probe_child);
-    add_stats(lstats, level, &st);
-    /* Children traced or finished here count at their own level. */
-    if (level + 1 < depth) add_stats(lstats, level + 1, &st_child);
+    STAGE(st.clock, OPSILA_STAGE_STATISTICS, {
+      add_stats(lstats, level, &st);
+      /* Children traced or finished here count at their own level. */
+      if (level + 1 < depth) add_stats(lstats, level + 1, &st_child);
+    });
   }
   out_item_count[item] = out.count;
+#ifdef OPSILA_STAGE_CYCLES
+  stage_enter(&clock, OPSILA_STAGE_BODY); /* stopped at the barrier */
+#endif
   /* Statistics and traffic leave the work-group once, not per descriptor. */
   barrier(CLK_LOCAL_MEM_FENCE);
+#ifdef OPSILA_STAGE_CYCLES
+  stage_start(&clock, OPSILA_STAGE_STATISTICS);
+#endif
   for (int i = lid; i < depth * OPSILA_STAT_COUNT; i += lsz) {
     uint v = lstats[i];
     if (v != 0u) count_stat(stats, P, i / OPSILA_STAT_COUNT, pe, i % OPSILA_STAT_COUNT, v);
@@ -300,4 +332,8 @@ __kernel void spmd_phase(FrameParams fp, __global const PeInfo *pes, __global co
     uint v = ltraffic[i];
     count_add(traffic, ((long)(i / P) * P + pe) * P + i % P, v);
   }
+#ifdef OPSILA_STAGE_CYCLES
+  stage_enter(&clock, OPSILA_STAGE_BODY);
+  stage_flush(&clock, cost);
+#endif
 }

@@ -97,6 +97,10 @@ class Megakernel {
   // built here) for the bench's timed frames, as OPSILA's timed frames run
   // without theirs. The image and the ray counts are the same.
   void count_work(bool count);
+  // One more frame, of the stage-cycle program (megakernel_stages, built
+  // here; only where ClRuntime::stage_cycles_unavailable is empty): the
+  // cycles of every stage (OPSILA_STAGES), summed over the pixels.
+  std::vector<std::uint64_t> stage_cycles();
 
  private:
   struct State;

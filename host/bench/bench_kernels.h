@@ -53,6 +53,13 @@ struct MegaRaysArgs {
   DeviceArray<struct RayLogRole> log;
   auto kernel_args() const { return std::tie(frame, log_first, log); }
 };
+// megakernel_stages (the stage-cycle program): the same, and every
+// work-item's cycles per stage added to `cycles` (OPSILA_STAGE_COUNT 64-bit counters).
+struct MegaStagesArgs {
+  MegaArgs frame;
+  DeviceArray<struct StageCyclesRole> cycles;
+  auto kernel_args() const { return std::tie(frame, cycles); }
+};
 
 // kernels/baselines/traversal.cl: `count` rays (two float4 each), one
 // answer word per ray.

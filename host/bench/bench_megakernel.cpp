@@ -15,6 +15,7 @@
 #include "partition/bank_bvh.h"
 #include "partition/partition.h"
 #include "bench/bench_kernels.h"
+#include "device/counters.h"
 #include "device/kernel_args.h"
 #include "frame/renderer.h"
 
@@ -226,6 +227,25 @@ void Megakernel::frame(BaselineImage& out) {
     out.triangle_tests += c.s[2];
     out.box_tests += c.s[3];
   }
+}
+
+std::vector<std::uint64_t> Megakernel::stage_cycles() {
+  ClRuntime& rt = s_->rt;
+  KernelBinding<MegaStagesArgs> mega(rt, "megakernel_stages", KernelProgram::baselines_stages);
+  std::vector<cl_uint> raw(OPSILA_STAGE_COUNT * OPSILA_COUNTER_WORDS, 0u);
+  MegaStagesArgs args;
+  args.frame = mega_args(s_->ms, s_->b, spp_side(s_->scene.spp), false);
+  args.cycles.buffer = upload(rt, raw, "stage cycles");
+  std::vector<LaunchRecord> launches;
+  Launcher launch(rt, launches);
+  const std::size_t npix = std::size_t(s_->scene.width) * s_->scene.height;
+  launch_tiles(rt, launch, mega.kernel(), "megakernel_stages", npix, s_->tile, [&](int begin, int count) {
+    args.frame.pixel_begin = begin;
+    args.frame.pixel_count = count;
+    mega.bind(args);
+  });
+  launch.harvest();
+  return read_counters(rt, args.cycles, OPSILA_STAGE_COUNT, "megakernel stage cycles");
 }
 
 BaselineImage render_megakernel(const Scene& scene, ClRuntime& rt, int tile) {

@@ -139,6 +139,7 @@ void build_program(BenchReport& report, ClRuntime& rt, Balance balance, const Be
   // their kernels are compiled for their work-group sizes by a first
   // pilot frame run before the pilots' clock (RenderSettings::pilot_warm_up).
   if (balance == Balance::measured) rt.program(KernelProgram::measure);
+  report.stages_skipped = rt.stage_cycles_unavailable();  // builds their programs where they can run
   report.compile_seconds = seconds_since(tc);
 }
 
@@ -232,6 +233,8 @@ void measure_renders(BenchReport& report, Scene& scene, const RenderSettings& se
   with_progress.count_work = false;
   with_progress.item_buffer_output = false;  // the image is what the renderers are compared on
   with_progress.switch_counting = true;
+  if (!baselines && report.stages_skipped.empty()) report.stages_skipped = "several ranks: one process only";
+  with_progress.stage_cycles = report.stages_skipped.empty();
   RenderSettings prepare = settings;
   prepare.pilot_warm_up = true;  // as the timed frames follow a warm-up frame
   // The baselines read the scene's facets after the banks are made.
@@ -269,6 +272,16 @@ void measure_renders(BenchReport& report, Scene& scene, const RenderSettings& se
   report.opsila.stats = stats[median_index(report.render_times)];
   with_work_counts(report.opsila.stats, frame.stats);
   report.render_seconds = median(report.render_times);
+  if (report.stages_skipped.empty()) {
+    live.restart("bench: OPSILA and the megakernel, cycles by stage");
+    RenderResult clocked;
+    renderer.count_stage_cycles(true);
+    renderer.render(clocked);
+    live.finish();
+    report.deterministic = report.deterministic && clocked.rgb == report.opsila.rgb;
+    report.spmd_stage_cycles = renderer.stage_cycles();
+    if (base.mega) report.megakernel_stage_cycles = base.mega->stage_cycles();
+  }
   progress("OPSILA: %.3f s, %.3f Mrays/s", report.render_seconds, mrays(report.rays_total(), report.render_seconds));
   base.finish(report);
 }

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "device/counters.h"
 #include "formats/image/image_io.h"
 #include "partition/pe_group.h"
 #include "opsila_shared.h"
@@ -146,13 +147,27 @@ double BenchReport::replicated_over_bank_max() const {
   return mine > 0 ? double(stats().replicated_bytes) / double(mine) : 0.0;
 }
 
+std::vector<StageTime> stage_times(const std::vector<std::uint64_t>& cycles, double seconds) {
+  std::uint64_t all = 0;
+  for (std::uint64_t c : cycles) all += c;
+  std::vector<StageTime> out;
+  for (std::size_t s = 0; s < cycles.size() && all > 0; ++s) {
+    if (cycles[s] == 0) continue;
+    const double share = double(cycles[s]) / double(all);
+    out.push_back({stage_name(static_cast<int>(s)), cycles[s], share, share * seconds});
+  }
+  return out;
+}
+
 void BenchReport::analyse() {
   const RenderStats& st = stats();
   by_kernel.clear();
   kernel_seconds = exchange_seconds = 0;
+  launches_per_frame = 0;
   for (const LaunchRecord& l : st.launches) {
     KernelTime& e = by_kernel[l.name];
     e.launches += static_cast<int>(l.launches);
+    launches_per_frame += static_cast<int>(l.launches);
     e.seconds += l.seconds;
     kernel_seconds += l.seconds;
     if (is_scatter(l.name)) exchange_seconds += l.seconds;

@@ -104,6 +104,14 @@ struct BenchReport {
   // The megakernel's rays through its BVH with nothing else: what the
   // renders spend per ray beyond it is shading, accumulation and exchange.
   TraversalAlone traversal;
+  // Where the SPMD phase's and the megakernel's time goes: cycles per stage
+  // (OPSILA_STAGES, kernels/opsila_shared.h), summed over the work-items,
+  // from one more frame of each built with stage cycles
+  // (kernels/lib/stage_cycles.cl), not timed. Empty, with the reason in
+  // stages_skipped, where they cannot run (a device other than an x86 CPU,
+  // several ranks).
+  std::vector<std::uint64_t> spmd_stage_cycles, megakernel_stage_cycles;
+  std::string stages_skipped;
 
   // 3. the scatter curve, and one length over several PE counts.
   int scatter_pes = 0;
@@ -116,6 +124,7 @@ struct BenchReport {
     double seconds = 0;
   };
   std::map<std::string, KernelTime> by_kernel;
+  int launches_per_frame = 0;  // kernel launches of the median frame
   double kernel_seconds = 0, exchange_seconds = 0, overhead_seconds = 0;
   double exchange_share = 0, overhead_share = 0;
   // Of the overhead: the device idle between one kernel's end and the next
@@ -159,6 +168,16 @@ struct RankFigures {
   double descriptors_per_ray = 0;     // crossing ranks
 };
 RankFigures rank_figures(const BenchReport& report);
+
+// One kernel's cycles by stage (BenchReport::spmd_stage_cycles, ...): each
+// stage with cycles, its share of their sum, and that share of `seconds`
+// (the kernel's time in the median timed frame).
+struct StageTime {
+  std::string name;
+  std::uint64_t cycles = 0;
+  double share = 0, seconds = 0;
+};
+std::vector<StageTime> stage_times(const std::vector<std::uint64_t>& cycles, double seconds);
 
 // "launch" mode of a kernel in the paper's terms.
 const char* launch_mode(const std::string& kernel_name);

@@ -161,6 +161,7 @@ json render_json(const BenchReport& r) {
     tk[name] = {{"launches", e.launches}, {"seconds", e.seconds}, {"mode", launch_mode(name)},
                 {"share", rs > 0 ? e.seconds / rs : 0.0}};
   j["time_by_kernel"] = tk;
+  j["launches_per_frame"] = r.launches_per_frame;
   json phases = json::array();
   for (const LaunchRecord& l : st.launches)
     phases.push_back({{"name", l.name}, {"mode", launch_mode(l.name)}, {"round", l.round}, {"seconds", l.seconds}});
@@ -336,6 +337,21 @@ json traversal_json(const BenchReport& r) {
           {"opsila_over_traversal", optional_value(r.over_traversal(r.render_seconds, r.rays_total()))}};
 }
 
+// Cycles by stage of the SPMD phase and of the megakernel (null where they
+// were not counted, with the reason in "stages_skipped").
+json stages_json(const BenchReport& r) {
+  auto kernel = [](const std::vector<std::uint64_t>& cycles, double seconds) -> json {
+    if (cycles.empty()) return nullptr;
+    json j = json::object();
+    for (const StageTime& s : stage_times(cycles, seconds))
+      j[s.name] = {{"cycles", s.cycles}, {"share", s.share}, {"seconds", s.seconds}};
+    return j;
+  };
+  const auto spmd = r.by_kernel.find("spmd_phase");
+  return {{"spmd_phase", kernel(r.spmd_stage_cycles, spmd == r.by_kernel.end() ? 0.0 : spmd->second.seconds)},
+          {"megakernel", kernel(r.megakernel_stage_cycles, r.megakernel.kernel_seconds)}};
+}
+
 // Several MPI ranks: the --stats "mpi" section (per-rank reports, the rank x
 // rank traffic) and what the exchange between ranks costs.
 json mpi_json(const BenchReport& r) {
@@ -425,6 +441,8 @@ nlohmann::json bench_json(const BenchReport& r) {
   j["baselines"] = baselines_json(r);
   j["baselines_left_out"] = r.single_process_only.empty() ? json(nullptr) : json(r.single_process_only);
   j["traversal_alone"] = traversal_json(r);
+  j["stages"] = stages_json(r);
+  j["stages_skipped"] = r.stages_skipped.empty() ? json(nullptr) : json(r.stages_skipped);
   j["targets"] = targets_json(r);
   return j;
 }

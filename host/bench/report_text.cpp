@@ -121,6 +121,24 @@ void traversal_text(std::string& out, const BenchReport& r) {
   appendf(out, "\n");
 }
 
+// Where the SPMD phase's and the megakernel's time goes, stage by stage.
+void stages_text(std::string& out, const BenchReport& r) {
+  if (!r.stages_skipped.empty()) {
+    appendf(out, "cycles by stage: not counted (%s)\n\n", r.stages_skipped.c_str());
+    return;
+  }
+  auto line = [&](const char* what, const std::vector<std::uint64_t>& cycles) {
+    if (cycles.empty()) return;
+    appendf(out, "  %-12s", what);
+    for (const StageTime& s : stage_times(cycles, 0)) appendf(out, " %s %.1f%%", s.name.c_str(), 100 * s.share);
+    appendf(out, "\n");
+  };
+  appendf(out, "cycles by stage (one more frame of each, counted by the processor's clock):\n");
+  line("SPMD phase", r.spmd_stage_cycles);
+  line("megakernel", r.megakernel_stage_cycles);
+  appendf(out, "\n");
+}
+
 // OPSILA's preparation beside the baselines' builds of the same scene.
 void prepare_text(std::string& out, const BenchReport& r) {
   const PrepareTimes& t = r.stats().prepare;
@@ -152,6 +170,7 @@ void phases_text(std::string& out, const BenchReport& r) {
   for (const auto& [name, e] : r.by_kernel)
     appendf(out, "  %-18s %5s %9d %10.4f %6.1f%%\n", name.c_str(), launch_mode(name), e.launches, e.seconds,
             rs > 0 ? 100.0 * e.seconds / rs : 0.0);
+  appendf(out, "  %-18s %5s %9d\n", "all kernels", "", r.launches_per_frame);
   appendf(out, "  %-18s %5s %9s %10.4f %6.1f%%\n", "launch overhead", "", "", r.overhead_seconds,
           100.0 * r.overhead_share);
   appendf(out, "  %-18s %5s %9s %10.4f %6.1f%%  (host: the image read back and decoded)\n", "  of it: read-back", "",
@@ -278,6 +297,7 @@ std::string bench_text(const BenchReport& r) {
   header_text(out, r);
   renders_text(out, r);
   traversal_text(out, r);
+  stages_text(out, r);
   prepare_text(out, r);
   phases_text(out, r);
   ranks_text(out, r);

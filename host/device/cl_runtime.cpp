@@ -390,7 +390,8 @@ cl::Program& ClRuntime::program(KernelProgram which) {
   const int index = static_cast<int>(which);
   cl::Program& program = programs_[index];
   if (built_[index]) return program;
-  const bool render = which != KernelProgram::baselines && which != KernelProgram::baselines_uncounted;
+  const bool render = which != KernelProgram::baselines && which != KernelProgram::baselines_uncounted &&
+                      which != KernelProgram::baselines_stages;
   const std::string& source = !render ? baseline_kernel_source() : source_.empty() ? kernel_source() : source_;
   const std::string origin = render ? source_origin_ : "embedded baseline kernels";
   cl_int err = CL_SUCCESS;
@@ -399,8 +400,10 @@ cl::Program& ClRuntime::program(KernelProgram which) {
   // No fast-math: every device must reproduce the reference's arithmetic.
   std::string options = "-cl-std=CL1.2";
   if (which == KernelProgram::measure) options += " -DOPSILA_MEASURE_COST=1";
-  if (which == KernelProgram::render_uncounted || which == KernelProgram::baselines_uncounted)
+  const bool stages = which == KernelProgram::render_stages || which == KernelProgram::baselines_stages;
+  if (which == KernelProgram::render_uncounted || which == KernelProgram::baselines_uncounted || stages)
     options += " -DOPSILA_COUNT_WORK=0";
+  if (stages) options += " -DOPSILA_STAGE_CYCLES=1";
   if (pow_fp64_) options += " -DOPSILA_POW_FP64=1";
   if (exact_divide_) options += " -cl-fp32-correctly-rounded-divide-sqrt";
   err = build(program, options);
@@ -431,6 +434,27 @@ cl_int ClRuntime::build(cl::Program& program, const std::string& options) {
   note.reset();
   build_seconds_ += seconds_since(start);
   return err;
+}
+
+std::string ClRuntime::stage_cycles_unavailable() {
+  if (stage_cycles_why_) return *stage_cycles_why_;
+  std::string why;
+#if defined(__x86_64__) || defined(__i386__)
+  if (!(device_.device.getInfo<CL_DEVICE_TYPE>() & CL_DEVICE_TYPE_CPU)) {
+    why = "the stage clocks read an x86 CPU's time-stamp counter; this is not a CPU device";
+  } else {
+    try {
+      program(KernelProgram::render_stages);
+      program(KernelProgram::baselines_stages);
+    } catch (const ClError&) {
+      why = "this device's compiler does not build the stage clocks (x86 inline assembly)";
+    }
+  }
+#else
+  why = "the stage clocks read an x86 CPU's time-stamp counter; this host is not x86";
+#endif
+  stage_cycles_why_ = why;
+  return why;
 }
 
 cl::Kernel ClRuntime::kernel(const char* name, KernelProgram which) {

@@ -7,6 +7,7 @@
 #include <functional>
 #include <map>
 #include <stdexcept>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -86,8 +87,19 @@ struct ClRuntimeOptions {
 // counters (OPSILA_COUNT_WORK=0) for a render that neither --stats nor the
 // bench reads them from; and the baselines without them, for the bench's
 // timed megakernel frames (as its timed OPSILA frames run without them).
-enum class KernelProgram { render = 0, baselines = 1, measure = 2, render_uncounted = 3, baselines_uncounted = 4 };
-constexpr int kKernelPrograms = 5;
+// The two *_stages programs count cycles per stage instead
+// (OPSILA_STAGE_CYCLES, kernels/lib/stage_cycles.cl): the bench's breakdown
+// frames, where stage_cycles_unavailable() is empty.
+enum class KernelProgram {
+  render = 0,
+  baselines = 1,
+  measure = 2,
+  render_uncounted = 3,
+  baselines_uncounted = 4,
+  render_stages = 5,
+  baselines_stages = 6
+};
+constexpr int kKernelPrograms = 7;
 
 class ClRuntime {
  public:
@@ -100,6 +112,10 @@ class ClRuntime {
   // Built on first use; throws ClError with the build log.
   cl::Program& program(KernelProgram which = KernelProgram::render);
   cl::Kernel kernel(const char* name, KernelProgram which = KernelProgram::render);
+  // Why the stage clocks cannot run here, or empty: they read an x86
+  // processor's time-stamp counter, so they need a CPU device on an x86
+  // host whose compiler takes the inline assembly (builds both programs).
+  std::string stage_cycles_unavailable();
   // Limits read from the device (never assumed).
   // The work-group size the kernels ask for (each capped by what it allows):
   // 64, where PoCL measured fastest and a GPU runs two warps or one
@@ -142,6 +158,7 @@ class ClRuntime {
   cl::CommandQueue queue_;
   cl::Program programs_[kKernelPrograms];
   bool built_[kKernelPrograms] = {};
+  std::optional<std::string> stage_cycles_why_;  // stage_cycles_unavailable, once asked
   std::size_t group_size_ = 64;
   bool pow_fp64_ = false;
   bool exact_divide_ = false;

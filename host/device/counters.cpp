@@ -13,6 +13,11 @@ const char* const kStatNames[] = {OPSILA_STAT_COUNTERS(OPSILA_STAT_NAME)};
 #undef OPSILA_STAT_NAME
 static_assert(sizeof(kStatNames) / sizeof(kStatNames[0]) == OPSILA_STAT_COUNT, "one name per counter");
 
+#define OPSILA_STAGE_NAME(name, json) json,
+const char* const kStageNames[] = {OPSILA_STAGES(OPSILA_STAGE_NAME)};
+#undef OPSILA_STAGE_NAME
+static_assert(sizeof(kStageNames) / sizeof(kStageNames[0]) == OPSILA_STAGE_COUNT, "one name per stage");
+
 enum class Sum { NONE, SPAWNED, FINISHED };
 #define OPSILA_STAT_SUM(name, json, sum) Sum::sum,
 const Sum kStatSums[] = {OPSILA_STAT_COUNTERS(OPSILA_STAT_SUM)};
@@ -21,6 +26,8 @@ const Sum kStatSums[] = {OPSILA_STAT_COUNTERS(OPSILA_STAT_SUM)};
 }  // namespace
 
 const char* stat_name(int index) { return index >= 0 && index < OPSILA_STAT_COUNT ? kStatNames[index] : "?"; }
+
+const char* stage_name(int index) { return index >= 0 && index < OPSILA_STAGE_COUNT ? kStageNames[index] : "?"; }
 
 CounterSums counter_sums(const std::uint64_t* values) {
   CounterSums s;

@@ -16,6 +16,8 @@ namespace opsila {
 
 // --stats name of OPSILA_STAT_* counter `index`.
 const char* stat_name(int index);
+// JSON name of OPSILA_STAGE_* stage `index` (the stage cycles, kernels/lib/stage_cycles.cl).
+const char* stage_name(int index);
 
 // What the counters of one (level, PE), or a sum of them, add up to:
 // descriptors spawned there (children and shadow rays; the primary ones

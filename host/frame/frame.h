@@ -71,10 +71,11 @@ struct Renderer::Machine {
   // one that counts only rays (a plain render, the bench's timed frames).
   // `counting` picks this frame's set; a machine prepared with
   // RenderSettings::switch_counting holds both.
-  frame_kernels::Set work_kernels, ray_kernels;
-  bool counting = true;
+  // `clocking` (Renderer::count_stage_cycles) runs the stage-clock set instead.
+  frame_kernels::Set work_kernels, ray_kernels, stage_kernels;
+  bool counting = true, clocking = false;
   int counted_traffic_levels = 0;  // traffic_levels of a counting frame (the buffer's size)
-  frame_kernels::Set& kernels() { return counting ? work_kernels : ray_kernels; }
+  frame_kernels::Set& kernels() { return clocking ? stage_kernels : counting ? work_kernels : ray_kernels; }
   std::unique_ptr<ScatterPass> scatter;
   // The device buffers, typed by role (frame_kernels.h), as the buffer
   // table declares them.
@@ -93,6 +94,7 @@ struct Renderer::Machine {
   PrimaryHitCount b_hits;
   // Pilot frames (measure_cost): each cluster's tests per level, and what
   // maps them back to the scene's facets (every cluster's, on every rank).
+  // A stage-clock frame counts its stages' cycles in work.cost instead.
   bool measure = false;
   ClusterWork work;
   std::size_t ncost = 1;

@@ -49,6 +49,7 @@ Renderer::Machine::Machine(const Scene& scene, PreparedBanks banks, const Render
   if (counting || settings.switch_counting)
     work_kernels = frame_kernels::Set(rt, measure ? KernelProgram::measure : KernelProgram::render);
   if (!counting || settings.switch_counting) ray_kernels = frame_kernels::Set(rt, KernelProgram::render_uncounted);
+  if (settings.stage_cycles) stage_kernels = frame_kernels::Set(rt, KernelProgram::render_stages);
   scatter = std::make_unique<ScatterPass>(rt, P);
   choose_work_groups();
   cap = settings.work_groups_per_pe > 0 ? settings.work_groups_per_pe * static_cast<int>(spmd_wg) : 0;
@@ -62,6 +63,7 @@ Renderer::Machine::Machine(const Scene& scene, PreparedBanks banks, const Render
   const PrepareTimes before_upload = prepare_times();
   auto upload = std::make_unique<StageClock>(PrepareStage::upload);
   if (measure) ncost = std::size_t(depth) * bs.clusters.size();
+  if (settings.stage_cycles) ncost = std::max<std::size_t>(ncost, OPSILA_STAGE_COUNT * OPSILA_COUNTER_WORDS);
   S = OPSILA_SPAWN_SLOTS(static_cast<int>(bs.lights.size()));
   counted_traffic_levels =
       (settings.count_work || settings.switch_counting) && P <= OPSILA_TRAFFIC_MAX_PES ? depth : 0;

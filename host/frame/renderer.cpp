@@ -10,6 +10,7 @@
 #include <string>
 
 #include "core/progress.h"
+#include "device/counters.h"
 #include "frame/frame.h"
 #include "frame/stats.h"
 
@@ -39,6 +40,20 @@ void Renderer::count_work(bool on) {
     throw std::logic_error("Renderer::count_work: the machine was not prepared to switch (switch_counting)");
   m.counting = on;
   m.traffic_levels = on ? m.counted_traffic_levels : 0;
+}
+
+void Renderer::count_stage_cycles(bool on) {
+  Machine& m = *m_;
+  if (m.measure || !m.stage_kernels.built)
+    throw std::logic_error("Renderer::count_stage_cycles: the machine was not prepared for it (stage_cycles)");
+  m.clocking = on;
+  m.traffic_levels = on || !m.counting ? 0 : m.counted_traffic_levels;  // the clocks count no work
+}
+
+std::vector<std::uint64_t> Renderer::stage_cycles() {
+  Machine& m = *m_;
+  if (!m.clocking) return {};
+  return read_counters(m.rt, m.work.cost, OPSILA_STAGE_COUNT, "SPMD phase stage cycles");
 }
 
 RenderResult Renderer::render() {

@@ -46,6 +46,13 @@ class Renderer {
   // the ray counts are the same. Needs RenderSettings::switch_counting, or
   // the way the machine was prepared (std::logic_error otherwise).
   void count_work(bool on);
+  // From the next frame on, run the stage-clock program (on) or the one
+  // count_work chose; the image and the ray counts are the same. Needs
+  // RenderSettings::stage_cycles (std::logic_error otherwise). After a
+  // clocked frame, stage_cycles() gives the SPMD phase's cycles per stage
+  // (OPSILA_STAGES, kernels/opsila_shared.h), summed over its work-items.
+  void count_stage_cycles(bool on);
+  std::vector<std::uint64_t> stage_cycles();
   // After render() of a Renderer prepared with measure_cost: each cluster's
   // tests per level, [level * clusters + cluster], summed over the ranks
   // (dist/pilot.h spreads them over the facets); empty otherwise.

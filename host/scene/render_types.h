@@ -59,6 +59,11 @@ struct RenderSettings {
   // them from frame to frame (the bench: timed frames as a plain render
   // runs them, then one counted frame for the work figures).
   bool switch_counting = false;
+  // Prepare the stage-clock program too (kernels/lib/stage_cycles.cl), so
+  // that Renderer::count_stage_cycles can run a frame that times the SPMD phase's
+  // stages (the bench's breakdown; ClRuntime::stage_cycles_unavailable says
+  // where it cannot run).
+  bool stage_cycles = false;
   // Fill RenderResult::item_buffer with each pixel's centre-ray (object,
   // facet), as --item-buffer writes it. false (a render without
   // --item-buffer, the bench's frames): the item buffer keeps only the hits

@@ -12,6 +12,7 @@
 #include "../lib/camera.cl"
 #include "../lib/shading.cl"
 #include "../lib/accum.cl"
+#include "../lib/stage_cycles.cl"
 
 /* Pending rays: a node pops one ray and pushes at most two (depth-first), so
  * at most max_depth + 1 rays ever wait. */
@@ -46,6 +47,9 @@ typedef struct {
   uint tri_tests, box_tests;
   __global float4 *ray_log;
   uint log_at;
+#ifdef OPSILA_STAGE_CYCLES
+  CycleClock *clock; /* megakernel_stages */
+#endif
 } MegaScene;
 
 /* Pending rays of one pixel's tree, depth-first. */
@@ -70,8 +74,9 @@ inline int mega_nearest(MegaScene *ms, const RayPre *r, float tmin, float *t) {
   CostProbe no_probe = no_cost_probe();
   HitKey best = hit_none();
   int hit = -1;
-  scene_nearest(r, ms->nodes, ms->tris, ms->root, ms->lo, ms->hi, tmin, ms->slack, &best, &hit, &ms->tri_tests,
-                &ms->box_tests, &no_probe);
+  STAGE(ms->clock, OPSILA_STAGE_BANK_WALK,
+        scene_nearest(r, ms->nodes, ms->tris, ms->root, ms->lo, ms->hi, tmin, ms->slack, &best, &hit,
+                      &ms->tri_tests, &ms->box_tests, &no_probe));
   *t = best.t;
   return hit;
 }
@@ -89,9 +94,12 @@ inline long3 mega_direct(FrameParams fp, MegaScene *ms, __global const Light *li
     ++*shadow;
     MEGA_LOG(ms, surf.p, lv, fp.epsilon, dist);
     RayPre sr = make_ray(surf.p, lv);
-    if (!scene_any(&sr, ms->nodes, ms->tris, ms->root, ms->lo, ms->hi, fp.epsilon, dist, ms->slack, &ms->tri_tests,
-                   &ms->box_tests, &no_probe))
-      sum = add_sat(sum, fixed3(contrib)); /* >= 0: saturates as add_fixed does */
+    bool blocked;
+    STAGE(ms->clock, OPSILA_STAGE_BANK_WALK,
+          blocked = scene_any(&sr, ms->nodes, ms->tris, ms->root, ms->lo, ms->hi, fp.epsilon, dist, ms->slack,
+                              &ms->tri_tests, &ms->box_tests, &no_probe));
+    if (!blocked)
+      STAGE(ms->clock, OPSILA_STAGE_PIXEL_SUMS, sum = add_sat(sum, fixed3(contrib))); /* >= 0: saturates as add_fixed does */
   }
   return sum;
 }
@@ -141,21 +149,25 @@ inline void mega_pixel(FrameParams fp, MegaScene *ms, __global const Material *m
       RayPre r = make_ray(org, d);
       int hit = mega_nearest(ms, &r, tmin, &t);
       if (hit < 0) {
-        sum = add_sat(sum, fixed3(weight * load3(fp.background)));
+        STAGE(ms->clock, OPSILA_STAGE_PIXEL_SUMS, sum = add_sat(sum, fixed3(weight * load3(fp.background))));
         continue;
       }
       __global const BankTriangle *tri = &ms->tris[hit];
       if (level == 0 && centre) item = (int2)(tri->object_id, tri->facet_id);
-      __global const Material *m = &materials[OPSILA_TRI_MATERIAL(*tri)];
-      SurfacePoint surf = surface_point(fp, ms->tris, hit, m, SURFACE_ARGS, org, d, t);
-      sum = add_sat(sum, fixed3(weight * load3(fp.ambient) * surf.ka));
-      sum = mega_direct(fp, ms, lights, m, surf, d, weight, sum, &shadow);
-      if (level + 1 < fp.max_depth) secondary += mega_children(&s, m, surf, d, weight, level);
+      STAGE(ms->clock, OPSILA_STAGE_SHADING, {
+        __global const Material *m = &materials[OPSILA_TRI_MATERIAL(*tri)];
+        SurfacePoint surf = surface_point(fp, ms->tris, hit, m, SURFACE_ARGS, org, d, t);
+        STAGE(ms->clock, OPSILA_STAGE_PIXEL_SUMS, sum = add_sat(sum, fixed3(weight * load3(fp.ambient) * surf.ka)));
+        sum = mega_direct(fp, ms, lights, m, surf, d, weight, sum, &shadow);
+        if (level + 1 < fp.max_depth) secondary += mega_children(&s, m, surf, d, weight, level);
+      });
     }
   } /* samples */
-  accum[pixel * 3 + 0] = sum.x;
-  accum[pixel * 3 + 1] = sum.y;
-  accum[pixel * 3 + 2] = sum.z;
+  STAGE(ms->clock, OPSILA_STAGE_PIXEL_SUMS, {
+    accum[pixel * 3 + 0] = sum.x;
+    accum[pixel * 3 + 1] = sum.y;
+    accum[pixel * 3 + 2] = sum.z;
+  });
   ray_counts[pixel] = (uint4)(secondary, shadow, ms->tri_tests, ms->box_tests);
   if (write_items) items[pixel] = item;
 }
@@ -188,3 +200,25 @@ __kernel void megakernel_rays(FrameParams fp, __global const BankNode *nodes, __
   mega_pixel(fp, &ms, materials, lights, SURFACE_ARGS, spp_k, offsets, pixel_begin + k, accum, ray_counts,
              write_items, items);
 }
+
+#ifdef OPSILA_STAGE_CYCLES
+/* The megakernel with its stage clocks (the bench's breakdown frame): the
+ * same frame; every work-item's cycles per stage are added to
+ * stage_cycles (OPSILA_STAGE_COUNT counters of OPSILA_COUNTER_WORDS words). */
+__kernel void megakernel_stages(FrameParams fp, __global const BankNode *nodes, __global const BankTriangle *tris,
+                                __global const Material *materials, __global const Light *lights, SURFACE_PARAMS,
+                                int root, float4 root_lo, float4 root_hi, int spp_k, __global const float *offsets,
+                                int pixel_begin, int pixel_count, __global long *accum, __global uint4 *ray_counts,
+                                int write_items, __global int2 *items, volatile __global uint *stage_cycles) {
+  int k = get_global_id(0);
+  if (k >= pixel_count) return;
+  CycleClock clock;
+  stage_clear(&clock);
+  stage_start(&clock, OPSILA_STAGE_CAMERA);
+  MegaScene ms = {nodes, tris, root, root_lo.xyz, root_hi.xyz, fp.box_slack, 0u, 0u, 0, 0u, &clock};
+  mega_pixel(fp, &ms, materials, lights, SURFACE_ARGS, spp_k, offsets, pixel_begin + k, accum, ray_counts,
+             write_items, items);
+  stage_enter(&clock, OPSILA_STAGE_CAMERA);
+  stage_flush(&clock, stage_cycles);
+}
+#endif

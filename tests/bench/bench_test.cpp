@@ -499,6 +499,26 @@ TEST(Bench, QuickRunWritesEveryJsonKey) {
   EXPECT_NE(r.out.find("traversal alone (the megakernel's BVH and rays"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("OPSILA, frame"), std::string::npos) << r.out;
   EXPECT_NE(test::read_file(csv + "/baselines.csv").find("\ntraversal_alone,"), std::string::npos);
+
+  // Launches per frame: every kernel's launches.
+  int launches = 0;
+  for (const auto& [name, k] : rj["time_by_kernel"].items()) launches += k["launches"].get<int>();
+  EXPECT_EQ(rj["launches_per_frame"].get<int>(), launches);
+  // Cycles by stage where the device counts them, else why not.
+  if (j["stages_skipped"].is_string()) {
+    EXPECT_FALSE(j["stages_skipped"].get<std::string>().empty());
+    EXPECT_TRUE(j["stages"]["spmd_phase"].is_null());
+  } else {
+    for (const char* kernel : {"spmd_phase", "megakernel"}) {
+      const nlohmann::json& st = j["stages"][kernel];
+      ASSERT_TRUE(st.is_object()) << kernel;
+      EXPECT_TRUE(st.contains("bank_walk")) << kernel;
+      double share = 0;
+      for (const auto& [name, v] : st.items()) share += v["share"].get<double>();
+      EXPECT_NEAR(share, 1.0, 1e-9) << kernel;
+    }
+    EXPECT_NE(r.out.find("cycles by stage"), std::string::npos) << r.out;
+  }
 }
 
 

@@ -99,8 +99,9 @@ class Megakernel {
   void count_work(bool count);
   // One more frame, of the stage-cycle program (megakernel_stages, built
   // here; only where ClRuntime::stage_cycles_unavailable is empty): the
-  // cycles of every stage (OPSILA_STAGES), summed over the pixels.
-  std::vector<std::uint64_t> stage_cycles();
+  // cycles of every stage (OPSILA_STAGES), summed over the pixels, and the
+  // frame's kernel seconds (the clocks' own cost included).
+  std::vector<std::uint64_t> stage_cycles(double& kernel_seconds);
 
  private:
   struct State;

@@ -229,7 +229,7 @@ void Megakernel::frame(BaselineImage& out) {
   }
 }
 
-std::vector<std::uint64_t> Megakernel::stage_cycles() {
+std::vector<std::uint64_t> Megakernel::stage_cycles(double& kernel_seconds) {
   ClRuntime& rt = s_->rt;
   KernelBinding<MegaStagesArgs> mega(rt, "megakernel_stages", KernelProgram::baselines_stages);
   std::vector<cl_uint> raw(OPSILA_STAGE_COUNT * OPSILA_COUNTER_WORDS, 0u);
@@ -244,8 +244,11 @@ std::vector<std::uint64_t> Megakernel::stage_cycles() {
     args.frame.pixel_count = count;
     mega.bind(args);
   });
-  launch.harvest();
-  return read_counters(rt, args.cycles, OPSILA_STAGE_COUNT, "megakernel stage cycles");
+  std::vector<std::uint64_t> cycles = read_counters(rt, args.cycles, OPSILA_STAGE_COUNT, "megakernel stage cycles");
+  launch.harvest();  // the read waited for the launches
+  kernel_seconds = 0;
+  for (const LaunchRecord& r : launches) kernel_seconds += r.seconds;
+  return cycles;
 }
 
 BaselineImage render_megakernel(const Scene& scene, ClRuntime& rt, int tile) {

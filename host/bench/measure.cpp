@@ -280,7 +280,9 @@ void measure_renders(BenchReport& report, Scene& scene, const RenderSettings& se
     live.finish();
     report.deterministic = report.deterministic && clocked.rgb == report.opsila.rgb;
     report.spmd_stage_cycles = renderer.stage_cycles();
-    if (base.mega) report.megakernel_stage_cycles = base.mega->stage_cycles();
+    for (const LaunchRecord& l : clocked.stats.launches)
+      if (l.name == "spmd_phase") report.spmd_clocked_seconds += l.seconds;
+    if (base.mega) report.megakernel_stage_cycles = base.mega->stage_cycles(report.megakernel_clocked_seconds);
   }
   progress("OPSILA: %.3f s, %.3f Mrays/s", report.render_seconds, mrays(report.rays_total(), report.render_seconds));
   base.finish(report);

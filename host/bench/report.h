@@ -112,6 +112,9 @@ struct BenchReport {
   // several ranks).
   std::vector<std::uint64_t> spmd_stage_cycles, megakernel_stage_cycles;
   std::string stages_skipped;
+  // The clocked frames' kernel seconds: over the timed ones', what the
+  // clocks' readings cost (they inflate the stages that switch most).
+  double spmd_clocked_seconds = 0, megakernel_clocked_seconds = 0;
 
   // 3. the scatter curve, and one length over several PE counts.
   int scatter_pes = 0;

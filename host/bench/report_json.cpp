@@ -340,16 +340,17 @@ json traversal_json(const BenchReport& r) {
 // Cycles by stage of the SPMD phase and of the megakernel (null where they
 // were not counted, with the reason in "stages_skipped").
 json stages_json(const BenchReport& r) {
-  auto kernel = [](const std::vector<std::uint64_t>& cycles, double seconds) -> json {
+  auto kernel = [](const std::vector<std::uint64_t>& cycles, double seconds, double clocked) -> json {
     if (cycles.empty()) return nullptr;
     json j = json::object();
     for (const StageTime& s : stage_times(cycles, seconds))
       j[s.name] = {{"cycles", s.cycles}, {"share", s.share}, {"seconds", s.seconds}};
-    return j;
+    return {{"stages", j}, {"clocked_over_timed", seconds > 0 ? clocked / seconds : 0.0}};
   };
   const auto spmd = r.by_kernel.find("spmd_phase");
-  return {{"spmd_phase", kernel(r.spmd_stage_cycles, spmd == r.by_kernel.end() ? 0.0 : spmd->second.seconds)},
-          {"megakernel", kernel(r.megakernel_stage_cycles, r.megakernel.kernel_seconds)}};
+  const double spmd_seconds = spmd == r.by_kernel.end() ? 0.0 : spmd->second.seconds;
+  return {{"spmd_phase", kernel(r.spmd_stage_cycles, spmd_seconds, r.spmd_clocked_seconds)},
+          {"megakernel", kernel(r.megakernel_stage_cycles, r.megakernel.kernel_seconds, r.megakernel_clocked_seconds)}};
 }
 
 // Several MPI ranks: the --stats "mpi" section (per-rank reports, the rank x

@@ -127,15 +127,17 @@ void stages_text(std::string& out, const BenchReport& r) {
     appendf(out, "cycles by stage: not counted (%s)\n\n", r.stages_skipped.c_str());
     return;
   }
-  auto line = [&](const char* what, const std::vector<std::uint64_t>& cycles) {
+  auto line = [&](const char* what, const std::vector<std::uint64_t>& cycles, double timed, double clocked) {
     if (cycles.empty()) return;
     appendf(out, "  %-12s", what);
     for (const StageTime& s : stage_times(cycles, 0)) appendf(out, " %s %.1f%%", s.name.c_str(), 100 * s.share);
-    appendf(out, "\n");
+    appendf(out, " (clocked frame %.2fx the timed)\n", timed > 0 ? clocked / timed : 0.0);
   };
   appendf(out, "cycles by stage (one more frame of each, counted by the processor's clock):\n");
-  line("SPMD phase", r.spmd_stage_cycles);
-  line("megakernel", r.megakernel_stage_cycles);
+  const auto spmd = r.by_kernel.find("spmd_phase");
+  line("SPMD phase", r.spmd_stage_cycles, spmd == r.by_kernel.end() ? 0.0 : spmd->second.seconds,
+       r.spmd_clocked_seconds);
+  line("megakernel", r.megakernel_stage_cycles, r.megakernel.kernel_seconds, r.megakernel_clocked_seconds);
   appendf(out, "\n");
 }
 

@@ -510,8 +510,9 @@ TEST(Bench, QuickRunWritesEveryJsonKey) {
     EXPECT_TRUE(j["stages"]["spmd_phase"].is_null());
   } else {
     for (const char* kernel : {"spmd_phase", "megakernel"}) {
-      const nlohmann::json& st = j["stages"][kernel];
+      const nlohmann::json& st = j["stages"][kernel]["stages"];
       ASSERT_TRUE(st.is_object()) << kernel;
+      EXPECT_GT(j["stages"][kernel]["clocked_over_timed"].get<double>(), 0.0) << kernel;
       EXPECT_TRUE(st.contains("bank_walk")) << kernel;
       double share = 0;
       for (const auto& [name, v] : st.items()) share += v["share"].get<double>();

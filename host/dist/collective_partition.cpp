@@ -31,8 +31,9 @@ static_assert(std::is_trivially_copyable<Shipped>::value &&
               "sent as bytes");
 
 // Facets in flight per rank and round: the exchange's buffer stays bounded
-// (2^16 records of 56 bytes, and 64 more for a facet with attributes: at
-// most 8 MB to send, R times that to receive) whatever the scene's size.
+// (2^16 records of 56 bytes, one more per rank at most, and 64 bytes more
+// for a facet with attributes: about 8 MB to send, at most R times that to
+// receive) whatever the scene's size.
 constexpr std::size_t kChunk = std::size_t(1) << 16;
 
 double seconds_since(std::chrono::steady_clock::time_point t0) {
@@ -132,38 +133,76 @@ struct OwnPart {
   }
 };
 
-// Each local cluster's facets to the rank of its PE, kChunk at a time,
-// into `own` as they come: each cluster's from one rank in the order that
-// rank held them (a spread cluster's from several: see own_part).
+// One destination's facets, its clusters in local order, sent `quota` a
+// round (the last round may send fewer).
+struct Stream {
+  std::vector<std::size_t> clusters;  // local cluster indices
+  std::size_t next = 0, facet = 0;    // the next facet to send: clusters[next], its facet-th
+  std::uint64_t facets = 0, quota = 0;
+};
+
+// Each destination's facets spread evenly over the rounds, which every rank
+// runs alike (enough for the rank with the most facets, kChunk a round).
+// Sent cluster after cluster instead, every rank sends to the same rank at
+// once (the ranks' clusters lie in much the same order), which receives up
+// to R times what it sends and so holds most of its share and of what it
+// receives at once: the peak of the rank served first (docs/BENCHMARKS.md
+// "Capacity"). Evenly, each rank receives about what it sends each round.
+// A round sends at most kChunk + R facets. Returns the rounds; `attributes`
+// (whether this rank's share has vertex attributes) becomes whether any
+// rank's has (one collective for both).
+std::uint64_t plan_streams(const std::vector<ClusterBuild>& local, const Placement& pl, int num_pes, Ranks& ranks,
+                           std::vector<Stream>& streams, bool& attributes) {
+  const int R = ranks.size();
+  streams.assign(std::size_t(R), Stream());
+  std::uint64_t facets = 0;
+  for (std::size_t c = 0; c < local.size(); ++c) {
+    if (local[c].tris.empty()) continue;  // a spread cluster's part on other ranks only
+    const int pe = pl.pe[std::size_t(pl.global_of_local[c])];
+    Stream& s = streams[std::size_t(rank_of_pe(num_pes, R, pe))];
+    s.clusters.push_back(c);
+    s.facets += local[c].tris.size();
+    facets += local[c].tris.size();
+  }
+  std::vector<std::uint64_t> most{attributes ? 1u : 0u, facets};
+  ranks.max(most);
+  attributes = most[0] != 0;
+  const std::uint64_t rounds = (most[1] + kChunk - 1) / kChunk;
+  for (Stream& s : streams) s.quota = rounds ? (s.facets + rounds - 1) / rounds : 0;
+  return rounds;
+}
+
+// Each local cluster's facets to the rank of its PE, round by round
+// (plan_streams), into `own` as they come: each cluster's from one rank in
+// the order that rank held them (a spread cluster's from several: see
+// order_spread).
 void exchange_facets(const Scene& scene, const std::vector<ClusterBuild>& local, const Placement& pl,
                      int num_pes, Ranks& ranks, OwnPart& own, PageLedger* sent) {
-  const int R = ranks.size();
-  std::vector<std::uint64_t> any{scene.attributes.empty() ? 0u : 1u};  // a second stream only when needed
-  ranks.max(any);
-  std::size_t cluster = 0, facet = 0;  // the next facet to send
-  for (;;) {
-    std::vector<std::vector<Shipped>> to(static_cast<std::size_t>(R));
-    std::vector<std::vector<VertexAttributes>> to_attributes(static_cast<std::size_t>(R));
-    std::size_t n = 0;
-    for (; cluster < local.size() && n < kChunk; facet = 0, ++cluster) {
-      const int g = pl.global_of_local[cluster];
-      const std::size_t dest = std::size_t(rank_of_pe(num_pes, R, pl.pe[std::size_t(g)]));
-      const std::vector<int>& tris = local[cluster].tris;
-      for (; facet < tris.size() && n < kChunk; ++facet, ++n) {
+  const std::size_t R = std::size_t(ranks.size());
+  bool attributes = !scene.attributes.empty();  // a second stream only when needed
+  std::vector<Stream> streams;
+  const std::uint64_t rounds = plan_streams(local, pl, num_pes, ranks, streams, attributes);
+  for (std::uint64_t round = 0; round < rounds; ++round) {
+    std::vector<std::vector<Shipped>> to(R);
+    std::vector<std::vector<VertexAttributes>> to_attributes(R);
+    for (std::size_t dest = 0; dest < R; ++dest) {
+      Stream& st = streams[dest];
+      for (std::uint64_t n = 0; n < st.quota && st.next < st.clusters.size(); ++n) {
+        const std::size_t cluster = st.clusters[st.next];
+        const int tri = local[cluster].tris[st.facet];
+        if (++st.facet == local[cluster].tris.size()) ++st.next, st.facet = 0;
         Shipped s;
-        s.t = scene.triangles[std::size_t(tris[facet])];
-        if (sent) sent->done(std::size_t(tris[facet]));
-        s.cluster = g;
+        s.t = scene.triangles[std::size_t(tri)];
+        if (sent) sent->done(std::size_t(tri));
+        s.cluster = pl.global_of_local[cluster];
         if (s.t.attributes >= 0) to_attributes[dest].push_back(scene.attributes[std::size_t(s.t.attributes)]);
         s.t.attributes = s.t.attributes >= 0 ? 0 : -1;
         to[dest].push_back(s);
       }
-      if (facet < tris.size()) break;  // the chunk is full inside this cluster
     }
-    if (ranks.sum(n) == 0) break;
     if (sent) sent->release();  // packed: the share's pages sent whole go
     const std::vector<Shipped> got = exchange_records(ranks, to);
-    own.add(got, any[0] ? exchange_records(ranks, to_attributes) : std::vector<VertexAttributes>());
+    own.add(got, attributes ? exchange_records(ranks, to_attributes) : std::vector<VertexAttributes>());
   }
 }
 
@@ -196,13 +235,18 @@ OwnPart own_part(const Scene& share, const Placement& pl, const PeGroup& group) 
 }
 
 // A spread cluster's facets came from several ranks, round by round: put in
-// one process's order (make_cluster's), which is the facet ids' order.
+// one process's order (make_cluster's), which is the facet ids' order, a
+// facet's fan in fan order (a total order: the result does not depend on
+// the order they came in).
 void order_spread(OwnPart& own, const Placement& pl) {
   const auto& tris = own.scene.triangles;
   for (std::size_t c = 0; c < own.clusters.size(); ++c)
     if (pl.clusters[std::size_t(own.first_cluster) + c].spread)
       std::sort(own.clusters[c].tris.begin(), own.clusters[c].tris.end(),
-                [&](int a, int b) { return tris[std::size_t(a)].facet_id < tris[std::size_t(b)].facet_id; });
+                [&](int a, int b) {
+                  const Triangle &x = tris[std::size_t(a)], &y = tris[std::size_t(b)];
+                  return x.facet_id != y.facet_id ? x.facet_id < y.facet_id : x.fan < y.fan;
+                });
 }
 
 // The texels of the maps the group's facets use, decoded now if the share

@@ -4,7 +4,8 @@
 // over the ranks) and the ranks together build exactly the banks one
 // process builds from the whole scene for each rank's group of PEs, byte
 // for byte, by facets, by measured work and by the sampled rays' work
-// (dist/collective_balance.h), with routing on spheres and on boxes.
+// (dist/collective_balance.h), with routing on spheres and on boxes; and
+// over an exchange of several rounds.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -19,6 +20,7 @@
 #include "prepare/prepare.h"
 #include "reference/reference.h"
 #include "sim_ranks.h"
+#include "test_util.h"
 
 namespace opsila {
 namespace {
@@ -34,8 +36,17 @@ const char* const kScene = R"({"smooth": true, "objects": [
    "seed": 3},
   {"type": "terrain", "size": [6, 6], "quads": [9, 7], "height": 0, "center": [0, 6, 0]}]})";
 
-Scene read(const SceneShare& share = SceneShare()) {
-  return load_scene_from_string(kScene, "scene.json", "", kMaxTriangles, share);
+struct Case {
+  Balance balance;
+  int num_pes, routing;
+  const char* scene = kScene;
+  std::string dir;               // where its files are
+  std::vector<int> spread = {1};  // the objects made in windows
+  std::vector<int> ranks = {1, 2, 3, 4};
+};
+
+Scene read(const Case& c, const SceneShare& share = SceneShare()) {
+  return load_scene_from_string(c.scene, "scene.json", c.dir, kMaxTriangles, share);
 }
 
 template <class V>
@@ -89,13 +100,8 @@ RaySample traced_sample(const Scene& scene, const SampleJoin* join) {
   return ReferenceTracer(scene).sample_rays(1500, join);
 }
 
-struct Case {
-  Balance balance;
-  int num_pes, routing;
-};
-
 void expect_shares_bank_as_one(const Case& c) {
-  const Scene whole = read();
+  const Scene whole = read(c);
   MeasuredWork whole_work;
   RaySample whole_sample;
   BalancePolicy policy;
@@ -108,14 +114,14 @@ void expect_shares_bank_as_one(const Case& c) {
     EXPECT_GT(bank_scene(whole, c.num_pes, c.routing, policy, all).scene.clusters.size(),
               bank_scene(whole, c.num_pes, c.routing, BalancePolicy(), all).scene.clusters.size());
   }
-  for (int R = 1; R <= 4; ++R) {
+  for (int R : c.ranks) {
     SCOPED_TRACE(std::to_string(R) + " ranks");
     std::vector<PreparedBanks> got(static_cast<std::size_t>(R));
     test::run_ranks(R, [&](Ranks& ranks) {
-      Scene share = read(scene_share_for(ranks));
+      Scene share = read(c, scene_share_for(ranks));
       ASSERT_EQ(share.total_triangles(), whole.triangles.size());
       if (ranks.size() > 1) {
-        EXPECT_EQ(share.share.spread, std::vector<int>({1})) << "the large terrain, made in windows";
+        EXPECT_EQ(share.share.spread, c.spread) << "the large objects, made in windows";
         EXPECT_LT(share.triangles.size(), whole.triangles.size() / 2 + 400) << "a share, not the scene";
       }
       MeasuredWork work;
@@ -155,6 +161,39 @@ TEST(CollectivePartition, SharesBankAsOneProcessByMeasuredWork) {
 
 TEST(CollectivePartition, SharesBankAsOneProcessBySampledWork) {
   expect_shares_bank_as_one({Balance::work, 64, OPSILA_ROUTING_BOXES});
+}
+
+// An OBJ grid of n x n quads over a gentle slope: each quad fans into two
+// triangles that share its facet id.
+std::string quad_grid(int n) {
+  std::string obj;
+  for (int z = 0; z <= n; ++z)
+    for (int x = 0; x <= n; ++x)
+      obj += "v " + std::to_string(x * 0.05) + " " + std::to_string((x % 7 + z % 5) * 0.01) + " " +
+             std::to_string(z * 0.05) + "\n";
+  for (int z = 0; z < n; ++z)
+    for (int x = 0; x < n; ++x) {
+      const int a = z * (n + 1) + x + 1;  // OBJ counts from 1
+      obj += "f " + std::to_string(a) + " " + std::to_string(a + n + 1) + " " + std::to_string(a + n + 2) + " " +
+             std::to_string(a + 1) + "\n";
+    }
+  return obj;
+}
+
+// More than 2^16 facets a rank: the exchange takes several rounds, every
+// rank sending to every rank in each, a cluster's facets over several of
+// them. The spread OBJ's quads give facets that share an id, which a rank
+// receives from several ranks.
+TEST(CollectivePartition, SharesBankAsOneProcessOverSeveralRounds) {
+  test::TempDir dir;
+  dir.write("quads.obj", quad_grid(300));
+  Case c{Balance::facets, 8, OPSILA_ROUTING_SPHERES};
+  c.scene = R"({"objects": [{"type": "obj", "file": "quads.obj"},
+    {"type": "terrain", "size": [20, 20], "quads": [300, 300], "height": 3, "center": [0, -2, 0]}]})";
+  c.dir = dir.path();
+  c.spread = {0, 1};
+  c.ranks = {3, 4};  // both objects spread over the ranks
+  expect_shares_bank_as_one(c);
 }
 
 }  // namespace

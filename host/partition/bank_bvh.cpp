@@ -171,14 +171,24 @@ class Builder {
     float best_cost = INFINITY;
     for (int axis = 0; axis < 3; ++axis) {
       if (!(cbox.extent(axis) > 0)) continue;
-      Bin right[kBins];
-      right[nb - 1] = bins[axis][nb - 1];
-      for (int k = nb - 2; k > 0; --k) right[k] = bins[axis][k], right[k].grow(right[k + 1]);
+      // The right sides' areas and weights only (whole bins stored and read
+      // back were most of a small node's time), grown as before: bin k
+      // grown by the side beyond it.
+      float right_area[kBins];
+      double right_w[kBins];
+      Bin right = bins[axis][nb - 1];
+      right_area[nb - 1] = right.area(), right_w[nb - 1] = right.w;
+      for (int k = nb - 2; k > 0; --k) {
+        Bin wider = bins[axis][k];
+        wider.grow(right);
+        right = wider;
+        right_area[k] = right.area(), right_w[k] = right.w;
+      }
       Bin left = Bin::empty();
       for (int s = 1; s < nb; ++s) {
         left.grow(bins[axis][s - 1]);
-        if (left.w == 0 || right[s].w == 0) continue;
-        float cost = static_cast<float>(left.area() * left.w + right[s].area() * right[s].w);
+        if (left.w == 0 || right_w[s] == 0) continue;
+        float cost = static_cast<float>(left.area() * left.w + right_area[s] * right_w[s]);
         if (cost < best_cost) best_cost = cost, best_axis = axis, best_bin = s;
       }
     }

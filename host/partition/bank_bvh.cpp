@@ -141,8 +141,9 @@ class Builder {
       w += bw;
     }
     void grow(const Bin& b) { grow(b.lo, b.hi, b.w); }
+    bool is_empty() const { return !(lo[0] <= hi[0]); }  // no item binned
     float area() const {  // Box::area's expression, the three products side by side
-      if (!(lo[0] <= hi[0])) return 0.0f;
+      if (is_empty()) return 0.0f;
       const F4 e = hi - lo, p = e * F4{e[1], e[2], e[0], 0};  // x*y, y*z, z*x
       return 2 * (p[0] + p[1] + p[2]);
     }
@@ -176,9 +177,17 @@ class Builder {
       // grown by the side beyond it.
       float right_area[kBins];
       double right_w[kBins];
+      // An empty bin changes neither side (the same bits): beside one,
+      // the right side's area is the one beyond it, and the plane after it
+      // costs what the plane before did, so it never wins (a small node's
+      // bins, one per item, are a third empty).
       Bin right = bins[axis][nb - 1];
       right_area[nb - 1] = right.area(), right_w[nb - 1] = right.w;
       for (int k = nb - 2; k > 0; --k) {
+        if (bins[axis][k].is_empty()) {
+          right_area[k] = right_area[k + 1], right_w[k] = right_w[k + 1];
+          continue;
+        }
         Bin wider = bins[axis][k];
         wider.grow(right);
         right = wider;
@@ -186,6 +195,7 @@ class Builder {
       }
       Bin left = Bin::empty();
       for (int s = 1; s < nb; ++s) {
+        if (bins[axis][s - 1].is_empty()) continue;
         left.grow(bins[axis][s - 1]);
         if (left.w == 0 || right_w[s] == 0) continue;
         float cost = static_cast<float>(left.area() * left.w + right_area[s] * right_w[s]);

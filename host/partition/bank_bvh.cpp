@@ -6,7 +6,6 @@
 #include <cstring>
 #include <limits>
 #include <numeric>
-#include <stdexcept>
 #include <string>
 
 #include "core/parallel.h"
@@ -33,11 +32,8 @@ struct BinNode {
   std::int16_t slots = 0;    // inner: what slots_of counts, kept from its build
 };
 
-// The slots binary node k takes in a wide node when opened down to its
-// leaves and kept nodes (each one slot), counted up to kWidth + 1 (more
-// than any wide node has room for). An inner node's count is made once,
-// as it is built (a node is kept before its parent is built): counted
-// afresh at every choice of a child to open, it was a tenth of the build.
+// The slots node k takes in a wide node opened down to its leaves and kept
+// nodes (one each), up to kWidth + 1; an inner node's, made as it is built.
 int slots_of(const std::vector<BinNode>& bin, int k) {
   return bin[k].kid[0] < 0 || bin[k].keep ? 1 : bin[k].slots;
 }
@@ -185,24 +181,19 @@ class Builder {
     for (int axis = 0; axis < 3; ++axis) {
       if (!(cbox.extent(axis) > 0)) continue;
       // The right sides' areas and weights only (whole bins stored and read
-      // back were most of a small node's time), grown as before: bin k
-      // grown by the side beyond it.
+      // back were most of a small node's time), grown as before: bin k grown
+      // by the side beyond it. An empty bin changes neither side (the same
+      // bits), so the plane after one costs what the plane before did and
+      // never wins (a small node's bins, one per item, are a third empty).
       float right_area[kBins];
       double right_w[kBins];
-      // An empty bin changes neither side (the same bits): beside one,
-      // the right side's area is the one beyond it, and the plane after it
-      // costs what the plane before did, so it never wins (a small node's
-      // bins, one per item, are a third empty).
-      Bin right = bins[axis][nb - 1];
-      right_area[nb - 1] = right.area(), right_w[nb - 1] = right.w;
-      for (int k = nb - 2; k > 0; --k) {
-        if (bins[axis][k].is_empty()) {
-          right_area[k] = right_area[k + 1], right_w[k] = right_w[k + 1];
-          continue;
+      Bin right = Bin::empty();
+      for (int k = nb - 1; k > 0; --k) {
+        if (!bins[axis][k].is_empty()) {
+          Bin wider = bins[axis][k];
+          wider.grow(right);
+          right = wider;
         }
-        Bin wider = bins[axis][k];
-        wider.grow(right);
-        right = wider;
         right_area[k] = right.area(), right_w[k] = right.w;
       }
       Bin left = Bin::empty();

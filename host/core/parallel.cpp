@@ -18,7 +18,11 @@ int host_threads() {
     const long v = std::strtol(env, &end, 10);
     if (*end == '\0' && v > 0 && v <= 1024) return static_cast<int>(v);
   }
-  return static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  // Asked once: the C library reads it from a system file each time, and
+  // the median cuts ask at every cut (on a small scene that was a third of
+  // the partition). The variable above is read each time (tests set it).
+  static const int cores = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  return cores;
 }
 
 void parallel_for(std::size_t n, const std::function<void(std::size_t)>& task, int threads) {

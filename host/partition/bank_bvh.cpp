@@ -2,10 +2,10 @@
 
 #include <algorithm>
 #include <atomic>
+#include <cstdint>
 #include <cstring>
 #include <limits>
 #include <numeric>
-#include <stdexcept>
 #include <string>
 
 #include "core/parallel.h"
@@ -29,7 +29,14 @@ struct BinNode {
   int first = 0, count = 0;  // leaf: positions [first, first + count) of the item order
   int height = 0;            // 0 for a leaf
   bool keep = false;         // a cluster root: stays a wide node of its own
+  std::int16_t slots = 0;    // inner: what slots_of counts, kept from its build
 };
+
+// The slots node k takes in a wide node opened down to its leaves and kept
+// nodes (one each), up to kWidth + 1; an inner node's, made as it is built.
+int slots_of(const std::vector<BinNode>& bin, int k) {
+  return bin[k].kid[0] < 0 || bin[k].keep ? 1 : bin[k].slots;
+}
 
 class Builder {
   typedef float F4 __attribute__((vector_size(16)));
@@ -109,6 +116,7 @@ class Builder {
     bin[node].kid[0] = l;
     bin[node].kid[1] = r;
     bin[node].height = 1 + std::max(bin[l].height, bin[r].height);
+    bin[node].slots = static_cast<std::int16_t>(std::min(slots_of(bin, l) + slots_of(bin, r), kWidth + 1));
     return node;
   }
 
@@ -141,8 +149,9 @@ class Builder {
       w += bw;
     }
     void grow(const Bin& b) { grow(b.lo, b.hi, b.w); }
+    bool is_empty() const { return !(lo[0] <= hi[0]); }  // no item binned
     float area() const {  // Box::area's expression, the three products side by side
-      if (!(lo[0] <= hi[0])) return 0.0f;
+      if (is_empty()) return 0.0f;
       const F4 e = hi - lo, p = e * F4{e[1], e[2], e[0], 0};  // x*y, y*z, z*x
       return 2 * (p[0] + p[1] + p[2]);
     }
@@ -171,14 +180,28 @@ class Builder {
     float best_cost = INFINITY;
     for (int axis = 0; axis < 3; ++axis) {
       if (!(cbox.extent(axis) > 0)) continue;
-      Bin right[kBins];
-      right[nb - 1] = bins[axis][nb - 1];
-      for (int k = nb - 2; k > 0; --k) right[k] = bins[axis][k], right[k].grow(right[k + 1]);
+      // The right sides' areas and weights only (whole bins stored and read
+      // back were most of a small node's time), grown as before: bin k grown
+      // by the side beyond it. An empty bin changes neither side (the same
+      // bits), so the plane after one costs what the plane before did and
+      // never wins (a small node's bins, one per item, are a third empty).
+      float right_area[kBins];
+      double right_w[kBins];
+      Bin right = Bin::empty();
+      for (int k = nb - 1; k > 0; --k) {
+        if (!bins[axis][k].is_empty()) {
+          Bin wider = bins[axis][k];
+          wider.grow(right);
+          right = wider;
+        }
+        right_area[k] = right.area(), right_w[k] = right.w;
+      }
       Bin left = Bin::empty();
       for (int s = 1; s < nb; ++s) {
+        if (bins[axis][s - 1].is_empty()) continue;
         left.grow(bins[axis][s - 1]);
-        if (left.w == 0 || right[s].w == 0) continue;
-        float cost = static_cast<float>(left.area() * left.w + right[s].area() * right[s].w);
+        if (left.w == 0 || right_w[s] == 0) continue;
+        float cost = static_cast<float>(left.area() * left.w + right_area[s] * right_w[s]);
         if (cost < best_cost) best_cost = cost, best_axis = axis, best_bin = s;
       }
     }
@@ -227,14 +250,6 @@ class Builder {
   }
 };
 
-// The slots binary node k takes in a wide node when opened down to its
-// leaves and kept nodes (each one slot), counted only up to `most` + 1.
-int slots_within(const std::vector<BinNode>& bin, int k, int most) {
-  if (bin[k].kid[0] < 0 || bin[k].keep) return 1;
-  const int left = slots_within(bin, bin[k].kid[0], most);
-  return left > most ? left : left + slots_within(bin, bin[k].kid[1], most - left);
-}
-
 // Which of a wide node's n children (binary nodes, the node itself being b)
 // to open next, or -1: first the one whose whole subtree fits the slots
 // left (the smallest such), since it then needs no wide node of its own
@@ -246,7 +261,7 @@ int child_to_open(const std::vector<BinNode>& bin, const int* kid, int n, int b)
   for (int i = 0; i < n; ++i) {
     const BinNode& c = bin[kid[i]];
     if (c.kid[0] < 0 || c.keep || kid[i] == b) continue;
-    const int slots = slots_within(bin, kid[i], room);
+    const int slots = slots_of(bin, kid[i]);  // above room: too many, whatever the count
     if (slots <= room && slots < pick_slots) pick = i, pick_slots = slots;
   }
   if (pick >= 0) return pick;

@@ -18,17 +18,13 @@
 namespace opsila {
 namespace partition_steps {
 
-Box tri_box(const Triangle& t) {
-  Box b;
-  b.grow(t.v0.data());
-  b.grow(t.v1.data());
-  b.grow(t.v2.data());
-  return b;
-}
+namespace {
 
 void put3(float* dst, const Vec3& v) {
   for (int a = 0; a < 3; ++a) dst[a] = v[a];
 }
+
+}  // namespace
 
 // The routing tables every PE knows: for each PE, a BVH over its clusters'
 // boxes, padded (like the spheres' radii) so that float rounding in the slab
@@ -178,6 +174,10 @@ void fill_banks(const Scene& scene, const Box& sbox, std::vector<ClusterBuild>& 
     next = ranges[c].second;
   }
   const std::size_t total = std::size_t(next);
+  // A scene of one batch would give all its pages back at the end, as its
+  // owner does right after: no ledger then (counting pages was a tenth of a
+  // small scene's partition).
+  if (total <= kReleaseBatch) consume = nullptr;
   bs.triangles.resize(total);
   if (maps.pilot) maps.source.resize(total), bs.tri_cluster.resize(total);
   if (!scene.attributes.empty()) maps.attributes.resize(total);

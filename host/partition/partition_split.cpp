@@ -15,8 +15,6 @@
 namespace opsila {
 namespace partition_steps {
 
-float centroid(const Triangle& t, int a) { return (t.v0[a] + t.v1[a] + t.v2[a]) * (1.0f / 3.0f); }
-
 // With split_flat, a flat piece (a floor, a wall, a terrain patch) must
 // also fit a fraction of a PE's region: its bounding sphere is mostly empty
 // space, so rays meet it far from any facet.

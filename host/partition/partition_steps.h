@@ -32,8 +32,16 @@ struct SplitLimits {
 };
 SplitLimits split_limits(std::size_t total, const Box& sbox, int num_pes);
 bool needs_cut(std::size_t facets, const Box& box, const SplitLimits& limits, bool split_flat);
-Box tri_box(const Triangle& t);
-float centroid(const Triangle& t, int a);
+// Inline: called per facet and axis at every cut (out of line, each call
+// went through the shared library's symbol table).
+inline Box tri_box(const Triangle& t) {
+  Box b;
+  b.grow(t.v0.data());
+  b.grow(t.v1.data());
+  b.grow(t.v2.data());
+  return b;
+}
+inline float centroid(const Triangle& t, int a) { return (t.v0[a] + t.v1[a] + t.v2[a]) * (1.0f / 3.0f); }
 void bounds_of(const Scene& scene, const std::vector<int>& tris, Box& box, Box& cbox);
 ClusterBuild make_cluster(std::vector<int> tris, const Box& box);
 // Cuts `tris` at the median centroid on the longest axis of `cbox` (ties by

@@ -67,28 +67,81 @@ D3 unit(const D3& v) {
 // get the same vertex.
 D3 mid(const D3& a, const D3& b) { return unit({a.x + b.x, a.y + b.y, a.z + b.z}); }
 
-struct SphereEmitter {
-  std::vector<Triangle>& out;
-  double cx, cy, cz, r;
-  FacetTag tag;
-  int facet;
-
-  Vec3 place(const D3& u) const {
-    return {static_cast<float>(cx + r * u.x), static_cast<float>(cy + r * u.y),
-            static_cast<float>(cz + r * u.z)};
+// The unit sphere's triangles, three corners each, in facet order.
+void unit_sphere(const D3& a, const D3& b, const D3& c, int level, std::vector<D3>& out) {
+  if (level == 0) {
+    out.insert(out.end(), {a, b, c});
+    return;
   }
-  void emit(const D3& a, const D3& b, const D3& c, int level) {
-    if (level == 0) {
-      push(out, place(a), place(b), place(c), tag, facet++);
-      return;
-    }
-    const D3 ab = mid(a, b), bc = mid(b, c), ca = mid(c, a);
-    emit(a, ab, ca, level - 1);
-    emit(b, bc, ab, level - 1);
-    emit(c, ca, bc, level - 1);
-    emit(ab, bc, ca, level - 1);
+  const D3 ab = mid(a, b), bc = mid(b, c), ca = mid(c, a);
+  unit_sphere(a, ab, ca, level - 1, out);
+  unit_sphere(b, bc, ab, level - 1, out);
+  unit_sphere(c, ca, bc, level - 1, out);
+  unit_sphere(ab, bc, ca, level - 1, out);
+}
+
+std::vector<D3> unit_icosphere(int subdivisions) {
+  const double t = (1.0 + std::sqrt(5.0)) / 2.0;
+  const D3 v[12] = {unit({-1, t, 0}), unit({1, t, 0}),   unit({-1, -t, 0}), unit({1, -t, 0}),
+                    unit({0, -1, t}), unit({0, 1, t}),   unit({0, -1, -t}), unit({0, 1, -t}),
+                    unit({t, 0, -1}), unit({t, 0, 1}),   unit({-t, 0, -1}), unit({-t, 0, 1})};
+  static const int faces[20][3] = {{0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11},
+                                   {1, 5, 9},  {5, 11, 4}, {11, 10, 2}, {10, 7, 6}, {7, 1, 8},
+                                   {3, 9, 4},  {3, 4, 2},  {3, 2, 6},   {3, 6, 8},  {3, 8, 9},
+                                   {4, 9, 5},  {2, 4, 11}, {6, 2, 10},  {8, 6, 7},  {9, 8, 1}};
+  std::vector<D3> out;
+  out.reserve(3 * icosphere_triangles(subdivisions));
+  for (const auto& f : faces) unit_sphere(v[f[0]], v[f[1]], v[f[2]], subdivisions, out);
+  return out;
+}
+
+// Scenes of many spheres of a few sizes of mesh: each mesh is made once per
+// thread and placed for every sphere (the midpoints' roots and divisions
+// were most of a generated crowd's parse). Small meshes only (5 levels:
+// 1.5 MB), so that the copies kept stay small.
+constexpr int kKeptSubdivisions = 5;
+
+const std::vector<D3>& kept_unit_icosphere(int subdivisions) {
+  thread_local std::vector<D3> kept[kKeptSubdivisions + 1];
+  std::vector<D3>& mesh = kept[subdivisions];
+  if (mesh.empty()) mesh = unit_icosphere(subdivisions);
+  return mesh;
+}
+
+// The rotation's cosines and sines, taken once for a run of points.
+struct Turn {
+  double c[3], s[3];
+  explicit Turn(const Vec3& deg) {
+    for (int a = 0; a < 3; ++a) cos_sin_deg(deg[a], c[a], s[a]);
   }
 };
+
+Vec3 apply_turned(const Transform& t, const Turn& turn, const Vec3& p) {
+  double x = double(p[0]) * t.scale[0], y = double(p[1]) * t.scale[1], z = double(p[2]) * t.scale[2];
+  double c = turn.c[0], s = turn.s[0];  // about x
+  double y2 = c * y - s * z, z2 = s * y + c * z;
+  y = y2;
+  z = z2;
+  c = turn.c[1], s = turn.s[1];  // about y
+  double x2 = c * x + s * z;
+  z2 = -s * x + c * z;
+  x = x2;
+  z = z2;
+  c = turn.c[2], s = turn.s[2];  // about z
+  x2 = c * x - s * y;
+  y2 = s * x + c * y;
+  x = x2;
+  y = y2;
+  return {static_cast<float>(x + t.translate[0]), static_cast<float>(y + t.translate[1]),
+          static_cast<float>(z + t.translate[2])};
+}
+
+Transform normal_transform(const Transform& t) {
+  Transform r;
+  r.rotate_deg = t.rotate_deg;
+  for (int a = 0; a < 3; ++a) r.scale[a] = static_cast<float>(1.0 / double(t.scale[a]));
+  return r;
+}
 
 std::uint64_t splitmix64(std::uint64_t x) {
   x += 0x9e3779b97f4a7c15ull;
@@ -114,47 +167,26 @@ bool Transform::is_identity() const {
   return translate == Vec3{0, 0, 0} && rotate_deg == Vec3{0, 0, 0} && scale == Vec3{1, 1, 1};
 }
 
-Vec3 Transform::apply(const Vec3& p) const {
-  double x = double(p[0]) * scale[0], y = double(p[1]) * scale[1], z = double(p[2]) * scale[2];
-  double c, s;
-  cos_sin_deg(rotate_deg[0], c, s);  // about x
-  double y2 = c * y - s * z, z2 = s * y + c * z;
-  y = y2;
-  z = z2;
-  cos_sin_deg(rotate_deg[1], c, s);  // about y
-  double x2 = c * x + s * z;
-  z2 = -s * x + c * z;
-  x = x2;
-  z = z2;
-  cos_sin_deg(rotate_deg[2], c, s);  // about z
-  x2 = c * x - s * y;
-  y2 = s * x + c * y;
-  x = x2;
-  y = y2;
-  return {static_cast<float>(x + translate[0]), static_cast<float>(y + translate[1]),
-          static_cast<float>(z + translate[2])};
-}
+Vec3 Transform::apply(const Vec3& p) const { return apply_turned(*this, Turn(rotate_deg), p); }
 
-Vec3 Transform::apply_normal(const Vec3& n) const {
-  Transform r;
-  r.rotate_deg = rotate_deg;
-  for (int a = 0; a < 3; ++a) r.scale[a] = static_cast<float>(1.0 / double(scale[a]));
-  return r.apply(n);
-}
+Vec3 Transform::apply_normal(const Vec3& n) const { return normal_transform(*this).apply(n); }
 
 void transform_normals(std::vector<VertexAttributes>& attributes, std::size_t first, const Transform& t) {
   if (t.is_identity()) return;
+  const Transform normal = normal_transform(t);
+  const Turn turn(normal.rotate_deg);
   for (std::size_t i = first; i < attributes.size(); ++i)
     if (attributes[i].has_normals)
-      for (Vec3& n : attributes[i].normal) n = t.apply_normal(n);
+      for (Vec3& n : attributes[i].normal) n = apply_turned(normal, turn, n);
 }
 
 void transform_triangles(std::vector<Triangle>& tris, std::size_t first, const Transform& t) {
   if (t.is_identity()) return;
+  const Turn turn(t.rotate_deg);
   for (std::size_t i = first; i < tris.size(); ++i) {
-    tris[i].v0 = t.apply(tris[i].v0);
-    tris[i].v1 = t.apply(tris[i].v1);
-    tris[i].v2 = t.apply(tris[i].v2);
+    tris[i].v0 = apply_turned(t, turn, tris[i].v0);
+    tris[i].v1 = apply_turned(t, turn, tris[i].v1);
+    tris[i].v2 = apply_turned(t, turn, tris[i].v2);
   }
 }
 
@@ -181,18 +213,17 @@ int add_polygon(std::vector<Triangle>& out, const std::vector<Vec3>& vertices, F
 
 int add_icosphere(std::vector<Triangle>& out, const Vec3& center, float radius,
                   int subdivisions, FacetTag tag, int facet) {
-  const double t = (1.0 + std::sqrt(5.0)) / 2.0;
-  const D3 v[12] = {unit({-1, t, 0}), unit({1, t, 0}),   unit({-1, -t, 0}), unit({1, -t, 0}),
-                    unit({0, -1, t}), unit({0, 1, t}),   unit({0, -1, -t}), unit({0, 1, -t}),
-                    unit({t, 0, -1}), unit({t, 0, 1}),   unit({-t, 0, -1}), unit({-t, 0, 1})};
-  static const int faces[20][3] = {{0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11},
-                                   {1, 5, 9},  {5, 11, 4}, {11, 10, 2}, {10, 7, 6}, {7, 1, 8},
-                                   {3, 9, 4},  {3, 4, 2},  {3, 2, 6},   {3, 6, 8},  {3, 8, 9},
-                                   {4, 9, 5},  {2, 4, 11}, {6, 2, 10},  {8, 6, 7},  {9, 8, 1}};
   reserve_more(out, icosphere_triangles(subdivisions));
-  SphereEmitter e{out, center[0], center[1], center[2], radius, tag, facet};
-  for (const auto& f : faces) e.emit(v[f[0]], v[f[1]], v[f[2]], subdivisions);
-  return e.facet;
+  std::vector<D3> made;
+  const std::vector<D3>& mesh = subdivisions <= kKeptSubdivisions ? kept_unit_icosphere(subdivisions)
+                                                                   : (made = unit_icosphere(subdivisions));
+  const double cx = center[0], cy = center[1], cz = center[2], r = radius;
+  const auto place = [&](const D3& u) {
+    return Vec3{static_cast<float>(cx + r * u.x), static_cast<float>(cy + r * u.y), static_cast<float>(cz + r * u.z)};
+  };
+  for (std::size_t k = 0; k < mesh.size(); k += 3)
+    push(out, place(mesh[k]), place(mesh[k + 1]), place(mesh[k + 2]), tag, facet++);
+  return facet;
 }
 
 int add_box(std::vector<Triangle>& out, const Vec3& lo, const Vec3& hi, FacetTag tag,

@@ -190,7 +190,8 @@ std::size_t ObjectReader::settle(std::size_t first, const std::string& path) {
       ++dropped;
       continue;
     }
-    tris[keep++] = t;
+    if (keep != k) tris[keep] = t;  // nothing dropped yet: each in place already
+    ++keep;
   }
   tris.resize(keep);
   return dropped;

@@ -127,14 +127,15 @@ __kernel void scatter_count(int pool_len, int pool_blocks, int num_blocks, int i
 }
 
 /* Per key q: hist[b * K + q] becomes the exclusive prefix over blocks,
- * key_total[q] the total (an atomic write: scatter_plan's last work-group
- * reads the others' totals). A work-group takes keys q = group, group +
+ * key_total[q] the total (with shared_totals, an atomic write: scatter_plan's
+ * last work-group reads the others' totals). A work-group takes keys q = group, group +
  * groups, ...: each work-item sums a run of blocks, the runs' sums are
  * scanned, then each work-item writes its run's prefixes. One work-group
  * per key on a GPU; one in all on a CPU, where work-groups are threads and
  * keys q and q+1 of one block share a cache line (each write would steal it
  * from the other core: 1.3 ms instead of 0.1 ms at 2^20 descriptors). */
-inline void scan_keys(int num_blocks, int num_keys, __global int *hist, __global int *key_total, __local int *sums) {
+inline void scan_keys(int num_blocks, int num_keys, __global int *hist, __global int *key_total, int shared_totals,
+                      __local int *sums) {
   int lid = get_local_id(0), lsz = get_local_size(0);
   int run = (num_blocks + lsz - 1) / lsz;
   int begin = min(lid * run, num_blocks), end = min(begin + run, num_blocks);
@@ -150,7 +151,10 @@ inline void scan_keys(int num_blocks, int num_keys, __global int *hist, __global
         sums[i] = acc;
         acc += v;
       }
-      atomic_xchg(&key_total[q], acc);
+      if (shared_totals)
+        atomic_xchg(&key_total[q], acc);
+      else
+        key_total[q] = acc;
     }
     barrier(CLK_LOCAL_MEM_FENCE);
     int acc = sums[lid];
@@ -167,7 +171,7 @@ inline void scan_keys(int num_blocks, int num_keys, __global int *hist, __global
 /* The scan alone: the hit list's (kernels/primary.cl), one key. */
 __kernel void scatter_scan(int num_blocks, int num_keys, __global int *hist, __global int *key_total) {
   __local int sums[OPSILA_SCATTER_GROUP_MAX];
-  scan_keys(num_blocks, num_keys, hist, key_total, sums);
+  scan_keys(num_blocks, num_keys, hist, key_total, 0, sums);
 }
 
 /* Whether this work-group is the launch's last to get here (the ticket
@@ -241,7 +245,7 @@ __kernel void scatter_plan(int num_blocks, int num_keys, __global int *hist, __g
   __local int group_base[OPSILA_MAX_PES];
   __local int flags[2]; /* last work-group, level found */
   __local int leaves_only;
-  scan_keys(num_blocks, num_keys, hist, key_total, partial);
+  scan_keys(num_blocks, num_keys, hist, key_total, 1, partial);
   if (!last_group(ticket, &flags[0])) return;
   int lid = get_local_id(0), lsz = get_local_size(0);
   for (int q = lid; q < 2 * num_pes; q += lsz) totals[q] = atomic_add(&key_total[q], 0); /* others' writes */

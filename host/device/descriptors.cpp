@@ -73,6 +73,9 @@ ScatterPass::ScatterPass(ClRuntime& rt, int num_pes) : rt_(rt), num_pes_(num_pes
   wg_scan_ = queried_group_size(rt, scan_.kernel(), cap);
   wg_plan_ = queried_group_size(rt, plan_.kernel(), cap);
   for (const Table& t : own_tables()) *t.buffer = device_buffer(rt, t.ints * sizeof(cl_int), t.name);
+  // scatter_plan writes the key totals by atomics, which read them first
+  // (Oclgrind's check counts that read).
+  zero_buffer(rt, key_total, 2 * std::size_t(num_pes) * sizeof(cl_int), "scatter key totals");
   no_outputs_.records.buffer = no_outputs_.dests.buffer = no_counts_.buffer = dummy_;
 }
 

@@ -187,8 +187,9 @@ class ScatterPass {
   // A pass over a pool alone, no SPMD outputs (the bench and the tests).
   static Args pool_only(const DescriptorSet& pool, std::size_t pool_len, const DescriptorSet& banks,
                         const DescriptorSet& next, int slots, int group_size);
-  // The move by entry (GPUs) or by block (CPUs) is chosen from the device;
-  // tests run both on any device.
+  // The move by entry (GPUs) or by block (CPUs) is chosen from the device,
+  // and with it the plan's scan (a work-group per key, or one); tests run
+  // both on any device.
   void set_move_by_block(bool by_block) { by_block_ = by_block; }
   void plan(Launcher& launch, const Args& a, int round);
   // The exclusive scan of n ints in place (scatter_scan, one key), their

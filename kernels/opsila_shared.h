@@ -45,12 +45,12 @@ typedef std::uint32_t opsila_u32;
  * a block in order, which keeps the sort stable). */
 #define OPSILA_SCATTER_BLOCK 256
 /* Scatter: work-items per work-group of the scan and the plan at most;
- * their local arrays (scatter_scan's sums, scatter_plan's partial) hold one
- * entry per work-item. The host caps both work-groups at this. */
+ * their local arrays (the scan's sums, the plan's partial) hold one entry
+ * per work-item. The host caps both work-groups at this. */
 #define OPSILA_SCATTER_GROUP_MAX 256
-/* Local memory of scatter_plan, in ints: partial, level_found, leaves_only,
- * group_base. */
-#define OPSILA_SCATTER_PLAN_LOCAL_INTS (OPSILA_SCATTER_GROUP_MAX + 2 + OPSILA_MAX_PES)
+/* Local memory of scatter_plan, in ints: partial, totals, group_base, the
+ * flags and leaves_only. */
+#define OPSILA_SCATTER_PLAN_LOCAL_INTS (OPSILA_SCATTER_GROUP_MAX + 3 * OPSILA_MAX_PES + 3)
 /* Item buffer: square tiles of at most this many pixels a side (one
  * work-group per tile; smaller when the device allows fewer work-items). */
 #define OPSILA_ITEM_TILE_SIDE 8

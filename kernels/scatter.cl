@@ -39,11 +39,15 @@
  * into blocks of OPSILA_SCATTER_BLOCK entries (num_blocks in all, out_blocks
  * of them outputs).
  *   scatter_count: per block, per-key counts and each entry's rank inside it;
- *   scatter_scan:  per key, a work-group's exclusive scan over the blocks;
- *   scatter_plan:  bank capacities that follow each PE's demand, bank
- *                  offsets, the SPMD work-groups of the next phase, and the
- *                  layout of what waits;
- *   scatter_move_pool, scatter_move_outputs: each record to I'(i). */
+ *   scatter_plan:  per key, a work-group's exclusive scan over the blocks;
+ *                  then, in the last work-group, bank capacities that
+ *                  follow each PE's demand, bank offsets, the SPMD
+ *                  work-groups of the next phase, and the layout of what
+ *                  waits;
+ *   scatter_move_entries (GPUs) or scatter_move_blocks (CPUs): each record
+ *                  to I'(i).
+ * A round launches these three: on a GPU each launch waits about 13 us
+ * between its enqueue and its start (docs/BENCHMARKS.md). */
 #include "lib/descriptor.cl"
 
 /* Where an entry of global rank r with key y goes: its bank slot, or its
@@ -109,11 +113,12 @@ OPSILA_INLINE void walk_block(int b, int pool_len, int out_blocks, int items_per
 
 /* Counts of block b; hist[b * K + y] = entries with key y (K = num_keys, 2
  * per PE). With write_rank, also each entry's rank inside its block (for the
- * move by entry). */
+ * move by entry). Resets scatter_plan's ticket for the launch that follows. */
 __kernel void scatter_count(int pool_len, int pool_blocks, int num_blocks, int items_per_group, int S, int num_keys,
                             DESC_PARAMS(pool), DESC_PARAMS(out), __global const int *out_item_count,
-                            __global int *hist, __global int *rank, int write_rank) {
+                            __global int *hist, __global int *rank, int write_rank, __global int *ticket) {
   int b = get_global_id(0);
+  if (b == 0) *ticket = 0;
   if (b >= num_blocks) return;
   __global int *h = hist + (long)b * num_keys;
   for (int y = 0; y < num_keys; ++y) h[y] = 0;
@@ -122,14 +127,15 @@ __kernel void scatter_count(int pool_len, int pool_blocks, int num_blocks, int i
 }
 
 /* Per key q: hist[b * K + q] becomes the exclusive prefix over blocks,
- * key_total[q] the total. A work-group takes keys q = group, group + groups,
- * ...: each work-item sums a run of blocks, the runs' sums are scanned, then
- * each work-item writes its run's prefixes. One work-group per key on a GPU;
- * one in all on a CPU, where work-groups are threads and keys q and q+1 of
- * one block share a cache line (each write would steal it from the other
- * core: 1.3 ms instead of 0.1 ms at 2^20 descriptors). */
-__kernel void scatter_scan(int num_blocks, int num_keys, __global int *hist, __global int *key_total) {
-  __local int sums[OPSILA_SCATTER_GROUP_MAX];
+ * key_total[q] the total (with shared_totals, an atomic write: scatter_plan's
+ * last work-group reads the others' totals). A work-group takes keys q = group, group +
+ * groups, ...: each work-item sums a run of blocks, the runs' sums are
+ * scanned, then each work-item writes its run's prefixes. One work-group
+ * per key on a GPU; one in all on a CPU, where work-groups are threads and
+ * keys q and q+1 of one block share a cache line (each write would steal it
+ * from the other core: 1.3 ms instead of 0.1 ms at 2^20 descriptors). */
+inline void scan_keys(int num_blocks, int num_keys, __global int *hist, __global int *key_total, int shared_totals,
+                      __local int *sums) {
   int lid = get_local_id(0), lsz = get_local_size(0);
   int run = (num_blocks + lsz - 1) / lsz;
   int begin = min(lid * run, num_blocks), end = min(begin + run, num_blocks);
@@ -145,7 +151,10 @@ __kernel void scatter_scan(int num_blocks, int num_keys, __global int *hist, __g
         sums[i] = acc;
         acc += v;
       }
-      key_total[q] = acc;
+      if (shared_totals)
+        atomic_xchg(&key_total[q], acc);
+      else
+        key_total[q] = acc;
     }
     barrier(CLK_LOCAL_MEM_FENCE);
     int acc = sums[lid];
@@ -159,42 +168,40 @@ __kernel void scatter_scan(int num_blocks, int num_keys, __global int *hist, __g
   }
 }
 
+/* The scan alone: the hit list's (kernels/primary.cl), one key. */
+__kernel void scatter_scan(int num_blocks, int num_keys, __global int *hist, __global int *key_total) {
+  __local int sums[OPSILA_SCATTER_GROUP_MAX];
+  scan_keys(num_blocks, num_keys, hist, key_total, 0, sums);
+}
+
+/* Whether this work-group is the launch's last to get here (the ticket
+ * starts at 0, scatter_count's doing). A fence orders each group's writes
+ * before its ticket, so the last one sees every key total. No group waits
+ * for another: any number of them may run at once, or one after another. */
+inline bool last_group(__global int *ticket, __local int *last) {
+  barrier(CLK_LOCAL_MEM_FENCE | CLK_GLOBAL_MEM_FENCE);
+  if (get_local_id(0) == 0) {
+    mem_fence(CLK_GLOBAL_MEM_FENCE);
+    *last = atomic_inc(ticket) == (int)get_num_groups(0) - 1;
+    mem_fence(CLK_GLOBAL_MEM_FENCE);
+  }
+  barrier(CLK_LOCAL_MEM_FENCE);
+  return *last;
+}
+
 /* Demand for bank slots on this device: none for PEs of another group;
  * only the records that end their tree (key 2q) while throttled. */
-inline int bank_demand(__global const int *key_total, int q, int group_begin, int group_end, int leaves_only) {
+inline int bank_demand(__local const int *key_total, int q, int group_begin, int group_end, int leaves_only) {
   if (q < group_begin || q >= group_end) return 0;
   return key_total[2 * q] + (leaves_only ? 0 : key_total[2 * q + 1]);
 }
 
-/* Bank capacity that follows demand: `slots` bank slots this round, split
- * by water-filling. Every PE gets min(demand, level, cap); the level is the
- * largest that fits; slots left over go one each to the PEs still waiting,
- * in PE order. So one hot PE no longer holds every other bank to its share,
- * and a round is full whenever enough descriptors wait. Each bank starts at
- * a multiple of the SPMD work-group size, so no work-group mixes banks.
- * throttle (the host: more wait than the frame's plan holds): demand is the
- * records that end their tree, if this device's PEs have any. Per PE q, key
- * 2q takes the bank's first slots, key 2q + 1 the rest; what waits is laid
- * out per PE in PE order, key 2q first. pe_total[q]: PE q's entries (the
- * rank exchange reads it). counts = {waiting, placed, SPMD work-groups}.
- * One work-group. */
-__kernel void scatter_plan(int num_pes, int group_begin, int group_end, int slots, int cap, int group_size,
-                           int throttle, __global const int *key_total, __global int *pe_total,
-                           __global int *bank_begin, __global int *bank_count, __global int *key_begin,
-                           __global int *key_count, __global int *key_base, __global int *group_pe,
-                           __global int *group_first, __global int *counts) {
-  __local int partial[OPSILA_SCATTER_GROUP_MAX];
-  __local int level_found, leaves_only;
-  __local int group_base[OPSILA_MAX_PES];
+/* The water level: the largest that fits `slots` (a binary search: the sum
+ * is monotonic in it). The whole work-group calls it; partial holds one
+ * entry per work-item. */
+inline int water_level(int num_pes, int group_begin, int group_end, int slots, int cap, int lv,
+                       __local const int *key_total, __local int *partial, __local int *found) {
   int lid = get_local_id(0), lsz = get_local_size(0);
-  if (lid == 0) {
-    int leaves = 0;
-    for (int q = group_begin; q < group_end && throttle; ++q) leaves |= key_total[2 * q];
-    leaves_only = throttle && leaves > 0;
-  }
-  barrier(CLK_LOCAL_MEM_FENCE);
-  int lv = leaves_only;
-  /* Binary search for the level (the sum is monotonic in it). */
   int lo = 0, hi = slots;
   while (lo < hi) {
     int mid = lo + (hi - lo + 1) / 2;
@@ -206,24 +213,63 @@ __kernel void scatter_plan(int num_pes, int group_begin, int group_end, int slot
     if (lid == 0) {
       long t = 0;
       for (int i = 0; i < lsz; ++i) t += partial[i];
-      level_found = t <= slots ? 1 : 0;
+      *found = t <= slots ? 1 : 0;
     }
     barrier(CLK_LOCAL_MEM_FENCE);
-    if (level_found) lo = mid; else hi = mid - 1;
+    if (*found) lo = mid; else hi = mid - 1;
     barrier(CLK_LOCAL_MEM_FENCE);
   }
+  return lo;
+}
+
+/* The scan (scan_keys), then in the launch's last work-group the plan:
+ * bank capacity that follows demand, `slots` bank slots this round, split
+ * by water-filling. Every PE gets min(demand, level, cap); the level is the
+ * largest that fits; slots left over go one each to the PEs still waiting,
+ * in PE order. So one hot PE no longer holds every other bank to its share,
+ * and a round is full whenever enough descriptors wait. Each bank starts at
+ * a multiple of the SPMD work-group size, so no work-group mixes banks.
+ * throttle (the host: more wait than the frame's plan holds): demand is the
+ * records that end their tree, if this device's PEs have any. Per PE q, key
+ * 2q takes the bank's first slots, key 2q + 1 the rest; what waits is laid
+ * out per PE in PE order, key 2q first. pe_total[q]: PE q's entries (the
+ * rank exchange reads it). counts = {waiting, placed, SPMD work-groups}. */
+__kernel void scatter_plan(int num_blocks, int num_keys, __global int *hist, __global int *key_total,
+                           __global int *ticket, int num_pes, int group_begin, int group_end, int slots, int cap,
+                           int group_size, int throttle, __global int *pe_total, __global int *bank_begin,
+                           __global int *bank_count, __global int *key_begin, __global int *key_count,
+                           __global int *key_base, __global int *group_pe, __global int *group_first,
+                           __global int *counts) {
+  __local int partial[OPSILA_SCATTER_GROUP_MAX];
+  __local int totals[2 * OPSILA_MAX_PES];
+  __local int group_base[OPSILA_MAX_PES];
+  __local int flags[2]; /* last work-group, level found */
+  __local int leaves_only;
+  scan_keys(num_blocks, num_keys, hist, key_total, 1, partial);
+  if (!last_group(ticket, &flags[0])) return;
+  int lid = get_local_id(0), lsz = get_local_size(0);
+  for (int q = lid; q < 2 * num_pes; q += lsz) totals[q] = atomic_add(&key_total[q], 0); /* others' writes */
+  barrier(CLK_LOCAL_MEM_FENCE);
+  if (lid == 0) {
+    int leaves = 0;
+    for (int q = group_begin; q < group_end && throttle; ++q) leaves |= totals[2 * q];
+    leaves_only = throttle && leaves > 0;
+  }
+  barrier(CLK_LOCAL_MEM_FENCE);
+  int lv = leaves_only;
+  int lo = water_level(num_pes, group_begin, group_end, slots, cap, lv, totals, partial, &flags[1]);
   if (lid == 0) {
     int used = 0;
-    for (int q = 0; q < num_pes; ++q) used += min(min(bank_demand(key_total, q, group_begin, group_end, lv), lo), cap);
+    for (int q = 0; q < num_pes; ++q) used += min(min(bank_demand(totals, q, group_begin, group_end, lv), lo), cap);
     int spare = slots - used, waiting = 0, placed = 0, begin = 0, groups = 0;
     for (int q = 0; q < num_pes; ++q) {
-      int demand = bank_demand(key_total, q, group_begin, group_end, lv);
+      int demand = bank_demand(totals, q, group_begin, group_end, lv);
       int c = min(min(demand, lo), cap);
       if (spare > 0 && c < demand && c < cap) {
         ++c;
         --spare;
       }
-      int ends = key_total[2 * q], more = key_total[2 * q + 1];
+      int ends = totals[2 * q], more = totals[2 * q + 1];
       int c_ends = min(c, ends);
       bank_count[q] = c;
       bank_begin[q] = begin;
@@ -255,31 +301,29 @@ __kernel void scatter_plan(int num_pes, int group_begin, int group_end, int slot
   }
 }
 
-__kernel void scatter_move_pool(int pool_len, int out_blocks, int num_keys, DESC_PARAMS(pool), __global const int *rank,
-                                __global const int *hist, __global const int *key_begin,
-                                __global const int *key_count, __global const int *key_base,
-                                DESC_PARAMS(banks), DESC_PARAMS(next)) {
-  int k = get_global_id(0);
-  if (k >= pool_len) return;
-  int rk = rank[k];
-  if (rk < 0) return;
-  int y = pool_dest[k];
-  int r = hist[(long)(out_blocks + k / OPSILA_SCATTER_BLOCK) * num_keys + y] + rk;
+/* The move by entry, for processors that run many work-items at once (a
+ * GPU): one range, a work-item per pool entry, then one per SPMD work-item
+ * t (its out_item_count[t] records); each record takes the rank the count
+ * stored, after its block's prefix. */
+__kernel void scatter_move_entries(int pool_len, int pool_blocks, int num_blocks, int items_per_group, int S,
+                                   int num_keys, DESC_PARAMS(pool), DESC_PARAMS(out),
+                                   __global const int *out_item_count, __global const int *rank,
+                                   __global const int *hist, __global const int *key_begin,
+                                   __global const int *key_count, __global const int *key_base, DESC_PARAMS(banks),
+                                   DESC_PARAMS(next)) {
+  int i = get_global_id(0), out_blocks = num_blocks - pool_blocks;
   Placement to = {key_begin, key_count, key_base, banks, next, next_dest};
-  place(pool, pool_dest, k, y, r, &to);
-}
-
-/* One work-item per SPMD work-item t: its out_item_count[t] records. */
-__kernel void scatter_move_outputs(int out_items, int items_per_group, int S, int pool_len, int num_keys,
-                                   DESC_PARAMS(out), __global const int *out_item_count,
-                                   __global const int *rank, __global const int *hist,
-                                   __global const int *key_begin, __global const int *key_count,
-                                   __global const int *key_base, DESC_PARAMS(banks), DESC_PARAMS(next)) {
-  int t = get_global_id(0);
-  if (t >= out_items) return;
+  if (i < pool_len) {
+    int rk = rank[i];
+    if (rk < 0) return;
+    int y = pool_dest[i];
+    place(pool, pool_dest, i, y, hist[(long)(out_blocks + i / OPSILA_SCATTER_BLOCK) * num_keys + y] + rk, &to);
+    return;
+  }
+  int t = i - pool_len;
+  if (t >= out_blocks * items_per_group) return;
   int c = out_item_count[t];
   __global const int *h = hist + (long)(t / items_per_group) * num_keys;
-  Placement to = {key_begin, key_count, key_base, banks, next, next_dest};
   for (int j = 0; j < c; ++j) {
     int at = t * S + j;
     int rk = rank[pool_len + at];

@@ -137,7 +137,7 @@ def plot_phases(bench, path, dpi):
         ("item buffer (SIMD)", ["item_buffer"], "C1"),
         ("primary descriptors (SIMD)", ["count_hits", "hit_list_scan", "list_hits", "build_primary"], "C4"),
         ("SPMD phases", ["spmd_phase"], "C0"),
-        ("scatter (SIMD exchange)", ["scatter_count", "scatter_scan", "scatter_plan", "scatter_move"], "C3"),
+        ("scatter (SIMD exchange)", ["scatter_count", "scatter_plan", "scatter_move"], "C3"),
     ]
     fig, (ax1, ax2) = plt.subplots(2, 1, figsize=(9, 7), gridspec_kw={"height_ratios": [1, 2.2]})
     left = 0.0

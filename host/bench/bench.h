@@ -36,7 +36,7 @@ struct ScatterPoint {
   int repeats = 0;
   double host_seconds = 0;         // median of host_scatter
   double kernel_seconds = 0;       // median of the sum of the scatter kernels
-  double count_seconds = 0, scan_seconds = 0, plan_seconds = 0, move_seconds = 0;  // of that median run
+  double count_seconds = 0, plan_seconds = 0, move_seconds = 0;  // of that median run (the plan: scan and plan)
   double copy_kernel_seconds = 0;  // median of copy_float4 over moved * kBytes bytes
   double copy_buffer_seconds = 0;  // median of clEnqueueCopyBuffer, same bytes
   // The paper's primitive alone, Vd(I'(i)) = Vs(i) with I' given: on its six

@@ -170,7 +170,6 @@ void measure_device_scatter(ClRuntime& rt, const HostDescriptors& src, int pes, 
     if (std::abs(totals[i] - pt.kernel_seconds) < std::abs(totals[best] - pt.kernel_seconds)) best = i;
   for (const LaunchRecord& rec : runs[best]) {
     if (rec.name == "scatter_count") pt.count_seconds += rec.seconds;
-    if (rec.name == "scatter_scan") pt.scan_seconds += rec.seconds;
     if (rec.name == "scatter_plan") pt.plan_seconds += rec.seconds;
     if (rec.name == "scatter_move") pt.move_seconds += rec.seconds;
   }

@@ -26,12 +26,12 @@ double fraction_of_copy(const ScatterPoint& p) {
 std::string scatter_csv(const std::vector<ScatterPoint>& curve) {
   std::ostringstream c;
   c << "length,moved,bytes,host_seconds,kernel_seconds,speedup,gbytes_per_s,copy_kernel_gbytes_per_s,"
-       "copy_buffer_gbytes_per_s,fraction_of_copy,count_seconds,scan_seconds,plan_seconds,move_seconds\n";
+       "copy_buffer_gbytes_per_s,fraction_of_copy,count_seconds,plan_seconds,move_seconds\n";
   for (const ScatterPoint& p : curve)
     c << p.length << ',' << p.moved << ',' << num(p.bytes()) << ',' << num(p.host_seconds) << ','
       << num(p.kernel_seconds) << ',' << num(p.speedup()) << ',' << num(p.gbytes_per_s()) << ','
       << num(p.copy_kernel_gbytes_per_s()) << ',' << num(p.copy_buffer_gbytes_per_s()) << ','
-      << num(fraction_of_copy(p)) << ',' << num(p.count_seconds) << ',' << num(p.scan_seconds) << ','
+      << num(fraction_of_copy(p)) << ',' << num(p.count_seconds) << ','
       << num(p.plan_seconds) << ',' << num(p.move_seconds) << '\n';
   return c.str();
 }

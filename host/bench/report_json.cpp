@@ -201,7 +201,6 @@ json scatter_point_json(const ScatterPoint& p) {
           {"host_seconds", p.host_seconds},
           {"kernel_seconds", p.kernel_seconds},
           {"kernels", {{"scatter_count", p.count_seconds},
-                       {"scatter_scan", p.scan_seconds},
                        {"scatter_plan", p.plan_seconds},
                        {"scatter_move", p.move_seconds}}},
           {"speedup", p.speedup()},

@@ -52,7 +52,8 @@ struct DeviceCapabilities {
   std::size_t max_work_group_size = 0;
 };
 DeviceCapabilities query_capabilities(const cl::Device& device);
-// Local memory the SPMD kernel needs per work-group (its per-level stats).
+// Local memory a work-group needs: the SPMD kernel's (its per-level stats) or
+// the exchange plan's, whichever is larger.
 std::size_t required_local_mem();
 // What the device lacks for opsila, one phrase each; empty when it can run it.
 std::vector<std::string> missing_capabilities(const DeviceCapabilities& caps);

@@ -65,8 +65,7 @@ ScatterPass::ScatterPass(ClRuntime& rt, int num_pes) : rt_(rt), num_pes_(num_pes
   count_ = decltype(count_)(rt, "scatter_count");
   scan_ = decltype(scan_)(rt, "scatter_scan");
   plan_ = decltype(plan_)(rt, "scatter_plan");
-  move_pool_ = decltype(move_pool_)(rt, "scatter_move_pool");
-  move_out_ = decltype(move_out_)(rt, "scatter_move_outputs");
+  move_entries_ = decltype(move_entries_)(rt, "scatter_move_entries");
   move_blocks_ = decltype(move_blocks_)(rt, "scatter_move_blocks");
   by_block_ = !rt.device().is_gpu;
   // scatter.cl's work-group arrays hold OPSILA_SCATTER_GROUP_MAX entries.
@@ -74,6 +73,9 @@ ScatterPass::ScatterPass(ClRuntime& rt, int num_pes) : rt_(rt), num_pes_(num_pes
   wg_scan_ = queried_group_size(rt, scan_.kernel(), cap);
   wg_plan_ = queried_group_size(rt, plan_.kernel(), cap);
   for (const Table& t : own_tables()) *t.buffer = device_buffer(rt, t.ints * sizeof(cl_int), t.name);
+  // scatter_plan writes the key totals by atomics, which read them first
+  // (Oclgrind's check counts that read).
+  zero_buffer(rt, key_total, 2 * std::size_t(num_pes) * sizeof(cl_int), "scatter key totals");
   no_outputs_.records.buffer = no_outputs_.dests.buffer = no_counts_.buffer = dummy_;
 }
 
@@ -94,6 +96,7 @@ std::vector<ScatterPass::Table> ScatterPass::own_tables() {
           {"scatter key counts", K, &key_ranges.count.buffer, nullptr},
           {"scatter overflow bases", K, &key_ranges.base.buffer, nullptr},
           {"scatter counts", 3, &counts.buffer, nullptr},
+          {"scatter plan ticket", 1, &ticket.buffer, nullptr},
           {"no SPMD outputs", 1, &dummy_, nullptr}};
 }
 
@@ -150,20 +153,6 @@ scatter_kernels::Placement ScatterPass::placement(const Args& a) const {
   return to;
 }
 
-// What the moves by entry (the pool's, the outputs') share: the pool's
-// length, the sort keys, each entry's rank (stored by the count), the
-// block counts, and where records go.
-template <class Move>
-Move ScatterPass::by_entry(const Args& a) const {
-  Move m;
-  m.pool_len = a.pool_len;
-  m.num_keys = 2 * num_pes_;
-  m.ranks = ranks.buffer;
-  m.hist = block_counts.buffer;
-  m.to = placement(a);
-  return m;
-}
-
 void ScatterPass::plan(Launcher& launch, const Args& a, int round) {
   const int P = num_pes_;
   const std::size_t nblocks = std::size_t(blocks(a));
@@ -179,18 +168,15 @@ void ScatterPass::plan(Launcher& launch, const Args& a, int round) {
   c.hist = block_counts.buffer;
   c.ranks = ranks.buffer;
   c.write_rank = by_block_ ? 0 : 1;
+  c.ticket = ticket;
   count_.bind(c);
   launch.run(count_.kernel(), "scatter_count", std::max<std::size_t>(nblocks, 1), 0, round);
-  scatter_kernels::ScanArgs s;
-  s.num_blocks = static_cast<int>(nblocks);
-  s.num_keys = c.sources.num_keys;
-  s.values = block_counts.buffer;
-  s.total = key_total;
-  scan_.bind(s);
-  // One work-group per key on a GPU, one in all on a CPU (see scatter_scan).
-  const std::size_t scan_groups = by_block_ ? 1 : std::size_t(s.num_keys);
-  launch.run(scan_.kernel(), "scatter_scan", scan_groups * wg_scan_, wg_scan_, round);
   scatter_kernels::PlanArgs p;
+  p.num_blocks = static_cast<int>(nblocks);
+  p.num_keys = c.sources.num_keys;
+  p.hist = block_counts.buffer;
+  p.key_total = key_total;
+  p.ticket = ticket;
   p.num_pes = P;
   p.group_begin = a.group_begin;
   p.group_end = a.group_end < 0 ? P : a.group_end;
@@ -198,14 +184,16 @@ void ScatterPass::plan(Launcher& launch, const Args& a, int round) {
   p.cap = a.cap > 0 ? a.cap : a.slots;
   p.group_size = a.group_size;
   p.throttle = a.throttle ? 1 : 0;
-  p.key_total = key_total;
   p.pe_total = pe_total;
   p.banks = bank_ranges;
   p.keys = key_ranges;
   p.groups = group_table();
   p.counts = counts;
   plan_.bind(p);
-  launch.run(plan_.kernel(), "scatter_plan", wg_plan_, wg_plan_, round);
+  // The scan: one work-group per key on a GPU, one in all on a CPU (see
+  // scan_keys); the last to finish plans.
+  const std::size_t scan_groups = by_block_ ? 1 : std::size_t(p.num_keys);
+  launch.run(plan_.kernel(), "scatter_plan", scan_groups * wg_plan_, wg_plan_, round);
 }
 
 void ScatterPass::scan(Launcher& launch, const char* name, const cl::Buffer& values, int n, const cl::Buffer& total,
@@ -219,32 +207,26 @@ void ScatterPass::scan(Launcher& launch, const char* name, const cl::Buffer& val
 }
 
 void ScatterPass::move(Launcher& launch, const Args& a, int round) {
+  const scatter_kernels::Sources sources = sources_of(a);
   if (by_block_) {
     scatter_kernels::MoveBlocksArgs m;
-    m.sources = sources_of(a);
+    m.sources = sources;
     m.hist = block_counts.buffer;
     m.to = placement(a);
     move_blocks_.bind(m);
-    if (blocks(a) > 0) launch.run(move_blocks_.kernel(), "scatter_move", std::size_t(blocks(a)), 0, round);
+    if (sources.num_blocks > 0)
+      launch.run(move_blocks_.kernel(), "scatter_move", std::size_t(sources.num_blocks), 0, round);
     return;
   }
-  if (a.pool_len > 0) {
-    auto m = by_entry<scatter_kernels::MovePoolArgs>(a);
-    m.out_blocks = a.out_groups;
-    m.pool = *a.pool;
-    move_pool_.bind(m);
-    launch.run(move_pool_.kernel(), "scatter_move", std::size_t(a.pool_len), 0, round);
-  }
-  if (a.out_groups > 0) {
-    auto m = by_entry<scatter_kernels::MoveOutputsArgs>(a);
-    m.out_items = a.out_groups * a.group_size;
-    m.items_per_group = a.group_size;
-    m.spawn_slots = a.spawn_slots;
-    m.outputs = *a.outputs;
-    m.out_count = *a.out_item_count;
-    move_out_.bind(m);
-    launch.run(move_out_.kernel(), "scatter_move", std::size_t(m.out_items), 0, round);
-  }
+  // One work-item per pool entry, then one per SPMD work-item.
+  const std::size_t entries = std::size_t(a.pool_len) + std::size_t(a.out_groups) * a.group_size;
+  scatter_kernels::MoveEntriesArgs m;
+  m.sources = sources;
+  m.ranks = ranks.buffer;
+  m.hist = block_counts.buffer;
+  m.to = placement(a);
+  move_entries_.bind(m);
+  if (entries > 0) launch.run(move_entries_.kernel(), "scatter_move", entries, 0, round);
 }
 
 }  // namespace opsila

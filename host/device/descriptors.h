@@ -66,6 +66,7 @@ using KeyTotals = DeviceArray<struct KeyTotalsRole>;          // per sort key, a
 using PeTotals = DeviceArray<struct PeTotalsRole>;            // per PE, its entries (placed or not)
 using ScatterCounts = DeviceArray<struct ScatterCountsRole>;  // {waiting, placed, SPMD work-groups}
 using OutputCounts = DeviceArray<struct OutputCountsRole>;    // the SPMD phase's records, per work-item
+using PlanTicket = DeviceArray<struct PlanTicketRole>;        // scatter_plan's work-groups that scanned
 // Per PE: its bank's first slot and how many it holds (the SPMD phase's).
 struct BankRanges {
   DeviceArray<struct BankBeginRole> begin;
@@ -106,26 +107,31 @@ struct CountArgs {
   BlockCounts hist;
   SourceRanks ranks;
   int write_rank = 0;  // the move by entry reads them
-  auto kernel_args() const { return std::tie(sources, hist, ranks, write_rank); }
+  PlanTicket ticket;   // reset for the plan
+  auto kernel_args() const { return std::tie(sources, hist, ranks, write_rank, ticket); }
 };
-// The scan is any exclusive scan of ints (the exchange's block counts, the
-// hit list's blocks): its buffers are plain.
+// The scan alone is any exclusive scan of ints (the hit list's blocks): its
+// buffers are plain.
 struct ScanArgs {
   int num_blocks = 0, num_keys = 1;
   cl::Buffer values, total;
   auto kernel_args() const { return std::tie(num_blocks, num_keys, values, total); }
 };
+// The scan of the block counts, then the plan.
 struct PlanArgs {
-  int num_pes = 0, group_begin = 0, group_end = 0, slots = 1, cap = 1, group_size = 1, throttle = 0;
+  int num_blocks = 0, num_keys = 1;
+  BlockCounts hist;
   KeyTotals key_total;
+  PlanTicket ticket;
+  int num_pes = 0, group_begin = 0, group_end = 0, slots = 1, cap = 1, group_size = 1, throttle = 0;
   PeTotals pe_total;
   BankRanges banks;
   KeyRanges keys;
   WorkGroupTable groups;
   ScatterCounts counts;
   auto kernel_args() const {
-    return std::tie(num_pes, group_begin, group_end, slots, cap, group_size, throttle, key_total, pe_total, banks,
-                    keys, groups, counts);
+    return std::tie(num_blocks, num_keys, hist, key_total, ticket, num_pes, group_begin, group_end, slots, cap,
+                    group_size, throttle, pe_total, banks, keys, groups, counts);
   }
 };
 // Where a move puts a record: its key's bank slots, else its waiting place.
@@ -134,24 +140,12 @@ struct Placement {
   DescriptorSet banks, next;
   auto kernel_args() const { return std::tie(keys, banks, next); }
 };
-struct MovePoolArgs {
-  int pool_len = 0, out_blocks = 0, num_keys = 0;
-  DescriptorSet pool;
+struct MoveEntriesArgs {
+  Sources sources;
   SourceRanks ranks;
   BlockCounts hist;
   Placement to;
-  auto kernel_args() const { return std::tie(pool_len, out_blocks, num_keys, pool, ranks, hist, to); }
-};
-struct MoveOutputsArgs {
-  int out_items = 0, items_per_group = 1, spawn_slots = 1, pool_len = 0, num_keys = 0;
-  DescriptorSet outputs;
-  OutputCounts out_count;
-  SourceRanks ranks;
-  BlockCounts hist;
-  Placement to;
-  auto kernel_args() const {
-    return std::tie(out_items, items_per_group, spawn_slots, pool_len, num_keys, outputs, out_count, ranks, hist, to);
-  }
+  auto kernel_args() const { return std::tie(sources, ranks, hist, to); }
 };
 struct MoveBlocksArgs {
   Sources sources;
@@ -193,8 +187,9 @@ class ScatterPass {
   // A pass over a pool alone, no SPMD outputs (the bench and the tests).
   static Args pool_only(const DescriptorSet& pool, std::size_t pool_len, const DescriptorSet& banks,
                         const DescriptorSet& next, int slots, int group_size);
-  // The move by entry (GPUs) or by block (CPUs) is chosen from the device;
-  // tests run both on any device.
+  // The move by entry (GPUs) or by block (CPUs) is chosen from the device,
+  // and with it the plan's scan (a work-group per key, or one); tests run
+  // both on any device.
   void set_move_by_block(bool by_block) { by_block_ = by_block; }
   void plan(Launcher& launch, const Args& a, int round);
   // The exclusive scan of n ints in place (scatter_scan, one key), their
@@ -230,6 +225,7 @@ class ScatterPass {
   PeTotals pe_total;
   ScatterCounts counts;  // {waiting, placed, groups}
   KeyTotals key_total;
+  PlanTicket ticket;
   KeyRanges key_ranges;
   // Buffers plan() sizes by the pass (capacity in ints) and grows when a
   // pass needs more (grown_tables).
@@ -252,11 +248,11 @@ class ScatterPass {
   KernelBinding<scatter_kernels::CountArgs> count_;
   KernelBinding<scatter_kernels::ScanArgs> scan_;
   KernelBinding<scatter_kernels::PlanArgs> plan_;
-  KernelBinding<scatter_kernels::MovePoolArgs> move_pool_;
-  KernelBinding<scatter_kernels::MoveOutputsArgs> move_out_;
+  KernelBinding<scatter_kernels::MoveEntriesArgs> move_entries_;
   KernelBinding<scatter_kernels::MoveBlocksArgs> move_blocks_;
   // Move by block (one work-item walks a block in order: CPUs) or by entry
-  // (one work-item per record, ranks stored by the count: GPUs).
+  // (one work-item per record, ranks stored by the count: GPUs); the plan's
+  // scan follows (scatter_plan: one work-group in all, or one per key).
   bool by_block_ = false;
   // Stands for the SPMD outputs and their counts when a pass has none.
   cl::Buffer dummy_;
@@ -265,8 +261,6 @@ class ScatterPass {
   int blocks(const Args& a) const;
   scatter_kernels::Sources sources_of(const Args& a) const;
   scatter_kernels::Placement placement(const Args& a) const;
-  template <class Move>
-  Move by_entry(const Args& a) const;
   void grow(const Table& need, std::size_t size);
 };
 

@@ -106,8 +106,11 @@ TEST(DeviceChecks, EachMissingCapabilityIsNamed) {
   embedded.profile = "EMBEDDED_PROFILE";
   embedded.extensions = "cl_khr_byte_addressable_store cles_khr_int64";
   EXPECT_TRUE(missing_capabilities(embedded).empty());
-  // The SPMD kernel's per-level stats and traffic live in local memory.
-  EXPECT_EQ(required_local_mem(), std::size_t(OPSILA_MAX_DEPTH) * (OPSILA_STAT_COUNT + OPSILA_TRAFFIC_MAX_PES) * 4);
+  // The SPMD kernel's per-level stats and traffic live in local memory, and
+  // the exchange plan's key totals and work-group bases: the larger counts.
+  EXPECT_EQ(required_local_mem(),
+            std::max<std::size_t>(std::size_t(OPSILA_MAX_DEPTH) * (OPSILA_STAT_COUNT + OPSILA_TRAFFIC_MAX_PES) * 4,
+                                  std::size_t(OPSILA_SCATTER_PLAN_LOCAL_INTS) * 4));
   DeviceCapabilities all_wrong = capable();
   all_wrong.version = "OpenCL 1.0";
   all_wrong.compiler_available = false;

@@ -54,7 +54,7 @@ using scatter_kernels::PlanArgs;
 static_assert(can_assign<decltype(PlanArgs::key_total), KeyTotals>, "a field takes its role");
 static_assert(!can_assign<decltype(PlanArgs::key_total), PeTotals>, "and no other");
 static_assert(!can_assign<decltype(PlanArgs::banks), KeyRanges>, "nor another group");
-static_assert(!can_assign<decltype(scatter_kernels::MovePoolArgs::hist), SourceRanks>,
+static_assert(!can_assign<decltype(scatter_kernels::MoveEntriesArgs::hist), SourceRanks>,
               "the ranks are not the block counts");
 static_assert(!can_assign<decltype(scatter_kernels::Placement::banks), BankRanges>,
               "the banks' descriptors are not their ranges");
@@ -67,10 +67,9 @@ static_assert(KernelBinding<int, DescriptorSet, KeyTotals>::kArgs == 4, "and a b
 TEST(KernelArgs, TheExchangesStructsFollowTheirKernels) {
   ClRuntime& rt = test::shared_runtime();
   using namespace scatter_kernels;
-  test::expect_follow_signatures<CountArgs, ScanArgs, PlanArgs, MovePoolArgs, MoveOutputsArgs, MoveBlocksArgs>(
+  test::expect_follow_signatures<CountArgs, ScanArgs, PlanArgs, MoveEntriesArgs, MoveBlocksArgs>(
       rt, KernelProgram::render,
-      {"scatter_count", "scatter_scan", "scatter_plan", "scatter_move_pool", "scatter_move_outputs",
-       "scatter_move_blocks"});
+      {"scatter_count", "scatter_scan", "scatter_plan", "scatter_move_entries", "scatter_move_blocks"});
 }
 
 // The check itself: a struct one part short, or with a value where the

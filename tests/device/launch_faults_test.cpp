@@ -38,11 +38,13 @@ namespace {
 // scatter_plan with tiny buffers: a kernel to launch, and its counts to read.
 struct PlanKernel {
   cl::Kernel kernel;
-  cl::Buffer key_totals, pe_total, bank_begin, bank_count, key_begin, key_count, key_base, group_pe, group_first,
-      counts;
+  cl::Buffer block_counts, key_totals, ticket, pe_total, bank_begin, bank_count, key_begin, key_count, key_base,
+      group_pe, group_first, counts;
   explicit PlanKernel(ClRuntime& rt) {
     kernel = rt.kernel("scatter_plan");
-    key_totals = upload(rt, std::vector<cl_int>{0, 3}, "key totals");  // one PE: 3 rays that spawn more
+    block_counts = upload(rt, std::vector<cl_int>{0, 3}, "block counts");  // one PE: 3 rays that spawn more
+    key_totals = upload(rt, std::vector<cl_int>{0, 0}, "key totals");
+    ticket = upload(rt, std::vector<cl_int>{0}, "plan ticket");
     pe_total = upload(rt, std::vector<cl_int>{0}, "PE totals");
     bank_begin = upload(rt, std::vector<cl_int>{0}, "bank begin");
     bank_count = upload(rt, std::vector<cl_int>{0}, "bank count");
@@ -53,6 +55,9 @@ struct PlanKernel {
     group_first = upload(rt, std::vector<cl_int>{0, 0}, "group slots");
     counts = upload(rt, std::vector<cl_int>{-1, -1, -1}, "counts");
     int a = 0;
+    kernel.setArg(a++, 1);  // one block
+    kernel.setArg(a++, 2);  // two sort keys
+    for (cl::Buffer* b : {&block_counts, &key_totals, &ticket}) kernel.setArg(a++, *b);
     kernel.setArg(a++, 1);  // PEs
     kernel.setArg(a++, 0);  // this device's PEs: [0, 1)
     kernel.setArg(a++, 1);
@@ -60,8 +65,8 @@ struct PlanKernel {
     kernel.setArg(a++, 2);  // cap
     kernel.setArg(a++, 1);  // work-group size
     kernel.setArg(a++, 0);  // not throttled
-    for (cl::Buffer* b : {&key_totals, &pe_total, &bank_begin, &bank_count, &key_begin, &key_count, &key_base,
-                          &group_pe, &group_first, &counts})
+    for (cl::Buffer* b :
+         {&pe_total, &bank_begin, &bank_count, &key_begin, &key_count, &key_base, &group_pe, &group_first, &counts})
       kernel.setArg(a++, *b);
   }
 };

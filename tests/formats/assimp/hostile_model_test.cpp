@@ -306,6 +306,21 @@ TEST(HostileModel, TruncatedDataIsRefusedInEveryFormat) {
          "PLY header declares the element 'vertex' twice");
   expect("early.ply", "ply\nformat ascii 1.0\nproperty float x\nelement vertex 1\nend_header\n0\n",
          "PLY header has a property before any element");
+  // The importer counts a word's leading digits: "2loat" is 2 vertices of
+  // (y, z), and the list's count the word after them (0x3f800000 ints: the
+  // importer allocated 8 GB on such a file, found by fuzz_model). Read as
+  // no vertices, the data held one strip of 3.
+  std::string digits = "ply\nformat binary_little_endian 1.0\nelement vertex 2loat x\nproperty float y\n"
+                       "property float z\nelement tristrips 1\nproperty list int int vertex_indices\nend_header\n";
+  digits += le32(3) + le32(0) + le32(1) + le32(2) + le32(0x3f800000);
+  try {
+    load_model_from_memory(digits, "digits.ply", "ply");
+    ADD_FAILURE() << "a count read from the wrong place was not refused";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("digits.ply: PLY data ends early: 'tristrips' element 1 of 1"),
+              std::string::npos)
+        << e.what();
+  }
   std::string stl(80, ' ');
   stl += le32(2) + std::string(50, '\0');
   expect("bin.stl", stl, "binary STL header counts 2 facets; the file holds 1 (truncated file)");

@@ -2,12 +2,16 @@
  * and the host (C++17: the reference tracer, the ray sample, the tests).
  * docs/CONTRACT.md "Nearest hit" states the rule; this is its only code.
  *
- * A hit's key is (distance on the grid, facet id, fan triangle), compared
- * key by key: a strict total order, so the least hit of a ray is the same
- * whatever order its hits are found in (any PE count, rank count, balance,
- * bank BVH, visit order). Facet ids are unique over a scene and never
- * decrease as object ids increase (checked when the banks are built,
- * host/partition/partition.cpp), so the facet id orders by object id first.
+ * A hit's key is (distance on the grid, instance, facet id, fan triangle),
+ * compared key by key: a strict total order, so the least hit of a ray is
+ * the same whatever order its hits are found in (any PE count, rank count,
+ * balance, bank BVH, visit order). It is SPEC's (distance, object id, facet
+ * id, fan): the scene's own facets have instance -1 and facet ids unique
+ * over the scene that never decrease as object ids increase (checked when
+ * the banks are built, host/partition/partition.cpp), so the facet id
+ * orders them by object id first; instance i (a model placed by a scene
+ * file) is object num_objects + i, after every facet of the scene's own,
+ * and its facets carry the model's own facet ids.
  *
  * The grid: a distance's float bits with the OPSILA_HIT_GRID_BITS lowest
  * mantissa bits cleared. Positive floats order as their bits do, so the
@@ -58,18 +62,20 @@ inline float hit_bits_float(hit_bits_t b) {
  * hit_none() (infinite distance, greatest ids). */
 typedef struct {
   float t;
-  int facet;
-  int fan; /* the triangle's index in its facet's fan, 0 first */
+  int inst;  /* the instance hit, -1: a facet of the scene's own */
+  int facet; /* SPEC facet id (an instance's: its model's) */
+  int fan;   /* the triangle's index in its facet's fan, 0 first */
 } HitKey;
 
-inline HitKey hit_key(float t, int facet, int fan) {
+inline HitKey hit_key(float t, int inst, int facet, int fan) {
   HitKey k;
   k.t = t;
+  k.inst = inst;
   k.facet = facet;
   k.fan = fan;
   return k;
 }
-inline HitKey hit_none(void) { return hit_key(OPSILA_HIT_INF, 0x7fffffff, 0x7fffffff); }
+inline HitKey hit_none(void) { return hit_key(OPSILA_HIT_INF, 0x7fffffff, 0x7fffffff, 0x7fffffff); }
 
 /* The distance's cell (t >= 0, or +inf). */
 inline hit_bits_t hit_grid(float t) { return hit_float_bits(t) & ~OPSILA_HIT_GRID_MASK; }
@@ -78,13 +84,14 @@ inline hit_bits_t hit_grid(float t) { return hit_float_bits(t) & ~OPSILA_HIT_GRI
  * cells are equal (a walk's leaf): the first key, then the others. */
 inline bool hit_cell_before(float t, HitKey best) { return hit_grid(t) < hit_grid(best.t); }
 inline bool hit_cell_same(float t, HitKey best) { return hit_grid(t) == hit_grid(best.t); }
-inline bool hit_ids_before(int facet, int fan, HitKey best) {
+inline bool hit_ids_before(int inst, int facet, int fan, HitKey best) {
+  if (inst != best.inst) return inst < best.inst;
   return facet != best.facet ? facet < best.facet : fan < best.fan;
 }
 
-/* Whether a hit (t, facet, fan) comes before `best` in the order. */
-inline bool hit_before(float t, int facet, int fan, HitKey best) {
-  return hit_cell_before(t, best) || (hit_cell_same(t, best) && hit_ids_before(facet, fan, best));
+/* Whether a hit (t, inst, facet, fan) comes before `best` in the order. */
+inline bool hit_before(float t, int inst, int facet, int fan, HitKey best) {
+  return hit_cell_before(t, best) || (hit_cell_same(t, best) && hit_ids_before(inst, facet, fan, best));
 }
 
 /* The least distance whose cell lies after best_t's: a hit at or beyond it

@@ -16,6 +16,23 @@
 
 #define ITEM_TILE_MAX (OPSILA_ITEM_TILE_SIDE * OPSILA_ITEM_TILE_SIDE) /* pixels per tile, at most */
 
+/* The best hit the groups of PEs before this one left (item_key: (facet,
+ * fan), or (instance, fan | OPSILA_META_INSTANCE), as a descriptor carries
+ * it): an instance's facet id is not needed here, since no other device
+ * holds that instance. */
+inline HitKey item_best(float t, int2 key) {
+  if (key.y & OPSILA_META_INSTANCE) return hit_key(t, key.x, 0, key.y & ~OPSILA_META_INSTANCE);
+  return hit_key(t, -1, key.x, key.y);
+}
+
+/* The (object, facet) of the nearest hit: an instance's object, its
+ * model's facet (opsila_shared.h, Instance). */
+inline int2 item_pair(__global const BankTriangle *tris, __global const Instance *insts, HitKey best, int best_tri) {
+  if (best_tri < 0) return (int2)(-1, -1);
+  int object = best.inst < 0 ? tris[best_tri].object_id : insts[best.inst].object_id;
+  return (int2)(object, tris[best_tri].facet_id);
+}
+
 /* One work-group = one square tile of tile_w x tile_w pixels, of the
  * tiles_x-wide grid of tiles from tile (tile_origin.x, tile_origin.y) on
  * (the host's traced rectangle: the pixels outside it are misses that no
@@ -33,6 +50,7 @@
 __kernel void item_buffer(FrameParams fp, __global const Cluster *clusters, __global const float *cluster_near,
                           __global const int4 *cluster_rects,
                           int4 listed_rect, __global const BankNode *nodes, __global const BankTriangle *tris,
+                          __global const Instance *insts,
                           int tile_w, int2 tile_origin, int tiles_x, int tile_begin, float ox, float oy, int mode,
                           __global int2 *items,
                           __global int *item_tri, __global float *item_t, __global int2 *item_key) {
@@ -51,7 +69,7 @@ __kernel void item_buffer(FrameParams fp, __global const Cluster *clusters, __gl
    * least hit of all groups (host/frame/rank_exchange.h). */
   bool continued = fp.group_begin > 0 && inside;
   bool held = continued && item_tri[pixel] >= 0; /* a miss leaves no distance or key */
-  HitKey best = held ? hit_key(item_t[pixel], item_key[pixel].x, item_key[pixel].y) : hit_none();
+  HitKey best = held ? item_best(item_t[pixel], item_key[pixel]) : hit_none();
   int best_tri = -1; /* a facet of this group's banks (local index) that won */
   uint tri_tests = 0, box_tests = 0;
   CostProbe no_probe = no_cost_probe();
@@ -89,7 +107,7 @@ __kernel void item_buffer(FrameParams fp, __global const Cluster *clusters, __gl
         if (cluster_near[cl] > cull_exit(hit_limit(best.t), fp.box_slack)) break;
         int4 pr = cluster_rects[cl]; /* x0, y0, x1, y1 inclusive */
         if (x < pr.x || x > pr.z || y < pr.y || y > pr.w) continue;
-        traverse_nearest(&r, nodes, tris, clusters[cl].root, 0.0f, fp.box_slack, &best, &best_tri, &tri_tests,
+        cluster_nearest(&r, nodes, tris, insts, clusters[cl].root, 0.0f, fp.box_slack, &best, &best_tri, &tri_tests,
                          &box_tests, &no_probe);
       }
       barrier(CLK_LOCAL_MEM_FENCE);
@@ -98,15 +116,12 @@ __kernel void item_buffer(FrameParams fp, __global const Cluster *clusters, __gl
     }
   }
   if (!inside || (best_tri < 0 && continued)) return; /* nothing nearer here: the state stands */
-  if (mode & OPSILA_ITEM_WRITE_ITEMS)
-    items[pixel] = best_tri >= 0 ? (int2)(tris[best_tri].object_id, tris[best_tri].facet_id) : (int2)(-1, -1);
+  if (mode & OPSILA_ITEM_WRITE_ITEMS) items[pixel] = item_pair(tris, insts, best, best_tri);
   if (mode & OPSILA_ITEM_WRITE_HITS) {
     /* A miss writes only its -1: its distance and facet are never read
      * (here, in build_primary, or by the ranks after this one). */
     item_tri[pixel] = best_tri >= 0 ? fp.tri_base + best_tri : -1;
-    if (best_tri >= 0) {
-      item_t[pixel] = best.t;
-      item_key[pixel] = (int2)(best.facet, best.fan);
-    }
+    if (best_tri >= 0) item_t[pixel] = best.t;
+    if (best_tri >= 0) item_key[pixel] = best.inst < 0 ? (int2)(best.facet, best.fan) : (int2)(best.inst, best.fan | OPSILA_META_INSTANCE);
   }
 }

@@ -278,7 +278,7 @@ typedef struct {
 } Cluster;
 
 /* Per-PE summary, global: box around all the PE's bounding spheres and its
- * range in the (PE-sorted) cluster and triangle tables. 48 bytes. */
+ * range in the (PE-sorted) cluster and triangle tables. 64 bytes. */
 typedef struct {
   float bmin[3];
   opsila_i32 cluster_begin;
@@ -288,7 +288,39 @@ typedef struct {
   opsila_i32 tri_end;
   opsila_i32 node_begin;
   opsila_i32 node_end;
+  opsila_i32 instance_root; /* root of the BVH over this bank's instances, -1 none */
+  opsila_i32 pad[3];
 } PeInfo;
+
+/* Instances (scenes/FORMAT.md "instances"): a model placed at many
+ * transforms. A bank that owns instances of a model holds the model's
+ * facets and BVH once (its copy, in the bank's ranges), and a BVH over its
+ * instances (PeInfo.instance_root) whose leaves are instances: a slot with
+ * count OPSILA_INSTANCE_LEAF names instance child[k]. A ray meets an
+ * instance in the model's frame, (to_object applied to its origin and
+ * direction, not normalised, so distances along it are the world's).
+ * Instance i is object num_objects + i (the scene's own objects first),
+ * and its facets keep the model's facet ids (kernels/hit_order.h). The
+ * table is global, like the clusters; root is only set on the device
+ * that holds the instance's bank. 64 bytes. */
+#define OPSILA_INSTANCE_LEAF 0x40000000
+typedef struct {
+  float to_object[12]; /* world to model: row i is (A[i][0], A[i][1], A[i][2], b[i]), x' = A x + b */
+  opsila_i32 root;      /* the model's BVH root in this device's nodes, -1: not held here */
+  opsila_i32 pe;        /* owning PE */
+  opsila_i32 object_id; /* SPEC object id */
+  opsila_i32 pad;
+} Instance;
+/* Whether the programs walk instances (-D, set when the scene has some):
+ * a scene without them runs the walks it always ran. */
+#ifndef OPSILA_INSTANCES
+#define OPSILA_INSTANCES 0
+#endif
+/* A radiance ray's best hit lies on an instance: DESC_BEST_FACET then holds
+ * the instance, and its facet id is read from the facet DESC_HIT names on
+ * the device that holds it (the only one that can find another hit on that
+ * instance, kernels/lib/descriptor.cl). Above the fan in the meta field. */
+#define OPSILA_META_INSTANCE (1 << 30)
 
 /* Material in SPEC.md terms, with kr/kt already derived from illum. 80 bytes. */
 typedef struct {
@@ -364,7 +396,11 @@ static_assert(offsetof(BankNode, count) == 28 * OPSILA_BVH_WIDTH, "BankNode layo
 static_assert(sizeof(Cluster) == 48, "Cluster layout");
 static_assert(offsetof(Cluster, pe) == 28, "Cluster layout");
 static_assert(offsetof(Cluster, root) == 44, "Cluster layout");
-static_assert(sizeof(PeInfo) == 48, "PeInfo layout");
+static_assert(sizeof(PeInfo) == 64, "PeInfo layout");
+static_assert(offsetof(PeInfo, instance_root) == 48, "PeInfo layout");
+static_assert(sizeof(Instance) == 64, "Instance layout");
+static_assert(offsetof(Instance, root) == 48, "Instance layout");
+static_assert(OPSILA_META_FAN_SHIFT + (32 - OPSILA_MATERIAL_BITS) <= 30, "the instance flag lies above the fan");
 static_assert(offsetof(PeInfo, tri_begin) == 32, "PeInfo layout");
 static_assert(sizeof(Material) == 80, "Material layout");
 static_assert(offsetof(Material, kt) == 64, "Material layout");

@@ -69,9 +69,11 @@ __kernel void list_hits(__global const int *item_tri, int npix, int width, int4 
  * item buffer holds one sample pass's hits, (ox, oy) is that sample's place
  * in the pixel, and the descriptor carries the pixel index: every sample
  * adds into the same pixel sums (divided by N when read). hit_count (64-bit
- * fixed pair) counts the descriptors built. */
+ * fixed pair) counts the descriptors built. item_key: the item buffer's
+ * keys (kernels/item_buffer.cl), which say whether the hit is an instance's. */
 __kernel void build_primary(FrameParams fp, __global const PeInfo *pes, __global const int *hit_pixels,
-                            __global const int *item_tri, __global const float *item_t, int first, int count,
+                            __global const int *item_tri, __global const float *item_t,
+                            __global const int2 *item_key, int first, int count,
                             float ox, float oy, int offset, DESC_PARAMS(q), volatile __global uint *hit_count) {
   __local uint hits;
   if (get_local_id(0) == 0) hits = 0u;
@@ -87,8 +89,13 @@ __kernel void build_primary(FrameParams fp, __global const PeInfo *pes, __global
     } else {
       int x = pixel % fp.width, y = pixel / fp.width;
       float3 d = primary_direction_at(fp, (float)x + ox, (float)y + oy);
-      desc_store(q, q_dest, slot, make_descriptor(load3(fp.eye), item_t[pixel], d, -1.0f, (float3)(1.0f), pixel,
-                                          OPSILA_META(OPSILA_KIND_RESOLVED, 0), tri, owner), fp.max_depth);
+      Descriptor ds = make_descriptor(load3(fp.eye), item_t[pixel], d, -1.0f, (float3)(1.0f), pixel,
+                                      OPSILA_META(OPSILA_KIND_RESOLVED, 0), tri, owner);
+      int2 key = item_key[pixel];
+      /* An instance's hit: the instance goes with it, to be shaded in its frame. */
+      if (key.y & OPSILA_META_INSTANCE)
+        desc_set_best(&ds, hit_key(item_t[pixel], key.x, 0, key.y & ~OPSILA_META_INSTANCE));
+      desc_store(q, q_dest, slot, ds, fp.max_depth);
       atomic_inc(&hits);
     }
   }

@@ -54,9 +54,12 @@ inline void emit(Outputs *o, Descriptor d) {
 typedef struct {
   __global const BankNode *nodes;
   __global const BankTriangle *tris;
+  __global const Instance *insts; /* the instance table, global */
   int pe, root;
+  int inst_root; /* its instances' BVH, -1 none */
   bool empty;
   float slack; /* FrameParams.box_slack */
+  int tri_base, tri_count; /* this device's facets, global indices (desc_best) */
 } Bank;
 
 /* What a ray's visit to this PE ends in. */
@@ -73,9 +76,13 @@ inline int shadow_visit(const Routing *rt, const Bank *bank, const RayPre *r, fl
                         const CostProbe *probe, Descriptor *next) {
   bool blocked = false;
   if (!bank->empty)
-    STAGE(st->clock, OPSILA_STAGE_BANK_WALK,
-          blocked = traverse_any(r, bank->nodes, bank->tris, bank->root, eps, tmax, bank->slack,
-                                 &st->v[OPSILA_STAT_TRI_TESTS], &st->v[OPSILA_STAT_BOX_TESTS], probe));
+    STAGE(st->clock, OPSILA_STAGE_BANK_WALK, {
+      blocked = traverse_any(r, bank->nodes, bank->tris, bank->insts, bank->root, eps, tmax, bank->slack,
+                             &st->v[OPSILA_STAT_TRI_TESTS], &st->v[OPSILA_STAT_BOX_TESTS], probe);
+      if (OPSILA_INSTANCES && !blocked && bank->inst_root >= 0)
+        blocked = traverse_any(r, bank->nodes, bank->tris, bank->insts, bank->inst_root, eps, tmax, bank->slack,
+                               &st->v[OPSILA_STAT_TRI_TESTS], &st->v[OPSILA_STAT_BOX_TESTS], probe);
+    });
   if (blocked) {
     STAT_INC(st, OCCLUDED);
     return VISIT_DONE;
@@ -106,9 +113,13 @@ inline int trace_visit(FrameParams fp, const Routing *rt, const Bank *bank, cons
   float eps = fp.epsilon;
   int found = -1; /* local index of a facet of this bank that won */
   if (!bank->empty)
-    STAGE(st->clock, OPSILA_STAGE_BANK_WALK,
-          traverse_nearest(r, bank->nodes, bank->tris, bank->root, eps, bank->slack, best, &found,
-                           &st->v[OPSILA_STAT_TRI_TESTS], &st->v[OPSILA_STAT_BOX_TESTS], probe));
+    STAGE(st->clock, OPSILA_STAGE_BANK_WALK, {
+      traverse_nearest(r, bank->nodes, bank->tris, bank->insts, bank->root, eps, bank->slack, best, &found,
+                       &st->v[OPSILA_STAT_TRI_TESTS], &st->v[OPSILA_STAT_BOX_TESTS], probe);
+      if (OPSILA_INSTANCES && bank->inst_root >= 0)
+        traverse_nearest(r, bank->nodes, bank->tris, bank->insts, bank->inst_root, eps, bank->slack, best, &found,
+                         &st->v[OPSILA_STAT_TRI_TESTS], &st->v[OPSILA_STAT_BOX_TESTS], probe);
+    });
   if (found >= 0) *hit = fp.tri_base + found;
   float entry, limit = hit_limit(best->t);
   int dest;
@@ -137,6 +148,7 @@ inline int trace_visit(FrameParams fp, const Routing *rt, const Bank *bank, cons
   STAT_INC(st, FORWARD);
   *next = make_descriptor(r->org, best->t, r->dir, 0.0f, w, pixel, OPSILA_META(OPSILA_KIND_RESOLVED,
                                                                                OPSILA_META_LEVEL(meta)), *hit, owner);
+  desc_set_best(next, *best); /* an instance's hit is shaded in its frame */
   return VISIT_SEND;
 }
 
@@ -148,10 +160,10 @@ inline int trace_visit(FrameParams fp, const Routing *rt, const Bank *bank, cons
  * most per new ray. st counts at `level`, st_child at level + 1. */
 inline void shade(FrameParams fp, const Routing *rt, const Bank *bank, __global const Material *materials,
                   __global const Light *lights, SURFACE_PARAMS, float3 org, float3 d, float t, int tri_index,
-                  float3 weight, int pixel, int level, Outputs *out, volatile __global uint *accum, PrivStats *st,
+                  int inst, float3 weight, int pixel, int level, Outputs *out, volatile __global uint *accum, PrivStats *st,
                   PrivStats *st_child, const CostProbe *probe, const CostProbe *probe_child) {
   __global const Material *m = &materials[OPSILA_TRI_MATERIAL(bank->tris[tri_index])];
-  SurfacePoint sp = surface_point(fp, bank->tris, tri_index, m, SURFACE_ARGS, org, d, t);
+  SurfacePoint sp = surface_point(fp, bank->tris, bank->insts, tri_index, inst, m, SURFACE_ARGS, org, d, t);
   float3 p = sp.p;
   float eps = fp.epsilon;
   Descriptor next;
@@ -219,6 +231,7 @@ inline void shade(FrameParams fp, const Routing *rt, const Bank *bank, __global 
       STAT_INC(st_child, FORWARD);
       next = make_descriptor(p, best.t, child_d[j], 0.0f, child_w[j], pixel,
                              OPSILA_META(OPSILA_KIND_RESOLVED, level + 1), hit, bank->pe);
+      desc_set_best(&next, best);
       v = VISIT_SEND;
     }
     if (v == VISIT_SEND) STAGE(st->clock, OPSILA_STAGE_OUTPUTS, emit(out, next));
@@ -249,7 +262,7 @@ inline void process(FrameParams fp, const Routing *rt, const Bank *bank, __globa
     return;
   }
   int hit = DESC_HIT(ds);
-  HitKey best = desc_best(ds);
+  HitKey best = desc_best(ds, bank->tris, bank->tri_base, bank->tri_count);
   if (kind == OPSILA_KIND_TRACE) {
     STAT_INC(st, RADIANCE);
     NextPe unknown = {false, -1, OPSILA_INF};
@@ -260,12 +273,14 @@ inline void process(FrameParams fp, const Routing *rt, const Bank *bank, __globa
   }
   STAT_INC(st, RESOLVED);
   STAGE(st->clock, OPSILA_STAGE_SHADING,
-        shade(fp, rt, bank, materials, lights, SURFACE_ARGS, org, d, best.t, hit - fp.tri_base, w, pixel, level, out,
+        shade(fp, rt, bank, materials, lights, SURFACE_ARGS, org, d, best.t, hit - fp.tri_base, best.inst, w, pixel,
+              level, out,
               accum, st, st_child, probe, probe_child));
 }
 
 __kernel void spmd_phase(FrameParams fp, __global const PeInfo *pes, __global const Cluster *clusters,
-                         __global const BankNode *route, int routing, __global const BankNode *nodes, __global const BankTriangle *tris,
+                         __global const BankNode *route, int routing, __global const BankNode *nodes,
+                         __global const BankTriangle *tris, __global const Instance *insts,
                          __global const Material *materials, __global const Light *lights, SURFACE_PARAMS,
                          DESC_PARAMS(b), __global const int *group_pe, __global const int *group_first,
                          __global const int *bank_begin, __global const int *bank_count, DESC_PARAMS(o),
@@ -292,7 +307,10 @@ __kernel void spmd_phase(FrameParams fp, __global const PeInfo *pes, __global co
   int item = g * lsz + lid;
   Outputs out = {o, o_dest, item * fp.spawn_slots, 0, depth, P, traffic_levels, ltraffic};
   Routing rt = {pes, clusters, route, P, routing};
-  Bank bank = {nodes, tris, pe, pes[pe].node_begin, pes[pe].node_begin == pes[pe].node_end, fp.box_slack};
+  int tri_end = pes[fp.group_end - 1].tri_end;
+  Bank bank = {nodes,         tris,         insts,          pe,
+               pes[pe].node_begin, pes[pe].instance_root, pes[pe].node_begin == pes[pe].node_end, fp.box_slack,
+               fp.tri_base,   tri_end - fp.tri_base};
   if (slot < bank_begin[pe] + bank_count[pe]) {
     Descriptor ds = desc_load(b, slot);
     int level = OPSILA_META_LEVEL(DESC_META(ds));

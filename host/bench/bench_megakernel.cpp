@@ -63,6 +63,7 @@ MegaBuffers mega_buffers(ClRuntime& rt, const Scene& scene, const BankedScene& b
   MegaBuffers b;
   b.geometry.tris.buffer = upload(rt, bs.triangles, "facets");
   b.geometry.nodes.buffer = upload(rt, bs.nodes, "BVH nodes");
+  b.geometry.insts.buffer = upload(rt, bs.instances.empty() ? std::vector<Instance>(1) : bs.instances, "instances");
   b.shading.materials.buffer = upload(rt, bs.materials, "materials");
   std::vector<Light> lights = bs.lights;
   if (lights.empty()) lights.push_back(Light{});

@@ -405,6 +405,7 @@ cl::Program& ClRuntime::program(KernelProgram which) {
     options += " -DOPSILA_COUNT_WORK=0";
   if (stages) options += " -DOPSILA_STAGE_CYCLES=1";
   if (pow_fp64_) options += " -DOPSILA_POW_FP64=1";
+  if (instances_) options += " -DOPSILA_INSTANCES=1";
   if (exact_divide_) options += " -cl-fp32-correctly-rounded-divide-sqrt";
   err = build(program, options);
   if (err != CL_SUCCESS) {
@@ -434,6 +435,12 @@ cl_int ClRuntime::build(cl::Program& program, const std::string& options) {
   note.reset();
   build_seconds_ += seconds_since(start);
   return err;
+}
+
+void ClRuntime::walk_instances(bool on) {
+  if (on == instances_) return;
+  instances_ = on;
+  for (bool& b : built_) b = false;
 }
 
 std::string ClRuntime::stage_cycles_unavailable() {

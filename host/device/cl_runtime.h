@@ -117,6 +117,10 @@ class ClRuntime {
   // processor's time-stamp counter, so they need a CPU device on an x86
   // host whose compiler takes the inline assembly (builds both programs).
   std::string stage_cycles_unavailable();
+  // Whether the programs walk instances (OPSILA_INSTANCES, set from the
+  // banks before their kernels are made): a scene without them keeps the
+  // walks it always ran. A change rebuilds each program on its next use.
+  void walk_instances(bool on);
   // Limits read from the device (never assumed).
   // The work-group size the kernels ask for (each capped by what it allows):
   // 64, where PoCL measured fastest and a GPU runs two warps or one
@@ -159,6 +163,7 @@ class ClRuntime {
   cl::CommandQueue queue_;
   cl::Program programs_[kKernelPrograms];
   bool built_[kKernelPrograms] = {};
+  bool instances_ = false;  // walk_instances
   std::optional<std::string> stage_cycles_why_;  // stage_cycles_unavailable, once asked
   std::size_t group_size_ = 64;
   bool pow_fp64_ = false;

@@ -346,6 +346,7 @@ BankedScene share_tables(const Scene& share, const Box& sbox, const Placement& p
     const bool mine = p >= group.begin && p < group.end;
     pe.node_begin = mine ? loc.pes[std::size_t(p - group.begin)].node_begin : 0;
     pe.node_end = mine ? loc.pes[std::size_t(p - group.begin)].node_end : 0;
+    pe.instance_root = -1;
     pe_bounds(bs.clusters, pe);
   }
   build_routing(bs, sbox);

@@ -119,6 +119,7 @@ struct Renderer::Machine {
   cl_int4 traced_rect{};
   std::vector<float> srgb;       // sRGB decode table
   std::vector<int> no_cluster{-1};
+  std::vector<Instance> no_instance{Instance{}};  // the table's stand-in for a scene without instances
   std::vector<BufferSpec> buffers;  // the buffer table, as allocated (frame_buffers.cpp)
   std::uint64_t in_place_bytes = 0;  // of the uploads, read by the device in place
 

@@ -122,8 +122,8 @@ void Renderer::Machine::host_tables(const Scene& scene, BankedScene& bs) {
   item_clusters.clear();
   item_near.clear();
   std::vector<double> distance;
-  for (int c : item_depth_order(scene, bs, &distance)) {  // another rank's cluster: never listed here
-    rects.push_back(bs.clusters[std::size_t(c)].root < 0 ? kNeverListed : by_index[std::size_t(c)]);
+  for (int c : item_depth_order(scene, bs, &distance)) {  // another rank's cluster (root -1): never listed here
+    rects.push_back(bs.clusters[std::size_t(c)].root == -1 ? kNeverListed : by_index[std::size_t(c)]);
     item_clusters.push_back(bs.clusters[std::size_t(c)]);
     // Rounded down: a camera ray enters the box no nearer than this.
     float near = static_cast<float>(distance[std::size_t(c)]);
@@ -171,6 +171,7 @@ std::vector<BufferSpec> Renderer::Machine::buffer_table(const BankedScene& bs, c
       // and the global (every-PE) tables, uploaded once.
       kept_host_buffer("bank facets", P_::scene, host_tris, &geometry.tris.buffer),
       kept_host_buffer("bank BVH nodes", P_::scene, host_nodes, &geometry.nodes.buffer),
+      host_buffer("instances", P_::scene, bs.instances.empty() ? no_instance : bs.instances, &geometry.insts.buffer),
       host_buffer("cluster spheres", P_::scene, bs.clusters, &routing_tables.clusters.buffer),
       host_buffer("routing boxes", P_::scene, bs.route_nodes, &routing_tables.route.buffer),
       host_buffer("PE table", P_::scene, bs.pes, &routing_tables.pes.buffer),

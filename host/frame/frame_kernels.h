@@ -39,11 +39,12 @@ struct ItemClusterList {
 // facet, distance and hit order key.
 using ItemHits = DeviceArray<struct ItemHitsRole>;
 using ItemDistances = DeviceArray<struct ItemDistancesRole>;
+using ItemKeys = DeviceArray<struct ItemKeysRole>;
 struct ItemArrays {
   DeviceArray<struct ItemPairsRole> items;
   ItemHits tri;
   ItemDistances t;
-  DeviceArray<struct ItemKeysRole> key;
+  ItemKeys key;
   auto kernel_args() const { return std::tie(items, tri, t, key); }
 };
 
@@ -116,13 +117,14 @@ struct PrimaryArgs {
   HitList list;
   ItemHits hits;
   ItemDistances distances;
+  ItemKeys keys;
   int first = 0, count = 0;
   float ox = 0.5f, oy = 0.5f;
   int offset = 0;
   DescriptorSet pool;
   PrimaryHitCount hit_count;
   auto kernel_args() const {
-    return std::tie(fp, pes, list, hits, distances, first, count, ox, oy, offset, pool, hit_count);
+    return std::tie(fp, pes, list, hits, distances, keys, first, count, ox, oy, offset, pool, hit_count);
   }
 };
 

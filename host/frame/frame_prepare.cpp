@@ -46,6 +46,7 @@ Renderer::Machine::Machine(const Scene& scene, PreparedBanks banks, const Render
   // and the bench's timed frames count only rays. Compiled before anything
   // is timed.
   counting = measure || settings.count_work;
+  rt.walk_instances(!banks.scene.instances.empty());
   if (counting || settings.switch_counting)
     work_kernels = frame_kernels::Set(rt, measure ? KernelProgram::measure : KernelProgram::render);
   if (!counting || settings.switch_counting) ray_kernels = frame_kernels::Set(rt, KernelProgram::render_uncounted);

@@ -11,13 +11,16 @@ namespace opsila {
 
 struct BankedScene;
 
-// A bank's BVH nodes and facets (partition/banks.h), in this order.
+// A bank's BVH nodes and facets (partition/banks.h), and the instance
+// table (one placeholder entry when the scene has none), in this order.
 using BankNodes = DeviceArray<struct BankNodesRole>;
 using BankFacets = DeviceArray<struct BankFacetsRole>;
+using InstanceTable = DeviceArray<struct InstanceTableRole>;
 struct BankGeometry {
   BankNodes nodes;
   BankFacets tris;
-  auto kernel_args() const { return std::tie(nodes, tris); }
+  InstanceTable insts;
+  auto kernel_args() const { return std::tie(nodes, tris, insts); }
 };
 
 // The bank data shading reads besides facets and materials (the kernels'

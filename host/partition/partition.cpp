@@ -270,6 +270,7 @@ void describe_pes(const std::vector<ClusterBuild>& cb, const std::vector<std::pa
     pe.tri_end = c_begin < c ? ranges[c - 1].second : pe.tri_begin;
     pe.node_begin = built[p].node_begin;
     pe.node_end = built[p].node_end;
+    pe.instance_root = -1;  // instances: partition/instance_banks.h
     pe_bounds(bs.clusters, pe);
     std::uint64_t bytes = std::uint64_t(pe.tri_end - pe.tri_begin) * sizeof(BankTriangle) +
                           std::uint64_t(pe.node_end - pe.node_begin) * sizeof(BankNode);

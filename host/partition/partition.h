@@ -28,6 +28,10 @@ struct BankedScene {
   BankArray<BankTriangle> triangles;    // bank p: [pes[p].tri_begin, tri_end)
   BankArray<BankNode> nodes;            // bank p: [pes[p].node_begin, node_end), root first
   std::vector<Cluster> clusters;        // sorted by PE
+  // Every instance's placement, owner and (in its bank) model BVH root
+  // (opsila_shared.h, Instance; partition/instance_banks.h); global, like
+  // the clusters. Empty for a scene without instances.
+  std::vector<Instance> instances;
   // Routing BVH over padded cluster boxes: PE p's root is node p; nodes
   // P .. P + ceil(P / W) - 1 are the top level, W PEs' boxes to a node in PE
   // order (child = the PE, count 1; absent for an empty PE).

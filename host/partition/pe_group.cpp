@@ -69,6 +69,7 @@ int keep_group_banks(BankedScene& bs, const PeGroup& group) {
   for (BankNode& node : bs.nodes)
     for (int k = 0; k < OPSILA_BVH_WIDTH; ++k) {
       if (node.count[k] == 0) node.child[k] -= n0;      // inner: a node
+      else if (node.count[k] == OPSILA_INSTANCE_LEAF) continue;  // an instance: its index
       else if (node.count[k] > 0) node.child[k] -= t0;  // leaf: its first facet
     }
   for (int p = 0; p < bs.num_pes; ++p) {
@@ -76,10 +77,12 @@ int keep_group_banks(BankedScene& bs, const PeGroup& group) {
     const bool mine = p >= group.begin && p < group.end;
     pe.node_begin = mine ? pe.node_begin - n0 : 0;  // other banks are not on this device
     pe.node_end = mine ? pe.node_end - n0 : 0;
+    pe.instance_root = mine && pe.instance_root >= 0 ? pe.instance_root - n0 : -1;
   }
+  for (Instance& in : bs.instances) in.root = in.pe >= group.begin && in.pe < group.end ? in.root - n0 : -1;
   for (Cluster& c : bs.clusters) {
     const bool mine = c.pe >= group.begin && c.pe < group.end;
-    c.root = mine ? c.root - n0 : -1;
+    c.root = !mine ? -1 : c.root >= 0 ? c.root - n0 : c.root;  // an instance's: -2 - the instance
   }
   return t0;
 }

@@ -57,7 +57,7 @@ struct ReferenceTracer::Impl {
   // The hit order's key of triangle `index` hit at t (hit_order.h).
   HitKey key_of(float t, int index) const {
     const Tri& tri = tris[std::size_t(index)];
-    return hit_key(t, tri.facet_id, tri.fan);
+    return hit_key(t, -1, tri.facet_id, tri.fan);
   }
 
   // Nearest hit with t > t_min: the least in the one hit order (hit_order.h),
@@ -68,7 +68,7 @@ struct ReferenceTracer::Impl {
     walk(origin, dir, t_min, [&] { return hit_limit(best.t); }, [&](int index) {
       float t, b1, b2;
       const Tri& tri = tris[std::size_t(index)];
-      if (reference::intersect(tri, origin, dir, t, &b1, &b2) && t > t_min && hit_before(t, tri.facet_id, tri.fan, best)) {
+      if (reference::intersect(tri, origin, dir, t, &b1, &b2) && t > t_min && hit_before(t, -1, tri.facet_id, tri.fan, best)) {
         best = key_of(t, index);
         hit.t = t;
         hit.tri = index;

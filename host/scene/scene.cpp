@@ -1,6 +1,8 @@
 // The scene model: SPEC material rules, bounds, epsilon, auto-framing.
 #include "scene/scene.h"
 
+#include "scene/instances.h"
+
 #include <algorithm>
 #include <array>
 #include <climits>
@@ -99,10 +101,21 @@ void Scene::bounds(Vec3& lo, Vec3& hi) const {
     lo = share.lo, hi = share.hi;
     return;
   }
-  if (triangles.empty()) {
+  if (triangles.empty() && instances.empty()) {
     lo = hi = Vec3{0, 0, 0};
     return;
   }
+  own_bounds(lo, hi);
+  // Instances: their world boxes (scene/instances.h), which hold them.
+  for (const InstanceDesc& in : instances) {
+    Vec3 l, h;
+    instance_box(*this, in, l, h);
+    lo = min(lo, l);
+    hi = max(hi, h);
+  }
+}
+
+void Scene::own_bounds(Vec3& lo, Vec3& hi) const {
   // Called by the loader, the partition and the frame constants: on 8 M
   // facets a loop over the vertices by pointer cost 0.2 s a call, this one,
   // with one running bound per axis in registers, some 20 ms; large scenes

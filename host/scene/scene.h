@@ -103,6 +103,26 @@ struct MapRequest {
   std::size_t warning = 0;
 };
 
+// A model that a scene file places many times (scenes/FORMAT.md,
+// "instances"): its triangles once, in its own frame. Facet ids are the
+// model's own (0 .. num_facets - 1, in its order), object_id 0; materials
+// and attributes index the scene's tables. Host/scene/instances.h places it.
+struct Prototype {
+  std::string name;  // what the scene file names (the model's file), for messages
+  std::vector<Triangle> triangles;
+  int num_facets = 0;
+  Vec3 lo{0, 0, 0}, hi{0, 0, 0};  // bounds in its frame
+};
+
+// One placement of a prototype: model to world x' = A x + b, and its
+// inverse as the kernels apply it to rays (make_instance computes both),
+// each row-major 3 x 4 (row i: A[i][0], A[i][1], A[i][2], b[i]).
+struct InstanceDesc {
+  int prototype = 0;
+  std::array<double, 12> to_world{};
+  std::array<float, 12> to_object{};
+};
+
 struct LightDesc {
   Vec3 position{0, 0, 0};
   Vec3 intensity{1, 1, 1};
@@ -169,6 +189,11 @@ struct Scene {
   std::vector<MaterialDesc> materials;  // never empty after loading
   std::vector<Texture> textures;        // referenced by MaterialDesc::map_kd / map_ka
   std::vector<LightDesc> lights;
+  // Models placed many times, and their placements: instance i is object
+  // num_objects + i (after every object of the scene's own; num_objects
+  // does not count them), its facets keep the model's facet ids.
+  std::vector<Prototype> prototypes;
+  std::vector<InstanceDesc> instances;
   CameraDesc camera;
   int width = 640, height = 480;
   int max_depth = 5;
@@ -189,8 +214,11 @@ struct Scene {
   // loader that reads a file adds it here, so that no output can overwrite it.
   std::vector<std::string> input_files;
 
-  // Axis-aligned bounds of all triangles (every rank's, for a share).
+  // Axis-aligned bounds of all triangles (every rank's, for a share),
+  // instances included.
   void bounds(Vec3& lo, Vec3& hi) const;
+  // Those of `triangles` alone (empty: lo = +inf, hi = -inf).
+  void own_bounds(Vec3& lo, Vec3& hi) const;
   bool is_share() const { return share.ranks > 1; }
   // Whether the scene is known by its figures (SceneShare) rather than its triangles.
   bool by_figures() const { return is_share() || share.banked; }

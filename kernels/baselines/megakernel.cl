@@ -41,6 +41,7 @@
 typedef struct {
   __global const BankNode *nodes;
   __global const BankTriangle *tris;
+  __global const Instance *insts; /* walked, not shaded: the bench runs no baseline on an instanced scene */
   int root;
   float3 lo, hi; /* the union of the root's child boxes (scene_nearest) */
   float slack;
@@ -75,7 +76,7 @@ inline int mega_nearest(MegaScene *ms, const RayPre *r, float tmin, float *t) {
   HitKey best = hit_none();
   int hit = -1;
   STAGE(ms->clock, OPSILA_STAGE_BANK_WALK,
-        scene_nearest(r, ms->nodes, ms->tris, ms->root, ms->lo, ms->hi, tmin, ms->slack, &best, &hit,
+        scene_nearest(r, ms->nodes, ms->tris, ms->insts, ms->root, ms->lo, ms->hi, tmin, ms->slack, &best, &hit,
                       &ms->tri_tests, &ms->box_tests, &no_probe));
   *t = best.t;
   return hit;
@@ -96,7 +97,7 @@ inline long3 mega_direct(FrameParams fp, MegaScene *ms, __global const Light *li
     RayPre sr = make_ray(surf.p, lv);
     bool blocked;
     STAGE(ms->clock, OPSILA_STAGE_BANK_WALK,
-          blocked = scene_any(&sr, ms->nodes, ms->tris, ms->root, ms->lo, ms->hi, fp.epsilon, dist, ms->slack,
+          blocked = scene_any(&sr, ms->nodes, ms->tris, ms->insts, ms->root, ms->lo, ms->hi, fp.epsilon, dist, ms->slack,
                               &ms->tri_tests, &ms->box_tests, &no_probe));
     if (!blocked)
       STAGE(ms->clock, OPSILA_STAGE_PIXEL_SUMS, sum = add_sat(sum, fixed3(contrib))); /* >= 0: saturates as add_fixed does */
@@ -156,7 +157,7 @@ inline void mega_pixel(FrameParams fp, MegaScene *ms, __global const Material *m
       if (level == 0 && centre) item = (int2)(tri->object_id, tri->facet_id);
       STAGE(ms->clock, OPSILA_STAGE_SHADING, {
         __global const Material *m = &materials[OPSILA_TRI_MATERIAL(*tri)];
-        SurfacePoint surf = surface_point(fp, ms->tris, hit, m, SURFACE_ARGS, org, d, t);
+        SurfacePoint surf = surface_point(fp, ms->tris, 0, hit, -1, m, SURFACE_ARGS, org, d, t);
         STAGE(ms->clock, OPSILA_STAGE_PIXEL_SUMS, sum = add_sat(sum, fixed3(weight * load3(fp.ambient) * surf.ka)));
         sum = mega_direct(fp, ms, lights, m, surf, d, weight, sum, &shadow);
         if (level + 1 < fp.max_depth) secondary += mega_children(&s, m, surf, d, weight, level);
@@ -173,13 +174,14 @@ inline void mega_pixel(FrameParams fp, MegaScene *ms, __global const Material *m
 }
 
 __kernel void megakernel(FrameParams fp, __global const BankNode *nodes, __global const BankTriangle *tris,
+                         __global const Instance *insts,
                          __global const Material *materials, __global const Light *lights, SURFACE_PARAMS, int root,
                          float4 root_lo, float4 root_hi, int spp_k, __global const float *offsets, int pixel_begin,
                          int pixel_count, __global long *accum, __global uint4 *ray_counts, int write_items,
                          __global int2 *items) {
   int k = get_global_id(0);
   if (k >= pixel_count) return;
-  MegaScene ms = {nodes, tris, root, root_lo.xyz, root_hi.xyz, fp.box_slack, 0u, 0u, 0, 0u};
+  MegaScene ms = {nodes, tris, insts, root, root_lo.xyz, root_hi.xyz, fp.box_slack, 0u, 0u, 0, 0u};
   mega_pixel(fp, &ms, materials, lights, SURFACE_ARGS, spp_k, offsets, pixel_begin + k, accum, ray_counts,
              write_items, items);
 }
@@ -188,6 +190,7 @@ __kernel void megakernel(FrameParams fp, __global const BankNode *nodes, __globa
  * log_first[pixel]] on (the prefix sums of the rays counted by a megakernel
  * run), for the bench's traversal-alone figure (baselines/traversal.cl). */
 __kernel void megakernel_rays(FrameParams fp, __global const BankNode *nodes, __global const BankTriangle *tris,
+                         __global const Instance *insts,
                               __global const Material *materials, __global const Light *lights, SURFACE_PARAMS,
                               int root, float4 root_lo, float4 root_hi, int spp_k, __global const float *offsets,
                               int pixel_begin, int pixel_count, __global long *accum, __global uint4 *ray_counts,
@@ -195,7 +198,7 @@ __kernel void megakernel_rays(FrameParams fp, __global const BankNode *nodes, __
                               __global float4 *ray_log) {
   int k = get_global_id(0);
   if (k >= pixel_count) return;
-  MegaScene ms = {nodes, tris, root, root_lo.xyz, root_hi.xyz, fp.box_slack, 0u, 0u, ray_log,
+  MegaScene ms = {nodes, tris, insts, root, root_lo.xyz, root_hi.xyz, fp.box_slack, 0u, 0u, ray_log,
                   log_first[pixel_begin + k]};
   mega_pixel(fp, &ms, materials, lights, SURFACE_ARGS, spp_k, offsets, pixel_begin + k, accum, ray_counts,
              write_items, items);
@@ -206,6 +209,7 @@ __kernel void megakernel_rays(FrameParams fp, __global const BankNode *nodes, __
  * same frame; every work-item's cycles per stage are added to
  * stage_cycles (OPSILA_STAGE_COUNT counters of OPSILA_COUNTER_WORDS words). */
 __kernel void megakernel_stages(FrameParams fp, __global const BankNode *nodes, __global const BankTriangle *tris,
+                         __global const Instance *insts,
                                 __global const Material *materials, __global const Light *lights, SURFACE_PARAMS,
                                 int root, float4 root_lo, float4 root_hi, int spp_k, __global const float *offsets,
                                 int pixel_begin, int pixel_count, __global long *accum, __global uint4 *ray_counts,
@@ -215,7 +219,7 @@ __kernel void megakernel_stages(FrameParams fp, __global const BankNode *nodes, 
   CycleClock clock;
   stage_clear(&clock);
   stage_start(&clock, OPSILA_STAGE_CAMERA);
-  MegaScene ms = {nodes, tris, root, root_lo.xyz, root_hi.xyz, fp.box_slack, 0u, 0u, 0, 0u, &clock};
+  MegaScene ms = {nodes, tris, insts, root, root_lo.xyz, root_hi.xyz, fp.box_slack, 0u, 0u, 0, 0u, &clock};
   mega_pixel(fp, &ms, materials, lights, SURFACE_ARGS, spp_k, offsets, pixel_begin + k, accum, ray_counts,
              write_items, items);
   stage_enter(&clock, OPSILA_STAGE_CAMERA);

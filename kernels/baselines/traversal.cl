@@ -8,7 +8,8 @@
 #include "../lib/bvh.cl"
 
 /* Nearest hit: the winning facet, -1 for none. */
-__kernel void traversal_nearest(__global const BankNode *nodes, __global const BankTriangle *tris, int root,
+__kernel void traversal_nearest(__global const BankNode *nodes, __global const BankTriangle *tris,
+                                __global const Instance *insts, int root,
                                 float4 root_lo, float4 root_hi, float slack, __global const float4 *rays, int count,
                                 __global int *hit) {
   int i = get_global_id(0);
@@ -19,13 +20,14 @@ __kernel void traversal_nearest(__global const BankNode *nodes, __global const B
   int tri = -1;
   uint tri_tests = 0u, box_tests = 0u; /* unread: the compiler may drop the counting */
   CostProbe probe = no_cost_probe();
-  scene_nearest(&r, nodes, tris, root, root_lo.xyz, root_hi.xyz, o.w, slack, &best, &tri, &tri_tests, &box_tests,
+  scene_nearest(&r, nodes, tris, insts, root, root_lo.xyz, root_hi.xyz, o.w, slack, &best, &tri, &tri_tests, &box_tests,
                 &probe);
   hit[i] = tri;
 }
 
 /* Any hit in (tmin, tmax): 1 when the segment is blocked. */
-__kernel void traversal_any(__global const BankNode *nodes, __global const BankTriangle *tris, int root, float4 root_lo,
+__kernel void traversal_any(__global const BankNode *nodes, __global const BankTriangle *tris,
+                            __global const Instance *insts, int root, float4 root_lo,
                             float4 root_hi, float slack, __global const float4 *rays, int count, __global int *hit) {
   int i = get_global_id(0);
   if (i >= count) return;
@@ -34,6 +36,6 @@ __kernel void traversal_any(__global const BankNode *nodes, __global const BankT
   uint tri_tests = 0u, box_tests = 0u;
   CostProbe probe = no_cost_probe();
   bool blocked =
-      scene_any(&r, nodes, tris, root, root_lo.xyz, root_hi.xyz, o.w, d.w, slack, &tri_tests, &box_tests, &probe);
+      scene_any(&r, nodes, tris, insts, root, root_lo.xyz, root_hi.xyz, o.w, d.w, slack, &tri_tests, &box_tests, &probe);
   hit[i] = blocked ? 1 : 0;
 }

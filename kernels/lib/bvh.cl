@@ -73,8 +73,11 @@ OPSILA_INLINE intW node_hits(const RayPre *r, __global const BankNode *nd, float
 /* A walk of one bank's BVH: the ray, its segment, and (nearest hit) the
  * best hit so far; the tests are counted as they are made. */
 typedef struct {
-  const RayPre *r;
+  const RayPre *r; /* in the frame of what is walked: the world's, or an instance's model's */
   __global const BankTriangle *tris;
+  __global const BankNode *nodes;
+  __global const Instance *insts; /* the instance table (OPSILA_INSTANCES) */
+  int inst;                       /* the instance being walked, -1: the scene's own facets */
   float tmin, tmax, slack; /* nearest hit: tmax is the best hit's limit, set at each pop */
   HitKey best;
   int best_tri;
@@ -117,7 +120,8 @@ OPSILA_INLINE bool nearest_pop(BankWalk *w, float entry) {
   return !(entry > w->cull);
 }
 
-OPSILA_INLINE bool nearest_leaf(BankWalk *w, int first, int count, float entry) {
+/* A leaf's facets for the nearest hit, in the frame of w->r. */
+OPSILA_INLINE void nearest_facets(BankWalk *w, int first, int count) {
   for (int i = first; i < first + count; ++i) {
     COUNT_TEST(w->tri_tests);
     COST_TRI(w->probe, i);
@@ -126,22 +130,63 @@ OPSILA_INLINE bool nearest_leaf(BankWalk *w, int first, int count, float entry) 
     /* hit_before, the ids read only when the distances share a cell. */
     __global const BankTriangle *tri = &w->tris[i];
     if (hit_cell_before(t, w->best) ||
-        (hit_cell_same(t, w->best) && hit_ids_before(tri->facet_id, OPSILA_TRI_FAN(*tri), w->best))) {
-      w->best = hit_key(t, tri->facet_id, OPSILA_TRI_FAN(*tri));
+        (hit_cell_same(t, w->best) && hit_ids_before(w->inst, tri->facet_id, OPSILA_TRI_FAN(*tri), w->best))) {
+      w->best = hit_key(t, w->inst, tri->facet_id, OPSILA_TRI_FAN(*tri));
       w->best_tri = i;
       nearest_bounds(w);
     }
   }
-  return false;
 }
 
-OPSILA_INLINE bool any_leaf(BankWalk *w, int first, int count, float entry) {
+OPSILA_INLINE bool any_facets(BankWalk *w, int first, int count) {
   for (int i = first; i < first + count; ++i) {
     COUNT_TEST(w->tri_tests);
     COST_TRI(w->probe, i);
     if (intersect_triangle(w->r, &w->tris[i], w->tmin, w->tmax) < OPSILA_INF) return true;
   }
   return false;
+}
+
+#if OPSILA_INSTANCES
+OPSILA_INLINE bool model_nearest_leaf(BankWalk *w, int first, int count, float entry) {
+  nearest_facets(w, first, count);
+  return false;
+}
+OPSILA_INLINE bool model_any_leaf(BankWalk *w, int first, int count, float entry) {
+  return any_facets(w, first, count);
+}
+/* The walks of a model's BVH, in its frame (instances are not nested). */
+OPSILA_DEFINE_WALK(walk_model_nearest, BankWalk, bank_node, bank_child, model_nearest_leaf, nearest_pop, 1)
+OPSILA_DEFINE_WALK(walk_model_any, BankWalk, bank_node, bank_child, model_any_leaf, WALK_NO_POP, 0)
+
+/* Instance i met by the walk: its model's BVH with the ray in its frame. */
+OPSILA_INLINE bool instance_walk(BankWalk *w, int i, bool any) {
+  __global const Instance *in = &w->insts[i];
+  RayPre ro = instance_ray(w->r, in);
+  const RayPre *world = w->r;
+  w->r = &ro;
+  w->inst = i;
+  bool blocked = any ? walk_model_any(w, w->nodes, in->root) : (walk_model_nearest(w, w->nodes, in->root), false);
+  w->r = world;
+  w->inst = -1;
+  w->tmax = any ? w->tmax : w->limit;
+  return blocked;
+}
+#define INSTANCE_LEAF(w, first, count, any) \
+  if ((count) == OPSILA_INSTANCE_LEAF) return instance_walk(w, first, any)
+#else
+#define INSTANCE_LEAF(w, first, count, any)
+#endif
+
+OPSILA_INLINE bool nearest_leaf(BankWalk *w, int first, int count, float entry) {
+  INSTANCE_LEAF(w, first, count, false);
+  nearest_facets(w, first, count);
+  return false;
+}
+
+OPSILA_INLINE bool any_leaf(BankWalk *w, int first, int count, float entry) {
+  INSTANCE_LEAF(w, first, count, true);
+  return any_facets(w, first, count);
 }
 
 OPSILA_DEFINE_WALK(walk_nearest, BankWalk, bank_node, bank_child, nearest_leaf, nearest_pop, 1)
@@ -152,21 +197,41 @@ OPSILA_DEFINE_WALK(walk_any, BankWalk, bank_node, bank_child, any_leaf, WALK_NO_
  * hit_order.h's order, whoever found the others); slack:
  * FrameParams.box_slack (node_hits). */
 OPSILA_INLINE void traverse_nearest(const RayPre *r, __global const BankNode *nodes,
-                                    __global const BankTriangle *tris, int root, float tmin, float slack,
-                                    HitKey *best, int *best_tri, uint *tri_tests, uint *box_tests,
-                                    const CostProbe *probe) {
-  BankWalk w = {r, tris, tmin, OPSILA_INF, slack, *best, *best_tri, tri_tests, box_tests, probe, 0.0f, 0.0f};
+                                    __global const BankTriangle *tris, __global const Instance *insts, int root,
+                                    float tmin, float slack, HitKey *best, int *best_tri, uint *tri_tests,
+                                    uint *box_tests, const CostProbe *probe) {
+  BankWalk w = {r,        tris,      nodes,     insts, -1,    tmin, OPSILA_INF, slack, *best,
+                *best_tri, tri_tests, box_tests, probe, 0.0f, 0.0f};
   nearest_bounds(&w);
   walk_nearest(&w, nodes, root);
   *best = w.best;
   *best_tri = w.best_tri;
 }
 
+/* Nearest hit from a cluster's root (Cluster.root): a node, or for an
+ * instance's cluster -2 - the instance (its model's BVH in its frame). */
+OPSILA_INLINE void cluster_nearest(const RayPre *r, __global const BankNode *nodes, __global const BankTriangle *tris,
+                                   __global const Instance *insts, int root, float tmin, float slack, HitKey *best,
+                                   int *best_tri, uint *tri_tests, uint *box_tests, const CostProbe *probe) {
+#if OPSILA_INSTANCES
+  if (root < -1) {
+    BankWalk w = {r,        tris,      nodes,     insts, -1,   tmin, OPSILA_INF, slack, *best,
+                  *best_tri, tri_tests, box_tests, probe, 0.0f, 0.0f};
+    nearest_bounds(&w);
+    instance_walk(&w, -2 - root, false);
+    *best = w.best;
+    *best_tri = w.best_tri;
+    return;
+  }
+#endif
+  traverse_nearest(r, nodes, tris, insts, root, tmin, slack, best, best_tri, tri_tests, box_tests, probe);
+}
+
 /* Any hit in (tmin, tmax): shadow rays. */
 OPSILA_INLINE bool traverse_any(const RayPre *r, __global const BankNode *nodes, __global const BankTriangle *tris,
-                                int root, float tmin, float tmax, float slack, uint *tri_tests, uint *box_tests,
-                                const CostProbe *probe) {
-  BankWalk w = {r, tris, tmin, tmax, slack, hit_none(), -1, tri_tests, box_tests, probe, 0.0f, 0.0f};
+                                __global const Instance *insts, int root, float tmin, float tmax, float slack,
+                                uint *tri_tests, uint *box_tests, const CostProbe *probe) {
+  BankWalk w = {r, tris, nodes, insts, -1, tmin, tmax, slack, hit_none(), -1, tri_tests, box_tests, probe, 0.0f, 0.0f};
   return walk_any(&w, nodes, root);
 }
 
@@ -202,15 +267,15 @@ OPSILA_INLINE bool root_box_met(const RayPre *r, __global const BankNode *nodes,
  * boxes, and the item buffer tests a cluster only inside its projected
  * rectangle. */
 OPSILA_INLINE void scene_nearest(const RayPre *r, __global const BankNode *nodes, __global const BankTriangle *tris,
-                                 int root, float3 lo, float3 hi, float tmin, float slack, HitKey *best, int *best_tri,
+                                 __global const Instance *insts, int root, float3 lo, float3 hi, float tmin, float slack, HitKey *best, int *best_tri,
                                  uint *tri_tests, uint *box_tests, const CostProbe *probe) {
   if (root_box_met(r, nodes, root, lo, hi, tmin, hit_limit(best->t), slack, box_tests, probe))
-    traverse_nearest(r, nodes, tris, root, tmin, slack, best, best_tri, tri_tests, box_tests, probe);
+    traverse_nearest(r, nodes, tris, insts, root, tmin, slack, best, best_tri, tri_tests, box_tests, probe);
 }
 
 OPSILA_INLINE bool scene_any(const RayPre *r, __global const BankNode *nodes, __global const BankTriangle *tris,
-                             int root, float3 lo, float3 hi, float tmin, float tmax, float slack, uint *tri_tests,
+                             __global const Instance *insts, int root, float3 lo, float3 hi, float tmin, float tmax, float slack, uint *tri_tests,
                              uint *box_tests, const CostProbe *probe) {
   return root_box_met(r, nodes, root, lo, hi, tmin, tmax, slack, box_tests, probe) &&
-         traverse_any(r, nodes, tris, root, tmin, tmax, slack, tri_tests, box_tests, probe);
+         traverse_any(r, nodes, tris, insts, root, tmin, tmax, slack, tri_tests, box_tests, probe);
 }

@@ -57,7 +57,8 @@ inline void desc_move(__global float4 *to, __global int *to_dest, int j, __globa
 #define DESC_HIT(d) ((d).ids.z)          /* global triangle of the best hit, -1 none */
 #define DESC_SHADOW_HOME(d) ((d).ids.z)  /* shadow: the PE that spawned it (and tested its bank first) */
 #define DESC_DEST(d) ((d).ids.w)         /* destination PE = cursor PE; -1 NIL */
-/* Radiance: facet id of the best hit (its bits); with the fan index in the
+/* Radiance: facet id of the best hit (its bits), or its instance when the
+ * meta field says so (OPSILA_META_INSTANCE); with the fan index in the
  * meta field and the distance, the best hit's key (hit_order.h) for the
  * next PE, whose device may not hold that facet. */
 #define DESC_BEST_FACET(d) ((d).wgt.w)
@@ -72,14 +73,27 @@ inline Descriptor make_descriptor(float3 origin, float t, float3 direction, floa
   return d;
 }
 
-/* A radiance descriptor's best hit so far: (DESC_T_BEST, its facet, its
- * fan index), or none while DESC_HIT is -1. */
-inline HitKey desc_best(Descriptor d) {
+/* The facet id of the facet at global index `hit` when this device holds
+ * it (its facets: global tri_base .. tri_base + tri_count - 1), else 0. An
+ * instance's best hit carries no facet id (OPSILA_META_INSTANCE): only the
+ * device holding the instance can find another hit on it, and reads it. */
+inline int held_facet_id(__global const BankTriangle *tris, int tri_base, int tri_count, int hit) {
+  int k = hit - tri_base;
+  return k >= 0 && k < tri_count ? tris[k].facet_id : 0;
+}
+
+/* A radiance descriptor's best hit so far: (DESC_T_BEST, its instance,
+ * facet and fan), or none while DESC_HIT is -1. */
+inline HitKey desc_best(Descriptor d, __global const BankTriangle *tris, int tri_base, int tri_count) {
   if (DESC_HIT(d) < 0) return hit_none();
-  return hit_key(DESC_T_BEST(d), as_int(DESC_BEST_FACET(d)), OPSILA_META_FAN(DESC_META(d)));
+  int meta = DESC_META(d), fan = OPSILA_META_FAN(meta);
+  if (meta & OPSILA_META_INSTANCE)
+    return hit_key(DESC_T_BEST(d), as_int(DESC_BEST_FACET(d)), held_facet_id(tris, tri_base, tri_count, DESC_HIT(d)),
+                   fan);
+  return hit_key(DESC_T_BEST(d), -1, as_int(DESC_BEST_FACET(d)), fan);
 }
 inline void desc_set_best(Descriptor *d, HitKey best) {
   DESC_T_BEST(*d) = best.t;
-  DESC_BEST_FACET(*d) = as_float(best.facet);
-  DESC_META(*d) = OPSILA_META_WITH_FAN(DESC_META(*d), best.fan);
+  DESC_BEST_FACET(*d) = as_float(best.inst >= 0 ? best.inst : best.facet);
+  DESC_META(*d) = OPSILA_META_WITH_FAN(DESC_META(*d), best.fan) | (best.inst >= 0 ? OPSILA_META_INSTANCE : 0);
 }

@@ -55,6 +55,22 @@ inline RayPre make_ray(float3 org, float3 dir) {
   return r;
 }
 
+#if OPSILA_INSTANCES
+/* The ray in an instance's model frame: to_object applied to the origin
+ * (a point) and the direction (a vector, not normalised: a distance t is
+ * the same point in both frames), each sum taken left to right, the same
+ * float operations as the host's (host/scene/instances.h). */
+inline RayPre instance_ray(const RayPre *r, __global const Instance *in) {
+  __global const float *m = in->to_object;
+  float3 o = r->org, d = r->dir;
+  float3 oo = (float3)(m[0] * o.x + m[1] * o.y + m[2] * o.z + m[3], m[4] * o.x + m[5] * o.y + m[6] * o.z + m[7],
+                       m[8] * o.x + m[9] * o.y + m[10] * o.z + m[11]);
+  float3 dd = (float3)(m[0] * d.x + m[1] * d.y + m[2] * d.z, m[4] * d.x + m[5] * d.y + m[6] * d.z,
+                       m[8] * d.x + m[9] * d.y + m[10] * d.z);
+  return make_ray(oo, dd);
+}
+#endif
+
 /* The watertight test's edge functions (u, v, w) of the triangle's
  * vertices v0, v1, v2 as seen along the ray, and their depths along kz. */
 OPSILA_INLINE float3 edge_functions(const RayPre *r, __global const BankTriangle *tri, float3 *depths) {

@@ -16,14 +16,30 @@ typedef struct {
       __global const float *srgb
 #define SURFACE_ARGS attrs, textures, texels, srgb
 
+#if OPSILA_INSTANCES
+/* A model-frame normal in the world: (A^-1)^T n for a model placed by
+ * x = A^-1 (x' - b), i.e. A^T n with A the instance's to_object; not
+ * normalised. */
+inline float3 instance_normal(__global const Instance *in, float3 n) {
+  __global const float *m = in->to_object;
+  return (float3)(m[0] * n.x + m[4] * n.y + m[8] * n.z, m[1] * n.x + m[5] * n.y + m[9] * n.z,
+                  m[2] * n.x + m[6] * n.y + m[10] * n.z);
+}
+#define WORLD_NORMAL(insts, inst, n) ((inst) >= 0 ? normalize(instance_normal(&(insts)[inst], (n))) : (n))
+#else
+#define WORLD_NORMAL(insts, inst, n) (n)
+#endif
+
 /* The surface at the hit of ray (org, d) at distance t on bank triangle
- * tri_index: SPEC's Ng, and where the triangle carries attributes, the
- * smooth normal and texture-mapped Ka, Kd at the hit's barycentrics. */
-inline SurfacePoint surface_point(FrameParams fp, __global const BankTriangle *tris, int tri_index,
-                                  __global const Material *m, SURFACE_PARAMS, float3 org, float3 d, float t) {
+ * tri_index (of instance inst's model, in its frame, or -1: the scene's
+ * own): SPEC's Ng, and where the triangle carries attributes, the smooth
+ * normal and texture-mapped Ka, Kd at the hit's barycentrics. */
+inline SurfacePoint surface_point(FrameParams fp, __global const BankTriangle *tris, __global const Instance *insts,
+                                  int tri_index, int inst, __global const Material *m, SURFACE_PARAMS, float3 org,
+                                  float3 d, float t) {
   __global const BankTriangle *tri = &tris[tri_index];
   float3 v0 = load3g(tri->v0), v1 = load3g(tri->v1), v2 = load3g(tri->v2);
-  float3 ng = normalize(cross(v1 - v0, v2 - v0));
+  float3 ng = WORLD_NORMAL(insts, inst, normalize(cross(v1 - v0, v2 - v0)));
   SurfacePoint sp;
   sp.p = org + t * d;
   sp.entering = dot(ng, d) < 0.0f;
@@ -34,10 +50,14 @@ inline SurfacePoint surface_point(FrameParams fp, __global const BankTriangle *t
   __global const BankAttributes *at = &attrs[tri_index];
   if (at->flags == 0) return sp;
   RayPre r = make_ray(org, d);
+#if OPSILA_INSTANCES
+  if (inst >= 0) r = instance_ray(&r, &insts[inst]);
+#endif
   float2 b = hit_barycentrics(&r, tri);
   float b0 = 1.0f - b.x - b.y;
   if (at->flags & OPSILA_ATTR_NORMALS) {
     float3 ns = b0 * load3g(at->n0) + b.x * load3g(at->n1) + b.y * load3g(at->n2);
+    ns = WORLD_NORMAL(insts, inst, ns);
     float len = length(ns);
     /* Normals that cancel out leave the facet normal. */
     if (len > 0.0f && isfinite(len)) {

@@ -16,7 +16,7 @@ __kernel void nearest_batch(__global const BankNode *nodes, __global const BankT
   int tri = -1;
   uint tri_tests = 0u, box_tests = 0u;
   CostProbe probe = no_cost_probe();
-  traverse_nearest(&r, nodes, tris, root, org[i].w, slack, &best, &tri, &tri_tests, &box_tests, &probe);
+  traverse_nearest(&r, nodes, tris, 0, root, org[i].w, slack, &best, &tri, &tri_tests, &box_tests, &probe);
   hit_tri[i] = tri;
   hit_t[i] = best.t;
   tests[i] = (uint2)(tri_tests, box_tests);
@@ -31,6 +31,6 @@ __kernel void any_batch(__global const BankNode *nodes, __global const BankTrian
   RayPre r = make_ray(org[i].xyz, dir[i].xyz);
   uint tri_tests = 0u, box_tests = 0u;
   CostProbe probe = no_cost_probe();
-  blocked[i] = traverse_any(&r, nodes, tris, root, org[i].w, dir[i].w, slack, &tri_tests, &box_tests, &probe) ? 1 : 0;
+  blocked[i] = traverse_any(&r, nodes, tris, 0, root, org[i].w, dir[i].w, slack, &tri_tests, &box_tests, &probe) ? 1 : 0;
   tests[i] = (uint2)(tri_tests, box_tests);
 }

@@ -138,8 +138,8 @@ TEST(BankBvhWalk, NearestHitIsTheBruteForceNearestOnRandomRays) {
       for (int f = pe.tri_begin; f < pe.tri_end; ++f) {
         const BankTriangle& tri = b.bs.triangles[f];
         const float t = host_intersect(r, tri, rays.org[i].s[3], kInf);
-        if (t < kInf && hit_before(t, tri.facet_id, OPSILA_TRI_FAN(tri), key)) {
-          key = hit_key(t, tri.facet_id, OPSILA_TRI_FAN(tri));
+        if (t < kInf && hit_before(t, -1, tri.facet_id, OPSILA_TRI_FAN(tri), key)) {
+          key = hit_key(t, -1, tri.facet_id, OPSILA_TRI_FAN(tri));
           best = f;
         }
       }
@@ -213,7 +213,7 @@ std::vector<std::pair<int, int>> winners(const Bank& b, const test::RayBatch& ra
     for (std::size_t i = 0; i < rays.size(); ++i) {
       if (w.tri[i] < 0) continue;
       const BankTriangle& t = b.bs.triangles[std::size_t(w.tri[i])];
-      if (hit_before(w.t[i], t.facet_id, OPSILA_TRI_FAN(t), best[i])) best[i] = hit_key(w.t[i], t.facet_id, OPSILA_TRI_FAN(t));
+      if (hit_before(w.t[i], -1, t.facet_id, OPSILA_TRI_FAN(t), best[i])) best[i] = hit_key(w.t[i], -1, t.facet_id, OPSILA_TRI_FAN(t));
     }
   }
   std::vector<std::pair<int, int>> ids;

@@ -14,8 +14,8 @@ __kernel void least_hit_batch(__global const float *t, __global const int2 *ids,
   int won = -1;
   for (int k = 0; k < n; ++k) {
     int h = base + order[i * n + k];
-    if (hit_before(t[h], ids[h].x, ids[h].y, best)) {
-      best = hit_key(t[h], ids[h].x, ids[h].y);
+    if (hit_before(t[h], -1, ids[h].x, ids[h].y, best)) {
+      best = hit_key(t[h], -1, ids[h].x, ids[h].y);
       won = h - base;
     }
   }

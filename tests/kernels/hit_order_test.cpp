@@ -71,7 +71,7 @@ int fold(const HitSet& s, const std::vector<int>& order, Before before) {
     if (won < 0 || before(s[std::size_t(h)], s[std::size_t(won)])) won = h;
   return won;
 }
-bool order_before(const Hit& a, const Hit& b) { return hit_before(a.t, a.facet, a.fan, hit_key(b.t, b.facet, b.fan)); }
+bool order_before(const Hit& a, const Hit& b) { return hit_before(a.t, -1, a.facet, a.fan, hit_key(b.t, -1, b.facet, b.fan)); }
 
 TEST(HitOrder, IsAStrictTotalOrderOnNearAndExactTies) {
   for (const HitSet& s : hit_sets(1, 300, 8)) {
@@ -138,7 +138,7 @@ TEST(HitOrder, TheLimitBoundsTheHitsThatCanWin) {
     ASSERT_GE(cull_exit(-limit, 0.0f), -limit);
   }
   EXPECT_EQ(hit_limit(OPSILA_HIT_INF), OPSILA_HIT_INF);
-  EXPECT_TRUE(hit_before(1e30f, 0x7ffffffe, 0, hit_none()));
+  EXPECT_TRUE(hit_before(1e30f, -1, 0x7ffffffe, 0, hit_none()));
 }
 
 // The device folds the same sets, each in many random orders, to the host's

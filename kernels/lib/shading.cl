@@ -25,9 +25,9 @@ inline float3 instance_normal(__global const Instance *in, float3 n) {
   return (float3)(m[0] * n.x + m[4] * n.y + m[8] * n.z, m[1] * n.x + m[5] * n.y + m[9] * n.z,
                   m[2] * n.x + m[6] * n.y + m[10] * n.z);
 }
-#define WORLD_NORMAL(insts, inst, n) ((inst) >= 0 ? normalize(instance_normal(&(insts)[inst], (n))) : (n))
+#define WORLD_VECTOR(insts, inst, n) ((inst) >= 0 ? instance_normal(&(insts)[inst], (n)) : (n))
 #else
-#define WORLD_NORMAL(insts, inst, n) (n)
+#define WORLD_VECTOR(insts, inst, n) (n)
 #endif
 
 /* The surface at the hit of ray (org, d) at distance t on bank triangle
@@ -39,7 +39,8 @@ inline SurfacePoint surface_point(FrameParams fp, __global const BankTriangle *t
                                   float3 d, float t) {
   __global const BankTriangle *tri = &tris[tri_index];
   float3 v0 = load3g(tri->v0), v1 = load3g(tri->v1), v2 = load3g(tri->v2);
-  float3 ng = WORLD_NORMAL(insts, inst, normalize(cross(v1 - v0, v2 - v0)));
+  float3 ng = normalize(cross(v1 - v0, v2 - v0));
+  if (OPSILA_INSTANCES && inst >= 0) ng = normalize(WORLD_VECTOR(insts, inst, ng));
   SurfacePoint sp;
   sp.p = org + t * d;
   sp.entering = dot(ng, d) < 0.0f;
@@ -57,7 +58,7 @@ inline SurfacePoint surface_point(FrameParams fp, __global const BankTriangle *t
   float b0 = 1.0f - b.x - b.y;
   if (at->flags & OPSILA_ATTR_NORMALS) {
     float3 ns = b0 * load3g(at->n0) + b.x * load3g(at->n1) + b.y * load3g(at->n2);
-    ns = WORLD_NORMAL(insts, inst, ns);
+    ns = WORLD_VECTOR(insts, inst, ns);
     float len = length(ns);
     /* Normals that cancel out leave the facet normal. */
     if (len > 0.0f && isfinite(len)) {

@@ -1,6 +1,7 @@
 #include "partition/partition.h"
 
 #include "partition/bank_bvh.h"
+#include "partition/instance_banks.h"
 #include "partition/partition_steps.h"
 
 #include <algorithm>
@@ -149,6 +150,17 @@ std::uint64_t texture_once(const Scene& scene, const std::vector<char>& used) {
   return once;
 }
 
+BankTriangle bank_triangle(const Triangle& t) {
+  BankTriangle bt{};
+  put3(bt.v0, t.v0);
+  put3(bt.v1, t.v1);
+  put3(bt.v2, t.v2);
+  bt.facet_id = t.facet_id;
+  bt.object_id = t.object_id;
+  bt.material_fan = OPSILA_PACK_MATERIAL_FAN(t.material, t.fan);
+  return bt;
+}
+
 namespace {
 
 constexpr std::size_t kReleaseBatch = std::size_t(1) << 20;  // facets filled before their pages go
@@ -188,14 +200,7 @@ void fill_banks(const Scene& scene, const Box& sbox, std::vector<ClusterBuild>& 
     std::size_t k = std::size_t(ranges[c].first);
     for (int i : cb[c].tris) {
       const Triangle& t = scene.triangles[std::size_t(i)];
-      BankTriangle bt{};
-      put3(bt.v0, t.v0);
-      put3(bt.v1, t.v1);
-      put3(bt.v2, t.v2);
-      bt.facet_id = t.facet_id;
-      bt.object_id = t.object_id;
-      bt.material_fan = OPSILA_PACK_MATERIAL_FAN(t.material, t.fan);
-      bs.triangles[k] = bt;
+      bs.triangles[k] = bank_triangle(t);
       if (maps.pilot) maps.source[k] = i, bs.tri_cluster[k] = static_cast<int>(c);
       if (!maps.attributes.empty()) maps.attributes[k] = t.attributes;
       ++k;
@@ -355,6 +360,8 @@ BankedScene partition_scene(const Scene& scene, int num_pes, bool split_flat, co
   if (use.release) use.release->release_triangles();  // the banks hold them now
   clock.progress(0.8);
   describe_pes(cb, ranges, maps, total, bs);
+  if (!scene.instances.empty())
+    add_instance_banks(scene, deal_instances(scene, num_pes), 0, num_pes, sbox, bs, maps.attributes);
 
   build_routing(bs, sbox);
   if (use.pilot_maps) node_clusters(bs);

@@ -99,6 +99,8 @@ struct FacetMaps {
   std::vector<int> attributes;  // Scene::attributes index of each bank facet, when the scene has any
   std::vector<std::vector<int>*> follow() { return {&source, &attributes}; }
 };
+// A scene triangle as a bank holds it.
+BankTriangle bank_triangle(const Triangle& t);
 // 3. The banks of clusters `cb` (sorted by PE, PEs 0 .. bs.num_pes - 1);
 // the clusters' facet lists are given up once copied.
 // `consume`: the scene's own triangles, given up (fill_banks, partition.cpp).

@@ -1,0 +1,217 @@
+#include "partition/instance_banks.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <stdexcept>
+
+#include "core/parallel.h"
+#include "partition/bank_bvh.h"
+#include "partition/partition_steps.h"
+#include "scene/instances.h"
+
+namespace opsila {
+
+namespace {
+
+Vec3 box_centre(const Scene& scene, const InstanceDesc& in) {
+  Vec3 lo, hi;
+  instance_box(scene, in, lo, hi);
+  return 0.5f * (lo + hi);
+}
+
+// Instances idx to PEs [first, first + count): halves of the instances
+// (in proportion to the PEs on each side) at the median centre on the
+// longest axis of their centres, ties by index.
+void bisect(const std::vector<Vec3>& centre, std::vector<int> idx, int first, int count, std::vector<int>& pe_of) {
+  if (count == 1 || idx.size() <= 1) {
+    for (int i : idx) pe_of[std::size_t(i)] = first;
+    return;
+  }
+  Box b;
+  for (int i : idx) b.grow(centre[std::size_t(i)]);
+  const int axis = b.longest();
+  const int left = count / 2;
+  const std::size_t cut = idx.size() * std::size_t(left) / std::size_t(count);
+  std::nth_element(idx.begin(), idx.begin() + std::ptrdiff_t(cut), idx.end(), [&](int x, int y) {
+    const float a = centre[std::size_t(x)][axis], c = centre[std::size_t(y)][axis];
+    return a != c ? a < c : x < y;
+  });
+  std::vector<int> upper(idx.begin() + std::ptrdiff_t(cut), idx.end());
+  idx.resize(cut);
+  bisect(centre, std::move(idx), first, left, pe_of);
+  bisect(centre, std::move(upper), first + left, count - left, pe_of);
+}
+
+// A model's facets and BVH, in its frame, as one bank would hold them from
+// index 0; `attributes`: each facet's Scene::attributes index (when the
+// scene has any), in the tree's facet order.
+struct ModelTree {
+  BankArray<BankTriangle> tris;
+  BankArray<BankNode> nodes;
+  std::vector<int> attributes;
+};
+
+ModelTree build_model(const Scene& scene, const Prototype& p) {
+  ModelTree m;
+  m.tris.reserve(p.triangles.size());
+  for (const Triangle& t : p.triangles) {
+    m.tris.push_back(partition_steps::bank_triangle(t));
+    if (!scene.attributes.empty()) m.attributes.push_back(t.attributes);
+  }
+  std::vector<Cluster> one(1);
+  for (int a = 0; a < 3; ++a) one[0].bmin[a] = p.lo[a], one[0].bmax[a] = p.hi[a];
+  const std::vector<std::pair<int, int>> range = {{0, static_cast<int>(m.tris.size())}};
+  std::vector<int> none;
+  build_bank_bvh(m.nodes, m.tris, one, 0, 1, range, {&m.attributes, &none});
+  return m;  // its root is node 0, the bank root
+}
+
+// The BVH over one bank's instances (world boxes), its leaves naming them.
+BankArray<BankNode> instance_tree(const Scene& scene, const std::vector<int>& insts) {
+  std::vector<Box> boxes(insts.size());
+  for (std::size_t k = 0; k < insts.size(); ++k)
+    instance_box(scene, scene.instances[std::size_t(insts[k])], boxes[k].lo, boxes[k].hi);
+  BankArray<BankNode> t(1);
+  build_route_bvh(t, 0, boxes, insts);
+  for (BankNode& n : t)
+    for (int k = 0; k < OPSILA_BVH_WIDTH; ++k)
+      if (n.count[k] == 1) n.count[k] = OPSILA_INSTANCE_LEAF;
+  return t;
+}
+
+// Nodes appended to `out` with their links moved: inner children by
+// node_delta, facets by tri_delta (instance leaves keep their index).
+void append_nodes(BankArray<BankNode>& out, const BankNode* first, const BankNode* last, int node_delta,
+                  int tri_delta) {
+  for (const BankNode* n = first; n != last; ++n) {
+    BankNode m = *n;
+    for (int k = 0; k < OPSILA_BVH_WIDTH; ++k) {
+      if (m.count[k] == 0) m.child[k] += node_delta;
+      else if (m.count[k] > 0 && m.count[k] != OPSILA_INSTANCE_LEAF) m.child[k] += tri_delta;
+    }
+    out.push_back(m);
+  }
+}
+
+Cluster instance_cluster(const Scene& scene, int i, int pe, const Box& sbox) {
+  Cluster cl{};
+  Vec3 lo, hi;
+  instance_box(scene, scene.instances[std::size_t(i)], lo, hi);
+  Box b;
+  b.grow(lo);
+  b.grow(hi);
+  for (int a = 0; a < 3; ++a) cl.center[a] = b.center(a), cl.bmin[a] = lo[a], cl.bmax[a] = hi[a];
+  // Padded as fill_banks pads the spheres of the scene's own clusters.
+  cl.radius = 0.5f * b.diagonal() * 1.0001f + 1e-5f * sbox.diagonal();
+  cl.pe = pe;
+  cl.root = -2 - i;
+  return cl;
+}
+
+// The new arrays, filled bank by bank.
+struct Layout {
+  BankArray<BankTriangle> tris;
+  BankArray<BankNode> nodes;
+  std::vector<Cluster> clusters;
+  std::vector<int> attributes;
+};
+
+// PE p's bank (bs.pes[p], its instances `insts`) appended to `out`, and
+// bs.pes[p] set to its new ranges.
+void lay_out_bank(const Scene& scene, const std::vector<ModelTree>& models, const std::vector<int>& insts,
+                  const Box& sbox, BankedScene& bs, std::size_t p, const std::vector<int>& attributes, Layout& out) {
+  PeInfo& pe = bs.pes[p];
+  const int tri0 = static_cast<int>(out.tris.size()), node0 = static_cast<int>(out.nodes.size());
+  const int t_delta = tri0 - pe.tri_begin, n_delta = node0 - pe.node_begin;
+  out.tris.insert(out.tris.end(), bs.triangles.begin() + pe.tri_begin, bs.triangles.begin() + pe.tri_end);
+  if (!attributes.empty())
+    out.attributes.insert(out.attributes.end(), attributes.begin() + pe.tri_begin, attributes.begin() + pe.tri_end);
+  append_nodes(out.nodes, bs.nodes.data() + pe.node_begin, bs.nodes.data() + pe.node_end, n_delta, t_delta);
+  for (int c = pe.cluster_begin; c < pe.cluster_end; ++c) {
+    Cluster cl = bs.clusters[std::size_t(c)];
+    if (cl.root >= 0) cl.root += n_delta;
+    out.clusters.push_back(cl);
+  }
+  const int c0 = static_cast<int>(out.clusters.size()) - (pe.cluster_end - pe.cluster_begin);
+  pe.instance_root = -1;
+  if (!insts.empty()) {
+    // A bank of instances alone still has a root of its own facets' walk.
+    if (pe.node_begin == pe.node_end) out.nodes.push_back(empty_node());
+    pe.instance_root = static_cast<int>(out.nodes.size());
+    const BankArray<BankNode> tree = instance_tree(scene, insts);
+    append_nodes(out.nodes, tree.data(), tree.data() + tree.size(), pe.instance_root, 0);
+    std::vector<int> copy_root(models.size(), -1);
+    for (int i : insts) {
+      const int m = scene.instances[std::size_t(i)].prototype;
+      if (copy_root[std::size_t(m)] < 0) {
+        const ModelTree& mt = models[std::size_t(m)];
+        copy_root[std::size_t(m)] = static_cast<int>(out.nodes.size());
+        append_nodes(out.nodes, mt.nodes.data(), mt.nodes.data() + mt.nodes.size(), copy_root[std::size_t(m)],
+                     static_cast<int>(out.tris.size()));
+        out.tris.insert(out.tris.end(), mt.tris.begin(), mt.tris.end());
+        out.attributes.insert(out.attributes.end(), mt.attributes.begin(), mt.attributes.end());
+      }
+      bs.instances[std::size_t(i)].root = copy_root[std::size_t(m)];
+      out.clusters.push_back(instance_cluster(scene, i, -1, sbox));  // its PE: set by the caller
+    }
+  }
+  pe.cluster_begin = c0;
+  pe.cluster_end = static_cast<int>(out.clusters.size());
+  pe.tri_begin = tri0;
+  pe.tri_end = static_cast<int>(out.tris.size());
+  pe.node_begin = node0;
+  pe.node_end = static_cast<int>(out.nodes.size());
+}
+
+}  // namespace
+
+std::vector<int> deal_instances(const Scene& scene, int num_pes) {
+  std::vector<Vec3> centre(scene.instances.size());
+  parallel_for(centre.size(), [&](std::size_t i) { centre[i] = box_centre(scene, scene.instances[i]); });
+  std::vector<int> idx(centre.size()), pe_of(centre.size(), 0);
+  std::iota(idx.begin(), idx.end(), 0);
+  bisect(centre, std::move(idx), 0, num_pes, pe_of);
+  return pe_of;
+}
+
+void add_instance_banks(const Scene& scene, const std::vector<int>& pe_of, int pe_begin, int pe_end,
+                        const Box& sbox, BankedScene& bs, std::vector<int>& attributes) {
+  if (!bs.tri_cluster.empty() || !bs.node_cluster.empty())
+    throw std::logic_error("add_instance_banks: the pilots' maps do not follow instances");
+  const std::size_t G = std::size_t(pe_end - pe_begin);
+  std::vector<std::vector<int>> by_pe(G);
+  std::vector<char> used(scene.prototypes.size(), 0);
+  bs.instances.assign(scene.instances.size(), Instance{});
+  for (std::size_t i = 0; i < scene.instances.size(); ++i) {
+    Instance& in = bs.instances[i];
+    std::copy(scene.instances[i].to_object.begin(), scene.instances[i].to_object.end(), in.to_object);
+    in.root = -1;
+    in.pe = pe_of[i];
+    in.object_id = scene.num_objects + static_cast<int>(i);
+    if (pe_of[i] < pe_begin || pe_of[i] >= pe_end) continue;
+    by_pe[std::size_t(pe_of[i] - pe_begin)].push_back(static_cast<int>(i));
+    used[std::size_t(scene.instances[i].prototype)] = 1;
+  }
+  std::vector<ModelTree> models(scene.prototypes.size());
+  parallel_for(models.size(), [&](std::size_t m) {
+    if (used[m]) models[m] = build_model(scene, scene.prototypes[m]);
+  });
+  Layout out;
+  for (std::size_t p = 0; p < G; ++p) {
+    const std::size_t before = out.tris.size() * sizeof(BankTriangle) + out.nodes.size() * sizeof(BankNode);
+    lay_out_bank(scene, models, by_pe[p], sbox, bs, p, attributes, out);
+    const std::size_t after = out.tris.size() * sizeof(BankTriangle) + out.nodes.size() * sizeof(BankNode);
+    if (p < bs.bank_bytes.size()) bs.bank_bytes[p] = after - before;
+  }
+  for (std::size_t p = 0; p < G; ++p)
+    for (int c = bs.pes[p].cluster_begin; c < bs.pes[p].cluster_end; ++c)
+      out.clusters[std::size_t(c)].pe = static_cast<int>(p) + pe_begin;
+  bs.triangles = std::move(out.tris);
+  bs.nodes = std::move(out.nodes);
+  bs.clusters = std::move(out.clusters);
+  if (!attributes.empty()) attributes = std::move(out.attributes);
+  for (PeInfo& pe : bs.pes) partition_steps::pe_bounds(bs.clusters, pe);
+}
+
+}  // namespace opsila

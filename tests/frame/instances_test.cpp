@@ -1,0 +1,33 @@
+// Instances on the machine: the same image at any PE count, and the image
+// of the scene with its instances written out, but for rounding.
+#include <gtest/gtest.h>
+
+#include "instance_scenes.h"
+#include "test_render.h"
+
+namespace opsila::test {
+namespace {
+
+TEST(Instances, SameImageAndItemsOnOneFourSixteenAndSixtyFourPes) {
+  const Scene s = instanced_scene(96);
+  const RenderResult one = render_on_pes(s, 1);
+  for (int pes : {4, 16, 64}) {
+    const RenderResult r = render_on_pes(s, pes);
+    EXPECT_EQ(r.rgb, one.rgb) << pes << " PEs";
+    EXPECT_EQ(r.item_buffer, one.item_buffer) << pes << " PEs";
+  }
+}
+
+// The instances' hits are the written-out objects', but where rounding of
+// the two transforms decides an edge.
+TEST(Instances, MatchTheSceneWithTheInstancesWrittenOut) {
+  const Scene s = instanced_scene(128);
+  const RenderResult inst = render_on_pes(s, 16);
+  const RenderResult flat = render_on_pes(flattened(s), 16);
+  EXPECT_GE(clamped_psnr(inst.rgb, flat.rgb), 35.0);
+  EXPECT_LE(fraction_off(inst.rgb, flat.rgb, 2), 0.02);
+  EXPECT_GE(item_agreement(inst.item_buffer, as_instance_items(s, flat.item_buffer)), 0.97);
+}
+
+}  // namespace
+}  // namespace opsila::test

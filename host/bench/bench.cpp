@@ -54,6 +54,11 @@ constexpr const char* kSingleProcessOnly =
     "a rank reads only its share of it; the scatter curve measures one "
     "device alone: run `opsila bench` without mpirun for them";
 
+// Why an instanced scene leaves them out.
+constexpr const char* kNoInstances =
+    "the baselines (megakernel, traversal alone, host reference, Embree) trace a scene's own facets, "
+    "not instances: OPSILA is measured alone on an instanced scene";
+
 BenchReport start_report(const BenchOptions& o, const Scene& scene, int pes) {
   BenchReport r;
   r.scene_path = o.scene_path;
@@ -87,6 +92,26 @@ PrepareRequest bench_request(const BenchOptions& o, bool silent, Ranks& ranks, O
   request.outputs = &outputs;
   request.note = [progress](const std::string& text) { progress("note: %s", text.c_str()); };
   return request;
+}
+
+// Stages 1-3: OPSILA's frames, and where one process renders a scene of
+// its own facets, the baselines on the same rays and the scatter curve.
+void measure_all(BenchReport& report, Scene& scene, const RenderSettings& settings, ClRuntime& rt, Ranks& ranks,
+                 const BenchProgress& progress) {
+  // The baselines trace the scene's own facets alone (instances: kNoInstances).
+  const bool baselines = ranks.size() == 1 && scene.instances.empty();
+  measure_renders(report, scene, settings, rt, baselines, progress);
+  report.ranks = ranks.size();
+  if (baselines) {
+    measure_host_references(report, scene, progress);
+    measure_scatter_curve(report, rt, progress);
+  } else if (ranks.size() == 1) {
+    report.single_process_only = kNoInstances;
+    progress("%s", kNoInstances);
+  } else {
+    report.single_process_only = kSingleProcessOnly;
+    progress("%d MPI ranks: %s", ranks.size(), kSingleProcessOnly);
+  }
 }
 
 }  // namespace
@@ -125,10 +150,13 @@ int run_bench(const std::vector<std::string>& args, Ranks& ranks) {
   // The bench measures the scheme with its PEs balanced by measured work
   // unless told otherwise, on one process or on ranks that each read only
   // their share of the scene (docs/DISTRIBUTED.md).
-  const PrepareRequest request = bench_request(o, !writer, ranks, outputs, progress);
-  const RenderSettings settings = prepared_settings(request);
+  PrepareRequest request = bench_request(o, !writer, ranks, outputs, progress);
   // The bench prepares the banks of each measured renderer itself (measure.cpp).
   Scene scene = std::move(prepare_scene(request, nullptr).scene);
+  // Pilot frames measure the scene's own facets only: an instanced scene's
+  // banks are balanced by the frame's sampled rays unless --balance says.
+  if (!scene.instances.empty() && !o.balance) request.balance = Balance::work;
+  const RenderSettings settings = prepared_settings(request);
   check_device_room(scene, o.scene_path, ranks, rt);
   if (settings.balance == Balance::work) progress("sampling the frame's rays for --balance work");
   if (settings.balance == Balance::measured) progress("pilot frames for --balance measured");
@@ -137,16 +165,9 @@ int run_bench(const std::vector<std::string>& args, Ranks& ranks) {
   report.device = device_facts(rt);
   report.context = gather_context();
   report.load_before = load_average();
+  rt.walk_instances(!scene.instances.empty());  // the programs the renderer will run
   build_program(report, rt, settings.balance, progress);
-  measure_renders(report, scene, settings, rt, ranks.size() == 1, progress);
-  report.ranks = ranks.size();
-  if (ranks.size() == 1) {
-    measure_host_references(report, scene, progress);
-    measure_scatter_curve(report, rt, progress);
-  } else {
-    report.single_process_only = kSingleProcessOnly;
-    progress("%d MPI ranks: %s", ranks.size(), kSingleProcessOnly);
-  }
+  measure_all(report, scene, settings, rt, ranks, progress);
   report.load_after = load_average();
   if (!writer) {
     ranks.checkpoint();  // rank 0 reports; a failure there ends every rank alike

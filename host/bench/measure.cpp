@@ -233,7 +233,8 @@ void measure_renders(BenchReport& report, Scene& scene, const RenderSettings& se
   with_progress.count_work = false;
   with_progress.item_buffer_output = false;  // the image is what the renderers are compared on
   with_progress.switch_counting = true;
-  if (!baselines && report.stages_skipped.empty()) report.stages_skipped = "several ranks: one process only";
+  const bool several_ranks = settings.ranks && settings.ranks->size() > 1;
+  if (several_ranks && report.stages_skipped.empty()) report.stages_skipped = "several ranks: one process only";
   with_progress.stage_cycles = report.stages_skipped.empty();
   RenderSettings prepare = settings;
   prepare.pilot_warm_up = true;  // as the timed frames follow a warm-up frame

@@ -12,6 +12,7 @@
 #include "core/page_ledger.h"
 #include "core/stage_clock.h"
 #include "dist/collective_balance.h"
+#include "partition/instance_banks.h"
 #include "partition/partition_steps.h"
 
 namespace opsila {
@@ -263,9 +264,10 @@ std::uint64_t decode_maps(const SceneShare& share, Scene& own) {
 
 // The group's banks from its own part: partition_scene's steps 3-4 on the
 // group's PEs only (numbered from 0, as keep_group_banks leaves them).
-BankedScene group_banks(OwnPart& own, const Box& sbox, int group_size, bool pilot, std::vector<char>& used) {
+BankedScene group_banks(OwnPart& own, const Box& sbox, const PeGroup& group, const std::vector<int>& inst_pe,
+                        bool pilot, std::vector<char>& used) {
   BankedScene loc;
-  loc.num_pes = group_size;
+  loc.num_pes = group.size();
   FacetMaps maps;
   maps.pilot = pilot;
   std::vector<std::pair<int, int>> ranges;
@@ -275,6 +277,12 @@ BankedScene group_banks(OwnPart& own, const Box& sbox, int group_size, bool pilo
   // received ones go before the BVHs are built.
   own.scene.triangles = std::vector<Triangle>();
   describe_pes(own.clusters, ranges, maps, facets, loc);
+  if (!inst_pe.empty()) {  // the group's PEs numbered from 0 here, the table's PEs global
+    std::vector<int> local(inst_pe.size());
+    for (std::size_t i = 0; i < local.size(); ++i) local[i] = inst_pe[i] - group.begin;
+    add_instance_banks(own.scene, local, 0, group.size(), sbox, loc, maps.attributes);
+    for (std::size_t i = 0; i < local.size(); ++i) loc.instances[i].pe = inst_pe[i];
+  }
   if (pilot) node_clusters(loc);
   bank_attributes(own.scene, maps.attributes, loc, &used);
   loc.source = std::move(maps.source);
@@ -286,7 +294,7 @@ BankedScene group_banks(OwnPart& own, const Box& sbox, int group_size, bool pilo
 // banks) becomes what keep_group_banks leaves of the whole scene's banks.
 BankedScene share_tables(const Scene& share, const Box& sbox, const Placement& pl, const PeGroup& group,
                          int num_pes, int first_cluster, const std::vector<char>& used, Ranks& ranks,
-                         BankedScene& loc) {
+                         BankedScene& loc, const InstanceShares& inst) {
   const std::size_t P = std::size_t(num_pes), T = share.textures.size();
   // Vertex attributes are one flag for the whole scene (FrameParams): a
   // rank whose facets have none still gives each of them an empty record.
@@ -328,25 +336,34 @@ BankedScene share_tables(const Scene& share, const Box& sbox, const Placement& p
 
   for (Cluster& c : loc.clusters) c.pe += group.begin;
   bs.clusters = records_of<Cluster>(ranks.all_gather(bytes_of(loc.clusters)));
-  if (bs.clusters.size() != pl.pe.size()) throw std::logic_error("partition_share: the ranks' clusters disagree");
+  bs.instances = std::move(loc.instances);
+  // Each PE's instance clusters follow its own (partition/instance_banks.h).
+  std::size_t instance_clusters = 0;
+  for (int p = 0; p < num_pes && !inst.clusters.empty(); ++p) {
+    if (p < group.begin) first_cluster += inst.clusters[std::size_t(p)];
+    instance_clusters += std::size_t(inst.clusters[std::size_t(p)]);
+  }
+  if (bs.clusters.size() != pl.pe.size() + instance_clusters)
+    throw std::logic_error("partition_share: the ranks' clusters disagree");
   const int own_end = first_cluster + static_cast<int>(loc.clusters.size());
   for (int c = 0; c < int(bs.clusters.size()); ++c)
     if (c < first_cluster || c >= own_end) bs.clusters[std::size_t(c)].root = -1;
 
   bs.pes.resize(P);
-  std::size_t c = 0;
+  std::size_t c = 0, placed = 0;  // the global table's clusters, the plan's
   std::uint64_t tri = 0;
   for (int p = 0; p < num_pes; ++p) {
     PeInfo& pe = bs.pes[std::size_t(p)];
     pe.cluster_begin = static_cast<int>(c);
     pe.tri_begin = static_cast<int>(tri);
-    for (; c < pl.pe.size() && pl.pe[c] == p; ++c) tri += pl.clusters[c].facets;
+    for (; placed < pl.pe.size() && pl.pe[placed] == p; ++placed, ++c) tri += pl.clusters[placed].facets;
+    if (!inst.clusters.empty()) c += std::size_t(inst.clusters[std::size_t(p)]), tri += inst.facets[std::size_t(p)];
     pe.cluster_end = static_cast<int>(c);
     pe.tri_end = static_cast<int>(tri);
     const bool mine = p >= group.begin && p < group.end;
     pe.node_begin = mine ? loc.pes[std::size_t(p - group.begin)].node_begin : 0;
     pe.node_end = mine ? loc.pes[std::size_t(p - group.begin)].node_end : 0;
-    pe.instance_root = -1;
+    pe.instance_root = mine ? loc.pes[std::size_t(p - group.begin)].instance_root : -1;
     pe_bounds(bs.clusters, pe);
   }
   build_routing(bs, sbox);
@@ -413,6 +430,9 @@ PreparedBanks bank_share(Scene& share, int num_pes, int routing, const PeGroup& 
   std::optional<PageLedger> sent;
   if (!how.keep_share) sent.emplace(share.triangles.data(), share.triangles.size(), sizeof(Triangle));
   exchange_facets(share, split.clusters, pl, num_pes, ranks, own, sent ? &*sent : nullptr);
+  // Instances are not dealt: every rank holds them all and banks its PEs'.
+  const std::vector<int> inst_pe = share.instances.empty() ? std::vector<int>() : deal_instances(share, num_pes);
+  if (!inst_pe.empty()) copy_instances(share, own.scene);
   // Sent: the share as read is no longer needed (its materials, textures
   // and figures stay).
   split = ShareClusters();
@@ -428,9 +448,10 @@ PreparedBanks bank_share(Scene& share, int num_pes, int routing, const PeGroup& 
   t0 = std::chrono::steady_clock::now();
   figures.texture_bytes = decode_maps(share.share, own.scene);  // the maps its facets use, no others
   std::vector<char> used;
-  BankedScene loc = group_banks(own, sbox, group.size(), how.pilot, used);
+  BankedScene loc = group_banks(own, sbox, group, inst_pe, how.pilot, used);
   own.scene = Scene();
-  out.scene = share_tables(share, sbox, pl, group, num_pes, own.first_cluster, used, ranks, loc);
+  out.scene = share_tables(share, sbox, pl, group, num_pes, own.first_cluster, used, ranks, loc,
+                           inst_pe.empty() ? InstanceShares() : instance_shares(share, inst_pe, num_pes));
   figures.bank_seconds = seconds_since(t0);
   out.tri_base = out.scene.pes[std::size_t(group.begin)].tri_begin;
   ranks.end_collective();

@@ -125,7 +125,7 @@ void lay_out_bank(const Scene& scene, const std::vector<ModelTree>& models, cons
   const int tri0 = static_cast<int>(out.tris.size()), node0 = static_cast<int>(out.nodes.size());
   const int t_delta = tri0 - pe.tri_begin, n_delta = node0 - pe.node_begin;
   out.tris.insert(out.tris.end(), bs.triangles.begin() + pe.tri_begin, bs.triangles.begin() + pe.tri_end);
-  if (!attributes.empty())
+  if (!scene.attributes.empty())  // then one per facet
     out.attributes.insert(out.attributes.end(), attributes.begin() + pe.tri_begin, attributes.begin() + pe.tri_end);
   append_nodes(out.nodes, bs.nodes.data() + pe.node_begin, bs.nodes.data() + pe.node_end, n_delta, t_delta);
   for (int c = pe.cluster_begin; c < pe.cluster_end; ++c) {
@@ -165,6 +165,35 @@ void lay_out_bank(const Scene& scene, const std::vector<ModelTree>& models, cons
 }
 
 }  // namespace
+
+InstanceShares instance_shares(const Scene& scene, const std::vector<int>& pe_of, int num_pes) {
+  InstanceShares s;
+  s.clusters.assign(std::size_t(num_pes), 0);
+  s.facets.assign(std::size_t(num_pes), 0);
+  std::vector<std::vector<char>> held(static_cast<std::size_t>(num_pes), std::vector<char>());
+  for (std::size_t i = 0; i < scene.instances.size(); ++i) {
+    const std::size_t p = std::size_t(pe_of[i]);
+    const int m = scene.instances[i].prototype;
+    ++s.clusters[p];
+    if (held[p].empty()) held[p].assign(scene.prototypes.size(), 0);
+    if (held[p][std::size_t(m)]) continue;
+    held[p][std::size_t(m)] = 1;
+    s.facets[p] += static_cast<int>(scene.prototypes[std::size_t(m)].triangles.size());
+  }
+  return s;
+}
+
+void copy_instances(const Scene& from, Scene& to) {
+  to.prototypes = from.prototypes;
+  to.instances = from.instances;
+  to.num_objects = from.num_objects;
+  for (Prototype& p : to.prototypes)
+    for (Triangle& t : p.triangles) {
+      if (t.attributes < 0) continue;
+      to.attributes.push_back(from.attributes[std::size_t(t.attributes)]);
+      t.attributes = static_cast<int>(to.attributes.size()) - 1;
+    }
+}
 
 std::vector<int> deal_instances(const Scene& scene, int num_pes) {
   std::vector<Vec3> centre(scene.instances.size());
@@ -210,7 +239,7 @@ void add_instance_banks(const Scene& scene, const std::vector<int>& pe_of, int p
   bs.triangles = std::move(out.tris);
   bs.nodes = std::move(out.nodes);
   bs.clusters = std::move(out.clusters);
-  if (!attributes.empty()) attributes = std::move(out.attributes);
+  if (!scene.attributes.empty()) attributes = std::move(out.attributes);
   for (PeInfo& pe : bs.pes) partition_steps::pe_bounds(bs.clusters, pe);
 }
 

@@ -35,4 +35,16 @@ std::vector<int> deal_instances(const Scene& scene, int num_pes);
 void add_instance_banks(const Scene& scene, const std::vector<int>& pe_of, int pe_begin, int pe_end,
                         const Box& sbox, BankedScene& bs, std::vector<int>& attributes);
 
+// What the instances add to each of `num_pes` banks: their clusters and
+// the facets of the model copies (every rank computes it alike).
+struct InstanceShares {
+  std::vector<int> clusters, facets;
+};
+InstanceShares instance_shares(const Scene& scene, const std::vector<int>& pe_of, int num_pes);
+
+// The prototypes and instances of `from` into `to` (a rank's facets as
+// received in a collective partition), with the vertex attributes their
+// facets use appended to to.attributes and their indices moved there.
+void copy_instances(const Scene& from, Scene& to);
+
 }  // namespace opsila

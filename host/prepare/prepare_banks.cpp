@@ -14,12 +14,21 @@ namespace opsila {
 
 namespace {
 
+// The pilots' maps follow the scene's own facets only (dist/pilot.h): an
+// instanced scene is shared by facets or by sampled work.
+void check_balance(const Scene& scene, const RenderSettings& settings) {
+  if (!scene.instances.empty() && (settings.balance == Balance::measured || settings.measure_cost))
+    throw InputError("--balance measured: pilot frames measure the work of the scene's own facets, not of "
+                     "instances (scenes/FORMAT.md, Instances); use --balance facets or work");
+}
+
 // A whole scene; `lendable` (null, or the scene itself) lends its facets
 // out while the pilots' view is copied, so the view costs no second copy,
 // and with Facets::released gives its triangles up to the banks.
 PreparedBanks prepare_whole(const Scene& scene, Scene* lendable, const RenderSettings& settings,
                             ClRuntime& runtime, Facets after) {
   check_machine_request(scene, settings.num_pes);
+  check_balance(scene, settings);
   const PrepareTimes before = prepare_times();
   OneProcess solo;  // one process, when the settings name no ranks
   Ranks& ranks = settings.ranks ? *settings.ranks : solo;
@@ -57,6 +66,7 @@ PreparedBanks prepare_banks_consuming(Scene& scene, const RenderSettings& settin
   if (!scene.is_share()) return prepare_whole(scene, &scene, settings, runtime, after);
   // Read in shares: the ranks partition it together, and it gives up its facets once they are sent.
   check_machine_request(scene, settings.num_pes);
+  check_balance(scene, settings);
   const PrepareTimes before = prepare_times();
   OneProcess solo;  // one process, when the settings name no ranks
   Ranks& ranks = settings.ranks ? *settings.ranks : solo;

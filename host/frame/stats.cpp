@@ -4,6 +4,7 @@
 #include <cstdint>
 #include <map>
 
+#include "scene/instances.h"
 #include "device/counters.h"
 #include "device/descriptors.h"
 #include "opsila_shared.h"
@@ -164,6 +165,12 @@ nlohmann::json stats_json(const RenderResult& result, const Scene& scene,
                 {"facets", scene.num_facets},
                 {"objects", scene.num_objects},
                 {"lights", scene.lights.size()}};
+  // Instances: the models' triangles held once each, and those they stand for.
+  if (!scene.instances.empty())
+    j["scene"]["instances"] = {{"count", scene.instances.size()},
+                               {"models", scene.prototypes.size()},
+                               {"model_triangles", prototype_triangles(scene)},
+                               {"instanced_triangles", instanced_triangles(scene)}};
 
   const RayCounts& rays = result.rays;
   const std::uint64_t total_rays = rays.total();
@@ -205,7 +212,8 @@ nlohmann::json stats_json(const RenderResult& result, const Scene& scene,
   add_launches(j, s);
 
   j["memory"] = memory_json(s);
-  j["triangle_cost"] = triangle_cost_json(s, scene.total_triangles());
+  // Per unique triangle: the scene's own and the models' (once each).
+  j["triangle_cost"] = triangle_cost_json(s, scene.total_triangles() + prototype_triangles(scene));
 
   j["traffic"] = traffic_json(s);
   if (!s.ranks.empty()) j["mpi"] = ranks_json(s.ranks);

@@ -29,5 +29,20 @@ TEST(Instances, MatchTheSceneWithTheInstancesWrittenOut) {
   EXPECT_GE(item_agreement(inst.item_buffer, as_instance_items(s, flat.item_buffer)), 0.97);
 }
 
+// A scene of instances alone: every bank's own walk starts at an empty root.
+TEST(Instances, AloneRenderTheSameOnOneAndSixteenPes) {
+  Scene s = instanced_scene(64, 4, 3);
+  s.triangles.clear();
+  s.num_objects = 0;
+  s.num_facets = 0;
+  const RenderResult one = render_on_pes(s, 1);
+  const RenderResult many = render_on_pes(s, 16);
+  EXPECT_EQ(many.rgb, one.rgb);
+  EXPECT_EQ(many.item_buffer, one.item_buffer);
+  std::size_t hits = 0;
+  for (std::size_t k = 0; k < one.item_buffer.size(); k += 2) hits += one.item_buffer[k] >= 0;
+  EXPECT_GT(hits, one.item_buffer.size() / 100) << "the instances are in view";
+}
+
 }  // namespace
 }  // namespace opsila::test

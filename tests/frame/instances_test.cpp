@@ -18,6 +18,27 @@ TEST(Instances, SameImageAndItemsOnOneFourSixteenAndSixtyFourPes) {
   }
 }
 
+// Routing on spheres, banks of a few descriptors (rays wait and are sent
+// again), the balance by sampled work, spp 4: the same bytes as the
+// default machine.
+TEST(Instances, SameImageWhateverTheRoutingBankSizeAndBalance) {
+  Scene s = instanced_scene(64);
+  s.spp = 4;
+  RenderSettings base;
+  base.num_pes = 16;
+  const RenderResult want = render(s, base, shared_runtime());
+  const RaySample sample = ReferenceTracer(s).sample_rays(2000);
+  for (int k = 0; k < 3; ++k) {
+    RenderSettings rs = base;
+    if (k == 0) rs.routing = OPSILA_ROUTING_SPHERES;
+    if (k == 1) rs.bank_capacity = 7;
+    if (k == 2) rs.balance = Balance::work, rs.ray_sample = &sample;
+    const RenderResult r = render(s, rs, shared_runtime());
+    EXPECT_EQ(r.rgb, want.rgb) << "variant " << k;
+    EXPECT_EQ(r.item_buffer, want.item_buffer) << "variant " << k;
+  }
+}
+
 // The instances' hits are the written-out objects', but where rounding of
 // the two transforms decides an edge.
 TEST(Instances, MatchTheSceneWithTheInstancesWrittenOut) {

@@ -54,10 +54,9 @@ constexpr const char* kSingleProcessOnly =
     "a rank reads only its share of it; the scatter curve measures one "
     "device alone: run `opsila bench` without mpirun for them";
 
-// Why an instanced scene leaves them out.
+// Why an instanced scene leaves Embree out.
 constexpr const char* kNoInstances =
-    "the baselines (megakernel, traversal alone, host reference, Embree) trace a scene's own facets, "
-    "not instances: OPSILA is measured alone on an instanced scene";
+    "Embree: its baseline here answers the scene's own facets only, not instances";
 
 BenchReport start_report(const BenchOptions& o, const Scene& scene, int pes) {
   BenchReport r;
@@ -98,16 +97,13 @@ PrepareRequest bench_request(const BenchOptions& o, bool silent, Ranks& ranks, O
 // its own facets, the baselines on the same rays and the scatter curve.
 void measure_all(BenchReport& report, Scene& scene, const RenderSettings& settings, ClRuntime& rt, Ranks& ranks,
                  const BenchProgress& progress) {
-  // The baselines trace the scene's own facets alone (instances: kNoInstances).
-  const bool baselines = ranks.size() == 1 && scene.instances.empty();
+  const bool baselines = ranks.size() == 1;
   measure_renders(report, scene, settings, rt, baselines, progress);
   report.ranks = ranks.size();
   if (baselines) {
     measure_host_references(report, scene, progress);
     measure_scatter_curve(report, rt, progress);
-  } else if (ranks.size() == 1) {
-    report.single_process_only = kNoInstances;
-    progress("%s", kNoInstances);
+    if (!scene.instances.empty()) report.single_process_only = kNoInstances;
   } else {
     report.single_process_only = kSingleProcessOnly;
     progress("%d MPI ranks: %s", ranks.size(), kSingleProcessOnly);

@@ -13,12 +13,14 @@
 
 namespace opsila {
 
-// The root of the one BVH over the whole scene, and its children's box
-// (kernels/lib/bvh.cl, scene_nearest).
+// The root of the one BVH over the whole scene's own facets, its
+// children's box (kernels/lib/bvh.cl, scene_nearest), and the root of the
+// BVH over its instances (-1: none).
 struct SceneRoot {
   int node = 0;
   cl_float4 lo{}, hi{};
-  auto kernel_args() const { return std::tie(node, lo, hi); }
+  int instances = -1;
+  auto kernel_args() const { return std::tie(node, lo, hi, instances); }
 };
 
 // kernels/baselines/megakernel.cl: one launch over pixels pixel_begin..

@@ -41,6 +41,7 @@ MegaScene mega_scene(const Scene& scene) {
   m.bs = partition_scene(scene, 1);
   m.fp = frame_params(scene, m.bs, 0);
   m.root.node = m.bs.pes[0].node_begin;
+  m.root.instances = m.bs.pes[0].instance_root;
   Box box;
   if (children_box(m.bs.nodes[std::size_t(m.root.node)], box))
     for (int a = 0; a < 3; ++a) m.root.lo.s[a] = box.lo[a], m.root.hi.s[a] = box.hi[a];
@@ -142,6 +143,7 @@ struct Megakernel::State {
 
 Megakernel::Megakernel(const Scene& scene, ClRuntime& rt, int tile, bool item_buffer) {
   check_kernel_limits(scene);
+  rt.walk_instances(!scene.instances.empty());
   s_ = std::make_unique<State>(scene, rt, tile, item_buffer);
 }
 
@@ -337,6 +339,7 @@ struct TraversalBatch::State {
 
 TraversalBatch::TraversalBatch(const Scene& scene, ClRuntime& rt, TraversalAlone& record, int tile) {
   check_kernel_limits(scene);
+  rt.walk_instances(!scene.instances.empty());
   rt.program(KernelProgram::baselines);
   auto s = std::make_unique<State>(rt, scene);
   s->b = mega_buffers(rt, scene, s->ms.bs);

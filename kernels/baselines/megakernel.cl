@@ -41,8 +41,8 @@
 typedef struct {
   __global const BankNode *nodes;
   __global const BankTriangle *tris;
-  __global const Instance *insts; /* walked, not shaded: the bench runs no baseline on an instanced scene */
-  int root;
+  __global const Instance *insts;
+  int root, inst_root; /* the scene's own facets' BVH, its instances' (-1: none) */
   float3 lo, hi; /* the union of the root's child boxes (scene_nearest) */
   float slack;
   uint tri_tests, box_tests;
@@ -70,14 +70,20 @@ inline bool mega_push(MegaStack *s, float3 org, float3 dir, float3 w, int level)
   return true;
 }
 
-/* The nearest hit of a ray (its triangle, -1 for none) and its distance. */
-inline int mega_nearest(MegaScene *ms, const RayPre *r, float tmin, float *t) {
+/* The nearest hit of a ray (its triangle, -1 for none), its distance and
+ * its instance (-1: a facet of the scene's own). */
+inline int mega_nearest(MegaScene *ms, const RayPre *r, float tmin, float *t, int *inst) {
   CostProbe no_probe = no_cost_probe();
   HitKey best = hit_none();
   int hit = -1;
-  STAGE(ms->clock, OPSILA_STAGE_BANK_WALK,
-        scene_nearest(r, ms->nodes, ms->tris, ms->insts, ms->root, ms->lo, ms->hi, tmin, ms->slack, &best, &hit,
-                      &ms->tri_tests, &ms->box_tests, &no_probe));
+  STAGE(ms->clock, OPSILA_STAGE_BANK_WALK, {
+    scene_nearest(r, ms->nodes, ms->tris, ms->insts, ms->root, ms->lo, ms->hi, tmin, ms->slack, &best, &hit,
+                  &ms->tri_tests, &ms->box_tests, &no_probe);
+    if (OPSILA_INSTANCES && ms->inst_root >= 0)
+      traverse_nearest(r, ms->nodes, ms->tris, ms->insts, ms->inst_root, tmin, ms->slack, &best, &hit,
+                       &ms->tri_tests, &ms->box_tests, &no_probe);
+  });
+  *inst = best.inst;
   *t = best.t;
   return hit;
 }
@@ -96,9 +102,13 @@ inline long3 mega_direct(FrameParams fp, MegaScene *ms, __global const Light *li
     MEGA_LOG(ms, surf.p, lv, fp.epsilon, dist);
     RayPre sr = make_ray(surf.p, lv);
     bool blocked;
-    STAGE(ms->clock, OPSILA_STAGE_BANK_WALK,
-          blocked = scene_any(&sr, ms->nodes, ms->tris, ms->insts, ms->root, ms->lo, ms->hi, fp.epsilon, dist, ms->slack,
-                              &ms->tri_tests, &ms->box_tests, &no_probe));
+    STAGE(ms->clock, OPSILA_STAGE_BANK_WALK, {
+      blocked = scene_any(&sr, ms->nodes, ms->tris, ms->insts, ms->root, ms->lo, ms->hi, fp.epsilon, dist, ms->slack,
+                          &ms->tri_tests, &ms->box_tests, &no_probe);
+      if (OPSILA_INSTANCES && !blocked && ms->inst_root >= 0)
+        blocked = traverse_any(&sr, ms->nodes, ms->tris, ms->insts, ms->inst_root, fp.epsilon, dist, ms->slack,
+                               &ms->tri_tests, &ms->box_tests, &no_probe);
+    });
     if (!blocked)
       STAGE(ms->clock, OPSILA_STAGE_PIXEL_SUMS, sum = add_sat(sum, fixed3(contrib))); /* >= 0: saturates as add_fixed does */
   }
@@ -118,6 +128,11 @@ inline uint mega_children(MegaStack *s, __global const Material *m, SurfacePoint
   return pushed;
 }
 
+/* The (object, facet) of a hit: an instance's object, its model's facet. */
+inline int2 mega_item(MegaScene *ms, int hit, int inst) {
+  return (int2)(inst >= 0 ? ms->insts[inst].object_id : ms->tris[hit].object_id, ms->tris[hit].facet_id);
+}
+
 /* One pixel's samples, each sample's ray tree traced depth-first. */
 inline void mega_pixel(FrameParams fp, MegaScene *ms, __global const Material *materials, __global const Light *lights,
                        SURFACE_PARAMS, int spp_k, __global const float *offsets, int pixel, __global long *accum,
@@ -128,11 +143,12 @@ inline void mega_pixel(FrameParams fp, MegaScene *ms, __global const Material *m
   uint secondary = 0u, shadow = 0u;
   int2 item = (int2)(-1, -1);
   float t;
+  int inst;
   /* Even k: the centre ray is not a sample; its hit is looked up alone. */
   if (spp_k % 2 == 0 && write_items) {
     RayPre cr = make_ray(load3(fp.eye), primary_direction(fp, x, y));
-    int hit = mega_nearest(ms, &cr, 0.0f, &t);
-    if (hit >= 0) item = (int2)(ms->tris[hit].object_id, ms->tris[hit].facet_id);
+    int hit = mega_nearest(ms, &cr, 0.0f, &t, &inst);
+    if (hit >= 0) item = mega_item(ms, hit, inst);
   }
   for (int sample = 0; sample < spp_k * spp_k; ++sample) {
     int si = sample % spp_k, sj = sample / spp_k;
@@ -148,16 +164,16 @@ inline void mega_pixel(FrameParams fp, MegaScene *ms, __global const Material *m
       float tmin = level == 0 ? 0.0f : fp.epsilon;
       MEGA_LOG(ms, org, d, tmin, -1.0f);
       RayPre r = make_ray(org, d);
-      int hit = mega_nearest(ms, &r, tmin, &t);
+      int hit = mega_nearest(ms, &r, tmin, &t, &inst);
       if (hit < 0) {
         STAGE(ms->clock, OPSILA_STAGE_PIXEL_SUMS, sum = add_sat(sum, fixed3(weight * load3(fp.background))));
         continue;
       }
       __global const BankTriangle *tri = &ms->tris[hit];
-      if (level == 0 && centre) item = (int2)(tri->object_id, tri->facet_id);
+      if (level == 0 && centre) item = mega_item(ms, hit, inst);
       STAGE(ms->clock, OPSILA_STAGE_SHADING, {
         __global const Material *m = &materials[OPSILA_TRI_MATERIAL(*tri)];
-        SurfacePoint surf = surface_point(fp, ms->tris, 0, hit, -1, m, SURFACE_ARGS, org, d, t);
+        SurfacePoint surf = surface_point(fp, ms->tris, ms->insts, hit, inst, m, SURFACE_ARGS, org, d, t);
         STAGE(ms->clock, OPSILA_STAGE_PIXEL_SUMS, sum = add_sat(sum, fixed3(weight * load3(fp.ambient) * surf.ka)));
         sum = mega_direct(fp, ms, lights, m, surf, d, weight, sum, &shadow);
         if (level + 1 < fp.max_depth) secondary += mega_children(&s, m, surf, d, weight, level);
@@ -174,14 +190,13 @@ inline void mega_pixel(FrameParams fp, MegaScene *ms, __global const Material *m
 }
 
 __kernel void megakernel(FrameParams fp, __global const BankNode *nodes, __global const BankTriangle *tris,
-                         __global const Instance *insts,
-                         __global const Material *materials, __global const Light *lights, SURFACE_PARAMS, int root,
-                         float4 root_lo, float4 root_hi, int spp_k, __global const float *offsets, int pixel_begin,
+                         __global const Instance *insts, __global const Material *materials, __global const Light *lights, SURFACE_PARAMS, int root,
+                         float4 root_lo, float4 root_hi, int inst_root, int spp_k, __global const float *offsets, int pixel_begin,
                          int pixel_count, __global long *accum, __global uint4 *ray_counts, int write_items,
                          __global int2 *items) {
   int k = get_global_id(0);
   if (k >= pixel_count) return;
-  MegaScene ms = {nodes, tris, insts, root, root_lo.xyz, root_hi.xyz, fp.box_slack, 0u, 0u, 0, 0u};
+  MegaScene ms = {nodes, tris, insts, root, inst_root, root_lo.xyz, root_hi.xyz, fp.box_slack, 0u, 0u, 0, 0u};
   mega_pixel(fp, &ms, materials, lights, SURFACE_ARGS, spp_k, offsets, pixel_begin + k, accum, ray_counts,
              write_items, items);
 }
@@ -190,15 +205,14 @@ __kernel void megakernel(FrameParams fp, __global const BankNode *nodes, __globa
  * log_first[pixel]] on (the prefix sums of the rays counted by a megakernel
  * run), for the bench's traversal-alone figure (baselines/traversal.cl). */
 __kernel void megakernel_rays(FrameParams fp, __global const BankNode *nodes, __global const BankTriangle *tris,
-                         __global const Instance *insts,
-                              __global const Material *materials, __global const Light *lights, SURFACE_PARAMS,
-                              int root, float4 root_lo, float4 root_hi, int spp_k, __global const float *offsets,
+                              __global const Instance *insts, __global const Material *materials, __global const Light *lights, SURFACE_PARAMS,
+                              int root, float4 root_lo, float4 root_hi, int inst_root, int spp_k, __global const float *offsets,
                               int pixel_begin, int pixel_count, __global long *accum, __global uint4 *ray_counts,
                               int write_items, __global int2 *items, __global const uint *log_first,
                               __global float4 *ray_log) {
   int k = get_global_id(0);
   if (k >= pixel_count) return;
-  MegaScene ms = {nodes, tris, insts, root, root_lo.xyz, root_hi.xyz, fp.box_slack, 0u, 0u, ray_log,
+  MegaScene ms = {nodes, tris, insts, root, inst_root, root_lo.xyz, root_hi.xyz, fp.box_slack, 0u, 0u, ray_log,
                   log_first[pixel_begin + k]};
   mega_pixel(fp, &ms, materials, lights, SURFACE_ARGS, spp_k, offsets, pixel_begin + k, accum, ray_counts,
              write_items, items);
@@ -209,9 +223,8 @@ __kernel void megakernel_rays(FrameParams fp, __global const BankNode *nodes, __
  * same frame; every work-item's cycles per stage are added to
  * stage_cycles (OPSILA_STAGE_COUNT counters of OPSILA_COUNTER_WORDS words). */
 __kernel void megakernel_stages(FrameParams fp, __global const BankNode *nodes, __global const BankTriangle *tris,
-                         __global const Instance *insts,
-                                __global const Material *materials, __global const Light *lights, SURFACE_PARAMS,
-                                int root, float4 root_lo, float4 root_hi, int spp_k, __global const float *offsets,
+                                __global const Instance *insts, __global const Material *materials, __global const Light *lights, SURFACE_PARAMS,
+                                int root, float4 root_lo, float4 root_hi, int inst_root, int spp_k, __global const float *offsets,
                                 int pixel_begin, int pixel_count, __global long *accum, __global uint4 *ray_counts,
                                 int write_items, __global int2 *items, volatile __global uint *stage_cycles) {
   int k = get_global_id(0);
@@ -219,7 +232,7 @@ __kernel void megakernel_stages(FrameParams fp, __global const BankNode *nodes, 
   CycleClock clock;
   stage_clear(&clock);
   stage_start(&clock, OPSILA_STAGE_CAMERA);
-  MegaScene ms = {nodes, tris, insts, root, root_lo.xyz, root_hi.xyz, fp.box_slack, 0u, 0u, 0, 0u, &clock};
+  MegaScene ms = {nodes, tris, insts, root, inst_root, root_lo.xyz, root_hi.xyz, fp.box_slack, 0u, 0u, 0, 0u, &clock};
   mega_pixel(fp, &ms, materials, lights, SURFACE_ARGS, spp_k, offsets, pixel_begin + k, accum, ray_counts,
              write_items, items);
   stage_enter(&clock, OPSILA_STAGE_CAMERA);

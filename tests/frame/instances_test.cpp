@@ -2,6 +2,7 @@
 // of the scene with its instances written out, but for rounding.
 #include <gtest/gtest.h>
 
+#include "bench/bench.h"
 #include "instance_scenes.h"
 #include "test_render.h"
 
@@ -48,6 +49,16 @@ TEST(Instances, MatchTheSceneWithTheInstancesWrittenOut) {
   EXPECT_GE(clamped_psnr(inst.rgb, flat.rgb), 35.0);
   EXPECT_LE(fraction_off(inst.rgb, flat.rgb, 2), 0.02);
   EXPECT_GE(item_agreement(inst.item_buffer, as_instance_items(s, flat.item_buffer)), 0.97);
+}
+
+// The bench's replicated megakernel walks the instances too: the same
+// items (one hit order) and the same image but for the order of sums.
+TEST(Instances, TheMegakernelSeesThemAsTheMachineDoes) {
+  const Scene s = instanced_scene(96);
+  const RenderResult machine = render_on_pes(s, 16);
+  const BaselineImage mega = render_megakernel(s, shared_runtime());
+  EXPECT_EQ(mega.item_buffer, machine.item_buffer);
+  EXPECT_GE(clamped_psnr(mega.rgb, machine.rgb), 60.0);
 }
 
 // A scene of instances alone: every bank's own walk starts at an empty root.

@@ -39,24 +39,28 @@ constexpr std::size_t kSampleChunk = std::size_t(1) << 14;
 using Impl = ReferenceTracer::Impl;
 
 // The least hit over every holder, in the hit order: the least cell of t
-// (into t_bits), then the least (facet, fan) key in it, then (should two
-// holders share a facet) the lowest holder. Returns each ray's holder.
+// (into t_bits), then (a scene with instances, which every holder has
+// alike) the least instance, then the least (facet, fan) key, then (should
+// two holders share a facet or an instance) the lowest holder. Each round
+// keeps the rays whose hit is still the least. Returns each ray's holder.
 std::vector<std::uint64_t> join_least(const Impl& im, const std::vector<Hit>& hits, const SampleJoin* join,
                                       std::uint64_t me, std::vector<std::uint64_t>& t_bits) {
   const std::size_t n = hits.size();
-  std::vector<std::uint64_t> key(n, kNoHit), holder(n, kNoHit);
-  t_bits.assign(n, kNoHit);
-  for (std::size_t i = 0; i < n; ++i)
-    if (hits[i].tri >= 0) t_bits[i] = hit_grid(hits[i].t);
-  if (join) join->min(t_bits);
-  const auto least_t = [&](std::size_t i) { return hits[i].tri >= 0 && hit_grid(hits[i].t) == t_bits[i]; };
-  for (std::size_t i = 0; i < n; ++i)
-    if (least_t(i)) key[i] = im.sample_key(hits[i].tri);
-  if (join) join->min(key);
-  for (std::size_t i = 0; i < n; ++i)
-    if (least_t(i) && im.sample_key(hits[i].tri) == key[i]) holder[i] = me;
-  if (join) join->min(holder);
-  return holder;
+  std::vector<bool> least(n);
+  for (std::size_t i = 0; i < n; ++i) least[i] = hits[i].tri >= 0;
+  std::vector<std::uint64_t> key(n);
+  const auto round = [&](auto key_of) {
+    for (std::size_t i = 0; i < n; ++i) key[i] = least[i] ? key_of(hits[i]) : kNoHit;
+    if (join) join->min(key);
+    for (std::size_t i = 0; i < n; ++i) least[i] = least[i] && key_of(hits[i]) == key[i];
+  };
+  round([](const Hit& h) { return std::uint64_t(hit_grid(h.t)); });
+  t_bits = key;
+  // -1 (the scene's own facets) first.
+  if (!im.scene.instances.empty()) round([](const Hit& h) { return std::uint64_t(std::int64_t(h.inst) + 1); });
+  round([&](const Hit& h) { return im.sample_key(h); });
+  round([&](const Hit&) { return me; });
+  return key;
 }
 
 // The segments and rays that the hits this holder won spawn: a shadow

@@ -9,6 +9,7 @@
 #include <chrono>
 #include <cmath>
 #include <exception>
+#include <stdexcept>
 #include <thread>
 
 #include "core/fixed_point.h"
@@ -27,29 +28,45 @@ ReferenceTracer::ReferenceTracer(const Scene& scene, const FacetQueries* queries
   // SPEC "a face with no material".
   if (impl_->materials.empty()) impl_->materials.push_back(MaterialDesc::default_material());
   check_hit_order_ids(scene);
-  impl_->tris.reserve(scene.triangles.size());
-  for (const Triangle& t : scene.triangles) {
-    Tri tri;
-    tri.v0 = t.v0;
-    tri.e1 = t.v1 - tri.v0;
-    tri.e2 = t.v2 - tri.v0;
-    const Vec3 c = cross(tri.e1, tri.e2);
-    const float len = length(c);
-    tri.degenerate = !(len > 0.0f) || !std::isfinite(len);
-    tri.normal = tri.degenerate ? splat(0.0f) : c / len;
-    tri.material = t.material >= 0 && t.material < static_cast<int>(impl_->materials.size()) ? t.material : 0;
-    tri.object_id = t.object_id;
-    tri.facet_id = t.facet_id;
-    tri.fan = t.fan;
-    impl_->tris.push_back(tri);
-  }
+  if (queries && !scene.instances.empty())
+    throw std::logic_error("ReferenceTracer: facet queries do not take instances");
+  const int materials = static_cast<int>(impl_->materials.size());
+  impl_->tris = reference::make_tris(scene.triangles, materials);
   impl_->queries = queries;
   const float pad = static_cast<float>(1e-5 * scene.diagonal()) + 1e-30f;
   if (!queries) impl_->bvh = reference::build_bvh(impl_->tris, scene.triangles, pad, build_threads);
+  build_instances(build_threads, pad);
   impl_->frame = camera_frame(scene.camera, scene.width, scene.height);
 }
 
 ReferenceTracer::~ReferenceTracer() = default;
+
+void ReferenceTracer::build_instances(int build_threads, float pad) {
+  const Scene& scene = scene_;
+  const int materials = static_cast<int>(impl_->materials.size());
+  // Each prototype once, in its frame, padded for its own size.
+  for (const Prototype& p : scene.prototypes) {
+    Impl::Model model;
+    model.tris = reference::make_tris(p.triangles, materials);
+    Vec3 lo = splat(INFINITY), hi = splat(-INFINITY);
+    for (const Triangle& t : p.triangles) {
+      lo = min(lo, min(t.v0, min(t.v1, t.v2)));
+      hi = max(hi, max(t.v0, max(t.v1, t.v2)));
+    }
+    const float model_pad = p.triangles.empty() ? 0.0f : static_cast<float>(1e-5 * box_diagonal(lo, hi)) + 1e-30f;
+    model.bvh = reference::build_bvh(model.tris, p.triangles, model_pad, build_threads);
+    impl_->models.push_back(std::move(model));
+  }
+  // The instances' world boxes, padded as the scene's nodes are.
+  const std::size_t n = scene.instances.size();
+  std::vector<Vec3> lo_of(n), hi_of(n);
+  impl_->inst_boxes.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    instance_box(scene, scene.instances[i], lo_of[i], hi_of[i]);
+    impl_->inst_boxes[i] = {lo_of[i] - splat(pad), hi_of[i] + splat(pad)};
+  }
+  impl_->inst_bvh = reference::build_bvh(lo_of, hi_of, std::vector<bool>(n, true), pad, build_threads);
+}
 
 Vec3 ReferenceTracer::render_pixel(int x, int y, std::int32_t* object_facet,
                                    RayCounts& counts) const {
@@ -58,7 +75,7 @@ Vec3 ReferenceTracer::render_pixel(int x, int y, std::int32_t* object_facet,
   // SPEC "Camera": a k x k grid of samples; the pixel is their mean.
   const int k = spp_side(scene.spp);
   double sum[3] = {0.0, 0.0, 0.0};
-  int centre_tri = -1;
+  Hit centre;
   for (int j = 0; j < k; ++j) {
     for (int i = 0; i < k; ++i) {
       const float px = static_cast<float>(x) + spp_offset(i, k), py = static_cast<float>(y) + spp_offset(j, k);
@@ -66,20 +83,18 @@ Vec3 ReferenceTracer::render_pixel(int x, int y, std::int32_t* object_facet,
       ++counts.primary;
       Vec3 sample = splat(0.0f);
       // Primary rays accept any t > 0 (only secondary and shadow rays skip t <= epsilon).
-      const int tri = impl_->trace(eye, dir, 0.0f, 0, splat(1.0f), sample, counts);
-      if (tri >= 0) ++counts.primary_hits;
-      if (2 * i + 1 == k && 2 * j + 1 == k) centre_tri = tri;  // odd k: this sample is the centre ray
+      const Hit hit = impl_->trace(eye, dir, 0.0f, 0, splat(1.0f), sample, counts);
+      if (hit.tri >= 0) ++counts.primary_hits;
+      if (2 * i + 1 == k && 2 * j + 1 == k) centre = hit;  // odd k: this sample is the centre ray
       for (int c = 0; c < 3; ++c) sum[c] += double(sample[c]);
     }
   }
   if (object_facet) {
     if (k % 2 == 0) {  // even k: the centre ray is not a sample; find its hit alone
-      Hit hit;
       const Vec3 dir = primary_direction(impl_->frame, scene.width, scene.height, x, y);
-      centre_tri = impl_->nearest(eye, dir, 0.0f, hit) ? hit.tri : -1;
+      impl_->nearest(eye, dir, 0.0f, centre);
     }
-    object_facet[0] = centre_tri >= 0 ? impl_->tris[centre_tri].object_id : -1;
-    object_facet[1] = centre_tri >= 0 ? impl_->tris[centre_tri].facet_id : -1;
+    impl_->item_ids(centre, object_facet);
   }
   // Saturated as the fixed-point sums of the other renderers are.
   for (int c = 0; c < 3; ++c) sum[c] = saturate_sum(sum[c]);

@@ -19,17 +19,21 @@ namespace opsila {
 
 class Progress;
 
-// A ray's nearest facet: its index in Scene::triangles (-1: none), the ray
-// parameter t and SPEC's barycentrics b1, b2 of the hit.
+// A ray's nearest facet: its index in Scene::triangles (-1: none), or with
+// inst >= 0 in the triangles of instance inst's prototype; the ray
+// parameter t and SPEC's barycentrics b1, b2 of the hit (an instance's in
+// its model's frame).
 struct FacetHit {
   float t = std::numeric_limits<float>::infinity();
   int tri = -1;
+  int inst = -1;  // the instance hit (Scene::instances), -1: a facet of the scene's own
   float b1 = 0, b2 = 0;
 };
 
 // Where rays meet the facets, when another library traverses the scene (the
 // bench's Embree baseline): the tracer then shades, samples and counts as
-// always, on these answers. Called from several threads at once.
+// always, on these answers. Called from several threads at once. They know
+// only Scene::triangles: a scene with instances takes none.
 class FacetQueries {
  public:
   virtual ~FacetQueries() = default;
@@ -42,8 +46,11 @@ class FacetQueries {
 // Holds the scene (by reference: it must outlive the tracer), its epsilon and
 // a BVH, or the `queries` it is given instead (which must outlive it too).
 // Const after construction, so several threads may render row ranges of one
-// tracer at once. The BVH is built on `build_threads` threads (0: every
-// hardware thread); it is the same tree for any number.
+// tracer at once. The BVHs (the scene's own facets', one per prototype in
+// its frame, one over the instances' world boxes) are built on
+// `build_threads` threads (0: every hardware thread); each is the same tree
+// for any number. Throws std::logic_error given `queries` and a scene with
+// instances.
 class ReferenceTracer {
  public:
   explicit ReferenceTracer(const Scene& scene, const FacetQueries* queries = nullptr, int build_threads = 0);
@@ -83,6 +90,9 @@ class ReferenceTracer {
   struct Impl;
 
  private:
+  // The prototypes' BVHs and the one over the instances (constructor's).
+  void build_instances(int build_threads, float pad);
+
   const Scene& scene_;
   float epsilon_ = 0;
   std::unique_ptr<Impl> impl_;

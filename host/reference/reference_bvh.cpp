@@ -117,20 +117,44 @@ void build_node(std::vector<Node>& nodes, std::vector<int>& order, int node_inde
 
 }  // namespace
 
-Bvh build_bvh(const std::vector<Tri>& tris, const std::vector<Triangle>& source, float pad, int threads) {
-  Bvh bvh;
-  std::vector<Vec3> lo_of, hi_of;
-  for (std::size_t i = 0; i < tris.size(); ++i) {
-    if (tris[i].degenerate) continue;
-    bvh.order.push_back(static_cast<int>(i));
+std::vector<Tri> make_tris(const std::vector<Triangle>& source, int materials) {
+  std::vector<Tri> tris;
+  tris.reserve(source.size());
+  for (const Triangle& t : source) {
+    Tri tri;
+    tri.v0 = t.v0;
+    tri.e1 = t.v1 - tri.v0;
+    tri.e2 = t.v2 - tri.v0;
+    const Vec3 c = cross(tri.e1, tri.e2);
+    const float len = length(c);
+    tri.degenerate = !(len > 0.0f) || !std::isfinite(len);
+    tri.normal = tri.degenerate ? splat(0.0f) : c / len;
+    tri.material = t.material >= 0 && t.material < materials ? t.material : 0;
+    tri.object_id = t.object_id;
+    tri.facet_id = t.facet_id;
+    tri.fan = t.fan;
+    tris.push_back(tri);
   }
-  lo_of.resize(tris.size());
-  hi_of.resize(tris.size());
+  return tris;
+}
+
+Bvh build_bvh(const std::vector<Tri>& tris, const std::vector<Triangle>& source, float pad, int threads) {
+  std::vector<Vec3> lo_of(tris.size()), hi_of(tris.size());
+  std::vector<bool> kept(tris.size());
   for (std::size_t i = 0; i < tris.size(); ++i) {
     const Vec3 a = source[i].v0, b = source[i].v1, c = source[i].v2;
     lo_of[i] = min(a, min(b, c));
     hi_of[i] = max(a, max(b, c));
+    kept[i] = !tris[i].degenerate;
   }
+  return build_bvh(lo_of, hi_of, kept, pad, threads);
+}
+
+Bvh build_bvh(const std::vector<Vec3>& lo_of, const std::vector<Vec3>& hi_of, const std::vector<bool>& kept,
+              float pad, int threads) {
+  Bvh bvh;
+  for (std::size_t i = 0; i < lo_of.size(); ++i)
+    if (kept[i]) bvh.order.push_back(static_cast<int>(i));
   if (bvh.order.empty()) return bvh;
   bvh.nodes.reserve(2 * bvh.order.size());
   bvh.nodes.emplace_back();
@@ -139,9 +163,8 @@ Bvh build_bvh(const std::vector<Tri>& tris, const std::vector<Triangle>& source,
   return bvh;
 }
 
-bool hits_box(const Node& node, const Vec3& origin, const Vec3& dir, float t_min, float t_max) {
-  return slab_test(node.box, origin, dir, t_min, t_max, OPSILA_CULL_SLACK);
+bool hits_box(const Box& box, const Vec3& origin, const Vec3& dir, float t_min, float t_max) {
+  return slab_test(box, origin, dir, t_min, t_max, OPSILA_CULL_SLACK);
 }
-
 
 }  // namespace opsila::reference

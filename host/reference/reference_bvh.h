@@ -41,13 +41,21 @@ struct Bvh {
   std::vector<int> order;  // triangle indices, grouped by leaf
 };
 
+// The tracer's triangles of `source`: materials outside [0, materials)
+// become 0 (SPEC "a face with no material").
+std::vector<Tri> make_tris(const std::vector<Triangle>& source, int materials);
+
 // The BVH over the non-degenerate triangles of `tris` (boxes from
 // `source`, padded by `pad`), built on `threads` threads (0: all).
 Bvh build_bvh(const std::vector<Tri>& tris, const std::vector<Triangle>& source, float pad, int threads);
+// The same over items 0 .. lo_of.size() - 1 with boxes [lo_of[i], hi_of[i]]
+// (the instances' world boxes), leaving out those not `kept`.
+Bvh build_bvh(const std::vector<Vec3>& lo_of, const std::vector<Vec3>& hi_of, const std::vector<bool>& kept,
+              float pad, int threads);
 
-// A node's box met within [t_min, t_max]; the exit widened by the hit
-// order's culling slack, so that rounding never culls a box holding a hit
-// before the best (hit_order.h).
-bool hits_box(const Node& node, const Vec3& origin, const Vec3& dir, float t_min, float t_max);
+// A box (a node's, an instance's) met within [t_min, t_max]; the exit
+// widened by the hit order's culling slack, so that rounding never culls a
+// box holding a hit before the best (hit_order.h).
+bool hits_box(const Box& box, const Vec3& origin, const Vec3& dir, float t_min, float t_max);
 
 }  // namespace opsila::reference

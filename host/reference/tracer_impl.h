@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "scene/camera.h"
+#include "scene/instances.h"
 #include "scene/texture.h"
 #include "hit_order.h"
 #include "reference/reference.h"
@@ -22,59 +23,111 @@ using reference::Tri;
 using Hit = FacetHit;
 
 struct ReferenceTracer::Impl {
+  // A prototype's triangles and BVH in its own frame, built once for all
+  // of its instances.
+  struct Model {
+    std::vector<Tri> tris;
+    Bvh bvh;
+  };
+
   const Scene& scene;
   std::vector<MaterialDesc> materials;  // the scene's, or SPEC's default if it has none
   std::vector<Tri> tris;
   Bvh bvh;
+  std::vector<Model> models;   // per Scene::prototypes
+  std::vector<Box> inst_boxes; // per Scene::instances: instance_box, padded
+  Bvh inst_bvh;                // over inst_boxes: leaves name instances
   CameraFrame frame;
   float epsilon = 0;
   const FacetQueries* queries = nullptr;  // instead of `bvh`, when given
 
   explicit Impl(const Scene& s) : scene(s) {}
 
-  // The BVH walk both searches share: nodes whose box the ray meets within
-  // [t_min, t_max()] (read at each node: the nearest search narrows it),
-  // their triangles handed to leaf(index), which returns true to stop.
+  // The BVH walk every search shares: nodes of `tree` whose box the ray
+  // meets within [t_min, t_max()] (read at each node: the nearest search
+  // narrows it), their items handed to leaf(index), which returns true to
+  // stop. Returns whether a leaf stopped it.
   template <typename TMax, typename Leaf>
-  void walk(const Vec3& origin, const Vec3& dir, float t_min, TMax t_max, Leaf leaf) const {
-    if (bvh.nodes.empty()) return;
+  static bool walk(const Bvh& tree, const Vec3& origin, const Vec3& dir, float t_min, TMax t_max, Leaf leaf) {
+    if (tree.nodes.empty()) return false;
     int stack[128];
     int top = 0;
     stack[top++] = 0;
     while (top > 0) {
-      const Node& node = bvh.nodes[stack[--top]];
-      if (!reference::hits_box(node, origin, dir, t_min, t_max())) continue;
+      const Node& node = tree.nodes[stack[--top]];
+      if (!reference::hits_box(node.box, origin, dir, t_min, t_max())) continue;
       if (node.count == 0) {
         stack[top++] = node.first;
         stack[top++] = node.first + 1;
         continue;
       }
       for (int i = node.first; i < node.first + node.count; ++i)
-        if (leaf(bvh.order[i])) return;
+        if (leaf(tree.order[i])) return true;
     }
+    return false;
   }
 
-  // The hit order's key of triangle `index` hit at t (hit_order.h).
-  HitKey key_of(float t, int index) const {
-    const Tri& tri = tris[std::size_t(index)];
-    return hit_key(t, -1, tri.facet_id, tri.fan);
+  // The instances the world ray may meet within [t_min, t_max()], each
+  // handed to leaf(i, origin', dir') with the ray in its model's frame
+  // (instances.h: not normalised, so t is the same parameter in both).
+  template <typename TMax, typename Leaf>
+  bool walk_instances(const Vec3& origin, const Vec3& dir, float t_min, TMax t_max, Leaf leaf) const {
+    return walk(inst_bvh, origin, dir, t_min, t_max, [&](int i) {
+      if (!reference::hits_box(inst_boxes[std::size_t(i)], origin, dir, t_min, t_max())) return false;
+      const std::array<float, 12>& m = scene.instances[std::size_t(i)].to_object;
+      return leaf(i, apply_point(m, origin), apply_vector(m, dir));
+    });
   }
 
-  // Nearest hit with t > t_min: the least in the one hit order (hit_order.h),
-  // whatever order the BVH visits the triangles in. Boxes are culled only
-  // beyond the end of the best hit's grid cell (widened in hits_box).
-  bool own_nearest(const Vec3& origin, const Vec3& dir, float t_min, Hit& hit) const {
-    HitKey best = hit.tri < 0 ? hit_none() : key_of(hit.t, hit.tri);
-    walk(origin, dir, t_min, [&] { return hit_limit(best.t); }, [&](int index) {
+  const Model& model_of(int inst) const {
+    return models[std::size_t(scene.instances[std::size_t(inst)].prototype)];
+  }
+  // The hit's triangle: hit.tri indexes the scene's, or for an instance
+  // hit its prototype's.
+  const Tri& tri_of(const Hit& hit) const {
+    return hit.inst < 0 ? tris[std::size_t(hit.tri)] : model_of(hit.inst).tris[std::size_t(hit.tri)];
+  }
+  const Triangle& source_of(const Hit& hit) const {
+    if (hit.inst < 0) return scene.triangles[std::size_t(hit.tri)];
+    const int p = scene.instances[std::size_t(hit.inst)].prototype;
+    return scene.prototypes[std::size_t(p)].triangles[std::size_t(hit.tri)];
+  }
+
+  // The hit order's key of a hit (hit_order.h).
+  HitKey key_of(const Hit& hit) const {
+    const Tri& tri = tri_of(hit);
+    return hit_key(hit.t, hit.inst, tri.facet_id, tri.fan);
+  }
+
+  // Nearest hit with t > t_min before `best` among `set`'s triangles (the
+  // scene's own, inst = -1, or instance inst's model, the ray in its frame).
+  static void nearest_in(const std::vector<Tri>& set, const Bvh& tree, int inst, const Vec3& origin,
+                         const Vec3& dir, float t_min, HitKey& best, Hit& hit) {
+    walk(tree, origin, dir, t_min, [&] { return hit_limit(best.t); }, [&](int index) {
       float t, b1, b2;
-      const Tri& tri = tris[std::size_t(index)];
-      if (reference::intersect(tri, origin, dir, t, &b1, &b2) && t > t_min && hit_before(t, -1, tri.facet_id, tri.fan, best)) {
-        best = key_of(t, index);
+      const Tri& tri = set[std::size_t(index)];
+      if (reference::intersect(tri, origin, dir, t, &b1, &b2) && t > t_min &&
+          hit_before(t, inst, tri.facet_id, tri.fan, best)) {
+        best = hit_key(t, inst, tri.facet_id, tri.fan);
         hit.t = t;
         hit.tri = index;
+        hit.inst = inst;
         hit.b1 = b1;
         hit.b2 = b2;
       }
+      return false;
+    });
+  }
+
+  // Nearest hit with t > t_min: the least in the one hit order (hit_order.h),
+  // whatever order the BVHs visit the triangles and instances in. Boxes are
+  // culled only beyond the end of the best hit's grid cell (widened in hits_box).
+  bool own_nearest(const Vec3& origin, const Vec3& dir, float t_min, Hit& hit) const {
+    HitKey best = hit.tri < 0 ? hit_none() : key_of(hit);
+    nearest_in(tris, bvh, -1, origin, dir, t_min, best, hit);
+    walk_instances(origin, dir, t_min, [&] { return hit_limit(best.t); }, [&](int i, const Vec3& o, const Vec3& d) {
+      const Model& m = model_of(i);
+      nearest_in(m.tris, m.bvh, i, o, d, t_min, best, hit);
       return false;
     });
     return hit.tri >= 0;
@@ -85,27 +138,50 @@ struct ReferenceTracer::Impl {
     return own_nearest(origin, dir, t_min, hit);
   }
 
-  // Shadow test: is any triangle hit with t in (t_min, t_max)?
-  bool occluded(const Vec3& origin, const Vec3& dir, float t_min, float t_max) const {
-    if (queries) return queries->occluded(origin, dir, t_min, t_max);
-    bool blocked = false;
-    walk(origin, dir, t_min, [&] { return t_max; }, [&](int index) {
+  // Is any of `set`'s triangles hit with t in (t_min, t_max)?
+  static bool any_in(const std::vector<Tri>& set, const Bvh& tree, const Vec3& origin, const Vec3& dir,
+                     float t_min, float t_max) {
+    return walk(tree, origin, dir, t_min, [&] { return t_max; }, [&](int index) {
       float t;
-      blocked = reference::intersect(tris[index], origin, dir, t) && t > t_min && t < t_max;
-      return blocked;
+      return reference::intersect(set[std::size_t(index)], origin, dir, t) && t > t_min && t < t_max;
     });
-    return blocked;
   }
 
-  // SPEC "Smooth shading": the interpolated vertex normal, turned to the
-  // side n_facing (the facet normal facing the ray) is on; n_facing itself
-  // without vertex normals (or when they cancel out).
-  Vec3 shading_normal(const Triangle& t, const Hit& hit, const Vec3& n_facing) const {
+  // Shadow test: is any triangle (the scene's own or an instance's) hit
+  // with t in (t_min, t_max)?
+  bool occluded(const Vec3& origin, const Vec3& dir, float t_min, float t_max) const {
+    if (queries) return queries->occluded(origin, dir, t_min, t_max);
+    if (any_in(tris, bvh, origin, dir, t_min, t_max)) return true;
+    return walk_instances(origin, dir, t_min, [&] { return t_max; }, [&](int i, const Vec3& o, const Vec3& d) {
+      const Model& m = model_of(i);
+      return any_in(m.tris, m.bvh, o, d, t_min, t_max);
+    });
+  }
+
+  // The item buffer's (object, facet) of a hit (SPEC "Item buffer"):
+  // instance i is object num_objects + i, with its model's facet ids.
+  void item_ids(const Hit& hit, std::int32_t* out) const {
+    if (hit.tri < 0) {
+      out[0] = out[1] = -1;
+      return;
+    }
+    const Tri& tri = tri_of(hit);
+    out[0] = hit.inst >= 0 ? scene.num_objects + hit.inst : tri.object_id;
+    out[1] = tri.facet_id;
+  }
+
+  // SPEC "Smooth shading": the interpolated vertex normal (an instance's
+  // through `to_object` to the world, not normalised before the length
+  // test), turned to the side n_facing (the facet normal facing the ray) is
+  // on; n_facing itself without vertex normals (or when they cancel out).
+  Vec3 shading_normal(const Triangle& t, const Hit& hit, const Vec3& n_facing,
+                      const std::array<float, 12>* to_object) const {
     if (!scene.smooth || t.attributes < 0) return n_facing;
     const VertexAttributes& a = scene.attributes[t.attributes];
     if (!a.has_normals) return n_facing;
     const float b0 = 1.0f - hit.b1 - hit.b2;
-    const Vec3 ns = b0 * a.normal[0] + hit.b1 * a.normal[1] + hit.b2 * a.normal[2];
+    Vec3 ns = b0 * a.normal[0] + hit.b1 * a.normal[1] + hit.b2 * a.normal[2];
+    if (to_object) ns = instance_normal(*to_object, ns);
     const float len = length(ns);
     if (!(len > 0.0f) || !std::isfinite(len)) return n_facing;
     const Vec3 unit = ns / len;
@@ -165,14 +241,19 @@ struct ReferenceTracer::Impl {
     const MaterialDesc* m;
     const Triangle* source;
   };
+  // An instance's hit: Ng of its model-frame triangle taken to the world
+  // and renormalised; the barycentrics are the model-frame ray's.
   Surface surface(const Vec3& origin, const Vec3& d, const Hit& hit) const {
-    const Tri& tri = tris[hit.tri];
+    const Tri& tri = tri_of(hit);
+    const std::array<float, 12>* to_object =
+        hit.inst >= 0 ? &scene.instances[std::size_t(hit.inst)].to_object : nullptr;
+    const Vec3 ng = to_object ? normalize(instance_normal(*to_object, tri.normal)) : tri.normal;
     Surface s;
     s.m = &materials[tri.material];
     s.p = origin + hit.t * d;
-    s.entering = dot(tri.normal, d) < 0.0f;
-    s.source = &scene.triangles[hit.tri];
-    s.n = shading_normal(*s.source, hit, s.entering ? tri.normal : -tri.normal);
+    s.entering = dot(ng, d) < 0.0f;
+    s.source = &source_of(hit);
+    s.n = shading_normal(*s.source, hit, s.entering ? ng : -ng, to_object);
     return s;
   }
 
@@ -197,20 +278,20 @@ struct ReferenceTracer::Impl {
   }
 
   // Adds weight x (radiance of the ray tree rooted at this ray) to `pixel`.
-  // Returns the triangle hit (for the item buffer), or -1.
-  int trace(const Vec3& origin, const Vec3& d, float t_min, int level, const Vec3& weight,
+  // Returns the ray's hit (for the item buffer; tri = -1: none).
+  Hit trace(const Vec3& origin, const Vec3& d, float t_min, int level, const Vec3& weight,
             Vec3& pixel, RayCounts& counts) const {
     Hit hit;
     if (!nearest(origin, d, t_min, hit)) {
       add_contribution(pixel, weight * scene.background);
-      return -1;
+      return hit;
     }
     const Surface s = surface(origin, d, hit);
     const MaterialDesc& m = *s.m;
     const Vec3 ka = mapped(*s.source, hit, m.ka, m.map_ka), kd = mapped(*s.source, hit, m.kd, m.map_kd);
     add_contribution(pixel, weight * local_intensity(s.p, s.n, d, m, ka, kd, counts));
 
-    if (level + 1 >= scene.max_depth) return hit.tri;
+    if (level + 1 >= scene.max_depth) return hit;
     // SPEC "Materials": kr = Ks for illum 3..7, kt = Tf for illum 4, 6, 7.
     const Vec3 kr = m.kr();
     const Vec3 kt = m.kt();
@@ -223,13 +304,14 @@ struct ReferenceTracer::Impl {
       ++counts.secondary;
       trace(s.p, t_dir, epsilon, level + 1, weight * kt, pixel, counts);
     }
-    return hit.tri;
+    return hit;
   }
 
-  // The sample's key of a triangle after the distance's cell: (facet, fan),
-  // the rest of the hit order (sample_rays joins holders on both).
-  std::uint64_t sample_key(int index) const {
-    const Tri& t = tris[std::size_t(index)];
+  // The sample's key of a hit's (facet, fan), after the distance's cell
+  // and the instance: the rest of the hit order (sample_rays joins holders
+  // on each).
+  std::uint64_t sample_key(const Hit& hit) const {
+    const Tri& t = tri_of(hit);
     return std::uint64_t(std::uint32_t(t.facet_id)) << 32 | std::uint32_t(t.fan);
   }
 };

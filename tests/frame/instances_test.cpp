@@ -51,6 +51,15 @@ TEST(Instances, MatchTheSceneWithTheInstancesWrittenOut) {
   EXPECT_GE(item_agreement(inst.item_buffer, as_instance_items(s, flat.item_buffer)), 0.97);
 }
 
+// The sequential reference, which meets instances in its own code, agrees
+// (within what float rounding across implementations allows).
+TEST(Instances, MatchTheReference) {
+  const Scene s = instanced_scene(128);
+  const RenderResult machine = render_on_pes(s, 16);
+  const ImageResult ref = render_reference(s);
+  expect_near_reference(machine, ref, 0.01, 0.99);
+}
+
 // The bench's replicated megakernel walks the instances too: the same
 // items (one hit order) and the same image but for the order of sums.
 TEST(Instances, TheMegakernelSeesThemAsTheMachineDoes) {

@@ -54,10 +54,6 @@ constexpr const char* kSingleProcessOnly =
     "a rank reads only its share of it; the scatter curve measures one "
     "device alone: run `opsila bench` without mpirun for them";
 
-// Why an instanced scene leaves Embree out.
-constexpr const char* kNoInstances =
-    "Embree: its baseline here answers the scene's own facets only, not instances";
-
 BenchReport start_report(const BenchOptions& o, const Scene& scene, int pes) {
   BenchReport r;
   r.scene_path = o.scene_path;
@@ -103,7 +99,6 @@ void measure_all(BenchReport& report, Scene& scene, const RenderSettings& settin
   if (baselines) {
     measure_host_references(report, scene, progress);
     measure_scatter_curve(report, rt, progress);
-    if (!scene.instances.empty()) report.single_process_only = kNoInstances;
   } else {
     report.single_process_only = kSingleProcessOnly;
     progress("%d MPI ranks: %s", ranks.size(), kSingleProcessOnly);

@@ -213,7 +213,7 @@ void measure_renders(BenchReport& report, Scene& scene, const RenderSettings& se
                      bool baselines, const BenchProgress& progress) {
   const int warmup = report.warmup, repeats = report.repeats;
   const int host_threads = report.host_threads;
-  const bool embree = baselines && embree_available() && scene.instances.empty();  // bench.cpp, kNoInstances
+  const bool embree = baselines && embree_available();
   std::string others;
   if (baselines)
     others = embree ? ", the megakernel, the traversal alone and Embree " + embree_version() + " (" +

@@ -28,14 +28,12 @@ ReferenceTracer::ReferenceTracer(const Scene& scene, const FacetQueries* queries
   // SPEC "a face with no material".
   if (impl_->materials.empty()) impl_->materials.push_back(MaterialDesc::default_material());
   check_hit_order_ids(scene);
-  if (queries && !scene.instances.empty())
-    throw std::logic_error("ReferenceTracer: facet queries do not take instances");
   const int materials = static_cast<int>(impl_->materials.size());
   impl_->tris = reference::make_tris(scene.triangles, materials);
   impl_->queries = queries;
   const float pad = static_cast<float>(1e-5 * scene.diagonal()) + 1e-30f;
   if (!queries) impl_->bvh = reference::build_bvh(impl_->tris, scene.triangles, pad, build_threads);
-  build_instances(build_threads, pad);
+  build_instances(build_threads, pad);  // the queries answer instances too, the models' facets shade them
   impl_->frame = camera_frame(scene.camera, scene.width, scene.height);
 }
 
@@ -54,9 +52,10 @@ void ReferenceTracer::build_instances(int build_threads, float pad) {
       hi = max(hi, max(t.v0, max(t.v1, t.v2)));
     }
     const float model_pad = p.triangles.empty() ? 0.0f : static_cast<float>(1e-5 * box_diagonal(lo, hi)) + 1e-30f;
-    model.bvh = reference::build_bvh(model.tris, p.triangles, model_pad, build_threads);
+    if (!impl_->queries) model.bvh = reference::build_bvh(model.tris, p.triangles, model_pad, build_threads);
     impl_->models.push_back(std::move(model));
   }
+  if (impl_->queries) return;
   // The instances' world boxes, padded as the scene's nodes are.
   const std::size_t n = scene.instances.size();
   std::vector<Vec3> lo_of(n), hi_of(n);

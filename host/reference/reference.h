@@ -32,8 +32,8 @@ struct FacetHit {
 
 // Where rays meet the facets, when another library traverses the scene (the
 // bench's Embree baseline): the tracer then shades, samples and counts as
-// always, on these answers. Called from several threads at once. They know
-// only Scene::triangles: a scene with instances takes none.
+// always, on these answers. Called from several threads at once. A hit on
+// an instance names it (FacetHit::inst) and its model's triangle.
 class FacetQueries {
  public:
   virtual ~FacetQueries() = default;
@@ -49,8 +49,8 @@ class FacetQueries {
 // tracer at once. The BVHs (the scene's own facets', one per prototype in
 // its frame, one over the instances' world boxes) are built on
 // `build_threads` threads (0: every hardware thread); each is the same tree
-// for any number. Throws std::logic_error given `queries` and a scene with
-// instances.
+// for any number; given `queries`, only the models' facets are kept (to
+// shade the instances' hits).
 class ReferenceTracer {
  public:
   explicit ReferenceTracer(const Scene& scene, const FacetQueries* queries = nullptr, int build_threads = 0);

@@ -70,6 +70,17 @@ TEST(Instances, TheMegakernelSeesThemAsTheMachineDoes) {
   EXPECT_GE(clamped_psnr(mega.rgb, machine.rgb), 60.0);
 }
 
+// The bench's Embree baseline instances one Embree scene per model.
+TEST(Instances, EmbreeInstancesThemToo) {
+  if (!embree_available()) GTEST_SKIP() << "built without Embree";
+  const Scene s = instanced_scene(128);
+  const ImageResult ref = render_reference(s);
+  const BaselineImage embree = render_embree(s, 2);
+  EXPECT_GE(clamped_psnr(embree.rgb, ref.rgb), 40.0);
+  EXPECT_LE(fraction_off(embree.rgb, ref.rgb, 2), 0.01);
+  EXPECT_GE(item_agreement(embree.item_buffer, ref.item_buffer), 0.99);
+}
+
 // A scene of instances alone: every bank's own walk starts at an empty root.
 TEST(Instances, AloneRenderTheSameOnOneAndSixteenPes) {
   Scene s = instanced_scene(64, 4, 3);

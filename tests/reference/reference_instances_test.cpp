@@ -356,17 +356,5 @@ TEST(ReferenceInstances, RaySampleEndsAtInstances) {
   EXPECT_GT(on_instances, 20u);
 }
 
-class NoQueries : public FacetQueries {
- public:
-  bool nearest(const Vec3&, const Vec3&, float, FacetHit&) const override { return false; }
-  bool occluded(const Vec3&, const Vec3&, float, float) const override { return false; }
-};
-
-TEST(ReferenceInstances, FacetQueriesRefuseInstances) {
-  const Scene s = instanced_scene(false, false, 8, 8);
-  const NoQueries queries;
-  EXPECT_THROW(ReferenceTracer(s, &queries), std::logic_error);
-}
-
 }  // namespace
 }  // namespace opsila

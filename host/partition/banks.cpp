@@ -14,7 +14,7 @@ void check_kernel_limits(const Scene& scene) {
   if (static_cast<int>(scene.lights.size()) > OPSILA_MAX_LIGHTS)
     throw InputError("scene has " + std::to_string(scene.lights.size()) + " lights; at most " +
                      std::to_string(OPSILA_MAX_LIGHTS) + " are supported");
-  if (scene.total_triangles() == 0 && scene.instances.empty()) throw InputError("scene has no facets");
+  if (!scene.has_facets()) throw InputError("scene has no facets");
 }
 
 void check_machine_request(const Scene& scene, int num_pes) {

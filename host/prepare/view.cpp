@@ -55,7 +55,7 @@ void apply_view_options(Scene& scene, const ViewOptions& o) {
                      " is not strictly between 0 and 180 degrees");
 
   // A scene without a camera frames its bounding box; flags given still win.
-  if (!scene.has_camera && scene.total_triangles() > 0) {
+  if (!scene.has_camera && scene.has_facets()) {
     Vec3 lo, hi;
     scene.bounds(lo, hi);
     const float fov = scene.camera.fov_deg;

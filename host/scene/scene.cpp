@@ -190,7 +190,7 @@ CameraDesc frame_bounds(const Vec3& lo, const Vec3& hi, float fov_deg, float asp
 void check_scene_extent(const Scene& scene, const std::string& where) {
   Vec3 lo, hi;
   scene.bounds(lo, hi);
-  check_scene_extent(scene.total_triangles(), lo, hi, where);
+  check_scene_extent(scene.total_triangles() + scene.instances.size(), lo, hi, where);  // an instance has facets
 }
 
 void check_scene_extent(std::size_t triangles, const Vec3& lo, const Vec3& hi, const std::string& where) {

@@ -224,6 +224,9 @@ struct Scene {
   bool by_figures() const { return is_share() || share.banked; }
   // Triangles of the whole scene (every rank's, for a share).
   std::size_t total_triangles() const { return by_figures() ? share.total_triangles : triangles.size(); }
+  // Whether a ray can hit anything: triangles of its own (any rank's) or
+  // instances (every rank holds them all).
+  bool has_facets() const { return total_triangles() > 0 || !instances.empty(); }
   // The count and the bounds kept as figures (SceneShare), so that the
   // frame's epsilon and the reports stay the same once the triangles go:
   // taken while the triangles are whole, before anything consumes them.
@@ -275,9 +278,9 @@ constexpr long long kMaxImagePixels = 1LL << 26;
 // enough that eye positions, distances and epsilon all stay finite in float.
 constexpr double kMaxSceneExtent = 1e30;
 
-// Throws InputError("<where>: ...") unless the scene has a facet and its
-// bounding-box diagonal is positive, at most kMaxSceneExtent, and gives a
-// positive epsilon in float.
+// Throws InputError("<where>: ...") unless the scene has a facet (its own
+// or an instance's) and its bounding-box diagonal is positive, at most
+// kMaxSceneExtent, and gives a positive epsilon in float.
 void check_scene_extent(const Scene& scene, const std::string& where);
 // The same from the figures: triangle count and bounds.
 void check_scene_extent(std::size_t triangles, const Vec3& lo, const Vec3& hi, const std::string& where);

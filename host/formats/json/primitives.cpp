@@ -114,10 +114,13 @@ struct Turn {
   explicit Turn(const Vec3& deg) {
     for (int a = 0; a < 3; ++a) cos_sin_deg(deg[a], c[a], s[a]);
   }
+  explicit Turn(const double deg[3]) {
+    for (int a = 0; a < 3; ++a) cos_sin_deg(deg[a], c[a], s[a]);
+  }
 };
 
-Vec3 apply_turned(const Transform& t, const Turn& turn, const Vec3& p) {
-  double x = double(p[0]) * t.scale[0], y = double(p[1]) * t.scale[1], z = double(p[2]) * t.scale[2];
+// (x, y, z) rotated about x, then y, then z.
+void turn_point(const Turn& turn, double& x, double& y, double& z) {
   double c = turn.c[0], s = turn.s[0];  // about x
   double y2 = c * y - s * z, z2 = s * y + c * z;
   y = y2;
@@ -132,6 +135,11 @@ Vec3 apply_turned(const Transform& t, const Turn& turn, const Vec3& p) {
   y2 = s * x + c * y;
   x = x2;
   y = y2;
+}
+
+Vec3 apply_turned(const Transform& t, const Turn& turn, const Vec3& p) {
+  double x = double(p[0]) * t.scale[0], y = double(p[1]) * t.scale[1], z = double(p[2]) * t.scale[2];
+  turn_point(turn, x, y, z);
   return {static_cast<float>(x + t.translate[0]), static_cast<float>(y + t.translate[1]),
           static_cast<float>(z + t.translate[2])};
 }
@@ -170,6 +178,25 @@ bool Transform::is_identity() const {
 Vec3 Transform::apply(const Vec3& p) const { return apply_turned(*this, Turn(rotate_deg), p); }
 
 Vec3 Transform::apply_normal(const Vec3& n) const { return normal_transform(*this).apply(n); }
+
+std::array<double, 12> Transform::matrix() const {
+  const double t[3] = {translate[0], translate[1], translate[2]}, r[3] = {rotate_deg[0], rotate_deg[1], rotate_deg[2]},
+               s[3] = {scale[0], scale[1], scale[2]};
+  return transform_matrix(t, r, s);
+}
+
+std::array<double, 12> transform_matrix(const double translate[3], const double rotate_deg[3], const double scale[3]) {
+  const Turn turn(rotate_deg);
+  std::array<double, 12> m{};
+  for (int j = 0; j < 3; ++j) {  // column j: the turned, scaled axis j
+    double p[3] = {0, 0, 0};
+    p[j] = scale[j];
+    turn_point(turn, p[0], p[1], p[2]);
+    for (int r = 0; r < 3; ++r) m[std::size_t(4 * r + j)] = p[r];
+  }
+  for (int r = 0; r < 3; ++r) m[std::size_t(4 * r + 3)] = translate[r];
+  return m;
+}
 
 void transform_normals(std::vector<VertexAttributes>& attributes, std::size_t first, const Transform& t) {
   if (t.is_identity()) return;

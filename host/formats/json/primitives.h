@@ -4,6 +4,7 @@
 // planes) and returns the next free facet id.
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <vector>
@@ -29,7 +30,12 @@ struct Transform {
   // A normal under the same transform: rotated, scaled by 1 / scale (the
   // inverse transpose), not normalised (shading normalises).
   Vec3 apply_normal(const Vec3& n) const;
+  // The same in double, row-major 3 x 4 (row i: A[i][0..2], b[i]; x' = A x + b).
+  std::array<double, 12> matrix() const;
 };
+
+// The matrix of T · Rz · Ry · Rx · S from values in double.
+std::array<double, 12> transform_matrix(const double translate[3], const double rotate_deg[3], const double scale[3]);
 
 // Applies `t` to the vertices of triangles [first, end).
 void transform_triangles(std::vector<Triangle>& tris, std::size_t first, const Transform& t);

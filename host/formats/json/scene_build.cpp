@@ -4,6 +4,8 @@
 #include <climits>
 #include <cmath>
 
+#include "scene/instances.h"
+
 namespace opsila {
 namespace scene_json {
 
@@ -12,11 +14,12 @@ void TriangleBudget::add(std::size_t triangles, std::size_t facets, std::size_t 
   const std::string on_ranks = ranks_ > 1 ? " on " + std::to_string(ranks_) + " ranks (" +
                                                 std::to_string(entry_limit_) + " per rank)"
                                           : std::string();
-  if (triangles > most_ || planned_triangles_ > most_ - triangles)
-    v_.fail(path, "would make " + std::to_string(triangles) + " more triangles (" +
-                      std::to_string(planned_triangles_) + " so far); a scene may have at most " +
-                      std::to_string(most_) + on_ranks + " (scenes/FORMAT.md, Limits)" +
-                      limit_.why_not(planned_triangles_ + triangles, ranks_) + hint(triangles, windowed));
+  const std::size_t so_far = planned_triangles_ + everywhere_;
+  if (triangles > most_ || so_far > most_ - triangles)
+    v_.fail(path, "would make " + std::to_string(triangles) + " more triangles (" + std::to_string(so_far) +
+                      " so far); a scene may have at most " + std::to_string(most_) + on_ranks +
+                      " (scenes/FORMAT.md, Limits)" + limit_.why_not(so_far + triangles, ranks_) +
+                      hint(triangles, windowed));
   if (triangles > entry_limit_ && !(windowed && ranks_ > 1))  // every rank builds an entry whole
     v_.fail(path, "would make " + std::to_string(triangles) + " triangles; one entry of objects may have at most " +
                       std::to_string(entry_limit_) + (windowed ? "" : " on any number of ranks") +
@@ -26,6 +29,22 @@ void TriangleBudget::add(std::size_t triangles, std::size_t facets, std::size_t 
   planned_triangles_ += triangles;
   planned_facets_ += facets;
   planned_objects_ += objects;
+}
+
+void TriangleBudget::hold_everywhere(std::size_t from, std::size_t placements, const std::string& path) {
+  const std::size_t model = planned_triangles_ - from;
+  planned_triangles_ = from;
+  if (placements > kMaxInstances - instances_)
+    v_.fail(path, "more than " + std::to_string(kMaxInstances) + " instances in the scene (scenes/FORMAT.md, Limits)");
+  instances_ += placements;
+  const std::size_t held = model + 3 * placements;  // placements <= 2^26: no overflow
+  add(held, 0, placements, path);
+  planned_triangles_ -= held;
+  everywhere_ += held;
+  if (everywhere_ > entry_limit_)
+    v_.fail(path, "the instances' models and placements (3 triangles each) come to " + std::to_string(everywhere_) +
+                      " triangles, which every rank holds; at most " + std::to_string(entry_limit_) +
+                      " (scenes/FORMAT.md, Limits)" + limit_.why_not(everywhere_, 1));
 }
 
 std::string TriangleBudget::beyond(const InputError& e) const {
@@ -38,7 +57,7 @@ std::string TriangleBudget::beyond(const InputError& e) const {
 // An entry every rank builds whole needs the memory on every rank.
 std::string TriangleBudget::hint(std::size_t triangles, bool windowed) const {
   const bool whole = triangles > entry_limit_ && !windowed;
-  const std::size_t all = planned_triangles_ + triangles;
+  const std::size_t all = planned_triangles_ + everywhere_ + triangles;
   std::string ranks;
 #ifdef OPSILA_HAVE_MPI
   const double r = std::ceil(double(all) / double(std::max<std::size_t>(entry_limit_, 1)));

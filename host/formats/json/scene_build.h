@@ -37,9 +37,17 @@ class TriangleBudget {
            bool windowed = false);
   void add(std::size_t triangles, const std::string& path) { add(triangles, triangles, 1, path); }
 
-  std::size_t planned() const { return planned_triangles_; }  // triangles so far
+  // Counts an instances entry (scenes/FORMAT.md "Instances"): its model,
+  // planned by add() since the plan held `from` triangles, and 3 triangles
+  // for each of its `placements` (what a placement holds while the scene
+  // is prepared). Every rank keeps them all: they leave the plan that is
+  // dealt (planned()), count against the scene's limit and, together, one
+  // rank's.
+  void hold_everywhere(std::size_t from, std::size_t placements, const std::string& path);
+
+  std::size_t planned() const { return planned_triangles_; }  // triangles so far, to be dealt
   std::size_t most() const { return most_; }                   // the whole scene's
-  std::size_t left() const { return most_ - planned_triangles_; }
+  std::size_t left() const { return most_ - planned_triangles_ - everywhere_; }
   std::size_t entry_limit() const { return entry_limit_; }
   // Why an included file that streamed past the scene's limit does not fit
   // (TooManyTriangles), "" for other errors: added to its message.
@@ -53,6 +61,7 @@ class TriangleBudget {
   std::size_t entry_limit_, most_;
   int ranks_;
   std::size_t planned_triangles_ = 0, planned_facets_ = 0, planned_objects_ = 0;
+  std::size_t everywhere_ = 0, instances_ = 0;  // hold_everywhere's
 };
 
 // The entry of "objects" being built: what is not yet placed, settled and

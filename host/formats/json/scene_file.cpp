@@ -67,10 +67,10 @@ void read_document(Scene& scene, const std::string& text, const std::string& nam
   // Every object is checked and the total counted: only now is geometry built.
   objects.build();
 
-  if (scene.total_triangles() == 0) values.fail("objects", "no facets: the scene has no visible objects");
+  if (!scene.has_facets()) values.fail("objects", "no facets: the scene has no visible objects");
   Vec3 lo, hi;
   scene.bounds(lo, hi);  // one scan of the facets for the check and the framing
-  check_scene_extent(scene.total_triangles(), lo, hi, name);
+  check_scene_extent(scene.total_triangles() + scene.instances.size(), lo, hi, name);  // an instance has facets
   if (const Json* c = find("camera"))
     sections.camera(*c, "camera");  // the whole camera: nothing of the framing is kept
   else

@@ -15,24 +15,6 @@ namespace {
 constexpr long long kFlushItems = 4096;                        // generator items between flushes, at most
 constexpr std::size_t kFlushTriangles = std::size_t(1) << 18;  // and about this many triangles
 
-// A generator's item count: `count`, or the product of `counts` (grid).
-long long generator_items(SceneValues& values, const Json& v, const std::string& path, bool grid, int counts[3]) {
-  const auto key = [&](const char* k) { return join_key(path, k); };
-  const int kMaxItems = kMaxGeneratorItems;
-  if (!grid) return values.integer(values.require(v, path, "count"), key("count"), 1, kMaxItems);
-  const Json& c = values.require(v, path, "counts");
-  if (c.is_number()) {
-    counts[0] = counts[1] = counts[2] = values.integer(c, key("counts"), 1, 1000);
-  } else if (c.is_array() && c.size() == 3) {
-    for (int a = 0; a < 3; ++a) counts[a] = values.integer(c[a], join_index(key("counts"), a), 1, 100000);
-  } else {
-    values.fail(key("counts"), std::string("expected an integer or [nx, ny, nz], not ") + kind(c));
-  }
-  const long long items = 1LL * counts[0] * counts[1] * counts[2];
-  if (items > kMaxItems) values.fail(key("counts"), "more than " + std::to_string(kMaxItems) + " items");
-  return items;
-}
-
 // The running sums of a generator's material weights (equal when left
 // out); returns their total.
 double material_weights(SceneValues& values, const Json& v, const std::string& path, std::size_t materials,
@@ -84,6 +66,50 @@ bool is_box(const Generator& g, double u_shape) {
 
 }  // namespace
 
+long long generator_items(SceneValues& values, const Json& v, const std::string& path, bool grid, int counts[3]) {
+  const auto key = [&](const char* k) { return join_key(path, k); };
+  const int kMaxItems = kMaxGeneratorItems;
+  if (!grid) return values.integer(values.require(v, path, "count"), key("count"), 1, kMaxItems);
+  const Json& c = values.require(v, path, "counts");
+  if (c.is_number()) {
+    counts[0] = counts[1] = counts[2] = values.integer(c, key("counts"), 1, 1000);
+  } else if (c.is_array() && c.size() == 3) {
+    for (int a = 0; a < 3; ++a) counts[a] = values.integer(c[a], join_index(key("counts"), a), 1, 100000);
+  } else {
+    values.fail(key("counts"), std::string("expected an integer or [nx, ny, nz], not ") + kind(c));
+  }
+  const long long items = 1LL * counts[0] * counts[1] * counts[2];
+  if (items > kMaxItems) values.fail(key("counts"), "more than " + std::to_string(kMaxItems) + " items");
+  return items;
+}
+
+void read_region(SceneValues& values, const Json& v, const std::string& path, Vec3& lo, Vec3& hi) {
+  lo = values.vec3(values.require(v, path, "min"), join_key(path, "min"));
+  hi = values.vec3(values.require(v, path, "max"), join_key(path, "max"));
+  for (int a = 0; a < 3; ++a)
+    if (!(hi[a] >= lo[a])) values.fail(join_key(path, "max"), "must not be less than min on any axis");
+}
+
+void read_range(SceneValues& values, const Json& v, const std::string& path, bool positive, float& lo, float& hi) {
+  const auto one = [&](const Json& x, const std::string& p) { return positive ? values.positive(x, p) : values.real(x, p); };
+  if (v.is_array() && v.size() == 2) {
+    lo = one(v[0], join_index(path, 0));
+    hi = one(v[1], join_index(path, 1));
+    if (hi < lo) values.fail(path, "[min, max] with max < min");
+  } else {
+    lo = hi = one(v, path);
+  }
+}
+
+void grid_centre(const int counts[3], const Vec3& lo, const Vec3& hi, float jitter, long long n, const double u[3],
+                 double centre[3]) {
+  const long long cell[3] = {n % counts[0], (n / counts[0]) % counts[1], n / (1LL * counts[0] * counts[1])};
+  for (int a = 0; a < 3; ++a) {
+    const double step = (double(hi[a]) - lo[a]) / counts[a];
+    centre[a] = lo[a] + step * (cell[a] + 0.5) + jitter * 0.5 * step * (2.0 * u[a] - 1.0);
+  }
+}
+
 // Many spheres/boxes, each its own object, from a fixed-seed PCG32. Per item
 // seven numbers are drawn in a fixed order: shape, radius, x, y, z,
 // material, angle (see FORMAT.md), so a scene is the same everywhere.
@@ -98,10 +124,7 @@ Generator read_generator(SceneValues& values, SceneSections& sections, const Jso
   const auto key = [&](const char* k) { return join_key(path, k); };
   Generator g;
   g.grid = grid;
-  g.lo = values.vec3(values.require(v, path, "min"), key("min"));
-  g.hi = values.vec3(values.require(v, path, "max"), key("max"));
-  for (int a = 0; a < 3; ++a)
-    if (!(g.hi[a] >= g.lo[a])) values.fail(key("max"), "must not be less than min on any axis");
+  read_region(values, v, path, g.lo, g.hi);
   g.items = generator_items(values, v, path, grid, g.counts);
   if (const Json* j = SceneValues::find(v, "jitter")) {
     g.jitter = values.real(*j, key("jitter"));
@@ -109,15 +132,7 @@ Generator read_generator(SceneValues& values, SceneSections& sections, const Jso
   }
   bool want_sphere = true, want_box = false;
   read_shapes(values, v, path, g, want_sphere, want_box);
-  if (const Json* r = SceneValues::find(v, "radius")) {
-    if (r->is_array() && r->size() == 2) {
-      g.rmin = values.positive((*r)[0], join_index(key("radius"), 0));
-      g.rmax = values.positive((*r)[1], join_index(key("radius"), 1));
-      if (g.rmax < g.rmin) values.fail(key("radius"), "[min, max] with max < min");
-    } else {
-      g.rmin = g.rmax = values.positive(*r, key("radius"));
-    }
-  }
+  if (const Json* r = SceneValues::find(v, "radius")) read_range(values, *r, key("radius"), true, g.rmin, g.rmax);
   if (const Json* s = SceneValues::find(v, "subdivisions")) g.subdivisions = values.integer(*s, key("subdivisions"), 0, 10);
   if (const Json* m = SceneValues::find(v, "materials")) g.materials = sections.material_list(*m, key("materials"));
   g.total = material_weights(values, v, path, g.materials.size(), g.cumulative);
@@ -153,12 +168,7 @@ void make_items(const Generator& g, std::vector<Triangle>& tris, int& next_objec
     double centre[3];
     const double u[3] = {ux, uy, uz};
     if (g.grid) {
-      const long long cell[3] = {n % g.counts[0], (n / g.counts[0]) % g.counts[1],
-                                 n / (1LL * g.counts[0] * g.counts[1])};
-      for (int a = 0; a < 3; ++a) {
-        const double step = (double(g.hi[a]) - g.lo[a]) / g.counts[a];
-        centre[a] = g.lo[a] + step * (cell[a] + 0.5) + g.jitter * 0.5 * step * (2.0 * u[a] - 1.0);
-      }
+      grid_centre(g.counts, g.lo, g.hi, g.jitter, n, u, centre);
     } else {
       for (int a = 0; a < 3; ++a) centre[a] = g.lo[a] + (double(g.hi[a]) - g.lo[a]) * u[a];
     }

@@ -33,6 +33,20 @@ struct Generator {
   std::size_t per_item = 0;  // the triangles of its largest shape
 };
 
+// What generators and instances share (scenes/FORMAT.md): the item count
+// of `v` (its `count`, or the product of a grid's `counts`, into counts),
+// at most kMaxGeneratorItems.
+long long generator_items(SceneValues& values, const Json& v, const std::string& path, bool grid, int counts[3]);
+// The region `min`, `max` of `v` (max >= min on every axis).
+void read_region(SceneValues& values, const Json& v, const std::string& path, Vec3& lo, Vec3& hi);
+// A number or [min, max] (max >= min) at `path`, positive when `positive`.
+void read_range(SceneValues& values, const Json& v, const std::string& path, bool positive, float& lo, float& hi);
+// The centre of item n of a grid of counts[0..2] cells over [lo, hi] (x
+// fastest, then y, then z), moved by jitter x half a cell x (2u - 1) on
+// each axis.
+void grid_centre(const int counts[3], const Vec3& lo, const Vec3& hi, float jitter, long long n, const double u[3],
+                 double centre[3]);
+
 // A generator entry ("grid" when `grid`), its keys and values checked.
 Generator read_generator(SceneValues& values, SceneSections& sections, const Json& v, const std::string& path,
                          bool grid);

@@ -21,8 +21,9 @@ void ObjectReader::build() {
   for (const auto& build : builds_) build();
   scene_.num_objects = building_.next_object;
   scene_.num_facets = building_.next_facet;
-  if (dealer_.active())
-    dealer_.finish(scene_, [this](const std::string& path, std::size_t dropped) { warn_dropped(path, dropped); });
+  if (!dealer_.active()) return;
+  dealer_.add_instances(scene_);
+  dealer_.finish(scene_, [this](const std::string& path, std::size_t dropped) { warn_dropped(path, dropped); });
 }
 
 // Checks one object and plans its construction; builds_ runs the plans in
@@ -31,26 +32,12 @@ void ObjectReader::object(const Json& v, const std::string& path) {
   v_.expect_object(v, path);
   const std::size_t planned_before = budget_.planned();  // where this entry's triangles start in the plan
   const std::string type = v_.string(v_.require(v, path, "type"), join_key(path, "type"));
-  const auto key = [&](const char* k) { return join_key(path, k); };
-  Make make;
-
-  if (type == "sphere" || type == "box" || type == "polygon") {
-    make = solid(v, path, type);
-  } else if (type == "plane" || type == "checkerboard") {
-    make = plane(v, path, type == "checkerboard");
-  } else if (type == "terrain") {
-    make = terrain(v, path);
-  } else if (type == "scatter" || type == "grid") {
-    make = generator(v, path, type == "grid");
-  } else if (type == "obj" || type == "model") {
-    make = includes_.plan(v, path, type == "model");
-  } else {
-    v_.fail(key("type"), "unknown object type '" + quoted_prefix(type) +
-                          "' (expected sphere, box, plane, checkerboard, polygon, terrain, "
-                          "scatter, grid, obj or model)");
+  if (type == "instances") {
+    builds_.push_back(instances(v, path));
+    return;
   }
-  std::optional<Transform> placed;
-  if (const Json* t = v_.find(v, "transform")) placed = sections_.transform(*t, key("transform"));
+  const Make make = type == "scatter" || type == "grid" ? generator(v, path, type == "grid") : shape(v, path, type);
+  const std::optional<Transform> placed = placement(v, path);
   const std::size_t planned_after = budget_.planned();
   builds_.push_back([this, make, placed, path, planned_before, planned_after] {
     Entry& entry = building_.entry;
@@ -68,6 +55,23 @@ void ObjectReader::object(const Json& v, const std::string& path) {
     else
       warn_dropped(path, entry.dropped);
   });
+}
+
+// An entry that makes the facets of one object or of one model's objects:
+// any type but the generators and instances.
+ObjectReader::Make ObjectReader::shape(const Json& v, const std::string& path, const std::string& type) {
+  if (type == "sphere" || type == "box" || type == "polygon") return solid(v, path, type);
+  if (type == "plane" || type == "checkerboard") return plane(v, path, type == "checkerboard");
+  if (type == "terrain") return terrain(v, path);
+  if (type == "obj" || type == "model") return includes_.plan(v, path, type == "model");
+  v_.fail(join_key(path, "type"), "unknown object type '" + quoted_prefix(type) +
+                                      "' (expected sphere, box, plane, checkerboard, polygon, terrain, "
+                                      "scatter, grid, obj, model or instances)");
+}
+
+std::optional<Transform> ObjectReader::placement(const Json& v, const std::string& path) {
+  if (const Json* t = v_.find(v, "transform")) return sections_.transform(*t, join_key(path, "transform"));
+  return std::nullopt;
 }
 
 // A sphere, a box or a polygon entry: one object of one material.
@@ -163,7 +167,7 @@ void ObjectReader::flush_entry() {
     transform_triangles(tris, first, *entry.placed);
     transform_normals(scene_.attributes, first_attribute, *entry.placed);
   }
-  entry.dropped += settle(first, entry.path);
+  entry.dropped += settle(tris, first, entry.path);
   if (dealer_.active() && entry.share.windowed)
     dealer_.count_window(scene_, first);
   else if (dealer_.active())
@@ -174,8 +178,7 @@ void ObjectReader::flush_entry() {
 
 // After placement: zero-area triangles (possible after extreme scaling)
 // are dropped, facets whose normal overflows float are refused.
-std::size_t ObjectReader::settle(std::size_t first, const std::string& path) {
-  auto& tris = scene_.triangles;
+std::size_t ObjectReader::settle(std::vector<Triangle>& tris, std::size_t first, const std::string& path) {
   std::size_t keep = first, dropped = 0;
   for (std::size_t k = first; k < tris.size(); ++k) {
     const Triangle& t = tris[k];

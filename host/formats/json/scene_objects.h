@@ -6,6 +6,7 @@
 
 #include <cstddef>
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -34,13 +35,20 @@ class ObjectReader {
   using Make = ModelIncludes::Make;
 
   void object(const Json& v, const std::string& path);
+  Make shape(const Json& v, const std::string& path, const std::string& type);
+  std::optional<Transform> placement(const Json& v, const std::string& path);  // its "transform"
+  // An instances entry (scene_instances.cpp): checked and counted; the
+  // build returned makes its prototype and instances.
+  std::function<void()> instances(const Json& v, const std::string& path);
+  Prototype prototype(const Make& make, const std::optional<Transform>& placed, const std::string& path);
   Make solid(const Json& v, const std::string& path, const std::string& type);
   Make plane(const Json& v, const std::string& path, bool checker);
   Make terrain(const Json& v, const std::string& path);
   Make generator(const Json& v, const std::string& path, bool grid);
   void box_extent(const Json& v, const std::string& path, Vec3& lo, Vec3& hi) const;
   void flush_entry();
-  std::size_t settle(std::size_t first, const std::string& path);  // returns the triangles dropped
+  // Triangles [first, end) of `tris`; returns those dropped.
+  std::size_t settle(std::vector<Triangle>& tris, std::size_t first, const std::string& path);
   void warn_dropped(const std::string& path, std::size_t dropped);
 
   SceneValues& v_;
@@ -51,6 +59,7 @@ class ObjectReader {
   Building building_;
   ModelIncludes includes_;
   std::vector<std::function<void()>> builds_;  // one per object, in order
+  int prototypes_planned_ = 0;  // instances entries so far
 };
 
 }  // namespace scene_json

@@ -14,6 +14,7 @@
 #include <limits>
 
 #include "core/page_ledger.h"
+#include "scene/instances.h"
 
 namespace opsila {
 namespace scene_json {
@@ -59,13 +60,27 @@ void ShareDealer::deal(Scene& scene, EntryShare& entry, std::size_t first, std::
 }
 
 void ShareDealer::grow_bounds(const Triangle& t) {
-  if (!bounded_) share_.lo = share_.hi = t.v0;
+  for (const Vec3* v : {&t.v0, &t.v1, &t.v2}) grow_bounds(*v);
+}
+
+void ShareDealer::grow_bounds(const Vec3& p) {
+  if (!bounded_) share_.lo = share_.hi = p;
   bounded_ = true;
-  for (const Vec3* v : {&t.v0, &t.v1, &t.v2})
-    for (int a = 0; a < 3; ++a) {
-      share_.lo[a] = std::min(share_.lo[a], (*v)[a]);
-      share_.hi[a] = std::max(share_.hi[a], (*v)[a]);
-    }
+  for (int a = 0; a < 3; ++a) {
+    share_.lo[a] = std::min(share_.lo[a], p[a]);
+    share_.hi[a] = std::max(share_.hi[a], p[a]);
+  }
+}
+
+// The same world boxes on every rank (scene/instances.h), so the bounds
+// `combine` joins hold them wherever the instances' triangles end up.
+void ShareDealer::add_instances(const Scene& scene) {
+  for (const InstanceDesc& in : scene.instances) {
+    Vec3 lo, hi;
+    instance_box(scene, in, lo, hi);
+    grow_bounds(lo);
+    grow_bounds(hi);
+  }
 }
 
 // This rank makes the triangles in its slice of the plan, the same slice

@@ -31,8 +31,22 @@ class ShareDealer {
  public:
   explicit ShareDealer(const SceneShare& share) : share_(share) {}
 
-  // Several ranks: the scene is read as this rank's share.
-  bool active() const { return share_.ranks > 1; }
+  // Several ranks: the scene is read as this rank's share (not while a
+  // Whole is held).
+  bool active() const { return share_.ranks > 1 && !whole_; }
+  // While one is held, entries are planned and built whole, as on one rank:
+  // an instances entry's model, which every rank keeps.
+  class Whole {
+   public:
+    explicit Whole(ShareDealer& dealer) : dealer_(dealer), was_(dealer.whole_) { dealer.whole_ = true; }
+    ~Whole() { dealer_.whole_ = was_; }
+    Whole(const Whole&) = delete;
+    Whole& operator=(const Whole&) = delete;
+
+   private:
+    ShareDealer& dealer_;
+    bool was_;
+  };
   const SceneShare& share() const { return share_; }
 
   // The entry's triangles from `first` (its attributes from
@@ -56,6 +70,9 @@ class ShareDealer {
   // once summed over the ranks, by finish).
   void add_window_dropped(const std::string& path, std::size_t dropped);
 
+  // The scene's instances, which every rank keeps, into this rank's bounds.
+  void add_instances(const Scene& scene);
+
   // After every entry: the figures joined over the ranks (share.combine),
   // the windowed entries' dropped triangles said by `warn_dropped`, the
   // share into the scene.
@@ -63,10 +80,12 @@ class ShareDealer {
 
  private:
   void grow_bounds(const Triangle& t);
+  void grow_bounds(const Vec3& p);
 
   SceneShare share_;           // rank and ranks; the whole scene's figures as they are built
   std::vector<int> owner_;     // object id -> the rank it is dealt to (-1: not yet seen)
-  bool bounded_ = false;       // share_.lo/hi hold a triangle
+  bool bounded_ = false;       // share_.lo/hi hold a triangle or an instance
+  bool whole_ = false;         // a Whole is held
   std::vector<std::string> window_paths_;  // the windowed entries, as share_.window_dropped
 };
 

@@ -17,6 +17,7 @@
 #include "dist/collective_partition.h"
 #include "formats/json/scene_file.h"
 #include "partition/banks.h"
+#include "partition/instance_banks.h"
 #include "prepare/prepare.h"
 #include "reference/reference.h"
 #include "sim_ranks.h"
@@ -43,6 +44,7 @@ struct Case {
   std::string dir;               // where its files are
   std::vector<int> spread = {1};  // the objects made in windows
   std::vector<int> ranks = {1, 2, 3, 4};
+  bool pilot = true;  // the facets' clusters too (expect_same_banks); instances have none
 };
 
 Scene read(const Case& c, const SceneShare& share = SceneShare()) {
@@ -65,6 +67,7 @@ void expect_same_banks(const PreparedBanks& one, const PreparedBanks& ranks) {
   EXPECT_TRUE(same_bytes(a.triangles, b.triangles)) << "bank facets";
   EXPECT_TRUE(same_bytes(a.nodes, b.nodes)) << "bank BVH nodes";
   EXPECT_TRUE(same_bytes(a.clusters, b.clusters)) << "clusters";
+  EXPECT_TRUE(same_bytes(a.instances, b.instances)) << "instances";
   EXPECT_TRUE(same_bytes(a.route_nodes, b.route_nodes)) << "routing nodes";
   EXPECT_TRUE(same_bytes(a.pes, b.pes)) << "PE table";
   EXPECT_TRUE(same_bytes(a.materials, b.materials)) << "materials";
@@ -106,7 +109,7 @@ void expect_shares_bank_as_one(const Case& c) {
   RaySample whole_sample;
   BalancePolicy policy;
   policy.balance = c.balance;
-  policy.pilot = true;  // the facets' clusters too (expect_same_banks)
+  policy.pilot = c.pilot;
   if (c.balance == Balance::measured) whole_work = measured_work(whole), policy.measured = &whole_work;
   if (c.balance == Balance::work) whole_sample = traced_sample(whole, nullptr), policy.sample = &whole_sample;
   if (c.balance != Balance::facets) {  // the balance cuts hot clusters: more than by facets
@@ -127,7 +130,7 @@ void expect_shares_bank_as_one(const Case& c) {
       MeasuredWork work;
       RaySample sample;
       ShareBalance how;
-      how.pilot = true;
+      how.pilot = c.pilot;
       if (c.balance == Balance::measured) work = measured_work(share), how.measured = &work;
       if (c.balance == Balance::work) {
         sample = balance_sample(share, traced_sample, ranks);  // traced by the ranks together
@@ -144,7 +147,10 @@ void expect_shares_bank_as_one(const Case& c) {
       expect_same_banks(bank_scene(whole, c.num_pes, c.routing, policy, group), got[std::size_t(r)]);
       held += got[std::size_t(r)].scene.triangles.size();
     }
-    EXPECT_EQ(held, whole.triangles.size()) << "every facet in one bank";
+    std::size_t copies = 0;  // the models' facets, once in each bank that places them
+    if (!whole.instances.empty())
+      for (int f : instance_shares(whole, deal_instances(whole, c.num_pes), c.num_pes).facets) copies += std::size_t(f);
+    EXPECT_EQ(held, whole.triangles.size() + copies) << "every facet in one bank";
   }
 }
 
@@ -178,6 +184,27 @@ std::string quad_grid(int n) {
              std::to_string(a + 1) + "\n";
     }
   return obj;
+}
+
+// Instances (every rank holds them all and banks its own PEs'): the model
+// copies, the instance BVHs and clusters and the instance table as one
+// process's, beside a terrain spread over the ranks and smooth models.
+TEST(CollectivePartition, SharesBankInstancesAsOneProcess) {
+  Case c{Balance::facets, 12, OPSILA_ROUTING_BOXES};
+  c.scene = R"({"smooth": true, "objects": [
+    {"type": "terrain", "size": [20, 20], "quads": [39, 41], "height": 3, "transform": {"rotate": [0, 30, 0]}},
+    {"type": "instances", "model": {"type": "sphere", "center": [0, 0, 0], "radius": 0.5, "subdivisions": 2},
+     "grid": {"counts": [7, 2, 5], "min": [-8, 4, -8], "max": [8, 6, 8], "jitter": 0.5, "scale": [0.5, 2],
+              "rotate_y": [0, 90], "seed": 9}},
+    {"type": "instances", "model": {"type": "box", "center": [0, 0, 0], "size": [1, 2, 1]},
+     "transforms": [{"translate": [0, 8, 0]}, {"rotate": [10, 20, 30], "translate": [3, 8, 1]}]},
+    {"type": "sphere", "center": [0, 4, 0], "radius": 1, "subdivisions": 2}]})";
+  c.pilot = false;
+  c.spread = {0};
+  expect_shares_bank_as_one(c);
+  c.balance = Balance::work;
+  c.num_pes = 16;
+  expect_shares_bank_as_one(c);
 }
 
 // More than 2^16 facets a rank: the exchange takes several rounds, every

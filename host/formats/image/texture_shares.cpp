@@ -111,12 +111,16 @@ void settle_map_warnings(Scene& scene) {
 
 std::uint64_t decode_used_maps(Scene& scene) {
   std::vector<char> used(scene.textures.size(), 0);
-  for (const Triangle& t : scene.triangles) {  // the facets bank_attributes gives texture coordinates
-    if (t.attributes < 0 || !scene.attributes[std::size_t(t.attributes)].has_uv) continue;
+  const auto mark = [&](const Triangle& t) {  // the facets bank_attributes gives texture coordinates
+    if (t.attributes < 0 || !scene.attributes[std::size_t(t.attributes)].has_uv) return;
     const MaterialDesc& m = scene.materials[std::size_t(t.material)];
     for (int map : {m.map_kd, m.map_ka})
       if (map >= 0) used[std::size_t(map)] = 1;
-  }
+  };
+  for (const Triangle& t : scene.triangles) mark(t);
+  // Every rank holds every model an instance places (the banks hold copies).
+  for (const Prototype& p : scene.prototypes)
+    for (const Triangle& t : p.triangles) mark(t);
   std::uint64_t bytes = 0;
   for (std::size_t k = 0; k < scene.textures.size(); ++k) {
     Texture& t = scene.textures[k];

@@ -17,6 +17,12 @@ namespace opsila {
 // every PE holds (a cluster, a placement and a routing box each, about 250
 // bytes an instance) within a few GB.
 constexpr std::size_t kMaxInstances = std::size_t(1) << 26;
+// What an instance costs the host while preparing, in triangles of the
+// memory plan's budget (scene/triangle_limit.h, 120 bytes each): its
+// placement, cluster, routing and item-buffer records and its share of its
+// bank's instance BVH, measured at 670 bytes an instance (docs/DISTRIBUTED.md,
+// "Cost model").
+constexpr std::size_t kInstanceTriangles = 6;
 
 // An instance of `prototype` placed by `to_world` (row-major 3 x 4): its
 // inverse is computed in double and rounded to float, the matrix the rays

@@ -37,12 +37,13 @@ void TriangleBudget::hold_everywhere(std::size_t from, std::size_t placements, c
   if (placements > kMaxInstances - instances_)
     v_.fail(path, "more than " + std::to_string(kMaxInstances) + " instances in the scene (scenes/FORMAT.md, Limits)");
   instances_ += placements;
-  const std::size_t held = model + 3 * placements;  // placements <= 2^26: no overflow
+  const std::size_t held = model + kInstanceTriangles * placements;  // placements <= 2^26: no overflow
   add(held, 0, placements, path);
   planned_triangles_ -= held;
   everywhere_ += held;
   if (everywhere_ > entry_limit_)
-    v_.fail(path, "the instances' models and placements (3 triangles each) come to " + std::to_string(everywhere_) +
+    v_.fail(path, "the instances' models and placements (" + std::to_string(kInstanceTriangles) +
+                      " triangles each) come to " + std::to_string(everywhere_) +
                       " triangles, which every rank holds; at most " + std::to_string(entry_limit_) +
                       " (scenes/FORMAT.md, Limits)" + limit_.why_not(everywhere_, 1));
 }

@@ -213,12 +213,14 @@ TEST(JsonInstances, PlacementsCountAgainstTheTriangleLimit) {
   const std::string text = scene_with(
       "{\"type\": \"instances\", \"model\": {\"type\": \"model\", \"file\": \"cube.obj\"},\n"
       " \"grid\": {\"counts\": [10, 1, 10], \"min\": [0,0,0], \"max\": [1,1,1]}}");
-  // The plane 2, the cube 12 and 100 placements 300, the sphere 20.
-  EXPECT_EQ(load_scene_from_string(text, "s.json", kData, 334).instances.size(), 100u);
-  expect_error([&] { load_scene_from_string(text, "s.json", kData, 333); },
-               {"s.json:5:", "objects[2]", "would make 20 more triangles (314 so far)", "at most 333"});
-  expect_error([&] { load_scene_from_string(text, "s.json", kData, 313); },
-               {"s.json:3:", "objects[1]", "would make 312 more triangles (2 so far)", "at most 313"});
+  // The plane 2, the cube 12 and 100 placements 600 (kInstanceTriangles
+  // each), the sphere 20.
+  static_assert(kInstanceTriangles == 6, "the figures below");
+  EXPECT_EQ(load_scene_from_string(text, "s.json", kData, 634).instances.size(), 100u);
+  expect_error([&] { load_scene_from_string(text, "s.json", kData, 633); },
+               {"s.json:5:", "objects[2]", "would make 20 more triangles (614 so far)", "at most 633"});
+  expect_error([&] { load_scene_from_string(text, "s.json", kData, 613); },
+               {"s.json:3:", "objects[1]", "would make 612 more triangles (2 so far)", "at most 613"});
 }
 
 TEST(JsonInstances, OnSeveralRanksTheyKeepOneRanksLimitTogether) {
@@ -228,10 +230,10 @@ TEST(JsonInstances, OnSeveralRanksTheyKeepOneRanksLimitTogether) {
   const std::string text = scene_with(forest + ",\n" + forest);
   SceneShare share;
   share.rank = 0, share.ranks = 2;
-  // Each entry 12 + 90 triangles, held by both ranks: 204, over one rank's 200.
-  EXPECT_EQ(load_scene_from_string(text, "s.json", kData, 204, share).instances.size(), 60u);
-  expect_error([&] { load_scene_from_string(text, "s.json", kData, 200, share); },
-               {"s.json:5:", "objects[2]", "204 triangles, which every rank holds; at most 200"});
+  // Each entry 12 + 180 triangles, held by both ranks: 384, over one rank's 380.
+  EXPECT_EQ(load_scene_from_string(text, "s.json", kData, 384, share).instances.size(), 60u);
+  expect_error([&] { load_scene_from_string(text, "s.json", kData, 380, share); },
+               {"s.json:5:", "objects[2]", "384 triangles, which every rank holds; at most 380"});
 }
 
 TEST(JsonInstances, ForestLoads) {

@@ -80,6 +80,16 @@ void check_camera(const CameraDesc& c, const std::string& eye_source, const std:
   if (sine < 1e-4)  // nearly parallel: the float basis would be noise
     throw InputError(up_source + " (" + format_vec(c.up) + ") is parallel to the view direction (from eye " +
                      format_vec(c.eye) + " to look-at " + format_vec(c.look_at) + ")");
+  // The basis is made in float (camera_frame): a view direction or up
+  // vector whose squared length underflows or overflows float gives no
+  // unit vector, and every camera ray would be NaN.
+  const CameraFrame frame = camera_frame(c, 1, 1);
+  for (const Vec3* v : {&frame.forward, &frame.right, &frame.up})
+    for (float x : *v)
+      if (!std::isfinite(x))
+        throw InputError(eye_source + ": the view from eye " + format_vec(c.eye) + " to look-at " +
+                         format_vec(c.look_at) + " with up " + format_vec(c.up) +
+                         " has no unit vectors in float (a distance or an up vector too small or too large)");
 }
 
 }  // namespace opsila

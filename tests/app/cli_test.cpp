@@ -106,6 +106,16 @@ TEST_F(CliFixture, DegenerateCameraIsRejected) {
                   "--up");
   // Only --up given: checked against the framed camera (looking along -(1,1,2)) after loading.
   expect_rejected({scene, "-o", out("x.png"), "--reference", "-q", "--up", "1,1,2"}, "--up");
+  // Apart in double, but the float basis underflows: every camera ray
+  // would be NaN (the machine hung on them).
+  expect_rejected({scene, "-o", out("x.png"), "--eye", "0,0,1e-25", "--look-at", "0,0,0"}, "--eye");
+  expect_rejected({scene, "-o", out("x.png"), "--eye", "0,0,5", "--look-at", "0,0,0", "--up", "0,1e-30,0"},
+                  "no unit vectors");
+  // A scene too small to frame (an instance scaled by 1e-25).
+  const std::string tiny = dir.write("tiny.json", R"({"objects": [{"type": "instances",
+    "model": {"type": "sphere", "center": [0, 0, 0], "radius": 1}, "transforms": [{"scale": 1e-25}]}]})");
+  before = dir.entries();
+  expect_rejected({tiny, "-o", out("x.png")}, "tiny.json: camera");
 }
 
 TEST_F(CliFixture, UnknownFlagAndMissingValueAreRejected) {

@@ -163,6 +163,11 @@ OPSILA_DEFINE_WALK(walk_model_any, BankWalk, bank_node, bank_child, model_any_le
 OPSILA_INLINE bool instance_walk(BankWalk *w, int i, bool any) {
   __global const Instance *in = &w->insts[i];
   RayPre ro = instance_ray(w->r, in);
+  /* A placement extreme enough to overflow the ray in the model's frame
+   * meets nothing: a NaN ray would meet every box, empty slots too, and
+   * the walk would never end. */
+  if (!all(isfinite(ro.org)) || !all(isfinite(ro.inv_dir)) || isnan(ro.sx) || isnan(ro.sy) || isnan(ro.sz))
+    return false;
   const RayPre *world = w->r;
   w->r = &ro;
   w->inst = i;

@@ -25,6 +25,16 @@ inline HitKey item_best(float t, int2 key) {
   return hit_key(t, -1, key.x, key.y);
 }
 
+/* The clusters the bin of the tile at (x0, y0) lists: those whose
+ * rectangle overlaps the bin, in the list's order (ItemBins,
+ * host/frame/frame.h); *count of them. */
+inline __global const int *tile_bin(__global const int *bin_first, __global const int *bin_list, int bin_side,
+                                    int bins_x, int x0, int y0, int *count) {
+  int bin = (y0 / bin_side) * bins_x + x0 / bin_side;
+  *count = bin_first[bin + 1] - bin_first[bin];
+  return bin_list + bin_first[bin];
+}
+
 /* The (object, facet) of the nearest hit: an instance's object, its
  * model's facet (opsila_shared.h, Instance). */
 inline int2 item_pair(__global const BankTriangle *tris, __global const Instance *insts, HitKey best, int best_tri) {
@@ -41,15 +51,18 @@ inline int2 item_pair(__global const BankTriangle *tris, __global const Instance
  * host/frame/frame.h; cluster_near: each one's distance from the eye), so
  * that a near hit ends a pixel's search at the first cluster beyond it;
  * the hit order makes the items the same in any order. The group first
- * lists, in that order, the clusters whose projected box overlaps the tile (one rectangle test per cluster per tile instead of per pixel);
- * each pixel then tests only those rectangles and traces their facets.
+ * lists, in that order, the clusters of its bin (tile_bin) whose projected
+ * box overlaps the tile (one rectangle test per cluster of the bin per
+ * tile, instead of per cluster of the scene per pixel); each pixel then
+ * tests only those rectangles and traces their facets.
  * listed_rect, the union of the rectangles (the host's), skips the listing
  * of a tile that no cluster can overlap: where the scene covers a small
  * part of the screen, most tiles; their pixels make no camera ray and only
  * write their misses. */
 __kernel void item_buffer(FrameParams fp, __global const Cluster *clusters, __global const float *cluster_near,
                           __global const int4 *cluster_rects,
-                          int4 listed_rect, __global const BankNode *nodes, __global const BankTriangle *tris,
+                          int4 listed_rect, __global const int *bin_first, __global const int *bin_list,
+                          int bin_side, int bins_x, __global const BankNode *nodes, __global const BankTriangle *tris,
                           __global const Instance *insts,
                           int tile_w, int2 tile_origin, int tiles_x, int tile_begin, float ox, float oy, int mode,
                           __global int2 *items,
@@ -81,24 +94,25 @@ __kernel void item_buffer(FrameParams fp, __global const Cluster *clusters, __gl
   if (tile_listed)
     r = make_ray(load3(fp.eye), primary_direction_at(fp, (float)min(x, fp.width - 1) + ox,
                                                      (float)min(y, fp.height - 1) + oy));
-  for (int base = 0; tile_listed && base < fp.num_clusters; base += lsz) {
-    int c = base + lid;
-    if (c < fp.num_clusters) {
+  int in_bin;
+  __global const int *bin_clusters = tile_bin(bin_first, bin_list, bin_side, bins_x, x0, y0, &in_bin);
+  for (int base = 0; tile_listed && base < in_bin; base += lsz) {
+    flags[lid] = 0; /* else the cluster + 1 */
+    if (base + lid < in_bin) {
+      int c = bin_clusters[base + lid];
       int4 rect = cluster_rects[c];
-      flags[lid] = !(x1 < rect.x || x0 > rect.z || y1 < rect.y || y0 > rect.w);
-    } else {
-      flags[lid] = 0;
+      if (!(x1 < rect.x || x0 > rect.z || y1 < rect.y || y0 > rect.w)) flags[lid] = c + 1;
     }
     barrier(CLK_LOCAL_MEM_FENCE);
     if (lid == 0) {
       int n = listed;
       for (int k = 0; k < lsz; ++k)
-        if (flags[k]) list[n++] = base + k;
+        if (flags[k]) list[n++] = flags[k] - 1;
       listed = n;
     }
     barrier(CLK_LOCAL_MEM_FENCE);
     int n = listed;
-    if (n > OPSILA_ITEM_LIST_CAP - lsz || base + lsz >= fp.num_clusters) {
+    if (n > OPSILA_ITEM_LIST_CAP - lsz || base + lsz >= in_bin) {
       for (int i = 0; i < n && inside; ++i) {
         int cl = list[i];
         /* The list is nearest first: a cluster whose box lies beyond the

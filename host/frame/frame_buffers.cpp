@@ -39,12 +39,12 @@ bool entirely_behind(const CameraFrame& frame, const Cluster& cl) {
 // "Projected object boxes": each cluster box as a conservative pixel
 // rectangle (x0, y0, x1, y1), the whole screen when a corner is behind the
 // eye, none when all of them are.
-std::vector<cl_int4> cluster_rects(const Scene& scene, const BankedScene& bs) {
+std::vector<cl_int4> cluster_rects(const Scene& scene, const std::vector<Cluster>& clusters) {
   const CameraFrame frame = camera_frame(scene.camera, scene.width, scene.height);
   int W = scene.width, H = scene.height;
-  std::vector<cl_int4> rects(bs.clusters.size());
-  for (std::size_t c = 0; c < bs.clusters.size(); ++c) {
-    const Cluster& cl = bs.clusters[c];
+  std::vector<cl_int4> rects(clusters.size());
+  for (std::size_t c = 0; c < clusters.size(); ++c) {
+    const Cluster& cl = clusters[c];
     double x0 = INFINITY, y0 = INFINITY, x1 = -INFINITY, y1 = -INFINITY;
     bool behind = false;
     for (int k = 0; k < 8 && !behind; ++k) {
@@ -72,17 +72,41 @@ std::vector<cl_int4> cluster_rects(const Scene& scene, const BankedScene& bs) {
   return rects;
 }
 
-std::vector<int> item_depth_order(const Scene& scene, const BankedScene& bs, std::vector<double>* distance) {
+std::vector<Cluster> item_buffer_clusters(const BankedScene& bs) {
+  std::vector<Cluster> out;
+  for (const PeInfo& pe : bs.pes) {
+    Cluster banked{};  // the PE's instances under their BVH
+    Box box;
+    for (int c = pe.cluster_begin; c < pe.cluster_end; ++c) {
+      const Cluster& cl = bs.clusters[std::size_t(c)];
+      if (cl.root >= -1 || pe.instance_root < 0) {
+        out.push_back(cl);
+        continue;
+      }
+      box.grow(cl.bmin);
+      box.grow(cl.bmax);
+      banked.pe = cl.pe;
+    }
+    if (box.empty()) continue;
+    for (int a = 0; a < 3; ++a) banked.bmin[a] = box.lo[a], banked.bmax[a] = box.hi[a];
+    banked.root = pe.instance_root;
+    out.push_back(banked);
+  }
+  return out;
+}
+
+std::vector<int> item_depth_order(const Scene& scene, const std::vector<Cluster>& clusters,
+                                  std::vector<double>* distance) {
   const Vec3 eye = scene.camera.eye;
-  std::vector<double> d2(bs.clusters.size());
-  for (std::size_t c = 0; c < bs.clusters.size(); ++c) {
-    const Cluster& cl = bs.clusters[c];
+  std::vector<double> d2(clusters.size());
+  for (std::size_t c = 0; c < clusters.size(); ++c) {
+    const Cluster& cl = clusters[c];
     for (int a = 0; a < 3; ++a) {
       const double out = std::max({double(cl.bmin[a]) - eye[a], double(eye[a]) - cl.bmax[a], 0.0});
       d2[c] += out * out;
     }
   }
-  std::vector<int> order(bs.clusters.size());
+  std::vector<int> order(clusters.size());
   for (std::size_t c = 0; c < order.size(); ++c) order[c] = static_cast<int>(c);
   std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return d2[std::size_t(a)] < d2[std::size_t(b)]; });
   if (distance)
@@ -117,20 +141,24 @@ SurfaceBuffers upload_surface(ClRuntime& rt, const BankedScene& bs) {
 void Renderer::Machine::host_tables(const Scene& scene, BankedScene& bs) {
   lights = bs.lights;
   if (lights.empty()) lights.push_back(Light{});
-  const std::vector<cl_int4> by_index = cluster_rects(scene, bs);
+  const std::vector<Cluster> listed_clusters = item_buffer_clusters(bs);
+  const std::vector<cl_int4> by_index = cluster_rects(scene, listed_clusters);
   rects.clear();
   item_clusters.clear();
   item_near.clear();
   std::vector<double> distance;
-  for (int c : item_depth_order(scene, bs, &distance)) {  // another rank's cluster (root -1): never listed here
-    rects.push_back(bs.clusters[std::size_t(c)].root == -1 ? kNeverListed : by_index[std::size_t(c)]);
-    item_clusters.push_back(bs.clusters[std::size_t(c)]);
+  for (int c : item_depth_order(scene, listed_clusters, &distance)) {  // another rank's (root -1): never listed here
+    rects.push_back(listed_clusters[std::size_t(c)].root == -1 ? kNeverListed : by_index[std::size_t(c)]);
+    item_clusters.push_back(listed_clusters[std::size_t(c)]);
     // Rounded down: a camera ray enters the box no nearer than this.
     float near = static_cast<float>(distance[std::size_t(c)]);
     if (double(near) > distance[std::size_t(c)]) near = std::nextafter(near, 0.0f);
     item_near.push_back(near);
   }
   const cl_int4 listed = item_list.listed = rects_union(rects);
+  bins = item_bins(rects, width, height, tile_w);
+  item_list.bin_side = bins.side;
+  item_list.bins_x = bins.bins_x;
   // Several ranks relay the item buffer in bands of whole tile rows, and
   // each lists only its own clusters: they trace the whole image alike.
   traced_rect = {{0, 0, width - 1, height - 1}};
@@ -184,6 +212,8 @@ std::vector<BufferSpec> Renderer::Machine::buffer_table(const BankedScene& bs, c
       host_buffer("projected cluster boxes", P_::scene, rects, &item_list.rects.buffer),
       host_buffer("item buffer clusters", P_::scene, item_clusters, &item_list.clusters.buffer),
       host_buffer("item buffer cluster distances", P_::scene, item_near, &item_list.near.buffer),
+      host_buffer("item buffer bins", P_::scene, bins.first, &item_list.bin_first.buffer),
+      host_buffer("item buffer bin lists", P_::scene, bins.list, &item_list.bin_list.buffer),
       // Only the pilot's program reads these; others get one-entry stand-ins.
       host_buffer("node clusters", P_::scene, measure ? bs.node_cluster : no_cluster, &work.node_cluster.buffer),
       host_buffer("facet clusters", P_::scene, measure ? bs.tri_cluster : no_cluster, &work.tri_cluster.buffer),

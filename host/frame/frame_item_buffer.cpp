@@ -59,3 +59,52 @@ void Renderer::Machine::item_buffer(Launcher& launch, int sample) {
 }
 
 }  // namespace opsila
+
+namespace opsila {
+
+namespace {
+
+// A rectangle's bins (inclusive), clamped to the screen; false when it
+// lies outside it (kNeverListed among them).
+bool bin_span(const cl_int4& r, int width, int height, int side, int (&b)[4]) {
+  const int x0 = std::max(r.s[0], 0), y0 = std::max(r.s[1], 0);
+  const int x1 = std::min(r.s[2], width - 1), y1 = std::min(r.s[3], height - 1);
+  if (x0 > x1 || y0 > y1) return false;
+  b[0] = x0 / side, b[1] = y0 / side, b[2] = x1 / side, b[3] = y1 / side;
+  return true;
+}
+
+}  // namespace
+
+ItemBins item_bins(const std::vector<cl_int4>& rects, int width, int height, int tile_w) {
+  ItemBins bins;
+  bins.side = tile_w;
+  const int most = std::max(width, height);
+  for (;;) {  // the finest bins whose lists fit
+    std::size_t entries = 0;
+    int b[4];
+    for (const cl_int4& r : rects)
+      if (bin_span(r, width, height, bins.side, b)) entries += std::size_t(b[2] - b[0] + 1) * (b[3] - b[1] + 1);
+    if (entries <= kMaxItemBinEntries || bins.side >= most) break;
+    bins.side *= 2;
+  }
+  bins.bins_x = (width + bins.side - 1) / bins.side;
+  const int bins_y = (height + bins.side - 1) / bins.side;
+  std::vector<int> count(std::size_t(bins.bins_x) * bins_y + 1, 0);
+  int b[4];
+  for (const cl_int4& r : rects)
+    if (bin_span(r, width, height, bins.side, b))
+      for (int y = b[1]; y <= b[3]; ++y)
+        for (int x = b[0]; x <= b[2]; ++x) ++count[std::size_t(y) * bins.bins_x + x];
+  bins.first.assign(count.size(), 0);
+  for (std::size_t k = 1; k < count.size(); ++k) bins.first[k] = bins.first[k - 1] + count[k - 1];
+  bins.list.assign(std::max<std::size_t>(1, std::size_t(bins.first.back())), -1);
+  std::vector<int> at(bins.first.begin(), bins.first.end() - 1);
+  for (std::size_t c = 0; c < rects.size(); ++c)
+    if (bin_span(rects[c], width, height, bins.side, b))
+      for (int y = b[1]; y <= b[3]; ++y)
+        for (int x = b[0]; x <= b[2]; ++x) bins.list[std::size_t(at[std::size_t(y) * bins.bins_x + x]++)] = int(c);
+  return bins;
+}
+
+}  // namespace opsila

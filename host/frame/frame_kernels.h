@@ -26,13 +26,17 @@ struct RoutingTables {
 };
 
 // The item buffer's clusters, nearest the eye first, their distances from
-// the eye and projected boxes, and the boxes' union (frame.h).
+// the eye and projected boxes, the boxes' union, and the bins that list
+// them (frame.h, ItemBins).
 struct ItemClusterList {
   DeviceArray<struct ItemClustersRole> clusters;
   DeviceArray<struct ItemClusterNearRole> near;
   DeviceArray<struct ClusterRectsRole> rects;
   cl_int4 listed{};
-  auto kernel_args() const { return std::tie(clusters, near, rects, listed); }
+  DeviceArray<struct ItemBinFirstRole> bin_first;
+  DeviceArray<struct ItemBinListRole> bin_list;
+  int bin_side = 1, bins_x = 1;
+  auto kernel_args() const { return std::tie(clusters, near, rects, listed, bin_first, bin_list, bin_side, bins_x); }
 };
 
 // The item buffer: (object, facet) pairs, and the nearest hit so far: its

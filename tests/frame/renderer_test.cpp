@@ -63,7 +63,7 @@ TEST(Renderer, ClustersBehindTheEyeAreNeverListed) {
   auto listed = [](const Scene& sc) {
     const BankedScene bs = partition_scene(sc, 4);
     int n = 0;
-    for (const cl_int4& r : cluster_rects(sc, bs)) n += r.s[0] <= r.s[2] && r.s[1] <= r.s[3];
+    for (const cl_int4& r : cluster_rects(sc, bs.clusters)) n += r.s[0] <= r.s[2] && r.s[1] <= r.s[3];
     return std::make_pair(n, int(bs.clusters.size()));
   };
   const auto facing = listed(s);
@@ -99,7 +99,7 @@ TEST(Renderer, TilesOutsideEveryClusterBoxListNothing) {
   Scene s = test::mirror_glass_scene(64);
   for (int i = 0; i < 3; ++i) s.camera.eye[i] = s.camera.look_at[i] + 4 * (s.camera.eye[i] - s.camera.look_at[i]);
   const BankedScene bs = partition_scene(s, 4);
-  const std::vector<cl_int4> rects = cluster_rects(s, bs);
+  const std::vector<cl_int4> rects = cluster_rects(s, bs.clusters);
   const cl_int4 u = rects_union(rects);
   for (const cl_int4& r : rects) {
     EXPECT_LE(u.s[0], r.s[0]);

@@ -14,12 +14,6 @@ namespace opsila {
 
 namespace {
 
-Vec3 box_centre(const Scene& scene, const InstanceDesc& in) {
-  Vec3 lo, hi;
-  instance_box(scene, in, lo, hi);
-  return 0.5f * (lo + hi);
-}
-
 // Instances idx to PEs [first, first + count): halves of the instances
 // (in proportion to the PEs on each side) at the median centre on the
 // longest axis of their centres, ties by index.
@@ -67,11 +61,17 @@ ModelTree build_model(const Scene& scene, const Prototype& p) {
   return m;  // its root is node 0, the bank root
 }
 
+// Every instance's world box (instance_box), made once for the partition.
+std::vector<Box> instance_boxes(const Scene& scene) {
+  std::vector<Box> boxes(scene.instances.size());
+  parallel_for(boxes.size(), [&](std::size_t i) { instance_box(scene, scene.instances[i], boxes[i].lo, boxes[i].hi); });
+  return boxes;
+}
+
 // The BVH over one bank's instances (world boxes), its leaves naming them.
-BankArray<BankNode> instance_tree(const Scene& scene, const std::vector<int>& insts) {
+BankArray<BankNode> instance_tree(const std::vector<Box>& all, const std::vector<int>& insts) {
   std::vector<Box> boxes(insts.size());
-  for (std::size_t k = 0; k < insts.size(); ++k)
-    instance_box(scene, scene.instances[std::size_t(insts[k])], boxes[k].lo, boxes[k].hi);
+  for (std::size_t k = 0; k < insts.size(); ++k) boxes[k] = all[std::size_t(insts[k])];
   BankArray<BankNode> t(1);
   build_route_bvh(t, 0, boxes, insts);
   for (BankNode& n : t)
@@ -94,14 +94,9 @@ void append_nodes(BankArray<BankNode>& out, const BankNode* first, const BankNod
   }
 }
 
-Cluster instance_cluster(const Scene& scene, int i, int pe, const Box& sbox) {
+Cluster instance_cluster(const Box& b, int i, int pe, const Box& sbox) {
   Cluster cl{};
-  Vec3 lo, hi;
-  instance_box(scene, scene.instances[std::size_t(i)], lo, hi);
-  Box b;
-  b.grow(lo);
-  b.grow(hi);
-  for (int a = 0; a < 3; ++a) cl.center[a] = b.center(a), cl.bmin[a] = lo[a], cl.bmax[a] = hi[a];
+  for (int a = 0; a < 3; ++a) cl.center[a] = b.center(a), cl.bmin[a] = b.lo[a], cl.bmax[a] = b.hi[a];
   // Padded as fill_banks pads the spheres of the scene's own clusters.
   cl.radius = 0.5f * b.diagonal() * 1.0001f + 1e-5f * sbox.diagonal();
   cl.pe = pe;
@@ -115,6 +110,7 @@ struct Layout {
   BankArray<BankNode> nodes;
   std::vector<Cluster> clusters;
   std::vector<int> attributes;
+  std::vector<Box> boxes;  // every instance's (instance_boxes)
 };
 
 // PE p's bank (bs.pes[p], its instances `insts`) appended to `out`, and
@@ -139,7 +135,7 @@ void lay_out_bank(const Scene& scene, const std::vector<ModelTree>& models, cons
     // A bank of instances alone still has a root of its own facets' walk.
     if (pe.node_begin == pe.node_end) out.nodes.push_back(empty_node());
     pe.instance_root = static_cast<int>(out.nodes.size());
-    const BankArray<BankNode> tree = instance_tree(scene, insts);
+    const BankArray<BankNode> tree = instance_tree(out.boxes, insts);
     append_nodes(out.nodes, tree.data(), tree.data() + tree.size(), pe.instance_root, 0);
     std::vector<int> copy_root(models.size(), -1);
     for (int i : insts) {
@@ -153,7 +149,7 @@ void lay_out_bank(const Scene& scene, const std::vector<ModelTree>& models, cons
         out.attributes.insert(out.attributes.end(), mt.attributes.begin(), mt.attributes.end());
       }
       bs.instances[std::size_t(i)].root = copy_root[std::size_t(m)];
-      out.clusters.push_back(instance_cluster(scene, i, -1, sbox));  // its PE: set by the caller
+      out.clusters.push_back(instance_cluster(out.boxes[std::size_t(i)], i, -1, sbox));  // its PE: set by the caller
     }
   }
   pe.cluster_begin = c0;
@@ -196,8 +192,9 @@ void copy_instances(const Scene& from, Scene& to) {
 }
 
 std::vector<int> deal_instances(const Scene& scene, int num_pes) {
-  std::vector<Vec3> centre(scene.instances.size());
-  parallel_for(centre.size(), [&](std::size_t i) { centre[i] = box_centre(scene, scene.instances[i]); });
+  const std::vector<Box> boxes = instance_boxes(scene);
+  std::vector<Vec3> centre(boxes.size());
+  for (std::size_t i = 0; i < boxes.size(); ++i) centre[i] = boxes[i].center();
   std::vector<int> idx(centre.size()), pe_of(centre.size(), 0);
   std::iota(idx.begin(), idx.end(), 0);
   bisect(centre, std::move(idx), 0, num_pes, pe_of);
@@ -227,6 +224,14 @@ void add_instance_banks(const Scene& scene, const std::vector<int>& pe_of, int p
     if (used[m]) models[m] = build_model(scene, scene.prototypes[m]);
   });
   Layout out;
+  out.boxes = instance_boxes(scene);
+  // Reserved: growing by doubling would copy (and fault in) the banks again.
+  std::size_t tris = bs.triangles.size(), nodes = bs.nodes.size() + 2 * G;
+  for (std::size_t m = 0; m < models.size(); ++m) tris += G * models[m].tris.size(), nodes += G * models[m].nodes.size();
+  out.tris.reserve(tris);
+  out.nodes.reserve(nodes + scene.instances.size() / 2);
+  out.clusters.reserve(bs.clusters.size() + scene.instances.size());
+  if (!scene.attributes.empty()) out.attributes.reserve(tris);
   for (std::size_t p = 0; p < G; ++p) {
     const std::size_t before = out.tris.size() * sizeof(BankTriangle) + out.nodes.size() * sizeof(BankNode);
     lay_out_bank(scene, models, by_pe[p], sbox, bs, p, attributes, out);

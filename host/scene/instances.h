@@ -20,7 +20,7 @@ constexpr std::size_t kMaxInstances = std::size_t(1) << 26;
 // What an instance costs the host while preparing, in triangles of the
 // memory plan's budget (scene/triangle_limit.h, 120 bytes each): its
 // placement, cluster, routing and item-buffer records and its share of its
-// bank's instance BVH, measured at 670 bytes an instance (docs/DISTRIBUTED.md,
+// bank's instance BVH, measured at 530 bytes an instance (docs/DISTRIBUTED.md,
 // "Cost model").
 constexpr std::size_t kInstanceTriangles = 6;
 

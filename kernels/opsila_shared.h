@@ -293,10 +293,12 @@ typedef struct {
 } PeInfo;
 
 /* Instances (scenes/FORMAT.md "instances"): a model placed at many
- * transforms. A bank that owns instances of a model holds the model's
- * facets and BVH once (its copy, in the bank's ranges), and a BVH over its
- * instances (PeInfo.instance_root) whose leaves are instances: a slot with
- * count OPSILA_INSTANCE_LEAF names instance child[k]. A ray meets an
+ * transforms. The banks of a device that own instances of a model share
+ * one copy of its facets and BVH (in the range of the first of them,
+ * partition/instance_banks.h), and each holds a BVH over its instances
+ * (PeInfo.instance_root) whose leaves are instances: a slot with count
+ * OPSILA_INSTANCE_LEAF names instance child[k]. A hit on an instance is
+ * shaded by the instance's PE (pe below). A ray meets an
  * instance in the model's frame, (to_object applied to its origin and
  * direction, not normalised, so distances along it are the world's).
  * Instance i is object num_objects + i (the scene's own objects first),

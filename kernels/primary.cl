@@ -71,7 +71,8 @@ __kernel void list_hits(__global const int *item_tri, int npix, int width, int4 
  * adds into the same pixel sums (divided by N when read). hit_count (64-bit
  * fixed pair) counts the descriptors built. item_key: the item buffer's
  * keys (kernels/item_buffer.cl), which say whether the hit is an instance's. */
-__kernel void build_primary(FrameParams fp, __global const PeInfo *pes, __global const int *hit_pixels,
+__kernel void build_primary(FrameParams fp, __global const PeInfo *pes, __global const Instance *insts,
+                            __global const int *hit_pixels,
                             __global const int *item_tri, __global const float *item_t,
                             __global const int2 *item_key, int first, int count,
                             float ox, float oy, int offset, DESC_PARAMS(q), volatile __global uint *hit_count) {
@@ -83,7 +84,9 @@ __kernel void build_primary(FrameParams fp, __global const PeInfo *pes, __global
     int pixel = hit_pixels[first + k];
     int slot = offset + k;
     int tri = item_tri[pixel];
-    int owner = owner_pe(pes, fp.num_pes, tri);
+    int2 key = item_key[pixel];
+    /* An instance's hit goes to the instance's PE (kernels/spmd_phase.cl). */
+    int owner = key.y & OPSILA_META_INSTANCE ? insts[key.x].pe : owner_pe(pes, fp.num_pes, tri);
     if (owner < fp.group_begin || owner >= fp.group_end) {
       q_dest[slot] = -1;
     } else {
@@ -91,7 +94,6 @@ __kernel void build_primary(FrameParams fp, __global const PeInfo *pes, __global
       float3 d = primary_direction_at(fp, (float)x + ox, (float)y + oy);
       Descriptor ds = make_descriptor(load3(fp.eye), item_t[pixel], d, -1.0f, (float3)(1.0f), pixel,
                                       OPSILA_META(OPSILA_KIND_RESOLVED, 0), tri, owner);
-      int2 key = item_key[pixel];
       /* An instance's hit: the instance goes with it, to be shaded in its frame. */
       if (key.y & OPSILA_META_INSTANCE)
         desc_set_best(&ds, hit_key(item_t[pixel], key.x, 0, key.y & ~OPSILA_META_INSTANCE));

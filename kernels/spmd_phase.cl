@@ -142,7 +142,9 @@ inline int trace_visit(FrameParams fp, const Routing *rt, const Bank *bank, cons
     STAGE(st->clock, OPSILA_STAGE_PIXEL_SUMS, accumulate(accum, pixel, w * load3(fp.background)));
     return VISIT_DONE;
   }
-  int owner = owner_pe(rt->pes, fp.num_pes, *hit);
+  /* An instance's hit is shaded by the instance's PE (the model's copy
+   * may lie in another bank of the device: partition/instance_banks.h). */
+  int owner = OPSILA_INSTANCES && best->inst >= 0 ? bank->insts[best->inst].pe : owner_pe(rt->pes, fp.num_pes, *hit);
   if (owner == bank->pe) return VISIT_SHADE;
   /* nearest hit known; its facet lives in another bank */
   STAT_INC(st, FORWARD);

@@ -451,7 +451,7 @@ PreparedBanks bank_share(Scene& share, int num_pes, int routing, const PeGroup& 
   BankedScene loc = group_banks(own, sbox, group, inst_pe, how.pilot, used);
   own.scene = Scene();
   out.scene = share_tables(share, sbox, pl, group, num_pes, own.first_cluster, used, ranks, loc,
-                           inst_pe.empty() ? InstanceShares() : instance_shares(share, inst_pe, num_pes));
+                           inst_pe.empty() ? InstanceShares() : instance_shares(share, inst_pe, num_pes, ranks.size()));
   figures.bank_seconds = seconds_since(t0);
   out.tri_base = out.scene.pes[std::size_t(group.begin)].tri_begin;
   ranks.end_collective();

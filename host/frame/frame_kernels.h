@@ -118,6 +118,7 @@ struct ListHitsArgs {
 struct PrimaryArgs {
   FrameParams fp{};
   PeTable pes;
+  InstanceTable insts;
   HitList list;
   ItemHits hits;
   ItemDistances distances;
@@ -128,7 +129,7 @@ struct PrimaryArgs {
   DescriptorSet pool;
   PrimaryHitCount hit_count;
   auto kernel_args() const {
-    return std::tie(fp, pes, list, hits, distances, keys, first, count, ox, oy, offset, pool, hit_count);
+    return std::tie(fp, pes, insts, list, hits, distances, keys, first, count, ox, oy, offset, pool, hit_count);
   }
 };
 

@@ -70,6 +70,7 @@ void Renderer::Machine::primary_descriptors(Launcher& launch, Frame& f, int roun
   a.list = b_hit_pixels;
   a.hits = item.tri;
   a.distances = item.t;
+  a.insts = geometry.insts;
   a.keys = item.key;
   a.first = static_cast<int>(f.next_hit);
   a.count = static_cast<int>(count);

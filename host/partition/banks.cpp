@@ -38,6 +38,7 @@ PreparedBanks bank_scene(const Scene& scene, int num_pes, int routing, const Bal
   PartitionUse use;
   use.pilot_maps = policy.pilot;
   use.release = release;
+  use.ranks = group.ranks;
   b.scene = partition_scene(scene, num_pes, routing == OPSILA_ROUTING_SPHERES, sample, measured, use);
   b.balance = policy.balance;
   b.group = group;

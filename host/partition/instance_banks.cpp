@@ -7,6 +7,7 @@
 
 #include "core/parallel.h"
 #include "partition/bank_bvh.h"
+#include "partition/pe_group.h"
 #include "partition/partition_steps.h"
 #include "scene/instances.h"
 
@@ -111,13 +112,25 @@ struct Layout {
   std::vector<Cluster> clusters;
   std::vector<int> attributes;
   std::vector<Box> boxes;  // every instance's (instance_boxes)
+  // The models' copies of the device being laid out: root node, -1 none yet.
+  int device = -1;
+  std::vector<int> copy_root;
 };
 
-// PE p's bank (bs.pes[p], its instances `insts`) appended to `out`, and
-// bs.pes[p] set to its new ranges.
-void lay_out_bank(const Scene& scene, const std::vector<ModelTree>& models, const std::vector<int>& insts,
-                  const Box& sbox, BankedScene& bs, std::size_t p, const std::vector<int>& attributes, Layout& out) {
+std::uint64_t model_bytes(const ModelTree& m) {
+  return m.tris.size() * sizeof(BankTriangle) + m.nodes.size() * sizeof(BankNode);
+}
+
+// PE p's bank (bs.pes[p], its instances `insts` under `tree`) appended to `out`, and
+// bs.pes[p] set to its new ranges; a model the device holds no copy of
+// yet is copied into it. Returns the bank's bytes (each model it places
+// counted, as a texture is).
+std::uint64_t lay_out_bank(const Scene& scene, const std::vector<ModelTree>& models, const std::vector<int>& insts,
+                           const BankArray<BankNode>& tree, const Box& sbox, BankedScene& bs, std::size_t p,
+                           const std::vector<int>& attributes, Layout& out) {
   PeInfo& pe = bs.pes[p];
+  std::uint64_t bytes = std::uint64_t(pe.tri_end - pe.tri_begin) * sizeof(BankTriangle) +
+                        std::uint64_t(pe.node_end - pe.node_begin) * sizeof(BankNode);
   const int tri0 = static_cast<int>(out.tris.size()), node0 = static_cast<int>(out.nodes.size());
   const int t_delta = tri0 - pe.tri_begin, n_delta = node0 - pe.node_begin;
   out.tris.insert(out.tris.end(), bs.triangles.begin() + pe.tri_begin, bs.triangles.begin() + pe.tri_end);
@@ -135,22 +148,26 @@ void lay_out_bank(const Scene& scene, const std::vector<ModelTree>& models, cons
     // A bank of instances alone still has a root of its own facets' walk.
     if (pe.node_begin == pe.node_end) out.nodes.push_back(empty_node());
     pe.instance_root = static_cast<int>(out.nodes.size());
-    const BankArray<BankNode> tree = instance_tree(out.boxes, insts);
     append_nodes(out.nodes, tree.data(), tree.data() + tree.size(), pe.instance_root, 0);
-    std::vector<int> copy_root(models.size(), -1);
+    bytes += tree.size() * sizeof(BankNode);
+    std::vector<char> placed(models.size(), 0);
     for (int i : insts) {
       const int m = scene.instances[std::size_t(i)].prototype;
-      if (copy_root[std::size_t(m)] < 0) {
+      int& root = out.copy_root[std::size_t(m)];
+      if (root < 0) {
         const ModelTree& mt = models[std::size_t(m)];
-        copy_root[std::size_t(m)] = static_cast<int>(out.nodes.size());
-        append_nodes(out.nodes, mt.nodes.data(), mt.nodes.data() + mt.nodes.size(), copy_root[std::size_t(m)],
+        root = static_cast<int>(out.nodes.size());
+        append_nodes(out.nodes, mt.nodes.data(), mt.nodes.data() + mt.nodes.size(), root,
                      static_cast<int>(out.tris.size()));
         out.tris.insert(out.tris.end(), mt.tris.begin(), mt.tris.end());
         out.attributes.insert(out.attributes.end(), mt.attributes.begin(), mt.attributes.end());
       }
-      bs.instances[std::size_t(i)].root = copy_root[std::size_t(m)];
+      placed[std::size_t(m)] = 1;
+      bs.instances[std::size_t(i)].root = root;
       out.clusters.push_back(instance_cluster(out.boxes[std::size_t(i)], i, -1, sbox));  // its PE: set by the caller
     }
+    for (std::size_t m = 0; m < models.size(); ++m)
+      if (placed[m]) bytes += model_bytes(models[m]);
   }
   pe.cluster_begin = c0;
   pe.cluster_end = static_cast<int>(out.clusters.size());
@@ -158,23 +175,30 @@ void lay_out_bank(const Scene& scene, const std::vector<ModelTree>& models, cons
   pe.tri_end = static_cast<int>(out.tris.size());
   pe.node_begin = node0;
   pe.node_end = static_cast<int>(out.nodes.size());
+  return bytes;
 }
 
 }  // namespace
 
-InstanceShares instance_shares(const Scene& scene, const std::vector<int>& pe_of, int num_pes) {
+InstanceShares instance_shares(const Scene& scene, const std::vector<int>& pe_of, int num_pes, int ranks) {
   InstanceShares s;
   s.clusters.assign(std::size_t(num_pes), 0);
   s.facets.assign(std::size_t(num_pes), 0);
-  std::vector<std::vector<char>> held(static_cast<std::size_t>(num_pes), std::vector<char>());
+  std::vector<std::vector<char>> places(std::size_t(num_pes), std::vector<char>(scene.prototypes.size(), 0));
   for (std::size_t i = 0; i < scene.instances.size(); ++i) {
-    const std::size_t p = std::size_t(pe_of[i]);
-    const int m = scene.instances[i].prototype;
-    ++s.clusters[p];
-    if (held[p].empty()) held[p].assign(scene.prototypes.size(), 0);
-    if (held[p][std::size_t(m)]) continue;
-    held[p][std::size_t(m)] = 1;
-    s.facets[p] += static_cast<int>(scene.prototypes[std::size_t(m)].triangles.size());
+    ++s.clusters[std::size_t(pe_of[i])];
+    places[std::size_t(pe_of[i])][std::size_t(scene.instances[i].prototype)] = 1;
+  }
+  // A model's copy lies in the first bank of its device that places it.
+  for (int r = 0; r < ranks; ++r) {
+    const PeGroup g = pe_group(num_pes, ranks, r);
+    std::vector<char> held(scene.prototypes.size(), 0);
+    for (int p = g.begin; p < g.end; ++p)
+      for (std::size_t m = 0; m < held.size(); ++m)
+        if (places[std::size_t(p)][m] && !held[m]) {
+          held[m] = 1;
+          s.facets[std::size_t(p)] += static_cast<int>(scene.prototypes[m].triangles.size());
+        }
   }
   return s;
 }
@@ -202,7 +226,8 @@ std::vector<int> deal_instances(const Scene& scene, int num_pes) {
 }
 
 void add_instance_banks(const Scene& scene, const std::vector<int>& pe_of, int pe_begin, int pe_end,
-                        const Box& sbox, BankedScene& bs, std::vector<int>& attributes) {
+                        const Box& sbox, BankedScene& bs, std::vector<int>& attributes,
+                        const std::vector<int>& device_of) {
   if (!bs.tri_cluster.empty() || !bs.node_cluster.empty())
     throw std::logic_error("add_instance_banks: the pilots' maps do not follow instances");
   const std::size_t G = std::size_t(pe_end - pe_begin);
@@ -226,17 +251,24 @@ void add_instance_banks(const Scene& scene, const std::vector<int>& pe_of, int p
   Layout out;
   out.boxes = instance_boxes(scene);
   // Reserved: growing by doubling would copy (and fault in) the banks again.
+  const std::size_t devices = device_of.empty() ? 1 : std::size_t(device_of.back() - device_of.front() + 1);
   std::size_t tris = bs.triangles.size(), nodes = bs.nodes.size() + 2 * G;
-  for (std::size_t m = 0; m < models.size(); ++m) tris += G * models[m].tris.size(), nodes += G * models[m].nodes.size();
+  for (std::size_t m = 0; m < models.size(); ++m)
+    tris += devices * models[m].tris.size(), nodes += devices * models[m].nodes.size();
   out.tris.reserve(tris);
   out.nodes.reserve(nodes + scene.instances.size() / 2);
   out.clusters.reserve(bs.clusters.size() + scene.instances.size());
   if (!scene.attributes.empty()) out.attributes.reserve(tris);
+  std::vector<BankArray<BankNode>> trees(G);  // side by side: each bank's alone
+  parallel_for(G, [&](std::size_t p) {
+    if (!by_pe[p].empty()) trees[p] = instance_tree(out.boxes, by_pe[p]);
+  });
   for (std::size_t p = 0; p < G; ++p) {
-    const std::size_t before = out.tris.size() * sizeof(BankTriangle) + out.nodes.size() * sizeof(BankNode);
-    lay_out_bank(scene, models, by_pe[p], sbox, bs, p, attributes, out);
-    const std::size_t after = out.tris.size() * sizeof(BankTriangle) + out.nodes.size() * sizeof(BankNode);
-    if (p < bs.bank_bytes.size()) bs.bank_bytes[p] = after - before;
+    const int device = device_of.empty() ? 0 : device_of[p];
+    if (device != out.device) out.device = device, out.copy_root.assign(models.size(), -1);
+    const std::uint64_t bytes = lay_out_bank(scene, models, by_pe[p], trees[p], sbox, bs, p, attributes, out);
+    BankArray<BankNode>().swap(trees[p]);
+    if (p < bs.bank_bytes.size()) bs.bank_bytes[p] = bytes;
   }
   for (std::size_t p = 0; p < G; ++p)
     for (int c = bs.pes[p].cluster_begin; c < bs.pes[p].cluster_end; ++c)

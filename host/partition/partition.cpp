@@ -2,6 +2,7 @@
 
 #include "partition/bank_bvh.h"
 #include "partition/instance_banks.h"
+#include "partition/pe_group.h"
 #include "partition/partition_steps.h"
 
 #include <algorithm>
@@ -361,7 +362,8 @@ BankedScene partition_scene(const Scene& scene, int num_pes, bool split_flat, co
   clock.progress(0.8);
   describe_pes(cb, ranges, maps, total, bs);
   if (!scene.instances.empty())
-    add_instance_banks(scene, deal_instances(scene, num_pes), 0, num_pes, sbox, bs, maps.attributes);
+    add_instance_banks(scene, deal_instances(scene, num_pes), 0, num_pes, sbox, bs, maps.attributes,
+                       devices_of_pes(num_pes, use.ranks));
 
   build_routing(bs, sbox);
   if (use.pilot_maps) node_clusters(bs);

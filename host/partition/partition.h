@@ -75,6 +75,9 @@ struct PartitionUse {
   // (Scene::release_triangles keeps its figures), so that no facet is held
   // twice at the partition's peak.
   Scene* release = nullptr;
+  // The devices the banks go to (MPI ranks, pe_group.h): their banks share
+  // the copies of the models their instances place (partition/instance_banks.h).
+  int ranks = 1;
 };
 BankedScene partition_scene(const Scene& scene, int num_pes, bool split_flat = false,
                             const RaySample* sample = nullptr, const MeasuredWork* measured = nullptr,

@@ -30,6 +30,12 @@ int rank_of_pe(int num_pes, int ranks, int pe) {
   return r;
 }
 
+std::vector<int> devices_of_pes(int num_pes, int ranks) {
+  std::vector<int> r(static_cast<std::size_t>(num_pes));
+  for (int p = 0; p < num_pes; ++p) r[std::size_t(p)] = rank_of_pe(num_pes, ranks, p);
+  return r;
+}
+
 int keep_group_banks(BankedScene& bs, const PeGroup& group) {
   if (group.all()) return 0;
   const PeInfo& first = bs.pes[group.begin];

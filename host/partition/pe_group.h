@@ -24,6 +24,8 @@ struct PeGroup {
 PeGroup pe_group(int num_pes, int ranks, int rank);
 // The rank holding PE `pe`.
 int rank_of_pe(int num_pes, int ranks, int pe);
+// The rank of every PE, in PE order.
+std::vector<int> devices_of_pes(int num_pes, int ranks);
 
 // Drops every bank outside the group from `bs` (facets, BVH nodes) and
 // renumbers what is left from 0: BVH links and the node ranges in the

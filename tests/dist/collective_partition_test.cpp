@@ -149,7 +149,7 @@ void expect_shares_bank_as_one(const Case& c) {
     }
     std::size_t copies = 0;  // the models' facets, once in each bank that places them
     if (!whole.instances.empty())
-      for (int f : instance_shares(whole, deal_instances(whole, c.num_pes), c.num_pes).facets) copies += std::size_t(f);
+      for (int f : instance_shares(whole, deal_instances(whole, c.num_pes), c.num_pes, R).facets) copies += std::size_t(f);
     EXPECT_EQ(held, whole.triangles.size() + copies) << "every facet in one bank";
   }
 }

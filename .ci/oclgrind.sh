@@ -93,6 +93,17 @@ check render-measured-balance-optimised "${optimised_checks[@]}" -- \
   "$build/opsila" render "$scene" -o "$work/measured.pfm" --size 6x4 --depth 2 --pes 4 --balance measured \
   --device oclgrind -q "${view[@]}"
 
+# 2e. Instances (-DOPSILA_INSTANCES=1): walks into a model's BVH in its
+#     frame, instance hits in the item buffer's keys and the descriptors,
+#     a model copy shared by the banks; with every check, then optimised
+#     with one descriptor slot per bank.
+check render-instances-all-checks "${all_checks[@]}" -- \
+  "$build/opsila" render "$root/tests/oclgrind/instances.json" -o "$work/instances.pfm" --size 8x6 --depth 3 \
+  --pes 4 --device oclgrind -q "${view[@]}"
+check render-instances-optimised "${optimised_checks[@]}" -- \
+  "$build/opsila" render "$root/tests/oclgrind/instances.json" -o "$work/instances-banks.pfm" --size 8x6 --depth 4 \
+  --pes 4 --bank-capacity 1 --device oclgrind -q "${view[@]}"
+
 # 3. The scatter on its own: SPMD output slots with holes and unused slots,
 #    a waiting queue, banks that overflow (tests/frame/small_scatter_test.cpp).
 check scatter-all-checks "${all_checks[@]}" -- \

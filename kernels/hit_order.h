@@ -67,6 +67,14 @@ typedef struct {
   int fan;   /* the triangle's index in its facet's fan, 0 first */
 } HitKey;
 
+#ifdef __OPENCL_C_VERSION__
+/* Made in place (a compound literal), never returned by a function: a
+ * returned 16-byte struct is a no-alias result pointer, and LLVM marks
+ * where such a function was inlined with llvm.experimental.noalias.scope.decl,
+ * which some OpenCL implementations (Oclgrind 21.10) cannot load. Kernel
+ * code fills a HitKey through a pointer for the same reason. */
+#define hit_key(t, inst, facet, fan) ((HitKey){(t), (inst), (facet), (fan)})
+#else
 inline HitKey hit_key(float t, int inst, int facet, int fan) {
   HitKey k;
   k.t = t;
@@ -75,7 +83,8 @@ inline HitKey hit_key(float t, int inst, int facet, int fan) {
   k.fan = fan;
   return k;
 }
-inline HitKey hit_none(void) { return hit_key(OPSILA_HIT_INF, 0x7fffffff, 0x7fffffff, 0x7fffffff); }
+#endif
+#define hit_none() hit_key(OPSILA_HIT_INF, 0x7fffffff, 0x7fffffff, 0x7fffffff)
 
 /* The distance's cell (t >= 0, or +inf). */
 inline hit_bits_t hit_grid(float t) { return hit_float_bits(t) & ~OPSILA_HIT_GRID_MASK; }

@@ -20,10 +20,9 @@
  * fan), or (instance, fan | OPSILA_META_INSTANCE), as a descriptor carries
  * it): an instance's facet id is not needed here, since no other device
  * holds that instance. */
-inline HitKey item_best(float t, int2 key) {
-  if (key.y & OPSILA_META_INSTANCE) return hit_key(t, key.x, 0, key.y & ~OPSILA_META_INSTANCE);
-  return hit_key(t, -1, key.x, key.y);
-}
+#define item_best(t, key)                                                                          \
+  ((key).y & OPSILA_META_INSTANCE ? hit_key((t), (key).x, 0, (key).y & ~OPSILA_META_INSTANCE) \
+                                  : hit_key((t), -1, (key).x, (key).y))
 
 /* The clusters the bin of the tile at (x0, y0) lists: those whose
  * rectangle overlaps the bin, in the list's order (ItemBins,

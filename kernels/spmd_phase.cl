@@ -264,7 +264,8 @@ inline void process(FrameParams fp, const Routing *rt, const Bank *bank, __globa
     return;
   }
   int hit = DESC_HIT(ds);
-  HitKey best = desc_best(ds, bank->tris, bank->tri_base, bank->tri_count);
+  HitKey best;
+  desc_best(ds, bank->tris, bank->tri_base, bank->tri_count, &best);
   if (kind == OPSILA_KIND_TRACE) {
     STAT_INC(st, RADIANCE);
     NextPe unknown = {false, -1, OPSILA_INF};
@@ -314,7 +315,8 @@ __kernel void spmd_phase(FrameParams fp, __global const PeInfo *pes, __global co
                pes[pe].node_begin, pes[pe].instance_root, pes[pe].node_begin == pes[pe].node_end, fp.box_slack,
                fp.tri_base,   tri_end - fp.tri_base};
   if (slot < bank_begin[pe] + bank_count[pe]) {
-    Descriptor ds = desc_load(b, slot);
+    Descriptor ds;
+    desc_load(b, slot, &ds);
     int level = OPSILA_META_LEVEL(DESC_META(ds));
     PrivStats st, st_child;
     for (int s = 0; s < OPSILA_STAT_COUNT; ++s) st.v[s] = st_child.v[s] = 0u;

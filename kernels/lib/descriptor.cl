@@ -16,12 +16,14 @@ typedef struct {
  * except the exchange's move into a bank (see desc_move_record). */
 #define DESC_PARAMS(p) __global float4 *p, __global int *p##_dest
 
-#define DESC_LOAD_LANE(lane, name, type, host_type) d.name = as_##type(v[at + lane]);
-inline Descriptor desc_load(__global const float4 *v, int k) {
-  Descriptor d;
+/* Record k into *d. Filled through a pointer, not returned: a returned
+ * struct is a no-alias result pointer, and LLVM marks where such a call
+ * was inlined with llvm.experimental.noalias.scope.decl, an intrinsic
+ * some OpenCL implementations (Oclgrind 21.10) cannot load. */
+#define DESC_LOAD_LANE(lane, name, type, host_type) d->name = as_##type(v[at + lane]);
+inline void desc_load(__global const float4 *v, int k, Descriptor *d) {
   long at = (long)k * OPSILA_DESCRIPTOR_LANE_COUNT;
   OPSILA_DESCRIPTOR_LANES(DESC_LOAD_LANE)
-  return d;
 }
 
 #define DESC_STORE_LANE(lane, name, type, host_type) v[at + lane] = as_float4(d.name);
@@ -83,14 +85,17 @@ inline int held_facet_id(__global const BankTriangle *tris, int tri_base, int tr
 }
 
 /* A radiance descriptor's best hit so far: (DESC_T_BEST, its instance,
- * facet and fan), or none while DESC_HIT is -1. */
-inline HitKey desc_best(Descriptor d, __global const BankTriangle *tris, int tri_base, int tri_count) {
-  if (DESC_HIT(d) < 0) return hit_none();
+ * facet and fan), or none while DESC_HIT is -1 (through a pointer:
+ * hit_order.h, hit_key). */
+inline void desc_best(Descriptor d, __global const BankTriangle *tris, int tri_base, int tri_count, HitKey *best) {
   int meta = DESC_META(d), fan = OPSILA_META_FAN(meta);
-  if (meta & OPSILA_META_INSTANCE)
-    return hit_key(DESC_T_BEST(d), as_int(DESC_BEST_FACET(d)), held_facet_id(tris, tri_base, tri_count, DESC_HIT(d)),
-                   fan);
-  return hit_key(DESC_T_BEST(d), -1, as_int(DESC_BEST_FACET(d)), fan);
+  if (DESC_HIT(d) < 0)
+    *best = hit_none();
+  else if (meta & OPSILA_META_INSTANCE)
+    *best = hit_key(DESC_T_BEST(d), as_int(DESC_BEST_FACET(d)),
+                    held_facet_id(tris, tri_base, tri_count, DESC_HIT(d)), fan);
+  else
+    *best = hit_key(DESC_T_BEST(d), -1, as_int(DESC_BEST_FACET(d)), fan);
 }
 inline void desc_set_best(Descriptor *d, HitKey best) {
   DESC_T_BEST(*d) = best.t;

@@ -151,7 +151,9 @@ OPSILA_INLINE void node_spans(const RayPre *r, __global const BankNode *nd, floa
         int k = lowest_bit(met);                                                  \
         met &= met - 1u;                                                          \
         int cnt = nd->count[k];                                                   \
-        if (!CHILD(w, nd, k, cnt, te[k])) continue;                               \
+        /* An empty slot is met only by a NaN ray (it meets every box): taken \
+         * as node child[k] it would start the walk again, without end. */     \
+        if (cnt < 0 || !CHILD(w, nd, k, cnt, te[k])) continue;                    \
         int node = nd->child[k];                                                  \
         if (ORDERED) {                                                            \
           float t = te[k];                                                        \

@@ -81,6 +81,18 @@ TEST(Instances, EmbreeInstancesThemToo) {
   EXPECT_GE(item_agreement(embree.item_buffer, ref.item_buffer), 0.99);
 }
 
+// Rays that are NaN (a camera whose float basis underflows; the command
+// line refuses it, scene/camera.h) meet every box, empty slots too: the
+// walks must still end (they never did: an empty slot taken as a node
+// restarted the walk at node 0).
+TEST(Instances, NanRaysEndTheirWalks) {
+  Scene s = instanced_scene(16);
+  s.camera.eye = {0, 0, 1e-25f};
+  s.camera.look_at = {0, 0, 0};
+  const RenderResult r = render_on_pes(s, 4);
+  EXPECT_EQ(r.rgb.size(), std::size_t(16 * 12 * 3));
+}
+
 // A scene of instances alone: every bank's own walk starts at an empty root.
 TEST(Instances, AloneRenderTheSameOnOneAndSixteenPes) {
   Scene s = instanced_scene(64, 4, 3);

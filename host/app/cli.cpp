@@ -113,8 +113,6 @@ std::string render_usage() {
          "  --device SPEC          device index, platform:device, or name substring (see 'opsila devices')\n"
          "  --host-memory SIZE     host memory this process may use while preparing the scene (8G, 512M,\n"
          "                         bytes; default: what the host has available, shared by its ranks)\n"
-         "  --host-memory SIZE     host memory this process may use while preparing the scene (8G, 512M,\n"
-         "                         bytes; default: what the host has available, shared by its ranks)\n"
          "  --item-buffer OUT.npy  (object, facet) of each pixel's primary hit, int32 (H, W, 2)\n"
          "  --stats OUT.json       ray counts, per-PE work, kernel times, memory, traffic\n"
          "  --reference            render with the sequential host reference instead of OpenCL\n"

@@ -2,6 +2,9 @@
 // flag or file, no output file), good input renders.
 #include <gtest/gtest.h>
 
+#include <map>
+#include <sstream>
+
 #include <nlohmann/json.hpp>
 
 #include "formats/image/image_io.h"
@@ -149,6 +152,27 @@ TEST(Cli, HelpAndVersionExitZero) {
   r = run_opsila({"--version"});
   EXPECT_EQ(r.exit_code, 0);
   EXPECT_NE(r.out.find(OPSILA_VERSION), std::string::npos);
+}
+
+// Each command's help lists each of its flags once (a flag described twice
+// had slipped into render's).
+TEST(Cli, HelpListsEveryFlagOnce) {
+  for (const char* command : {"render", "bench"}) {
+    const RunResult r = run_opsila({command, "--help"});
+    ASSERT_EQ(r.exit_code, 0) << command;
+    std::map<std::string, int> seen;
+    std::istringstream lines(r.out);
+    for (std::string line; std::getline(lines, line);) {
+      const size_t at = line.find_first_not_of(' ');
+      if (at == std::string::npos || at == 0 || line[at] != '-') continue;  // not a flag's first line
+      std::string flag = line.substr(at, line.find(' ', at) - at);
+      if (flag.size() == 2 && line.size() > at + 4 && line.compare(at + 2, 2, ", ") == 0)  // "-o, --output"
+        flag = line.substr(at + 4, line.find(' ', at + 4) - at - 4);
+      ++seen[flag];
+    }
+    EXPECT_GT(seen.size(), 3u) << command << ": no flags found in\n" << r.out;
+    for (const auto& [flag, count] : seen) EXPECT_EQ(count, 1) << command << " --help lists " << flag << " " << count << " times";
+  }
 }
 
 TEST(Cli, NoOrUnknownCommandIsAUsageError) {

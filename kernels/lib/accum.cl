@@ -21,8 +21,13 @@ inline void add_fixed(volatile __global uint *cell, long value) {
 }
 
 /* A contribution in fixed point: round to nearest even, saturating (the host
- * mirror is to_fixed in host/core/fixed_point.h). */
-inline long3 fixed3(float3 value) { return convert_long3_sat_rte(value * OPSILA_FIXED_SCALE); }
+ * mirror is to_fixed in host/core/fixed_point.h). A NaN (an infinite weight
+ * times a zero channel: colours are finite but unbounded) is 0, as OpenCL
+ * says and to_fixed does; Rusticl's built-in gives LONG_MIN, hence the mask. */
+inline long3 fixed3(float3 value) {
+  float3 s = value * OPSILA_FIXED_SCALE;
+  return convert_long3_sat_rte(s) & convert_long3(s == s);
+}
 
 /* add_fixed where no other work-item adds to `cell` during the launch (the
  * queue runs launches in order): one 64-bit read and write, no atomics, the

@@ -82,6 +82,24 @@ TEST(HugeValues, TermsBeyondFloatSaturateEverywhere) {
   EXPECT_NO_THROW(encode_pfm(cl.width, cl.height, cl.rgb));
 }
 
+// Colours are finite but unbounded: two mirrors of kr = 1e30 face each
+// other, and after two bounces a weight is infinite; times a light's or the
+// ambient's zero channel it is NaN, which adds nothing (to_fixed's 0, and
+// OpenCL's), on every device: Rusticl's own conversion gave the largest sum.
+TEST(HugeValues, InfiniteWeightsTimesZeroChannelsAddNothing) {
+  const Scene s = scene_of(R"({"image": {"size": [32, 24]}, "depth": 6, "ambient": [0.1, 0, 0.1],
+    "camera": {"eye": [0, 0, 0], "look_at": [0, 0, -1]},
+    "lights": [{"position": [0, 0.5, 0], "intensity": [1, 0, 1]}],
+    "materials": {"m": {"Kd": 0.5, "kr": 1e30}},
+    "objects": [{"type": "box", "min": [-5, -5, -3], "max": [5, 5, -2], "material": "m"},
+                {"type": "box", "min": [-5, -5, 2], "max": [5, 5, 3], "material": "m"}]})");
+  const ImageResult ref = render_reference(s);
+  const RenderResult cl = render(s, RenderSettings{}, runtime());
+  EXPECT_GT(expect_agrees_with_reference(cl.rgb, ref.rgb, "OpenCL"), 100);
+  expect_agrees_with_reference(render_megakernel(s, runtime()).rgb, ref.rgb, "megakernel");
+  for (std::size_t i = 1; i < cl.rgb.size(); i += 3) ASSERT_EQ(cl.rgb[i], 0.0f) << "green of pixel " << i / 3;
+}
+
 TEST(HugeValues, SumsBeyondTheFixedPointSaturateNotWrap) {
   const Scene s = scene_of(many_lights_scene());
   const ImageResult ref = render_reference(s);

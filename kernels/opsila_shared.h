@@ -186,6 +186,9 @@ enum { OPSILA_STAT_COUNTERS(OPSILA_STAT_WORK_FLAG) OPSILA_STAT_WORK_END };
 #define OPSILA_STAGE_INDEX(name, json) OPSILA_STAGE_##name,
 enum { OPSILA_STAGES(OPSILA_STAGE_INDEX) OPSILA_STAGE_COUNT };
 #undef OPSILA_STAGE_INDEX
+/* The counters a clocked frame fills: each stage's cycles, then how many
+ * clock readings entered it (what the clock's own cost is charged to). */
+#define OPSILA_STAGE_COUNTERS (2 * OPSILA_STAGE_COUNT)
 
 /* One facet triangle as stored in a bank (48 bytes). Vertices are kept
  * exactly as loaded so that the watertight test sees shared edges alike.

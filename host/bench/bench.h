@@ -99,7 +99,8 @@ class Megakernel {
   void count_work(bool count);
   // One more frame, of the stage-cycle program (megakernel_stages, built
   // here; only where ClRuntime::stage_cycles_unavailable is empty): the
-  // cycles of every stage (OPSILA_STAGES), summed over the pixels, and the
+  // cycles of every stage (OPSILA_STAGES), summed over the pixels, then the
+  // clock readings that entered each (OPSILA_STAGE_COUNTERS), and the
   // frame's kernel seconds (the clocks' own cost included).
   std::vector<std::uint64_t> stage_cycles(double& kernel_seconds);
 

@@ -56,7 +56,8 @@ struct MegaRaysArgs {
   auto kernel_args() const { return std::tie(frame, log_first, log); }
 };
 // megakernel_stages (the stage-cycle program): the same, and every
-// work-item's cycles per stage added to `cycles` (OPSILA_STAGE_COUNT 64-bit counters).
+// work-item's cycles and clock readings per stage added to `cycles`
+// (OPSILA_STAGE_COUNTERS 64-bit counters).
 struct MegaStagesArgs {
   MegaArgs frame;
   DeviceArray<struct StageCyclesRole> cycles;

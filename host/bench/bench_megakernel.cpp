@@ -235,7 +235,7 @@ void Megakernel::frame(BaselineImage& out) {
 std::vector<std::uint64_t> Megakernel::stage_cycles(double& kernel_seconds) {
   ClRuntime& rt = s_->rt;
   KernelBinding<MegaStagesArgs> mega(rt, "megakernel_stages", KernelProgram::baselines_stages);
-  std::vector<cl_uint> raw(OPSILA_STAGE_COUNT * OPSILA_COUNTER_WORDS, 0u);
+  std::vector<cl_uint> raw(OPSILA_STAGE_COUNTERS * OPSILA_COUNTER_WORDS, 0u);
   MegaStagesArgs args;
   args.frame = mega_args(s_->ms, s_->b, spp_side(s_->scene.spp), false);
   args.cycles.buffer = upload(rt, raw, "stage cycles");
@@ -247,7 +247,7 @@ std::vector<std::uint64_t> Megakernel::stage_cycles(double& kernel_seconds) {
     args.frame.pixel_count = count;
     mega.bind(args);
   });
-  std::vector<std::uint64_t> cycles = read_counters(rt, args.cycles, OPSILA_STAGE_COUNT, "megakernel stage cycles");
+  std::vector<std::uint64_t> cycles = read_counters(rt, args.cycles, OPSILA_STAGE_COUNTERS, "megakernel stage cycles");
   launch.harvest();  // the read waited for the launches
   kernel_seconds = 0;
   for (const LaunchRecord& r : launches) kernel_seconds += r.seconds;

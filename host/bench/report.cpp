@@ -147,14 +147,36 @@ double BenchReport::replicated_over_bank_max() const {
   return mine > 0 ? double(stats().replicated_bytes) / double(mine) : 0.0;
 }
 
-std::vector<StageTime> stage_times(const std::vector<std::uint64_t>& cycles, double seconds) {
-  std::uint64_t all = 0;
-  for (std::uint64_t c : cycles) all += c;
+std::vector<StageTime> stage_times(const std::vector<std::uint64_t>& counters, double seconds, double clocked,
+                                   StageClockCost* cost) {
+  const std::size_t n = std::min<std::size_t>(counters.size(), OPSILA_STAGE_COUNT);
+  const bool entries = counters.size() >= std::size_t(OPSILA_STAGE_COUNTERS);
+  std::uint64_t all = 0, readings = 0;
+  for (std::size_t s = 0; s < n; ++s) {
+    all += counters[s];
+    if (entries) readings += counters[OPSILA_STAGE_COUNT + s];
+  }
+  // The readings' cost: the cycles beyond what the timed frame's share of
+  // them would be, evenly over the readings.
+  const double over = clocked > seconds && seconds > 0 ? 1.0 - seconds / clocked : 0.0;
+  const double per_entry = readings > 0 ? over * double(all) / double(readings) : 0.0;
+  if (cost) *cost = {per_entry, readings > 0 ? over : 0.0};
   std::vector<StageTime> out;
-  for (std::size_t s = 0; s < cycles.size() && all > 0; ++s) {
-    if (cycles[s] == 0) continue;
-    const double share = double(cycles[s]) / double(all);
-    out.push_back({stage_name(static_cast<int>(s)), cycles[s], share, share * seconds});
+  double kept = 0;
+  for (std::size_t s = 0; s < n && all > 0; ++s) {
+    if (counters[s] == 0) continue;
+    StageTime t;
+    t.name = stage_name(static_cast<int>(s));
+    t.cycles = counters[s];
+    t.entries = entries ? counters[OPSILA_STAGE_COUNT + s] : 0;
+    t.raw_share = double(t.cycles) / double(all);
+    t.share = std::max(0.0, double(t.cycles) - per_entry * double(t.entries));  // cycles, until divided below
+    kept += t.share;
+    out.push_back(t);
+  }
+  for (StageTime& t : out) {
+    t.share = kept > 0 ? t.share / kept : t.raw_share;
+    t.seconds = t.share * seconds;
   }
   return out;
 }

@@ -106,6 +106,7 @@ struct BenchReport {
   TraversalAlone traversal;
   // Where the SPMD phase's and the megakernel's time goes: cycles per stage
   // (OPSILA_STAGES, kernels/opsila_shared.h), summed over the work-items,
+  // then the clock readings that entered each stage (OPSILA_STAGE_COUNTERS),
   // from one more frame of each built with stage cycles
   // (kernels/lib/stage_cycles.cl), not timed. Empty, with the reason in
   // stages_skipped, where they cannot run (a device other than an x86 CPU,
@@ -174,13 +175,23 @@ RankFigures rank_figures(const BenchReport& report);
 
 // One kernel's cycles by stage (BenchReport::spmd_stage_cycles, ...): each
 // stage with cycles, its share of their sum, and that share of `seconds`
-// (the kernel's time in the median timed frame).
+// (the kernel's time in the median timed frame). The clocked frame took
+// `clocked` seconds: the readings' own cost, (1 - seconds / clocked) of
+// the cycles, is shared out evenly over the readings and taken from the
+// stages they entered (StageTime::share); raw_share keeps the stage's share
+// of the cycles as counted. Without the entries (counters of
+// OPSILA_STAGE_COUNT only) or a clocked time, share is raw_share.
 struct StageTime {
   std::string name;
-  std::uint64_t cycles = 0;
-  double share = 0, seconds = 0;
+  std::uint64_t cycles = 0, entries = 0;
+  double raw_share = 0, share = 0, seconds = 0;
 };
-std::vector<StageTime> stage_times(const std::vector<std::uint64_t>& cycles, double seconds);
+struct StageClockCost {
+  double cycles_per_entry = 0;  // what one reading of the clock cost
+  double share = 0;             // of the counted cycles
+};
+std::vector<StageTime> stage_times(const std::vector<std::uint64_t>& counters, double seconds, double clocked = 0,
+                                   StageClockCost* cost = nullptr);
 
 // "launch" mode of a kernel in the paper's terms.
 const char* launch_mode(const std::string& kernel_name);

@@ -342,9 +342,13 @@ json stages_json(const BenchReport& r) {
   auto kernel = [](const std::vector<std::uint64_t>& cycles, double seconds, double clocked) -> json {
     if (cycles.empty()) return nullptr;
     json j = json::object();
-    for (const StageTime& s : stage_times(cycles, seconds))
-      j[s.name] = {{"cycles", s.cycles}, {"share", s.share}, {"seconds", s.seconds}};
-    return {{"stages", j}, {"clocked_over_timed", seconds > 0 ? clocked / seconds : 0.0}};
+    StageClockCost cost;
+    for (const StageTime& s : stage_times(cycles, seconds, clocked, &cost))
+      j[s.name] = {{"cycles", s.cycles},   {"clock_readings", s.entries}, {"share", s.share},
+                   {"raw_share", s.raw_share}, {"seconds", s.seconds}};
+    return {{"stages", j},
+            {"clocked_over_timed", seconds > 0 ? clocked / seconds : 0.0},
+            {"cycles_per_clock_reading", cost.cycles_per_entry}};
   };
   const auto spmd = r.by_kernel.find("spmd_phase");
   const double spmd_seconds = spmd == r.by_kernel.end() ? 0.0 : spmd->second.seconds;

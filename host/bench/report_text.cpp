@@ -129,11 +129,18 @@ void stages_text(std::string& out, const BenchReport& r) {
   }
   auto line = [&](const char* what, const std::vector<std::uint64_t>& cycles, double timed, double clocked) {
     if (cycles.empty()) return;
+    StageClockCost cost;
+    const std::vector<StageTime> stages = stage_times(cycles, timed, clocked, &cost);
     appendf(out, "  %-12s", what);
-    for (const StageTime& s : stage_times(cycles, 0)) appendf(out, " %s %.1f%%", s.name.c_str(), 100 * s.share);
-    appendf(out, " (clocked frame %.2fx the timed)\n", timed > 0 ? clocked / timed : 0.0);
+    for (const StageTime& s : stages) appendf(out, " %s %.1f%%", s.name.c_str(), 100 * s.share);
+    appendf(out, "\n  %-12s as counted:", "");
+    for (const StageTime& s : stages) appendf(out, " %s %.1f%%", s.name.c_str(), 100 * s.raw_share);
+    appendf(out, " (clocked frame %.2fx the timed: %.0f cycles a reading)\n", timed > 0 ? clocked / timed : 0.0,
+            cost.cycles_per_entry);
   };
-  appendf(out, "cycles by stage (one more frame of each, counted by the processor's clock):\n");
+  appendf(out,
+          "cycles by stage (one more frame of each, counted by the processor's clock; the clock readings' own\n"
+          "cost, the clocked frame's time beyond the timed one's, taken from the stages they entered):\n");
   const auto spmd = r.by_kernel.find("spmd_phase");
   line("SPMD phase", r.spmd_stage_cycles, spmd == r.by_kernel.end() ? 0.0 : spmd->second.seconds,
        r.spmd_clocked_seconds);

@@ -64,7 +64,7 @@ Renderer::Machine::Machine(const Scene& scene, PreparedBanks banks, const Render
   const PrepareTimes before_upload = prepare_times();
   auto upload = std::make_unique<StageClock>(PrepareStage::upload);
   if (measure) ncost = std::size_t(depth) * bs.clusters.size();
-  if (settings.stage_cycles) ncost = std::max<std::size_t>(ncost, OPSILA_STAGE_COUNT * OPSILA_COUNTER_WORDS);
+  if (settings.stage_cycles) ncost = std::max<std::size_t>(ncost, OPSILA_STAGE_COUNTERS * OPSILA_COUNTER_WORDS);
   S = OPSILA_SPAWN_SLOTS(static_cast<int>(bs.lights.size()));
   counted_traffic_levels =
       (settings.count_work || settings.switch_counting) && P <= OPSILA_TRAFFIC_MAX_PES ? depth : 0;

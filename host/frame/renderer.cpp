@@ -53,7 +53,7 @@ void Renderer::count_stage_cycles(bool on) {
 std::vector<std::uint64_t> Renderer::stage_cycles() {
   Machine& m = *m_;
   if (!m.clocking) return {};
-  return read_counters(m.rt, m.work.cost, OPSILA_STAGE_COUNT, "SPMD phase stage cycles");
+  return read_counters(m.rt, m.work.cost, OPSILA_STAGE_COUNTERS, "SPMD phase stage cycles");
 }
 
 RenderResult Renderer::render() {

@@ -50,7 +50,8 @@ class Renderer {
   // count_work chose; the image and the ray counts are the same. Needs
   // RenderSettings::stage_cycles (std::logic_error otherwise). After a
   // clocked frame, stage_cycles() gives the SPMD phase's cycles per stage
-  // (OPSILA_STAGES, kernels/opsila_shared.h), summed over its work-items.
+  // (OPSILA_STAGES, kernels/opsila_shared.h), summed over its work-items,
+  // then the clock readings that entered each (OPSILA_STAGE_COUNTERS).
   void count_stage_cycles(bool on);
   std::vector<std::uint64_t> stage_cycles();
   // After render() of a Renderer prepared with measure_cost: each cluster's

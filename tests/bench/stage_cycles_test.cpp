@@ -8,6 +8,7 @@
 
 #include "bench/bench.h"
 #include "bench/bench_kernels.h"
+#include "bench/report.h"
 #include "device/counters.h"
 #include "frame/renderer.h"
 #include "kernel_signature.h"
@@ -57,14 +58,40 @@ TEST(StageCycles, TheSpmdPhaseCountsItsStagesAndKeepsItsImage) {
   EXPECT_EQ(clocked.rgb, plain.rgb);
   EXPECT_TRUE(clocked.rays.same_rays(plain.rays));
   const std::vector<std::uint64_t> cycles = machine.stage_cycles();
-  ASSERT_EQ(cycles.size(), std::size_t(OPSILA_STAGE_COUNT));
+  ASSERT_EQ(cycles.size(), std::size_t(OPSILA_STAGE_COUNTERS));
   for (int st : {OPSILA_STAGE_BODY, OPSILA_STAGE_BANK_WALK, OPSILA_STAGE_DESTINATION, OPSILA_STAGE_SHADING,
-                 OPSILA_STAGE_PIXEL_SUMS, OPSILA_STAGE_OUTPUTS, OPSILA_STAGE_STATISTICS})
+                 OPSILA_STAGE_PIXEL_SUMS, OPSILA_STAGE_OUTPUTS, OPSILA_STAGE_STATISTICS}) {
     EXPECT_GT(cycles[std::size_t(st)], 0u) << stage_name(st);
+    EXPECT_GT(cycles[std::size_t(OPSILA_STAGE_COUNT + st)], 0u) << stage_name(st) << ": clock readings";
+  }
   EXPECT_EQ(cycles[OPSILA_STAGE_CAMERA], 0u);
+  EXPECT_EQ(cycles[OPSILA_STAGE_COUNT + OPSILA_STAGE_CAMERA], 0u);
   EXPECT_EQ(machine.render().rgb, plain.rgb);
   machine.count_stage_cycles(false);
   EXPECT_EQ(machine.render().rgb, plain.rgb);
+}
+
+// The clock readings' cost comes out of the stages they entered: here the
+// clocked frame took 1.25x the timed one, so a fifth of the 1000 counted
+// cycles (200) were readings; 100 readings cost 2 cycles each. Stage A
+// (500 cycles, 90 readings) keeps 320, B (500, 10) keeps 480.
+TEST(StageCycles, TheReadingsCostIsTakenFromTheStagesTheyEntered) {
+  std::vector<std::uint64_t> counters(OPSILA_STAGE_COUNTERS, 0);
+  counters[OPSILA_STAGE_CAMERA] = 500, counters[OPSILA_STAGE_COUNT + OPSILA_STAGE_CAMERA] = 90;
+  counters[OPSILA_STAGE_SHADING] = 500, counters[OPSILA_STAGE_COUNT + OPSILA_STAGE_SHADING] = 10;
+  StageClockCost cost;
+  const std::vector<StageTime> t = stage_times(counters, 0.8, 1.0, &cost);
+  ASSERT_EQ(t.size(), 2u);
+  EXPECT_NEAR(cost.cycles_per_entry, 2.0, 1e-9);
+  EXPECT_NEAR(cost.share, 0.2, 1e-9);
+  EXPECT_EQ(t[0].name, "camera");
+  EXPECT_NEAR(t[0].raw_share, 0.5, 1e-12);
+  EXPECT_NEAR(t[0].share, 320.0 / 800.0, 1e-12);
+  EXPECT_NEAR(t[1].share, 480.0 / 800.0, 1e-12);
+  EXPECT_NEAR(t[0].seconds + t[1].seconds, 0.8, 1e-12);
+  // Counters without the readings, or no clocked time: the shares as counted.
+  counters.resize(OPSILA_STAGE_COUNT);
+  for (const StageTime& s : stage_times(counters, 0.8, 1.0)) EXPECT_EQ(s.share, s.raw_share);
 }
 
 TEST(StageCycles, AMachineNotPreparedForThemRefuses) {
@@ -83,9 +110,14 @@ TEST(StageCycles, TheMegakernelCountsItsStages) {
   double seconds = 0;
   const std::vector<std::uint64_t> cycles = mega.stage_cycles(seconds);
   EXPECT_GT(seconds, 0.0);
-  ASSERT_EQ(cycles.size(), std::size_t(OPSILA_STAGE_COUNT));
-  for (int st : {OPSILA_STAGE_CAMERA, OPSILA_STAGE_BANK_WALK, OPSILA_STAGE_SHADING, OPSILA_STAGE_PIXEL_SUMS})
+  ASSERT_EQ(cycles.size(), std::size_t(OPSILA_STAGE_COUNTERS));
+  for (int st : {OPSILA_STAGE_CAMERA, OPSILA_STAGE_BANK_WALK, OPSILA_STAGE_SHADING, OPSILA_STAGE_PIXEL_SUMS}) {
     EXPECT_GT(cycles[std::size_t(st)], 0u) << stage_name(st);
+    EXPECT_GT(cycles[std::size_t(OPSILA_STAGE_COUNT + st)], 0u) << stage_name(st) << ": clock readings";
+  }
+  // The pixel's clock starts in the camera stage, and every walk is entered
+  // once a ray and left back to the stage around it.
+  EXPECT_GE(cycles[OPSILA_STAGE_COUNT + OPSILA_STAGE_CAMERA], std::uint64_t(48 * 48));
   for (int st : {OPSILA_STAGE_DESTINATION, OPSILA_STAGE_OUTPUTS, OPSILA_STAGE_STATISTICS})
     EXPECT_EQ(cycles[std::size_t(st)], 0u) << stage_name(st);
   // The clocked frame wrote the same pixel sums: the next frame's image is unchanged.

@@ -207,6 +207,36 @@ struct Baselines {
   }
 };
 
+// Cycles by stage: as many clocked frames of each as timed rounds, and of
+// each the frame whose clocked kernel time is the median (one frame alone
+// would carry whatever else the machine did meanwhile into the readings'
+// cost, stage_times).
+void measure_stage_cycles(BenchReport& report, Renderer& renderer, Megakernel* mega) {
+  struct Clocked {
+    double seconds = 0;
+    std::vector<std::uint64_t> counters;
+  };
+  auto median_of = [](std::vector<Clocked> runs, double& seconds) {
+    std::sort(runs.begin(), runs.end(), [](const Clocked& a, const Clocked& b) { return a.seconds < b.seconds; });
+    seconds = runs[runs.size() / 2].seconds;
+    return runs[runs.size() / 2].counters;
+  };
+  const int n = std::max(1, report.repeats);
+  std::vector<Clocked> spmd(n), kernel(mega ? n : 0);
+  renderer.count_stage_cycles(true);
+  for (int i = 0; i < n; ++i) {
+    RenderResult clocked;
+    renderer.render(clocked);
+    report.deterministic = report.deterministic && clocked.rgb == report.opsila.rgb;
+    spmd[i].counters = renderer.stage_cycles();
+    for (const LaunchRecord& l : clocked.stats.launches)
+      if (l.name == "spmd_phase") spmd[i].seconds += l.seconds;
+    if (mega) kernel[i].counters = mega->stage_cycles(kernel[i].seconds);
+  }
+  report.spmd_stage_cycles = median_of(spmd, report.spmd_clocked_seconds);
+  if (mega) report.megakernel_stage_cycles = median_of(kernel, report.megakernel_clocked_seconds);
+}
+
 }  // namespace
 
 void measure_renders(BenchReport& report, Scene& scene, const RenderSettings& settings, ClRuntime& rt,
@@ -275,15 +305,8 @@ void measure_renders(BenchReport& report, Scene& scene, const RenderSettings& se
   report.render_seconds = median(report.render_times);
   if (report.stages_skipped.empty()) {
     live.restart("bench: OPSILA and the megakernel, cycles by stage");
-    RenderResult clocked;
-    renderer.count_stage_cycles(true);
-    renderer.render(clocked);
+    measure_stage_cycles(report, renderer, base.mega.get());
     live.finish();
-    report.deterministic = report.deterministic && clocked.rgb == report.opsila.rgb;
-    report.spmd_stage_cycles = renderer.stage_cycles();
-    for (const LaunchRecord& l : clocked.stats.launches)
-      if (l.name == "spmd_phase") report.spmd_clocked_seconds += l.seconds;
-    if (base.mega) report.megakernel_stage_cycles = base.mega->stage_cycles(report.megakernel_clocked_seconds);
   }
   progress("OPSILA: %.3f s, %.3f Mrays/s", report.render_seconds, mrays(report.rays_total(), report.render_seconds));
   base.finish(report);

@@ -107,8 +107,9 @@ struct BenchReport {
   // Where the SPMD phase's and the megakernel's time goes: cycles per stage
   // (OPSILA_STAGES, kernels/opsila_shared.h), summed over the work-items,
   // then the clock readings that entered each stage (OPSILA_STAGE_COUNTERS),
-  // from one more frame of each built with stage cycles
-  // (kernels/lib/stage_cycles.cl), not timed. Empty, with the reason in
+  // from untimed frames of each built with stage cycles
+  // (kernels/lib/stage_cycles.cl), as many as the timed rounds, the one with
+  // the median clocked time kept (measure_stage_cycles). Empty, with the reason in
   // stages_skipped, where they cannot run (a device other than an x86 CPU,
   // several ranks).
   std::vector<std::uint64_t> spmd_stage_cycles, megakernel_stage_cycles;

@@ -139,8 +139,9 @@ void stages_text(std::string& out, const BenchReport& r) {
             cost.cycles_per_entry);
   };
   appendf(out,
-          "cycles by stage (one more frame of each, counted by the processor's clock; the clock readings' own\n"
-          "cost, the clocked frame's time beyond the timed one's, taken from the stages they entered):\n");
+          "cycles by stage (clocked frames of each, as many as the timed ones, the median kept; counted by the\n"
+          "processor's clock, the readings' own cost, the clocked frame's time beyond the timed one's, taken\n"
+          "from the stages they entered):\n");
   const auto spmd = r.by_kernel.find("spmd_phase");
   line("SPMD phase", r.spmd_stage_cycles, spmd == r.by_kernel.end() ? 0.0 : spmd->second.seconds,
        r.spmd_clocked_seconds);

@@ -26,11 +26,15 @@ typedef struct {
 #endif
 } PrivStats;
 
-/* A work-item's counts into its work-group's, at `level`. */
-inline void add_stats(__local uint *lstats, int level, const PrivStats *st) {
-  for (int s = 0; s < OPSILA_STAT_COUNT; ++s)
-    if (st->v[s] != 0u) atomic_add(&lstats[level * OPSILA_STAT_COUNT + s], st->v[s]);
-}
+/* A work-item's counts into its work-group's, at `level`: one test per
+ * counter, written out, none for a work counter in a program that does not
+ * count the work (a loop over every counter tested them all, as the
+ * compiler cannot see that those stay 0). */
+#define ADD_STAT(name, json, sum)                                                            \
+  if ((OPSILA_COUNT_WORK || !OPSILA_STAT_WORK_##name) && st->v[OPSILA_STAT_##name] != 0u) \
+    atomic_add(&lstats[level * OPSILA_STAT_COUNT + OPSILA_STAT_##name], st->v[OPSILA_STAT_##name]);
+inline void add_stats(__local uint *lstats, int level, const PrivStats *st) { OPSILA_STAT_COUNTERS(ADD_STAT) }
+#undef ADD_STAT
 
 /* Output records of one work-item: its S places, filled from the front,
  * and the PE x PE traffic of its work-group (local, flushed once). */

@@ -68,6 +68,13 @@ check render-optimised-tiny-banks "${optimised_checks[@]}" -- \
   "$build/opsila" render "$scene" -o "$work/banks.pfm" --size 8x6 --depth 4 --pes 4 --bank-capacity 1 \
   --device oclgrind -q "${view[@]}"
 
+# 2a. More hits than one injection (1024) and small banks: the SPMD launch's
+#     work-groups build the next round's primary descriptors beside the
+#     phase's (kernels/spmd_phase.cl), every check.
+check render-primary-ahead-all-checks "${all_checks[@]}" -- \
+  "$build/opsila" render "$scene" -o "$work/ahead.pfm" --size 48x32 --depth 2 --pes 4 --bank-capacity 8 \
+  --device oclgrind -q "${view[@]}"
+
 # 2b. Samples per pixel (k = 2): the centre-only item-buffer pass, one pass
 #     per sample, the primary hit counter.
 check render-spp-all-checks "${all_checks[@]}" -- \

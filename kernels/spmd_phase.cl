@@ -12,7 +12,15 @@
  * output is deterministic) and fills them from the front: the reflected or
  * forwarded ray, the transmitted ray, then one shadow ray per light that
  * needs one. out_item_count says how many, so the exchange never reads an
- * empty slot. */
+ * empty slot.
+ *
+ * The launch's first work-groups, when it has more than spmd_groups, build
+ * the next round's primary descriptors into the waiting pool (primary.cl,
+ * the same function as build_primary): they read neither the banks nor
+ * the outputs, and a launch of their own costs a GPU more than their work.
+ * First, not last: last, PoCL's two threads finished each round unevenly
+ * (docs/BENCHMARKS.md, "Levers kept"). */
+#include "primary.cl"
 #include "lib/bvh.cl"
 #include "lib/routing.cl"
 #include "lib/shading.cl"
@@ -285,6 +293,28 @@ inline void process(FrameParams fp, const Routing *rt, const Bank *bank, __globa
               accum, st, st_child, probe, probe_child));
 }
 
+/* PE pe's bank, on this device (its facets: fp.tri_base on); through a
+ * pointer, as desc_load (a returned struct: descriptor.cl). */
+inline void own_bank(FrameParams fp, __global const PeInfo *pes, __global const BankNode *nodes,
+                     __global const BankTriangle *tris, __global const Instance *insts, int pe, Bank *bank) {
+  int tri_end = pes[fp.group_end - 1].tri_end;
+  Bank b = {nodes, tris, insts, pe, pes[pe].node_begin, pes[pe].instance_root,
+            pes[pe].node_begin == pes[pe].node_end, fp.box_slack, fp.tri_base, tri_end - fp.tri_base};
+  *bank = b;
+}
+
+/* A work-group's statistics and traffic, after its barrier, to the frame's
+ * counters: once a work-group, not once a descriptor. */
+inline void flush_group_counts(__local const uint *lstats, __local const uint *ltraffic, int depth, int ntraffic,
+                               int P, int pe, volatile __global uint *stats, volatile __global uint *traffic) {
+  int lid = get_local_id(0), lsz = get_local_size(0);
+  for (int i = lid; i < depth * OPSILA_STAT_COUNT; i += lsz) {
+    uint v = lstats[i];
+    if (v != 0u) count_stat(stats, P, i / OPSILA_STAT_COUNT, pe, i % OPSILA_STAT_COUNT, v);
+  }
+  for (int i = lid; i < ntraffic; i += lsz) count_add(traffic, ((long)(i / P) * P + pe) * P + i % P, ltraffic[i]);
+}
+
 __kernel void spmd_phase(FrameParams fp, __global const PeInfo *pes, __global const Cluster *clusters,
                          __global const BankNode *route, int routing, __global const BankNode *nodes,
                          __global const BankTriangle *tris, __global const Instance *insts,
@@ -293,10 +323,20 @@ __kernel void spmd_phase(FrameParams fp, __global const PeInfo *pes, __global co
                          __global const int *bank_begin, __global const int *bank_count, DESC_PARAMS(o),
                          __global int *out_item_count, volatile __global uint *accum, volatile __global uint *stats,
                          volatile __global uint *traffic, int traffic_levels, __global const int *node_cluster,
-                         __global const int *tri_cluster, volatile __global uint *cost) {
+                         __global const int *tri_cluster, volatile __global uint *cost, int spmd_groups,
+                         __global const int *hit_pixels, __global const int *item_tri, __global const float *item_t,
+                         __global const int2 *item_key, int prim_first, int prim_count, float prim_ox,
+                         float prim_oy, int prim_offset, DESC_PARAMS(pool), volatile __global uint *hit_count) {
   __local uint lstats[OPSILA_MAX_DEPTH * OPSILA_STAT_COUNT];
   __local uint ltraffic[OPSILA_MAX_DEPTH * OPSILA_TRAFFIC_MAX_PES];
   int g = get_group_id(0), lid = get_local_id(0), lsz = get_local_size(0);
+  int builders = get_num_groups(0) - spmd_groups;
+  if (g < builders) {
+    PrimaryBuild pb = {hit_pixels, item_tri, item_t, item_key, prim_first, prim_count, prim_ox, prim_oy, prim_offset};
+    build_primary_ahead(fp, pes, insts, &pb, g, pool, pool_dest, hit_count);
+    return;
+  }
+  g -= builders; /* the phase's work-group */
   int P = fp.num_pes, depth = fp.max_depth;
   int ntraffic = traffic_levels * P;
   for (int i = lid; i < depth * OPSILA_STAT_COUNT; i += lsz) lstats[i] = 0u;
@@ -314,10 +354,8 @@ __kernel void spmd_phase(FrameParams fp, __global const PeInfo *pes, __global co
   int item = g * lsz + lid;
   Outputs out = {o, o_dest, item * fp.spawn_slots, 0, depth, P, traffic_levels, ltraffic};
   Routing rt = {pes, clusters, route, P, routing};
-  int tri_end = pes[fp.group_end - 1].tri_end;
-  Bank bank = {nodes,         tris,         insts,          pe,
-               pes[pe].node_begin, pes[pe].instance_root, pes[pe].node_begin == pes[pe].node_end, fp.box_slack,
-               fp.tri_base,   tri_end - fp.tri_base};
+  Bank bank;
+  own_bank(fp, pes, nodes, tris, insts, pe, &bank);
   if (slot < bank_begin[pe] + bank_count[pe]) {
     Descriptor ds;
     desc_load(b, slot, &ds);
@@ -345,19 +383,11 @@ __kernel void spmd_phase(FrameParams fp, __global const PeInfo *pes, __global co
 #ifdef OPSILA_STAGE_CYCLES
   stage_enter(&clock, OPSILA_STAGE_BODY); /* stopped at the barrier */
 #endif
-  /* Statistics and traffic leave the work-group once, not per descriptor. */
   barrier(CLK_LOCAL_MEM_FENCE);
 #ifdef OPSILA_STAGE_CYCLES
   stage_start(&clock, OPSILA_STAGE_STATISTICS);
 #endif
-  for (int i = lid; i < depth * OPSILA_STAT_COUNT; i += lsz) {
-    uint v = lstats[i];
-    if (v != 0u) count_stat(stats, P, i / OPSILA_STAT_COUNT, pe, i % OPSILA_STAT_COUNT, v);
-  }
-  for (int i = lid; i < ntraffic; i += lsz) {
-    uint v = ltraffic[i];
-    count_add(traffic, ((long)(i / P) * P + pe) * P + i % P, v);
-  }
+  flush_group_counts(lstats, ltraffic, depth, ntraffic, P, pe, stats, traffic);
 #ifdef OPSILA_STAGE_CYCLES
   stage_enter(&clock, OPSILA_STAGE_BODY);
   stage_flush(&clock, cost);

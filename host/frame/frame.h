@@ -71,6 +71,9 @@ struct Renderer::Machine {
   // tests can show how a failure among running ranks ends them all.
   int fault_round = -1;
   FlightPlan flight{1, 1, 1, 1};
+  // The SPMD launch builds the next round's primary descriptors
+  // (RenderSettings::primary_ahead; frame_primary.cpp, primary_ahead).
+  bool build_ahead = true;
   // Descriptors that may wait before the exchange takes only the rays that
   // end their tree (kernels/scatter.cl): OPSILA_WAITING_LIMIT, else the
   // planned pool once a level (depth first, about what the trees hold).
@@ -147,6 +150,7 @@ struct Renderer::Machine {
     int out_groups = 0;          // SPMD work-groups whose outputs the next exchange reads
     int groups = 0;              // SPMD work-groups of this round (from the exchange's plan)
     std::size_t pool_len_max = 0;  // several ranks: the longest pool of any rank (they inject alike)
+    bool built_ahead = false;    // the last SPMD launch built this round's primary descriptors
   };
 
   Machine(const Scene& scene, PreparedBanks banks, const RenderSettings& settings, ClRuntime& runtime);
@@ -164,7 +168,9 @@ struct Renderer::Machine {
   void clear_frame();
   void item_buffer(Launcher& launch, int sample);
   std::size_t list_hits(Launcher& launch, int sample);
+  frame_kernels::PrimaryBuildArgs primary_build(Frame& f, std::size_t count);
   void primary_descriptors(Launcher& launch, Frame& f, int round);
+  int primary_ahead(Frame& f, frame_kernels::PrimaryBuildArgs& b);
   ScatterPass::Args exchange_args(const Frame& f) const;
   void exchange(Launcher& launch, Frame& f, int round, RenderStats& st);
   void spmd_phase(Launcher& launch, Frame& f, int round);

@@ -113,12 +113,10 @@ struct ListHitsArgs {
   HitList list;
   auto kernel_args() const { return std::tie(hits, npix, width, traced, block_first, list); }
 };
-// kernels/primary.cl, build_primary: hits first.. first + count - 1 of the
-// list, written into the pool from slot `offset` on.
-struct PrimaryArgs {
-  FrameParams fp{};
-  PeTable pes;
-  InstanceTable insts;
+// kernels/primary.cl, PrimaryBuild: hits first.. first + count - 1 of the
+// list, written into the pool from slot `offset` on, by build_primary or
+// by the SPMD launch's first work-groups, before its phase's (spmd_groups).
+struct PrimaryBuildArgs {
   HitList list;
   ItemHits hits;
   ItemDistances distances;
@@ -128,9 +126,14 @@ struct PrimaryArgs {
   int offset = 0;
   DescriptorSet pool;
   PrimaryHitCount hit_count;
-  auto kernel_args() const {
-    return std::tie(fp, pes, insts, list, hits, distances, keys, first, count, ox, oy, offset, pool, hit_count);
-  }
+  auto kernel_args() const { return std::tie(list, hits, distances, keys, first, count, ox, oy, offset, pool, hit_count); }
+};
+struct PrimaryArgs {
+  FrameParams fp{};
+  PeTable pes;
+  InstanceTable insts;
+  PrimaryBuildArgs build;
+  auto kernel_args() const { return std::tie(fp, pes, insts, build); }
 };
 
 // kernels/spmd_phase.cl: the plan's work-groups, each on one PE's bank.
@@ -150,9 +153,11 @@ struct SpmdArgs {
   TrafficCounters traffic;
   int traffic_levels = 0;
   ClusterWork work;
+  int spmd_groups = 0;       // the phase's work-groups; any before them build
+  PrimaryBuildArgs primary;  // the next round's primary descriptors (count 0: none)
   auto kernel_args() const {
     return std::tie(fp, routing, routing_mode, geometry, shading, banks, groups, bank_ranges, outputs, out_count, accum,
-                    stats, traffic, traffic_levels, work);
+                    stats, traffic, traffic_levels, work, spmd_groups, primary);
   }
 };
 

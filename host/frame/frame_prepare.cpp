@@ -34,6 +34,7 @@ Renderer::Machine::Machine(const Scene& scene, PreparedBanks banks, const Render
   spp_k = spp_side(spp);
   offsets = sample_offsets(spp);
   item_output = settings.item_buffer_output;
+  build_ahead = settings.primary_ahead;
   pinned_readback = settings.pinned_readback || !host_sharing(rt).in_place;
   progress = settings.progress;
   if (const auto k = env_hook_number(EnvHook::fault_round, 0, 999999999, "a round number"))

@@ -2,7 +2,8 @@
 
 namespace opsila {
 
-// SPMD phase: the plan's work-groups, each on one PE's bank.
+// SPMD phase: the plan's work-groups, each on one PE's bank, and before
+// them those that build the next round's primary descriptors, if any.
 void Renderer::Machine::spmd_phase(Launcher& launch, Frame& f, int round) {
   frame_kernels::SpmdArgs a;
   a.fp = fp;
@@ -20,8 +21,10 @@ void Renderer::Machine::spmd_phase(Launcher& launch, Frame& f, int round) {
   a.traffic = b_traffic;
   a.traffic_levels = traffic_levels;
   a.work = work;
+  a.spmd_groups = f.groups;
+  const int builders = primary_ahead(f, a.primary);
   kernels().spmd.bind(a);
-  launch.run(kernels().spmd.kernel(), "spmd_phase", std::size_t(f.groups) * spmd_wg, spmd_wg, round);
+  launch.run(kernels().spmd.kernel(), "spmd_phase", std::size_t(f.groups + builders) * spmd_wg, spmd_wg, round);
   f.out_groups = f.groups;
   if (round % 16 == 15) launch.harvest();
 }

@@ -80,6 +80,11 @@ struct RenderSettings {
   // elsewhere (a discrete GPU); true takes the second way on any device, so
   // that the tests hold it to the same image on a CPU.
   bool pinned_readback = false;
+  // The SPMD launch builds the next round's primary descriptors in
+  // work-groups of its own, one launch a round fewer (a GPU's launches cost
+  // more than that work); false builds them with a launch of their own, as
+  // the tests compare. The same descriptors either way.
+  bool primary_ahead = true;
 };
 
 // One kernel launch, named, with its OpenCL-profiled time.

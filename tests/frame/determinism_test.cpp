@@ -80,5 +80,53 @@ TEST(Determinism, ItemBufferTilesDoNotChangeTheImage) {
   EXPECT_GE(item_launches, (40 * 30 + 96) / 97);
 }
 
+// The SPMD launch builds the next round's primary descriptors
+// (RenderSettings::primary_ahead): the frame a launch of their own gives, to
+// the byte and to the counter, with one build_primary launch a round fewer.
+// Only a round that starts a sample pass (its item buffer pass and hit list
+// first) still launches its own; hits beyond one injection (1024) and
+// small banks (64 slots: many rounds) make the difference show.
+TEST(Determinism, PrimaryDescriptorsBuiltAheadGiveTheSameFrame) {
+  ClRuntime rt(test_device(), plain_options());
+  auto count = [](const RenderResult& r, const char* name) {
+    return std::count_if(r.stats.launches.begin(), r.stats.launches.end(),
+                         [&](const LaunchRecord& l) { return l.name == name; });
+  };
+  bool fewer = false;
+  for (int spp : {1, 4})
+    for (int pes : {1, 16})
+      for (int capacity : {0, 64}) {
+        SCOPED_TRACE("spp " + std::to_string(spp) + ", " + std::to_string(pes) + " PEs, capacity " +
+                     std::to_string(capacity));
+        Scene s = test::mirror_glass_scene(96, 3);
+        s.spp = spp;
+        RenderSettings rs;
+        rs.num_pes = pes;
+        rs.bank_capacity = capacity;
+        rs.primary_ahead = false;
+        const RenderResult own = render(s, rs, rt);
+        rs.primary_ahead = true;
+        const RenderResult ahead = render(s, rs, rt);
+        ASSERT_EQ(own.rgb.size(), ahead.rgb.size());
+        EXPECT_EQ(0, std::memcmp(own.rgb.data(), ahead.rgb.data(), own.rgb.size() * sizeof(float)));
+        EXPECT_EQ(own.item_buffer, ahead.item_buffer);
+        EXPECT_TRUE(own.rays.same_rays(ahead.rays));
+        EXPECT_EQ(own.rays.primary_hits, ahead.rays.primary_hits);
+        const RenderStats &a = own.stats, &b = ahead.stats;
+        EXPECT_EQ(a.counters, b.counters);
+        EXPECT_EQ(a.traffic, b.traffic);
+        EXPECT_EQ(std::tie(a.rounds, a.descriptors_spawned, a.descriptors_finished, a.forwards),
+                  std::tie(b.rounds, b.descriptors_spawned, b.descriptors_finished, b.forwards));
+        EXPECT_EQ(std::tie(a.overflow_deferrals, a.waiting_peak, a.throttled_rounds),
+                  std::tie(b.overflow_deferrals, b.waiting_peak, b.throttled_rounds));
+        const auto own_builds = count(own, "build_primary"), builds = count(ahead, "build_primary");
+        EXPECT_EQ(a.launches.size() - b.launches.size(), std::size_t(own_builds - builds));
+        EXPECT_LE(builds, count(ahead, "count_hits")) << "one build a sample pass at most";
+        EXPECT_EQ(count(own, "spmd_phase"), count(ahead, "spmd_phase"));
+        fewer = fewer || builds < own_builds;
+      }
+  EXPECT_TRUE(fewer) << "no configuration built a round's descriptors ahead";
+}
+
 }  // namespace
 }  // namespace opsila

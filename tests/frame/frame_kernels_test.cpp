@@ -25,7 +25,7 @@ static_assert(!can_assign<decltype(SpmdArgs::accum), StatCounters>, "sums and co
 static_assert(!can_assign<decltype(SpmdArgs::stats), TrafficCounters>, "counters apart");
 static_assert(!can_assign<decltype(SpmdArgs::out_count), GroupPes>, "outputs and work-groups apart");
 static_assert(!can_assign<decltype(SpmdArgs::routing), BankGeometry>, "groups apart");
-static_assert(!can_assign<decltype(frame_kernels::PrimaryArgs::hits), ItemDistances>, "hits and distances apart");
+static_assert(!can_assign<decltype(frame_kernels::PrimaryBuildArgs::hits), ItemDistances>, "hits and distances apart");
 static_assert(!can_assign<decltype(frame_kernels::ListHitsArgs::list), HitBlocks>, "the list and its blocks apart");
 
 TEST(FrameKernels, EveryStructFollowsItsKernelInEveryProgram) {

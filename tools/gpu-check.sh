@@ -22,7 +22,8 @@
 #          (tests, Embree and other optional parts off) while 1 runs, and
 #          checks that its image of the default scene is the Debian build's;
 #       3. `opsila bench` on hundreds at 800x600 and 1920x1080 (the Debian
-#          build, Embree beside it on the host's threads).
+#          build, Embree beside it on the host's threads), and renders at
+#          1920x1080 with and without OPSILA_PRIMARY_AHEAD.
 #       Everything runs within 8 minutes.
 #
 # KIT defaults to ./gpu-kit. Results: KIT/results (log, PFMs, bench JSON and
@@ -250,6 +251,21 @@ run() {
       echo "FAIL  bench $size (or out of time)"
       failed=1
     fi
+  done
+  # The next round's primary descriptors built by the SPMD launch (the
+  # default) or by a launch of their own (OPSILA_PRIMARY_AHEAD=0): five
+  # renders each at 1920x1080, interleaved; each run's frame seconds.
+  local a i
+  for a in 1 0; do : >"$out/ahead$a.txt"; done
+  for i in 1 2 3 4 5; do
+    for a in 1 0; do
+      OPSILA_PRIMARY_AHEAD=$a timeout 60 "$bin" render scenes/hundreds.json --size 1920x1080 -q \
+        -o "$out/ahead$a.pfm" --stats "$out/ahead$a.json" >/dev/null 2>&1 &&
+        grep -o '"render_seconds": *[0-9.e+-]*' "$out/ahead$a.json" | grep -o '[0-9.e+-]*$' >>"$out/ahead$a.txt"
+    done
+  done
+  for a in 1 0; do
+    echo "      OPSILA_PRIMARY_AHEAD=$a, frame seconds (sorted): $(sort -g "$out/ahead$a.txt" | tr '\n' ' ')"
   done
   echo "gpu-check: $([ $failed -eq 0 ] && echo passed || echo FAILED) in $((SECONDS - start)) s; results in $out"
   return $failed

@@ -32,7 +32,9 @@ namespace opsila {
   /* a device fault injected at this round of every frame (reliability tests) */                                   \
   X(fault_round, "OPSILA_FAULT_ROUND")                                                                             \
   /* descriptors that may wait before the exchange throttles (default: the planned pool x depth) */               \
-  X(waiting_limit, "OPSILA_WAITING_LIMIT")
+  X(waiting_limit, "OPSILA_WAITING_LIMIT")                                                                        \
+  /* 0: each round's primary descriptors get a launch of their own (default 1: the SPMD launch before builds them) */ \
+  X(primary_ahead, "OPSILA_PRIMARY_AHEAD")
 
 enum class EnvHook {
 #define OPSILA_ENV_ENUM(id, name) id,

@@ -35,6 +35,7 @@ Renderer::Machine::Machine(const Scene& scene, PreparedBanks banks, const Render
   offsets = sample_offsets(spp);
   item_output = settings.item_buffer_output;
   build_ahead = settings.primary_ahead;
+  if (const auto a = env_hook_number(EnvHook::primary_ahead, 0, 1, "0 or 1")) build_ahead = build_ahead && *a == 1;
   pinned_readback = settings.pinned_readback || !host_sharing(rt).in_place;
   progress = settings.progress;
   if (const auto k = env_hook_number(EnvHook::fault_round, 0, 999999999, "a round number"))

@@ -195,5 +195,19 @@ TEST(WaitingLimit, ABadValueIsAnInputError) {
   EXPECT_TRUE(test::file_exists(dir.file("out.pfm")));
 }
 
+// OPSILA_PRIMARY_AHEAD: 0 or 1, or one clear error before anything is
+// written; 0 gives the same image with a build_primary launch a round.
+TEST(PrimaryAhead, ABadValueIsAnInputErrorAndZeroGivesTheSameImage) {
+  TempDir dir;
+  RunResult bad = opsila(render_args(dir.file("out.pfm")), {{"OPSILA_PRIMARY_AHEAD", "yes"}});
+  expect_one_error(bad, 2, "OPSILA_PRIMARY_AHEAD=yes");
+  EXPECT_FALSE(test::file_exists(dir.file("out.pfm")));
+  RunResult ahead = opsila(render_args(dir.file("ahead.pfm")), {{"OPSILA_PRIMARY_AHEAD", "1"}});
+  RunResult own = opsila(render_args(dir.file("own.pfm")), {{"OPSILA_PRIMARY_AHEAD", "0"}});
+  ASSERT_EQ(ahead.exit_code, 0) << ahead.err;
+  ASSERT_EQ(own.exit_code, 0) << own.err;
+  EXPECT_TRUE(test::read_file(dir.file("ahead.pfm")) == test::read_file(dir.file("own.pfm")));
+}
+
 }  // namespace
 }  // namespace opsila

@@ -53,6 +53,11 @@ export LSAN_OPTIONS="suppressions=$root/.ci/lsan.supp:print_suppressions=0"
 # (formats/common/model_files.h), which this limit does not reach.
 ulimit -s 2048 || exit 1
 
+# The model importer's memory budget (OPSILA_IMPORT_MEMORY), half the
+# fuzzers' limit: the glTF checks must refuse what the importer would take
+# beyond it, so that no input reaches -rss_limit_mb.
+export OPSILA_IMPORT_MEMORY=$(( 1 << 30 ))
+
 status=0
 for name in obj scene model; do
   work="$build/fuzz-$name"

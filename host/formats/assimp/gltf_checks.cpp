@@ -41,6 +41,11 @@ GltfParts split_glb(const std::string& b, const std::string& name) {
   const u64 size = b.size();
   if (size < 20) throw InputError(name + ": GLB file shorter than its header (truncated file)");
   const std::uint32_t version = le32(b, 4), length = le32(b, 8);
+  // The importer reads the first chunk's header whatever the length says,
+  // and allocates what that chunk claims (found by fuzz_model).
+  if (length < 20)
+    throw InputError(name + ": GLB header says " + std::to_string(length) +
+                     " bytes, fewer than its header and first chunk's (20)");
   if (length > size)
     throw InputError(name + ": GLB header says " + std::to_string(length) + " bytes; the file holds " +
                      std::to_string(size) + " (truncated file)");
@@ -147,7 +152,9 @@ u64 data_uri_bytes(const std::string& uri) {
   return text / 4 * 3 - std::min<u64>(pad, text / 4 * 3);
 }
 
-std::vector<u64> buffer_lengths(const Gltf& g, ModelFiles& files, const GltfParts& parts, const std::string& path) {
+// Each buffer's length; `external` gets the bytes of the files they name.
+std::vector<u64> buffer_lengths(const Gltf& g, ModelFiles& files, const GltfParts& parts, const std::string& path,
+                                u64& external) {
   std::vector<u64> lengths;
   for (const Entry& e : g.entries("buffers")) {
     u64 available = parts.bin_bytes;  // no uri: the GLB's binary chunk
@@ -163,6 +170,7 @@ std::vector<u64> buffer_lengths(const Gltf& g, ModelFiles& files, const GltfPart
         const std::string dir = std::filesystem::path(path).parent_path().string();
         source = dir.empty() ? u : dir + "/" + u;
         available = files.size(source);
+        external += available;
       }
     }
     const u64 length = whole(*e.value, "byteLength", available, e.where);
@@ -225,12 +233,20 @@ void check_range(u64 offset, u64 count, u64 elem, u64 stride, u64 length, const 
                      std::to_string(length) + " bytes)");
 }
 
-void check_accessors(const Gltf& g, const std::vector<View>& views) {
+// What an accessor holds: `count` elements of `elem` bytes.
+struct Accessor {
+  std::string where;
+  u64 count = 0, elem = 0;
+};
+
+std::vector<Accessor> check_accessors(const Gltf& g, const std::vector<View>& views) {
+  std::vector<Accessor> accessors;
   for (const Entry& e : g.entries("accessors")) {
     const Json& a = *e.value;
     const u64 comp = component_bytes(whole(a, "componentType", 0, e.where)), n = type_components(a);
     if (comp == 0 || n == 0) throw InputError(e.where + ": unknown componentType or type");
     const u64 count = whole(a, "count", 0, e.where), elem = comp * n;
+    accessors.push_back({e.where, count, elem});
     if (count > kMaxInputFileBytes / elem)
       throw InputError(e.where + ": count " + std::to_string(count) + " (more than a file can hold)");
     const long v = g.ref(a, "bufferView", "bufferViews", e.where);
@@ -256,6 +272,7 @@ void check_accessors(const Gltf& g, const std::vector<View>& views) {
                   "bufferViews[" + std::to_string(pv) + "]");
     }
   }
+  return accessors;
 }
 
 // The node graph is a forest (glTF: "disjoint strict trees") of bounded
@@ -296,6 +313,119 @@ void check_nodes(const Gltf& g, const std::string& name) {
                      std::to_string(kMaxNodeDepth) + ")");
 }
 
+// The importer's memory for what a scene uses, about (Debian's assimp 5.2):
+// it reads only the accessors a mesh, skin or animation uses, each whole
+// for every use (its bytes, then vectors of 12 to 16 bytes an element); an
+// index becomes a face of 16 bytes with an array of its own; a primitive,
+// node or material is a record of a few KiB (a name is a 1 KiB array). An
+// accessor with no bufferView, or a sparse one, holds as many elements as
+// its count says with none of their bytes in the file: a 700-byte glTF had
+// the importer ask for 12.9 GB (found by fuzz_model).
+class ImportCost {
+ public:
+  static constexpr u64 kVertexBytes = 32, kIndexBytes = 64, kRecordBytes = 4096;
+  ImportCost(const Gltf& g, const std::vector<Accessor>& accessors) : g_(g), accessors_(accessors) {}
+
+  // `ref` names an accessor read at `where`, `per_element` bytes an element
+  // beyond its own; returns its count.
+  u64 use(const Json& ref, u64 per_element, const std::string& where) {
+    const long k = g_.index("accessors", ref);
+    if (k < 0) throw InputError(where + ": names no entry of 'accessors'");
+    const Accessor& a = accessors_[std::size_t(k)];
+    add(a.count * (a.elem + per_element), where, &a);
+    return a.count;
+  }
+  void add(u64 bytes, const std::string& where, const Accessor* a = nullptr) {
+    total_ += bytes;
+    if (bytes <= largest_) return;
+    largest_ = bytes;
+    largest_where_ = where;
+    largest_accessor_ = a;
+  }
+  void check(u64 budget) const {
+    if (total_ <= budget) return;
+    std::string what = largest_where_;
+    if (largest_accessor_)
+      what += " (" + largest_accessor_->where.substr(largest_accessor_->where.find(": ") + 2) + ", " +
+              std::to_string(largest_accessor_->count) + " elements)";
+    const auto size = [](u64 b) { return b >> 20 ? std::to_string(b >> 20) + " MiB" : std::to_string(b) + " bytes"; };
+    throw InputError(what + ": importing the model would take about " + size(total_) + ", more than the " +
+                     size(budget) + " the model importer may use (4 GiB or 64 times the file and its buffers; " +
+                     "OPSILA_IMPORT_MEMORY)");
+  }
+
+ private:
+  const Gltf& g_;
+  const std::vector<Accessor>& accessors_;
+  u64 total_ = 0, largest_ = 0;
+  std::string largest_where_;
+  const Accessor* largest_accessor_ = nullptr;
+};
+
+// The vertex attributes of `obj` (a primitive or one of its morph targets).
+// With no indices, the importer makes a face of every few vertices: the
+// attribute that holds the most elements is used again for them.
+void use_attributes(ImportCost& cost, const Json& obj, const std::string& where, bool faces) {
+  if (!obj.is_object()) return;
+  u64 most = 0;
+  auto longest = obj.end();
+  for (auto a = obj.begin(); a != obj.end(); ++a) {
+    const u64 n = cost.use(a.value(), ImportCost::kVertexBytes, where + "." + quoted_prefix(a.key()));
+    if (longest == obj.end() || n > most) most = n, longest = a;
+  }
+  if (faces && longest != obj.end())
+    cost.use(longest.value(), ImportCost::kIndexBytes, where + "." + quoted_prefix(longest.key()));
+}
+
+void use_meshes(const Gltf& g, ImportCost& cost) {
+  for (const Entry& m : g.entries("meshes")) {
+    const auto prims = m.value->find("primitives");
+    if (prims == m.value->end() || !prims->is_array()) continue;
+    for (std::size_t i = 0; i < prims->size(); ++i) {
+      const Json& p = (*prims)[i];
+      const std::string where = m.where + ".primitives[" + std::to_string(i) + "]";
+      if (!p.is_object()) continue;
+      cost.add(ImportCost::kRecordBytes, where);
+      const auto indices = p.find("indices"), attributes = p.find("attributes"), targets = p.find("targets");
+      if (indices != p.end()) cost.use(*indices, ImportCost::kIndexBytes, where + ".indices");
+      if (attributes != p.end()) use_attributes(cost, *attributes, where + ".attributes", indices == p.end());
+      if (targets != p.end() && targets->is_array())
+        for (std::size_t t = 0; t < targets->size(); ++t)
+          use_attributes(cost, (*targets)[t], where + ".targets[" + std::to_string(t) + "]", false);
+    }
+  }
+}
+
+// Skins' matrices, animations' keys (glTF 1 names them through the
+// animation's parameters), and a record per node and material.
+void use_skins_and_animations(const Gltf& g, ImportCost& cost) {
+  for (const Entry& s : g.entries("skins")) {
+    const auto m = s.value->find("inverseBindMatrices");
+    if (m != s.value->end()) cost.use(*m, ImportCost::kVertexBytes, s.where + ".inverseBindMatrices");
+  }
+  for (const Entry& a : g.entries("animations")) {
+    const auto samplers = a.value->find("samplers"), parameters = a.value->find("parameters");
+    if (samplers == a.value->end() || !samplers->is_structured()) continue;
+    for (auto s = samplers->begin(); s != samplers->end(); ++s)
+      for (const char* key : {"input", "output"}) {
+        if (!s->is_object() || !s->contains(key)) continue;
+        const Json* ref = &(*s)[key];
+        if (parameters != a.value->end() && parameters->is_object() && ref->is_string() && parameters->contains(*ref))
+          ref = &(*parameters)[ref->get<std::string>()];
+        cost.use(*ref, ImportCost::kVertexBytes, a.where + ".samplers." + key);
+      }
+  }
+  for (const char* records : {"nodes", "materials"})
+    for (const Entry& e : g.entries(records)) cost.add(ImportCost::kRecordBytes, e.where);
+}
+
+void check_import_memory(const Gltf& g, const std::vector<Accessor>& accessors, u64 budget) {
+  ImportCost cost(g, accessors);
+  use_meshes(g, cost);
+  use_skins_and_animations(g, cost);
+  cost.check(budget);
+}
+
 // Mesh compressions the importer cannot decode (Debian's assimp 5.2 reads
 // Draco, not meshopt): a file that requires one would otherwise fail on its
 // placeholder buffers, with a message about their lengths.
@@ -313,7 +443,7 @@ void check_required_extensions(const Json& root, const std::string& name) {
 
 }  // namespace
 
-void check_gltf(ModelFiles& files, const std::string& bytes, const std::string& path) {
+std::uint64_t check_gltf(ModelFiles& files, const std::string& bytes, const std::string& path) {
   GltfParts parts;
   if (bytes.compare(0, 4, "glTF") == 0) parts = split_glb(bytes, path);
   else parts.json = bytes;
@@ -321,7 +451,7 @@ void check_gltf(ModelFiles& files, const std::string& bytes, const std::string& 
   check_json_shape(parts.json, path, 64, 1 << 24);
   // Not a JSON object: no glTF reader takes it (and no other is asked).
   const std::size_t first = parts.json.find_first_not_of(" \t\r\n");
-  if (first == std::string::npos || parts.json[first] != '{') return;
+  if (first == std::string::npos || parts.json[first] != '{') return 0;
   Json root;
   try {
     root = Json::parse(parts.json);
@@ -332,9 +462,12 @@ void check_gltf(ModelFiles& files, const std::string& bytes, const std::string& 
   if (!root.is_object()) throw InputError(path + ": not glTF JSON (not an object)");
   check_required_extensions(root, path);
   const Gltf g(root, path);
-  const std::vector<u64> buffers = buffer_lengths(g, files, parts, path);
-  check_accessors(g, buffer_views(g, buffers));
+  u64 external = 0;
+  const std::vector<u64> buffers = buffer_lengths(g, files, parts, path, external);
+  const std::vector<Accessor> accessors = check_accessors(g, buffer_views(g, buffers));
   check_nodes(g, path);
+  check_import_memory(g, accessors, import_memory_budget(files.size(path) + external));
+  return external;
 }
 
 }  // namespace opsila

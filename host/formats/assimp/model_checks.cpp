@@ -7,7 +7,9 @@
 #include <cstdint>
 #include <string_view>
 
+#include "core/env_hooks.h"
 #include "core/errors.h"
+#include "core/host_memory.h"
 #include "core/input_file.h"
 #include "core/util.h"
 #include "formats/ply/ply_format.h"
@@ -71,18 +73,27 @@ void check_nesting(const std::string& bytes, const std::string& name) {
                      " levels deep (the limit is " + std::to_string(kMaxNesting) + ")");
 }
 
-void check_model_file_shape(ModelFiles& files, const std::string& path, const std::string& ext) {
+std::uint64_t import_memory_budget(std::uint64_t bytes) {
+  if (const auto v = env_hook_number(EnvHook::import_memory, 1, std::uint64_t(1) << 50, "a number of bytes"))
+    return *v;
+  const std::uint64_t ram = physical_memory();
+  const std::uint64_t want = std::max<std::uint64_t>(std::uint64_t(4) << 30, 64 * std::min<std::uint64_t>(bytes, std::uint64_t(1) << 50));
+  return ram > 0 ? std::max<std::uint64_t>(std::min(want, ram / 4 * 3), std::uint64_t(1) << 30) : want;
+}
+
+std::uint64_t check_model_file_shape(ModelFiles& files, const std::string& path, const std::string& ext) {
   const std::string e = lower(!ext.empty() && ext[0] == '.' ? ext.substr(1) : ext);
+  const std::uint64_t size = files.size(path);
   if (e == "off") {
-    const std::uint64_t size = files.size(path);
     check_off(files.head(path, kMaxInputFileBytes), static_cast<std::size_t>(size), path);
-    return;
+    return size;
   }
   const std::string bytes = files.head(path, kMaxInputFileBytes);
   if (e == "ply") ply::check_ply(bytes, path);
   else if (e == "stl") stl::check_stl(bytes, path);
-  else if (e == "gltf" || e == "glb") check_gltf(files, bytes, path);
+  else if (e == "gltf" || e == "glb") return size + check_gltf(files, bytes, path);
   else check_nesting(bytes, path);
+  return size;
 }
 
 }  // namespace opsila

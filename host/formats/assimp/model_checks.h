@@ -6,6 +6,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <string>
 
 #include "formats/common/model_files.h"
@@ -21,10 +22,18 @@ constexpr std::size_t kMaxNodes = std::size_t(1) << 20;
 // (a node level takes a few).
 constexpr long kMaxNesting = 4 * kMaxNodeDepth;
 
+// The memory the importer may add while it reads `bytes` of model (a file
+// and the buffers it names): 4 GiB or 64 times the bytes, whichever is
+// larger, but at most three quarters of the machine's memory; or
+// OPSILA_IMPORT_MEMORY bytes. The glTF checks hold their estimate of the
+// import to it, and the import's watchdog its resident memory.
+std::uint64_t import_memory_budget(std::uint64_t bytes);
+
 // The checks of the format that `ext` names (with or without its dot), for
 // the file `path` read through `files`. PLY's and STL's are their rooms'
-// (ply::check_ply, stl::check_stl).
-void check_model_file_shape(ModelFiles& files, const std::string& path, const std::string& ext);
+// (ply::check_ply, stl::check_stl). Returns the bytes the importer will
+// read: the file's, and for glTF those of its external buffers too.
+std::uint64_t check_model_file_shape(ModelFiles& files, const std::string& path, const std::string& ext);
 
 // OFF: the vertex and face counts fit the file; every vertex line holds its
 // numbers and every face line a count of 1 to 9 and that many indices of
@@ -35,7 +44,9 @@ void check_nesting(const std::string& bytes, const std::string& name);
 // glTF (text) and GLB: chunk lengths within the file; buffers, buffer views
 // and accessors within one another, in 64-bit arithmetic; external buffers
 // within the file limit and as long as declared; node graph a forest of at
-// most kMaxNodes nodes and kMaxNodeDepth levels.
-void check_gltf(ModelFiles& files, const std::string& bytes, const std::string& path);
+// most kMaxNodes nodes and kMaxNodeDepth levels; what the meshes, skins and
+// animations use within import_memory_budget. Returns the bytes of the
+// external buffers.
+std::uint64_t check_gltf(ModelFiles& files, const std::string& bytes, const std::string& path);
 
 }  // namespace opsila

@@ -148,21 +148,12 @@ class ModelReader {
 //
 // Memory too: a corrupted Q3O file made the library's reader take 19 GB in
 // its 60 s. The resident memory the read adds is polled every 20 ms and
-// bounded by 4 GiB or 64 times the file, whichever is larger, but at most
-// three quarters of the machine's memory (or OPSILA_IMPORT_MEMORY bytes).
+// bounded by import_memory_budget (model_checks.h).
 std::uint64_t resident_bytes() {
   std::ifstream statm("/proc/self/statm");
   unsigned long long size = 0, resident = 0;
   if (!(statm >> size >> resident)) return 0;
   return resident * static_cast<std::uint64_t>(sysconf(_SC_PAGESIZE));
-}
-
-std::uint64_t import_memory_budget(std::uintmax_t bytes) {
-  if (const auto v = env_hook_number(EnvHook::import_memory, 1, std::uint64_t(1) << 50, "a number of bytes"))
-    return *v;
-  const std::uint64_t ram = physical_memory();
-  const std::uint64_t want = std::max<std::uint64_t>(std::uint64_t(4) << 30, 64 * std::uint64_t(bytes));
-  return ram > 0 ? std::max<std::uint64_t>(std::min(want, ram / 4 * 3), std::uint64_t(1) << 30) : want;
 }
 
 class ImportWatchdog {
@@ -353,7 +344,7 @@ Scene import_model(ModelFiles& files, const std::string& path, const std::string
   Scene scene;
   run_with_stack(kImportStackBytes, [&] {
     const std::string ext = fs::path(path).extension().string();
-    check_model_file_shape(files, path, ext);
+    const std::uint64_t input_bytes = check_model_file_shape(files, path, ext);
     Assimp::Importer importer;
     importer.SetIOHandler(files.io_system());  // the importer owns it
     keep_readers_for(importer, ext);
@@ -361,7 +352,7 @@ Scene import_model(ModelFiles& files, const std::string& path, const std::string
     const bool our_checks = validated_by_us(ext);
     const unsigned flags = our_checks ? 0u : kImportFlags;
     if (watched) {
-      const ImportWatchdog watchdog(path, files.size(path));
+      const ImportWatchdog watchdog(path, input_bytes);
       const ImportFaultGuard guard(path);
       ai = importer.ReadFile(path, flags);
     } else {

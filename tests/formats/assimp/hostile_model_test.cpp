@@ -151,6 +151,14 @@ TEST(HostileModel, GlbChunkLengthsAreCheckedAgainstTheFile) {
   EXPECT_EQ(r.exit_code, 2) << r.err;
   EXPECT_NE(r.err.find("liar.glb: GLB chunk 0 claims 4294967280 bytes"), std::string::npos) << r.err;
   EXPECT_LT(r.max_rss_kb, 1024 * 1024) << "the claim was believed";
+  // The same claim behind a header whose length leaves no room for a chunk:
+  // the importer reads the chunk anyway.
+  std::string no_room = glb(json, 0xffff0000u, triangle_bytes());
+  no_room.replace(8, 4, le32(0));
+  EXPECT_NE(error_loading(dir.write("no-room.glb", no_room))
+                .find("no-room.glb: GLB header says 0 bytes, fewer than its header and first chunk's (20)"),
+            std::string::npos)
+      << error_loading(dir.file("no-room.glb"));
   // A binary chunk shorter than the buffer it holds.
   const std::string short_bin = dir.write("short.glb", glb(json, std::uint32_t(json.size()), std::string(12, '\0')));
   EXPECT_NE(error_loading(short_bin).find("buffers[0]: byteLength 36 but the GLB binary chunk holds 12 bytes"),
@@ -208,6 +216,67 @@ TEST(HostileModel, OffsetsNear2To64AreRefusedBeforeTheImporterSeesThem) {
   // A buffer longer than its file.
   dir.write("short.bin", "0123");
   EXPECT_NE(error_loading(dir.write("s.gltf", gltf("short.bin"))).find("byteLength 36 but"), std::string::npos);
+}
+
+// Accessors whose elements the file does not hold (no bufferView: zeros; or
+// sparse: a few values) made the importer allocate whatever their count
+// said: 12.9 GB for a 700-byte file (fuzz_model). What a mesh uses is
+// estimated first and held to the importer's memory budget.
+std::string unheld(const std::string& accessor, const std::string& primitive) {
+  return R"({"asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0]}], "nodes": [{"mesh": 0}],
+  "meshes": [{"primitives": [)" + primitive + R"(]}],
+  "buffers": [{"uri": "tri.bin", "byteLength": 36}],
+  "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 36}],
+  "accessors": [{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3", "min": [0, 0, 0],
+                 "max": [1, 1, 0]}, )" + accessor + "]}";
+}
+
+TEST(HostileModel, ElementsTheFileDoesNotHoldAreBoundedBeforeTheImport) {
+  TempDir dir;
+  dir.write("tri.bin", triangle_bytes());
+  // Line indices, sparse: 1,616,904,193 of them from 2 bytes of data.
+  const std::string sparse = dir.write(
+      "sparse.gltf", unheld(R"({"componentType": 5121, "count": 1616904193, "type": "SCALAR", "sparse": {"count": 1,
+        "indices": {"bufferView": 0, "componentType": 5121}, "values": {"bufferView": 0}}})",
+                            R"({"attributes": {"POSITION": 0}, "indices": 1, "mode": 1})"));
+  const RunResult r = run_opsila({"render", sparse, "-o", dir.file("x.png"), "--size", "8x8"});
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  ASSERT_EQ(r.error_lines().size(), 1u) << r.err;
+  EXPECT_NE(r.error_lines()[0].find(sparse + ": meshes[0].primitives[0].indices (accessors[1], 1616904193 elements): "
+                                             "importing the model would take about "),
+            std::string::npos)
+      << r.err;
+  EXPECT_LT(r.max_rss_kb, 1 << 20) << "refused before the importer allocates";
+  EXPECT_FALSE(test::file_exists(dir.file("x.png")));
+  // Positions, sparse: one of 178,956,970 held in the file.
+  const std::string few_held = R"({"componentType": 5126, "count": COUNT, "type": "VEC3", "sparse": {"count": 1,
+        "indices": {"bufferView": 0, "componentType": 5121}, "values": {"bufferView": 0}}})";
+  const auto positions = [&](const char* count) {
+    std::string a = few_held;
+    return a.replace(a.find("COUNT"), 5, count);
+  };
+  const std::string zeros =
+      dir.write("zeros.gltf", unheld(positions("178956970"), R"({"attributes": {"POSITION": 1}})"));
+  EXPECT_NE(error_loading(zeros).find(zeros + ": meshes[0].primitives[0].attributes.POSITION (accessors[1], "
+                                              "178956970 elements): importing"),
+            std::string::npos)
+      << error_loading(zeros);
+  // The same, few enough, loads; an unused huge accessor is not read at all.
+  EXPECT_NO_THROW(load_scene(dir.write(
+      "few.gltf", unheld(positions("300"), R"({"attributes": {"POSITION": 0}}, {"attributes": {"POSITION": 1}})"))));
+  EXPECT_NO_THROW(load_scene(
+      dir.write("unused.gltf", unheld(positions("178956970"), R"({"attributes": {"POSITION": 0}})"))));
+  // The budget is the importer's (OPSILA_IMPORT_MEMORY): a triangle takes a
+  // few KiB to import.
+  const std::string tri = dir.write("tri.gltf", gltf("tri.bin"));
+  const RunResult small = test::run_program(
+      OPSILA_BINARY, {"render", tri, "-o", dir.file("y.png"), "--size", "8x8"}, {{"OPSILA_IMPORT_MEMORY", "4096"}});
+  EXPECT_EQ(small.exit_code, 2) << small.err;
+  EXPECT_NE(small.err.find("more than the 4096 bytes the model importer may use"), std::string::npos) << small.err;
+  EXPECT_EQ(test::run_program(OPSILA_BINARY, {"render", tri, "-o", dir.file("z.png"), "--size", "8x8"},
+                              {{"OPSILA_IMPORT_MEMORY", "1048576"}})
+                .exit_code,
+            0);
 }
 
 // ------------------------------------------------------ deep hierarchies ---

@@ -14,6 +14,7 @@
 #include <nlohmann/json.hpp>
 
 #include "formats/common/json_text.h"
+#include "formats/assimp/gltf_still.h"
 #include "formats/assimp/model_checks.h"
 #include "formats/obj/obj_loader.h"
 
@@ -314,7 +315,8 @@ void check_nodes(const Gltf& g, const std::string& name) {
 }
 
 // The importer's memory for what a scene uses, about (Debian's assimp 5.2):
-// it reads only the accessors a mesh, skin or animation uses, each whole
+// it reads only the accessors a mesh uses (skins and animations are not
+// read, gltf_still.h), each whole
 // for every use (its bytes, then vectors of 12 to 16 bytes an element); an
 // index becomes a face of 16 bytes with an array of its own; a primitive,
 // node or material is a record of a few KiB (a name is a 1 KiB array). An
@@ -323,7 +325,7 @@ void check_nodes(const Gltf& g, const std::string& name) {
 // the importer ask for 12.9 GB (found by fuzz_model).
 class ImportCost {
  public:
-  static constexpr u64 kVertexBytes = 32, kIndexBytes = 64, kRecordBytes = 4096;
+  static constexpr u64 kVertexBytes = 32, kIndexBytes = 64, kRecordBytes = 2048;
   ImportCost(const Gltf& g, const std::vector<Accessor>& accessors) : g_(g), accessors_(accessors) {}
 
   // `ref` names an accessor read at `where`, `per_element` bytes an element
@@ -396,25 +398,9 @@ void use_meshes(const Gltf& g, ImportCost& cost) {
   }
 }
 
-// Skins' matrices, animations' keys (glTF 1 names them through the
-// animation's parameters), and a record per node and material.
-void use_skins_and_animations(const Gltf& g, ImportCost& cost) {
-  for (const Entry& s : g.entries("skins")) {
-    const auto m = s.value->find("inverseBindMatrices");
-    if (m != s.value->end()) cost.use(*m, ImportCost::kVertexBytes, s.where + ".inverseBindMatrices");
-  }
-  for (const Entry& a : g.entries("animations")) {
-    const auto samplers = a.value->find("samplers"), parameters = a.value->find("parameters");
-    if (samplers == a.value->end() || !samplers->is_structured()) continue;
-    for (auto s = samplers->begin(); s != samplers->end(); ++s)
-      for (const char* key : {"input", "output"}) {
-        if (!s->is_object() || !s->contains(key)) continue;
-        const Json* ref = &(*s)[key];
-        if (parameters != a.value->end() && parameters->is_object() && ref->is_string() && parameters->contains(*ref))
-          ref = &(*parameters)[ref->get<std::string>()];
-        cost.use(*ref, ImportCost::kVertexBytes, a.where + ".samplers." + key);
-      }
-  }
+// A record per node and material. Skins and animations are not read
+// (gltf_still.h).
+void use_records(const Gltf& g, ImportCost& cost) {
   for (const char* records : {"nodes", "materials"})
     for (const Entry& e : g.entries(records)) cost.add(ImportCost::kRecordBytes, e.where);
 }
@@ -422,7 +408,7 @@ void use_skins_and_animations(const Gltf& g, ImportCost& cost) {
 void check_import_memory(const Gltf& g, const std::vector<Accessor>& accessors, u64 budget) {
   ImportCost cost(g, accessors);
   use_meshes(g, cost);
-  use_skins_and_animations(g, cost);
+  use_records(g, cost);
   cost.check(budget);
 }
 
@@ -467,6 +453,7 @@ std::uint64_t check_gltf(ModelFiles& files, const std::string& bytes, const std:
   const std::vector<Accessor> accessors = check_accessors(g, buffer_views(g, buffers));
   check_nodes(g, path);
   check_import_memory(g, accessors, import_memory_budget(files.size(path) + external));
+  if (const auto still = gltf_without_motion(root, bytes)) files.substitute(path, *still);
   return external;
 }
 

@@ -44,9 +44,9 @@ void check_nesting(const std::string& bytes, const std::string& name);
 // glTF (text) and GLB: chunk lengths within the file; buffers, buffer views
 // and accessors within one another, in 64-bit arithmetic; external buffers
 // within the file limit and as long as declared; node graph a forest of at
-// most kMaxNodes nodes and kMaxNodeDepth levels; what the meshes, skins and
-// animations use within import_memory_budget. Returns the bytes of the
-// external buffers.
+// most kMaxNodes nodes and kMaxNodeDepth levels; what the meshes use within
+// import_memory_budget; skins and animations left out of what the importer
+// reads (gltf_still.h). Returns the bytes of the external buffers.
 std::uint64_t check_gltf(ModelFiles& files, const std::string& bytes, const std::string& path);
 
 }  // namespace opsila

@@ -54,6 +54,11 @@ std::FILE* open_checked(const std::string& path, std::uint64_t& bytes) {
 ModelFiles::ModelFiles(std::string main_name, std::string main, std::string other)
     : memory_(true), main_name_(std::move(main_name)), main_(std::move(main)), other_(std::move(other)) {}
 
+void ModelFiles::substitute(const std::string& path, std::string bytes) {
+  substitute_name_ = path;
+  substitute_ = std::move(bytes);
+}
+
 void ModelFiles::record(const std::string& path) {
   if (std::find(files_.begin(), files_.end(), path) == files_.end()) files_.push_back(path);
 }
@@ -159,6 +164,7 @@ class ModelIOSystem : public Assimp::IOSystem {
       files_.refusal_ = std::string(path) + ": the model importer asked to write it (refused)";
       return nullptr;
     }
+    if (!files_.substitute_name_.empty() && path == files_.substitute_name_) return new MemoryStream(files_.substitute_);
     if (files_.memory_) {
       const std::string* bytes = files_.in_memory(path);
       return bytes ? new MemoryStream(*bytes) : nullptr;

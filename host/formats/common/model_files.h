@@ -33,6 +33,10 @@ class ModelFiles {
   // Up to `max_bytes` from the start of a file (the same checks).
   std::string head(const std::string& path, std::size_t max_bytes);
 
+  // The importer reads `bytes` where it opens `path`, which the checks have
+  // read as it is (a glTF without what opsila does not use, gltf_still.h).
+  void substitute(const std::string& path, std::string bytes);
+
   // An IOSystem for Assimp::Importer::SetIOHandler (which takes ownership)
   // that opens files through this object; it must not outlive it.
   Assimp::IOSystem* io_system();
@@ -50,6 +54,7 @@ class ModelFiles {
 
   bool memory_ = false;
   std::string main_name_, main_, other_;
+  std::string substitute_name_, substitute_;
   std::vector<std::string> files_;
   std::string refusal_;
 };

@@ -392,6 +392,7 @@ Scene load_model_from_memory(const std::string& bytes, const std::string& name, 
                              const std::string& other) {
   // The importer picks its reader by the name's extension.
   const std::string path = bare_extension(fs::path(name).extension().string()) == lower(hint) ? name : name + "." + hint;
+  if (lower(hint) == "ply" && ply_has_strips(path, &bytes)) return load_ply_whole(path, kMaxTriangles, &bytes);
   ModelFiles files(path, bytes, other);
   return import_model(files, path, "", false, MapImages::now);
 }

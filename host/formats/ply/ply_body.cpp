@@ -2,6 +2,8 @@
 // read. Ascii words are read as the importer reads them (its own number
 // parsers, assimp/fast_atof.h), so the values are bit for bit its values.
 #ifdef OPSILA_HAVE_ASSIMP
+#include <stdio.h>  // fmemopen
+
 #include <cerrno>
 #include <cstring>
 #include <stdexcept>
@@ -34,9 +36,10 @@ float Value::as_float() const {
   return is_signed(type) ? static_cast<float>(static_cast<std::int32_t>(i)) : static_cast<float>(static_cast<std::uint32_t>(i));
 }
 
-Body::Body(const std::string& path, const Header& h, std::size_t block_bytes)
+Body::Body(const std::string& path, const Header& h, std::size_t block_bytes, const std::string* bytes)
     : path_(path), format_(h.format), block_(std::max<std::size_t>(block_bytes, 1)), line_(h.lines) {
-  file_ = std::fopen(path.c_str(), "rb");
+  // A file in memory holds its header, so it is never empty (which fmemopen refuses).
+  file_ = bytes ? ::fmemopen(const_cast<char*>(bytes->data()), bytes->size(), "rb") : std::fopen(path.c_str(), "rb");
   if (!file_ || std::fseek(file_, static_cast<long>(h.body), SEEK_SET) != 0)
     throw InputError(path + ": cannot read: " + std::strerror(errno));
   consumed_ = h.body;

@@ -61,8 +61,9 @@ enum class Reading { stream, importer };
 // for the importer's reading) of a file of file_bytes.
 Header parse_header(const std::string& bytes, std::uint64_t file_bytes, const std::string& path, Reading how);
 
-// The header of the file `path`, as the stream reads it.
-Header read_header(const std::string& path);
+// The header of the file `path`, as the stream reads it; from `bytes`, the
+// whole file in memory, when given (a model read from memory, fuzz_model).
+Header read_header(const std::string& path, const std::string* bytes = nullptr);
 
 // The checks before the importer reads the PLY file `bytes` (named `name`):
 // its header (Reading::importer), a body that holds every element the
@@ -92,7 +93,7 @@ struct Value {
 // file and the element with its line (ascii) or byte offset (binary).
 class Body {
  public:
-  Body(const std::string& path, const Header& h, std::size_t block_bytes);
+  Body(const std::string& path, const Header& h, std::size_t block_bytes, const std::string* bytes = nullptr);
   ~Body();
   Body(const Body&) = delete;
   Body& operator=(const Body&) = delete;

@@ -230,7 +230,8 @@ Header parse_header(const std::string& bytes, std::uint64_t file_bytes, const st
   return h;
 }
 
-Header read_header(const std::string& path) {
+Header read_header(const std::string& path, const std::string* bytes) {
+  if (bytes) return parse_header(bytes->substr(0, kMaxHeaderBytes), bytes->size(), path, Reading::stream);
   ModelFiles files;
   const std::uint64_t size = files.size(path);
   return parse_header(files.head(path, kMaxHeaderBytes), size, path, Reading::stream);

@@ -26,11 +26,11 @@ std::string ply_stream_refusal(const std::string& path);
 // triangle of its strips, so one process reads such a file with the stream
 // too (load_ply_whole). Throws, naming the file and why, when the stream
 // cannot read it; false for a header the stream cannot read at all (the
-// importer path then judges it).
-bool ply_has_strips(const std::string& path);
+// importer path then judges it). `bytes`: the file in memory, if given.
+bool ply_has_strips(const std::string& path, const std::string* bytes = nullptr);
 
-// The whole file as one process reads it, by the stream.
-Scene load_ply_whole(const std::string& path, std::size_t max_triangles);
+// The whole file as one process reads it, by the stream (from `bytes`, if given).
+Scene load_ply_whole(const std::string& path, std::size_t max_triangles, const std::string* bytes = nullptr);
 
 // One warning for each element of a PLY read through the importer that
 // gives no facets and is not the importer's 'material' (an 'edge', a

@@ -78,15 +78,16 @@ void read_vertices(ply::Body& body, const ply::Element& e, const ply::Header& h,
 
 class PlyWindowReader {
  public:
-  PlyWindowReader(const std::string& path, std::size_t max_triangles, const ModelWindow& window, std::size_t block)
-      : path_(path), max_triangles_(max_triangles), window_(window), block_(block) {}
+  PlyWindowReader(const std::string& path, std::size_t max_triangles, const ModelWindow& window, std::size_t block,
+                  const std::string* bytes = nullptr)
+      : path_(path), bytes_(bytes), max_triangles_(max_triangles), window_(window), block_(block) {}
 
   Scene run(std::uint64_t& fans) {
     try {
-      const ply::Header h = ply::read_header(path_);
+      const ply::Header h = ply::read_header(path_, bytes_);
       const std::string why = ply::stream_refusal(h);
       if (!why.empty()) throw InputError(path_ + ": the PLY stream cannot read this file: " + why);
-      ply::Body body(path_, h, block_);
+      ply::Body body(path_, h, block_, bytes_);
       aiMesh mesh;
       std::unordered_map<unsigned, std::string> not_finite;
       read_vertices(body, h.elements[0], h, mesh, path_, not_finite);
@@ -176,6 +177,7 @@ class PlyWindowReader {
   }
 
   const std::string& path_;
+  const std::string* bytes_;  // the file in memory, or nullptr
   std::size_t max_triangles_;
   ModelWindow window_;
   std::size_t block_;
@@ -198,10 +200,10 @@ Scene load_ply_window(const std::string& path, std::size_t max_triangles, const 
   return PlyWindowReader(path, max_triangles, window, block_bytes).run(fans);
 }
 
-bool ply_has_strips(const std::string& path) {
+bool ply_has_strips(const std::string& path, const std::string* bytes) {
   ply::Header h;
   try {
-    h = ply::read_header(path);
+    h = ply::read_header(path, bytes);
   } catch (const InputError&) {
     return false;
   }
@@ -212,11 +214,11 @@ bool ply_has_strips(const std::string& path) {
   return true;
 }
 
-Scene load_ply_whole(const std::string& path, std::size_t max_triangles) {
+Scene load_ply_whole(const std::string& path, std::size_t max_triangles, const std::string* bytes) {
   ModelWindow all;  // one rank, one fan triangle in the plan: every face is kept
   all.fans = 1;
   std::uint64_t fans = 0;
-  Scene scene = load_ply_window(path, max_triangles, all, fans);
+  Scene scene = PlyWindowReader(path, max_triangles, all, std::size_t(32) << 20, bytes).run(fans);
   scene.share = SceneShare{};
   return scene;
 }
@@ -246,8 +248,8 @@ Scene load_ply_window(const std::string& path, std::size_t, const ModelWindow&, 
   throw InputError(path + ": this build has no Open Asset Import Library (install libassimp-dev and rebuild)");
 }
 
-bool ply_has_strips(const std::string&) { return false; }
-Scene load_ply_whole(const std::string& path, std::size_t) {
+bool ply_has_strips(const std::string&, const std::string*) { return false; }
+Scene load_ply_whole(const std::string& path, std::size_t, const std::string*) {
   std::uint64_t fans = 0;
   return load_ply_window(path, 0, ModelWindow{}, fans);
 }

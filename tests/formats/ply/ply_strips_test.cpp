@@ -5,6 +5,7 @@
 // a 'face' element. And a PLY element nothing reads is named in a warning.
 #include <gtest/gtest.h>
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -96,6 +97,32 @@ TEST_F(PlyStrips, StripsTheStreamCannotReadAreRefused) {
   test::write_ply(bad, p);
   test::expect_error([&] { load_model(bad); },
                      {bad + ":", "PLY 'tristrips' element 1 of 1", "vertex index 12 out of range (the file has 12"});
+}
+
+// A strip file read from memory (fuzz_model's path) reads as from its
+// file; one whose header only the importer's reading accepts never
+// reaches the importer (it asked for 12 GB for a 600-byte file).
+TEST_F(PlyStrips, StripsFromMemoryAndHeadersOnlyTheImporterReads) {
+  std::string faces;
+  const std::string strips = write_pair(4, 3, "binary_little_endian", "mem", faces);
+  const std::string bytes = test::read_file(strips);
+  const Scene from_file = load_model(strips), from_memory = load_model_from_memory(bytes, strips, "ply");
+  ASSERT_EQ(from_memory.triangles.size(), from_file.triangles.size());
+  for (std::size_t t = 0; t < from_file.triangles.size(); ++t) {
+    EXPECT_EQ(from_memory.triangles[t].object_id, from_file.triangles[t].object_id);
+    EXPECT_EQ(from_memory.triangles[t].facet_id, from_file.triangles[t].facet_id);
+    EXPECT_EQ(from_memory.triangles[t].fan, from_file.triangles[t].fan);
+    EXPECT_EQ(from_memory.triangles[t].v0, from_file.triangles[t].v0);
+    EXPECT_EQ(from_memory.triangles[t].v2, from_file.triangles[t].v2);
+  }
+  // A stray byte after a count, which the importer's header reading skips.
+  std::string odd = bytes;
+  odd.insert(odd.find("element vertex ") + 17, "\x01");
+  const std::string path = dir.write("odd.ply", odd);
+  for (const auto& load : {std::function<void()>([&] { load_model(path); }),
+                           std::function<void()>([&] { load_model_from_memory(odd, path, "ply"); })})
+    test::expect_error(load, {path + ": PLY triangle strips are read only by opsila's PLY reader, which cannot "
+                                     "read this file (" + path + ":4: PLY header"});
 }
 
 // An element nothing reads: one warning naming it and its count.

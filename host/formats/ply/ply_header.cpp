@@ -61,7 +61,14 @@ struct HeaderLines {
     if (!strict) {
       // The importer counts a word's leading digits ("5loat" is 5, found by
       // fuzz_model: read as 0 here, the checks walked the binary data from
-      // another place than the importer, which allocated 8 GB).
+      // another place than the importer, which allocated 8 GB). After a
+      // name it does not know it reads the count from the name itself
+      // ("element 5555555 x" is 5,555,555 elements, which it read for
+      // ever; also found by fuzz_model), and a texture file has none.
+      static const char* const kKnown[] = {"vertex", "face", "tristrips", "edge", "material"};
+      bool known = false;
+      for (const char* k : kKnown) known = known || name == k;
+      if (!known) count = name == "TextureFile" ? "" : name;
       const std::string digits = count.substr(0, count.find_first_not_of("0123456789"));
       const std::uint64_t n = digits.empty()        ? 0
                               : digits.size() <= 19 ? std::stoull(digits)

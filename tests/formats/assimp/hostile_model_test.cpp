@@ -294,6 +294,15 @@ TEST(HostileModel, TruncatedDataIsRefusedInEveryFormat) {
               std::string::npos)
         << e.what();
   }
+  // After a name it does not know, the importer reads the count from the
+  // name itself: 5,555,555 elements of (y), which it read for ever
+  // (fuzz_model). Read so, the file cannot hold them.
+  const std::string named = dir.write("named.ply", "ply\nformat ascii 1.0\nelement 5555555 x\nproperty float y\n"
+                                                   "element face 1\nproperty list uchar int vertex_indices\n"
+                                                   "end_header\n0\n1\n2\n3 0 1 2\n");
+  EXPECT_NE(error_loading(named).find(named + ": PLY header asks for 5555555 '5555555' elements, more than a file of"),
+            std::string::npos)
+      << error_loading(named);
   std::string stl(80, ' ');
   stl += le32(2) + std::string(50, '\0');
   expect("bin.stl", stl, "binary STL header counts 2 facets; the file holds 1 (truncated file)");

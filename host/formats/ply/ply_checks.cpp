@@ -22,29 +22,39 @@ namespace {
                    std::to_string(e.count) + " is missing or incomplete (truncated file)");
 }
 
-// The text data: every property one word, a list its count and that many.
-// A vertex whose x, y or z is not finite in floats (as the importer stores
-// it) is named with its line where a face uses it (data starts on line
-// `first_line`); one no face uses is harmless.
+// The text data as the importer reads it: an element's instance from one
+// line (empty lines skipped), then the next line, so an element without
+// properties still takes a line each (found by fuzz_model: read as taking
+// none, the face lists' counts came from other lines than the importer's,
+// which asked for 24 GB). Every property one word of its line, a list its
+// count and that many. A vertex whose x, y or z is not finite in floats
+// (as the importer stores it) is named with its line where a face uses it
+// (data starts on line `first_line`); one no face uses is harmless.
 void check_text(std::string_view data, std::uint64_t first_line, const Header& h, const std::string& name) {
-  std::size_t at = 0, counted = 0;
-  std::uint64_t line = first_line;
-  const auto line_of = [&](std::string_view word) {  // words in file order
-    const std::size_t pos = std::size_t(word.data() - data.data());
-    line += std::count(data.begin() + std::ptrdiff_t(counted), data.begin() + std::ptrdiff_t(pos), '\n');
-    counted = pos;
-    return line;
-  };
+  std::size_t at = 0;
+  std::uint64_t line = first_line - 1;
   std::unordered_map<std::uint64_t, std::uint64_t> not_finite;  // vertex -> its line
-  std::string_view w;
-  for (const Element& e : h.elements) {
-    if (e.properties.empty()) continue;
-    for (std::uint64_t i = 0; i < e.count; ++i)
+  std::string_view text, w;
+  for (const Element& e : h.elements)
+    for (std::uint64_t i = 0; i < e.count; ++i) {
+      do {
+        if (at >= data.size()) truncated(name, e, i);
+        const std::size_t end = std::min(data.find('\n', at), data.size());
+        text = data.substr(at, end - at), at = end + 1, ++line;
+      } while (text.find_first_not_of('\r') == std::string_view::npos);
+      std::size_t in = 0;
+      const auto value = [&] {
+        if (next_word(text, in, w)) return;
+        if (at >= data.size()) truncated(name, e, i);  // the file's last line, cut short
+        throw InputError(name + ":" + std::to_string(line) + ": PLY '" + e.name + "' element " +
+                         std::to_string(i + 1) + " of " + std::to_string(e.count) +
+                         ": the line holds fewer values than the header's properties ask for");
+      };
       for (const Property& p : e.properties) {
-        if (!next_word(data, at, w)) truncated(name, e, i);
+        value();
         if (!p.list) {
           if (e.name == "vertex" && (p.name == "x" || p.name == "y" || p.name == "z") && !finite_in_float(w))
-            not_finite.emplace(i, line_of(w));
+            not_finite.emplace(i, line);
           continue;
         }
         std::uint64_t n = 0;
@@ -55,16 +65,16 @@ void check_text(std::string_view data, std::uint64_t first_line, const Header& h
         const bool corners = !not_finite.empty() && e.name == "face" &&
                              (p.name == "vertex_indices" || p.name == "vertex_index");
         for (std::uint64_t k = 0; k < n; ++k) {
-          if (!next_word(data, at, w)) truncated(name, e, i);
+          value();
           if (!corners || w.size() > 19 || w.find_first_not_of("0123456789") != std::string_view::npos) continue;
           const auto bad = not_finite.find(std::stoull(std::string(w)));
           if (bad != not_finite.end())
-            throw InputError(name + ":" + std::to_string(line_of(w)) + ": PLY 'face' element " +
-                             std::to_string(i + 1) + " of " + std::to_string(e.count) + ": vertex " + std::string(w) +
-                             " (line " + std::to_string(bad->second) + ") is not a finite number");
+            throw InputError(name + ":" + std::to_string(line) + ": PLY 'face' element " + std::to_string(i + 1) +
+                             " of " + std::to_string(e.count) + ": vertex " + std::string(w) + " (line " +
+                             std::to_string(bad->second) + ") is not a finite number");
         }
       }
-  }
+    }
 }
 
 // The binary data: fixed sizes, lists read for their counts.

@@ -303,6 +303,15 @@ TEST(HostileModel, TruncatedDataIsRefusedInEveryFormat) {
   EXPECT_NE(error_loading(named).find(named + ": PLY header asks for 5555555 '5555555' elements, more than a file of"),
             std::string::npos)
       << error_loading(named);
+  // The importer reads an instance a line, one of an element without
+  // properties too (a misspelt property line leaves 'vertex' none): the
+  // face's count is on the fourth line, which asked it for 24 GB.
+  const std::string lines = dir.write("lines.ply", "ply\nformat ascii 1.0\nelement vertex 3\npropeloat y\n"
+                                                   "element face 1\nproperty list uchar int vertex_indices\n"
+                                                   "end_header\n3 0 1 2\n0\n0\n55555555555555555555 0\n");
+  EXPECT_NE(error_loading(lines).find(lines + ": PLY 'face' element 1: list length '55555555555555555555' is not"),
+            std::string::npos)
+      << error_loading(lines);
   std::string stl(80, ' ');
   stl += le32(2) + std::string(50, '\0');
   expect("bin.stl", stl, "binary STL header counts 2 facets; the file holds 1 (truncated file)");

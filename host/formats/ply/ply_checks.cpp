@@ -22,8 +22,31 @@ namespace {
                    std::to_string(e.count) + " is missing or incomplete (truncated file)");
 }
 
+// The importer's next line (its stream buffer's): a line ends at '\r',
+// '\n', NUL or '\f' (so a NUL splits a line in two); one that starts at
+// such a byte first skips past the next '\n' (a "\r\n" ending, or one
+// empty line). `line` is the file's line at `at`; `text_line` gets the
+// line `text` is on, for messages.
+bool next_line(std::string_view data, std::size_t& at, std::string_view& text, std::uint64_t& line,
+               std::uint64_t& text_line) {
+  const auto ends = [](char c) { return c == '\r' || c == '\n' || c == '\0' || c == '\f'; };
+  if (at >= data.size()) return false;
+  if (ends(data[at])) {
+    const std::size_t lf = data.find('\n', at);
+    if (lf == std::string_view::npos || lf + 1 >= data.size()) return false;
+    line += 1, at = lf + 1;
+  }
+  const std::size_t start = at;
+  text_line = line;
+  while (at < data.size() && !ends(data[at])) ++at;
+  text = data.substr(start, at - start);
+  if (at < data.size() && data[at] == '\n') ++line;
+  ++at;
+  return true;
+}
+
 // The text data as the importer reads it: an element's instance from one
-// line (empty lines skipped), then the next line, so an element without
+// line (next_line), then the next line, so an element without
 // properties still takes a line each (found by fuzz_model: read as taking
 // none, the face lists' counts came from other lines than the importer's,
 // which asked for 24 GB). Every property one word of its line, a list its
@@ -32,16 +55,12 @@ namespace {
 // (data starts on line `first_line`); one no face uses is harmless.
 void check_text(std::string_view data, std::uint64_t first_line, const Header& h, const std::string& name) {
   std::size_t at = 0;
-  std::uint64_t line = first_line - 1;
+  std::uint64_t next = first_line, line = first_line;  // the line at `at`; the instance's
   std::unordered_map<std::uint64_t, std::uint64_t> not_finite;  // vertex -> its line
   std::string_view text, w;
   for (const Element& e : h.elements)
     for (std::uint64_t i = 0; i < e.count; ++i) {
-      do {
-        if (at >= data.size()) truncated(name, e, i);
-        const std::size_t end = std::min(data.find('\n', at), data.size());
-        text = data.substr(at, end - at), at = end + 1, ++line;
-      } while (text.find_first_not_of('\r') == std::string_view::npos);
+      if (!next_line(data, at, text, next, line)) truncated(name, e, i);
       std::size_t in = 0;
       const auto value = [&] {
         if (next_word(text, in, w)) return;

@@ -312,6 +312,14 @@ TEST(HostileModel, TruncatedDataIsRefusedInEveryFormat) {
   EXPECT_NE(error_loading(lines).find(lines + ": PLY 'face' element 1: list length '55555555555555555555' is not"),
             std::string::npos)
       << error_loading(lines);
+  // A NUL ends a line for the importer too: the first line is two.
+  std::string nul = "ply\nformat ascii 1.0\nelement vertex 4\npropeloat y\nelement face 1\n"
+                    "property list uchar int vertex_indices\nend_header\n3 0 1 2\n0\n0\n55555555555555555555 0\n";
+  nul.insert(nul.find("3 0 1 2") + 7, std::string("\0\x01", 2));
+  const std::string split = dir.write("split.ply", nul);
+  EXPECT_NE(error_loading(split).find(split + ": PLY 'face' element 1: list length '55555555555555555555' is not"),
+            std::string::npos)
+      << error_loading(split);
   std::string stl(80, ' ');
   stl += le32(2) + std::string(50, '\0');
   expect("bin.stl", stl, "binary STL header counts 2 facets; the file holds 1 (truncated file)");

@@ -120,7 +120,8 @@ TEST(GltfImport, SkinsAndAnimationsAreNotReadAndTheMeshRendersAsStored) {
   const std::string plain = dir.write("plain.gltf", gltf("tri.bin"));
   const std::string text = dir.write("skinned.gltf", skinned("skinned.bin"));
   const std::string binary = dir.write("skinned.glb", glb(json, std::uint32_t(json.size()), skinned_bytes()));
-  ASSERT_EQ(run_opsila({"render", plain, "-o", dir.file("plain.png"), "--size", "32x24"}).exit_code, 0);
+  const RunResult first = run_opsila({"render", plain, "-o", dir.file("plain.png"), "--size", "32x24"});
+  ASSERT_EQ(first.exit_code, 0) << first.err;
   for (const std::string& model : {text, binary}) {
     SCOPED_TRACE(model);
     const RunResult r = run_opsila({"render", model, "-o", dir.file("skinned.png"), "--size", "32x24"});
@@ -128,7 +129,9 @@ TEST(GltfImport, SkinsAndAnimationsAreNotReadAndTheMeshRendersAsStored) {
     EXPECT_EQ(test::read_file(dir.file("skinned.png")), test::read_file(dir.file("plain.png")));
   }
   // 2,000 channels sharing one sampler of 10,000 keys: the importer took
-  // 490 MB for this 300 KB file, its keys; not read, they take nothing.
+  // 490 MB for this 300 KB file, its keys; not read, they take nothing
+  // (within 64 MiB of the watchdog's budget, and of the plain triangle's
+  // peak: a sanitizer build's own is larger).
   std::string keys;
   for (int k = 0; k < 10000; ++k) keys += f32(float(k));
   keys += std::string(12 * 10000, '\0');
@@ -153,7 +156,7 @@ TEST(GltfImport, SkinsAndAnimationsAreNotReadAndTheMeshRendersAsStored) {
   const RunResult r = test::run_program(OPSILA_BINARY, {"render", animated, "-o", dir.file("a.png"), "--size", "32x24"},
                                         {{"OPSILA_IMPORT_MEMORY", std::to_string(64 << 20)}});
   EXPECT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_LT(r.max_rss_kb, 200 * 1024) << "the animation's keys were read";
+  EXPECT_LT(r.max_rss_kb, first.max_rss_kb + 100 * 1024) << "the animation's keys were read";
 }
 
 }  // namespace

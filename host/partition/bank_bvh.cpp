@@ -18,7 +18,7 @@ namespace opsila {
 namespace {
 
 constexpr int kWidth = OPSILA_BVH_WIDTH;
-constexpr int kFacetsPerLeaf = 2;                    // measured against 4 on hundreds (docs/BENCHMARKS.md)
+constexpr int kFacetsPerLeaf = 4;  // tested in vector lanes (kernels/lib/bvh.cl); 2 and 8 measured (docs/BENCHMARKS.md)
 constexpr int kSahDepth = 40;                        // deeper than this, median splits keep the tree shallow
 constexpr int kMaxBinaryDepth = OPSILA_BVH_STACK - 8;  // a leaf takes the rest beyond this depth
 

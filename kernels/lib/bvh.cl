@@ -120,32 +120,68 @@ OPSILA_INLINE bool nearest_pop(BankWalk *w, float entry) {
   return !(entry > w->cull);
 }
 
-/* A leaf's facets for the nearest hit, in the frame of w->r. */
-OPSILA_INLINE void nearest_facets(BankWalk *w, int first, int count) {
-  for (int i = first; i < first + count; ++i) {
-    COUNT_TEST(w->tri_tests);
-    COST_TRI(w->probe, i);
-    float t = intersect_triangle(w->r, &w->tris[i], w->tmin, w->limit);
-    if (!(t < OPSILA_INF)) continue;
-    /* hit_before, the ids read only when the distances share a cell. */
-    __global const BankTriangle *tri = &w->tris[i];
-    if (hit_cell_before(t, w->best) ||
-        (hit_cell_same(t, w->best) && hit_ids_before(w->inst, tri->facet_id, OPSILA_TRI_FAN(*tri), w->best))) {
-      w->best = hit_key(t, w->inst, tri->facet_id, OPSILA_TRI_FAN(*tri));
-      w->best_tri = i;
-      nearest_bounds(w);
-    }
+/* Facet i, met at t (< w->limit when tested), against the best hit: the
+ * ids are read only when the distances share a cell (hit_before). A limit
+ * lowered by a facet tested alongside only prunes: the order decides. */
+OPSILA_INLINE void nearest_candidate(BankWalk *w, int i, float t) {
+  __global const BankTriangle *tri = &w->tris[i];
+  if (hit_cell_before(t, w->best) ||
+      (hit_cell_same(t, w->best) && hit_ids_before(w->inst, tri->facet_id, OPSILA_TRI_FAN(*tri), w->best))) {
+    w->best = hit_key(t, w->inst, tri->facet_id, OPSILA_TRI_FAN(*tri));
+    w->best_tri = i;
+    nearest_bounds(w);
   }
 }
 
-OPSILA_INLINE bool any_facets(BankWalk *w, int first, int count) {
-  for (int i = first; i < first + count; ++i) {
-    COUNT_TEST(w->tri_tests);
-    COST_TRI(w->probe, i);
-    if (intersect_triangle(w->r, &w->tris[i], w->tmin, w->tmax) < OPSILA_INF) return true;
+/* A leaf's facets in lanes: four at a time while three or more are left (a
+ * group of three repeats its last facet in lane 3, whose answer is not
+ * used), then two, then one; each lane gives the single test's bits
+ * (geometry.cl). Leaves hold up to kFacetsPerLeaf facets
+ * (host/partition/bank_bvh.cpp), more only at the builder's depth bound. */
+#define FACETS_IN_LANES(w, first, count, tmax, ON_HIT)                                                      \
+  {                                                                                                          \
+    __global const BankTriangle *tr_ = (w)->tris;                                                            \
+    int i_ = (first), end_ = (first) + (count);                                                              \
+    for (; end_ - i_ > 2; i_ += 4) {                                                                         \
+      int n_ = min(end_ - i_, 4);                                                                            \
+      float4 t4_ = intersect_triangle4((w)->r, &tr_[i_], &tr_[i_ + 1], &tr_[i_ + 2], &tr_[i_ + n_ - 1],      \
+                                       (w)->tmin, (tmax));                                                   \
+      float lane_[4] = {t4_.x, t4_.y, t4_.z, t4_.w};                                                         \
+      for (int k_ = 0; k_ < n_; ++k_) {                                                                      \
+        COUNT_TEST((w)->tri_tests);                                                                          \
+        COST_TRI((w)->probe, i_ + k_);                                                                       \
+        if (lane_[k_] < OPSILA_INF) ON_HIT(w, i_ + k_, lane_[k_]);                                           \
+      }                                                                                                      \
+    }                                                                                                        \
+    if (end_ - i_ == 2) {                                                                                    \
+      float2 t2_ = intersect_triangle2((w)->r, &tr_[i_], &tr_[i_ + 1], (w)->tmin, (tmax));                   \
+      float lane_[2] = {t2_.x, t2_.y};                                                                       \
+      for (int k_ = 0; k_ < 2; ++k_) {                                                                       \
+        COUNT_TEST((w)->tri_tests);                                                                          \
+        COST_TRI((w)->probe, i_ + k_);                                                                       \
+        if (lane_[k_] < OPSILA_INF) ON_HIT(w, i_ + k_, lane_[k_]);                                           \
+      }                                                                                                      \
+    } else if (end_ - i_ == 1) {                                                                             \
+      COUNT_TEST((w)->tri_tests);                                                                            \
+      COST_TRI((w)->probe, i_);                                                                              \
+      float t1_ = intersect_triangle((w)->r, &tr_[i_], (w)->tmin, (tmax));                                   \
+      if (t1_ < OPSILA_INF) ON_HIT(w, i_, t1_);                                                              \
+    }                                                                                                        \
   }
+
+/* A leaf's facets for the nearest hit, in the frame of w->r. */
+OPSILA_INLINE void nearest_facets(BankWalk *w, int first, int count) {
+  FACETS_IN_LANES(w, first, count, w->limit, nearest_candidate)
+}
+
+/* A leaf's facets for any hit in the segment: true at the first group
+ * with a hit. */
+#define ANY_HIT_FOUND(w, i, t) return true
+OPSILA_INLINE bool any_facets(BankWalk *w, int first, int count) {
+  FACETS_IN_LANES(w, first, count, w->tmax, ANY_HIT_FOUND)
   return false;
 }
+#undef ANY_HIT_FOUND
 
 #if OPSILA_INSTANCES
 OPSILA_INLINE bool model_nearest_leaf(BankWalk *w, int first, int count, float entry) {

@@ -104,6 +104,53 @@ OPSILA_INLINE float intersect_triangle(const RayPre *r, __global const BankTrian
   return (t > tmin && t < tmax) ? t : OPSILA_INF;
 }
 
+/* intersect_triangle on the two facets a and b at once, lane 0 a's, lane 1
+ * b's: the same operations lane by lane, so the same bits as two calls (no
+ * contraction, and a vector divide is rounded as the scalar one). A leaf of
+ * two facets costs one test's arithmetic; its loads stay one per value. */
+#define LOAD2(pa, pb, k) ((float2)((pa)[k], (pb)[k]))
+#define LOAD4(pa, pb, pc, pd, k) ((float4)((pa)[k], (pb)[k], (pc)[k], (pd)[k]))
+#define TRI_TEST_LANES(floatN, intN, LOAD_V0, LOAD_V1, LOAD_V2)                                              \
+  int kx = r->kx, ky = r->ky, kz = r->kz;                                                                     \
+  floatN ox = (floatN)(r->org_k.x), oy = (floatN)(r->org_k.y), oz = (floatN)(r->org_k.z);                   \
+  floatN sx = (floatN)(r->sx), sy = (floatN)(r->sy);                                                          \
+  floatN az = LOAD_V0(kz) - oz, bz = LOAD_V1(kz) - oz, cz = LOAD_V2(kz) - oz;                                 \
+  floatN ax = (LOAD_V0(kx) - ox) - sx * az, ay = (LOAD_V0(ky) - oy) - sy * az;                                \
+  floatN bx = (LOAD_V1(kx) - ox) - sx * bz, by = (LOAD_V1(ky) - oy) - sy * bz;                                \
+  floatN cx = (LOAD_V2(kx) - ox) - sx * cz, cy = (LOAD_V2(ky) - oy) - sy * cz;                                \
+  floatN u = cx * by - cy * bx, v = ax * cy - ay * cx, w = bx * ay - by * ax;                                 \
+  const floatN zero = (floatN)(0.0f);                                                                         \
+  intN mixed = ((u < zero) | (v < zero) | (w < zero)) & ((u > zero) | (v > zero) | (w > zero));               \
+  floatN det = u + v + w;                                                                                     \
+  floatN inv_det = (floatN)(1.0f) / det;                                                                      \
+  floatN sz = (floatN)(r->sz);                                                                                \
+  floatN t = (u * inv_det) * (sz * az) + (v * inv_det) * (sz * bz) + (w * inv_det) * (sz * cz);               \
+  intN in = (t > (floatN)(tmin)) & (t < (floatN)(tmax)) & ~mixed & (det != zero);                             \
+  return select((floatN)(OPSILA_INF), t, in)
+OPSILA_INLINE float2 intersect_triangle2(const RayPre *r, __global const BankTriangle *a,
+                                         __global const BankTriangle *b, float tmin, float tmax) {
+#define V0(k) LOAD2(a->v0, b->v0, k)
+#define V1(k) LOAD2(a->v1, b->v1, k)
+#define V2(k) LOAD2(a->v2, b->v2, k)
+  TRI_TEST_LANES(float2, int2, V0, V1, V2);
+#undef V0
+#undef V1
+#undef V2
+}
+OPSILA_INLINE float4 intersect_triangle4(const RayPre *r, __global const BankTriangle *a,
+                                         __global const BankTriangle *b, __global const BankTriangle *c,
+                                         __global const BankTriangle *d, float tmin, float tmax) {
+#define V0(k) LOAD4(a->v0, b->v0, c->v0, d->v0, k)
+#define V1(k) LOAD4(a->v1, b->v1, c->v1, d->v1, k)
+#define V2(k) LOAD4(a->v2, b->v2, c->v2, d->v2, k)
+  TRI_TEST_LANES(float4, int4, V0, V1, V2);
+#undef V0
+#undef V1
+#undef V2
+}
+#undef LOAD2
+#undef LOAD4
+
 /* SPEC's barycentrics (b1, b2) of the ray's hit on a triangle it is known
  * to hit: P = (1 - b1 - b2) v0 + b1 v1 + b2 v2. */
 inline float2 hit_barycentrics(const RayPre *r, __global const BankTriangle *tri) {

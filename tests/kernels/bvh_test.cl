@@ -34,3 +34,30 @@ __kernel void any_batch(__global const BankNode *nodes, __global const BankTrian
   blocked[i] = traverse_any(&r, nodes, tris, 0, root, org[i].w, dir[i].w, slack, &tri_tests, &box_tests, &probe) ? 1 : 0;
   tests[i] = (uint2)(tri_tests, box_tests);
 }
+
+/* The facet tests in lanes (intersect_triangle2, intersect_triangle4) held
+ * against intersect_triangle one facet at a time, bit for bit (a leaf's
+ * winner must not depend on how its facets were tested): ray i on the
+ * groups of four facets first[i] .. first[i] + groups - 1. Per ray: the
+ * lane results whose bits differ from the single test's (0 expected), and
+ * the single tests' hits. */
+__kernel void facet_lanes_batch(__global const BankTriangle *tris, int num_groups, __global const float4 *org,
+                                __global const float4 *dir, __global const int *first, int groups, int count,
+                                __global uint2 *out) {
+  int i = get_global_id(0);
+  if (i >= count) return;
+  RayPre r = make_ray(org[i].xyz, dir[i].xyz);
+  float tmin = org[i].w, tmax = dir[i].w;
+  uint differ = 0u, hits = 0u;
+  for (int g = first[i]; g < min(first[i] + groups, num_groups); ++g) {
+    __global const BankTriangle *q = &tris[4 * g];
+    float one[4];
+    for (int k = 0; k < 4; ++k) one[k] = intersect_triangle(&r, &q[k], tmin, tmax);
+    float4 t4 = intersect_triangle4(&r, &q[0], &q[1], &q[2], &q[3], tmin, tmax);
+    float2 a = intersect_triangle2(&r, &q[0], &q[1], tmin, tmax), b = intersect_triangle2(&r, &q[2], &q[3], tmin, tmax);
+    float lanes[8] = {t4.x, t4.y, t4.z, t4.w, a.x, a.y, b.x, b.y};
+    for (int k = 0; k < 8; ++k) differ += as_uint(lanes[k]) != as_uint(one[k % 4]) ? 1u : 0u;
+    for (int k = 0; k < 4; ++k) hits += one[k] < INFINITY ? 1u : 0u;
+  }
+  out[i] = (uint2)(differ, hits);
+}

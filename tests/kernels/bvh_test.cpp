@@ -253,5 +253,79 @@ TEST(BankBvhWalk, OneWinnerWhateverTheBanksAndTheVisitOrder) {
   EXPECT_GT(fan_wins, rays.size() / 10) << "too few rays decided on a fan's later triangle to test the order";
 }
 
+// A leaf's facets are tested two or four at a time (intersect_triangle2,
+// intersect_triangle4): each lane must give the single test's bits, or a
+// leaf's winner would change with how its facets fall into leaves (the PE
+// count). Facets side by side as a leaf holds them: the tie scene's fans
+// (shared edges, creases), coincident facets, and degenerate ones (a
+// sliver, a point, a segment); rays aimed at their edges and corners, and
+// random ones through the batch scene.
+TEST(BankBvhWalk, FacetTestsInLanesGiveTheSingleTestsBits) {
+  Scene s = test::tie_scene(64, 12);
+  const Scene more = test::batch_scene(7);
+  s.triangles.insert(s.triangles.end(), more.triangles.begin(), more.triangles.end());
+  const Vec3 p{0.5f, 0.25f, -0.125f};
+  s.triangles.push_back({p, p, p, 1, 0, 0, -1, 0});                                                  // a point
+  s.triangles.push_back({p, {p[0] + 1, p[1], p[2]}, {p[0] + 2, p[1], p[2]}, 2, 0, 0, -1, 0});         // a segment
+  s.triangles.push_back({p, {p[0] + 1, p[1], p[2]}, {p[0] + 1, p[1] + 1e-7f, p[2]}, 3, 0, 0, -1, 0});  // a sliver
+  while (s.triangles.size() % 4 != 0) s.triangles.push_back(s.triangles.back());
+  std::vector<BankTriangle> tris;
+  for (const Triangle& t : s.triangles) {
+    BankTriangle b{};
+    for (int a = 0; a < 3; ++a) b.v0[a] = t.v0[a], b.v1[a] = t.v1[a], b.v2[a] = t.v2[a];
+    b.facet_id = t.facet_id;
+    tris.push_back(b);
+  }
+  const int num_groups = static_cast<int>(tris.size() / 4), groups = 6;
+  // Rays at each facet's edges and corners, each tried on the groups around
+  // its facet; then random rays on random groups.
+  test::RayBatch rays;
+  std::vector<cl_int> first;
+  std::mt19937 gen(11);
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+  for (std::size_t j = 0; j < s.triangles.size(); ++j) {
+    const Triangle& t = s.triangles[j];
+    for (float w : {0.5f, 0.0f, 1.0f / 3.0f}) {
+      const Vec3 q{t.v0[0] + w * (t.v1[0] - t.v0[0]), t.v0[1] + w * (t.v1[1] - t.v0[1]),
+                   t.v0[2] + w * (t.v1[2] - t.v0[2])};
+      const Vec3 o{q[0] + 3 * u(gen), q[1] + 4 + 2 * u(gen), q[2] + 3 + 3 * u(gen)};
+      const Vec3 d{q[0] - o[0], q[1] - o[1], q[2] - o[2]};
+      const float l = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+      rays.org.push_back({{o[0], o[1], o[2], 0.0f}});
+      rays.dir.push_back({{d[0] / l, d[1] / l, d[2] / l, w == 0.0f ? l : kInf}});  // corners: the segment ends there
+      first.push_back(std::max(0, static_cast<int>(j / 4) - groups / 2));
+    }
+  }
+  const test::RayBatch random = test::random_rays(4000, 3, 1e-3f, 2.0f, 20.0f);
+  std::uniform_int_distribution<int> g(0, num_groups - 1);
+  for (std::size_t i = 0; i < random.size(); ++i) {
+    rays.org.push_back(random.org[i]);
+    rays.dir.push_back(random.dir[i]);
+    first.push_back(g(gen));
+  }
+  ClRuntime& rt = test::batch_runtime();
+  const std::size_t n = rays.size();
+  cl::Buffer tri_buf = test::to_device(rt, tris), org = test::to_device(rt, rays.org), dir = test::to_device(rt, rays.dir);
+  cl::Buffer first_buf = test::to_device(rt, first), out = test::to_device(rt, std::vector<cl_uint2>(n));
+  cl::Kernel k = rt.kernel("facet_lanes_batch");
+  int a = 0;
+  k.setArg(a++, tri_buf);
+  k.setArg(a++, cl_int(num_groups));
+  k.setArg(a++, org);
+  k.setArg(a++, dir);
+  k.setArg(a++, first_buf);
+  k.setArg(a++, cl_int(groups));
+  k.setArg(a++, cl_int(n));
+  k.setArg(a++, out);
+  test::run_batch(rt, k, n);
+  const std::vector<cl_uint2> res = test::from_device<cl_uint2>(rt, out, n);
+  std::size_t hits = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    ASSERT_EQ(res[i].s[0], 0u) << "ray " << i << ": a lane's distance differs from the single test's";
+    hits += res[i].s[1];
+  }
+  EXPECT_GT(hits, n / 2) << "too few facets hit to compare the lanes";
+}
+
 }  // namespace
 }  // namespace opsila

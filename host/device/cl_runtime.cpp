@@ -344,6 +344,16 @@ ClRuntime::ClRuntime(const DeviceEntry& device, const ClRuntimeOptions& options)
            "clGetDeviceInfo(CL_DEVICE_SINGLE_FP_CONFIG)");
   exact_divide_ = (single_fp & CL_FP_CORRECTLY_ROUNDED_DIVIDE_SQRT) != 0;
 
+  // A leaf's facets tested in vector lanes (kernels/lib/bvh.cl) where a
+  // work-item's vectors fill the device's own (native float width 4 or more:
+  // PoCL's CPUs); a device that runs work-items in its lanes (GPUs, Mesa's
+  // llvmpipe: width 1) tests them one at a time, as the lanes cost it four
+  // tests' work each (llvmpipe: a frame 1.5x slower; docs/BENCHMARKS.md).
+  cl_uint native_float = 0;
+  cl_check(device_.device.getInfo(CL_DEVICE_NATIVE_VECTOR_WIDTH_FLOAT, &native_float),
+           "clGetDeviceInfo(CL_DEVICE_NATIVE_VECTOR_WIDTH_FLOAT)");
+  facet_lanes_ = native_float >= 4;
+
   source_ = options.kernel_source;
   source_origin_ = source_.empty() ? "embedded kernels"
                                    : (options.kernel_source_origin.empty() ? "kernel source given by the caller"
@@ -407,6 +417,7 @@ cl::Program& ClRuntime::program(KernelProgram which) {
   if (pow_fp64_) options += " -DOPSILA_POW_FP64=1";
   if (instances_) options += " -DOPSILA_INSTANCES=1";
   if (exact_divide_) options += " -cl-fp32-correctly-rounded-divide-sqrt";
+  if (facet_lanes_) options += " -DOPSILA_FACET_LANES=1";
   err = build(program, options);
   if (err != CL_SUCCESS) {
     std::string log;

@@ -167,6 +167,7 @@ class ClRuntime {
   std::optional<std::string> stage_cycles_why_;  // stage_cycles_unavailable, once asked
   std::size_t group_size_ = 64;
   bool pow_fp64_ = false;
+  bool facet_lanes_ = false;  // -DOPSILA_FACET_LANES: a leaf's facets in vector lanes
   bool exact_divide_ = false;
   cl_ulong max_alloc_ = 0, global_mem_ = 0, limit_ = 0;
   std::uint64_t allocated_ = 0;

@@ -133,12 +133,27 @@ OPSILA_INLINE void nearest_candidate(BankWalk *w, int i, float t) {
   }
 }
 
-/* A leaf's facets in lanes: four at a time while three or more are left (a
- * group of three repeats its last facet in lane 3, whose answer is not
- * used), then two, then one; each lane gives the single test's bits
- * (geometry.cl). Leaves hold up to kFacetsPerLeaf facets
- * (host/partition/bank_bvh.cpp), more only at the builder's depth bound. */
-#define FACETS_IN_LANES(w, first, count, tmax, ON_HIT)                                                      \
+/* A leaf's facets, each met at t < tmax handed to ON_HIT(w, i, t).
+ * OPSILA_FACET_LANES (the host sets it where a work-item's vectors are the
+ * device's own: host/device/cl_runtime.cpp): in vector lanes, four at a
+ * time while three or more are left (a group of three repeats its last
+ * facet in lane 3, whose answer is not used), then two, then one; each lane
+ * gives the single test's bits (geometry.cl). Otherwise one at a time.
+ * Leaves hold up to kFacetsPerLeaf facets (host/partition/bank_bvh.cpp),
+ * more only at the builder's depth bound. */
+#ifndef OPSILA_FACET_LANES
+#define OPSILA_FACET_LANES 0
+#endif
+#if !OPSILA_FACET_LANES
+#define LEAF_FACETS(w, first, count, tmax, ON_HIT)                             \
+  for (int i_ = (first); i_ < (first) + (count); ++i_) {                          \
+    COUNT_TEST((w)->tri_tests);                                                  \
+    COST_TRI((w)->probe, i_);                                                    \
+    float t1_ = intersect_triangle((w)->r, &(w)->tris[i_], (w)->tmin, (tmax));    \
+    if (t1_ < OPSILA_INF) ON_HIT(w, i_, t1_);                                     \
+  }
+#else
+#define LEAF_FACETS(w, first, count, tmax, ON_HIT)                                                      \
   {                                                                                                          \
     __global const BankTriangle *tr_ = (w)->tris;                                                            \
     int i_ = (first), end_ = (first) + (count);                                                              \
@@ -168,17 +183,18 @@ OPSILA_INLINE void nearest_candidate(BankWalk *w, int i, float t) {
       if (t1_ < OPSILA_INF) ON_HIT(w, i_, t1_);                                                              \
     }                                                                                                        \
   }
+#endif
 
 /* A leaf's facets for the nearest hit, in the frame of w->r. */
 OPSILA_INLINE void nearest_facets(BankWalk *w, int first, int count) {
-  FACETS_IN_LANES(w, first, count, w->limit, nearest_candidate)
+  LEAF_FACETS(w, first, count, w->limit, nearest_candidate)
 }
 
 /* A leaf's facets for any hit in the segment: true at the first group
  * with a hit. */
 #define ANY_HIT_FOUND(w, i, t) return true
 OPSILA_INLINE bool any_facets(BankWalk *w, int first, int count) {
-  FACETS_IN_LANES(w, first, count, w->tmax, ANY_HIT_FOUND)
+  LEAF_FACETS(w, first, count, w->tmax, ANY_HIT_FOUND)
   return false;
 }
 #undef ANY_HIT_FOUND

@@ -181,24 +181,28 @@ TEST(BankBvhWalk, AnyHitMatchesTheBruteForceOnRandomSegments) {
   EXPECT_GT(blocked, 100u) << "too few segments blocked to test the walk";
 }
 
+// A ray from a random point above facet t to the point at w along its edge
+// v0-v1: open, or (ends_there) a segment that ends at that point.
+void push_edge_ray(test::RayBatch& b, const Triangle& t, float w, std::mt19937& gen, bool ends_there) {
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+  const Vec3 p{t.v0[0] + w * (t.v1[0] - t.v0[0]), t.v0[1] + w * (t.v1[1] - t.v0[1]),
+               t.v0[2] + w * (t.v1[2] - t.v0[2])};
+  const Vec3 o{p[0] + 3 * u(gen), p[1] + 4 + 2 * u(gen), p[2] + 3 + 3 * u(gen)};
+  const Vec3 d{p[0] - o[0], p[1] - o[1], p[2] - o[2]};
+  const float l = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+  b.org.push_back({{o[0], o[1], o[2], 0.0f}});
+  b.dir.push_back({{d[0] / l, d[1] / l, d[2] / l, ends_there ? l : kInf}});
+}
+
 // Rays aimed at the points where the hit order's ids decide: the midpoints
 // and corners of shared fan edges (both triangles of a crease are hit), and
 // points of coincident facets of two objects (test::tie_scene).
 test::RayBatch rays_at_ties(const Scene& s, unsigned seed) {
   test::RayBatch b;
   std::mt19937 gen(seed);
-  std::uniform_real_distribution<float> u(-1.0f, 1.0f);
   for (const Triangle& t : s.triangles) {
     if (t.fan == 0) continue;  // a later fan triangle: its edge v0-v1 is shared with the one before
-    for (float w : {0.5f, 0.0f, 0.25f}) {
-      const Vec3 p{t.v0[0] + w * (t.v1[0] - t.v0[0]), t.v0[1] + w * (t.v1[1] - t.v0[1]),
-                   t.v0[2] + w * (t.v1[2] - t.v0[2])};
-      const Vec3 o{p[0] + 3 * u(gen), p[1] + 4 + 2 * u(gen), p[2] + 3 + 3 * u(gen)};
-      const Vec3 d{p[0] - o[0], p[1] - o[1], p[2] - o[2]};
-      const float l = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
-      b.org.push_back({{o[0], o[1], o[2], 0.0f}});
-      b.dir.push_back({{d[0] / l, d[1] / l, d[2] / l, kInf}});
-    }
+    for (float w : {0.5f, 0.0f, 0.25f}) push_edge_ray(b, t, w, gen, false);
   }
   return b;
 }
@@ -282,17 +286,9 @@ TEST(BankBvhWalk, FacetTestsInLanesGiveTheSingleTestsBits) {
   test::RayBatch rays;
   std::vector<cl_int> first;
   std::mt19937 gen(11);
-  std::uniform_real_distribution<float> u(-1.0f, 1.0f);
   for (std::size_t j = 0; j < s.triangles.size(); ++j) {
-    const Triangle& t = s.triangles[j];
     for (float w : {0.5f, 0.0f, 1.0f / 3.0f}) {
-      const Vec3 q{t.v0[0] + w * (t.v1[0] - t.v0[0]), t.v0[1] + w * (t.v1[1] - t.v0[1]),
-                   t.v0[2] + w * (t.v1[2] - t.v0[2])};
-      const Vec3 o{q[0] + 3 * u(gen), q[1] + 4 + 2 * u(gen), q[2] + 3 + 3 * u(gen)};
-      const Vec3 d{q[0] - o[0], q[1] - o[1], q[2] - o[2]};
-      const float l = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
-      rays.org.push_back({{o[0], o[1], o[2], 0.0f}});
-      rays.dir.push_back({{d[0] / l, d[1] / l, d[2] / l, w == 0.0f ? l : kInf}});  // corners: the segment ends there
+      push_edge_ray(rays, s.triangles[j], w, gen, w == 0.0f);  // a corner: the segment ends there
       first.push_back(std::max(0, static_cast<int>(j / 4) - groups / 2));
     }
   }

@@ -144,16 +144,25 @@ OPSILA_INLINE void nearest_candidate(BankWalk *w, int i, float t) {
 #ifndef OPSILA_FACET_LANES
 #define OPSILA_FACET_LANES 0
 #endif
-#if !OPSILA_FACET_LANES
-#define LEAF_FACETS(w, first, count, tmax, ON_HIT)                             \
-  for (int i_ = (first); i_ < (first) + (count); ++i_) {                          \
-    COUNT_TEST((w)->tri_tests);                                                  \
-    COST_TRI((w)->probe, i_);                                                    \
-    float t1_ = intersect_triangle((w)->r, &(w)->tris[i_], (w)->tmin, (tmax));    \
-    if (t1_ < OPSILA_INF) ON_HIT(w, i_, t1_);                                     \
+/* Facet i alone; n facets from `base` whose results are lanes[0 .. n-1]. */
+#define FACET_ONE(w, i, tmax, ON_HIT)                                          \
+  {                                                                            \
+    COUNT_TEST((w)->tri_tests);                                                \
+    COST_TRI((w)->probe, (i));                                                 \
+    float t1_ = intersect_triangle((w)->r, &(w)->tris[i], (w)->tmin, (tmax));  \
+    if (t1_ < OPSILA_INF) ON_HIT(w, (i), t1_);                                 \
   }
+#define FACET_LANES(w, base, lanes, n, ON_HIT)                                 \
+  for (int k_ = 0; k_ < (n); ++k_) {                                           \
+    COUNT_TEST((w)->tri_tests);                                                \
+    COST_TRI((w)->probe, (base) + k_);                                         \
+    if (lanes[k_] < OPSILA_INF) ON_HIT(w, (base) + k_, lanes[k_]);             \
+  }
+#if !OPSILA_FACET_LANES
+#define LEAF_FACETS(w, first, count, tmax, ON_HIT) \
+  for (int i_ = (first); i_ < (first) + (count); ++i_) FACET_ONE(w, i_, tmax, ON_HIT)
 #else
-#define LEAF_FACETS(w, first, count, tmax, ON_HIT)                                                      \
+#define LEAF_FACETS(w, first, count, tmax, ON_HIT)                                                            \
   {                                                                                                          \
     __global const BankTriangle *tr_ = (w)->tris;                                                            \
     int i_ = (first), end_ = (first) + (count);                                                              \
@@ -161,27 +170,15 @@ OPSILA_INLINE void nearest_candidate(BankWalk *w, int i, float t) {
       int n_ = min(end_ - i_, 4);                                                                            \
       float4 t4_ = intersect_triangle4((w)->r, &tr_[i_], &tr_[i_ + 1], &tr_[i_ + 2], &tr_[i_ + n_ - 1],      \
                                        (w)->tmin, (tmax));                                                   \
-      float lane_[4] = {t4_.x, t4_.y, t4_.z, t4_.w};                                                         \
-      for (int k_ = 0; k_ < n_; ++k_) {                                                                      \
-        COUNT_TEST((w)->tri_tests);                                                                          \
-        COST_TRI((w)->probe, i_ + k_);                                                                       \
-        if (lane_[k_] < OPSILA_INF) ON_HIT(w, i_ + k_, lane_[k_]);                                           \
-      }                                                                                                      \
+      float lane4_[4] = {t4_.x, t4_.y, t4_.z, t4_.w};                                                        \
+      FACET_LANES(w, i_, lane4_, n_, ON_HIT)                                                                 \
     }                                                                                                        \
     if (end_ - i_ == 2) {                                                                                    \
       float2 t2_ = intersect_triangle2((w)->r, &tr_[i_], &tr_[i_ + 1], (w)->tmin, (tmax));                   \
-      float lane_[2] = {t2_.x, t2_.y};                                                                       \
-      for (int k_ = 0; k_ < 2; ++k_) {                                                                       \
-        COUNT_TEST((w)->tri_tests);                                                                          \
-        COST_TRI((w)->probe, i_ + k_);                                                                       \
-        if (lane_[k_] < OPSILA_INF) ON_HIT(w, i_ + k_, lane_[k_]);                                           \
-      }                                                                                                      \
-    } else if (end_ - i_ == 1) {                                                                             \
-      COUNT_TEST((w)->tri_tests);                                                                            \
-      COST_TRI((w)->probe, i_);                                                                              \
-      float t1_ = intersect_triangle((w)->r, &tr_[i_], (w)->tmin, (tmax));                                   \
-      if (t1_ < OPSILA_INF) ON_HIT(w, i_, t1_);                                                              \
-    }                                                                                                        \
+      float lane2_[2] = {t2_.x, t2_.y};                                                                      \
+      FACET_LANES(w, i_, lane2_, 2, ON_HIT)                                                                  \
+    } else if (end_ - i_ == 1)                                                                               \
+      FACET_ONE(w, i_, tmax, ON_HIT)                                                                         \
   }
 #endif
 

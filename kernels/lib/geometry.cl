@@ -104,10 +104,11 @@ OPSILA_INLINE float intersect_triangle(const RayPre *r, __global const BankTrian
   return (t > tmin && t < tmax) ? t : OPSILA_INF;
 }
 
-/* intersect_triangle on the two facets a and b at once, lane 0 a's, lane 1
- * b's: the same operations lane by lane, so the same bits as two calls (no
- * contraction, and a vector divide is rounded as the scalar one). A leaf of
- * two facets costs one test's arithmetic; its loads stay one per value. */
+/* intersect_triangle on two facets (a, b) or four (a .. d) at once, lane k
+ * the k-th facet's: the same operations lane by lane, so the same bits as
+ * one call per facet (no contraction, and a vector divide is rounded as
+ * the scalar one). A leaf's facets cost one test's arithmetic; the loads
+ * stay one per value (the vertices are stored facet by facet). */
 #define LOAD2(pa, pb, k) ((float2)((pa)[k], (pb)[k]))
 #define LOAD4(pa, pb, pc, pd, k) ((float4)((pa)[k], (pb)[k], (pc)[k], (pd)[k]))
 #define TRI_TEST_LANES(floatN, intN, LOAD_V0, LOAD_V1, LOAD_V2)                                              \

@@ -105,6 +105,32 @@ void measure_all(BenchReport& report, Scene& scene, const RenderSettings& settin
   }
 }
 
+// Checked, not created: the CSV folder, its tables, the JSON file and the
+// rays file appear together at the end, or not at all. Rank 0 writes; the
+// rays file needs the traversal alone, which one process measures.
+void declare_outputs(const BenchOptions& o, bool writer, Ranks& ranks, OutputFiles& outputs) {
+  if (writer && !o.json_path.empty()) outputs.declare("--json", o.json_path);
+  if (writer && !o.csv_dir.empty()) outputs.declare_folder("--csv", o.csv_dir);
+  if (!o.rays_path.empty()) {
+    if (ranks.size() > 1)
+      bad_flag("--rays-out", o.rays_path, "the traversal alone runs in one process, not under several ranks");
+    outputs.declare("--rays-out", o.rays_path);
+  }
+  outputs.refuse_inputs({o.scene_path});
+}
+
+void write_outputs(const BenchOptions& o, const BenchReport& report, const nlohmann::json& results,
+                   OutputFiles& outputs) {
+  if (!o.json_path.empty()) outputs.write(o.json_path, results.dump(1) + "\n");
+  if (!o.csv_dir.empty()) write_bench_csv(report, o.csv_dir, outputs);
+  if (!o.rays_path.empty()) {
+    if (report.traversal.rays_file.empty())
+      bad_flag("--rays-out", o.rays_path, "the traversal alone was not measured: " + report.traversal.skipped);
+    outputs.write(o.rays_path, report.traversal.rays_file);
+  }
+  outputs.commit();
+}
+
 }  // namespace
 
 int run_bench(const std::vector<std::string>& args, Ranks& ranks) {
@@ -116,13 +142,9 @@ int run_bench(const std::vector<std::string>& args, Ranks& ranks) {
   // (kSingleProcessOnly says why in the report).
   if (launched_by_mpi()) ranks.start();
   const bool writer = ranks.rank() == 0;
-  // Checked, not created: the CSV folder, its tables and the JSON file
-  // appear together at the end, or not at all.
   install_interrupt_cleanup();
   OutputFiles outputs;
-  if (writer && !o.json_path.empty()) outputs.declare("--json", o.json_path);
-  if (writer && !o.csv_dir.empty()) outputs.declare_folder("--csv", o.csv_dir);
-  outputs.refuse_inputs({o.scene_path});
+  declare_outputs(o, writer, ranks, outputs);
   nlohmann::json saved;  // read first, so a bad file fails before any work
   if (!o.compare_path.empty()) {
     outputs.refuse_inputs({o.compare_path});
@@ -149,10 +171,13 @@ int run_bench(const std::vector<std::string>& args, Ranks& ranks) {
   if (!scene.instances.empty() && !o.balance) request.balance = Balance::work;
   const RenderSettings settings = prepared_settings(request);
   check_device_room(scene, o.scene_path, ranks, rt);
+  if (!o.rays_path.empty() && !scene.instances.empty())
+    bad_flag("--rays-out", o.rays_path, "the scene places instances; the file holds plain triangles only");
   if (settings.balance == Balance::work) progress("sampling the frame's rays for --balance work");
   if (settings.balance == Balance::measured) progress("pilot frames for --balance measured");
 
   BenchReport report = start_report(o, scene, settings.num_pes);
+  report.traversal.keep_rays = !o.rays_path.empty();
   report.device = device_facts(rt);
   report.context = gather_context();
   report.load_before = load_average();
@@ -167,13 +192,12 @@ int run_bench(const std::vector<std::string>& args, Ranks& ranks) {
   report.analyse();
 
   const nlohmann::json results = bench_json(report);
-  if (!o.json_path.empty()) outputs.write(o.json_path, results.dump(1) + "\n");
-  if (!o.csv_dir.empty()) write_bench_csv(report, o.csv_dir, outputs);
-  outputs.commit();
+  write_outputs(o, report, results, outputs);
   std::fputs(bench_text(report).c_str(), stdout);
   if (!o.compare_path.empty()) std::fputs(compare_text(results, saved, o.compare_path).c_str(), stdout);
   if (!o.json_path.empty()) progress("wrote %s", o.json_path.c_str());
   if (!o.csv_dir.empty()) progress("wrote CSV tables in %s", o.csv_dir.c_str());
+  if (!o.rays_path.empty()) progress("wrote %s", o.rays_path.c_str());
   ranks.checkpoint();
   return kExitOk;
 }

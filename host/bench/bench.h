@@ -126,6 +126,10 @@ struct TraversalAlone {
   std::vector<double> seconds_all, nearest_seconds_all, any_seconds_all;
   double seconds = 0, nearest_seconds = 0, any_seconds = 0;  // of the median run
   std::size_t rays() const { return nearest_rays + any_rays; }
+  // --rays-out: asked for before the batch is made; then the file's bytes
+  // (bench/ray_file.h), the rays with the traversal's answers.
+  bool keep_rays = false;
+  std::string rays_file;
 };
 TraversalAlone measure_traversal_alone(const Scene& scene, ClRuntime& runtime, int warmup, int repeats,
                                        int tile = 1 << 16);
@@ -140,6 +144,9 @@ class TraversalBatch {
   TraversalBatch(const Scene& scene, ClRuntime& runtime, TraversalAlone& record, int tile = 1 << 16);
   ~TraversalBatch();
   std::pair<double, double> run();
+  // When record.keep_rays: traces the rays once more, reads the answers and
+  // puts the rays file in record.rays_file.
+  void write_rays_file(TraversalAlone& record);
 
  private:
   struct State;

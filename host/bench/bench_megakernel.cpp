@@ -15,6 +15,7 @@
 #include "partition/bank_bvh.h"
 #include "partition/partition.h"
 #include "bench/bench_kernels.h"
+#include "bench/ray_file.h"
 #include "device/counters.h"
 #include "device/kernel_args.h"
 #include "frame/renderer.h"
@@ -335,6 +336,7 @@ struct TraversalBatch::State {
   TraversalArgs args;  // the rays and their count are each kernel's
   Buf b_nearest, b_any;
   std::size_t nearest_rays = 0, any_rays = 0;
+  RayLog kept;  // --rays-out only
 };
 
 TraversalBatch::TraversalBatch(const Scene& scene, ClRuntime& rt, TraversalAlone& record, int tile) {
@@ -355,6 +357,7 @@ TraversalBatch::TraversalBatch(const Scene& scene, ClRuntime& rt, TraversalAlone
   s->args.slack = s->ms.fp.box_slack;
   s->args.hits.buffer = device_buffer(rt, std::max<std::size_t>(s->nearest_rays, s->any_rays) * sizeof(cl_int) + 4,
                                       "traversal answers");
+  if (record.keep_rays) s->kept = std::move(log);
   s_ = std::move(s);
 }
 
@@ -377,6 +380,48 @@ std::pair<double, double> TraversalBatch::run() {
   double n = 0, a = 0;
   for (const LaunchRecord& l : launches) (l.name == "traversal_nearest" ? n : a) += l.seconds;
   return {n, a};
+}
+
+namespace {
+
+// The logged rays as the file's 8 floats each: tmax +inf for a nearest-hit
+// ray (the log marks those with a negative one).
+std::vector<float> file_rays(const std::vector<cl_float4>& log, bool nearest) {
+  std::vector<float> out;
+  out.reserve(log.size() * 4);
+  for (std::size_t i = 0; i < log.size(); i += 2) {
+    for (int k = 0; k < 4; ++k) out.push_back(log[i].s[k]);
+    for (int k = 0; k < 3; ++k) out.push_back(log[i + 1].s[k]);
+    out.push_back(nearest ? INFINITY : log[i + 1].s[3]);
+  }
+  return out;
+}
+
+}  // namespace
+
+void TraversalBatch::write_rays_file(TraversalAlone& record) {
+  State& s = *s_;
+  RayFile f;
+  for (const BankTriangle& t : s.ms.bs.triangles)
+    for (const float* v : {t.v0, t.v1, t.v2}) f.triangles.insert(f.triangles.end(), v, v + 3);
+  f.nearest = file_rays(s.kept.nearest, true);
+  f.any = file_rays(s.kept.any, false);
+  std::vector<LaunchRecord> launches;
+  Launcher launch(s.rt, launches);
+  for (auto [k, rays, count, answers] : {std::tuple{&s.nearest, &s.b_nearest, s.nearest_rays, &f.nearest_hit},
+                                         std::tuple{&s.any, &s.b_any, s.any_rays, &f.any_blocked}}) {
+    answers->resize(count);
+    if (count == 0) continue;
+    s.args.rays.buffer = *rays;
+    s.args.count = static_cast<int>(count);
+    cl::Kernel& kk = k->bind(s.args);
+    launch.run(kk, k->name().c_str(), round_up(static_cast<int>(count), 64), fixed_local(s.rt, kk), -1);
+    launch.check(s.rt.queue().enqueueReadBuffer(s.args.hits.buffer, CL_TRUE, 0, count * sizeof(cl_int),
+                                                answers->data()),
+                 "clEnqueueReadBuffer(traversal answers)");
+  }
+  launch.harvest();
+  record.rays_file = ray_file_bytes(f);
 }
 
 void record_traversal_run(TraversalAlone& t, std::pair<double, double> seconds) {

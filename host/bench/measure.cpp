@@ -203,6 +203,7 @@ struct Baselines {
   void finish(BenchReport& report) {
     if (mega_runs) report.megakernel = mega_runs->finish();
     if (batch) finish_traversal(report.traversal);
+    if (batch && report.traversal.keep_rays) batch->write_rays_file(report.traversal);
     if (embree_runs) report.embree = embree_runs->finish();
   }
 };

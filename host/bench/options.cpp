@@ -19,7 +19,7 @@ CommandSyntax bench_syntax() {
   syntax.flags = {{"--json", "--json", true},       {"--csv", "--csv", true},
                   {"--repeats", "--repeats", true}, {"--warmup", "--warmup", true},
                   {"--threads", "--threads", true}, {"--scatter-max", "--scatter-max", true},
-                  {"--compare", "--compare", true},
+                  {"--compare", "--compare", true}, {"--rays-out", "--rays-out", true},
                   {"--quick", "--quick", false},    {"-q", "-q", false},
                   {"--quiet", "-q", false},         {"-h", "--help", false},
                   {"--help", "--help", false}};
@@ -46,6 +46,8 @@ BenchOptions parse_bench_options(const std::vector<std::string>& args) {
       o.json_path = path_ending_in(name, value, ".json", "must end in .json");
     } else if (flag == "--compare") {
       o.compare_path = path_ending_in(name, value, ".json", "must end in .json (a saved --json result)");
+    } else if (flag == "--rays-out") {
+      o.rays_path = path_ending_in(name, value, ".rays", "must end in .rays");
     } else if (flag == "--csv") {
       if (value.empty()) bad_flag(name, value, "empty folder name");
       o.csv_dir = value;
@@ -79,6 +81,8 @@ std::string bench_usage() {
          "  --json FILE        write every result as JSON (see docs/BENCHMARKS.md)\n"
          "  --csv DIR          write CSV tables: scatter, phases, levels, occupancy, traffic, baselines\n"
          "  --compare OLD.json print each figure beside a saved --json result, with the ratio\n"
+         "  --rays-out F.rays  write the traversal alone's triangles, rays and answers, for\n"
+         "                     timing other kernels on the same rays (see docs/BENCHMARKS.md)\n"
          "  --quick            fewer repeats and shorter scatter vectors (CI)\n"
          "  --repeats N        timed runs per measurement (default 5, --quick 2)\n"
          "  --warmup N         untimed runs before them (default 1)\n"

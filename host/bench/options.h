@@ -13,6 +13,7 @@ namespace opsila {
 struct BenchOptions : ViewOptions {
   std::string json_path, csv_dir;
   std::string compare_path;  // --compare: a saved --json result
+  std::string rays_path;     // --rays-out: the traversal alone's rays and answers (bench/ray_file.h)
   bool quick = false, quiet = false, help = false;
   std::optional<int> repeats, warmup, threads, scatter_max_log2;
 

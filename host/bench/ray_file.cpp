@@ -12,7 +12,7 @@ constexpr std::size_t kHeaderBytes = 24;
 
 template <typename T>
 void put(std::string& out, const std::vector<T>& v) {
-  out.append(reinterpret_cast<const char*>(v.data()), v.size() * sizeof(T));
+  if (!v.empty()) out.append(reinterpret_cast<const char*>(v.data()), v.size() * sizeof(T));
 }
 
 void put_u32(std::string& out, std::uint32_t v) { out.append(reinterpret_cast<const char*>(&v), 4); }
@@ -27,7 +27,7 @@ std::uint32_t get_u32(const std::string& bytes, std::size_t at) {
 template <typename T>
 std::vector<T> take(const std::string& bytes, std::size_t& at, std::uint64_t n) {
   std::vector<T> v(n);
-  std::memcpy(v.data(), bytes.data() + at, n * sizeof(T));
+  if (n > 0) std::memcpy(v.data(), bytes.data() + at, n * sizeof(T));  // an empty vector's data() may be null
   at += n * sizeof(T);
   return v;
 }

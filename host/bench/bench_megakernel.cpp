@@ -337,6 +337,14 @@ struct TraversalBatch::State {
   Buf b_nearest, b_any;
   std::size_t nearest_rays = 0, any_rays = 0;
   RayLog kept;  // --rays-out only
+
+  // Enqueues kernel k over `count` rays of `rays` (count > 0).
+  void trace(Launcher& launch, BatchKernel& k, const Buf& rays, std::size_t count) {
+    args.rays.buffer = rays;
+    args.count = static_cast<int>(count);
+    cl::Kernel& kk = k.bind(args);
+    launch.run(kk, k.name().c_str(), round_up(static_cast<int>(count), 64), fixed_local(rt, kk), -1);
+  }
 };
 
 TraversalBatch::TraversalBatch(const Scene& scene, ClRuntime& rt, TraversalAlone& record, int tile) {
@@ -369,11 +377,7 @@ std::pair<double, double> TraversalBatch::run() {
   Launcher launch(s.rt, launches);
   for (auto [k, rays, count] : {std::tuple{&s.nearest, &s.b_nearest, s.nearest_rays},
                                 std::tuple{&s.any, &s.b_any, s.any_rays}}) {
-    if (count == 0) continue;
-    s.args.rays.buffer = *rays;
-    s.args.count = static_cast<int>(count);
-    cl::Kernel& kk = k->bind(s.args);
-    launch.run(kk, k->name().c_str(), round_up(static_cast<int>(count), 64), fixed_local(s.rt, kk), -1);
+    if (count > 0) s.trace(launch, *k, *rays, count);
   }
   launch.check(s.rt.queue().finish(), "clFinish");
   launch.harvest();
@@ -412,10 +416,7 @@ void TraversalBatch::write_rays_file(TraversalAlone& record) {
                                          std::tuple{&s.any, &s.b_any, s.any_rays, &f.any_blocked}}) {
     answers->resize(count);
     if (count == 0) continue;
-    s.args.rays.buffer = *rays;
-    s.args.count = static_cast<int>(count);
-    cl::Kernel& kk = k->bind(s.args);
-    launch.run(kk, k->name().c_str(), round_up(static_cast<int>(count), 64), fixed_local(s.rt, kk), -1);
+    s.trace(launch, *k, *rays, count);
     launch.check(s.rt.queue().enqueueReadBuffer(s.args.hits.buffer, CL_TRUE, 0, count * sizeof(cl_int),
                                                 answers->data()),
                  "clEnqueueReadBuffer(traversal answers)");

@@ -81,6 +81,18 @@ check render-spp-all-checks "${all_checks[@]}" -- \
   "$build/opsila" render "$scene" -o "$work/spp.pfm" --size 4x3 --depth 2 --pes 4 --spp 4 --device oclgrind -q \
   "${view[@]}"
 
+# 2b'. A GPU's paths on a device that shares host memory: launches without
+#      events but the long ones (OPSILA_LAUNCH_EVENTS=0) and the image
+#      resolved on the device (kernels/resolve.cl), every check; its image
+#      is render-all-checks' to the byte.
+check render-gpu-paths-all-checks "${all_checks[@]}" -- \
+  env OPSILA_LAUNCH_EVENTS=0 OPSILA_DEVICE_RESOLVE=1 "$build/opsila" render "$scene" -o "$work/resolved.pfm" \
+  --size 8x6 --depth 3 --pes 4 --device oclgrind -q "${view[@]}" --stats "$work/resolved.json"
+if ! grep -q '"resolve_image"' "$work/resolved.json" 2>/dev/null || ! cmp -s "$work/render.pfm" "$work/resolved.pfm"; then
+  echo "FAIL  render-gpu-paths: no resolve_image launch, or not render-all-checks' image"
+  failed=1
+fi
+
 # 2c. Texture maps and smooth shading: vertex attributes, texture copies in
 #     the banks, texel lookups and the sRGB table.
 check render-textured-smooth-all-checks "${all_checks[@]}" -- \

@@ -21,13 +21,6 @@
  *               traced rectangle is left alone: the host reads it as
  *               the background's sum (Renderer::Machine::read_image);
  *   list_hits:  the block's hit pixels, from the block's exclusive prefix on. */
-/* traced: the pixels the item buffer traced (x0, y0, x1, y1); a pixel
- * outside them is a miss, whatever its item_tri holds. */
-inline bool was_traced(int pixel, int width, int4 traced) {
-  int x = pixel % width, y = pixel / width;
-  return x >= traced.x && x <= traced.z && y >= traced.y && y <= traced.w;
-}
-
 __kernel void count_hits(FrameParams fp, __global const int *item_tri, int npix, int4 traced, int first_pass,
                          __global int *block_hits, volatile __global uint *accum) {
   int b = get_global_id(0);

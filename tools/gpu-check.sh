@@ -23,7 +23,8 @@
 #          checks that its image of the default scene is the Debian build's;
 #       3. `opsila bench` on hundreds at 800x600 and 1920x1080 (the Debian
 #          build, Embree beside it on the host's threads), and renders at
-#          1920x1080 with and without OPSILA_PRIMARY_AHEAD.
+#          1920x1080 with and without OPSILA_PRIMARY_AHEAD,
+#          OPSILA_LAUNCH_EVENTS and OPSILA_DEVICE_RESOLVE.
 #       Everything runs within 8 minutes.
 #
 # KIT defaults to ./gpu-kit. Results: KIT/results (log, PFMs, bench JSON and
@@ -252,23 +253,36 @@ run() {
       failed=1
     fi
   done
-  # The next round's primary descriptors built by the SPMD launch (the
-  # default) or by a launch of their own (OPSILA_PRIMARY_AHEAD=0): five
-  # renders each at 1920x1080, interleaved; each run's frame seconds.
-  local a i
-  for a in 1 0; do : >"$out/ahead$a.txt"; done
+  # Three levers, each on and off: the next round's primary descriptors
+  # built by the SPMD launch (the default) or by a launch of their own
+  # (OPSILA_PRIMARY_AHEAD=0); launches without events but the long ones
+  # (OPSILA_LAUNCH_EVENTS=0, a plain render's way on a GPU) or every launch
+  # timed (1); the image resolved on the GPU (OPSILA_DEVICE_RESOLVE=1, the
+  # default there) or decoded on the host. Five renders each at 1920x1080,
+  # interleaved; each run's frame seconds, and whether the images are the
+  # same bytes.
+  on_and_off OPSILA_PRIMARY_AHEAD
+  on_and_off OPSILA_LAUNCH_EVENTS
+  on_and_off OPSILA_DEVICE_RESOLVE
+  echo "gpu-check: $([ $failed -eq 0 ] && echo passed || echo FAILED) in $((SECONDS - start)) s; results in $out"
+  return $failed
+}
+
+on_and_off() {  # on_and_off VARIABLE: renders with VARIABLE=1 and =0 (run, step 3)
+  local var=$1 a i
+  for a in 1 0; do : >"$out/$var$a.txt"; done
   for i in 1 2 3 4 5; do
     for a in 1 0; do
-      OPSILA_PRIMARY_AHEAD=$a timeout 60 "$bin" render scenes/hundreds.json --size 1920x1080 -q \
-        -o "$out/ahead$a.pfm" --stats "$out/ahead$a.json" >/dev/null 2>&1 &&
-        grep -o '"render_seconds": *[0-9.e+-]*' "$out/ahead$a.json" | grep -o '[0-9.e+-]*$' >>"$out/ahead$a.txt"
+      env "$var=$a" timeout 60 "$bin" render scenes/hundreds.json --size 1920x1080 -q \
+        -o "$out/$var$a.pfm" --stats "$out/$var$a.json" >/dev/null 2>&1 &&
+        grep -o '"render_seconds": *[0-9.e+-]*' "$out/$var$a.json" | grep -o '[0-9.e+-]*$' >>"$out/$var$a.txt"
     done
   done
   for a in 1 0; do
-    echo "      OPSILA_PRIMARY_AHEAD=$a, frame seconds (sorted): $(sort -g "$out/ahead$a.txt" | tr '\n' ' ')"
+    echo "      $var=$a, frame seconds (sorted): $(sort -g "$out/$var$a.txt" | tr '\n' ' ')"
   done
-  echo "gpu-check: $([ $failed -eq 0 ] && echo passed || echo FAILED) in $((SECONDS - start)) s; results in $out"
-  return $failed
+  cmp -s "$out/${var}1.pfm" "$out/${var}0.pfm" && echo "ok    $var=1 and =0 give the same image" ||
+    { echo "FAIL  $var=1 and =0 give different images"; failed=1; }
 }
 
 case "$mode" in

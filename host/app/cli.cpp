@@ -255,6 +255,7 @@ int run_render(const std::vector<std::string>& args, Ranks& ranks) {
   request.note = [](const std::string& note) { print_line("note", note); };
   request.progress = &progress;
   request.count_work = !o.stats_path.empty();  // only --stats reads the work counters
+  request.launch_records = !o.stats_path.empty();  // and the launches' times
   request.item_buffer_output = !o.item_buffer_path.empty();
   std::string device;
   if (runtime) {

@@ -34,7 +34,11 @@ namespace opsila {
   /* descriptors that may wait before the exchange throttles (default: the planned pool x depth) */               \
   X(waiting_limit, "OPSILA_WAITING_LIMIT")                                                                        \
   /* 0: each round's primary descriptors get a launch of their own (default 1: the SPMD launch before builds them) */ \
-  X(primary_ahead, "OPSILA_PRIMARY_AHEAD")
+  X(primary_ahead, "OPSILA_PRIMARY_AHEAD")                                                                          \
+  /* 1: every launch keeps its event and time; 0: only the long ones (default: RenderSettings::launch_records) */ \
+  X(launch_events, "OPSILA_LAUNCH_EVENTS")                                                                         \
+  /* 1: the image resolved on the device where it has doubles; 0: decoded on the host (default: on a GPU) */     \
+  X(device_resolve, "OPSILA_DEVICE_RESOLVE")
 
 enum class EnvHook {
 #define OPSILA_ENV_ENUM(id, name) id,

@@ -63,6 +63,10 @@ class MeanDecoder {
         exact_(samples > 0 && (samples & (samples - 1)) == 0),
         inverse_(1.0 / divisor_) {}
   float operator()(std::uint64_t sum) const { return static_cast<float>(mean(sum)); }
+  // What kernels/resolve.cl computes the same floats with.
+  void kernel_constants(double& divisor, double& inverse, int& exact) const {
+    divisor = divisor_, inverse = inverse_, exact = exact_ ? 1 : 0;
+  }
   // The mean before its rounding to float: from_fixed's quotient, exactly.
   double mean(std::uint64_t sum) const {
     const double s = saturated(sum) ? static_cast<double>(kMaxPixelValue) * OPSILA_FIXED_SCALE

@@ -325,13 +325,13 @@ ClRuntime::ClRuntime(const DeviceEntry& device, const ClRuntimeOptions& options)
   // exp2(Ns log2 x) in doubles takes about 16 ns and rounds correctly
   // (docs/BENCHMARKS.md). A GPU may run doubles at a fraction of its float
   // rate, so it keeps its own pow unless asked.
-  const bool has_fp64 = (" " + caps.extensions + " ").find(" cl_khr_fp64 ") != std::string::npos;
+  doubles_ = (" " + caps.extensions + " ").find(" cl_khr_fp64 ") != std::string::npos;
   using SpecularPow = ClRuntimeOptions::SpecularPow;
-  if (options.specular_pow == SpecularPow::fp64 && !has_fp64)
+  if (options.specular_pow == SpecularPow::fp64 && !doubles_)
     throw ClError("device " + device_.device_name + " (" + device_.platform_name +
                   ") has no double precision (cl_khr_fp64) for the specular power in doubles");
   pow_fp64_ = options.specular_pow == SpecularPow::fp64 ||
-              (options.specular_pow == SpecularPow::automatic && has_fp64 && !device_.is_gpu);
+              (options.specular_pow == SpecularPow::automatic && doubles_ && !device_.is_gpu);
 
   // Division and square root correctly rounded wherever the device offers
   // it (CL_FP_CORRECTLY_ROUNDED_DIVIDE_SQRT): OpenCL C 1.2 lets x / y be
@@ -415,6 +415,7 @@ cl::Program& ClRuntime::program(KernelProgram which) {
     options += " -DOPSILA_COUNT_WORK=0";
   if (stages) options += " -DOPSILA_STAGE_CYCLES=1";
   if (pow_fp64_) options += " -DOPSILA_POW_FP64=1";
+  if (doubles_) options += " -DOPSILA_FP64=1";
   if (instances_) options += " -DOPSILA_INSTANCES=1";
   if (exact_divide_) options += " -cl-fp32-correctly-rounded-divide-sqrt";
   if (facet_lanes_) options += " -DOPSILA_FACET_LANES=1";

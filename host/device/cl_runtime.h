@@ -133,6 +133,9 @@ class ClRuntime {
   // Whether the kernels are built with -cl-fp32-correctly-rounded-divide-sqrt
   // (the device reports CL_FP_CORRECTLY_ROUNDED_DIVIDE_SQRT).
   bool exact_divide() const { return exact_divide_; }
+  // Whether the device has doubles (cl_khr_fp64): the kernels are built with
+  // OPSILA_FP64=1 and the image can be resolved on the device (kernels/resolve.cl).
+  bool doubles() const { return doubles_; }
   cl_ulong max_alloc() const { return max_alloc_; }
   // Device bytes asked for through device_buffer (device/descriptors.h)
   // since the runtime was made: what the memory plan is checked against.
@@ -169,6 +172,7 @@ class ClRuntime {
   bool pow_fp64_ = false;
   bool facet_lanes_ = false;  // -DOPSILA_FACET_LANES: a leaf's facets in vector lanes
   bool exact_divide_ = false;
+  bool doubles_ = false;
   cl_ulong max_alloc_ = 0, global_mem_ = 0, limit_ = 0;
   std::uint64_t allocated_ = 0;
   std::map<std::string, std::uint64_t> by_name_;

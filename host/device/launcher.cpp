@@ -8,7 +8,7 @@
 namespace opsila {
 
 void Launcher::run(cl::Kernel& k, const char* name, std::size_t global, std::size_t local, int round,
-                   const std::vector<cl::Event>* wait) {
+                   const std::vector<cl::Event>* wait, Watch watch) {
   if (local == 0) {
     // A fixed work-group size per kernel, from what the kernel allows: drivers
     // that compile per work-group size (PoCL) then compile each kernel once.
@@ -20,8 +20,9 @@ void Launcher::run(cl::Kernel& k, const char* name, std::size_t global, std::siz
   }
   global = round_up(std::max<std::size_t>(global, 1), local);
   cl::Event ev;
+  const bool timed = !sparse_ || watch == Watch::always;
   cl_int err = rt_.queue().enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(global), cl::NDRange(local), wait,
-                                                &ev);
+                                                timed ? &ev : nullptr);
   cl_check(err, (std::string("clEnqueueNDRangeKernel(") + name + ")").c_str());
   pending_.push_back({name, round, ev});
 }
@@ -31,6 +32,7 @@ void Launcher::check(cl_int err, const char* what) {
     return std::string(p.name) + (p.round >= 0 ? " (round " + std::to_string(p.round) + ")" : std::string());
   };
   for (std::size_t i = checked_; i < pending_.size(); ++i) {
+    if (!pending_[i].ev()) continue;  // launched without an event (sparse)
     cl_int status = CL_COMPLETE;
     if (pending_[i].ev.getInfo(CL_EVENT_COMMAND_EXECUTION_STATUS, &status) != CL_SUCCESS) break;
     if (status < 0)
@@ -71,6 +73,10 @@ void Launcher::harvest() {
   std::size_t done = 0;
   for (; done < pending_.size(); ++done) {
     const Pending& p = pending_[done];
+    if (!p.ev()) {  // no event, no time: counted alone
+      record(p.name, p.round, 0, -1, -1);
+      continue;
+    }
     cl_int status = CL_COMPLETE;
     cl_check(p.ev.getInfo(CL_EVENT_COMMAND_EXECUTION_STATUS, &status), "clGetEventInfo(execution status)");
     if (status != CL_COMPLETE) break;

@@ -63,6 +63,12 @@ struct Renderer::Machine {
   // The pixel sums read into pinned host memory (RenderSettings::pinned_readback)
   // rather than mapped; accum_host holds them.
   bool pinned_readback = false;
+  // Launches without events but the long ones (RenderSettings::launch_records).
+  bool sparse_launches = false;
+  // The image resolved on the device (kernels/resolve.cl) and read back as
+  // floats: one device alone that does not share host memory and has
+  // doubles, or OPSILA_DEVICE_RESOLVE=1; accum_host then holds the floats.
+  bool device_resolve = false;
   PinnedHostBuffer accum_host;
   std::vector<float> offsets;     // (i + 0.5) / k, i = 0..k-1
   Progress* progress = nullptr;
@@ -105,6 +111,7 @@ struct Renderer::Machine {
   HitBlocks b_hit_blocks;
   HitListLength b_hit_total;
   PixelSums b_accum;
+  ResolvedImage b_image;  // device_resolve only (one pixel's room elsewhere)
   StatCounters b_stats;
   TrafficCounters b_traffic;
   OutputCounts b_out_count;
@@ -161,6 +168,7 @@ struct Renderer::Machine {
   int choose_bank_capacity(const BankedScene& bs, const RenderSettings& settings);
   void choose_work_groups();
   void host_tables(const Scene& scene, BankedScene& bs);
+  void take_switches(const RenderSettings& settings, const PeGroup& on);
   void describe_prepared(const PreparedBanks& banks);
   std::vector<BufferSpec> buffer_table(const BankedScene& bs, const FlightPlan& f);
   void allocate();
@@ -176,6 +184,8 @@ struct Renderer::Machine {
   void spmd_phase(Launcher& launch, Frame& f, int round);
   void report_progress(const Frame& f);
   void read_image(Launcher& launch, RenderResult& result);
+  void read_resolved(Launcher& launch, RenderResult& result);
+  void read_items(Launcher& launch, RenderResult& result);
   void read_stats(RenderResult& result);
   bool end_rank_round(Launcher& launch, Frame& f);
   RankReport rank_report(const RenderStats& st, double seconds, double mpi_seconds) const;

@@ -231,6 +231,9 @@ std::vector<BufferSpec> Renderer::Machine::buffer_table(const BankedScene& bs, c
       frame_buffer("hit list length", P_::other, sint, 1, Fill::device, &b_hit_total.buffer),
       // Not cleared: the frame's first hit list writes every pixel's sums.
       frame_buffer("pixel sums", P_::image, OPSILA_ACCUM_WORDS * sizeof(cl_uint), npix, Fill::device, &b_accum.buffer),
+      // The image as floats, where the device resolves it (read_resolved).
+      frame_buffer("image", P_::image, 3 * sizeof(cl_float), device_resolve ? npix : 1, Fill::device,
+                   &b_image.buffer),
       // Counters: statistics, PE x PE traffic, primary hits; the pilots'
       // cluster work; the SPMD phase's output counts.
       frame_buffer("stats", P_::other, 1, counter_bytes(nstats), Fill::zero, &b_stats.buffer),

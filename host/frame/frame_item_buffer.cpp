@@ -52,7 +52,7 @@ void Renderer::Machine::item_buffer(Launcher& launch, int sample) {
     a.tile_begin = begin;
     kernels().item.bind(a);
     launch.run(kernels().item.kernel(), "item_buffer", std::size_t(count) * tile_w * tile_w,
-               std::size_t(tile_w) * tile_w, -1);
+               std::size_t(tile_w) * tile_w, -1, nullptr, Launcher::Watch::always);
     if (!group.all()) relay.send(px0, px1 - px0);
   }
   if (!group.all()) relay.share(npix);

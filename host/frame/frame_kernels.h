@@ -63,6 +63,7 @@ using PixelSums = DeviceArray<struct PixelSumsRole>;
 using StatCounters = DeviceArray<struct StatCountersRole>;
 using TrafficCounters = DeviceArray<struct TrafficCountersRole>;
 using PrimaryHitCount = DeviceArray<struct PrimaryHitCountRole>;
+using ResolvedImage = DeviceArray<struct ResolvedImageRole>;  // three floats a pixel
 
 // The pilots' cluster work: what maps nodes and facets to their clusters,
 // and each cluster's tests per level (one-entry stand-ins elsewhere).
@@ -136,6 +137,19 @@ struct PrimaryArgs {
   auto kernel_args() const { return std::tie(fp, pes, insts, build); }
 };
 
+// kernels/resolve.cl: the pixel sums to the image, as MeanDecoder decodes
+// them; background: the sums of a pixel outside the traced rectangle.
+struct ResolveArgs {
+  PixelSums accum;
+  int npix = 0, width = 0;
+  cl_int4 traced{};
+  cl_ulong4 background{};
+  double divisor = 1, inverse = 1;
+  int exact = 0;
+  ResolvedImage rgb;
+  auto kernel_args() const { return std::tie(accum, npix, width, traced, background, divisor, inverse, exact, rgb); }
+};
+
 // kernels/spmd_phase.cl: the plan's work-groups, each on one PE's bank.
 struct SpmdArgs {
   FrameParams fp{};
@@ -166,6 +180,7 @@ using CountHitsKernel = KernelBinding<CountHitsArgs>;
 using ListHitsKernel = KernelBinding<ListHitsArgs>;
 using PrimaryKernel = KernelBinding<PrimaryArgs>;
 using SpmdKernel = KernelBinding<SpmdArgs>;
+using ResolveKernel = KernelBinding<ResolveArgs>;
 
 // All of them, from one program (frame_prepare.cpp).
 struct Set {
@@ -174,6 +189,7 @@ struct Set {
   ListHitsKernel list_hits;
   PrimaryKernel primary;
   SpmdKernel spmd;
+  ResolveKernel resolve;  // only where the device has doubles (ClRuntime::doubles)
   bool built = false;
   Set() = default;
   Set(ClRuntime& rt, KernelProgram program);

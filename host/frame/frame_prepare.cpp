@@ -34,14 +34,7 @@ Renderer::Machine::Machine(const Scene& scene, PreparedBanks banks, const Render
   spp_k = spp_side(spp);
   offsets = sample_offsets(spp);
   item_output = settings.item_buffer_output;
-  build_ahead = settings.primary_ahead;
-  if (const auto a = env_hook_number(EnvHook::primary_ahead, 0, 1, "0 or 1")) build_ahead = build_ahead && *a == 1;
-  pinned_readback = settings.pinned_readback || !host_sharing(rt).in_place;
-  progress = settings.progress;
-  if (const auto k = env_hook_number(EnvHook::fault_round, 0, 999999999, "a round number"))
-    fault_round = static_cast<int>(*k);
-  if (const auto w = env_hook_number(EnvHook::waiting_limit, 1, std::uint64_t(1) << 40, "a descriptor count"))
-    waiting_limit = static_cast<std::size_t>(*w);
+  take_switches(settings, banks.group);
 
   measure = settings.measure_cost;
   // --stats and the bench's counted frame count the work; a plain render
@@ -95,6 +88,26 @@ Renderer::Machine::Machine(const Scene& scene, PreparedBanks banks, const Render
   prepared.prepare[PrepareStage::upload] = stages_since(before_upload)[PrepareStage::upload];
   prepared.prepare.peak_host_bytes = host_peak_bytes();
   if (!group.all()) rank_exchange = std::make_unique<RankExchange>(rt, ranks, group, P, depth);
+}
+
+// The frame's switches: from the settings, unless a hook overrides them
+// (core/env_hooks.h).
+void Renderer::Machine::take_switches(const RenderSettings& settings, const PeGroup& on) {
+  build_ahead = settings.primary_ahead;
+  if (const auto a = env_hook_number(EnvHook::primary_ahead, 0, 1, "0 or 1")) build_ahead = build_ahead && *a == 1;
+  pinned_readback = settings.pinned_readback || !host_sharing(rt).in_place;
+  // Several ranks' reports read every launch's time (rank_report).
+  sparse_launches = !settings.launch_records && !host_sharing(rt).in_place && on.all();
+  if (const auto e = env_hook_number(EnvHook::launch_events, 0, 1, "0 or 1")) sparse_launches = *e == 0;
+  // One device alone: several ranks add their sums on the host first.
+  device_resolve = !host_sharing(rt).in_place;
+  if (const auto r = env_hook_number(EnvHook::device_resolve, 0, 1, "0 or 1")) device_resolve = *r == 1;
+  device_resolve = device_resolve && rt.doubles() && on.all();
+  progress = settings.progress;
+  if (const auto k = env_hook_number(EnvHook::fault_round, 0, 999999999, "a round number"))
+    fault_round = static_cast<int>(*k);
+  if (const auto w = env_hook_number(EnvHook::waiting_limit, 1, std::uint64_t(1) << 40, "a descriptor count"))
+    waiting_limit = static_cast<std::size_t>(*w);
 }
 
 // What the stats report of the machine's preparation (RenderStats).
@@ -180,6 +193,8 @@ frame_kernels::Set::Set(ClRuntime& rt, KernelProgram program)
       list_hits(rt, "list_hits", program),
       primary(rt, "build_primary", program),
       spmd(rt, "spmd_phase", program),
-      built(true) {}
+      built(true) {
+  if (rt.doubles()) resolve = ResolveKernel(rt, "resolve_image", program);
+}
 
 }  // namespace opsila

@@ -52,6 +52,7 @@ static_assert(OPSILA_ACCUM_WORDS == 3 * OPSILA_COUNTER_WORDS, "pixel sums: three
 // Read back the pixel sums (fixed point: the sum of the N samples, decoded
 // here into their mean) and, when the frame gives it, the item buffer.
 void Renderer::Machine::read_image(Launcher& launch, RenderResult& result) {
+  if (device_resolve) return read_resolved(launch, result);
   cl::CommandQueue& q = rt.queue();
   const std::size_t values = npix * 3;
   const std::size_t pixel_bytes = OPSILA_ACCUM_WORDS * sizeof(cl_uint);
@@ -74,14 +75,7 @@ void Renderer::Machine::read_image(Launcher& launch, RenderResult& result) {
     accum.emplace(launch, q, b_accum, npix * pixel_bytes, "clEnqueueMapBuffer(pixel sums)");
     words = accum->data<cl_uint>() + row0 * width * OPSILA_ACCUM_WORDS;
   }
-  if (item_output) {
-    MappedRead items(launch, q, item.items, npix * sizeof(cl_int2), "clEnqueueMapBuffer(item buffer)");
-    const cl_int* item = items.data<cl_int>();
-    result.item_buffer.assign(item, item + npix * 2);
-    items.unmap(launch, "clEnqueueUnmapMemObject(item buffer)");
-  } else {
-    result.item_buffer.clear();
-  }
+  read_items(launch, result);
   const std::size_t first = row0 * width * 3;  // the first value `words` holds
   auto sum = [words, first](std::size_t i) { return join_words(words[2 * (i - first)], words[2 * (i - first) + 1]); };
   const MeanDecoder mean(spp);
@@ -121,6 +115,51 @@ void Renderer::Machine::read_image(Launcher& launch, RenderResult& result) {
     });
   }
   launch.check(q.finish(), "clFinish");
+}
+
+// The item buffer, when the frame gives it (--item-buffer).
+void Renderer::Machine::read_items(Launcher& launch, RenderResult& result) {
+  if (!item_output) {
+    result.item_buffer.clear();
+    return;
+  }
+  MappedRead items(launch, rt.queue(), item.items, npix * sizeof(cl_int2), "clEnqueueMapBuffer(item buffer)");
+  const cl_int* item = items.data<cl_int>();
+  result.item_buffer.assign(item, item + npix * 2);
+  items.unmap(launch, "clEnqueueUnmapMemObject(item buffer)");
+}
+
+// The image resolved on the device (kernels/resolve.cl): the floats
+// read_image's decode would give, read into pinned memory, then copied
+// into the result on the host's threads.
+void Renderer::Machine::read_resolved(Launcher& launch, RenderResult& result) {
+  const std::size_t values = npix * 3;
+  frame_kernels::ResolveArgs a;
+  a.accum = b_accum;
+  a.npix = static_cast<int>(npix);
+  a.width = width;
+  a.traced = traced_rect;
+  for (int c = 0; c < 3; ++c) a.background.s[c] = owned_sum(to_fixed(fp.background[c]), spp);
+  const MeanDecoder mean(spp);
+  mean.kernel_constants(a.divisor, a.inverse, a.exact);
+  a.rgb = b_image;
+  // A few work-groups a compute unit, each work-item over many pixels
+  // (kernels/resolve.cl).
+  cl_int err = CL_SUCCESS;
+  const cl_uint units = rt.device().device.getInfo<CL_DEVICE_MAX_COMPUTE_UNITS>(&err);
+  launch.check(err, "clGetDeviceInfo(CL_DEVICE_MAX_COMPUTE_UNITS)");
+  const std::size_t grid = std::size_t(std::max<cl_uint>(units, 1)) * 8 * rt.group_size();
+  launch.run(kernels().resolve.bind(a), "resolve_image", std::min(grid, npix), 0, -1);
+  accum_host.reserve(rt, values * sizeof(float), "image, host copy");
+  launch.check(rt.queue().enqueueReadBuffer(b_image, CL_TRUE, 0, values * sizeof(float), accum_host.data()),
+               "clEnqueueReadBuffer(image)");
+  read_items(launch, result);
+  const float* rgb = static_cast<const float*>(accum_host.data());
+  result.rgb.resize(values);
+  parallel_ranges(values, std::size_t(1) << 18, [&](std::size_t i0, std::size_t i1) {
+    std::copy(rgb + i0, rgb + i1, result.rgb.begin() + std::ptrdiff_t(i0));
+  });
+  launch.check(rt.queue().finish(), "clFinish");
 }
 
 // Per-level, per-PE counters and traffic, then the frame's totals. Every

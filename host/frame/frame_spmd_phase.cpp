@@ -24,7 +24,8 @@ void Renderer::Machine::spmd_phase(Launcher& launch, Frame& f, int round) {
   a.spmd_groups = f.groups;
   const int builders = primary_ahead(f, a.primary);
   kernels().spmd.bind(a);
-  launch.run(kernels().spmd.kernel(), "spmd_phase", std::size_t(f.groups + builders) * spmd_wg, spmd_wg, round);
+  launch.run(kernels().spmd.kernel(), "spmd_phase", std::size_t(f.groups + builders) * spmd_wg, spmd_wg, round,
+             nullptr, Launcher::Watch::always);
   f.out_groups = f.groups;
   if (round % 16 == 15) launch.harvest();
 }

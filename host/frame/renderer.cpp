@@ -70,6 +70,7 @@ void Renderer::render(RenderResult& result) {
   result.stats = m.prepared;
   RenderStats& st = result.stats;
   Launcher launch(m.rt, st.launches);
+  launch.set_sparse(m.sparse_launches);
   // Several ranks: from here on they wait on each other (a rank that failed
   // while preparing has said so, and every rank stops here).
   const bool ranks = !m.group.all();

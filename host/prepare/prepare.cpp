@@ -55,6 +55,7 @@ RenderSettings prepared_settings(const PrepareRequest& r) {
   settings.ranks = r.ranks;
   settings.progress = r.progress;
   settings.count_work = r.count_work;
+  settings.launch_records = r.launch_records;
   settings.item_buffer_output = r.item_buffer_output;
   return settings;
 }

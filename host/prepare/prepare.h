@@ -41,6 +41,7 @@ struct PrepareRequest {
   // What the frame is asked for beyond the view (the command's outputs).
   Progress* progress = nullptr;
   bool count_work = false;          // --stats: the work counters
+  bool launch_records = true;       // --stats: every launch's time (RenderSettings::launch_records)
   bool item_buffer_output = false;  // --item-buffer
 };
 

@@ -85,6 +85,14 @@ struct RenderSettings {
   // more than that work); false builds them with a launch of their own, as
   // the tests compare. The same descriptors either way.
   bool primary_ahead = true;
+  // Time every launch (RenderStats::launches), as --stats, the bench and
+  // several ranks' reports read them. false (a plain render): on a device
+  // that does not share host memory (a GPU), only the long launches keep an
+  // OpenCL event (Launcher::set_sparse), the others go without; elsewhere
+  // every launch is timed still, as a CPU driver's first frame needs its
+  // launches' times to leave its kernels' compile out. The same image either
+  // way; OPSILA_LAUNCH_EVENTS decides instead when set.
+  bool launch_records = true;
 };
 
 // One kernel launch, named, with its OpenCL-profiled time.

@@ -1,6 +1,13 @@
 /* Fixed-point pixel and statistics accumulation. */
 #include "../opsila_shared.h"
 
+/* traced: the pixels the item buffer traced (x0, y0, x1, y1); a pixel
+ * outside them is a miss, whatever its item_tri holds. */
+inline bool was_traced(int pixel, int width, int4 traced) {
+  int x = pixel % width, y = pixel / width;
+  return x >= traced.x && x <= traced.z && y >= traced.y && y <= traced.w;
+}
+
 /* 64-bit fixed-point add from two 32-bit atomics: the carry out of the low
  * word goes to the high word. Integer sums are order-independent, so the
  * image is identical however the work-items are scheduled.

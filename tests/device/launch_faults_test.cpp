@@ -93,6 +93,36 @@ TEST(LaunchFaults, CleanLaunchesPassAndErrorsNameTheLastKernel) {
   EXPECT_EQ(records[0].name, "scatter_plan");
 }
 
+// Sparse (Launcher::set_sparse): a launch goes without an event unless it is
+// watched. Both are recorded in launch order, only the watched one with a
+// time, and an error still names the last kernel launched.
+TEST(LaunchRecords, SparseLaunchesKeepOnlyTheWatchedEvents) {
+  ClRuntime rt(test_device(), plain_options());
+  PlanKernel plan(rt);
+  std::vector<LaunchRecord> records;
+  Launcher launch(rt, records);
+  launch.set_sparse(true);
+  launch.run(plan.kernel, "scatter_plan", 1, 1, 2);
+  launch.run(plan.kernel, "watched_plan", 1, 1, 3, nullptr, Launcher::Watch::always);
+  launch.run(plan.kernel, "last_plan", 1, 1, 4);
+  cl_int counts[3] = {0, 0, 0};
+  EXPECT_NO_THROW(
+      launch.check(rt.queue().enqueueReadBuffer(plan.counts, CL_TRUE, 0, sizeof counts, counts), "read"));
+  try {
+    launch.check(CL_OUT_OF_RESOURCES, "clFinish");
+    FAIL() << "an error code passed";
+  } catch (const ClError& e) {
+    EXPECT_STREQ(e.what(), "clFinish: CL_OUT_OF_RESOURCES (-5) after kernel last_plan (round 4)");
+  }
+  launch.harvest();
+  ASSERT_EQ(records.size(), 3u);
+  EXPECT_EQ(std::tie(records[0].name, records[0].round, records[0].seconds, records[0].started),
+            std::make_tuple(std::string("scatter_plan"), 2, 0.0, -1.0));
+  EXPECT_EQ(records[1].name, "watched_plan");
+  EXPECT_GE(records[1].started, 0) << "the watched launch has its profiled times";
+  EXPECT_EQ(std::tie(records[2].name, records[2].started), std::make_tuple(std::string("last_plan"), -1.0));
+}
+
 // An endless render launches without end: past its cap the launcher folds
 // each kernel's later launches into one record, their count and seconds.
 TEST(LaunchRecords, PastTheCapEachKernelsLaunchesAreFolded) {

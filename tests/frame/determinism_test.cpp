@@ -128,5 +128,63 @@ TEST(Determinism, PrimaryDescriptorsBuiltAheadGiveTheSameFrame) {
   EXPECT_TRUE(fewer) << "no configuration built a round's descriptors ahead";
 }
 
+// Launches without events but the long ones (RenderSettings::launch_records,
+// Launcher::set_sparse; a plain render's way on a GPU, forced here by
+// OPSILA_LAUNCH_EVENTS=0): the frame every launch's event gives, to the byte,
+// with the same launches recorded, the item buffer's and the SPMD phase's
+// timed, the others counted with no time.
+TEST(Determinism, LaunchesWithoutEventsGiveTheSameFrame) {
+  struct Events {  // OPSILA_LAUNCH_EVENTS for one render
+    explicit Events(const char* v) { ::setenv("OPSILA_LAUNCH_EVENTS", v, 1); }
+    ~Events() { ::unsetenv("OPSILA_LAUNCH_EVENTS"); }
+  };
+  ClRuntime rt(test_device(), plain_options());
+  for (int pes : {1, 16, 64}) {
+    SCOPED_TRACE(std::to_string(pes) + " PEs");
+    Scene s = test::mirror_glass_scene(96, 3);
+    RenderSettings rs;
+    rs.num_pes = pes;
+    rs.bank_capacity = 64;  // many rounds
+    rs.launch_records = false;  // a plain render's way: sparse on a GPU, every launch timed on a CPU
+    std::optional<RenderResult> timed_hook, sparse;
+    {
+      Events on("1");
+      timed_hook = render(s, rs, rt);
+    }
+    {
+      Events off("0");
+      sparse = render(s, rs, rt);
+    }
+    rs.launch_records = true;  // as --stats asks: every launch timed, on any device
+    const RenderResult timed = render(s, rs, rt);
+    EXPECT_EQ(0, std::memcmp(timed.rgb.data(), timed_hook->rgb.data(), timed.rgb.size() * sizeof(float)));
+    for (const LaunchRecord& l : timed_hook->stats.launches) EXPECT_GE(l.started, 0) << l.name << " (hook 1)";
+    ASSERT_EQ(timed.rgb.size(), sparse->rgb.size());
+    EXPECT_EQ(0, std::memcmp(timed.rgb.data(), sparse->rgb.data(), timed.rgb.size() * sizeof(float)));
+    EXPECT_EQ(timed.item_buffer, sparse->item_buffer);
+    EXPECT_EQ(timed.stats.counters, sparse->stats.counters);
+    ASSERT_EQ(timed.stats.launches.size(), sparse->stats.launches.size());
+    int untimed = 0;
+    for (std::size_t i = 0; i < timed.stats.launches.size(); ++i) {
+      const LaunchRecord &a = timed.stats.launches[i], &b = sparse->stats.launches[i];
+      EXPECT_EQ(std::tie(a.name, a.round), std::tie(b.name, b.round));
+      EXPECT_GE(a.started, 0) << a.name << ": every launch timed";
+      const bool watched = b.name == "item_buffer" || b.name == "spmd_phase";
+      EXPECT_EQ(b.started >= 0, watched) << b.name;
+      if (!watched) EXPECT_EQ(b.seconds, 0.0) << b.name;
+      untimed += watched ? 0 : 1;
+    }
+    EXPECT_GT(untimed, 0);
+  }
+  Events bad("2");
+  Scene s = test::mirror_glass_scene(16, 1);
+  try {
+    render(s, RenderSettings(), rt);
+    FAIL() << "OPSILA_LAUNCH_EVENTS=2 was taken";
+  } catch (const InputError& e) {
+    EXPECT_STREQ(e.what(), "OPSILA_LAUNCH_EVENTS=2: expected 0 or 1");
+  }
+}
+
 }  // namespace
 }  // namespace opsila

@@ -74,6 +74,8 @@ Renderer::Machine::Machine(const Scene& scene, PreparedBanks banks, const Render
   n = choose_bank_capacity(bs, settings);
   fp.bank_capacity = n;
   flight = FlightPlan(G, n, spmd_wg, S);
+  if (item_launch_pixels <= 0)  // RenderSettings::item_buffer_tile
+    item_launch_pixels = static_cast<int>(std::clamp<std::size_t>(flight.slots, std::size_t(1) << 16, 1 << 24));
   // Depth first, what waits is about the planned pool once a level of the
   // ray trees; beyond that the exchange throttles (frame_scatter.cpp).
   if (waiting_limit == 0) waiting_limit = flight.pool * std::size_t(std::max(depth, 1));

@@ -38,7 +38,10 @@ struct RenderSettings {
   // At most this many work-groups serve one PE's bank per round (0 = as
   // many as its count needs). 1 is the paper's one PE, one processor.
   int work_groups_per_pe = 0;
-  int item_buffer_tile = 1 << 16;  // pixels per item-buffer launch (bounded work per launch)
+  // Pixels per item-buffer launch (bounded work per launch). 0: as many as
+  // the SPMD launch's slots (P x n, the work bound it keeps), at least 2^16;
+  // a GPU's many slots then take a few launches where 2^16 took dozens.
+  int item_buffer_tile = 0;
   int routing = OPSILA_ROUTING_BOXES;  // destination choice: cluster boxes, or the paper's spheres
   Progress* progress = nullptr;    // told at round boundaries when set (core/progress.h)
   // measured: the prepare step runs the pilot frames first (prepare/prepare_banks.h).

@@ -80,6 +80,29 @@ TEST(Determinism, ItemBufferTilesDoNotChangeTheImage) {
   EXPECT_GE(item_launches, (40 * 30 + 96) / 97);
 }
 
+// By default an item-buffer launch covers as many pixels as the SPMD launch
+// has slots (P x n), at least 2^16: 192 Ki pixels take three launches with
+// 16 PEs of 4096 slots, one with 64 PEs; the image is the tiles' anyway.
+TEST(Determinism, ItemBufferLaunchesFollowTheSlotsInFlight) {
+  ClRuntime rt(test_device(), plain_options());
+  Scene s = test::mirror_glass_scene(512, 1);  // 512x384
+  auto launches = [](const RenderResult& r) {
+    return std::count_if(r.stats.launches.begin(), r.stats.launches.end(),
+                         [](const LaunchRecord& l) { return l.name == "item_buffer"; });
+  };
+  RenderSettings rs;
+  rs.bank_capacity = 4096;
+  rs.num_pes = 16;
+  const RenderResult sixteen = render(s, rs, rt);
+  rs.num_pes = 64;
+  const RenderResult sixty_four = render(s, rs, rt);
+  EXPECT_EQ(launches(sixteen), 3);
+  EXPECT_EQ(launches(sixty_four), 1);
+  ASSERT_EQ(sixteen.rgb.size(), sixty_four.rgb.size());
+  EXPECT_EQ(0, std::memcmp(sixteen.rgb.data(), sixty_four.rgb.data(), sixteen.rgb.size() * sizeof(float)));
+  EXPECT_EQ(sixteen.item_buffer, sixty_four.item_buffer);
+}
+
 // The SPMD launch builds the next round's primary descriptors
 // (RenderSettings::primary_ahead): the frame a launch of their own gives, to
 // the byte and to the counter, with one build_primary launch a round fewer.

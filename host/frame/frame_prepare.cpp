@@ -97,12 +97,13 @@ Renderer::Machine::Machine(const Scene& scene, PreparedBanks banks, const Render
 void Renderer::Machine::take_switches(const RenderSettings& settings, const PeGroup& on) {
   build_ahead = settings.primary_ahead;
   if (const auto a = env_hook_number(EnvHook::primary_ahead, 0, 1, "0 or 1")) build_ahead = build_ahead && *a == 1;
-  pinned_readback = settings.pinned_readback || !host_sharing(rt).in_place;
+  const bool discrete = !host_sharing(rt).in_place;  // a GPU's memory, not the host's
+  pinned_readback = settings.pinned_readback || discrete;
   // Several ranks' reports read every launch's time (rank_report).
-  sparse_launches = !settings.launch_records && !host_sharing(rt).in_place && on.all();
+  sparse_launches = !settings.launch_records && discrete && on.all();
   if (const auto e = env_hook_number(EnvHook::launch_events, 0, 1, "0 or 1")) sparse_launches = *e == 0;
   // One device alone: several ranks add their sums on the host first.
-  device_resolve = !host_sharing(rt).in_place;
+  device_resolve = discrete;
   if (const auto r = env_hook_number(EnvHook::device_resolve, 0, 1, "0 or 1")) device_resolve = *r == 1;
   device_resolve = device_resolve && rt.doubles() && on.all();
   progress = settings.progress;

@@ -77,12 +77,46 @@ std::vector<BenchFigure> bench_figures(const json& j) {
   return out;
 }
 
+namespace {
+
+// The settings compare_text reads from a saved run, each where it is
+// present of the type it must have, so that a hand-edited file is refused
+// when it is read (before any work or output), naming the key.
+void check_saved_settings(const json& j, const std::string& path) {
+  const auto need = [&](const json& parent, const std::string& where, const char* key, bool text) {
+    if (!parent.contains(key)) return;
+    const json& v = parent[key];
+    if (text ? v.is_string() : v.is_number_integer()) return;
+    throw InputError("--compare " + path + ": " + where + key + ": expected " + (text ? "a string" : "an integer"));
+  };
+  const auto object = [&](const char* key) {
+    if (j.contains(key) && !j[key].is_object())
+      throw InputError("--compare " + path + ": " + key + ": expected an object");
+    return j.contains(key);
+  };
+  need(j, "", "device", true);
+  need(j, "", "depth", false);
+  need(j, "", "pes", false);
+  if (object("context")) {
+    need(j["context"], "context.", "date", true);
+    need(j["context"], "context.", "host_name", true);
+  }
+  if (object("scene")) need(j["scene"], "scene.", "path", true);
+  if (object("image")) {
+    need(j["image"], "image.", "width", false);
+    need(j["image"], "image.", "height", false);
+  }
+}
+
+}  // namespace
+
 json read_saved_bench(const std::string& path) {
   // A saved bench result is a few hundred KiB.
   json j = json::parse(read_named_file("--compare ", path, std::size_t(64) << 20), nullptr, false);
   if (j.is_discarded()) throw InputError("--compare " + path + ": not JSON");
   if (!j.is_object() || !j.contains("render") || !j["render"].is_object())
     throw InputError("--compare " + path + ": not an opsila bench result (no \"render\" block)");
+  check_saved_settings(j, path);
   return j;
 }
 

@@ -564,6 +564,36 @@ TEST(BenchCompare, ASavedRunMustBeABenchResult) {
   EXPECT_EQ(test::run_opsila({"bench", "scene.json", "--compare", "old.txt"}).exit_code, 2);
 }
 
+// A saved run whose settings have the wrong type is refused when it is
+// read, naming the key, before the bench writes (or overwrites) anything.
+TEST(BenchCompare, ASavedRunWithMistypedSettingsIsRefusedFirst) {
+  test::TempDir dir;
+  const std::vector<std::pair<std::string, nlohmann::json>> bad = {
+      {"device", 5},          {"depth", "5"},          {"pes", 2.5},         {"context", 1},
+      {"scene", {{"path", 3}}}, {"image", {{"width", "8"}}}, {"context", {{"date", 7}}}};
+  for (const auto& [key, value] : bad) {
+    nlohmann::json j = saved_result(1, 1, 1);
+    j[key] = value;
+    const std::string path = dir.write("typed.json", j.dump());
+    try {
+      read_saved_bench(path);
+      ADD_FAILURE() << key << " = " << value.dump() << " was read";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(path + ": " + key), std::string::npos) << e.what();
+    }
+  }
+  nlohmann::json j = saved_result(1, 1, 1);
+  j["image"]["height"] = "6";
+  const std::string saved = dir.write("typed.json", j.dump());
+  const std::string out = dir.write("out.json", "precious");
+  const test::RunResult r = test::run_opsila({"bench", std::string(OPSILA_SOURCE_DIR) + "/scenes/whitted.json",
+                                              "--quick", "-q", "--json", out, "--compare", saved});
+  EXPECT_EQ(r.exit_code, 2);
+  ASSERT_EQ(r.error_lines().size(), 1u) << r.err;
+  EXPECT_NE(r.error_lines()[0].find("image.height: expected an integer"), std::string::npos) << r.err;
+  EXPECT_EQ(test::read_file(out), "precious");
+}
+
 // Two quick runs: the second prints each figure beside the first's, and both
 // carry the context block and min/median/max of every timed figure.
 TEST(BenchCompare, TwoSavedRuns) {

@@ -210,6 +210,18 @@ void check_scene_extent(std::size_t triangles, const Vec3& lo, const Vec3& hi, c
                      short_number(diag) + ", so epsilon is not positive)");
 }
 
+void check_material_count(std::size_t materials, const std::string& where) {
+  if (materials > std::size_t(OPSILA_MAX_MATERIALS))
+    throw InputError(where + "more than " + std::to_string(OPSILA_MAX_MATERIALS) +
+                     " materials, the most opsila renders (docs/CONTRACT.md, Limits)");
+}
+
+void check_fan_triangles(long long triangles, const std::string& where) {
+  if (triangles > OPSILA_MAX_FAN)
+    throw InputError(where + "the facet fans into " + std::to_string(triangles) + " triangles, more than " +
+                     std::to_string(OPSILA_MAX_FAN) + ", the most one facet may have (docs/CONTRACT.md, Limits)");
+}
+
 // What the hit order (kernels/hit_order.h) needs of the ids: a material
 // index and a fan index that fit their halves of BankTriangle::material_fan
 // (user limits: one line), and facet ids that never decrease as object ids

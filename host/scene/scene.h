@@ -145,6 +145,13 @@ struct Scene;
 // object ids increase (else std::logic_error: every reader numbers them so).
 void check_hit_order_ids(const Scene& scene);
 
+// The same limits where a reader meets them, so that the error names the
+// file, line or key (`where`): a scene's material count (the default
+// included), and the triangles of one facet's fan over its mesh's
+// placements. `where` ends in ": " ("FILE:LINE: KEY: ").
+void check_material_count(std::size_t materials, const std::string& where);
+void check_fan_triangles(long long triangles, const std::string& where);
+
 struct SceneShare {
   int rank = 0, ranks = 1;         // ranks == 1: the scene is whole
   std::size_t total_triangles = 0;  // every rank's, together

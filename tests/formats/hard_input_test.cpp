@@ -207,5 +207,41 @@ TEST(HardInput, NegativeNsAndColoursAreRefusedByEveryReader) {
             std::string::npos);
 }
 
+// The hit order's limits (docs/CONTRACT.md, Limits) are met where the
+// reader still knows the file, the line and the key.
+TEST(HardInput, HitOrderLimitsNameTheLineAndKey) {
+  std::string ring;  // a polygon of 65,539 corners: 65,537 fan triangles
+  for (int k = 0; k < 65539; ++k) ring += std::string(k ? "," : "") + "[" + std::to_string(k % 7) + ",1," + std::to_string(k % 5) + "]";
+  std::string msg = error_of("{\"objects\": [{\"type\": \"polygon\", \"vertices\": [" + ring + "]}]}");
+  EXPECT_NE(msg.find("s.json:1: objects[0].vertices: the facet fans into 65537 triangles, more than 65536"),
+            std::string::npos) << msg.substr(0, 200);
+  std::string mats;  // 65,536 inline materials and the default: one too many
+  for (int k = 0; k < 65536; ++k) mats += std::string(k ? "," : "") + "{\"Kd\": 0.5}";
+  msg = error_of(R"({"objects": [{"type": "scatter", "min": [0,0,0], "max": [1,1,1], "count": 2, "materials": [)" +
+                 mats + "]}]}");
+  EXPECT_NE(msg.find("s.json:1: objects[0].materials[65535]: more than 65536 materials"), std::string::npos)
+      << msg.substr(0, 200);
+
+  std::string obj = "v 0 0 0\nv 1 0 0\nv 0 1 0\n\nf";
+  for (int k = 0; k < 65539; ++k) obj += " " + std::to_string(1 + k % 3);
+  try {
+    load_obj_from_string(obj + "\n", "m.obj", "", ObjChunking{1024, 2});  // chunks: the error is still its line
+    ADD_FAILURE() << "a fan of 65,537 triangles was read";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("m.obj:5: 'f' line of 65539 corners: the facet fans into 65537"),
+              std::string::npos) << e.what();
+  }
+  std::string mtl;
+  for (int k = 0; k < 65536; ++k) mtl += "newmtl m" + std::to_string(k) + "\nKd 1 1 1\n";
+  std::vector<std::string> warnings;
+  try {
+    parse_mtl(mtl, "m.mtl", warnings);
+    ADD_FAILURE() << "65,537 materials were read";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("m.mtl:131071: 'newmtl': more than 65536 materials"), std::string::npos)
+        << e.what();
+  }
+}
+
 }  // namespace
 }  // namespace opsila

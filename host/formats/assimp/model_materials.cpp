@@ -61,6 +61,7 @@ class MaterialReader {
     std::vector<int> index(ai_.mNumMaterials, 0);
     for (unsigned i = 0; i < ai_.mNumMaterials; ++i) {
       if (is_placeholder(*ai_.mMaterials[i])) continue;  // stays 0
+      check_material_count(scene_.materials.size() + 1, name_ + ": material " + std::to_string(i) + ": ");
       index[i] = static_cast<int>(scene_.materials.size());
       scene_.materials.push_back(material(*ai_.mMaterials[i], i));
     }

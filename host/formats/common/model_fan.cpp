@@ -8,6 +8,7 @@
 #include <cmath>
 
 #include "core/errors.h"
+#include "opsila_shared.h"
 
 namespace opsila {
 
@@ -31,6 +32,10 @@ bool MeshFan::face(const unsigned* corners, unsigned n, unsigned f, int object, 
     return Vec3{p.x, p.y, p.z};
   };
   const auto where = [&] { return name_ + ": mesh " + std::to_string(object) + " face " + std::to_string(f); };
+  // Its placements before this one share its facet ids: their fans count.
+  const long long fan = (long long)(placement + 1) * ((long long)n - 2);
+  if (fan > OPSILA_MAX_FAN)
+    check_fan_triangles(fan, where() + (placement > 0 ? " (placement " + std::to_string(placement + 1) + ")" : "") + ": ");
   const Vec3 p0 = position(corners[0]);
   bool any = false;
   for (unsigned k = 1; k + 1 < n; ++k) {

@@ -35,7 +35,11 @@ ModelIncludes::Make ModelIncludes::plan(const Json& v, const std::string& path, 
   budget_.add(r.windowed ? sub->share.total_triangles : sub->triangles.size(), std::size_t(sub->num_facets),
               std::size_t(sub->num_objects), path, r.windowed);
   const int mat_offset = static_cast<int>(scene_.materials.size()) - 1;
-  if (override_mat < 0) join_materials(*sub);
+  if (override_mat < 0) {
+    // The model's own materials (its first, the default, is the scene's).
+    check_material_count(scene_.materials.size() + sub->materials.size() - 1, v_.where(r.fkey));
+    join_materials(*sub);
+  }
   append_warnings(scene_, *sub);
   for (std::string& f : sub->input_files) scene_.input_files.push_back(std::move(f));
   // A share does not hold an imported model from now until it is built:

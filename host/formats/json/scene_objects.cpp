@@ -7,6 +7,7 @@
 #include <cmath>
 
 #include "formats/json/scene_generators.h"
+#include "opsila_shared.h"
 
 namespace opsila {
 namespace scene_json {
@@ -105,6 +106,7 @@ ObjectReader::Make ObjectReader::solid(const Json& v, const std::string& path, c
     const Json& vs = v_.require(v, path, "vertices");
     v_.expect_array(vs, key("vertices"));
     if (vs.size() < 3) v_.fail(key("vertices"), "a polygon needs at least 3 vertices");
+    if (vs.size() - 2 > OPSILA_MAX_FAN) check_fan_triangles(static_cast<long long>(vs.size()) - 2, v_.where(key("vertices")));
     std::vector<Vec3> pts;
     for (std::size_t k = 0; k < vs.size(); ++k)
       pts.push_back(v_.vec3(vs[k], join_index(key("vertices"), k)));

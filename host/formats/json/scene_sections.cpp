@@ -83,6 +83,7 @@ void SceneSections::materials(const Json& v, const std::string& path) {
   for (auto it = v.begin(); it != v.end(); ++it) {
     const std::string p = join_key(path, it.key());
     if (it.key().empty()) v_.fail(p, "a material needs a non-empty name");
+    check_material_count(scene_.materials.size() + 1, v_.where(p));
     named_.emplace(it.key(), static_cast<int>(scene_.materials.size()));
     named_order_.push_back(it.key());
     scene_.materials.push_back(material(it.value(), p, it.key()));
@@ -153,6 +154,7 @@ int SceneSections::material_ref(const Json* v, const std::string& path) {
     return it->second;
   }
   if (v->is_object()) {
+    check_material_count(scene_.materials.size() + 1, v_.where(path));
     scene_.materials.push_back(material(*v, path, path));
     return static_cast<int>(scene_.materials.size()) - 1;
   }

@@ -110,6 +110,7 @@ std::vector<MaterialDesc> parse_mtl(const std::string& text, const std::string& 
     const std::string_view kw = next_token(rest);
     if (kw.empty() || kw[0] == '#') continue;
     if (kw == "newmtl") {
+      check_material_count(out.size() + 2, at(name, ln) + "'newmtl': ");  // the default is the scene's first
       MaterialDesc m;  // SPEC defaults for keys left out
       m.name = std::string(trim(rest));
       out.push_back(std::move(m));

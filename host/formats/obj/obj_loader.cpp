@@ -119,6 +119,7 @@ int ObjParser::add_attributes(Scene& scene, const Polygon& poly, std::uint32_t k
 std::vector<int> ObjParser::resolve_materials(Scene& scene) {
   scene.materials.push_back(MaterialDesc::default_material());
   for (const MaterialDesc& m : library_) scene.materials.push_back(m);
+  check_material_count(scene.materials.size(), name_ + ": its material libraries: ");
   std::vector<int> slot_material(slot_names_.size(), 0);
   int unknown = 0;
   for (std::size_t s = 0; s < slot_names_.size(); ++s) {

@@ -10,6 +10,7 @@
 #include "formats/obj/obj_parser.h"
 #include "formats/obj/obj_text.h"
 #include "formats/image/texture_file.h"
+#include "opsila_shared.h"
 
 namespace opsila {
 namespace obj_parse {
@@ -229,6 +230,8 @@ void ObjParser::face(std::string_view rest) {
     if (short_faces_++ == 0) short_line_ = line_;
     return;
   }
+  if (n - 2 > OPSILA_MAX_FAN)
+    check_fan_triangles(static_cast<long long>(n) - 2, at(name_, line_) + "'f' line of " + std::to_string(n) + " corners: ");
   if (polygons() >= static_cast<std::size_t>(INT_MAX))
     fail(name_, line_, "too many facets (more than " + std::to_string(INT_MAX) + ")");
   triangle_total_ += n - 2;

@@ -163,7 +163,10 @@ class ImportWatchdog {
     if (const char* env = env_hook(EnvHook::import_timeout)) {
       char* end = nullptr;
       const double v = std::strtod(env, &end);
-      if (end != env && v >= 0) budget = v;
+      if (end == env || *end != '\0' || !(v >= 0 && v <= 1e9))
+        throw InputError(std::string(env_hook_name(EnvHook::import_timeout)) + "=" + env +
+                         ": expected a number of seconds, 0 to 1e9");
+      budget = v;
     }
     const std::uint64_t memory = import_memory_budget(bytes);
     message_ = "opsila: error: " + name + ": the model importer did not finish within " +

@@ -175,9 +175,10 @@ struct RunResult {
 // std::nullopt removes it; the rest of this process's environment is kept.
 using EnvChanges = std::map<std::string, std::optional<std::string>>;
 
-// Runs `program args...` (no shell), stdout and stderr captured via files.
+// Runs `program args...` (no shell), stdout and stderr captured via files
+// (stdout into `stdout_to` instead, when given).
 inline RunResult run_program(const std::string& program, const std::vector<std::string>& args,
-                             const EnvChanges& env = {}) {
+                             const EnvChanges& env = {}, const std::string& stdout_to = "") {
   std::vector<std::string> entries;
   for (char** e = environ; *e; ++e) {
     const std::string entry = *e;
@@ -193,7 +194,8 @@ inline RunResult run_program(const std::string& program, const std::vector<std::
   const std::string out_path = capture.file("stdout"), err_path = capture.file("stderr");
   posix_spawn_file_actions_t actions;
   posix_spawn_file_actions_init(&actions);
-  posix_spawn_file_actions_addopen(&actions, 1, out_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  posix_spawn_file_actions_addopen(&actions, 1, stdout_to.empty() ? out_path.c_str() : stdout_to.c_str(),
+                                   O_WRONLY | O_CREAT | O_TRUNC, 0644);
   posix_spawn_file_actions_addopen(&actions, 2, err_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
   std::vector<char*> argv;
   argv.push_back(const_cast<char*>(program.c_str()));

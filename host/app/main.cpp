@@ -1,6 +1,8 @@
 // opsila: command-line entry point. Every failure ends here as one
 // "opsila: error: ..." line and an exit code (see cli.h); nothing escapes.
+#include <cerrno>
 #include <cstdio>
+#include <cstring>
 #include <exception>
 #include <string>
 #include <vector>
@@ -10,6 +12,20 @@
 #include "bench/bench.h"
 #include "core/util.h"
 #include "mpi/ranks.h"
+
+namespace {
+
+// A listing or report that could not be written (a full disk, a closed
+// pipe) is a failure, not a success with nothing shown.
+int checked_stdout(int code) {
+  errno = 0;
+  if (std::fflush(stdout) == 0 && !std::ferror(stdout)) return code;
+  std::fprintf(stderr, "opsila: error: standard output: write failed (%s)\n",
+               errno ? std::strerror(errno) : "stream error");
+  return code == opsila::kExitOk ? opsila::kExitUsage : code;
+}
+
+}  // namespace
 
 int main(int argc, char** argv) {
   opsila::return_large_frees_to_system();
@@ -21,9 +37,9 @@ int main(int argc, char** argv) {
     if (opsila::launched_by_mpi()) world.start();
     const std::vector<std::string> args(argv + 1, argv + argc);
     if (!args.empty() && args[0] == "bench") {
-      return opsila::run_bench(std::vector<std::string>(args.begin() + 1, args.end()), world);
+      return checked_stdout(opsila::run_bench(std::vector<std::string>(args.begin() + 1, args.end()), world));
     }
-    return opsila::run_cli(args, world);
+    return checked_stdout(opsila::run_cli(args, world));
   } catch (...) {
     return opsila::report_rank_failure(std::current_exception(), world);
   }

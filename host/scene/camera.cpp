@@ -83,13 +83,17 @@ void check_camera(const CameraDesc& c, const std::string& eye_source, const std:
   // The basis is made in float (camera_frame): a view direction or up
   // vector whose squared length underflows or overflows float gives no
   // unit vector, and every camera ray would be NaN.
+  // The forward vector depends on the eye and look-at alone; the others,
+  // made from it, fail only through the up vector: that source is named.
   const CameraFrame frame = camera_frame(c, 1, 1);
-  for (const Vec3* v : {&frame.forward, &frame.right, &frame.up})
-    for (float x : *v)
-      if (!std::isfinite(x))
-        throw InputError(eye_source + ": the view from eye " + format_vec(c.eye) + " to look-at " +
-                         format_vec(c.look_at) + " with up " + format_vec(c.up) +
-                         " has no unit vectors in float (a distance or an up vector too small or too large)");
+  const auto unit_like = [](const Vec3& v) {  // an overflowed length gives zeros, an underflowed one inf or NaN
+    return std::isfinite(v[0]) && std::isfinite(v[1]) && std::isfinite(v[2]) && (v[0] != 0 || v[1] != 0 || v[2] != 0);
+  };
+  const bool forward = unit_like(frame.forward);
+  if (!forward || !unit_like(frame.right) || !unit_like(frame.up))
+    throw InputError((forward ? up_source : eye_source) + ": the view from eye " + format_vec(c.eye) + " to look-at " +
+                     format_vec(c.look_at) + " with up " + format_vec(c.up) + " has no unit vectors in float (" +
+                     (forward ? "an up vector too small or too large)" : "a distance too small or too large)"));
 }
 
 }  // namespace opsila

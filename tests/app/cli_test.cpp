@@ -1,6 +1,7 @@
 // The real opsila binary: bad input fails cleanly (one error line naming the
 // flag or file, no output file), good input renders.
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <map>
 #include <sstream>
@@ -114,11 +115,24 @@ TEST_F(CliFixture, DegenerateCameraIsRejected) {
   expect_rejected({scene, "-o", out("x.png"), "--eye", "0,0,1e-25", "--look-at", "0,0,0"}, "--eye");
   expect_rejected({scene, "-o", out("x.png"), "--eye", "0,0,5", "--look-at", "0,0,0", "--up", "0,1e-30,0"},
                   "no unit vectors");
+  // The scene's camera is sound; only the flag's up vector is too small for float.
+  expect_rejected({scene, "-o", out("x.png"), "--reference", "-q", "--up", "1e-38,1e-38,0"}, "opsila: error: --up:");
   // A scene too small to frame (an instance scaled by 1e-25).
   const std::string tiny = dir.write("tiny.json", R"({"objects": [{"type": "instances",
     "model": {"type": "sphere", "center": [0, 0, 0], "radius": 1}, "transforms": [{"scale": 1e-25}]}]})");
   before = dir.entries();
   expect_rejected({tiny, "-o", out("x.png")}, "tiny.json: camera");
+}
+
+// A listing that could not be written is a failure, said on stderr.
+TEST_F(CliFixture, AnUnwritableStandardOutputIsAnError) {
+  if (access("/dev/full", W_OK) != 0) GTEST_SKIP() << "no /dev/full to write to";
+  for (const std::vector<std::string>& args : {std::vector<std::string>{"devices"}, {"render", "--help"}}) {
+    const RunResult r = test::run_program(OPSILA_BINARY, args, {}, "/dev/full");
+    EXPECT_EQ(r.exit_code, 2) << args[0];
+    ASSERT_EQ(r.error_lines().size(), 1u) << r.err;
+    EXPECT_NE(r.error_lines()[0].find("opsila: error: standard output: write failed"), std::string::npos) << r.err;
+  }
 }
 
 TEST_F(CliFixture, UnknownFlagAndMissingValueAreRejected) {

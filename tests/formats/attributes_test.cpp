@@ -4,6 +4,9 @@
 // attributes and texels. No OpenCL needed.
 #include <gtest/gtest.h>
 
+#include <array>
+#include <cstdlib>
+
 #include <cmath>
 #include <cstdint>
 #include <string>
@@ -195,6 +198,50 @@ TEST(Textures, PngTooLargeOrTruncatedSaysWhy) {
   EXPECT_EQ(problem_of(large), "image too large (60000x4)");
   const std::string truncated = problem_of(ok.substr(0, 45));
   EXPECT_EQ(truncated, "cannot decode the image (truncated PNG: it ends before its IEND chunk)");
+}
+
+// A 24-bit BMP of w x h pixels (given top row first); a negative height
+// stores them top-down, a positive one bottom-up, as the format allows.
+std::string bmp(int w, int h, const std::vector<std::array<unsigned char, 3>>& rgb) {
+  const int rows = std::abs(h), pitch = (3 * w + 3) / 4 * 4;
+  const auto le32 = [](std::string& s, std::int64_t v) {
+    for (int i = 0; i < 4; ++i) s += char((std::uint64_t(v) >> (8 * i)) & 0xff);
+  };
+  std::string s = "BM";
+  le32(s, 54 + std::int64_t(pitch) * rows);
+  le32(s, 0);
+  le32(s, 54);
+  le32(s, 40), le32(s, w), le32(s, h);
+  s += std::string("\x01\x00\x18\x00", 4);  // one plane, 24 bits
+  for (int i = 0; i < 6; ++i) le32(s, 0);
+  for (int r = 0; r < rows && !rgb.empty(); ++r) {
+    const int row = h < 0 ? r : rows - 1 - r;
+    std::string line(std::size_t(pitch), '\0');
+    for (int x = 0; x < w; ++x)
+      for (int c = 0; c < 3; ++c) line[std::size_t(3 * x + c)] = char(rgb[std::size_t(row * w + x)][2 - c]);
+    s += line;
+  }
+  return s;
+}
+
+TEST(Textures, TopDownBmpDecodesAndSaysItsSize) {
+  const std::vector<std::array<unsigned char, 3>> px = {{10, 20, 30}, {40, 50, 60}, {70, 80, 90}, {255, 128, 0}};
+  for (int h : {2, -2}) {
+    const std::string bytes = bmp(2, h, px);
+    Texture t;
+    std::string problem;
+    ASSERT_TRUE(decode_texture_memory(reinterpret_cast<const unsigned char*>(bytes.data()), bytes.size(), "x", t,
+                                      problem))
+        << h << ": " << problem;
+    ASSERT_EQ(t.height, 2);
+    EXPECT_EQ(t.texels[0], 10u | 20u << 8 | 30u << 16) << h;
+    EXPECT_EQ(t.texels[3], 255u | 128u << 8) << h;
+  }
+  const std::string huge = bmp(20000, -20000, {});
+  Texture t;
+  std::string problem;
+  EXPECT_FALSE(decode_texture_memory(reinterpret_cast<const unsigned char*>(huge.data()), huge.size(), "x", t, problem));
+  EXPECT_EQ(problem, "image too large (20000x20000)");
 }
 
 TEST(Textures, SrgbDecodeTable) {

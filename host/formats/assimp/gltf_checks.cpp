@@ -253,6 +253,11 @@ std::vector<Accessor> check_accessors(const Gltf& g, const std::vector<View>& vi
     const long v = g.ref(a, "bufferView", "bufferViews", e.where);
     if (v >= 0) {
       const u64 stride = whole(a, "byteStride", views[v].stride, e.where);  // glTF 1 keeps it here
+      // glTF: a stride, where given, holds at least one element; a smaller
+      // one makes elements overlap, and the importer would read garbage.
+      if (stride != 0 && stride < elem)
+        throw InputError(e.where + ": byteStride " + std::to_string(stride) + " of bufferViews[" + std::to_string(v) +
+                         "] is smaller than one element (" + std::to_string(elem) + " bytes)");
       check_range(whole(a, "byteOffset", 0, e.where), count, elem, stride, views[v].length, e.where,
                   "bufferViews[" + std::to_string(v) + "]");
     }

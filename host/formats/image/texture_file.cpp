@@ -2,6 +2,7 @@
 #include "formats/image/texture_file.h"
 
 #include <algorithm>
+#include <cstdlib>
 #include <cstdint>
 #include <filesystem>
 #include <limits>
@@ -53,9 +54,15 @@ bool decode_texture_memory(const unsigned char* data, std::size_t size, const st
     problem = std::string("not a readable PNG, JPEG, TGA or BMP image") + (why ? std::string(" (") + why + ")" : "");
     return false;
   }
-  if (w <= 0 || h <= 0 || w > kMaxTextureSide || h > kMaxTextureSide ||
-      static_cast<std::size_t>(w) * static_cast<std::size_t>(h) > kMaxTextureTexels) {
-    problem = "image too large (" + std::to_string(w) + "x" + std::to_string(h) + ")";
+  // A top-down BMP may state a negative height: the size is told as it is meant.
+  const long long aw = std::llabs(w), ah = std::llabs(h);
+  if (aw == 0 || ah == 0) {
+    problem = "image has no pixels (" + std::to_string(w) + "x" + std::to_string(h) + ")";
+    return false;
+  }
+  if (aw > kMaxTextureSide || ah > kMaxTextureSide ||
+      static_cast<std::size_t>(aw) * static_cast<std::size_t>(ah) > kMaxTextureTexels) {
+    problem = "image too large (" + std::to_string(aw) + "x" + std::to_string(ah) + ")";
     return false;
   }
   if (stbi_is_16_bit_from_memory(data, len)) {

@@ -180,6 +180,14 @@ TEST(HostileModel, OffsetsNear2To64AreRefusedBeforeTheImporterSeesThem) {
   // A buffer longer than its file.
   dir.write("short.bin", "0123");
   EXPECT_NE(error_loading(dir.write("s.gltf", gltf("short.bin"))).find("byteLength 36 but"), std::string::npos);
+  // A stride shorter than the element: overlapping positions, refused; one
+  // that holds it is read.
+  const std::string overlap = dir.write("stride.gltf", gltf("tri.bin", R"("byteLength": 36, "byteStride": 4)", "3"));
+  EXPECT_NE(error_loading(overlap).find("accessors[0]: byteStride 4 of bufferViews[0] is smaller than one element "
+                                        "(12 bytes)"),
+            std::string::npos)
+      << error_loading(overlap);
+  EXPECT_EQ(error_loading(dir.write("s12.gltf", gltf("tri.bin", R"("byteLength": 36, "byteStride": 12)", "3"))), "<no error>");
 }
 
 // ------------------------------------------------------ deep hierarchies ---

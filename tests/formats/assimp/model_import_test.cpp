@@ -275,6 +275,17 @@ TEST(ModelImport, AnImportThatOutlivesItsBudgetIsOneClearError) {
   EXPECT_FALSE(test::file_exists(dir.file("x.png")));
   // With the default budget the same file loads.
   EXPECT_EQ(test::run_opsila({"render", model, "-o", dir.file("y.png"), "--size", "8x8"}).exit_code, 0);
+  // A budget that is no number of seconds is refused, named, not ignored.
+  for (const char* bad : {"abc", "-1", "nan", "5abc", "1e400"}) {
+    const test::RunResult b = test::run_program(
+        OPSILA_BINARY, {"render", model, "-o", dir.file("z.png"), "--size", "8x8"}, {{"OPSILA_IMPORT_TIMEOUT", bad}});
+    EXPECT_EQ(b.exit_code, 2) << bad;
+    ASSERT_EQ(b.error_lines().size(), 1u) << b.err;
+    EXPECT_NE(b.error_lines()[0].find(std::string("OPSILA_IMPORT_TIMEOUT=") + bad + ": expected a number of seconds"),
+              std::string::npos)
+        << b.err;
+    EXPECT_FALSE(test::file_exists(dir.file("z.png")));
+  }
 }
 
 // A reader that grows without end (a corrupted Q3O file took 19 GB in the

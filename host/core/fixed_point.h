@@ -34,6 +34,15 @@ inline bool saturated(std::uint64_t sum) {
   return sum >= std::uint64_t(std::numeric_limits<std::int64_t>::max());
 }
 
+// Two sums added as the kernels' add_fixed adds to one: a sum that reached
+// 2^63 (bit 63 set) stays marked, and two that reach it together are marked
+// (each below 2^63 unmarked, their sum cannot wrap). How the MPI ranks'
+// pixel sums are added (Ranks::reduce_sum), so that ranks saturate as one
+// device does.
+inline std::uint64_t add_sums(std::uint64_t a, std::uint64_t b) {
+  return (a + b) | ((a | b) & (std::uint64_t(1) << 63));
+}
+
 // A sum back to a linear value.
 inline float from_fixed(std::uint64_t sum) {
   if (saturated(sum)) return kMaxPixelValue;

@@ -10,6 +10,8 @@
 
 #ifdef OPSILA_HAVE_MPI
 #include <mpi.h>
+
+#include "core/fixed_point.h"
 #endif
 
 namespace opsila {
@@ -140,18 +142,32 @@ std::vector<std::uint64_t> MpiRanks::all_to_all(const Bytes& send, const std::ve
   return recv_counts;
 }
 
+namespace {
+
+// MPI's side of add_sums: MPI_SUM would wrap a marked (saturated) sum.
+void add_sums_op(void* in, void* inout, int* len, MPI_Datatype*) {
+  const auto* a = static_cast<const std::uint64_t*>(in);
+  auto* b = static_cast<std::uint64_t*>(inout);
+  for (int i = 0; i < *len; ++i) b[i] = add_sums(a[i], b[i]);
+}
+
+}  // namespace
+
 void MpiRanks::reduce_sum(std::vector<std::uint64_t>& values, int root) {
   if (size_ == 1) return;
   Timed t(mpi_seconds_);
-  // Unsigned sums wrap modulo 2^64 exactly like the device's fixed-point
-  // cells, so signed pixel sums come out right on the root.
+  static const MPI_Op op = [] {
+    MPI_Op made;
+    MPI_Op_create(&add_sums_op, 1, &made);  // commutative, as the device's atomics
+    return made;
+  }();
   const std::size_t step = std::size_t(INT_MAX) / 8;
   for (std::size_t at = 0; at < values.size(); at += step) {
     const int n = static_cast<int>(std::min(step, values.size() - at));
     if (rank_ == root)
-      MPI_Reduce(MPI_IN_PLACE, values.data() + at, n, MPI_UINT64_T, MPI_SUM, root, MPI_COMM_WORLD);
+      MPI_Reduce(MPI_IN_PLACE, values.data() + at, n, MPI_UINT64_T, op, root, MPI_COMM_WORLD);
     else
-      MPI_Reduce(values.data() + at, nullptr, n, MPI_UINT64_T, MPI_SUM, root, MPI_COMM_WORLD);
+      MPI_Reduce(values.data() + at, nullptr, n, MPI_UINT64_T, op, root, MPI_COMM_WORLD);
   }
 }
 

@@ -1,5 +1,7 @@
 #include "mpi/ranks.h"
 
+#include "core/fixed_point.h"
+
 #include <unistd.h>
 
 #include <algorithm>
@@ -39,7 +41,8 @@ std::vector<std::uint64_t> Ranks::reduce(const std::string& op, const std::vecto
     if (v.size() != values.size())
       throw std::logic_error(op + ": rank " + std::to_string(q) + " gave " + std::to_string(v.size()) +
                              " values, rank " + std::to_string(rank()) + " " + std::to_string(values.size()));
-    for (std::size_t i = 0; q > 0 && i < v.size(); ++i) out[i] = op == "max" ? std::max(out[i], v[i]) : out[i] + v[i];
+    for (std::size_t i = 0; q > 0 && i < v.size(); ++i)
+      out[i] = op == "max" ? std::max(out[i], v[i]) : op == "reduce_sum" ? add_sums(out[i], v[i]) : out[i] + v[i];
   }
   return out;
 }

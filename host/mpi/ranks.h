@@ -78,7 +78,9 @@ class Ranks {
   // (also in rank order, then in the order each source sent them).
   virtual std::vector<std::uint64_t> all_to_all(const Bytes& send, const std::vector<std::uint64_t>& send_counts,
                                                 std::size_t record_bytes, Bytes& recv);
-  virtual void reduce_sum(std::vector<std::uint64_t>& values, int root);  // in place; valid on root
+  // Element-wise sums of pixel sums and counters (core/fixed_point.h,
+  // add_sums: a sum that reached 2^63 stays marked), in place; valid on root.
+  virtual void reduce_sum(std::vector<std::uint64_t>& values, int root);
   virtual void broadcast(void* data, std::size_t bytes, int root);
   virtual std::vector<std::string> gather(const std::string& mine, int root);  // all ranks' strings on root
   // Every rank's bytes, concatenated in rank order, on every rank.

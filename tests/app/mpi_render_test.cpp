@@ -10,6 +10,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "core/fixed_point.h"
+#include "formats/image/image_io.h"
 #include "mpi_fixture.h"
 #include "test_util.h"
 
@@ -149,6 +151,30 @@ TEST_F(MpiFixture, HitOrderAcrossRanks) {
       nlohmann::json s;
       expect_ranks_as_one(R, with, s);
     }
+  }
+}
+
+// A light so bright that pixel sums pass 2^63 on some ranks' devices, or
+// only once the ranks' sums are added: they saturate as on one process
+// (core/fixed_point.h, add_sums), never wrap to a small value.
+TEST_F(MpiFixture, SaturatedSumsAreTheSameOnRanks) {
+  const std::string path = scene("whitted.json");
+  const auto with = [&](const std::string& tag) {
+    return std::vector<std::string>{path, "--size", "64x48", "--spp", "4", "--pes", "7", "--light",
+                                    "2,6,4,3e12,3e12,3e12", "--ambient", "0.5,0.5,0.5", "-q", "-o",
+                                    dir.file(tag + ".pfm"), "--item-buffer", dir.file(tag + ".npy"), "--stats",
+                                    dir.file(tag + ".json")};
+  };
+  const RunResult single = one(with("one"));
+  ASSERT_EQ(single.exit_code, 0) << single.err;
+  const FloatImage img = read_pfm(dir.file("one.pfm"));
+  int top = 0;  // pixels at the largest value a 4-sample pixel holds
+  for (float v : img.rgb) top += v == kMaxPixelValue / 4;
+  ASSERT_GT(top, 0) << "no sum saturated: the test would show nothing";
+  for (int R : {2, 3}) {
+    SCOPED_TRACE(std::to_string(R) + " ranks");
+    nlohmann::json s;
+    expect_ranks_as_one(R, with, s);
   }
 }
 

@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "core/fixed_point.h"
 #include "mpi/ranks.h"
 #include "sim_ranks.h"
 
@@ -49,6 +50,12 @@ TEST(SimRanks, CollectivesGiveEveryRanksValuesInRankOrder) {
       std::vector<std::uint64_t> root = {std::uint64_t(r + 1)};
       ranks.reduce_sum(root, 0);
       EXPECT_EQ(root[0], r == 0 ? std::uint64_t(R * (R + 1) / 2) : std::uint64_t(r + 1)) << "valid on the root";
+      // Pixel sums saturate: one marked (bit 63) with others just below it
+      // would wrap past 2^64 as plain sums; two unmarked reach 2^63 together.
+      const std::uint64_t mark = std::uint64_t(1) << 63;
+      std::vector<std::uint64_t> sums = {r == 0 ? mark | 1 : mark - 1, mark / 2 + 1};
+      ranks.reduce_sum(sums, 0);
+      if (r == 0 && R > 1) EXPECT_TRUE(saturated(sums[0]) && saturated(sums[1])) << sums[0] << " " << sums[1];
       // The lowest failing rank's code, on every rank.
       int code = r > 0 && r % 2 == 1 ? 10 + r : 0;
       EXPECT_EQ(ranks.agree(code), R > 1 ? 1 : -1);

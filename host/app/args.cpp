@@ -278,6 +278,56 @@ void check_view_flags(const ViewOptions& o) {
   }
 }
 
+namespace {
+
+std::uint64_t fnv1a(std::uint64_t h, const char* data, std::size_t n) {
+  for (std::size_t i = 0; i < n; ++i) h = (h ^ static_cast<unsigned char>(data[i])) * 0x100000001b3ull;
+  return h;
+}
+
+// The file's size and its first and last MiB, hashed: cheap on a model of
+// gigabytes. 0 for a file that cannot be read (the reader says why).
+std::uint64_t file_print(const std::string& path) {
+  std::FILE* f = std::fopen(path.c_str(), "rb");
+  if (!f) return 0;
+  std::vector<char> buf(std::size_t(1) << 20);
+  std::uint64_t h = 0xcbf29ce484222325ull;
+  std::size_t n = std::fread(buf.data(), 1, buf.size(), f);
+  h = fnv1a(h, buf.data(), n);
+  if (std::fseek(f, 0, SEEK_END) == 0) {
+    const long size = std::ftell(f);
+    h = fnv1a(h, reinterpret_cast<const char*>(&size), sizeof size);
+    if (size > long(buf.size()) && std::fseek(f, size - long(buf.size()), SEEK_SET) == 0)
+      h = fnv1a(h, buf.data(), std::fread(buf.data(), 1, buf.size(), f));
+  }
+  std::fclose(f);
+  return h;
+}
+
+}  // namespace
+
+void check_started_alike(Ranks& ranks, const std::vector<std::string>& args, const std::string& scene_path) {
+  if (ranks.size() == 1) return;
+  // --device may differ: ranks on one host each take their own GPU.
+  std::uint64_t words = 0xcbf29ce484222325ull;
+  for (std::size_t k = 0; k < args.size(); ++k) {
+    if (args[k] == "--device") {
+      ++k;
+      continue;
+    }
+    if (args[k].rfind("--device=", 0) != 0) words = fnv1a(words, args[k].c_str(), args[k].size() + 1);  // NUL parts them
+  }
+  // Alike when the largest of each value is the smallest's (two collectives).
+  std::vector<std::uint64_t> high = {words, file_print(scene_path)}, low = {~high[0], ~high[1]};
+  ranks.max(high);
+  ranks.max(low);
+  if (high[0] != ~low[0])
+    throw InputError("the ranks were given different arguments: every rank of a run takes the same command line");
+  if (high[1] != ~low[1])
+    throw InputError(scene_path + ": the ranks did not read the same file (its size or contents differ between "
+                                  "ranks): they see different copies, or it changed while they started");
+}
+
 DeviceEntry choose_device_flag(const std::string& spec, const Ranks& ranks) {
   try {
     return choose_rank_device(spec, ranks.local_rank());

@@ -232,6 +232,7 @@ int run_render(const std::vector<std::string>& args, Ranks& ranks) {
     if (!o.stats_path.empty()) outputs.declare("--stats", o.stats_path);
   }
   check_scene_file(o.scene_path);
+  check_started_alike(ranks, args, o.scene_path);
   outputs.refuse_inputs({o.scene_path});
   if (o.reference && ranks.size() > 1)
     throw InputError("--reference is the sequential host renderer: run it as one process, without mpirun");

@@ -141,6 +141,7 @@ int run_bench(const std::vector<std::string>& args, Ranks& ranks) {
   // scatter curve need one process: with several ranks they are left out
   // (kSingleProcessOnly says why in the report).
   if (launched_by_mpi()) ranks.start();
+  check_started_alike(ranks, args, o.scene_path);
   const bool writer = ranks.rank() == 0;
   install_interrupt_cleanup();
   OutputFiles outputs;

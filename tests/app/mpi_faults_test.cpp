@@ -42,24 +42,47 @@ TEST_F(MpiFixture, MoreRanksThanPesAreRefused) {
   EXPECT_TRUE(dir.entries().empty()) << "an output file was left behind";
 }
 
-// A broken file among many, which one rank reads (its scene names it) and
-// the others do not: one error line naming the file, every rank ended, no
+// A broken file among many, which the ranks of its share read and the
+// others do not: one error line naming the file, every rank ended, no
 // output left behind.
 TEST_F(MpiFixture, ABrokenFileOnOneRankEndsEveryRank) {
-  const std::string good = share_scene(dir, 2, 4);
-  TempDir other;
-  const std::string bad = share_scene(other, 2, 4, 3);
-  const std::vector<std::string> args = {"--size", "32x24", "--pes", "6", "-o", dir.file("x.pfm")};
-  std::vector<std::string> mine = {good}, theirs = {bad};
-  mine.insert(mine.end(), args.begin(), args.end());
-  theirs.insert(theirs.end(), args.begin(), args.end());
-  const RunResult r = ranks(2, mine, {theirs});  // rank 2 reads the broken scene
+  TempDir out;
+  const std::string bad = share_scene(dir, 2, 4, 3);
+  const RunResult r = ranks(3, {bad, "--size", "32x24", "--pes", "6", "-o", out.file("x.pfm")});
   EXPECT_EQ(r.exit_code, 2) << r.err;
   const auto errors = r.error_lines();
   ASSERT_EQ(errors.size(), 1u) << r.err;
-  EXPECT_EQ(errors[0].rfind("opsila: error: rank 2: ", 0), 0u) << errors[0];
+  EXPECT_EQ(errors[0].rfind("opsila: error: rank ", 0), 0u) << errors[0];
   EXPECT_NE(errors[0].find("part3.obj"), std::string::npos) << errors[0];
-  EXPECT_EQ(dir.entries().size(), 5u) << "an output file was left behind (the folder held the scene and 4 OBJ files)";
+  EXPECT_TRUE(out.entries().empty()) << "an output file was left behind";
+}
+
+// Ranks started unalike (mpirun's ':' programs with other flags, folders
+// with their own copies of the scene) are refused before they exchange
+// anything: they crashed in the exchange, or mixed two scenes in one image.
+TEST_F(MpiFixture, RanksStartedUnalikeAreRefused) {
+  TempDir other;
+  const std::string text = R"({"objects": [{"type": "sphere", "center": [0, 0, 0], "radius": 1}]})";
+  dir.write("s.json", text);
+  other.write("s.json", R"({"image": {"width": 40, "height": 30}, )" + text.substr(1));
+  const std::vector<std::string> args = {"s.json", "--size", "32x24", "-o", dir.file("x.pfm")};
+  std::vector<std::string> deeper = args;
+  deeper.insert(deeper.end(), {"--depth", "3"});
+  std::vector<std::string> a = launch(1);
+  a.insert(a.end(), {"-wdir", dir.path(), OPSILA_BINARY, "render"});
+  a.insert(a.end(), args.begin(), args.end());
+  a.insert(a.end(), {":", "-np", "1", "-wdir", dir.path(), OPSILA_BINARY, "render"});
+  a.insert(a.end(), deeper.begin(), deeper.end());
+  expect_refused(test::run_program("/usr/bin/timeout", a, env),
+                 {"opsila: error: rank 0: the ranks were given different arguments"});
+  a = launch(1);
+  a.insert(a.end(), {"-wdir", dir.path(), OPSILA_BINARY, "render"});
+  a.insert(a.end(), args.begin(), args.end());
+  a.insert(a.end(), {":", "-np", "1", "-wdir", other.path(), OPSILA_BINARY, "render"});
+  a.insert(a.end(), args.begin(), args.end());
+  expect_refused(test::run_program("/usr/bin/timeout", a, env),
+                 {"opsila: error: rank 0: s.json: the ranks did not read the same file"});
+  EXPECT_FALSE(test::file_exists(dir.file("x.pfm")));
 }
 
 TEST_F(MpiFixture, BadDeviceOnOneRankEndsEveryRankCleanly) {

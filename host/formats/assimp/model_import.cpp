@@ -4,6 +4,7 @@
 // joins and reorders meshes, and so would change the object ids).
 #include "formats/assimp/model_import.h"
 
+#include <fcntl.h>
 #include <signal.h>
 #include <unistd.h>
 
@@ -15,6 +16,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <exception>
 #include <filesystem>
 #include <fstream>
 #include <limits>
@@ -156,6 +158,50 @@ std::uint64_t resident_bytes() {
   return resident * static_cast<std::uint64_t>(sysconf(_SC_PAGESIZE));
 }
 
+// Where a failed import's one error line goes: the run's standard error,
+// while the importer's own stderr is shut (ImportStderr).
+int g_error_fd = 2;
+
+// Write all of `text` to g_error_fd (async-signal-safe).
+void say_error(const char* text, std::size_t length) {
+  while (length > 0) {
+    const ssize_t n = write(g_error_fd, text, length);
+    if (n <= 0) return;
+    text += n, length -= std::size_t(n);
+  }
+}
+
+// The importer prints to stderr on its way to a failure (a failed
+// assertion's text, the runtime's "terminate called after ..."): one error
+// line is the rule, so while it reads, its stderr goes to /dev/null and
+// opsila's own line (watchdog, fault guard) to the saved descriptor.
+class ImportStderr {
+ public:
+  ImportStderr() {
+    saved_ = dup(2);
+    const int null = open("/dev/null", O_WRONLY | O_CLOEXEC);
+    if (saved_ < 0 || null < 0 || dup2(null, 2) < 0) {
+      if (null >= 0) close(null);
+      if (saved_ >= 0) close(saved_);
+      saved_ = -1;
+      return;
+    }
+    close(null);
+    g_error_fd = saved_;
+  }
+  ~ImportStderr() {
+    if (saved_ < 0) return;
+    g_error_fd = 2;
+    dup2(saved_, 2);
+    close(saved_);
+  }
+  ImportStderr(const ImportStderr&) = delete;
+  ImportStderr& operator=(const ImportStderr&) = delete;
+
+ private:
+  int saved_ = -1;
+};
+
 class ImportWatchdog {
  public:
   ImportWatchdog(const std::string& name, std::uintmax_t bytes) {
@@ -187,8 +233,8 @@ class ImportWatchdog {
         const bool late = std::chrono::steady_clock::now() >= deadline;
         const std::uint64_t now = resident_bytes();
         if (late || now > base + memory) {
-          std::fputs((late ? message_ : memory_message_).c_str(), stderr);
-          std::fflush(stderr);
+          const std::string& text = late ? message_ : memory_message_;
+          say_error(text.c_str(), text.size());
           std::_Exit(2);  // the exit code of bad input (app/args.h)
         }
       }
@@ -240,8 +286,10 @@ class ImportFaultGuard {
     sa.sa_flags = SA_ONSTACK;
     sigemptyset(&sa.sa_mask);
     for (int k = 0; k < kSignals; ++k) sigaction(kSignal[k], &sa, &old_[k]);
+    old_terminate_ = std::set_terminate([] { on_fault(SIGABRT); });  // an exception no one catches
   }
   ~ImportFaultGuard() {
+    std::set_terminate(old_terminate_);
     for (int k = 0; k < kSignals; ++k) sigaction(kSignal[k], &old_[k], nullptr);
     sigaltstack(&old_stack_, nullptr);
   }
@@ -250,8 +298,7 @@ class ImportFaultGuard {
 
  private:
   static void on_fault(int) {
-    const ssize_t ignored = write(2, message_, length_);
-    (void)ignored;
+    say_error(message_, length_);
     _exit(2);  // the exit code of bad input (app/args.h)
   }
   static constexpr int kSignals = 5;
@@ -261,6 +308,7 @@ class ImportFaultGuard {
   std::vector<char> alt_;
   stack_t old_stack_{};
   struct sigaction old_[kSignals] {};
+  std::terminate_handler old_terminate_ = nullptr;
 };
 
 // The extension without its dot, in lower case.
@@ -355,6 +403,7 @@ Scene import_model(ModelFiles& files, const std::string& path, const std::string
     const bool our_checks = validated_by_us(ext);
     const unsigned flags = our_checks ? 0u : kImportFlags;
     if (watched) {
+      const ImportStderr quiet;
       const ImportWatchdog watchdog(path, input_bytes);
       const ImportFaultGuard guard(path);
       ai = importer.ReadFile(path, flags);

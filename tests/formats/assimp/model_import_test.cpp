@@ -334,6 +334,22 @@ TEST(ModelImport, AFaultInsideTheImporterIsOneClearError) {
   EXPECT_FALSE(test::file_exists(dir.file("x.png")));
 }
 
+// An exception the importer lets escape ends in std::terminate, whose
+// runtime text ("terminate called after throwing ...") came before
+// opsila's line; the importer's stderr is shut while it reads, so the
+// whole of stderr is the one line (a COB file cut after 363 bytes).
+TEST(ModelImport, AnImporterThatGivesUpPrintsNothingButTheLine) {
+  REQUIRE_TEST_MODELS();
+  test::TempDir dir;
+  const fs::path whole = kModels / "COB" / "molecule.cob";
+  ASSERT_TRUE(fs::exists(whole));
+  const std::string model = dir.write("cut.cob", test::read_file(whole.string()).substr(0, 363));
+  const test::RunResult r = test::run_opsila({"render", model, "-o", dir.file("x.png"), "--size", "8x8", "-q"});
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_EQ(r.err, "opsila: error: " + model + ": the model importer failed while reading it (malformed file?)\n");
+  EXPECT_FALSE(test::file_exists(dir.file("x.png")));
+}
+
 // Counts in an OFF header that no file of that size can hold are refused
 // before the importer allocates for them (found by fuzz_model).
 TEST(ModelImport, OffCountsBeyondTheFileAreRefused) {

@@ -1,5 +1,6 @@
 #include "bench/compare.h"
 
+#include <climits>
 #include <cstdio>
 #include <sstream>
 
@@ -86,8 +87,9 @@ void check_saved_settings(const json& j, const std::string& path) {
   const auto need = [&](const json& parent, const std::string& where, const char* key, bool text) {
     if (!parent.contains(key)) return;
     const json& v = parent[key];
-    if (text ? v.is_string() : v.is_number_integer()) return;
-    throw InputError("--compare " + path + ": " + where + key + ": expected " + (text ? "a string" : "an integer"));
+    if (text ? v.is_string() : v.is_number_unsigned() && v.get<std::uint64_t>() <= std::uint64_t(INT_MAX)) return;
+    throw InputError("--compare " + path + ": " + where + key + ": expected " +
+                     (text ? "a string" : "a whole number from 0 to " + std::to_string(INT_MAX)));
   };
   const auto object = [&](const char* key) {
     if (j.contains(key) && !j[key].is_object())

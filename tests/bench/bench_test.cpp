@@ -569,7 +569,8 @@ TEST(BenchCompare, ASavedRunMustBeABenchResult) {
 TEST(BenchCompare, ASavedRunWithMistypedSettingsIsRefusedFirst) {
   test::TempDir dir;
   const std::vector<std::pair<std::string, nlohmann::json>> bad = {
-      {"device", 5},          {"depth", "5"},          {"pes", 2.5},         {"context", 1},
+      {"device", 5},          {"depth", "5"},          {"pes", 2.5},         {"context", 1},  {"depth", -1},
+      {"pes", std::uint64_t(-1)},
       {"scene", {{"path", 3}}}, {"image", {{"width", "8"}}}, {"context", {{"date", 7}}}};
   for (const auto& [key, value] : bad) {
     nlohmann::json j = saved_result(1, 1, 1);
@@ -590,7 +591,7 @@ TEST(BenchCompare, ASavedRunWithMistypedSettingsIsRefusedFirst) {
                                               "--quick", "-q", "--json", out, "--compare", saved});
   EXPECT_EQ(r.exit_code, 2);
   ASSERT_EQ(r.error_lines().size(), 1u) << r.err;
-  EXPECT_NE(r.error_lines()[0].find("image.height: expected an integer"), std::string::npos) << r.err;
+  EXPECT_NE(r.error_lines()[0].find("image.height: expected a whole number"), std::string::npos) << r.err;
   EXPECT_EQ(test::read_file(out), "precious");
 }
 

@@ -166,7 +166,8 @@ void OutputFiles::write(const std::string& path, const std::string& bytes) {
   static unsigned counter = 0;
   int fd = -1;
   for (int attempt = 0; attempt < 100 && fd < 0; ++attempt) {
-    e.temp = folder_of(path) + "/." + name_of(path) + ".tmp-" + std::to_string(::getpid()) + "-" +
+    // The name cut to 200 bytes: a name of up to 255 (NAME_MAX) stays writable.
+    e.temp = folder_of(path) + "/." + name_of(path).substr(0, 200) + ".tmp-" + std::to_string(::getpid()) + "-" +
              std::to_string(counter++);
     e.slot = claim_slot(e.temp);  // before the file exists: a signal may come any time
     if (e.slot < 0) {

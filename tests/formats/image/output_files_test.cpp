@@ -75,6 +75,19 @@ TEST(Outputs, NoOutputMayNameAnotherOutput) {
   EXPECT_EQ(test::read_file(image), "old");
 }
 
+// Names as long as a folder allows (255 bytes) are written: their
+// temporary files, beside them, take a shorter name.
+TEST(Outputs, TheLongestFileNamesAreWritten) {
+  TempDir dir;
+  const std::string scene = dir.write("s.json", kScene);
+  const std::string image = dir.file(std::string(251, 'i') + ".png"), stats = dir.file(std::string(250, 's') + ".json");
+  const RunResult r = run_opsila({"render", scene, "-o", image, "--stats", stats, "--reference", "-q"});
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(test::file_exists(image));
+  EXPECT_TRUE(test::file_exists(stats));
+  EXPECT_EQ(TempDir::list(dir.path()).size(), 3u) << "a temporary file was left behind";
+}
+
 // A file size limit makes the second output's write fail (EFBIG) as a full
 // disk would, while the first (a small PNG) fits.
 TEST(Outputs, AFailedWriteLeavesNoOutputAtAll) {

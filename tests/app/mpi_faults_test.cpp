@@ -68,20 +68,17 @@ TEST_F(MpiFixture, RanksStartedUnalikeAreRefused) {
   const std::vector<std::string> args = {"s.json", "--size", "32x24", "-o", dir.file("x.pfm")};
   std::vector<std::string> deeper = args;
   deeper.insert(deeper.end(), {"--depth", "3"});
-  std::vector<std::string> a = launch(1);
-  a.insert(a.end(), {"-wdir", dir.path(), OPSILA_BINARY, "render"});
-  a.insert(a.end(), args.begin(), args.end());
-  a.insert(a.end(), {":", "-np", "1", "-wdir", dir.path(), OPSILA_BINARY, "render"});
-  a.insert(a.end(), deeper.begin(), deeper.end());
-  expect_refused(test::run_program("/usr/bin/timeout", a, env),
-                 {"opsila: error: rank 0: the ranks were given different arguments"});
-  a = launch(1);
-  a.insert(a.end(), {"-wdir", dir.path(), OPSILA_BINARY, "render"});
-  a.insert(a.end(), args.begin(), args.end());
-  a.insert(a.end(), {":", "-np", "1", "-wdir", other.path(), OPSILA_BINARY, "render"});
-  a.insert(a.end(), args.begin(), args.end());
-  expect_refused(test::run_program("/usr/bin/timeout", a, env),
-                 {"opsila: error: rank 0: s.json: the ranks did not read the same file"});
+  // Rank 0 in `dir` with `args`, rank 1 in `folder` with `its`.
+  const auto two = [&](const std::string& folder, const std::vector<std::string>& its) {
+    std::vector<std::string> a = launch(1);
+    a.insert(a.end(), {"-wdir", dir.path(), OPSILA_BINARY, "render"});
+    a.insert(a.end(), args.begin(), args.end());
+    a.insert(a.end(), {":", "-np", "1", "-wdir", folder, OPSILA_BINARY, "render"});
+    a.insert(a.end(), its.begin(), its.end());
+    return test::run_program("/usr/bin/timeout", a, env);
+  };
+  expect_refused(two(dir.path(), deeper), {"opsila: error: rank 0: the ranks were given different arguments"});
+  expect_refused(two(other.path(), args), {"opsila: error: rank 0: s.json: the ranks did not read the same file"});
   EXPECT_FALSE(test::file_exists(dir.file("x.pfm")));
 }
 

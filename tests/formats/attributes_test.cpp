@@ -339,6 +339,27 @@ TEST(BankAttributes, NormalsOnlyWhenSmoothAndCoordinatesOnlyWithAMap) {
 
 // ------------------------------------------------------------ scene file
 
+// A textured model included three times holds its map once: each include's
+// materials name the one copy (twelve includes of a map of 8192 x 8192
+// held twelve copies, 3 GB beyond one).
+TEST(SceneIncludes, AMapSeveralIncludesNameIsHeldOnce) {
+  test::TempDir dir;
+  dir.write("t.png", encode_png(4, 4, std::vector<float>(4 * 4 * 3, 0.5f)));
+  dir.write("t.mtl", "newmtl m\nKd 1 1 1\nmap_Kd t.png\nnewmtl n\nKd 1 1 1\nmap_Ka t.png\n");
+  dir.write("t.obj", "mtllib t.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nusemtl m\nf 1/1 2/2 3/3\n"
+                     "usemtl n\nf 1/1 3/3 2/2\n");
+  std::string objects;
+  for (int k = 0; k < 3; ++k)
+    objects += std::string(k ? "," : "") + R"({"type": "obj", "file": "t.obj", "transform": {"translate": [)" +
+               std::to_string(2 * k) + ", 0, 0]}}";
+  const Scene s = load_scene(dir.write("s.json", "{\"objects\": [" + objects + "]}"));
+  ASSERT_EQ(s.textures.size(), 1u);
+  EXPECT_EQ(s.textures[0].width, 4);
+  ASSERT_EQ(s.materials.size(), 7u);  // the default, then m and n of each include
+  for (std::size_t k = 1; k < s.materials.size(); ++k)
+    EXPECT_EQ(k % 2 ? s.materials[k].map_kd : s.materials[k].map_ka, 0) << k;
+}
+
 TEST(SceneSmooth, KeyAndIncludedObjNormalsFollowTheTransform) {
   test::TempDir dir;
   dir.write("n.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nvn 1 0 0\nvn 0 1 0\nf 1//1 2//2 3//3\n");

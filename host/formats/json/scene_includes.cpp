@@ -94,16 +94,25 @@ void ModelIncludes::read(Scene& sub, const Reading& r, bool any_format, std::uin
 }
 
 // The model's own materials and maps after the scene's (its material 0,
-// the default, is the scene's).
+// the default, is the scene's). A map an earlier include holds (the same
+// path, so the same image) is not joined again: twelve includes of a model
+// with a map of 8192 x 8192 held twelve copies of its 256 MiB of texels.
 void ModelIncludes::join_materials(Scene& sub) {
-  const int tex_offset = static_cast<int>(scene_.textures.size());
+  std::vector<int> at(sub.textures.size());
+  for (std::size_t k = 0; k < sub.textures.size(); ++k) {
+    Texture& t = sub.textures[k];
+    const std::string key = t.path + (t.pixels_later ? "\n(later)" : "");
+    const auto [it, added] = texture_at_.emplace(key, static_cast<int>(scene_.textures.size()));
+    if (added) scene_.textures.push_back(std::move(t));
+    at[k] = it->second;
+  }
+  std::vector<Texture>().swap(sub.textures);  // the model's triangles wait in `sub` until built: not its maps
   for (std::size_t k = 1; k < sub.materials.size(); ++k) {
     MaterialDesc m = sub.materials[k];
-    if (m.map_kd >= 0) m.map_kd += tex_offset;
-    if (m.map_ka >= 0) m.map_ka += tex_offset;
+    if (m.map_kd >= 0) m.map_kd = at[std::size_t(m.map_kd)];
+    if (m.map_ka >= 0) m.map_ka = at[std::size_t(m.map_ka)];
     scene_.materials.push_back(std::move(m));
   }
-  for (Texture& t : sub.textures) scene_.textures.push_back(std::move(t));
 }
 
 // An OBJ entry (or a PLY or STL model its stream reads) read as a stream

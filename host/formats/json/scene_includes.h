@@ -11,6 +11,7 @@
 #include <functional>
 #include <memory>
 #include <string>
+#include <unordered_map>
 #include <vector>
 
 #include "formats/json/scene_build.h"
@@ -51,6 +52,8 @@ class ModelIncludes {
   Building& building_;
   Scene& scene_;
   const std::string& base_dir_;
+  // The scene's maps by path: a map that several includes name is held once.
+  std::unordered_map<std::string, int> texture_at_;
 };
 
 }  // namespace scene_json

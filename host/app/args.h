@@ -113,10 +113,11 @@ void check_view_flags(const ViewOptions& o);
 DeviceEntry choose_device_flag(const std::string& spec, const Ranks& ranks);
 
 // Under mpirun, before any other collective: every rank was given the same
-// arguments (but --device, each rank's own) and reads the same scene file (its size and its first and last
-// MiB; the readers compare what they stream, SceneShare::reads). Ranks
-// started unalike (mpirun's ':' programs, folders with their own copies)
-// went on to exchange what did not match. InputError naming the difference.
+// arguments (but --device, each rank's own) and reads the same scene file
+// (its size and its first and last MiB; the readers compare what they
+// stream, SceneShare::reads). Ranks started unalike (mpirun's ':'
+// programs, folders with their own copies) went on to exchange what did
+// not match. InputError naming the difference.
 void check_started_alike(Ranks& ranks, const std::vector<std::string>& args, const std::string& scene_path);
 
 // ------------------------------------------------------------ walk_args

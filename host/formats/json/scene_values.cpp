@@ -209,7 +209,10 @@ void SceneValues::count2(const Json& v, const std::string& path, int hi, int& a,
 
 std::string SceneValues::string(const Json& v, const std::string& path) const {
   if (!v.is_string()) fail(path, std::string("expected a string, not ") + kind(v));
-  return v.get<std::string>();
+  // A file name cut at its NUL would open another file ("t.obj\u0000x" read t.obj).
+  const std::string& s = v.get_ref<const std::string&>();
+  if (s.find('\0') != std::string::npos) fail(path, "a string here may not hold \\u0000");
+  return s;
 }
 
 }  // namespace scene_json

@@ -12,6 +12,7 @@
 #include <mpi.h>
 
 #include "core/fixed_point.h"
+#include "core/last_words.h"
 #endif
 
 namespace opsila {
@@ -67,6 +68,7 @@ void MpiRanks::start() {
   std::atexit(finish_at_exit);
   MPI_Comm_rank(MPI_COMM_WORLD, &rank_);
   MPI_Comm_size(MPI_COMM_WORLD, &size_);
+  set_last_words_rank(rank_, size_);
   // Ranks sharing this machine (MPI-3): the local rank picks the node's GPU.
   MPI_Comm local;
   MPI_Comm_split_type(MPI_COMM_WORLD, MPI_COMM_TYPE_SHARED, rank_, MPI_INFO_NULL, &local);

@@ -137,6 +137,45 @@ TEST_F(MpiFixture, RanksFailingTogetherPrintOneLine) {
   }
 }
 
+// The model importer failing inside a library call (a fault caught by a
+// signal handler, a read past its time) ends a rank at once, with no
+// collective to agree on one line: every rank reads the model and printed
+// its own. Rank 0 speaks; the others wait long enough for the job to end,
+// so that a rank failing alone still says so. The line names the scene's
+// file, line and key. The importer's fault needs Debian's assimp test models.
+TEST_F(MpiFixture, AnImporterFailingInsideItsLibraryIsOneLine) {
+  const std::string cob = "/usr/share/assimp/models/COB/molecule.cob";
+  if (!test::file_exists(cob)) GTEST_SKIP() << "Debian package assimp-testmodels is not installed";
+  const std::string cut = dir.write("cut.cob", test::read_file(cob).substr(0, 363));  // the importer faults on it
+  const std::string s = dir.write("s.json", "{\"objects\": [\n{\"type\": \"sphere\", \"center\": [0, 0, 0], \"radius\": 1},"
+                                            "\n{\"type\": \"model\", \"file\": \"cut.cob\"}]}");
+  const RunResult r = ranks(3, {s, "--size", "32x24", "-o", dir.file("x.pfm")});
+  expect_refused(r, {"opsila: error: rank 0: " + s + ":3: objects[1].file: " + cut + ": the model importer failed"});
+  EXPECT_FALSE(test::file_exists(dir.file("x.pfm")));
+}
+
+TEST_F(MpiFixture, AnImporterOutOfTimeOnOneRankStillSaysSo) {
+  std::string off = "OFF\n150002 150000 0\n";  // about 0.3 s for the importer
+  for (int i = 0; i < 150002; ++i)
+    off += std::to_string(i % 300) + " " + std::to_string(i / 300) + " " + std::to_string(i % 5) + "\n";
+  for (int i = 0; i < 150000; ++i)
+    off += "3 " + std::to_string(i) + " " + std::to_string(i + 1) + " " + std::to_string(i + 2) + "\n";
+  const std::vector<std::string> args = {dir.write("big.off", off), "--size", "32x24", "-o", dir.file("x.pfm")};
+  std::vector<std::string> a = launch(2);
+  a.insert(a.end(), {OPSILA_BINARY, "render"});
+  a.insert(a.end(), args.begin(), args.end());
+  a.insert(a.end(), {":", "-np", "1", "/usr/bin/env", "OPSILA_IMPORT_TIMEOUT=0", OPSILA_BINARY, "render"});
+  a.insert(a.end(), args.begin(), args.end());  // rank 2 gives the importer no time
+  const RunResult r = test::run_program("/usr/bin/timeout", a, env);
+  EXPECT_NE(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.exit_code, 124) << "the ranks hung";
+  const auto errors = r.error_lines();
+  ASSERT_EQ(errors.size(), 1u) << r.err;
+  EXPECT_EQ(errors[0].rfind("opsila: error: rank 2: " + args[0] + ": the model importer did not finish", 0), 0u)
+      << errors[0];
+  EXPECT_FALSE(test::file_exists(dir.file("x.pfm")));
+}
+
 // Ranks that do not see the same model file (one started in another
 // folder, as on machines with their own copies, or a file rewritten while
 // they stream it): refused with one line naming the file, before any

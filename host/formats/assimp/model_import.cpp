@@ -6,6 +6,7 @@
 
 #include <fcntl.h>
 #include <signal.h>
+#include <time.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -29,6 +30,7 @@
 
 #include "core/env_hooks.h"
 #include "core/host_memory.h"
+#include "core/last_words.h"
 #include "core/util.h"
 #include "formats/assimp/model_checks.h"
 #include "formats/common/model_fan.h"
@@ -162,13 +164,11 @@ std::uint64_t resident_bytes() {
 // while the importer's own stderr is shut (ImportStderr).
 int g_error_fd = 2;
 
-// Write all of `text` to g_error_fd (async-signal-safe).
-void say_error(const char* text, std::size_t length) {
-  while (length > 0) {
-    const ssize_t n = write(g_error_fd, text, length);
-    if (n <= 0) return;
-    text += n, length -= std::size_t(n);
-  }
+// Seconds on the monotonic clock (async-signal-safe).
+double monotonic_seconds() {
+  timespec t{};
+  clock_gettime(CLOCK_MONOTONIC, &t);
+  return double(t.tv_sec) + 1e-9 * double(t.tv_nsec);
 }
 
 // The importer prints to stderr on its way to a failure (a failed
@@ -215,13 +215,14 @@ class ImportWatchdog {
       budget = v;
     }
     const std::uint64_t memory = import_memory_budget(bytes);
-    message_ = "opsila: error: " + name + ": the model importer did not finish within " +
+    message_ = "opsila: error: " + last_words_prefix() + name + ": the model importer did not finish within " +
                std::to_string(static_cast<long long>(budget + 0.5)) + " s (malformed file?)\n";
-    memory_message_ = "opsila: error: " + name + ": the model importer took more than " +
+    memory_message_ = "opsila: error: " + last_words_prefix() + name + ": the model importer took more than " +
                       std::to_string(memory >> 20) + " MiB of memory reading a file of " + std::to_string(bytes) +
                       " bytes (malformed file?)\n";
     const std::uint64_t base = resident_bytes();
-    thread_ = std::thread([this, budget, memory, base] {
+    const double start = monotonic_seconds();
+    thread_ = std::thread([this, budget, memory, base, start] {
       std::unique_lock<std::mutex> lock(mutex_);
       const auto deadline = std::chrono::steady_clock::now() +
                             std::chrono::duration_cast<std::chrono::steady_clock::duration>(
@@ -234,8 +235,8 @@ class ImportWatchdog {
         const std::uint64_t now = resident_bytes();
         if (late || now > base + memory) {
           const std::string& text = late ? message_ : memory_message_;
-          say_error(text.c_str(), text.size());
-          std::_Exit(2);  // the exit code of bad input (app/args.h)
+          // 2: the exit code of bad input (app/args.h)
+          say_last_words(g_error_fd, text.c_str(), text.size(), monotonic_seconds() - start, 2);
         }
       }
     });
@@ -273,9 +274,10 @@ class ImportFaultGuard {
  public:
   explicit ImportFaultGuard(const std::string& name) {
     std::snprintf(message_, sizeof message_,
-                  "opsila: error: %s: the model importer failed while reading it (malformed file?)\n",
-                  name.size() < 3000 ? name.c_str() : "the model");
+                  "opsila: error: %s%s: the model importer failed while reading it (malformed file?)\n",
+                  last_words_prefix().c_str(), name.size() < 3000 ? name.c_str() : "the model");
     length_ = std::strlen(message_);
+    start_ = monotonic_seconds();
     alt_.resize(std::max<std::size_t>(SIGSTKSZ, 64 * 1024));
     stack_t st{};
     st.ss_sp = alt_.data();
@@ -298,13 +300,13 @@ class ImportFaultGuard {
 
  private:
   static void on_fault(int) {
-    say_error(message_, length_);
-    _exit(2);  // the exit code of bad input (app/args.h)
+    say_last_words(g_error_fd, message_, length_, monotonic_seconds() - start_, 2);  // 2: bad input (app/args.h)
   }
   static constexpr int kSignals = 5;
   static constexpr int kSignal[kSignals] = {SIGSEGV, SIGBUS, SIGFPE, SIGILL, SIGABRT};
   static inline char message_[4096];
   static inline std::size_t length_ = 0;
+  static inline double start_ = 0;
   std::vector<char> alt_;
   stack_t old_stack_{};
   struct sigaction old_[kSignals] {};

@@ -4,6 +4,7 @@
 #include <filesystem>
 
 #include "core/input_file.h"
+#include "core/last_words.h"
 #include "core/util.h"
 #include "formats/assimp/model_import.h"
 #include "formats/assimp/model_window.h"
@@ -73,6 +74,7 @@ ModelIncludes::Make ModelIncludes::plan(const Json& v, const std::string& path, 
 // only the counts, materials and warnings.
 void ModelIncludes::read(Scene& sub, const Reading& r, bool any_format, std::uint64_t& fans) {
   const MapImages images = dealer_.share().map_images;
+  const LastWordsPlace place(v_.where(r.fkey));  // for a fault inside the importer
   try {
     if (!r.obj && any_format && !is_imported_model(r.full))
       throw InputError(r.full + ": not a model format the importer reads (see scenes/FORMAT.md)");
@@ -140,6 +142,7 @@ void ModelIncludes::file_window(Scene& sub, const std::string& file, std::uint64
 // attributes, which must be those the plan counted.
 void ModelIncludes::model_again(Scene& sub, const std::string& file, std::size_t triangles, const std::string& fkey) {
   Scene again;
+  const LastWordsPlace place(v_.where(fkey));
   try {
     again = load_model(file, dealer_.share().map_images);
   } catch (const InputError& e) {

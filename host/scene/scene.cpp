@@ -195,19 +195,23 @@ void check_scene_extent(const Scene& scene, const std::string& where) {
 
 void check_scene_extent(std::size_t triangles, const Vec3& lo, const Vec3& hi, const std::string& where) {
   if (triangles == 0) throw InputError(where + ": no facets");
+  if (const std::string beyond = scene_extent_beyond(lo, hi); !beyond.empty()) throw InputError(where + ": " + beyond);
   const double diag = box_diagonal(lo, hi);
   const float diag_f = static_cast<float>(diag);
-  if (!std::isfinite(diag_f))
-    throw InputError(where + ": scene extent overflows float (bounding-box diagonal " +
-                     short_number(diag) + ")");
-  if (diag > kMaxSceneExtent)
-    throw InputError(where + ": scene extent too large (bounding-box diagonal " +
-                     short_number(diag) + ", the limit is " + short_number(kMaxSceneExtent) +
-                     ")");
   const float eps = epsilon_for(diag);
   if (!(diag_f > 0) || !(eps > 0) || !std::isfinite(eps))
     throw InputError(where + ": scene has no extent (bounding-box diagonal " +
                      short_number(diag) + ", so epsilon is not positive)");
+}
+
+std::string scene_extent_beyond(const Vec3& lo, const Vec3& hi) {
+  const double diag = box_diagonal(lo, hi);
+  if (!std::isfinite(static_cast<float>(diag)))
+    return "scene extent overflows float (bounding-box diagonal " + short_number(diag) + ")";
+  if (diag > kMaxSceneExtent)
+    return "scene extent too large (bounding-box diagonal " + short_number(diag) + ", the limit is " +
+           short_number(kMaxSceneExtent) + ")";
+  return "";
 }
 
 void check_material_count(std::size_t materials, const std::string& where) {

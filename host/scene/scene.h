@@ -291,5 +291,9 @@ constexpr double kMaxSceneExtent = 1e30;
 void check_scene_extent(const Scene& scene, const std::string& where);
 // The same from the figures: triangle count and bounds.
 void check_scene_extent(std::size_t triangles, const Vec3& lo, const Vec3& hi, const std::string& where);
+// What is wrong with bounds too large for the renderer ("scene extent too
+// large (...)"), or "" when they are not: a reader that grows its bounds an
+// object at a time names the object that took them past the limit.
+std::string scene_extent_beyond(const Vec3& lo, const Vec3& hi);
 
 }  // namespace opsila

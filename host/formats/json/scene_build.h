@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cstddef>
+#include <limits>
 #include <optional>
 #include <string>
 
@@ -78,6 +79,10 @@ struct Building {
   Entry entry;
   int next_object = 0;
   int next_facet = 0;
+  // The box of the facets settled so far: the entry that takes it past the
+  // renderer's extent is the one the error names.
+  Vec3 lo{kInf, kInf, kInf}, hi{-kInf, -kInf, -kInf};
+  static constexpr float kInf = std::numeric_limits<float>::infinity();
 };
 
 }  // namespace scene_json

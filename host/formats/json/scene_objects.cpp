@@ -170,6 +170,14 @@ void ObjectReader::flush_entry() {
     transform_normals(scene_.attributes, first_attribute, *entry.placed);
   }
   entry.dropped += settle(tris, first, entry.path);
+  for (std::size_t k = first; k < tris.size(); ++k)
+    for (const Vec3& v : {tris[k].v0, tris[k].v1, tris[k].v2}) {
+      building_.lo = min(building_.lo, v);
+      building_.hi = max(building_.hi, v);
+    }
+  if (tris.size() > first)
+    if (const std::string beyond = scene_extent_beyond(building_.lo, building_.hi); !beyond.empty())
+      v_.fail(entry.path, beyond);
   if (dealer_.active() && entry.share.windowed)
     dealer_.count_window(scene_, first);
   else if (dealer_.active())

@@ -491,7 +491,10 @@ TEST(SceneFormat, ErrorsNameFileLineAndKeyPath) {
        "\"subdivisions\": 0}]}",
        {"objects[0]", "overflows float"}},
       {"{\"objects\": [{\"type\": \"box\", \"min\": [-1e36,0,0], \"max\": [1e36,1,1]}]}",
-       {"s.json", "extent too large"}},
+       {"s.json:1:", "objects[0]: scene extent too large"}},
+      {"{\"objects\": [{\"type\": \"sphere\", \"center\": [0,0,0], \"radius\": 1},\n"
+       "{\"type\": \"sphere\", \"center\": [3e30,0,0], \"radius\": 1}]}",
+       {"s.json:2:", "objects[1]: scene extent too large"}},
       {"{\"objects\": [{\"type\": \"sphere\", \"center\": [0,0,0], \"radius\": 1, \"subdivisions\": 11}]}",
        {"objects[0].subdivisions", "0..10"}},
       {"{\"objects\": [{\"type\": \"scatter\", \"count\": 5, \"min\": [0,0,0], \"max\": [1,1,1], "
@@ -526,6 +529,21 @@ TEST(SceneFormat, FileErrorsNameTheFile) {
                {"missing_include.json:4:", "no_such_model.obj", "cannot open"});
   expect_error([] { load_scene(kData + "/scenes/none.json"); }, {"none.json", "cannot open"});
   expect_error([] { load_scene(kData + "/scenes"); }, {"scenes", "directory"});
+}
+
+// A file name holding \u0000 is refused: cut at the NUL it named another
+// file, and "t.obj\u0000x" rendered t.obj.
+TEST(SceneFormat, AFileNameWithANulIsRefused) {
+  test::TempDir dir;
+  dir.write("t.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+  const std::string ok = dir.write("ok.json", R"({"objects": [{"type": "obj", "file": "t.obj"}]})");
+  EXPECT_EQ(load_scene(ok).triangles.size(), 1u);
+  for (const char* type : {"obj", "model"}) {
+    SCOPED_TRACE(type);
+    const std::string path = dir.write(
+        "nul.json", std::string(R"({"objects": [)") + "\n" + R"({"type": ")" + type + R"(", "file": "t.obj\u0000x"}]})");
+    expect_error([&] { load_scene(path); }, {"nul.json:2:", "objects[0].file", "\\u0000"});
+  }
 }
 
 TEST(SceneFormat, TriangleBudgetIsEnforcedBeforeBuilding) {

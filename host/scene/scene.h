@@ -85,6 +85,12 @@ struct Texture {
   // A scene read in shares: the image was checked, but its texels are
   // decoded only by the ranks whose facets use it (docs/DISTRIBUTED.md).
   bool pixels_later = false;
+  // The file's device and inode (0, 0 for an embedded map): one file under
+  // two names (a link, a second path) is one map, its texels held once.
+  std::uint64_t file_device = 0, file_inode = 0;
+  bool same_file(std::uint64_t device, std::uint64_t inode) const {
+    return inode != 0 && file_inode == inode && file_device == device;
+  }
 };
 
 // What a reader does with the image of each texture map its materials

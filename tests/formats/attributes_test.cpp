@@ -9,6 +9,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -358,6 +359,30 @@ TEST(SceneIncludes, AMapSeveralIncludesNameIsHeldOnce) {
   ASSERT_EQ(s.materials.size(), 7u);  // the default, then m and n of each include
   for (std::size_t k = 1; k < s.materials.size(); ++k)
     EXPECT_EQ(k % 2 ? s.materials[k].map_kd : s.materials[k].map_ka, 0) << k;
+}
+
+// One image file under other names (a symbolic link, a hard link) is one
+// map, in one OBJ's materials and across includes: each name held another
+// copy of its texels (a 200 KB PNG of 8192 x 8192 is 256 MiB of them).
+TEST(SceneIncludes, AMapUnderOtherNamesIsHeldOnce) {
+  test::TempDir dir;
+  const std::string png = dir.write("t.png", encode_png(4, 4, std::vector<float>(4 * 4 * 3, 0.5f)));
+  std::filesystem::create_symlink("t.png", dir.file("soft.png"));
+  std::filesystem::create_hard_link(png, dir.file("hard.png"));
+  dir.write("t.mtl", "newmtl m\nKd 1 1 1\nmap_Kd t.png\nnewmtl n\nKd 1 1 1\nmap_Kd soft.png\n");
+  dir.write("u.mtl", "newmtl h\nKd 1 1 1\nmap_Kd hard.png\n");
+  const std::string face = "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\n";
+  const std::string t = dir.write("t.obj", "mtllib t.mtl\n" + face + "usemtl m\nf 1/1 2/2 3/3\nusemtl n\nf 1/1 3/3 2/2\n");
+  dir.write("u.obj", "mtllib u.mtl\n" + face + "usemtl h\nf 1/1 2/2 3/3\n");
+  const Scene alone = load_obj(t);
+  ASSERT_EQ(alone.textures.size(), 1u);
+  EXPECT_EQ(alone.materials.at(1).map_kd, 0);
+  EXPECT_EQ(alone.materials.at(2).map_kd, 0);
+  const Scene s = load_scene(dir.write("s.json", R"({"objects": [{"type": "obj", "file": "t.obj"},
+    {"type": "obj", "file": "u.obj", "transform": {"translate": [2, 0, 0]}}]})"));
+  ASSERT_EQ(s.textures.size(), 1u);
+  ASSERT_EQ(s.materials.size(), 4u);
+  for (std::size_t k = 1; k < s.materials.size(); ++k) EXPECT_EQ(s.materials[k].map_kd, 0) << k;
 }
 
 TEST(SceneSmooth, KeyAndIncludedObjNormalsFollowTheTransform) {

@@ -8,6 +8,8 @@
 #include <limits>
 #include <system_error>
 
+#include <sys/stat.h>
+
 #define STBI_ONLY_PNG
 #define STBI_ONLY_JPEG
 #define STBI_ONLY_TGA
@@ -120,13 +122,22 @@ std::string resolve_texture_path(const std::string& written, const std::string& 
   return full.string();
 }
 
+int map_of_file(const Scene& scene, const std::string& path, Texture& t) {
+  struct stat st {};
+  if (stat(path.c_str(), &st) == 0) t.file_device = std::uint64_t(st.st_dev), t.file_inode = std::uint64_t(st.st_ino);
+  for (std::size_t i = 0; i < scene.textures.size(); ++i) {
+    const Texture& known = scene.textures[i];
+    if (known.path == path || known.same_file(t.file_device, t.file_inode)) return static_cast<int>(i);
+  }
+  return -1;
+}
+
 int add_texture_file(Scene& scene, const std::string& path, const std::string& where, MapImages images) {
   if (images == MapImages::later) return list_map_for_later(scene, path, where);
-  for (std::size_t i = 0; i < scene.textures.size(); ++i)
-    if (scene.textures[i].path == path) return static_cast<int>(i);
+  Texture t;
+  if (const int known = map_of_file(scene, path, t); known >= 0) return known;
   // An input, whether or not it decodes: no output may overwrite it.
   scene.input_files.push_back(path);
-  Texture t;
   std::string problem;
   if (!decode_texture_file(path, t, problem)) {
     scene.warnings.push_back(where + "texture map '" + path + "' ignored: " + problem);

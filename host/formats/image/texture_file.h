@@ -47,6 +47,11 @@ int add_texture_file(Scene& scene, const std::string& path, const std::string& w
 // whose facets use them (decode_used_maps).
 int list_map_for_later(Scene& scene, const std::string& path, const std::string& where);
 
+// The index of the scene's map that is `path`'s file (by name, or by device
+// and inode: a link or another path to it), or -1; `t` gets the file's
+// device and inode for a map added next.
+int map_of_file(const Scene& scene, const std::string& path, Texture& t);
+
 // What checking one image found: its size, or why it is ignored.
 struct MapCheck {
   bool ok = false;

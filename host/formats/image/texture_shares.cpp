@@ -45,10 +45,9 @@ std::map<std::string, MapCheck*> checks_by_path(const Scene& scene, std::vector<
 // about it.
 int list_map_for_later(Scene& scene, const std::string& path, const std::string& where) {
   scene.map_requests.push_back(MapRequest{path, where, scene.warnings.size()});
-  for (std::size_t i = 0; i < scene.textures.size(); ++i)
-    if (scene.textures[i].path == path) return static_cast<int>(i);
-  scene.input_files.push_back(path);
   Texture t;
+  if (const int known = map_of_file(scene, path, t); known >= 0) return known;
+  scene.input_files.push_back(path);
   t.path = path;
   t.pixels_later = true;
   scene.textures.push_back(std::move(t));

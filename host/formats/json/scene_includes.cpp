@@ -97,13 +97,14 @@ void ModelIncludes::read(Scene& sub, const Reading& r, bool any_format, std::uin
 
 // The model's own materials and maps after the scene's (its material 0,
 // the default, is the scene's). A map an earlier include holds (the same
-// path, so the same image) is not joined again: twelve includes of a model
+// file, by any name) is not joined again: twelve includes of a model
 // with a map of 8192 x 8192 held twelve copies of its 256 MiB of texels.
 void ModelIncludes::join_materials(Scene& sub) {
   std::vector<int> at(sub.textures.size());
   for (std::size_t k = 0; k < sub.textures.size(); ++k) {
     Texture& t = sub.textures[k];
-    const std::string key = t.path + (t.pixels_later ? "\n(later)" : "");
+    const std::string file = t.file_inode ? std::to_string(t.file_device) + ":" + std::to_string(t.file_inode) : t.path;
+    const std::string key = file + (t.pixels_later ? "\n(later)" : "");
     const auto [it, added] = texture_at_.emplace(key, static_cast<int>(scene_.textures.size()));
     if (added) scene_.textures.push_back(std::move(t));
     at[k] = it->second;

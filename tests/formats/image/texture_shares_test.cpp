@@ -5,6 +5,7 @@
 // process's places, and its texture table.
 #include <gtest/gtest.h>
 
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -54,6 +55,20 @@ TEST(TextureShares, ListedMapsSettleAsOneProcessReadsThem) {
   EXPECT_EQ(later.textures[0].texels, now.textures[0].texels);
   EXPECT_EQ(later.materials[1].map_kd, now.materials[1].map_kd);
   EXPECT_EQ(later.materials[2].map_kd, now.materials[2].map_kd);
+}
+
+// A map listed again under another name of its file (a link) is the one
+// listed first: one texture (each name is still checked, so that a bad
+// image warns under the names one process would give).
+TEST(TextureShares, AMapListedUnderALinkIsListedOnce) {
+  TempDir dir;
+  const std::string good = dir.write("good.tga", test::tga(2, 1, {{255, 0, 0}, {0, 255, 0}}));
+  std::filesystem::create_symlink("good.tga", dir.file("link.tga"));
+  for (const MapImages images : {MapImages::now, MapImages::later}) {
+    const Scene s = read_maps(good, dir.file("link.tga"), images);
+    ASSERT_EQ(s.textures.size(), 1u);
+    EXPECT_EQ(s.materials[2].map_kd, 0);
+  }
 }
 
 // A model's warnings joined after a scene's, or a reader's own put first:

@@ -6,6 +6,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <climits>
 #include <cstring>
@@ -195,25 +196,57 @@ void OutputFiles::write(const std::string& path, const std::string& bytes) {
   if (::close(fd) != 0) fail(std::strerror(errno));
 }
 
+// An output that replaces a file keeps the old one under a second name (a
+// hard link beside it) until the whole set is in place: a rename that
+// fails after others have succeeded puts the old files back, where it had
+// removed them (a table's name held by a folder, a busy mount point).
+// Where no link can be made (a file system without them) the old file is
+// replaced last among the set, so a failure before it leaves it untouched.
 void OutputFiles::commit() {
   HoldSignals hold;
+  std::vector<std::string> kept(entries_.size());  // the old file's second name, or ""
+  std::vector<std::size_t> order;
   for (std::size_t k = 0; k < entries_.size(); ++k) {
     Entry& e = entries_[k];
     if (e.temp.empty()) continue;  // declared, but this run has nothing for it
-    if (::rename(e.temp.c_str(), e.path.c_str()) != 0) {
-      const int err = errno;
-      // Those already in place go again: the set appears whole or not at all.
-      for (std::size_t j = 0; j < k; ++j)
-        if (!entries_[j].temp.empty()) ::unlink(entries_[j].path.c_str());
-      for (std::size_t j = 0; j < k; ++j) entries_[j].temp.clear();
-      discard();
-      cannot_write(e.path, std::strerror(err));
+    struct stat st;
+    if (::lstat(e.path.c_str(), &st) == 0) {
+      if (S_ISDIR(st.st_mode)) fail_commit(kept, order, 0, e.path, std::strerror(EISDIR));
+      kept[k] = e.temp + ".old";
+      if (::link(e.path.c_str(), kept[k].c_str()) != 0) kept[k].clear();
     }
-    release_slot(e.slot);
+    order.push_back(k);
   }
-  for (Entry& e : entries_) e.temp.clear();
+  std::stable_partition(order.begin(), order.end(), [&](std::size_t k) {
+    return !kept[k].empty() || ::access(entries_[k].path.c_str(), F_OK) != 0;
+  });
+  for (std::size_t n = 0; n < order.size(); ++n) {
+    Entry& e = entries_[order[n]];
+    if (::rename(e.temp.c_str(), e.path.c_str()) != 0) fail_commit(kept, order, n, e.path, std::strerror(errno));
+  }
+  for (std::size_t k = 0; k < entries_.size(); ++k) {
+    if (!kept[k].empty()) ::unlink(kept[k].c_str());
+    entries_[k].temp.clear();
+    release_slot(entries_[k].slot);
+  }
   g_folder_used = 0;
   folder_created_ = false;
+}
+
+// The first `done` of `order` are in place: each goes back to its old file
+// (or away, where there was none), then every temporary file.
+void OutputFiles::fail_commit(const std::vector<std::string>& kept, const std::vector<std::size_t>& order,
+                              std::size_t done, const std::string& path, const std::string& reason) {
+  for (std::size_t n = 0; n < done; ++n) {
+    Entry& e = entries_[order[n]];
+    const std::string& old = kept[order[n]];
+    if (old.empty() || ::rename(old.c_str(), e.path.c_str()) != 0) ::unlink(e.path.c_str());
+    e.temp.clear();
+  }
+  for (const std::string& old : kept)
+    if (!old.empty()) ::unlink(old.c_str());  // those not put back: their files were never replaced
+  discard();
+  cannot_write(path, reason);
 }
 
 void OutputFiles::discard() noexcept {

@@ -54,6 +54,8 @@ class OutputFiles {
     bool in_folder = false;
   };
   void discard() noexcept;
+  [[noreturn]] void fail_commit(const std::vector<std::string>& kept, const std::vector<std::size_t>& order,
+                                std::size_t done, const std::string& path, const std::string& reason);
   Entry& entry_for(const std::string& path);
 
   std::vector<Entry> entries_;

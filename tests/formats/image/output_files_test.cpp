@@ -4,10 +4,12 @@
 #include <gtest/gtest.h>
 #include <signal.h>
 #include <sys/resource.h>
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <chrono>
+#include <cstdlib>
 #include <thread>
 
 #include "formats/image/image_io.h"
@@ -115,6 +117,46 @@ TEST(Outputs, AFailedWriteLeavesNoOutputAtAll) {
                                    dir.file("o.npy"), "--stats", old_stats, "--reference"});
   EXPECT_EQ(ok.exit_code, 0) << ok.err;
   EXPECT_EQ(dir.entries(), (Names{"o.json", "o.npy", "o.png", "s.json"}));
+}
+
+// A rename that fails once others have succeeded (a table's name held by a
+// folder; a busy mount point) put the new files in place of the old, then
+// removed them: the user's earlier files of those names were lost. The old
+// files now stay as they were.
+TEST(Outputs, AFailedRenameLeavesTheOldFilesInPlace) {
+  TempDir dir;
+  const std::string old_a = dir.write("a.json", "old a");
+  ASSERT_EQ(::mkdir(dir.file("tables").c_str(), 0755), 0);
+  dir.write("tables/keep.csv", "old table");
+  ASSERT_EQ(::mkdir(dir.file("tables/t.csv").c_str(), 0755), 0);  // a folder where a table goes
+  {
+    OutputFiles out;
+    out.declare("--json", old_a);
+    out.declare_folder("--csv", dir.file("tables"));
+    out.write(old_a, "new a");
+    out.write(dir.file("tables/keep.csv"), "new table");
+    out.write(dir.file("tables/t.csv"), "t");
+    test::expect_error([&] { out.commit(); }, {"t.csv: cannot write (Is a directory)"});
+  }
+  EXPECT_EQ(test::read_file(old_a), "old a");
+  EXPECT_EQ(test::read_file(dir.file("tables/keep.csv")), "old table");
+  EXPECT_EQ(dir.entries(), (Names{"a.json", "tables"}));
+  // A rename refused by the system itself, after another's succeeded.
+  const std::string busy = dir.write("busy.json", "old busy"), other = dir.write("other.json", "mounted");
+  if (::geteuid() != 0 || std::system(("mount --bind " + other + " " + busy + " 2>/dev/null").c_str()) != 0)
+    GTEST_SKIP() << "a bind mount (root, and a system that allows it) makes a rename fail with EBUSY";
+  {
+    OutputFiles out;
+    out.declare("--json", old_a);
+    out.declare("--stats", busy);
+    out.write(old_a, "new a");
+    out.write(busy, "new busy");
+    test::expect_error([&] { out.commit(); }, {"busy.json: cannot write"});
+  }
+  EXPECT_EQ(std::system(("umount " + busy).c_str()), 0);
+  EXPECT_EQ(test::read_file(old_a), "old a");
+  EXPECT_EQ(test::read_file(busy), "old busy");
+  EXPECT_EQ(dir.entries(), (Names{"a.json", "busy.json", "other.json", "tables"}));
 }
 
 // The file-size limit with SIGXFSZ left at its default (a user's `ulimit

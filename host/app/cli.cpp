@@ -19,6 +19,7 @@
 
 #include "device/cl_runtime.h"
 #include "formats/image/image_io.h"
+#include "core/env_hooks.h"
 #include "core/progress.h"
 #include "core/stage_clock.h"
 #include "formats/image/output_files.h"
@@ -234,6 +235,7 @@ int run_render(const std::vector<std::string>& args, Ranks& ranks) {
   check_scene_file(o.scene_path);
   check_started_alike(ranks, args, o.scene_path);
   outputs.refuse_inputs({o.scene_path});
+  outputs.refuse_inputs(env_hook_inputs());
   if (o.reference && ranks.size() > 1)
     throw InputError("--reference is the sequential host renderer: run it as one process, without mpirun");
 

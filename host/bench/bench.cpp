@@ -18,6 +18,7 @@
 #include "bench/report.h"
 #include "prepare/prepare.h"
 #include "prepare/scene_limits.h"
+#include "core/env_hooks.h"
 #include "core/progress.h"
 #include "core/stage_clock.h"
 #include "formats/image/image_io.h"
@@ -117,6 +118,7 @@ void declare_outputs(const BenchOptions& o, bool writer, Ranks& ranks, OutputFil
     outputs.declare("--rays-out", o.rays_path);
   }
   outputs.refuse_inputs({o.scene_path});
+  outputs.refuse_inputs(env_hook_inputs());
 }
 
 void write_outputs(const BenchOptions& o, const BenchReport& report, const nlohmann::json& results,

@@ -39,4 +39,10 @@ std::optional<std::uint64_t> env_hook_number(EnvHook hook, std::uint64_t lo, std
   return n;
 }
 
+std::vector<std::string> env_hook_inputs() {
+  std::vector<std::string> files;
+  if (const char* kernels = env_hook(EnvHook::kernel_source)) files.push_back(kernels);
+  return files;
+}
+
 }  // namespace opsila

@@ -9,6 +9,8 @@
 
 #include <cstdint>
 #include <optional>
+#include <string>
+#include <vector>
 
 namespace opsila {
 
@@ -53,5 +55,9 @@ const char* env_hook(EnvHook hook);
 // "NAME=value: expected <expected>" for anything else.
 std::optional<std::uint64_t> env_hook_number(EnvHook hook, std::uint64_t lo, std::uint64_t hi,
                                              const char* expected);
+
+// The files the variables name that a run reads (OPSILA_KERNEL_SOURCE):
+// inputs, which no output may replace.
+std::vector<std::string> env_hook_inputs();
 
 }  // namespace opsila

@@ -64,6 +64,22 @@ TEST(Outputs, NoOutputMayNameTheSceneOrAFileItReads) {
   EXPECT_EQ(dir.entries(), before);
 }
 
+// The kernels a run builds from OPSILA_KERNEL_SOURCE are an input too:
+// `--stats` of the same name replaced them.
+TEST(Outputs, NoOutputMayNameTheKernelSource) {
+  TempDir dir;
+  const std::string scene = dir.write("s.json", kScene), kernels = dir.write("k.json", "kernels");
+  for (const char* command : {"render", "bench"}) {
+    std::vector<std::string> args = {command, scene, std::string(command) == "render" ? "--stats" : "--json", kernels};
+    if (std::string(command) == "render") args.insert(args.end(), {"-o", dir.file("x.png")});
+    const RunResult r = test::run_program(OPSILA_BINARY, args, {{"OPSILA_KERNEL_SOURCE", kernels}});
+    EXPECT_EQ(r.exit_code, 2) << r.err;
+    EXPECT_NE(r.err.find(kernels + ": is an input of this run"), std::string::npos) << r.err;
+    EXPECT_EQ(test::read_file(kernels), "kernels");
+    EXPECT_EQ(dir.entries(), (Names{"k.json", "s.json"}));
+  }
+}
+
 TEST(Outputs, NoOutputMayNameAnotherOutput) {
   TempDir dir;
   const std::string scene = dir.write("s.json", kScene);

@@ -6,6 +6,7 @@
 
 #include "bench/report.h"
 #include "core/input_file.h"
+#include "formats/common/json_text.h"
 #include "scene/scene.h"
 
 namespace opsila {
@@ -113,8 +114,11 @@ void check_saved_settings(const json& j, const std::string& path) {
 }  // namespace
 
 json read_saved_bench(const std::string& path) {
-  // A saved bench result is a few hundred KiB.
-  json j = json::parse(read_named_file("--compare ", path, std::size_t(64) << 20), nullptr, false);
+  // A saved bench result is a few hundred KiB, a few levels deep: its shape
+  // is checked before the parse, which took 3 GB for 40 MiB of '['.
+  const std::string text = read_named_file("--compare ", path, std::size_t(16) << 20);
+  check_json_shape(text, "--compare " + path, 16, 4096);
+  json j = json::parse(text, nullptr, false);
   if (j.is_discarded()) throw InputError("--compare " + path + ": not JSON");
   if (!j.is_object() || !j.contains("render") || !j["render"].is_object())
     throw InputError("--compare " + path + ": not an opsila bench result (no \"render\" block)");

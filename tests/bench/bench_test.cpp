@@ -557,6 +557,9 @@ TEST(BenchCompare, ASavedRunMustBeABenchResult) {
   EXPECT_THROW(read_saved_bench(dir.write("bad.json", "{ not json")), InputError);
   EXPECT_THROW(read_saved_bench(dir.write("other.json", "{\"a\": 1}")), InputError);
   EXPECT_NO_THROW(read_saved_bench(dir.write("ok.json", saved_result(1, 1, 1).dump())));
+  // Its shape is checked before the parse (40 MiB of '[' took 3.1 GB there).
+  test::expect_error([&] { read_saved_bench(dir.write("deep.json", std::string(1 << 23, '['))); },
+                     {"deep.json:1: nesting deeper than 16 levels"});
   const test::RunResult r = test::run_opsila({"bench", "scene.json", "--compare", dir.file("none.json")});
   EXPECT_EQ(r.exit_code, 2);
   ASSERT_EQ(r.error_lines().size(), 1u) << r.err;

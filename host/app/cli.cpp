@@ -37,7 +37,7 @@ namespace opsila {
 namespace {
 
 void print_line(const std::string& kind, const std::string& text) {
-  std::fprintf(stderr, "opsila: %s: %s\n", kind.c_str(), text.c_str());
+  std::fprintf(stderr, "opsila: %s: %s\n", kind.c_str(), shown_text(text).c_str());
 }
 
 // Same path written twice would lose one of the outputs.
@@ -360,7 +360,7 @@ int report_exception(std::exception_ptr error, const Ranks& ranks) {
   std::string line;
   std::getline(lines, line);
   print_line("error", ranks.label() + (line.empty() ? "unknown failure" : line));
-  while (std::getline(lines, line)) std::fprintf(stderr, "    %s\n", line.c_str());
+  while (std::getline(lines, line)) std::fprintf(stderr, "    %s\n", shown_text(line).c_str());
   std::fflush(stderr);
   return code;
 }

@@ -1,6 +1,7 @@
 // opsila: command-line entry point. Every failure ends here as one
 // "opsila: error: ..." line and an exit code (see cli.h); nothing escapes.
 #include <cerrno>
+#include <csignal>
 #include <cstdio>
 #include <cstring>
 #include <exception>
@@ -29,6 +30,9 @@ int checked_stdout(int code) {
 
 int main(int argc, char** argv) {
   opsila::return_large_frees_to_system();
+  // A closed pipe on stdout or stderr is a write error (stdout's is
+  // reported: checked_stdout), not a death by SIGPIPE.
+  std::signal(SIGPIPE, SIG_IGN);
   // The one read of the run's process group: every command is handed it.
   opsila::Ranks& world = opsila::Ranks::world();
   try {

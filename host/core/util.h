@@ -30,6 +30,11 @@ Spread spread_of(const std::vector<double>& v);
 
 double seconds_since(std::chrono::steady_clock::time_point t0);
 
+// `text` as a terminal line shows it: control bytes but newlines (a
+// carriage return, an escape sequence from a file's name) written as \xNN,
+// so that a message cannot rewrite what the terminal shows.
+std::string shown_text(const std::string& text);
+
 // "12.3 MiB": the largest binary unit (KiB, MiB, GiB) not above `bytes`,
 // never below `smallest` (1 = KiB, 2 = MiB), with `decimals` digits.
 std::string format_bytes(double bytes, int decimals, int smallest = 1);

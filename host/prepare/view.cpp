@@ -8,6 +8,7 @@
 #include <cstring>
 #include <set>
 
+#include "core/util.h"
 #include "mpi/ranks.h"
 #include "opsila_shared.h"
 #include "prepare/map_checks.h"
@@ -98,7 +99,7 @@ void print_warnings(const std::vector<std::string>& warnings, bool quiet) {
   std::set<std::string> seen;
   for (const std::string& w : warnings)
     if (seen.size() < kMaxShown && seen.insert(w).second)
-      std::fprintf(stderr, "opsila: warning: %s\n", w.c_str());
+      std::fprintf(stderr, "opsila: warning: %s\n", shown_text(w).c_str());
   if (warnings.size() > seen.size() && seen.size() == kMaxShown)
     std::fprintf(stderr, "opsila: warning: ... and more (only the first %zu are shown)\n", kMaxShown);
 }

@@ -1,7 +1,11 @@
 // The real opsila binary: bad input fails cleanly (one error line naming the
 // flag or file, no output file), good input renders.
 #include <gtest/gtest.h>
+#include <fcntl.h>
+#include <sys/wait.h>
 #include <unistd.h>
+
+#include <csignal>
 
 #include <map>
 #include <sstream>
@@ -133,6 +137,37 @@ TEST_F(CliFixture, AnUnwritableStandardOutputIsAnError) {
     ASSERT_EQ(r.error_lines().size(), 1u) << r.err;
     EXPECT_NE(r.error_lines()[0].find("opsila: error: standard output: write failed"), std::string::npos) << r.err;
   }
+}
+
+// A name's control bytes (a carriage return, an escape sequence) are
+// shown as \xNN: raw, they let a file name rewrite the terminal's line.
+TEST_F(CliFixture, ControlBytesInAMessageAreShownNotSent) {
+  const RunResult r = test::run_opsila({"render", "a\rFAKE\x1b[2J.json", "-o", out("x.png")});
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_EQ(r.err, "opsila: error: a\\x0dFAKE\\x1b[2J.json: cannot open scene (No such file or directory)\n");
+}
+
+// A standard output whose reader has gone (`opsila render --help | head
+// -0`) is a write error like any other, not a death by SIGPIPE.
+TEST_F(CliFixture, AClosedPipeIsAWriteErrorNotASignal) {
+  int fds[2];
+  ASSERT_EQ(::pipe(fds), 0);
+  ::close(fds[0]);  // nobody reads
+  const pid_t pid = ::fork();
+  ASSERT_GE(pid, 0);
+  if (pid == 0) {
+    ::signal(SIGPIPE, SIG_DFL);  // as a shell starts it
+    ::dup2(fds[1], 1);
+    const int null = ::open("/dev/null", O_WRONLY);
+    ::dup2(null, 2);
+    ::execl(OPSILA_BINARY, OPSILA_BINARY, "render", "--help", static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  ::close(fds[1]);
+  int status = 0;
+  ASSERT_EQ(::waitpid(pid, &status, 0), pid);
+  ASSERT_FALSE(WIFSIGNALED(status)) << "killed by signal " << WTERMSIG(status);
+  EXPECT_EQ(WEXITSTATUS(status), 2);
 }
 
 TEST_F(CliFixture, UnknownFlagAndMissingValueAreRejected) {

@@ -215,9 +215,9 @@ class ImportWatchdog {
       budget = v;
     }
     const std::uint64_t memory = import_memory_budget(bytes);
-    message_ = "opsila: error: " + last_words_prefix() + name + ": the model importer did not finish within " +
+    message_ = "opsila: error: " + last_words_prefix() + shown_text(name) + ": the model importer did not finish within " +
                std::to_string(static_cast<long long>(budget + 0.5)) + " s (malformed file?)\n";
-    memory_message_ = "opsila: error: " + last_words_prefix() + name + ": the model importer took more than " +
+    memory_message_ = "opsila: error: " + last_words_prefix() + shown_text(name) + ": the model importer took more than " +
                       std::to_string(memory >> 20) + " MiB of memory reading a file of " + std::to_string(bytes) +
                       " bytes (malformed file?)\n";
     const std::uint64_t base = resident_bytes();
@@ -275,7 +275,7 @@ class ImportFaultGuard {
   explicit ImportFaultGuard(const std::string& name) {
     std::snprintf(message_, sizeof message_,
                   "opsila: error: %s%s: the model importer failed while reading it (malformed file?)\n",
-                  last_words_prefix().c_str(), name.size() < 3000 ? name.c_str() : "the model");
+                  last_words_prefix().c_str(), name.size() < 3000 ? shown_text(name).c_str() : "the model");
     length_ = std::strlen(message_);
     start_ = monotonic_seconds();
     alt_.resize(std::max<std::size_t>(SIGSTKSZ, 64 * 1024));

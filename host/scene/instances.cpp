@@ -2,6 +2,7 @@
 
 #include <cfloat>
 #include <cmath>
+#include <cstdio>
 #include <string>
 
 #include "core/errors.h"
@@ -15,8 +16,14 @@ InstanceDesc make_instance(int prototype, const std::array<double, 12>& w, const
   double scale = 0;
   for (int i = 0; i < 12; ++i)
     if (i % 4 != 3) scale = std::max(scale, std::fabs(w[std::size_t(i)]));
+  const auto number = [](double v) {
+    char text[32];
+    std::snprintf(text, sizeof text, "%.6g", v);
+    return std::string(text);
+  };
   if (!std::isfinite(det) || !(std::fabs(det) > 1e-30 * scale * scale * scale))
-    throw InputError(where + ": the transform is singular (determinant " + std::to_string(det) + ")");
+    throw InputError(where + ": the transform is singular or nearly so (determinant " + number(det) +
+                     " for a largest entry of " + number(scale) + ": at most 1e-30 of its cube)");
   const double inv[9] = {(e * k - f * h) / det, (c * h - b * k) / det, (b * f - c * e) / det,
                          (f * g - d * k) / det, (a * k - c * g) / det, (c * d - a * f) / det,
                          (d * h - e * g) / det, (b * g - a * h) / det, (a * e - b * d) / det};

@@ -192,6 +192,9 @@ TEST(JsonInstances, ErrorsNameFileLineAndKey) {
       {entry("\"model\": {\"type\": \"model\", \"file\": \"no_such.obj\"}, \"transforms\": [{}]"),
        {"s.json:3:", "objects[1].model.file", "no_such.obj"}},
       {entry("\"model\": {\"type\": \"cone\"}, \"transforms\": [{}]"), {"objects[1].model.type", "unknown object type"}},
+      // Scales 1e-20 and 1e20: the determinant is 1, the inverse not of use.
+      {entry(cube + ", \"transforms\": [{\"scale\": [1e-20, 1, 1e20]}]"),
+       {"objects[1].transforms[0]", "singular or nearly so (determinant 1 for a largest entry of 1e+20"}},
   };
   for (const auto& c : cases) {
     SCOPED_TRACE(c.text);

@@ -81,6 +81,17 @@ std::string TriangleLimit::why_not(std::size_t n, int ranks, bool more_than) con
          (several ? "each rank" : "this process") + " may use " + gib(memory.bytes) + " " + memory_source(memory);
 }
 
+std::string TriangleLimit::objects_beyond(std::size_t n, std::size_t objects) const {
+  if (why != Why::memory) return "";
+  const std::uint64_t need = memory_for_triangles(n) + std::uint64_t(objects) * kPrepareHostBytesPerObject;
+  if (need <= memory.bytes) return "";
+  const std::uint64_t mib = std::uint64_t(1) << 20;
+  return ": " + std::to_string(objects) + " objects and " + std::to_string(n) + " triangles need about " + gib(need) +
+         " while preparing at " + std::to_string(kPrepareHostBytesPerObject) + " bytes an object and " +
+         std::to_string(kPrepareHostBytesPerTriangle) + " a triangle, and this process may use " + gib(memory.bytes) +
+         " " + memory_source(memory) + "; --host-memory " + std::to_string((need + mib - 1) / mib) + "M would do";
+}
+
 std::string TriangleLimit::memory_hint(std::size_t n, int ranks) const {
   const std::size_t share = per_rank(n, ranks);
   if (why != Why::memory || share > kMaxTriangles) return "";

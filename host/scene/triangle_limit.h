@@ -22,6 +22,10 @@ constexpr std::size_t kMaxTriangles = (std::size_t(1) << 31) - 1;
 // model"), so that a scene accepted fits.
 constexpr std::uint64_t kPrepareHostBaseBytes = std::uint64_t(256) << 20;
 constexpr std::uint64_t kPrepareHostBytesPerTriangle = 120;
+// And this much per object beyond its triangles: each small object is a
+// cluster of its own, with its boxes and its bank BVH's root (3 M objects of
+// one triangle each peaked 673 bytes an object above one object of 3 M).
+constexpr std::uint64_t kPrepareHostBytesPerObject = 768;
 
 // Triangles that `bytes` of host memory prepare (0 below the base), at most
 // kMaxTriangles; and the bytes that preparing `triangles` takes.
@@ -60,6 +64,12 @@ struct TriangleLimit {
   // while preparing at 120 bytes a triangle, and this process may use 0.29
   // GiB (--host-memory)"; "" for a given number.
   std::string why_not(std::size_t triangles, int ranks, bool more_than = false) const;
+  // Why one process's `triangles` in `objects` objects do not fit, counting
+  // kPrepareHostBytesPerObject as well (": 3000000 objects and ... need
+  // about 2.4 GiB ..., and this process may use 0.68 GiB (--host-memory);
+  // --host-memory 2476M would do"); "" when they fit or memory is not what
+  // limits.
+  std::string objects_beyond(std::size_t triangles, std::size_t objects) const;
   // "--host-memory 371M" when that much memory a rank would take
   // `triangles` on `ranks` ranks; "" when memory is not what limits.
   std::string memory_hint(std::size_t triangles, int ranks) const;

@@ -86,6 +86,28 @@ TEST(SceneLimitsCli, AStreamedObjIsRefusedAsItPassesTheLimit) {
   EXPECT_EQ(fits.exit_code, 0) << fits.err;
 }
 
+// Each small object is a cluster of its own: 3 M one-triangle groups of a
+// 30 MB OBJ peaked at 2.65 GB under --host-memory 700M, which counted their
+// triangles alone. Objects count too now (768 bytes each).
+TEST(SceneLimitsCli, ManySmallObjectsCountAgainstTheMemory) {
+  TempDir dir;
+  std::ostringstream obj;
+  for (int i = 0; i < 20000; ++i)
+    obj << "g o" << i << "\nv " << i << " 0 0\nv " << i << ".5 0 0\nv " << i << " 0.5 0\nf -3 -2 -1\n";
+  const std::string path = dir.write("groups.obj", obj.str());
+  TempDir out;
+  // 256 MiB + 20000 x (120 + 768) bytes: 16.9 MiB over the base.
+  const RunResult r = run_opsila({"render", path, "--host-memory", "270M", "-o", out.file("x.png")});
+  expect_says(refusal(r, out), path,
+              {"20000 objects and 20000 triangles need about 0.27 GiB while preparing at 768 bytes an object and 120 "
+               "a triangle", "this process may use 0.26 GiB (--host-memory); --host-memory 273M would do"});
+  const RunResult fits = run_opsila({"render", path, "--host-memory", "273M", "--size", "16x12", "-q", "-o", out.file("x.png")});
+  EXPECT_EQ(fits.exit_code, 0) << fits.err;
+  const RunResult reference =
+      run_opsila({"render", path, "--host-memory", "270M", "--reference", "--size", "16x12", "-q", "-o", out.file("r.png")});
+  EXPECT_EQ(reference.exit_code, 0) << "no clusters to build: " << reference.err;
+}
+
 TEST(SceneLimitsCli, AShareTooLargeForTheDeviceIsRefusedBeforeThePartition) {
   TempDir dir;
   const RunResult r = test::run_program(OPSILA_BINARY, {"render", kMillion, "-o", dir.file("x.png")},

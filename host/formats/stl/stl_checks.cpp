@@ -33,17 +33,24 @@ void check_text(const std::string& bytes, const std::string& name) {
   };
   std::string_view w;
   unsigned long long facets = 0;
+  int corners = 0;  // the facet's 'vertex' lines so far: the importer kept 3 and dropped a 4th unsaid
   bool in_facet = false, in_solid = false;
+  const auto corners_wrong = [&](const std::string& what) {
+    throw InputError(name + ":" + std::to_string(line_at(at - w.size())) + ": STL facet " + std::to_string(facets) +
+                     " " + what + " (a facet is a triangle: 3 'vertex' lines)");
+  };
   while (next_word(bytes, at, w)) {
     if (w == "solid" || w == "endsolid") {
       in_solid = w == "solid";
       at = std::min(bytes.find('\n', at), bytes.size());
     } else if (w == "facet") {
-      in_facet = true, ++facets;
+      in_facet = true, ++facets, corners = 0;
     } else if (w == "endfacet") {
+      if (corners < 3) corners_wrong("has " + std::to_string(corners) + " 'vertex' lines");
       in_facet = false;
     } else if (w == "vertex" || w == "normal") {
       const std::string key(w);
+      if (key == "vertex" && ++corners > 3) corners_wrong("has a 4th 'vertex'");
       for (int k = 0; k < 3; ++k) {
         if (!next_word(bytes, at, w)) break;  // the end of the data: said below
         if (number_start(w)) {

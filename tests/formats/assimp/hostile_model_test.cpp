@@ -352,6 +352,11 @@ TEST(HostileModel, BadValuesAreNamedWithTheirLine) {
          ":9: STL 'normal' needs 3 numbers; '.x' is not one");
   expect("short.stl", "solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0\nvertex 1 0 0\n",
          ":5: STL 'vertex' needs 3 numbers; 'vertex' is not one");
+  // A facet of 4 corners rendered its first 3, the 4th dropped unsaid.
+  expect("quad.stl", "solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 1 1 0\n"
+         "vertex 0 1 0\nendloop\nendfacet\nendsolid t\n", ":7: STL facet 1 has a 4th 'vertex'");
+  expect("two.stl", "solid t\n" + std::string("facet normal 0 0 1\n") + facet + "facet normal 0 0 1\nouter loop\n"
+         "vertex 0 0 0\nvertex 1 0 0\nendloop\nendfacet\nendsolid t\n", ":14: STL facet 2 has 2 'vertex' lines");
   // Numbers as the importer reads them, and a solid whose name holds keywords.
   EXPECT_EQ(load_scene(dir.write("ok.stl", "solid vertex normal x\nfacet normal -0 +0 1e0\nouter loop\n"
                                            "vertex .5 0 0\nvertex 1 0 0\nvertex 0 1 0\nendloop\nendfacet\n"

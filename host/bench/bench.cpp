@@ -64,6 +64,7 @@ BenchReport start_report(const BenchOptions& o, const Scene& scene, int pes) {
   r.host_repeats = o.host_repeats();
   r.host_threads = o.host_threads();
   r.scatter_max_log2 = o.scatter_max();
+  r.host_memory = o.host_memory;
   r.triangles = scene.total_triangles();  // every rank's, for a share
   r.lights = scene.lights.size();
   r.facets = scene.num_facets;

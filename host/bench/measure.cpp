@@ -343,12 +343,16 @@ void measure_scatter_curve(BenchReport& report, ClRuntime& rt, const BenchProgre
   for (std::size_t len : lengths) {
     // The curve stops where the device cannot hold a point (2^24 needs a
     // 2.2 GB buffer, more than PoCL allows on a 24 GB machine).
+    // Nor past --host-memory: 2^23 took 5.6 GB of a CPU device's host memory.
     const ScatterFootprint need = scatter_footprint(len, report.scatter_pes);
-    if (need.largest > rt.max_alloc() || need.total > rt.global_mem()) {
+    const bool host = report.host_memory && need.total > report.host_memory;
+    if (need.largest > rt.max_alloc() || need.total > rt.global_mem() || host) {
       report.scatter_limit = "the curve stops at " + length_label(report.curve.empty() ? 0 : report.curve.back().length) +
                              ": " + length_label(len) + " needs a buffer of " + format_size(need.largest) + " and " +
-                             format_size(need.total) + " in all, the device allows " + format_size(rt.max_alloc()) +
-                             " and " + format_size(rt.global_mem());
+                             format_size(need.total) + " in all, " +
+                             (host ? "--host-memory allows " + format_size(report.host_memory)
+                                   : "the device allows " + format_size(rt.max_alloc()) + " and " +
+                                         format_size(rt.global_mem()));
       progress("scatter: %s", report.scatter_limit.c_str());
       break;
     }

@@ -76,6 +76,7 @@ struct BenchReport {
   std::string scene_path;
   bool quick = false;
   int repeats = 0, warmup = 0, host_repeats = 0, host_threads = 0, scatter_max_log2 = 0;
+  std::uint64_t host_memory = 0;  // --host-memory (0: not given): the scatter curve stops within it
   // Where and on what.
   DeviceFacts device;
   BenchContext context;

@@ -363,6 +363,21 @@ TEST(Bench, TheScatterCurveStopsWhereTheDeviceIsFull) {
   EXPECT_EQ(j["scatter_by_pes"].front()["length"], 1 << 19);
 }
 
+// And within --host-memory: the default curve took 5.6 GB of a CPU
+// device's host memory whatever the flag said.
+TEST(Bench, TheScatterCurveStopsWithinTheHostMemoryGiven) {
+  test::TempDir dir;
+  const std::string json_path = dir.file("bench.json");
+  const test::RunResult r = test::run_opsila(
+      {"bench", std::string(OPSILA_SOURCE_DIR) + "/scenes/whitted.json", "--size", "16x12", "--depth", "2", "--pes",
+       "4", "--balance", "facets", "--repeats", "1", "--scatter-max", "20", "--host-memory", "300M", "--json", json_path});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("the curve stops at 2^19: 2^20 needs a buffer of"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("--host-memory allows 300.0 MiB"), std::string::npos) << r.out;
+  const nlohmann::json j = nlohmann::json::parse(test::read_file(json_path));
+  EXPECT_EQ(j["scatter"].back()["length"], 1 << 19);
+}
+
 // The renders on the same rays run in rounds, one frame of each a round, so
 // every one of them has a timed frame in every timed round (Embree too,
 // where it used to run the host references' count); the host references

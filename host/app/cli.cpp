@@ -74,7 +74,8 @@ std::string main_usage() {
          "  opsila --help | --version\n"
          "\n"
          "Run 'opsila render --help' for the render options.\n"
-         "Exit codes: 0 success, 1 unexpected failure, 2 bad input or flag, 3 OpenCL device or driver error.\n";
+         "Exit codes: 0 success, 1 unexpected failure, 2 bad input or flag, 3 OpenCL device or driver error,\n"
+         "130 / 143 interrupted by SIGINT / SIGTERM (nothing written).\n";
 }
 
 std::string render_usage() {

@@ -359,8 +359,12 @@ Scene convert(Assimp::Importer& importer, const aiScene* ai, const std::string& 
     if (why.empty()) why = "cannot read the model";
     throw InputError(name + ": " + why + (files.refusal().empty() ? "" : " (" + files.refusal() + ")"));
   }
-  if (!ai->mRootNode || ai->mNumMeshes == 0 || (ai->mFlags & AI_SCENE_FLAGS_INCOMPLETE))
+  if (!ai->mRootNode || ai->mNumMeshes == 0)
     throw InputError(name + ": no facets (the model has no meshes)");
+  // Meshes, but the reader says it did not read the whole file (a UTF-16
+  // ASE, a COLLADA of cameras or lights only): nothing of it is trusted.
+  if (ai->mFlags & AI_SCENE_FLAGS_INCOMPLETE)
+    throw InputError(name + ": the model importer read only part of the file (an incomplete scene)");
   try {
     return ModelReader(*ai, name, base_dir, images, max_triangles).run();
   } catch (const std::bad_alloc&) {

@@ -431,6 +431,16 @@ TEST(ModelImport, SceneFileModelObjects) {
   EXPECT_NE(msg.find("not a model format"), std::string::npos) << msg;
 }
 
+// A scene the importer flags incomplete (it read the file only in part)
+// says so: it was "no facets (the model has no meshes)", though it had some.
+TEST(ModelImport, AnIncompleteSceneSaysSo) {
+  REQUIRE_TEST_MODELS();
+  for (const char* model : {"ASE/ThreeCubesGreen_UTF16LE.ASE", "Collada/cameras.dae"}) {
+    const std::string path = (kModels / model).string();
+    EXPECT_EQ(error_of(path), path + ": the model importer read only part of the file (an incomplete scene)");
+  }
+}
+
 // glTF primitive modes (scenes/FORMAT.md): triangle strips and fans are
 // read as their triangles, each a facet; points and lines make none (a
 // model of nothing else is "no facets").

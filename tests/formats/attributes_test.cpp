@@ -136,6 +136,14 @@ TEST(MtlMaps, OptionsAreSkippedAndWindowsPathsResolved) {
   EXPECT_TRUE(has_warning(s, "m.mtl:3:", "-s, -o ignored"));
   EXPECT_TRUE(has_warning(s, "material 'c'", "missing.png' ignored"));
   EXPECT_TRUE(has_warning(s, "material 'd'", "not a readable PNG, JPEG, TGA or BMP image"));
+  // Blender's "//sub/x.tga" is sub/x.tga beside the model, not /sub/x.tga.
+  std::filesystem::create_directory(dir.file("sub"));
+  dir.write("sub/x.tga", tga(1, 1, {{0, 0, 255}}));
+  dir.write("b.mtl", "newmtl f\nmap_Kd //sub/x.tga\n");
+  const Scene blender = load_obj(dir.write("b.obj", "mtllib b.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\n"
+                                                    "usemtl f\nf 1/1 2/1 3/1\n"));
+  ASSERT_EQ(blender.textures.size(), 1u);
+  EXPECT_EQ(blender.textures[0].texels[0], 0xff0000u);
 }
 
 // SPEC: a material with a map_Kd (map_Ka) but no Kd (Ka) takes (1, 1, 1),

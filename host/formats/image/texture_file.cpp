@@ -111,6 +111,8 @@ std::string resolve_texture_path(const std::string& written, const std::string& 
   for (char& c : name)
     if (c == '\\') c = '/';
   while (name.compare(0, 2, "./") == 0) name.erase(0, 2);
+  // Blender's "//x.png" is x.png beside the .blend file, not /x.png.
+  if (name.compare(0, 2, "//") == 0) name.erase(0, name.find_first_not_of('/'));
   const fs::path p(name);
   const fs::path base = base_dir.empty() ? fs::path(".") : fs::path(base_dir);
   const fs::path full = (p.is_absolute() ? p : base / p).lexically_normal();

@@ -214,8 +214,10 @@ OPSILA_INLINE bool instance_walk(BankWalk *w, int i, bool any) {
   RayPre ro = instance_ray(w->r, in);
   /* A placement extreme enough to overflow the ray in the model's frame
    * meets nothing: a NaN ray would meet every box, empty slots too, and
-   * the walk would never end. */
-  if (!all(isfinite(ro.org)) || !all(isfinite(ro.inv_dir)) || isnan(ro.sx) || isnan(ro.sy) || isnan(ro.sz))
+   * the walk would never end. An infinite inv_dir is not such a ray: a
+   * direction component of zero (an axis-aligned ray) gives it, and the
+   * slab test handles it as in the world's frame. */
+  if (!all(isfinite(ro.org)) || !all(isfinite(ro.dir)) || isnan(ro.sx) || isnan(ro.sy) || isnan(ro.sz))
     return false;
   const RayPre *world = w->r;
   w->r = &ro;

@@ -93,6 +93,42 @@ TEST(Instances, NanRaysEndTheirWalks) {
   EXPECT_EQ(r.rgb.size(), std::size_t(16 * 12 * 3));
 }
 
+// Rays with a direction component of exactly zero (the camera's centre
+// column, a shadow ray straight up to a light) meet an instance as they
+// meet the facets written out. Its model-frame inverse direction is then
+// infinite, which the walk once took for an overflowed ray: the column saw
+// the floor through the instance, and its shadow had a lit stripe.
+TEST(Instances, AxisAlignedRaysMeetThem) {
+  Scene s;
+  const int grey = add_material(s, {0.8f, 0.8f, 0.8f}, {0.8f, 0.8f, 0.8f}, {0, 0, 0}, 1, {0, 0, 0}, 1, 2);
+  add_quad(s, {-2, 0, -3}, {-2, 0, 2}, {2, 0, 2}, {2, 0, -3}, 0, grey);
+  s.num_objects = 1;
+  const int tile = add_prototype(s, "tile", [&](Scene& m) {
+    add_quad(m, {-0.5f, 0, -0.4f}, {-0.5f, 0, 0.4f}, {0.5f, 0, 0.4f}, {0.5f, 0, -0.4f}, 0, grey);
+  });
+  s.instances.push_back(make_instance(tile, placement({0, 2, -0.6f}, 0.0, 0.0, {1, 1, 1}), "test"));
+  s.lights.push_back({{0, 4, 0}, {1, 1, 1}});
+  s.camera.eye = {0, 5, 4};
+  s.camera.look_at = {0, 0, -1};
+  s.camera.fov_deg = 40;
+  s.width = s.height = 21;
+  s.has_camera = s.has_lights = true;
+  const RenderResult inst = render_on_pes(s, 4);
+  const RenderResult flat = render_on_pes(flattened(s), 4);
+  const std::vector<std::int32_t> want = as_instance_items(s, flat.item_buffer);
+  int column_hits = 0;
+  for (int y = 0; y < s.height; ++y) {
+    const std::size_t k = std::size_t(2 * (y * s.width + s.width / 2));
+    EXPECT_EQ(inst.item_buffer[k], want[k]) << "row " << y;
+    column_hits += want[k] == 1;
+    for (std::size_t c = 0; c < 3; ++c)
+      EXPECT_NEAR(int(to_srgb8(inst.rgb[3 * (k / 2) + c])), int(to_srgb8(flat.rgb[3 * (k / 2) + c])), 2)
+          << "row " << y;
+  }
+  EXPECT_GT(column_hits, 0) << "the instance is in the centre column";
+  EXPECT_LE(fraction_off(inst.rgb, flat.rgb, 2), 0.01);
+}
+
 // A scene of instances alone: every bank's own walk starts at an empty root.
 TEST(Instances, AloneRenderTheSameOnOneAndSixteenPes) {
   Scene s = instanced_scene(64, 4, 3);

@@ -261,14 +261,14 @@ int run_render(const std::vector<std::string>& args, Ranks& ranks) {
   request.count_work = !o.stats_path.empty();  // only --stats reads the work counters
   request.launch_records = !o.stats_path.empty();  // and the launches' times
   request.item_buffer_output = !o.item_buffer_path.empty();
+  PreparedScene prepared = prepare_scene(request, runtime ? &*runtime : nullptr);
+  // Said once the scene is read, so that bad input gets its error line alone.
   std::string device;
   if (runtime) {
     device = runtime->description();
-    const int pes = prepared_settings(request).num_pes;
-    if (!o.quiet) print_line("device", device_text(ranks, pes, device));
+    if (!o.quiet) print_line("device", device_text(ranks, prepared.settings.num_pes, device));
     if (ranks.size() > 1 && writer) device = std::to_string(ranks.size()) + " MPI ranks; rank 0: " + device;
   }
-  PreparedScene prepared = prepare_scene(request, runtime ? &*runtime : nullptr);
 
   RenderResult result;
   if (o.reference) {

@@ -157,19 +157,20 @@ int run_bench(const std::vector<std::string>& args, Ranks& ranks) {
   const BenchProgress progress{o.quiet || !writer};
 
   ClRuntime rt(choose_device_flag(o.device_spec, ranks));
-  // Every rank names its device (as render does), each on its own line.
-  const std::string device = device_text(ranks, o.pes.value_or(RenderSettings().num_pes), rt.description());
-  if (ranks.size() > 1) {
-    if (!o.quiet) std::fprintf(stderr, "opsila: bench: device: %s\n", device.c_str());
-  } else {
-    progress("device: %s", device.c_str());
-  }
   // The bench measures the scheme with its PEs balanced by measured work
   // unless told otherwise, on one process or on ranks that each read only
   // their share of the scene (docs/DISTRIBUTED.md).
   PrepareRequest request = bench_request(o, !writer, ranks, outputs, progress);
   // The bench prepares the banks of each measured renderer itself (measure.cpp).
   Scene scene = std::move(prepare_scene(request, nullptr).scene);
+  // Every rank names its device (as render does), each on its own line,
+  // once the scene is read: bad input gets its error line alone.
+  const std::string device = device_text(ranks, o.pes.value_or(RenderSettings().num_pes), rt.description());
+  if (ranks.size() > 1) {
+    if (!o.quiet) std::fprintf(stderr, "opsila: bench: device: %s\n", device.c_str());
+  } else {
+    progress("device: %s", device.c_str());
+  }
   // Pilot frames measure the scene's own facets only: an instanced scene's
   // banks are balanced by the frame's sampled rays unless --balance says.
   if (!scene.instances.empty() && !o.balance) request.balance = Balance::work;

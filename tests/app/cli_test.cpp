@@ -101,6 +101,25 @@ TEST_F(CliFixture, UnknownDeviceIsRejected) {
   EXPECT_EQ(dir.entries(), before);
 }
 
+// A scene that fails to read gets its error line alone on stderr: the
+// device is named only once the scene is read (render and bench alike).
+TEST_F(CliFixture, BadSceneContentPrintsOnlyItsError) {
+  const std::string bad = dir.write("bad.json", R"({"objects": [{"type": "sphere", "center": [0, 0, 0], "radius": "x"}]})");
+  before = dir.entries();
+  for (const char* command : {"render", "bench"}) {
+    std::vector<std::string> args = {command, bad};
+    if (std::string(command) == "render") args.insert(args.end(), {"-o", out("x.png"), "--size", "16x12"});
+    const RunResult r = run_opsila(args);
+    EXPECT_EQ(r.exit_code, 2) << command;
+    std::istringstream lines(r.err);
+    std::vector<std::string> all;
+    for (std::string line; std::getline(lines, line);) all.push_back(line);
+    ASSERT_EQ(all.size(), 1u) << command << ": " << r.err;
+    EXPECT_NE(all[0].find("radius"), std::string::npos) << all[0];
+    EXPECT_EQ(dir.entries(), before) << command;
+  }
+}
+
 TEST_F(CliFixture, MalformedVectorsAreRejected) {
   expect_rejected({scene, "-o", out("x.png"), "--light", "1,2"}, "--light");
   expect_rejected({scene, "-o", out("x.png"), "--light", "1,2,3,4"}, "--light");

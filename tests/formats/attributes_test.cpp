@@ -253,6 +253,31 @@ TEST(Textures, TopDownBmpDecodesAndSaysItsSize) {
   EXPECT_EQ(problem, "image too large (20000x20000)");
 }
 
+// A BMP or TGA shorter than its header says is refused (stb would decode
+// the missing pixels as zeros: a few bytes claiming 16384 x 4096 were half
+// a gigabyte of black); run-length TGA is bounded by its packets.
+TEST(Textures, TruncatedBmpAndTgaSayWhy) {
+  const auto problem_of = [](const std::string& bytes) {
+    Texture t;
+    std::string problem;
+    decode_texture_memory(reinterpret_cast<const unsigned char*>(bytes.data()), bytes.size(), "x", t, problem);
+    return problem;
+  };
+  const std::string whole = bmp(2, 2, {{1, 2, 3}, {4, 5, 6}, {7, 8, 9}, {10, 11, 12}});
+  EXPECT_EQ(problem_of(whole), "");
+  EXPECT_EQ(problem_of(whole.substr(0, whole.size() - 1)),
+            "cannot decode the image (truncated BMP: 2x2 needs at least 70 bytes, the file has 69)");
+  // TGA: 18-byte header, type 2 (true colour) or 10 (its run-length form), 4 x 4, 24 bits.
+  const auto tga = [](char type, const std::string& body) {
+    return std::string("\0\0", 2) + type + std::string(9, '\0') + std::string("\x04\0\x04\0\x18\0", 6) + body;
+  };
+  EXPECT_EQ(problem_of(tga(2, std::string(48, '\x40'))), "");
+  EXPECT_EQ(problem_of(tga(2, std::string(47, '\x40'))),
+            "cannot decode the image (truncated TGA: 4x4 needs at least 66 bytes, the file has 65)");
+  EXPECT_EQ(problem_of(tga(10, "\x8f\x01\x02\x03")), "") << "one packet of 16 pixels";
+  EXPECT_NE(problem_of(tga(10, "")).find("truncated TGA"), std::string::npos);
+}
+
 TEST(Textures, SrgbDecodeTable) {
   EXPECT_EQ(lin(0), 0.0f);
   EXPECT_EQ(lin(255), 1.0f);

@@ -27,6 +27,42 @@ namespace opsila {
 
 namespace fs = std::filesystem;
 
+namespace {
+
+std::uint32_t le(const unsigned char* data, std::size_t at, int bytes) {
+  std::uint32_t v = 0;
+  for (int k = bytes - 1; k >= 0; --k) v = v << 8 | data[at + std::size_t(k)];
+  return v;
+}
+
+// Where an uncompressed BMP, or a TGA, is shorter than its header says:
+// stb decodes the missing pixels as zeros, so a file of a few bytes would
+// become a black image of the size it claims. "" when it is long enough (or
+// not one of these; stb then judges it). A TGA's run-length packets hold at
+// most 128 pixels each, in at least one byte more than a pixel.
+std::string short_bmp_or_tga(const unsigned char* data, std::size_t size, long long w, long long h) {
+  const unsigned long long pixels = static_cast<unsigned long long>(w) * static_cast<unsigned long long>(h);
+  unsigned long long need = 0;
+  const char* format = "";
+  if (size >= 34 && data[0] == 'B' && data[1] == 'M') {
+    const bool os2 = le(data, 14, 4) == 12;  // the old 12-byte header: no compression field
+    const std::uint32_t compression = os2 ? 0 : le(data, 30, 4), bits = le(data, os2 ? 24 : 28, 2);
+    if (compression != 0 && compression != 3) return "";
+    format = "BMP";
+    need = le(data, 10, 4) + (static_cast<unsigned long long>(w) * bits + 31) / 32 * 4 * static_cast<unsigned long long>(h);
+  } else if (size >= 18 && (data[2] & 7) != 0 && (data[2] & ~0xBu) == 0 && (data[1] == 0 || data[1] == 1)) {
+    const unsigned long long pixel_bytes = (data[16] + 7u) / 8u;
+    const unsigned long long palette = data[1] ? le(data, 5, 2) * ((data[7] + 7u) / 8u) : 0;
+    format = "TGA";
+    need = 18 + data[0] + palette + ((data[2] & 8) ? (pixels + 127) / 128 * (1 + pixel_bytes) : pixels * pixel_bytes);
+  }
+  if (need <= size) return "";
+  return std::string("truncated ") + format + ": " + std::to_string(w) + "x" + std::to_string(h) + " needs at least " +
+         std::to_string(need) + " bytes, the file has " + std::to_string(size);
+}
+
+}  // namespace
+
 bool decode_texture_memory(const unsigned char* data, std::size_t size, const std::string& name,
                            Texture& out, std::string& problem) {
   if (size == 0 || size > static_cast<std::size_t>(std::numeric_limits<int>::max())) {
@@ -65,6 +101,10 @@ bool decode_texture_memory(const unsigned char* data, std::size_t size, const st
   if (aw > kMaxTextureSide || ah > kMaxTextureSide ||
       static_cast<std::size_t>(aw) * static_cast<std::size_t>(ah) > kMaxTextureTexels) {
     problem = "image too large (" + std::to_string(aw) + "x" + std::to_string(ah) + ")";
+    return false;
+  }
+  if (std::string why = short_bmp_or_tga(data, size, aw, ah); !why.empty()) {
+    problem = "cannot decode the image (" + why + ")";
     return false;
   }
   if (stbi_is_16_bit_from_memory(data, len)) {

@@ -136,7 +136,8 @@ Value Body::next(Type t, const Element& e, std::uint64_t i) {
   } catch (const std::runtime_error&) {
     end = w.c_str();
   }
-  if (end != w.c_str() + w.size()) fail(e, i, "'" + w + "' is not a number of its property's type");
+  if (end != w.c_str() + w.size() || (v.is_integer() && !fits_type(v.i, t)))
+    fail(e, i, "'" + w + "' is not a number of its property's type");
   return v;
 }
 

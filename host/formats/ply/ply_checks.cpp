@@ -17,6 +17,11 @@ using namespace model_words;
 
 namespace {
 
+[[noreturn]] void bad_count(const std::string& name, const Element& e, std::uint64_t i, const std::string& why) {
+  throw InputError(name + ": PLY '" + e.name + "' element " + std::to_string(i + 1) + " of " +
+                   std::to_string(e.count) + ": " + why);
+}
+
 [[noreturn]] void truncated(const std::string& name, const Element& e, std::uint64_t i) {
   throw InputError(name + ": PLY data ends early: '" + e.name + "' element " + std::to_string(i + 1) + " of " +
                    std::to_string(e.count) + " is missing or incomplete (truncated file)");
@@ -81,6 +86,8 @@ void check_text(std::string_view data, std::uint64_t first_line, const Header& h
           throw InputError(name + ": PLY '" + e.name + "' element " + std::to_string(i + 1) + ": list length '" +
                            std::string(w.substr(0, 20)) + "' is not a count");
         for (char c : w) n = n * 10 + unsigned(c - '0');
+        if (!fits_type(static_cast<std::int64_t>(n), p.count))
+          bad_count(name, e, i, "list length " + std::string(w) + " does not fit its count type");
         const bool corners = !not_finite.empty() && e.name == "face" &&
                              (p.name == "vertex_indices" || p.name == "vertex_index");
         for (std::uint64_t k = 0; k < n; ++k) {
@@ -122,6 +129,9 @@ void check_binary(std::string_view data, const Header& h, const std::string& nam
             n = n << 8 | static_cast<unsigned char>(data[at + std::uint64_t(k)]);
           }
           at += std::uint64_t(count_bytes);
+          if (!fits_type(static_cast<std::int64_t>(n), p.count))  // a signed count's sign bit
+            bad_count(name, e, i, "list length " + std::to_string(std::int64_t(n) - (std::int64_t(1) << (8 * count_bytes))) +
+                                      " is negative");
         }
         const int item_bytes = type_bytes(p.type);
         if (n > (size - at) / std::uint64_t(std::max(1, item_bytes))) truncated(name, e, i);

@@ -19,6 +19,8 @@ enum class Type { int8, uint8, int16, uint16, int32, uint32, float32, float64, u
 
 // Bytes of a value of type t in a binary body (0 for unknown).
 int type_bytes(Type t);
+// Whether v is a value of the integer type t (never for a float type).
+bool fits_type(std::int64_t v, Type t);
 
 struct Property {
   std::string name;

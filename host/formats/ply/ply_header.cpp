@@ -162,6 +162,9 @@ void judge_types_for_importer(const Header& h, const std::string& path) {
     for (const Property& p : e.properties)
       if (p.type == Type::unknown || (p.list && p.count == Type::unknown))
         throw InputError(path + ": PLY '" + e.name.substr(0, 20) + "' element: a property of unknown type");
+      else if (p.list && (p.count == Type::float32 || p.count == Type::float64))
+        throw InputError(path + ": PLY '" + e.name.substr(0, 20) + "' element: the list '" + p.name.substr(0, 20) +
+                         "' has a count type that is not an integer type");
   if (h.format_name != "ascii" && h.format_name != "binary_little_endian" && h.format_name != "binary_big_endian")
     throw InputError(path + ": PLY format '" + h.format_name.substr(0, 20) +
                      "' (ascii, binary_little_endian or binary_big_endian)");
@@ -186,6 +189,18 @@ std::size_t importer_body(std::string_view bytes, std::size_t end, const std::st
 }
 
 }  // namespace
+
+bool fits_type(std::int64_t v, Type t) {
+  switch (t) {
+    case Type::int8: return v >= -128 && v <= 127;
+    case Type::uint8: return v >= 0 && v <= 255;
+    case Type::int16: return v >= -32768 && v <= 32767;
+    case Type::uint16: return v >= 0 && v <= 65535;
+    case Type::int32: return v >= -2147483648LL && v <= 2147483647LL;
+    case Type::uint32: return v >= 0 && v <= 4294967295LL;
+    default: return false;
+  }
+}
 
 int type_bytes(Type t) {
   switch (t) {

@@ -187,6 +187,32 @@ TEST_F(PlyWindow, BadFilesGiveOneErrorOnEveryRank) {
   expect_error(q, "no_faces", "", {"no facets"});
 }
 
+// A list count outside its type, or of a type that is no integer, is
+// named as such, not taken for a truncated file (a signed count of -1 read
+// as 4 billion) nor read past its type's range.
+TEST_F(PlyWindow, ListCountsOutsideTheirTypeAreNamed) {
+  PlyFile p = ply_grid(3, 3, 0);
+  p.count_type = "int";
+  p.face_count = p.faces.size() + 1;
+  const std::string negative = file(p, "negative_count.ply");
+  std::ofstream(negative, std::ios::binary | std::ios::app) << std::string("\xff\xff\xff\xff", 4) << std::string(12, '\0');
+  EXPECT_NE(one_process(negative).find("list length -1 is negative"), std::string::npos) << one_process(negative);
+  p.face_count = UINT64_MAX;
+  p.count_type = "float";
+  const std::string real = file(p, "float_count.ply");
+  EXPECT_NE(one_process(real).find("the list 'vertex_indices' has a count type that is not an integer type"),
+            std::string::npos)
+      << one_process(real);
+  p.count_type = "uchar";
+  p.format = "ascii";
+  p.faces.back().assign(300, 0);
+  const std::string wide = file(p, "wide_count.ply");
+  EXPECT_NE(one_process(wide).find("list length 300 does not fit its count type"), std::string::npos)
+      << one_process(wide);
+  EXPECT_NE(on_ranks(wide, 2, 7).find("'300' is not a number of its property's type"), std::string::npos)
+      << on_ranks(wide, 2, 7);
+}
+
 // Files the stream leaves to the importer path (read whole): other
 // elements, a texture named in a comment, partial normals or uv.
 TEST_F(PlyWindow, FilesItCannotReadAsTheImporterDoesAreLeftToIt) {

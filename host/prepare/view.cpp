@@ -56,7 +56,8 @@ void apply_view_options(Scene& scene, const ViewOptions& o) {
                      " is not strictly between 0 and 180 degrees");
 
   // A scene without a camera frames its bounding box; flags given still win.
-  if (!scene.has_camera && scene.has_facets()) {
+  const bool framed = !scene.has_camera && scene.has_facets();
+  if (framed) {
     Vec3 lo, hi;
     scene.bounds(lo, hi);
     const float fov = scene.camera.fov_deg;
@@ -67,8 +68,18 @@ void apply_view_options(Scene& scene, const ViewOptions& o) {
   if (o.look_at) scene.camera.look_at = *o.look_at;
   if (o.up) scene.camera.up = *o.up;
 
-  check_camera(scene.camera, (o.eye || o.look_at) ? "--eye/--look-at" : file + ": camera",
-               o.up ? "--up" : file + ": camera up");
+  try {
+    check_camera(scene.camera, (o.eye || o.look_at) ? "--eye/--look-at" : file + ": camera",
+                 o.up ? "--up" : file + ": camera up");
+  } catch (const InputError&) {
+    // A framed eye stands farther the narrower the view: the field of view is the cause.
+    if (!framed || o.eye || o.look_at || o.up) throw;
+    char fov[32];
+    std::snprintf(fov, sizeof fov, "%g", double(scene.camera.fov_deg));
+    throw InputError((o.fov ? "--fov " : file + ": field of view ") + std::string(fov) +
+                     ": too narrow to frame a scene without a camera (its eye would stand at " +
+                     format_vec(scene.camera.eye) + ", beyond float's reach); give a wider field of view or a camera");
+  }
 
   if (!o.lights.empty()) {
     scene.lights = o.lights;

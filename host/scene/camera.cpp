@@ -14,13 +14,14 @@ Vec3 unit(const Vec3& v) { return v / length(v); }
 
 double dot(const Vec3& a, const double (&b)[3]) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
 
+}  // namespace
+
 std::string format_vec(const Vec3& v) {
   std::ostringstream out;
   out << v[0] << "," << v[1] << "," << v[2];
   return out.str();
 }
 
-}  // namespace
 
 CameraFrame camera_frame(const CameraDesc& camera, int width, int height) {
   CameraFrame frame;

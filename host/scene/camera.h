@@ -39,6 +39,9 @@ Vec3 primary_direction_at(const CameraFrame& frame, int width, int height, float
 // plane), where no projection exists.
 bool project_to_pixels(const CameraFrame& frame, int width, int height, const Vec3& point, double& px, double& py);
 
+// "x,y,z" as the camera's messages write a point.
+std::string format_vec(const Vec3& v);
+
 // Throws InputError unless the basis exists: eye != look-at, up non-zero and
 // not parallel to the view direction. The sources name the flags or the file
 // in the message.

@@ -66,6 +66,8 @@ TEST_F(CliFixture, FovOutOfRangeIsRejected) {
   expect_rejected({scene, "-o", out("x.png"), "--fov", "0"}, "--fov");
   expect_rejected({scene, "-o", out("x.png"), "--fov", "180"}, "--fov");
   expect_rejected({scene, "-o", out("x.png"), "--fov=nan"}, "--fov");
+  // In range, but too narrow to frame a model without a camera: the flag is named.
+  expect_rejected({scene, "-o", out("x.png"), "--fov", "1e-30"}, "--fov 1e-30: too narrow to frame");
 }
 
 TEST_F(CliFixture, DepthAndPesOutOfRangeAreRejected) {

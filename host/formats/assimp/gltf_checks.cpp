@@ -142,12 +142,20 @@ class Gltf {
   mutable std::unordered_map<std::string, std::unordered_map<std::string, long>> ids_;  // glTF 1 id -> index
 };
 
-// Bytes a data: URI holds (base64 decoded, else its text).
-u64 data_uri_bytes(const std::string& uri) {
+// Bytes a data: URI holds (base64 decoded, else its text). Base64 must be
+// whole: the importer decodes a character outside the alphabet as some
+// value and reads other geometry than the file's, without a word.
+u64 data_uri_bytes(const std::string& uri, const std::string& where) {
   const std::size_t comma = uri.find(',');
   if (comma == std::string::npos) return 0;
   const u64 text = uri.size() - comma - 1;
   if (uri.rfind(";base64", comma) == std::string::npos) return text;
+  const std::size_t end = uri.find_last_not_of('=') + 1, bad = uri.find_first_not_of(
+      "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/", comma + 1);
+  if ((bad != std::string::npos && bad < end) || uri.size() - end > 2 || text % 4 != 0)
+    throw InputError(where + ": uri: the data URI is not base64" +
+                     (bad < end ? " (character " + std::to_string(bad - comma) + " of its data is not in the alphabet)"
+                                : " (its length is not a multiple of 4 with at most two '=' at the end)"));
   u64 pad = 0;
   for (std::size_t k = uri.size(); k > comma + 1 && uri[k - 1] == '=' && pad < 2; --k) ++pad;
   return text / 4 * 3 - std::min<u64>(pad, text / 4 * 3);
@@ -164,7 +172,7 @@ std::vector<u64> buffer_lengths(const Gltf& g, ModelFiles& files, const GltfPart
     if (uri != e.value->end() && uri->is_string() && e.key != "binary_glTF") {
       const std::string& u = uri->get_ref<const std::string&>();
       if (u.compare(0, 5, "data:") == 0) {
-        available = data_uri_bytes(u);
+        available = data_uri_bytes(u, e.where);
         source = "its data URI";
       } else {
         // Where the importer looks: the model's folder and the uri as written.

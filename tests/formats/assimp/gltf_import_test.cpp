@@ -83,6 +83,22 @@ TEST(GltfImport, ElementsTheFileDoesNotHoldAreBoundedBeforeTheImport) {
 // moves; `uri` is its buffer (empty: a GLB's binary chunk). glTF 2 makes
 // inverseBindMatrices optional (identity matrices); Debian's assimp 5.2
 // faulted on a skin without them.
+// A data URI's base64 is checked whole: the importer decoded a character
+// outside the alphabet as some value and rendered other geometry, exit 0.
+TEST(GltfImport, ADataUriThatIsNotBase64IsNamed) {
+  TempDir dir;
+  const std::string prefix = "data:application/octet-stream;base64,";
+  const std::string triangle = "AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAA";  // triangle_bytes()
+  EXPECT_EQ(error_loading(dir.write("ok.gltf", gltf(prefix + triangle))), "<no error>");
+  std::string starred = triangle;
+  starred.replace(16, 4, "****");
+  const std::string star = dir.write("star.gltf", gltf(prefix + starred));
+  EXPECT_EQ(error_loading(star),
+            star + ": buffers[0]: uri: the data URI is not base64 (character 17 of its data is not in the alphabet)");
+  const std::string cut = dir.write("cut.gltf", gltf(prefix + triangle.substr(1)));
+  EXPECT_NE(error_loading(cut).find("its length is not a multiple of 4"), std::string::npos) << error_loading(cut);
+}
+
 std::string skinned_bytes() {
   std::string b = triangle_bytes();
   for (int v = 0; v < 3; ++v) b += std::string(8, '\0');  // JOINTS_0: joint 0, four u16

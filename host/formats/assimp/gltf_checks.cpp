@@ -365,7 +365,7 @@ class ImportCost {
               std::to_string(largest_accessor_->count) + " elements)";
     const auto size = [](u64 b) { return b >> 20 ? std::to_string(b >> 20) + " MiB" : std::to_string(b) + " bytes"; };
     throw InputError(what + ": importing the model would take about " + size(total_) + ", more than the " +
-                     size(budget) + " the model importer may use (4 GiB or 64 times the file and its buffers; " +
+                     size(budget) + " the model importer may use (1 GiB or 64 times the file and its buffers; " +
                      "OPSILA_IMPORT_MEMORY)");
   }
 

@@ -77,7 +77,7 @@ std::uint64_t import_memory_budget(std::uint64_t bytes) {
   if (const auto v = env_hook_number(EnvHook::import_memory, 1, std::uint64_t(1) << 50, "a number of bytes"))
     return *v;
   const std::uint64_t ram = physical_memory();
-  const std::uint64_t want = std::max<std::uint64_t>(std::uint64_t(4) << 30, 64 * std::min<std::uint64_t>(bytes, std::uint64_t(1) << 50));
+  const std::uint64_t want = std::max<std::uint64_t>(std::uint64_t(1) << 30, 64 * std::min<std::uint64_t>(bytes, std::uint64_t(1) << 50));
   return ram > 0 ? std::max<std::uint64_t>(std::min(want, ram / 4 * 3), std::uint64_t(1) << 30) : want;
 }
 

@@ -23,7 +23,7 @@ constexpr std::size_t kMaxNodes = std::size_t(1) << 20;
 constexpr long kMaxNesting = 4 * kMaxNodeDepth;
 
 // The memory the importer may add while it reads `bytes` of model (a file
-// and the buffers it names): 4 GiB or 64 times the bytes, whichever is
+// and the buffers it names): 1 GiB or 64 times the bytes, whichever is
 // larger, but at most three quarters of the machine's memory; or
 // OPSILA_IMPORT_MEMORY bytes. The glTF checks hold their estimate of the
 // import to it, and the import's watchdog its resident memory.

@@ -148,10 +148,11 @@ class ModelReader {
 // files (Debian's PLY reader on some headers). A read that outlives its
 // budget ends the run with one error line instead of a hang; nothing has been
 // written yet while a scene loads, so there is no output to clean up.
-// Budget: OPSILA_IMPORT_TIMEOUT seconds if set, else 60 s + 1 s per MiB.
+// Budget: OPSILA_IMPORT_TIMEOUT seconds if set, else 10 s + 1 s per MiB
+// (a truncated SMD or OpenGEX file of a few bytes loops until it).
 //
 // Memory too: a corrupted Q3O file made the library's reader take 19 GB in
-// its 60 s. The resident memory the read adds is polled every 20 ms and
+// its time. The resident memory the read adds is polled every 20 ms and
 // bounded by import_memory_budget (model_checks.h).
 std::uint64_t resident_bytes() {
   std::ifstream statm("/proc/self/statm");
@@ -205,7 +206,7 @@ class ImportStderr {
 class ImportWatchdog {
  public:
   ImportWatchdog(const std::string& name, std::uintmax_t bytes) {
-    double budget = 60.0 + double(bytes) / (1024.0 * 1024.0);
+    double budget = 10.0 + double(bytes) / (1024.0 * 1024.0);
     if (const char* env = env_hook(EnvHook::import_timeout)) {
       char* end = nullptr;
       const double v = std::strtod(env, &end);

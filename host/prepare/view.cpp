@@ -17,6 +17,31 @@
 
 namespace opsila {
 
+namespace {
+
+// The camera's basis exists (check_camera). A framed eye stands farther
+// the narrower the view: where the scene's own framing fails only for its
+// narrow field of view (framed at 90 degrees it would pass), that is named.
+void check_view_camera(const Scene& scene, const ViewOptions& o, const std::string& file, bool framed) {
+  const std::string eye_source = (o.eye || o.look_at) ? "--eye/--look-at" : file + ": camera";
+  const std::string up_source = o.up ? "--up" : file + ": camera up";
+  try {
+    check_camera(scene.camera, eye_source, up_source);
+  } catch (const InputError&) {
+    if (!framed || o.eye || o.look_at || o.up) throw;
+    Vec3 lo, hi;
+    scene.bounds(lo, hi);
+    check_camera(frame_bounds(lo, hi, 90.0f, static_cast<float>(scene.width) / scene.height), eye_source, up_source);
+    char fov[32];
+    std::snprintf(fov, sizeof fov, "%g", double(scene.camera.fov_deg));
+    throw InputError((o.fov ? "--fov " : file + ": field of view ") + std::string(fov) +
+                     ": too narrow to frame a scene without a camera (its eye would stand at " +
+                     format_vec(scene.camera.eye) + ", beyond float's reach); give a wider field of view or a camera");
+  }
+}
+
+}  // namespace
+
 RenderSettings render_settings(const ViewOptions& o) {
   RenderSettings settings;
   settings.num_pes = o.pes.value_or(settings.num_pes);
@@ -68,18 +93,7 @@ void apply_view_options(Scene& scene, const ViewOptions& o) {
   if (o.look_at) scene.camera.look_at = *o.look_at;
   if (o.up) scene.camera.up = *o.up;
 
-  try {
-    check_camera(scene.camera, (o.eye || o.look_at) ? "--eye/--look-at" : file + ": camera",
-                 o.up ? "--up" : file + ": camera up");
-  } catch (const InputError&) {
-    // A framed eye stands farther the narrower the view: the field of view is the cause.
-    if (!framed || o.eye || o.look_at || o.up) throw;
-    char fov[32];
-    std::snprintf(fov, sizeof fov, "%g", double(scene.camera.fov_deg));
-    throw InputError((o.fov ? "--fov " : file + ": field of view ") + std::string(fov) +
-                     ": too narrow to frame a scene without a camera (its eye would stand at " +
-                     format_vec(scene.camera.eye) + ", beyond float's reach); give a wider field of view or a camera");
-  }
+  check_view_camera(scene, o, file, framed);
 
   if (!o.lights.empty()) {
     scene.lights = o.lights;

@@ -289,6 +289,30 @@ std::vector<Accessor> check_accessors(const Gltf& g, const std::vector<View>& vi
   return accessors;
 }
 
+// A node's placement as glTF writes it: a matrix of 16 numbers, or a
+// translation and scale of 3 and a rotation of 4, a unit quaternion (the
+// importer takes any array and any quaternion: the zero one placed the
+// mesh as a point).
+void check_node_transform(const Entry& n) {
+  static const std::pair<const char*, std::size_t> kKeys[] = {
+      {"matrix", 16}, {"translation", 3}, {"rotation", 4}, {"scale", 3}};
+  for (const auto& [key, size] : kKeys) {
+    const auto it = n.value->find(key);
+    if (it == n.value->end()) continue;
+    bool numbers = it->is_array() && it->size() == size;
+    double norm = 0;
+    for (std::size_t k = 0; numbers && k < size; ++k) {
+      numbers = (*it)[k].is_number() && std::isfinite((*it)[k].get<double>());
+      if (numbers) norm += (*it)[k].get<double>() * (*it)[k].get<double>();
+    }
+    if (!numbers)
+      throw InputError(n.where + ": '" + key + "' is not " + std::to_string(size) + " finite numbers");
+    if (size == 4 && std::fabs(norm - 1.0) > 1e-2)
+      throw InputError(n.where + ": 'rotation' is not a unit quaternion (its length is " +
+                       std::to_string(std::sqrt(norm)) + ")");
+  }
+}
+
 // The node graph is a forest (glTF: "disjoint strict trees") of bounded
 // size and depth; the depth of every node is found without recursion.
 void check_nodes(const Gltf& g, const std::string& name) {
@@ -298,6 +322,7 @@ void check_nodes(const Gltf& g, const std::string& name) {
                      std::to_string(kMaxNodes) + ")");
   std::vector<long> parent(nodes.size(), -1);
   for (std::size_t i = 0; i < nodes.size(); ++i) {
+    check_node_transform(nodes[i]);
     const auto children = nodes[i].value->find("children");
     if (children == nodes[i].value->end() || !children->is_array()) continue;
     for (const Json& c : *children) {
@@ -401,6 +426,7 @@ void use_meshes(const Gltf& g, ImportCost& cost) {
       const std::string where = m.where + ".primitives[" + std::to_string(i) + "]";
       if (!p.is_object()) continue;
       cost.add(ImportCost::kRecordBytes, where);
+      g.ref(p, "material", "materials", where);  // the importer: 'Missing section "materials"'
       const auto indices = p.find("indices"), attributes = p.find("attributes"), targets = p.find("targets");
       if (indices != p.end()) cost.use(*indices, ImportCost::kIndexBytes, where + ".indices");
       if (attributes != p.end()) use_attributes(cost, *attributes, where + ".attributes", indices == p.end());

@@ -99,6 +99,27 @@ TEST(GltfImport, ADataUriThatIsNotBase64IsNamed) {
   EXPECT_NE(error_loading(cut).find("its length is not a multiple of 4"), std::string::npos) << error_loading(cut);
 }
 
+// Placements and references the importer takes as they come: a matrix of
+// 4 numbers, the zero quaternion (the mesh placed as a point), a material
+// index past the end (its message was 'Missing section "materials"').
+TEST(GltfImport, MalformedPlacementsAndMaterialsAreNamed) {
+  TempDir dir;
+  dir.write("tri.bin", triangle_bytes());
+  const auto with = [&](const std::string& name, const std::string& from, const std::string& to) {
+    std::string text = gltf("tri.bin");
+    text.replace(text.find(from), from.size(), to);
+    return dir.write(name, text);
+  };
+  const std::string four = with("four.gltf", R"({"mesh": 0})", R"({"mesh": 0, "matrix": [1, 0, 0, 0]})");
+  EXPECT_EQ(error_loading(four), four + ": nodes[0]: 'matrix' is not 16 finite numbers");
+  const std::string zero = with("zero.gltf", R"({"mesh": 0})", R"({"mesh": 0, "rotation": [0, 0, 0, 0]})");
+  EXPECT_EQ(error_loading(zero), zero + ": nodes[0]: 'rotation' is not a unit quaternion (its length is 0.000000)");
+  const std::string turned = with("turned.gltf", R"({"mesh": 0})", R"({"mesh": 0, "rotation": [0, 0.7071068, 0, 0.7071068]})");
+  EXPECT_EQ(error_loading(turned), "<no error>");
+  const std::string past = with("past.gltf", R"({"POSITION": 0})", R"({"POSITION": 0}, "material": 3)");
+  EXPECT_EQ(error_loading(past), past + ": meshes[0].primitives[0]: 'material' names no entry of 'materials'");
+}
+
 std::string skinned_bytes() {
   std::string b = triangle_bytes();
   for (int v = 0; v < 3; ++v) b += std::string(8, '\0');  // JOINTS_0: joint 0, four u16

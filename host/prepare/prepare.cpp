@@ -23,12 +23,16 @@ Scene read_view_scene(const PrepareRequest& r, Ranks& ranks) {
   show_prepare_progress(!r.quiet);
   Scene scene = load_scene_or_explain(r.view.scene_path, r.quiet, ranks, share, limit);
   if (r.outputs) r.outputs->refuse_inputs(scene.input_files);
-  // Many small objects cost more than their triangles (one process: a
-  // rank's share holds only its part of the objects' clusters).
-  if (share.ranks <= 1 && !r.reference)
-    if (const std::string why = limit.objects_beyond(scene.total_triangles(), std::size_t(scene.num_objects));
+  // Many small objects cost more than their triangles, and decoded maps
+  // their texels (one process: a rank's share holds only its part of the
+  // objects' clusters).
+  if (share.ranks <= 1 && !r.reference) {
+    std::uint64_t map_bytes = 0;
+    for (const Texture& t : scene.textures) map_bytes += std::uint64_t(t.texels.size()) * sizeof(t.texels[0]);
+    if (const std::string why = limit.objects_beyond(scene.total_triangles(), std::size_t(scene.num_objects), map_bytes);
         !why.empty())
       throw InputError(r.view.scene_path + why);
+  }
   apply_view_options(scene, r.view);
   if (r.quiet || !r.note) return scene;
   if (const std::string text = large_work_note(scene); !text.empty()) r.note(text);

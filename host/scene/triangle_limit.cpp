@@ -81,12 +81,14 @@ std::string TriangleLimit::why_not(std::size_t n, int ranks, bool more_than) con
          (several ? "each rank" : "this process") + " may use " + gib(memory.bytes) + " " + memory_source(memory);
 }
 
-std::string TriangleLimit::objects_beyond(std::size_t n, std::size_t objects) const {
+std::string TriangleLimit::objects_beyond(std::size_t n, std::size_t objects, std::uint64_t map_bytes) const {
   if (why != Why::memory) return "";
-  const std::uint64_t need = memory_for_triangles(n) + std::uint64_t(objects) * kPrepareHostBytesPerObject;
+  const std::uint64_t need = memory_for_triangles(n) + std::uint64_t(objects) * kPrepareHostBytesPerObject + map_bytes;
   if (need <= memory.bytes) return "";
   const std::uint64_t mib = std::uint64_t(1) << 20;
-  return ": " + std::to_string(objects) + " objects and " + std::to_string(n) + " triangles need about " + gib(need) +
+  const std::string maps = map_bytes ? ", " + std::to_string((map_bytes + mib - 1) / mib) + " MiB of texture maps" : "";
+  return ": " + std::to_string(objects) + " objects" + maps + " and " + std::to_string(n) + " triangles need about " +
+         gib(need) +
          " while preparing at " + std::to_string(kPrepareHostBytesPerObject) + " bytes an object and " +
          std::to_string(kPrepareHostBytesPerTriangle) + " a triangle, and this process may use " + gib(memory.bytes) +
          " " + memory_source(memory) + "; --host-memory " + std::to_string((need + mib - 1) / mib) + "M would do";

@@ -64,12 +64,13 @@ struct TriangleLimit {
   // while preparing at 120 bytes a triangle, and this process may use 0.29
   // GiB (--host-memory)"; "" for a given number.
   std::string why_not(std::size_t triangles, int ranks, bool more_than = false) const;
-  // Why one process's `triangles` in `objects` objects do not fit, counting
-  // kPrepareHostBytesPerObject as well (": 3000000 objects and ... need
+  // Why one process's `triangles` in `objects` objects, with `map_bytes`
+  // of decoded texture maps, do not fit, counting kPrepareHostBytesPerObject
+  // and the maps as well (": 3000000 objects and ... need
   // about 2.4 GiB ..., and this process may use 0.68 GiB (--host-memory);
   // --host-memory 2476M would do"); "" when they fit or memory is not what
   // limits.
-  std::string objects_beyond(std::size_t triangles, std::size_t objects) const;
+  std::string objects_beyond(std::size_t triangles, std::size_t objects, std::uint64_t map_bytes = 0) const;
   // "--host-memory 371M" when that much memory a rank would take
   // `triangles` on `ranks` ranks; "" when memory is not what limits.
   std::string memory_hint(std::size_t triangles, int ranks) const;

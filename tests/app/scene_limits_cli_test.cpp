@@ -108,6 +108,25 @@ TEST(SceneLimitsCli, ManySmallObjectsCountAgainstTheMemory) {
   EXPECT_EQ(reference.exit_code, 0) << "no clusters to build: " << reference.err;
 }
 
+// Decoded texture maps count too: a 1024 x 1024 map is 4 MiB of texels.
+TEST(SceneLimitsCli, TextureMapsCountAgainstTheMemory) {
+  TempDir dir;
+  // An uncompressed 24-bit TGA: an 18-byte header, then the pixels.
+  std::string tga("\0\0\x02", 3);
+  tga += std::string(9, '\0') + std::string("\0\x04\0\x04\x18\0", 6) + std::string(std::size_t(3) << 20, '\x60');
+  dir.write("map.tga", tga);
+  dir.write("m.mtl", "newmtl m\nKd 1 1 1\nmap_Kd map.tga\n");
+  const std::string path =
+      dir.write("mapped.obj", "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nusemtl m\nf 1/1 2/2 3/3\n");
+  TempDir out;
+  // 256 MiB + 4 MiB of texels + one triangle and object: over 260 MiB.
+  const RunResult r = run_opsila({"render", path, "--host-memory", "259M", "-o", out.file("x.png")});
+  expect_says(refusal(r, out), path, {"1 objects, 4 MiB of texture maps and 1 triangles need about 0.25 GiB",
+                                      "--host-memory 261M would do"});
+  const RunResult fits = run_opsila({"render", path, "--host-memory", "261M", "--size", "16x12", "-q", "-o", out.file("x.png")});
+  EXPECT_EQ(fits.exit_code, 0) << fits.err;
+}
+
 TEST(SceneLimitsCli, AShareTooLargeForTheDeviceIsRefusedBeforeThePartition) {
   TempDir dir;
   const RunResult r = test::run_program(OPSILA_BINARY, {"render", kMillion, "-o", dir.file("x.png")},

@@ -156,7 +156,10 @@ TEST(HardInput, ImageSizeLimitIsTheRenderersAndNamesTheKey) {
   EXPECT_EQ(error_of("{\"image\": {\"width\": 16384, \"height\": 16}, \"objects\": [" + sphere + "]}"),
             "<no error>");
   std::string msg = error_of("{\"image\": {\"width\": 16385, \"height\": 16}, \"objects\": [" + sphere + "]}");
-  EXPECT_NE(msg.find("s.json:1: image.width: must be in 1..16384"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("s.json:1: image.width: must be in 1..16384, not 16385"), std::string::npos) << msg;
+  // A whole number is named as written, not rounded to nine digits.
+  msg = error_of("{\"image\": {\"width\": 2147483648, \"height\": 16}, \"objects\": [" + sphere + "]}");
+  EXPECT_NE(msg.find("image.width: must be in 1..16384, not 2147483648"), std::string::npos) << msg;
   msg = error_of("{\"image\":\n{\"size\": [16384, 16384]}, \"objects\": [" + sphere + "]}");
   EXPECT_NE(msg.find("s.json:2: image.size: 16384 x 16384 pixels; at most 67108864"), std::string::npos) << msg;
 }

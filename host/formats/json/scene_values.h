@@ -4,6 +4,7 @@
 // uses. Internal to formats/json.
 #pragma once
 
+#include <cmath>
 #include <cstddef>
 #include <cstdio>
 #include <initializer_list>
@@ -26,7 +27,12 @@ constexpr int kMaxKeys = 1024;  // in one object: FORMAT.md "Limits"
 
 inline std::string num_text(double v) {
   char buf[32];
-  std::snprintf(buf, sizeof buf, "%.9g", v);
+  // Whole numbers as written (2147483648, not 2.14748365e+09): a count or an
+  // index read back in the message should be the user's number.
+  if (std::floor(v) == v && std::fabs(v) < 1e15)
+    std::snprintf(buf, sizeof buf, "%.0f", v);
+  else
+    std::snprintf(buf, sizeof buf, "%.9g", v);
   return buf;
 }
 

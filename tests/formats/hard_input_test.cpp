@@ -177,6 +177,24 @@ TEST(HardInput, UnknownMaterialIsAWarningAndTheDefault) {
       << s.warnings[0];
 }
 
+// A polygon of zero area is a degenerate facet, as in an OBJ: one warning,
+// not drawn, its id kept (the next object's facet is 2, not 1).
+TEST(HardInput, ZeroAreaPolygonIsAWarningAndKeepsItsId) {
+  const Scene s = load_scene_from_string(
+      R"({"objects": [{"type": "polygon", "vertices": [[0,0,0], [1,0,0], [1,1,0]]},
+          {"type": "polygon", "vertices": [[0,0,0], [1,1,1], [2,2,2]]},
+          {"type": "polygon", "vertices": [[0,0,1], [1,0,1], [1,1,1]]}]})",
+      "s.json", "");
+  ASSERT_EQ(s.triangles.size(), 2u);
+  EXPECT_EQ(s.triangles[0].facet_id, 0);
+  EXPECT_EQ(s.triangles[1].facet_id, 2);
+  EXPECT_EQ(s.triangles[1].object_id, 2);
+  EXPECT_EQ(s.num_facets, 3);
+  ASSERT_EQ(s.warnings.size(), 1u);
+  EXPECT_NE(s.warnings[0].find("s.json:2: objects[1].vertices: the polygon has zero area"), std::string::npos)
+      << s.warnings[0];
+}
+
 TEST(HardInput, WarningsBeforeAnErrorAreStillPrinted) {
   TempDir dir;
   const std::string scene = dir.write("typo.json", "{\"objcts\": [" + std::string(kSphere) + "]}");

@@ -116,7 +116,9 @@ ObjectReader::Make ObjectReader::solid(const Json& v, const std::string& path, c
     make = [this, pts, mat, where_vertices](std::vector<Triangle>& tris) {
       const std::size_t before = tris.size();
       building_.next_facet = add_polygon(tris, pts, FacetTag{building_.next_object++, mat}, building_.next_facet);
-      if (tris.size() == before) v_.fail(where_vertices, "the polygon has zero area");
+      // A degenerate facet, as in an OBJ (CONTRACT "Fan triangulation"):
+      // not drawn, its id kept, one warning.
+      if (tris.size() == before) v_.warn(where_vertices, "the polygon has zero area: not drawn; its facet id is kept");
     };
   }
   return make;

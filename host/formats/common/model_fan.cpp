@@ -22,6 +22,9 @@ MeshFan::MeshFan(const std::string& name, const aiMesh& mesh, const aiMatrix4x4&
                  FanTally& tally)
     : name_(name), mesh_(mesh), place_(place), normal_matrix_(place), max_triangles_(max_triangles), tally_(tally) {
   normal_matrix_.Inverse().Transpose();
+  const double a = place.a1, b = place.a2, c = place.a3, d = place.b1, e = place.b2, f = place.b3, g = place.c1,
+               h = place.c2, i = place.c3;
+  mirrored_ = a * (e * i - f * h) - b * (d * i - f * g) + c * (d * h - e * g) < 0;
 }
 
 bool MeshFan::face(const unsigned* corners, unsigned n, unsigned f, int object, int facet, int material, Scene* out) {
@@ -39,7 +42,10 @@ bool MeshFan::face(const unsigned* corners, unsigned n, unsigned f, int object, 
   const Vec3 p0 = position(corners[0]);
   bool any = false;
   for (unsigned k = 1; k + 1 < n; ++k) {
-    const unsigned corner[3] = {corners[0], corners[k], corners[k + 1]};
+    // A mirroring placement turns the winding: its fan triangles are taken
+    // the other way round, so that Ng points out of the solid as it did in
+    // the mesh's own frame (glTF 2.0, "Transformations").
+    const unsigned corner[3] = {corners[0], corners[mirrored_ ? k + 1 : k], corners[mirrored_ ? k : k + 1]};
     Triangle t;
     t.v0 = p0;
     t.v1 = position(corner[1]);

@@ -1,6 +1,7 @@
 // A mesh's faces fanned into SPEC triangles as the importer path makes
 // them: from the first corner, every fan triangle with the face's id,
-// positions by the node transform, normals by its inverse transpose; a
+// positions by the node transform (a mirroring one turns each triangle's
+// winding, so Ng stays outward), normals by its inverse transpose; a
 // zero-area triangle is dropped (and counted), a corner that is not a finite
 // number or a triangle whose edges overflow float refuses the file. One
 // home for the importer's meshes (model_import.cpp) and the PLY
@@ -52,6 +53,7 @@ class MeshFan {
   const aiMesh& mesh_;
   aiMatrix4x4 place_;
   aiMatrix3x3 normal_matrix_;
+  bool mirrored_ = false;  // the placement's determinant is negative
   std::size_t max_triangles_;
   FanTally& tally_;
 };

@@ -120,6 +120,32 @@ TEST(GltfImport, MalformedPlacementsAndMaterialsAreNamed) {
   EXPECT_EQ(error_loading(past), past + ": meshes[0].primitives[0]: 'material' names no entry of 'materials'");
 }
 
+// A node that mirrors its mesh (a negative determinant) turns its winding
+// (glTF 2.0, "Transformations"), so that Ng is the mesh's own normal under
+// the inverse transpose, as a smooth normal is: the triangle, facing +z in
+// its frame, still faces +z mirrored in x and faces -z mirrored in z, as it
+// does turned by 180 degrees about y (determinant +1, winding kept). Before,
+// a mirrored glass part was drawn inside out.
+TEST(GltfImport, AMirroringNodeKeepsTheFacetsFacingOut) {
+  TempDir dir;
+  dir.write("tri.bin", triangle_bytes());
+  std::string text = gltf("tri.bin");
+  const std::string one = R"("nodes": [0]}], "nodes": [{"mesh": 0}])";
+  ASSERT_NE(text.find(one), std::string::npos);
+  text.replace(text.find(one), one.size(),
+               R"("nodes": [0, 1, 2, 3]}], "nodes": [{"mesh": 0}, {"mesh": 0, "scale": [-1, 1, 1]},
+                  {"mesh": 0, "matrix": [1, 0, 0, 0, 0, 1, 0, 0, 0, 0, -2, 0, 0, 0, 0, 1]},
+                  {"mesh": 0, "rotation": [0, 1, 0, 0]}])");
+  const Scene s = load_scene(dir.write("mirrors.gltf", text));
+  ASSERT_EQ(s.triangles.size(), 4u);
+  const float want[4] = {1, 1, -1, -1};  // the placements in node order
+  for (int k = 0; k < 4; ++k) {
+    const Triangle& t = s.triangles[k];
+    const Vec3 a = t.v1 - t.v0, b = t.v2 - t.v0;
+    EXPECT_EQ(a[0] * b[1] - a[1] * b[0], want[k]) << "placement " << k;
+  }
+}
+
 std::string skinned_bytes() {
   std::string b = triangle_bytes();
   for (int v = 0; v < 3; ++v) b += std::string(8, '\0');  // JOINTS_0: joint 0, four u16

@@ -39,6 +39,7 @@ void read_document(Scene& scene, const std::string& text, const std::string& nam
                    const TriangleLimit& limit, const SceneShare& share) {
   const Json root = parse_scene_text(text, name);
   SceneValues values(text, name, scene.warnings);
+  values.refuse_nul(root, "");
   if (!root.is_object()) values.fail("", std::string("the scene must be a JSON object, not ") + kind(root));
   values.check_keys(root, "", {"description", "camera", "image", "depth", "spp", "ambient", "background",
                                "lights", "materials", "objects", "smooth"});

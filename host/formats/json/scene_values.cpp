@@ -209,10 +209,22 @@ void SceneValues::count2(const Json& v, const std::string& path, int hi, int& a,
 
 std::string SceneValues::string(const Json& v, const std::string& path) const {
   if (!v.is_string()) fail(path, std::string("expected a string, not ") + kind(v));
-  // A file name cut at its NUL would open another file ("t.obj\u0000x" read t.obj).
-  const std::string& s = v.get_ref<const std::string&>();
-  if (s.find('\0') != std::string::npos) fail(path, "a string here may not hold \\u0000");
-  return s;
+  return v.get_ref<const std::string&>();
+}
+
+// A name cut at its NUL would name something else ("t.obj\u0000x" read
+// t.obj; a material or a key likewise): no string or key may hold one.
+void SceneValues::refuse_nul(const Json& v, const std::string& path) const {
+  const auto has_nul = [](const std::string& s) { return s.find('\0') != std::string::npos; };
+  if (v.is_string() && has_nul(v.get_ref<const std::string&>()))
+    fail(path, "a string may not hold \\u0000 (a NUL)");
+  if (v.is_array())
+    for (std::size_t i = 0; i < v.size(); ++i) refuse_nul(v[i], join_index(path, i));
+  if (!v.is_object()) return;
+  for (auto it = v.begin(); it != v.end(); ++it) {
+    if (has_nul(it.key())) fail(path, "a key may not hold \\u0000 (a NUL)");
+    refuse_nul(it.value(), join_key(path, it.key()));
+  }
 }
 
 }  // namespace scene_json

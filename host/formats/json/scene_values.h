@@ -82,6 +82,8 @@ class SceneValues {
   // An integer in 1..hi (both alike) or [a, b].
   void count2(const Json& v, const std::string& path, int hi, int& a, int& b) const;
   std::string string(const Json& v, const std::string& path) const;
+  // Refuses a \u0000 in any string or key under v (nesting is bounded).
+  void refuse_nul(const Json& v, const std::string& path) const;
 
  private:
   const std::string& name_;

@@ -5,7 +5,7 @@
  * A hit's key is (distance on the grid, instance, facet id, fan triangle),
  * compared key by key: a strict total order, so the least hit of a ray is
  * the same whatever order its hits are found in (any PE count, rank count,
- * balance, bank BVH, visit order). It is SPEC's (distance, object id, facet
+ * balance, bank BVH, visit order). It is CONTRACT's (distance, object id, facet
  * id, fan): the scene's own facets have instance -1 and facet ids unique
  * over the scene that never decrease as object ids increase (checked when
  * the banks are built, host/partition/partition.cpp), so the facet id
@@ -63,7 +63,7 @@ inline float hit_bits_float(hit_bits_t b) {
 typedef struct {
   float t;
   int inst;  /* the instance hit, -1: a facet of the scene's own */
-  int facet; /* SPEC facet id (an instance's: its model's) */
+  int facet; /* CONTRACT facet id (an instance's: its model's) */
   int fan;   /* the triangle's index in its facet's fan, 0 first */
 } HitKey;
 

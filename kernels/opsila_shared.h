@@ -200,9 +200,9 @@ enum { OPSILA_STAGES(OPSILA_STAGE_INDEX) OPSILA_STAGE_COUNT };
 #define OPSILA_MAX_FAN (1 << (32 - OPSILA_MATERIAL_BITS))
 typedef struct {
   float v0[3];
-  opsila_i32 facet_id; /* SPEC facet id (file order) */
+  opsila_i32 facet_id; /* CONTRACT facet id (file order) */
   float v1[3];
-  opsila_i32 object_id; /* SPEC object id */
+  opsila_i32 object_id; /* CONTRACT object id */
   float v2[3];
   opsila_i32 material_fan; /* material | fan << OPSILA_MATERIAL_BITS */
 } BankTriangle;
@@ -210,7 +210,7 @@ typedef struct {
 #define OPSILA_TRI_MATERIAL(tri) ((tri).material_fan & (OPSILA_MAX_MATERIALS - 1))
 #define OPSILA_TRI_FAN(tri) ((opsila_i32)((opsila_u32)(tri).material_fan >> OPSILA_MATERIAL_BITS))
 
-/* What the vertices of one bank triangle carry (SPEC "barycentric
+/* What the vertices of one bank triangle carry (CONTRACT "barycentric
  * attributes"), stored in the bank of the PE that owns the triangle, at the
  * triangle's own index. Present only when some triangle needs them
  * (FrameParams.has_attributes). 80 bytes. */
@@ -313,7 +313,7 @@ typedef struct {
   float to_object[12]; /* world to model: row i is (A[i][0], A[i][1], A[i][2], b[i]), x' = A x + b */
   opsila_i32 root;      /* the model's BVH root in this device's nodes, -1: not held here */
   opsila_i32 pe;        /* owning PE */
-  opsila_i32 object_id; /* SPEC object id */
+  opsila_i32 object_id; /* CONTRACT object id */
   opsila_i32 pad;
 } Instance;
 /* Whether the programs walk instances (-D, set when the scene has some):
@@ -327,7 +327,7 @@ typedef struct {
  * instance, kernels/lib/descriptor.cl). Above the fan in the meta field. */
 #define OPSILA_META_INSTANCE (1 << 30)
 
-/* Material in SPEC.md terms, with kr/kt already derived from illum. 80 bytes. */
+/* Material in docs/CONTRACT.md terms, with kr/kt already derived from illum. 80 bytes. */
 typedef struct {
   float ka[3];
   float ns;

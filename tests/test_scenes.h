@@ -150,7 +150,7 @@ inline int add_attributes(Scene& s, std::array<Vec3, 3> n, std::array<std::array
   return static_cast<int>(s.attributes.size()) - 1;
 }
 
-// SPEC's barycentric attributes at work: a texture-mapped floor (coordinates
+// CONTRACT's barycentric attributes at work: a texture-mapped floor (coordinates
 // running past [0, 1), so the map repeats), a textured sphere and a plain
 // sphere with vertex normals (smooth when scene.smooth), a mirror that
 // reflects them, and one facet with coordinates but no map. Two lights.

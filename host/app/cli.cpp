@@ -70,7 +70,7 @@ std::string main_usage() {
          "usage:\n"
          "  opsila render SCENE -o OUT.(png|pfm|exr) [options]   render an image\n"
          "  opsila devices                                      list OpenCL platforms and devices\n"
-         "  opsila bench [options]                              run the benchmarks\n"
+         "  opsila bench SCENE [options]                        run the benchmarks\n"
          "  opsila --help | --version\n"
          "\n"
          "Run 'opsila render --help' for the render options.\n"

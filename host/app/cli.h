@@ -1,4 +1,4 @@
-// The command line (SPEC "Command line"): `opsila render`, `opsila devices`,
+// The command line (CONTRACT "Command line"): `opsila render`, `opsila devices`,
 // help and version. host/app/main.cpp dispatches to run_cli (and to the bench).
 #pragma once
 

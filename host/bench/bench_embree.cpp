@@ -1,5 +1,5 @@
 // The Embree baseline: Embree finds the hits, the host reference
-// (reference/reference.h) does everything else as SPEC says: the camera and
+// (reference/reference.h) does everything else as CONTRACT says: the camera and
 // its samples, smooth normals, texture maps, shading and the ray tree. So it
 // is the OPSILA image's work with Embree's traversal, on all host threads.
 // Instances are Embree instances of one scene per model. Built only when
@@ -98,7 +98,7 @@ void attach_triangles(RTCDevice device, RTCScene scene, const std::vector<Triang
   }
   for (std::size_t i = 0; i < nt; ++i) {
     const Triangle& t = tris[std::size_t(kept[i])];
-    const Vec3* v[3] = {&t.v0, &t.v1, &t.v2};  // in order: Embree's u, v are SPEC's b1, b2
+    const Vec3* v[3] = {&t.v0, &t.v1, &t.v2};  // in order: Embree's u, v are CONTRACT's b1, b2
     for (int k = 0; k < 3; ++k)
       for (int a = 0; a < 3; ++a) vb[9 * i + 3 * k + a] = (*v[k])[a];
     for (int k = 0; k < 3; ++k) ib[3 * i + k] = static_cast<unsigned>(3 * i + k);

@@ -49,7 +49,7 @@ inline float from_fixed(std::uint64_t sum) {
   return static_cast<float>(static_cast<double>(sum) / OPSILA_FIXED_SCALE);
 }
 
-// The mean of `samples` values whose fixed-point sum is `sum` (SPEC's N
+// The mean of `samples` values whose fixed-point sum is `sum` (CONTRACT's N
 // samples per pixel): one division by samples x 2^24, so one sample decodes
 // exactly as from_fixed does, and N equal samples (a sum N*s, exact in double
 // up to 2^53) decode to exactly the one sample's value. A saturated sum gives

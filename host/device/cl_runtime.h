@@ -35,7 +35,7 @@ std::vector<DeviceEntry> list_devices();  // throws ClError when there is no pla
 std::vector<std::string> platforms_without_devices();
 std::string no_devices_hint(const std::string& platform_name);
 
-// SPEC: empty -> first GPU, else first CPU, else first device. Otherwise an
+// CONTRACT: empty -> first GPU, else first CPU, else first device. Otherwise an
 // index ("2"), "platform:device" ("0:1") or a case-insensitive substring of
 // platform/device/vendor name ("pocl", "nvidia"). Throws InputError if none.
 DeviceEntry choose_device(const std::string& spec);

@@ -70,7 +70,7 @@ void build_routing(BankedScene& bs, const Box& sbox) {
   }
 }
 
-// Vertex attributes and texture copies of every bank (SPEC "barycentric
+// Vertex attributes and texture copies of every bank (CONTRACT "barycentric
 // attributes", "Texture maps"): normals only when the scene is smooth, texture
 // coordinates only where the facet's material has a map. A bank holds its
 // own copy of each texture its facets use, as the paper's banks would, and

@@ -83,7 +83,7 @@ BankedScene partition_scene(const Scene& scene, int num_pes, bool split_flat = f
                             const RaySample* sample = nullptr, const MeasuredWork* measured = nullptr,
                             const PartitionUse& use = PartitionUse{});
 
-// Per-frame constants for the kernels: the SPEC camera basis computed in
+// Per-frame constants for the kernels: the CONTRACT camera basis computed in
 // float exactly as the formula reads, so that every renderer built on a
 // banked scene casts the same primary rays bit for bit.
 FrameParams frame_params(const Scene& scene, const BankedScene& bs, int bank_capacity);

@@ -99,7 +99,7 @@ void apply_view_options(Scene& scene, const ViewOptions& o) {
     scene.lights = o.lights;
     scene.has_lights = true;
   } else if (!scene.has_lights && scene.lights.empty()) {
-    // SPEC: with no light given anywhere, one white light sits at the eye.
+    // CONTRACT: with no light given anywhere, one white light sits at the eye.
     LightDesc light;
     light.position = scene.camera.eye;
     light.intensity = Vec3{1, 1, 1};

@@ -29,7 +29,7 @@ struct ViewOptions {
   int work_groups_per_pe = 0;     // 0 = as many as each bank's descriptors need
   std::optional<int> routing;     // --routing: OPSILA_ROUTING_*
   std::optional<Balance> balance;  // --balance (default kDefaultBalance)
-  bool smooth = false;            // --smooth: SPEC's smooth shading (else the scene's "smooth")
+  bool smooth = false;            // --smooth: CONTRACT's smooth shading (else the scene's "smooth")
   std::uint64_t host_memory = 0;  // --host-memory in bytes (0: what the host has available)
 };
 

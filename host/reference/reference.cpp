@@ -20,12 +20,12 @@ namespace opsila {
 
 ReferenceTracer::ReferenceTracer(const Scene& scene, const FacetQueries* queries, int build_threads)
     : scene_(scene), impl_(new Impl(scene)) {
-  // SPEC: epsilon = 1e-4 x the diagonal of the bounding box of the facets.
+  // CONTRACT: epsilon = 1e-4 x the diagonal of the bounding box of the facets.
   epsilon_ = scene.epsilon();
   impl_->epsilon = epsilon_;
 
   impl_->materials = scene.materials;
-  // SPEC "a face with no material".
+  // CONTRACT "a face with no material".
   if (impl_->materials.empty()) impl_->materials.push_back(MaterialDesc::default_material());
   check_hit_order_ids(scene);
   const int materials = static_cast<int>(impl_->materials.size());
@@ -71,7 +71,7 @@ Vec3 ReferenceTracer::render_pixel(int x, int y, std::int32_t* object_facet,
                                    RayCounts& counts) const {
   const Scene& scene = scene_;
   const Vec3 eye = scene.camera.eye;
-  // SPEC "Camera": a k x k grid of samples; the pixel is their mean.
+  // CONTRACT "Camera": a k x k grid of samples; the pixel is their mean.
   const int k = spp_side(scene.spp);
   double sum[3] = {0.0, 0.0, 0.0};
   Hit centre;

@@ -1,4 +1,4 @@
-// The sequential reference: SPEC.md written out plainly for one processor.
+// The sequential reference: docs/CONTRACT.md written out plainly for one processor.
 // No OpenCL, no banks, no descriptors: one recursive Whitted tracer. It is the
 // oracle the tests compare the OpenCL renderer with, and the "sequential host"
 // baseline of the benchmark.
@@ -21,7 +21,7 @@ class Progress;
 
 // A ray's nearest facet: its index in Scene::triangles (-1: none), or with
 // inst >= 0 in the triangles of instance inst's prototype; the ray
-// parameter t and SPEC's barycentrics b1, b2 of the hit (an instance's in
+// parameter t and CONTRACT's barycentrics b1, b2 of the hit (an instance's in
 // its model's frame).
 struct FacetHit {
   float t = std::numeric_limits<float>::infinity();
@@ -66,7 +66,7 @@ class ReferenceTracer {
   // shown is the rows finished.
   void render_image(ImageResult& out, int threads, Progress* progress = nullptr) const;
   // Pixel value: the mean of the radiance of its scene.spp sample ray trees;
-  // also reports the centre ray's primary hit (SPEC "Item buffer").
+  // also reports the centre ray's primary hit (CONTRACT "Item buffer").
   Vec3 render_pixel(int x, int y, std::int32_t* object_facet, RayCounts& counts) const;
   float epsilon() const { return epsilon_; }
   // The ray trees of about `target_primary` centre rays on a regular pixel

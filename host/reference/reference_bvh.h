@@ -12,7 +12,7 @@
 namespace opsila::reference {
 
 // A triangle as the tracer needs it: the vertices' edges for the
-// intersection test, Ng from the vertices (SPEC "Geometry"), and the ids.
+// intersection test, Ng from the vertices (CONTRACT "Geometry and ids"), and the ids.
 struct Tri {
   Vec3 v0, e1, e2;
   Vec3 normal;   // Ng = normalize(cross(v1 - v0, v2 - v0))
@@ -42,7 +42,7 @@ struct Bvh {
 };
 
 // The tracer's triangles of `source`: materials outside [0, materials)
-// become 0 (SPEC "a face with no material").
+// become 0 (CONTRACT "a face with no material").
 std::vector<Tri> make_tris(const std::vector<Triangle>& source, int materials);
 
 // The BVH over the non-degenerate triangles of `tris` (boxes from

@@ -31,7 +31,7 @@ struct ReferenceTracer::Impl {
   };
 
   const Scene& scene;
-  std::vector<MaterialDesc> materials;  // the scene's, or SPEC's default if it has none
+  std::vector<MaterialDesc> materials;  // the scene's, or CONTRACT's default if it has none
   std::vector<Tri> tris;
   Bvh bvh;
   std::vector<Model> models;   // per Scene::prototypes
@@ -158,7 +158,7 @@ struct ReferenceTracer::Impl {
     });
   }
 
-  // The item buffer's (object, facet) of a hit (SPEC "Item buffer"):
+  // The item buffer's (object, facet) of a hit (CONTRACT "Item buffer"):
   // instance i is object num_objects + i, with its model's facet ids.
   void item_ids(const Hit& hit, std::int32_t* out) const {
     if (hit.tri < 0) {
@@ -170,7 +170,7 @@ struct ReferenceTracer::Impl {
     out[1] = tri.facet_id;
   }
 
-  // SPEC "Smooth shading": the interpolated vertex normal (an instance's
+  // CONTRACT "Smooth shading": the interpolated vertex normal (an instance's
   // through `to_object` to the world, not normalised before the length
   // test), turned to the side n_facing (the facet normal facing the ray) is
   // on; n_facing itself without vertex normals (or when they cancel out).
@@ -188,7 +188,7 @@ struct ReferenceTracer::Impl {
     return dot(unit, n_facing) < 0.0f ? -unit : unit;
   }
 
-  // SPEC "Texture maps": the material's colour times its map at the hit's
+  // CONTRACT "Texture maps": the material's colour times its map at the hit's
   // interpolated texture coordinates, where the facet has them.
   Vec3 mapped(const Triangle& t, const Hit& hit, const Vec3& colour, int map) const {
     if (map < 0 || map >= static_cast<int>(scene.textures.size()) || t.attributes < 0) return colour;
@@ -200,7 +200,7 @@ struct ReferenceTracer::Impl {
     return colour * sample_texture(scene.textures[map], u, v);
   }
 
-  // SPEC "Shading": the shadow ray from P (shading normal n) to `light`,
+  // CONTRACT "Shading": the shadow ray from P (shading normal n) to `light`,
   // cast only where the light term can be non-zero (n.Lv > 0): false when
   // there is none.
   static bool shadow_ray(const Vec3& p, const Vec3& n, const LightDesc& light, Vec3& lv, float& distance,
@@ -210,7 +210,7 @@ struct ReferenceTracer::Impl {
     if (!(distance > 0.0f)) return false;  // light at P: no direction to it
     lv = to_light / distance;
     n_dot_l = dot(n, lv);
-    return n_dot_l > 0.0f;  // SPEC: else the whole light term is 0
+    return n_dot_l > 0.0f;  // CONTRACT: else the whole light term is 0
   }
 
   // Local intensity at P with shading normal n, for a ray of unit direction
@@ -233,7 +233,7 @@ struct ReferenceTracer::Impl {
     return result;
   }
 
-  // What a ray meets at its hit (SPEC "Shading"): the point, the side and
+  // What a ray meets at its hit (CONTRACT "Shading"): the point, the side and
   // the shading normal there.
   struct Surface {
     Vec3 p, n;
@@ -257,7 +257,7 @@ struct ReferenceTracer::Impl {
     return s;
   }
 
-  // SPEC "Materials": the reflected direction, renormalised (SPEC treats
+  // CONTRACT "Materials": the reflected direction, renormalised (CONTRACT treats
   // every ray direction as unit, and epsilon is a distance).
   static Vec3 reflected(const Vec3& d, const Vec3& n) { return normalize(d - 2.0f * dot(d, n) * n); }
   // The transmitted direction; false on total internal reflection (k < 0).
@@ -292,7 +292,7 @@ struct ReferenceTracer::Impl {
     add_contribution(pixel, weight * local_intensity(s.p, s.n, d, m, ka, kd, counts));
 
     if (level + 1 >= scene.max_depth) return hit;
-    // SPEC "Materials": kr = Ks for illum 3..7, kt = Tf for illum 4, 6, 7.
+    // CONTRACT "Materials": kr = Ks for illum 3..7, kt = Tf for illum 4, 6, 7.
     const Vec3 kr = m.kr();
     const Vec3 kt = m.kt();
     if (any_nonzero(kr)) {

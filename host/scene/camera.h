@@ -1,4 +1,4 @@
-// The camera (SPEC "Camera"), in one place: the check that a basis exists,
+// The camera (CONTRACT "Camera"), in one place: the check that a basis exists,
 // the basis f, r, u with s = tan(fov/2) and a = W/H (computed in float once,
 // as the kernels receive it), the primary ray of a pixel, and the projection
 // of a point back to pixel coordinates.
@@ -23,7 +23,7 @@ CameraFrame camera_frame(const CameraDesc& camera, int width, int height);
 
 // Unit direction of pixel (x, y)'s primary ray (through the pixel centre).
 Vec3 primary_direction(const CameraFrame& frame, int width, int height, int x, int y);
-// Samples per pixel (SPEC "Camera"), N = k*k: sample i (0..k-1) sits at
+// Samples per pixel (CONTRACT "Camera"), N = k*k: sample i (0..k-1) sits at
 // (i + 0.5) / k inside its pixel along each axis, computed once here in float
 // so that every device and the reference use the same bits (k = 1 gives
 // exactly 0.5, the centre ray). sample_offsets(N) lists them for i = 0..k-1.
@@ -31,7 +31,7 @@ float spp_offset(int i, int k);
 std::vector<float> sample_offsets(int spp);
 
 // Unit direction of the ray through image point (px, py): px = x + 0.5 is
-// pixel x's centre, px = x + spp_offset(i, k) its sample i (SPEC's k x k grid).
+// pixel x's centre, px = x + spp_offset(i, k) its sample i (CONTRACT's k x k grid).
 Vec3 primary_direction_at(const CameraFrame& frame, int width, int height, float px, float py);
 
 // Where `point` lands on the screen, in continuous pixel coordinates (pixel

@@ -8,7 +8,7 @@
 
 namespace opsila {
 
-// Rays of one frame (SPEC "Statistics"): one primary ray per pixel,
+// Rays of one frame (CONTRACT "Statistics"): one primary ray per pixel,
 // secondary = reflected + transmitted rays spawned, shadow rays cast.
 struct RayCounts {
   std::uint64_t primary = 0;

@@ -1,4 +1,4 @@
-// The scene model: SPEC material rules, bounds, epsilon, auto-framing.
+// The scene model: CONTRACT material rules, bounds, epsilon, auto-framing.
 #include "scene/scene.h"
 
 #include "scene/instances.h"

@@ -1,4 +1,4 @@
-// The scene as loaded: what SPEC.md talks about (facets, objects, materials,
+// The scene as loaded: what docs/CONTRACT.md talks about (facets, objects, materials,
 // camera, lights), before it is split into banks. Loaders fill it; the
 // partitioner, the OpenCL renderer and the sequential reference read it.
 #pragma once
@@ -17,30 +17,30 @@
 
 namespace opsila {
 
-// SPEC "Materials": an illumination model reflects (kr = Ks) for illum
+// CONTRACT "Materials": an illumination model reflects (kr = Ks) for illum
 // 3..7 and transmits (kt = Tf) for illum 4, 6 and 7.
 bool illum_reflects(int illum);
 bool illum_transmits(int illum);
 
-// SPEC.md "Materials", as read from MTL or a scene file.
+// docs/CONTRACT.md "Materials", as read from MTL or a scene file.
 struct MaterialDesc {
   std::string name;
   Vec3 ka{0, 0, 0}, kd{0, 0, 0}, ks{0, 0, 0}, tf{0, 0, 0};
   float ns = 1.0f, ni = 1.0f;
   int illum = 0;
-  // SPEC "Texture maps": index into Scene::textures, -1 = no map (or the
+  // CONTRACT "Texture maps": index into Scene::textures, -1 = no map (or the
   // image could not be read).
   int map_kd = -1, map_ka = -1;
   // The map files as an MTL file names them (options removed, not yet
   // looked up): the OBJ reader resolves and loads them.
   std::string map_kd_file, map_ka_file;
-  // SPEC: kr = Ks when illum in {3..7}; kt = Tf when illum in {4,6,7}.
+  // CONTRACT: kr = Ks when illum in {3..7}; kt = Tf when illum in {4,6,7}.
   Vec3 kr() const;
   Vec3 kt() const;
   static MaterialDesc default_material();  // the "face with no material" one
 };
 
-// SPEC "Materials": the Ka (Kd) of a material that leaves the key out:
+// CONTRACT "Materials": the Ka (Kd) of a material that leaves the key out:
 // (1, 1, 1) when the material has a map_Ka (map_Kd), so that the texture
 // alone gives the colour (glTF 1, IQM, SMD and MDL materials often carry
 // only a texture), else 0. Every reader of materials (MTL, other model
@@ -49,7 +49,7 @@ Vec3 left_out_colour(bool has_map);
 
 // The one rule every reader (MTL, scene files, other model formats) applies
 // to a material value: colours (Ka, Kd, Ks, Tf) and Ns must not be negative.
-// So every term of SPEC's pixel sum is >= 0 (what the saturating pixel sums
+// So every term of CONTRACT's pixel sum is >= 0 (what the saturating pixel sums
 // rely on) and pow(x, Ns) is never infinite. Returns "" or the problem,
 // e.g. "must not be negative (-1)".
 std::string material_value_problem(const std::string& key, float value);
@@ -65,7 +65,7 @@ struct Triangle {
   int fan = 0;          // index in the facet's fan, 0 first: the hit order's last key (kernels/hit_order.h)
 };
 
-// What the vertices of one triangle carry besides their position (SPEC
+// What the vertices of one triangle carry besides their position (CONTRACT
 // "barycentric attributes"): normals (OBJ vn) and texture coordinates (OBJ
 // vt), in the triangle's vertex order. Kept apart from Triangle, since most
 // scenes have neither.
@@ -77,7 +77,7 @@ struct VertexAttributes {
 };
 
 // A decoded texture map: 8-bit sRGB texels packed as r | g << 8 | b << 16,
-// row 0 = the top row of the image (SPEC's j = 0).
+// row 0 = the top row of the image (CONTRACT's j = 0).
 struct Texture {
   std::string path;  // as found on disk (or "file#name" for an embedded one)
   int width = 0, height = 0;
@@ -210,8 +210,8 @@ struct Scene {
   CameraDesc camera;
   int width = 640, height = 480;
   int max_depth = 5;
-  int spp = 1;  // samples per pixel, N = k*k (SPEC "Camera"); see spp_problem
-  bool smooth = false;  // SPEC "Smooth shading": interpolated vertex normals
+  int spp = 1;  // samples per pixel, N = k*k (CONTRACT "Camera"); see spp_problem
+  bool smooth = false;  // CONTRACT "Smooth shading": interpolated vertex normals
   Vec3 ambient{0.1f, 0.1f, 0.1f};
   Vec3 background{0.0f, 0.0f, 0.0f};
   int num_objects = 0;  // object ids are 0 .. num_objects-1
@@ -247,7 +247,7 @@ struct Scene {
   // Gives the triangles up once the banks hold copies of them (keeping the
   // figures first, if not yet kept); nothing reads them after.
   void release_triangles();
-  // SPEC: epsilon = 1e-4 x the diagonal of the scene's bounding box.
+  // CONTRACT: epsilon = 1e-4 x the diagonal of the scene's bounding box.
   float epsilon() const;
   // Length of the bounding box diagonal (computed in double, so a scene too
   // big for float shows up as infinity rather than as a wrong number).
@@ -259,13 +259,13 @@ void append_warnings(Scene& into, Scene& from);
 // `first` ahead of the scene's warnings, its map requests kept in their places.
 void put_warnings_first(Scene& scene, std::vector<std::string> first);
 
-// The diagonal of the box [lo, hi] in double, and SPEC's epsilon for it:
+// The diagonal of the box [lo, hi] in double, and CONTRACT's epsilon for it:
 // one home for both, so that code that already holds the bounds (a scan of
 // every facet) need not scan again.
 double box_diagonal(const Vec3& lo, const Vec3& hi);
 inline float epsilon_for(double diagonal) { return static_cast<float>(1e-4 * diagonal); }
 
-// Samples per pixel (SPEC "Camera"): N = k*k with 1 <= N <= kMaxSpp. The
+// Samples per pixel (CONTRACT "Camera"): N = k*k with 1 <= N <= kMaxSpp. The
 // bound (k <= 32) keeps every pixel's 64-bit fixed-point sum of N samples far
 // from overflow and a render's cost (N times the rays of N = 1) sane.
 constexpr int kMaxSpp = 1024;

@@ -1,4 +1,4 @@
-// SPEC "Texture maps" sampling, written once for the host: the sRGB decode
+// CONTRACT "Texture maps" sampling, written once for the host: the sRGB decode
 // table (also uploaded to the kernels, so both decode texels identically)
 // and the bilinear, repeating lookup the reference tracer uses.
 // kernels/lib/texture.cl is the same lookup, expression for expression.

@@ -11,7 +11,7 @@ inline bool was_traced(int pixel, int width, int4 traced) {
 /* 64-bit fixed-point add from two 32-bit atomics: the carry out of the low
  * word goes to the high word. Integer sums are order-independent, so the
  * image is identical however the work-items are scheduled.
- * Saturation: values are >= 0 and < 2^63 (every term of SPEC's pixel sum
+ * Saturation: values are >= 0 and < 2^63 (every term of CONTRACT's pixel sum
  * is >= 0, and fixed3 saturates), so a sum reaching 2^63 sets bit 31 of
  * the high word; an add that carries out of the high word sets it again
  * (atomic_or), and adds that do not carry out cannot clear it. So bit 31 is

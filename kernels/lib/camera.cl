@@ -1,10 +1,10 @@
-/* The SPEC camera on the device: the primary rays of the item buffer, the
+/* The CONTRACT camera on the device: the primary rays of the item buffer, the
  * primary descriptors and the replicated megakernel. The basis comes from
  * the host (FrameParams, computed once by host/scene/camera.cpp, which also
  * holds the host's copy of these two functions). */
 #include "geometry.cl"
 
-/* SPEC camera: direction of the ray through image point (px, py); pixel
+/* CONTRACT camera: direction of the ray through image point (px, py); pixel
  * (x, y)'s centre is (x + 0.5, y + 0.5), its sample (i, j) is
  * (x + (i+0.5)/k, y + (j+0.5)/k) with the offsets computed on the host. */
 inline float3 primary_direction_at(FrameParams fp, float px, float py) {

@@ -152,7 +152,7 @@ OPSILA_INLINE float4 intersect_triangle4(const RayPre *r, __global const BankTri
 #undef LOAD2
 #undef LOAD4
 
-/* SPEC's barycentrics (b1, b2) of the ray's hit on a triangle it is known
+/* CONTRACT's barycentrics (b1, b2) of the ray's hit on a triangle it is known
  * to hit: P = (1 - b1 - b2) v0 + b1 v1 + b2 v2. */
 inline float2 hit_barycentrics(const RayPre *r, __global const BankTriangle *tri) {
   float3 z;

@@ -1,4 +1,4 @@
-/* Whitted shading pieces (SPEC "Shading"), shared by the SPMD phase and the
+/* Whitted shading pieces (CONTRACT "Shading"), shared by the SPMD phase and the
  * replicated megakernel so that both shade from one definition. */
 #include "texture.cl"
 
@@ -32,7 +32,7 @@ inline float3 instance_normal(__global const Instance *in, float3 n) {
 
 /* The surface at the hit of ray (org, d) at distance t on bank triangle
  * tri_index (of instance inst's model, in its frame, or -1: the scene's
- * own): SPEC's Ng, and where the triangle carries attributes, the smooth
+ * own): CONTRACT's Ng, and where the triangle carries attributes, the smooth
  * normal and texture-mapped Ka, Kd at the hit's barycentrics. */
 inline SurfacePoint surface_point(FrameParams fp, __global const BankTriangle *tris, __global const Instance *insts,
                                   int tri_index, int inst, __global const Material *m, SURFACE_PARAMS, float3 org,

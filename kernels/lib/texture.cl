@@ -1,4 +1,4 @@
-/* SPEC "Texture maps": the bilinear, repeating lookup of a bank's texture
+/* CONTRACT "Texture maps": the bilinear, repeating lookup of a bank's texture
  * copy. host/scene/texture.cpp is the same lookup, expression for
  * expression; srgb is the host's 256-entry sRGB decode table. */
 #include "geometry.cl"

@@ -1,4 +1,4 @@
-// SPEC's barycentric attributes on the host: OBJ vt/vn and face references,
+// CONTRACT's barycentric attributes on the host: OBJ vt/vn and face references,
 // MTL texture maps (options, Windows paths, missing images), texture decoding
 // and sampling against hand-computed texels, and where the partition puts
 // attributes and texels. No OpenCL needed.
@@ -146,7 +146,7 @@ TEST(MtlMaps, OptionsAreSkippedAndWindowsPathsResolved) {
   EXPECT_EQ(blender.textures[0].texels[0], 0xff0000u);
 }
 
-// SPEC: a material with a map_Kd (map_Ka) but no Kd (Ka) takes (1, 1, 1),
+// CONTRACT: a material with a map_Kd (map_Ka) but no Kd (Ka) takes (1, 1, 1),
 // in whatever order the keys come; a colour the material states is kept,
 // and one it leaves out without a map is 0.
 TEST(MtlMaps, MapWithoutItsColourTakesOne) {

@@ -1,4 +1,4 @@
-// SPEC's material rules on real models of Debian's assimp-testmodels (NFF,
+// CONTRACT's material rules on real models of Debian's assimp-testmodels (NFF,
 // glTF 1, IQM, SMD, HL1 MDL) and on an OBJ/MTL: the OpenCL image against the
 // sequential reference, and the colours the rules give. Under the rules
 // before (a name decided "no material"; a texture-only material had Kd = 0)

@@ -132,7 +132,7 @@ Scene mirror_box(int depth) {
 
 // Follows a ray bouncing inside the mirror box in double precision. True if
 // one of its first `bounces` reflection points lies within `reach` of another
-// face: there SPEC's rule (secondary rays ignore hits with t <= epsilon) lets
+// face: there CONTRACT's rule (secondary rays ignore hits with t <= epsilon) lets
 // the reflected ray pass the corner. Escaping any other way is a crack.
 bool bounces_near_an_edge(const Vec3& eye, const Vec3& dir, int bounces, double reach) {
   double p[3] = {eye[0], eye[1], eye[2]}, d[3] = {dir[0], dir[1], dir[2]};
@@ -155,7 +155,7 @@ bool bounces_near_an_edge(const Vec3& eye, const Vec3& dir, int bounces, double 
 // From inside a closed box of mirrors made of grids, looking into a corner
 // (three faces, their shared edges and the corner vertex in view). The
 // background is red, the box has no red: every primary ray must hit a facet;
-// a reflected ray may only escape where SPEC's epsilon lets it pass a corner.
+// a reflected ray may only escape where CONTRACT's epsilon lets it pass a corner.
 TEST(Numeric, NoCracksInsideAClosedMirrorBox) {
   for (int pes : {1, 8}) {
     const Scene primary = mirror_box(1);
@@ -399,7 +399,7 @@ TEST(Numeric, TotalInternalReflection) {
 // term only (to rounding: n.Lv is a rounding error, times Kd; Ks = 0).
 // Blocks standing on the floor are lit as usual and, with the light beside
 // the floor, agree with the reference. With the light on the floor, a shadow
-// ray meets the floor at t = |light - P| itself, which SPEC's open interval
+// ray meets the floor at t = |light - P| itself, which CONTRACT's open interval
 // excludes but rounding may not: which block pixels are lit is then not
 // defined to the last bit (docs/RELIABILITY.md), so only the floor is checked.
 TEST(Numeric, LightInTheFacetPlane) {

@@ -1,4 +1,4 @@
-// The OpenCL renderer against the sequential reference (SPEC.md in plain
+// The OpenCL renderer against the sequential reference (docs/CONTRACT.md in plain
 // C++), across PE counts, bank capacities and runs.
 #include <gtest/gtest.h>
 
@@ -133,7 +133,7 @@ TEST(Renderer, DepthOneIsLocalShadingOnly) {
 }
 
 // Two facing glass slabs: every hit spawns a reflected and a refracted ray,
-// so a pixel's ray tree doubles with each level (SPEC's depth) until its
+// so a pixel's ray tree doubles with each level (CONTRACT's depth) until its
 // rays leave the slabs' sides.
 Scene facing_slabs(int depth) {
   const std::string text = R"({"image": {"size": [64, 48]}, "depth": )" + std::to_string(depth) + R"(,

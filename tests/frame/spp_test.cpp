@@ -1,4 +1,4 @@
-// Samples per pixel (SPEC "Camera"): the k x k grid, the mean, the centre
+// Samples per pixel (CONTRACT "Camera"): the k x k grid, the mean, the centre
 // ray's item buffer; in the reference, the replicated megakernel and the
 // OPSILA renderer. Also the --spp / "spp" checks and the progress line.
 #include <gtest/gtest.h>

@@ -1,5 +1,5 @@
 // Texture maps and smooth shading on the OpenCL renderer and the replicated
-// megakernel, against the sequential reference (SPEC in plain C++), on 1, 16
+// megakernel, against the sequential reference (CONTRACT in plain C++), on 1, 16
 // and 64 PEs.
 #include <gtest/gtest.h>
 
@@ -40,7 +40,7 @@ INSTANTIATE_TEST_SUITE_P(FlatAndSmooth, SurfaceRender, ::testing::Values(false, 
                          [](const ::testing::TestParamInfo<bool>& p) { return p.param ? "Smooth" : "Flat"; });
 
 // The maps and the normals do change the image (so the comparisons above
-// could fail), and only where SPEC says.
+// could fail), and only where CONTRACT says.
 TEST(SurfaceRenderEffect, TexturesAndSmoothNormalsChangeTheImage) {
   const Scene smooth = test::textured_smooth_scene(96, true);
   const Scene flat = test::textured_smooth_scene(96, false);

@@ -1,4 +1,4 @@
-// What every scene a reader accepts must satisfy (SPEC ids in range, finite
+// What every scene a reader accepts must satisfy (CONTRACT ids in range, finite
 // data, a usable camera and epsilon), for the fuzz targets: a broken
 // invariant aborts, which the fuzzer reports like a crash.
 #pragma once

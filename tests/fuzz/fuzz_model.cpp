@@ -1,4 +1,4 @@
-// libFuzzer target: bytes -> the Open Asset Import Library -> SPEC's scene
+// libFuzzer target: bytes -> the Open Asset Import Library -> CONTRACT's scene
 // (load_model_from_memory). The first byte picks the format the importer is
 // told to expect (STL, OFF, glTF, GLB or PLY); bytes after the first
 // "#EXTERNAL#" are every other file the importer opens (a glTF's external

@@ -1,4 +1,4 @@
-// The sequential reference against values worked out by hand from SPEC.md.
+// The sequential reference against values worked out by hand from docs/CONTRACT.md.
 #include "reference/reference.h"
 
 #include <gtest/gtest.h>

@@ -1,5 +1,5 @@
-// The importer's scene -> SPEC's scene. Kept apart from the importer's own
-// post-processing: no aiProcess_Triangulate (SPEC fans polygons itself and
+// The importer's scene -> CONTRACT's scene. Kept apart from the importer's own
+// post-processing: no aiProcess_Triangulate (CONTRACT fans polygons itself and
 // keeps one facet id per face) and no aiProcess_PreTransformVertices (it
 // joins and reorders meshes, and so would change the object ids).
 #include "formats/assimp/model_import.h"

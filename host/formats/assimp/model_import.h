@@ -1,5 +1,5 @@
 // Models in the formats the Open Asset Import Library reads (PLY, STL,
-// glTF/GLB, FBX, COLLADA, 3DS, ...), with SPEC's ids: object id = index of
+// glTF/GLB, FBX, COLLADA, 3DS, ...), with CONTRACT's ids: object id = index of
 // the mesh in the importer's list, facet id = running index of the face over
 // those meshes. OBJ keeps its own strict reader (host/formats/obj/obj_loader.h).
 // scenes/FORMAT.md has the rules (materials, node transforms, textures).

@@ -1,6 +1,6 @@
-// The importer's materials -> SPEC's material keys. A material is used as
+// The importer's materials -> CONTRACT's material keys. A material is used as
 // the file gives it, whatever its name; only the importer's placeholder for
-// "no material" becomes SPEC's default material.
+// "no material" becomes CONTRACT's default material.
 #include "formats/assimp/model_materials.h"
 
 #ifdef OPSILA_HAVE_ASSIMP
@@ -36,7 +36,7 @@ std::string map_path(const aiMaterial& m, aiTextureType type) {
   return path.C_Str();
 }
 
-// The importer's stand-in for "no material" (SPEC, other model formats): no
+// The importer's stand-in for "no material" (CONTRACT, other model formats): no
 // name or AI_DEFAULT_MATERIAL_NAME (what the STL, PLY, OFF, SMD, MDL, ...
 // readers make up), no texture map, and a grey diffuse colour (or none).
 // NFF names its coloured materials so too, and HL1 MDL leaves its textured
@@ -71,15 +71,15 @@ class MaterialReader {
  private:
   void warn(const std::string& what) { scene_.warnings.push_back(name_ + ": " + what); }
 
-  // SPEC keys from the importer's: ambient, diffuse, specular colours,
+  // CONTRACT keys from the importer's: ambient, diffuse, specular colours,
   // shininess, refraction index, transparent colour and shading model.
   // "Left out" is the key's absence from the material. The readers that
   // make up a material themselves (MD2, MD3, MDC, MDL, HMP, SMD) store a
   // diffuse colour of 1 beside a texture and a grey one without: the first
-  // agrees with SPEC, the second is the placeholder above. glTF 1, IQM, SMD
-  // and HL1 MDL give a texture and no diffuse colour: Kd = 1 (SPEC).
+  // agrees with CONTRACT, the second is the placeholder above. glTF 1, IQM, SMD
+  // and HL1 MDL give a texture and no diffuse colour: Kd = 1 (CONTRACT).
   MaterialDesc material(const aiMaterial& am, unsigned i) {
-    MaterialDesc m;  // SPEC defaults for keys left out
+    MaterialDesc m;  // CONTRACT defaults for keys left out
     aiString ainame;
     m.name = am.Get(AI_MATKEY_NAME, ainame) == AI_SUCCESS && ainame.length > 0 ? ainame.C_Str()
                                                                                 : "material " + std::to_string(i);

@@ -1,4 +1,4 @@
-// The importer's materials as SPEC's (SPEC "Materials", and "Geometry" on
+// The importer's materials as CONTRACT's (CONTRACT "Materials", and "Geometry" on
 // other model formats): which material is the importer's placeholder for
 // "no material", which keys a material gives, and its texture maps.
 #pragma once
@@ -14,7 +14,7 @@ namespace opsila {
 
 // Appends the importer's materials to scene.materials (their maps to
 // scene.textures) and returns, for each of them, its index in
-// scene.materials: 0, SPEC's default, for the importer's placeholder.
+// scene.materials: 0, CONTRACT's default, for the importer's placeholder.
 // Warnings start with `name`; map files are found from `base_dir` ("" when
 // the model came from memory: no file is read then), their images read as
 // `images` says (add_texture_file).

@@ -1,4 +1,4 @@
-// A mesh's faces fanned into SPEC triangles as the importer path makes
+// A mesh's faces fanned into CONTRACT triangles as the importer path makes
 // them: from the first corner, every fan triangle with the face's id,
 // positions by the node transform (a mirroring one turns each triangle's
 // winding, so Ng stays outward), normals by its inverse transpose; a

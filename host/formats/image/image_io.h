@@ -1,4 +1,4 @@
-// Output files (SPEC "Outputs"): PNG, PFM, OpenEXR, the item buffer as .npy, text.
+// Output files (CONTRACT "Outputs"): PNG, PFM, OpenEXR, the item buffer as .npy, text.
 // Every writer builds the whole file in memory, writes it to a temporary file
 // in the destination folder and renames it into place only after a complete,
 // checked write, so no partial output file is ever left behind.

@@ -1,4 +1,4 @@
-// stb_image is compiled here, once, with only the decoders SPEC names.
+// stb_image is compiled here, once, with only the decoders CONTRACT names.
 #include "formats/image/texture_file.h"
 
 #include <algorithm>

@@ -1,4 +1,4 @@
-// Texture images (SPEC "Texture maps"): 8-bit PNG, JPEG, TGA or BMP decoded
+// Texture images (CONTRACT "Texture maps"): 8-bit PNG, JPEG, TGA or BMP decoded
 // with stb_image, and the path rules real model files need.
 #pragma once
 

@@ -1,6 +1,6 @@
 // Tessellation of the scene format's built-in shapes, plus the portable
 // random numbers and noise its generators use. Every function appends
-// triangles with CCW outward winding (SPEC's Ng points out of solids, up for
+// triangles with CCW outward winding (CONTRACT's Ng points out of solids, up for
 // planes) and returns the next free facet id.
 #pragma once
 

@@ -90,11 +90,11 @@ void SceneSections::materials(const Json& v, const std::string& path) {
   }
 }
 
-// SPEC terms, plus kr (-> Ks) and kt (-> Tf) with illum chosen to apply them.
+// CONTRACT terms, plus kr (-> Ks) and kt (-> Tf) with illum chosen to apply them.
 MaterialDesc SceneSections::material(const Json& v, const std::string& path, const std::string& name) {
   v_.expect_object(v, path);
   v_.check_keys(v, path, {"Ka", "Kd", "Ks", "Ns", "Ni", "Tf", "illum", "kr", "kt"});
-  MaterialDesc m;  // SPEC defaults for keys left out
+  MaterialDesc m;  // CONTRACT defaults for keys left out
   m.name = name;
   const auto key = [&](const char* k) { return join_key(path, k); };
   if (const Json* x = v_.find(v, "Ka")) m.ka = v_.colour(*x, key("Ka"));

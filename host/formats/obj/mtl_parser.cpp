@@ -1,4 +1,4 @@
-// Strict MTL reading: the material keys SPEC uses, each value checked and
+// Strict MTL reading: the material keys CONTRACT uses, each value checked and
 // every problem named by FILE:LINE.
 #include "formats/obj/obj_loader.h"
 
@@ -58,7 +58,7 @@ float parse_single(std::string_view rest, std::string_view key, const std::strin
 // The file of a map statement ("map_Kd [-options] file"): options and their
 // values are skipped; the rest of the line, blanks included, is the file.
 // Options that change the mapping (-o, -s, -t, -clamp on) are not part of
-// SPEC's texture lookup: they are ignored with a warning.
+// CONTRACT's texture lookup: they are ignored with a warning.
 std::string map_file(std::string_view rest, std::string_view key, const std::string& file, int line,
                      std::vector<std::string>& warnings) {
   std::vector<std::string> ignored;
@@ -111,7 +111,7 @@ std::vector<MaterialDesc> parse_mtl(const std::string& text, const std::string& 
     if (kw.empty() || kw[0] == '#') continue;
     if (kw == "newmtl") {
       check_material_count(out.size() + 2, at(name, ln) + "'newmtl': ");  // the default is the scene's first
-      MaterialDesc m;  // SPEC defaults for keys left out
+      MaterialDesc m;  // CONTRACT defaults for keys left out
       m.name = std::string(trim(rest));
       out.push_back(std::move(m));
       given.push_back({false, false});
@@ -167,7 +167,7 @@ std::vector<MaterialDesc> parse_mtl(const std::string& text, const std::string& 
                        " material keys before the first 'newmtl' were ignored");
   for (std::size_t k = 0; k < out.size(); ++k) {
     MaterialDesc& m = out[k];
-    // A map is known by its statement, read or not (SPEC: the colour is the
+    // A map is known by its statement, read or not (CONTRACT: the colour is the
     // texture's alone; an image that cannot be read is then ignored).
     if (!given[k][0]) m.ka = left_out_colour(!m.map_ka_file.empty());
     if (!given[k][1]) m.kd = left_out_colour(!m.map_kd_file.empty());

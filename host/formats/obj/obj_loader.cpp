@@ -114,7 +114,7 @@ int ObjParser::add_attributes(Scene& scene, const Polygon& poly, std::uint32_t k
   return static_cast<int>(scene.attributes.size()) - 1;
 }
 
-// Materials: 0 is the SPEC default, then the MTL ones in definition order;
+// Materials: 0 is the CONTRACT default, then the MTL ones in definition order;
 // a slot whose name no library defines gets the default (and a warning).
 std::vector<int> ObjParser::resolve_materials(Scene& scene) {
   scene.materials.push_back(MaterialDesc::default_material());
@@ -158,7 +158,7 @@ bool ObjParser::fan(const Polygon& poly, int id, FanFigures& fig, Scene* out, in
   for (std::uint32_t k = 1; k + 1 < poly.count; ++k) {
     const Vec3 p1 = vtx(index_[poly.first + k]);
     const Vec3 p2 = vtx(index_[poly.first + k + 1]);
-    // SPEC's geometric normal, in float: zero means no normal (skip it),
+    // CONTRACT's geometric normal, in float: zero means no normal (skip it),
     // overflow means the renderer could not shade it (refuse the file).
     const float e1[3] = {p1[0] - p0[0], p1[1] - p0[1], p1[2] - p0[2]};
     const float e2[3] = {p2[0] - p0[0], p2[1] - p0[1], p2[2] - p0[2]};

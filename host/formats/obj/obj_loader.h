@@ -1,4 +1,4 @@
-// Wavefront OBJ + MTL input with SPEC.md's facet/object id rules.
+// Wavefront OBJ + MTL input with docs/CONTRACT.md's facet/object id rules.
 // The exact rules (ids, sections, materials, what is an error and what is a
 // warning) are written down in scenes/FORMAT.md.
 #pragma once
@@ -55,7 +55,7 @@ Scene load_obj_window(const std::string& path, std::size_t max_triangles, const 
                       std::uint64_t& fans, const ObjStreaming& streaming = ObjStreaming{});
 
 // Parses MTL text (`name` for messages). Materials come back in definition
-// order; a key a material leaves out keeps the SPEC default (colours 0,
+// order; a key a material leaves out keeps the CONTRACT default (colours 0,
 // Ns = Ni = 1, illum 0). Soft problems are appended to `warnings`.
 std::vector<MaterialDesc> parse_mtl(const std::string& text, const std::string& name,
                                     std::vector<std::string>& warnings);

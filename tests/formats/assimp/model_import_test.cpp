@@ -1,4 +1,4 @@
-// Models through the Open Asset Import Library: SPEC's ids (mesh index,
+// Models through the Open Asset Import Library: CONTRACT's ids (mesh index,
 // running face index), materials, texture maps, framing, and one clear
 // "FILE: problem" for a broken file of every format. No OpenCL needed.
 #include <gtest/gtest.h>
@@ -39,7 +39,7 @@ void expect_framed(const Scene& s) {
     EXPECT_NEAR(s.camera.look_at[a], 0.5f * (lo[a] + hi[a]), 1e-3f * (hi[a] - lo[a]) + 1e-6f);
     EXPECT_TRUE(std::isfinite(s.camera.eye[a]));
   }
-  // Outside the box (on the +x, +y, +z side, as SPEC's framing puts it).
+  // Outside the box (on the +x, +y, +z side, as CONTRACT's framing puts it).
   EXPECT_GT(s.camera.eye[2], hi[2]);
 }
 
@@ -59,7 +59,7 @@ TEST(ModelImport, HandWrittenPlyFansPolygonsAndKeepsFaceIds) {
   EXPECT_EQ(s.triangles[2].facet_id, 1);
   EXPECT_EQ(s.triangles[1].v0, (Vec3{0, 0, 0}));
   EXPECT_EQ(s.triangles[1].v2, (Vec3{0, 1, 0}));
-  // A PLY has no material: the importer's stand-in is SPEC's default.
+  // A PLY has no material: the importer's stand-in is CONTRACT's default.
   for (const Triangle& t : s.triangles) EXPECT_EQ(t.material, 0);
   EXPECT_EQ(s.materials[0].illum, 2);
   EXPECT_FLOAT_EQ(s.materials[0].kd[1], 0.8f);
@@ -113,7 +113,7 @@ TEST(ModelImport, TestModelsOfSeveralFormats) {
 }
 
 // A text STL makes a mesh of every solid; an empty one keeps its place in
-// the list, so the solids after it keep their object ids (SPEC: the mesh's
+// the list, so the solids after it keep their object ids (CONTRACT: the mesh's
 // index), and the file renders (the importer's validation refused it
 // whole: "The mesh emptySolid contains no vertices").
 TEST(ModelImport, AnEmptySolidKeepsItsPlace) {
@@ -162,7 +162,7 @@ TEST(ModelImport, MaterialsAndTextureMaps) {
   EXPECT_TRUE(warned);
 }
 
-// SPEC: a material is used as the file gives it, whatever its name; only the
+// CONTRACT: a material is used as the file gives it, whatever its name; only the
 // importer's placeholder (no name or DefaultMaterial, no map, grey or no
 // diffuse colour) is "no material". NFF names its coloured materials
 // DefaultMaterial; HL1 MDL leaves its textured ones unnamed.
@@ -174,7 +174,7 @@ TEST(ModelImport, MaterialsAreUsedWhateverTheirName) {
   EXPECT_EQ(nff.materials[1].kd, (Vec3{0.8f, 0, 0}));
   EXPECT_EQ(nff.materials[2].kd, (Vec3{0, 0.8f, 0}));
   EXPECT_EQ(nff.materials[3].kd, (Vec3{0, 0, 0.8f}));
-  EXPECT_EQ(nff.materials[1].ka, (Vec3{0, 0, 0}));  // as the file gives it, not SPEC's default 0.8
+  EXPECT_EQ(nff.materials[1].ka, (Vec3{0, 0, 0}));  // as the file gives it, not CONTRACT's default 0.8
   std::set<int> used;
   for (const Triangle& t : nff.triangles) used.insert(t.material);
   EXPECT_EQ(used, (std::set<int>{0, 1, 2, 3}));
@@ -190,7 +190,7 @@ TEST(ModelImport, MaterialsAreUsedWhateverTheirName) {
     if (k <= 3) EXPECT_GE(man.materials[k].map_kd, 0);  // the file's meshes use the first three
   }
   for (const Triangle& t : man.triangles) EXPECT_GT(t.material, 0);
-  // The placeholder of a format without materials is still SPEC's default
+  // The placeholder of a format without materials is still CONTRACT's default
   // (PLY: unnamed; STL: DefaultMaterial, both with a grey diffuse colour).
   for (const char* f : {"PLY/cube.ply", "STL/Spider_binary.stl"}) {
     SCOPED_TRACE(f);
@@ -200,7 +200,7 @@ TEST(ModelImport, MaterialsAreUsedWhateverTheirName) {
   }
 }
 
-// SPEC: a material with a map_Kd (map_Ka) but no Kd (Ka) takes (1, 1, 1):
+// CONTRACT: a material with a map_Kd (map_Ka) but no Kd (Ka) takes (1, 1, 1):
 // the texture alone gives the colour. glTF 1, IQM, SMD and HL1 MDL
 // materials carry a texture and no diffuse colour; where the file gives a
 // diffuse colour beside the map it is kept.

@@ -1,4 +1,4 @@
-// The scene model (SPEC material rules, bounds, epsilon, framing), the JSON
+// The scene model (CONTRACT material rules, bounds, epsilon, framing), the JSON
 // scene format, its primitives and generators, and the gallery. No OpenCL.
 #include <gtest/gtest.h>
 
@@ -343,13 +343,13 @@ TEST(SceneFormat, MaterialsSpecTermsAndFriendlyKrKt) {
   EXPECT_EQ(both.kr(), (Vec3{0.1f, 0.1f, 0.1f}));
   EXPECT_EQ(both.kt(), (Vec3{0.7f, 0.8f, 0.9f}));
   const MaterialDesc& plain = s.materials[5];
-  EXPECT_EQ(plain.illum, 0);  // SPEC: illum left out is 0
+  EXPECT_EQ(plain.illum, 0);  // CONTRACT: illum left out is 0
   EXPECT_EQ(plain.ns, 1.0f);
   EXPECT_EQ(s.materials[6].illum, 5);
   EXPECT_EQ(s.materials[7].illum, 3);
   EXPECT_EQ(s.materials[7].name, "objects[1].material");
   EXPECT_EQ(s.triangles.front().material, 3);
-  EXPECT_EQ(s.triangles.back().material, 0);  // no material: SPEC default
+  EXPECT_EQ(s.triangles.back().material, 0);  // no material: CONTRACT default
 }
 
 TEST(SceneFormat, ObjIncludesOffsetIdsAndMaterials) {

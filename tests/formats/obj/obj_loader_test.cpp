@@ -1,4 +1,4 @@
-// OBJ/MTL input: SPEC id rules, materials, and one precise message per bad
+// OBJ/MTL input: CONTRACT id rules, materials, and one precise message per bad
 // input. No OpenCL needed.
 #include <gtest/gtest.h>
 

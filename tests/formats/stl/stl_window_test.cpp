@@ -74,7 +74,7 @@ class StlWindow : public ::testing::Test {
 
 // Every facet of a stl_grid is one, with the importer's normals (the
 // facet's, on each corner; a zero one kept as the importer keeps it), one
-// triangle is degenerate, and the material is SPEC's default (the
+// triangle is degenerate, and the material is CONTRACT's default (the
 // importer's white "DefaultMaterial" is its placeholder).
 TEST_F(StlWindow, WindowsTogetherAreTheImportersTriangles) {
   const StlFile grid = stl_grid(9, 7);

@@ -1,12 +1,12 @@
 #include "core/input_file.h"
 
+#include <fcntl.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cerrno>
 #include <cstring>
-#include <filesystem>
-#include <fstream>
 #include <system_error>
 #include <vector>
 
@@ -15,27 +15,57 @@
 
 namespace opsila {
 
-namespace fs = std::filesystem;
+namespace {
+
+// The descriptor of an input, checked on itself (so the file checked is the
+// file read: a path swapped for a FIFO after a check on the name would block
+// the open for ever). O_NONBLOCK keeps a FIFO from blocking the open; it is
+// refused as not a regular file, and a regular file is then read blocking.
+class InputDescriptor {
+ public:
+  InputDescriptor(const std::string& path, std::uintmax_t& size) {
+    fd_ = ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC | O_NOCTTY);
+    if (fd_ < 0)
+      throw InputError(path + ": cannot open: " + (errno == ENOENT ? "no such file" : std::strerror(errno)));
+    struct stat st {};
+    if (::fstat(fd_, &st) != 0) fail(path, std::string("cannot open: ") + std::strerror(errno));
+    if (S_ISDIR(st.st_mode)) fail(path, "is a directory, not a file");
+    if (!S_ISREG(st.st_mode)) fail(path, "is not a regular file");
+    const int flags = ::fcntl(fd_, F_GETFL);
+    if (flags < 0 || ::fcntl(fd_, F_SETFL, flags & ~O_NONBLOCK) != 0)
+      fail(path, std::string("cannot open: ") + std::strerror(errno));
+    size = std::uintmax_t(st.st_size);
+  }
+  ~InputDescriptor() { ::close(fd_); }
+  InputDescriptor(const InputDescriptor&) = delete;
+  InputDescriptor& operator=(const InputDescriptor&) = delete;
+  // Up to n bytes; 0 at the end; -1 on a read error.
+  long read(char* to, std::size_t n) {
+    for (;;) {
+      const ssize_t got = ::read(fd_, to, n);
+      if (got >= 0 || errno != EINTR) return static_cast<long>(got);
+    }
+  }
+
+ private:
+  [[noreturn]] void fail(const std::string& path, const std::string& what) {
+    ::close(fd_);
+    throw InputError(path + ": " + what);
+  }
+  int fd_ = -1;
+};
+
+}  // namespace
 
 void read_file_chunks(const std::string& path, std::size_t max_bytes, const ChunkCheck& check,
                       const std::function<void(std::uintmax_t)>& sized, const ChunkTake& take) {
-  std::error_code ec;
-  const fs::file_status st = fs::status(path, ec);
-  if (ec || !fs::exists(st)) {
-    const std::string why = ec ? ec.message() : "no such file";
-    throw InputError(path + ": cannot open: " + why);
-  }
-  if (fs::is_directory(st)) throw InputError(path + ": is a directory, not a file");
-  if (!fs::is_regular_file(st)) throw InputError(path + ": is not a regular file");
-  const std::uintmax_t size = fs::file_size(path, ec);
-  if (ec) throw InputError(path + ": cannot read: " + ec.message());
+  std::uintmax_t size = 0;
+  InputDescriptor in(path, size);
   const auto too_large = [&](std::uintmax_t bytes) {
     throw InputError(path + ": file too large (" + std::to_string(bytes) +
                      " bytes; the limit is " + std::to_string(max_bytes) + ")");
   };
   if (size > max_bytes) too_large(size);
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(path + ": cannot open: " + std::strerror(errno));
   sized(size);
   // Read and checked a chunk at a time: a binary file is refused at its
   // first bad byte, not after gigabytes, and a file that grows while it is
@@ -45,15 +75,19 @@ void read_file_chunks(const std::string& path, std::size_t max_bytes, const Chun
   StageClock clock(PrepareStage::read);
   for (std::size_t done = 0;;) {
     if (size > 0) clock.progress(double(done) / double(size));
-    in.read(chunk.data(), static_cast<std::streamsize>(chunk.size()));
-    const std::size_t got = static_cast<std::size_t>(in.gcount());
+    std::size_t got = 0;  // a whole chunk unless the file ends: checks see the same chunks as before
+    while (got < chunk.size()) {
+      const long n = in.read(chunk.data() + got, chunk.size() - got);
+      if (n < 0) throw InputError(path + ": read error (" + std::strerror(errno) + ")");
+      if (n == 0) break;
+      got += static_cast<std::size_t>(n);
+    }
     if (got == 0) break;
     if (done + got > max_bytes) too_large(done + got);
     if (check) check(chunk.data(), got, done);
     take(chunk.data(), got);
     done += got;
   }
-  if (in.bad()) throw InputError(path + ": read error");
 }
 
 std::string read_input_file(const std::string& path, std::size_t max_bytes,

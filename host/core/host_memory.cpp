@@ -1,5 +1,6 @@
 #include "core/host_memory.h"
 
+#include <sys/resource.h>
 #include <unistd.h>
 
 #include <cctype>
@@ -13,6 +14,16 @@ namespace opsila {
 std::uint64_t physical_memory() {
   const long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGESIZE);
   return pages > 0 && page > 0 ? std::uint64_t(pages) * std::uint64_t(page) : 0;
+}
+
+std::uint64_t address_space_left(std::uint64_t reserve) {
+  struct rlimit rl {};
+  if (::getrlimit(RLIMIT_AS, &rl) != 0 || rl.rlim_cur == RLIM_INFINITY) return 0;
+  std::uint64_t pages = 0;
+  std::ifstream statm("/proc/self/statm");  // its first field: the pages mapped now
+  if (!(statm >> pages)) return 0;
+  const std::uint64_t used = pages * std::uint64_t(sysconf(_SC_PAGESIZE));
+  return rl.rlim_cur > used + reserve ? rl.rlim_cur - used - reserve : 1;
 }
 
 std::uint64_t available_host_memory() {

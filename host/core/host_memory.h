@@ -14,6 +14,10 @@ namespace opsila {
 std::uint64_t available_host_memory();
 // Bytes of physical memory (pages x page size).
 std::uint64_t physical_memory();
+// Bytes of address space left to this process under its soft RLIMIT_AS
+// (ulimit -v), less `reserve` for what others (a driver) still map, at
+// least 1; 0 when there is no limit.
+std::uint64_t address_space_left(std::uint64_t reserve);
 
 // A positive size: a number (a fraction allowed) with an optional binary
 // unit K, M, G or T (1K = 1024; "B" or "iB" may follow), else plain bytes.

@@ -10,6 +10,7 @@
 
 #include "opsila_shared.h"
 #include "core/env_hooks.h"
+#include "core/host_memory.h"
 #include "core/input_file.h"
 #include "core/progress.h"
 #include "scene/scene.h"
@@ -384,6 +385,12 @@ ClRuntime::ClRuntime(const DeviceEntry& device, const ClRuntimeOptions& options)
   cl_check(err, "clCreateCommandQueue");
   max_alloc_ = device_.device.getInfo<CL_DEVICE_MAX_MEM_ALLOC_SIZE>();
   global_mem_ = device_.device.getInfo<CL_DEVICE_GLOBAL_MEM_SIZE>();
+  // A CPU device maps its buffers into this process: past the address
+  // space left under ulimit -v, PoCL fails an assertion, not an allocation.
+  const cl_ulong room = device_.is_gpu ? 0 : address_space_left(cl_ulong(128) << 20);
+  if (room > 0 && room < global_mem_ && (limit == 0 || room < limit)) limit = room;
+  if (limit > 0)
+    memory_source_ = limit == room ? "as the address-space limit (ulimit -v) leaves it" : "as lowered by OPSILA_DEVICE_MEMORY_LIMIT";
   limit_ = limit;
   if (limit > 0) {
     max_alloc_ = std::min(max_alloc_, limit);
@@ -424,9 +431,15 @@ cl::Program& ClRuntime::program(KernelProgram which) {
     std::string log;
     program.getBuildInfo(device_.device, CL_PROGRAM_BUILD_LOG, &log);
     log = trim(log);
+    // No diagnostic from the compiler: the build failed around it (PoCL
+    // writes its kernel cache while it builds).
+    if (log.find("error") == std::string::npos)
+      log += (log.empty() ? "" : "\n") + std::string("(no compiler error: the driver could not finish the build; a "
+             "full disk or a file-size limit (ulimit -f) where it caches kernels, e.g. POCL_CACHE_DIR, or too "
+             "little memory (ulimit -v) fail it)");
     throw ClError(std::string("clBuildProgram: ") + cl_error_name(err) + " (" + std::to_string(err) + ") on " +
                   device_.device_name + " (kernel source: " + origin + "); build log:\n" +
-                  (log.empty() ? "(the driver gave no build log)" : log));
+                  log);
   }
   built_[index] = true;
   return program;

@@ -148,6 +148,8 @@ class ClRuntime {
   }
   cl_ulong global_mem() const { return global_mem_; }
   cl_ulong memory_limit() const { return limit_; }  // 0, or the limit that lowered the two above
+  // What set global_mem(): "CL_DEVICE_GLOBAL_MEM_SIZE", or the limit that lowered it.
+  const std::string& global_mem_source() const { return memory_source_; }
   std::string description() const;  // "device (platform, driver)"
   // "embedded kernels", or where the replacement source of the render
   // program came from (the baselines are always the embedded ones).
@@ -174,6 +176,7 @@ class ClRuntime {
   bool exact_divide_ = false;
   bool doubles_ = false;
   cl_ulong max_alloc_ = 0, global_mem_ = 0, limit_ = 0;
+  std::string memory_source_ = "CL_DEVICE_GLOBAL_MEM_SIZE";
   std::uint64_t allocated_ = 0;
   std::map<std::string, std::uint64_t> by_name_;
   std::string source_, source_origin_;  // source_ empty: the embedded kernels

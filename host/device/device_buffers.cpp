@@ -11,7 +11,7 @@ cl::Buffer device_buffer(ClRuntime& rt, std::size_t bytes, const char* what, cl_
   if (bytes > rt.max_alloc())
     throw ClError(std::string("buffer '") + what + "' needs " + std::to_string(bytes) +
                   " bytes, more than the device's CL_DEVICE_MAX_MEM_ALLOC_SIZE (" + std::to_string(rt.max_alloc()) +
-                  " bytes" + (rt.memory_limit() ? ", as lowered by OPSILA_DEVICE_MEMORY_LIMIT" : "") +
+                  " bytes" + (rt.memory_limit() ? ", " + rt.global_mem_source() : std::string()) +
                   "): use a smaller --size, --depth or --bank-capacity");
   cl_int err = CL_SUCCESS;
   cl::Buffer b(rt.context(), flags, host ? bytes : std::max<std::size_t>(bytes, 16), host, &err);

@@ -155,7 +155,7 @@ int Renderer::Machine::choose_bank_capacity(const BankedScene& bs, const RenderS
     throw ClError("the render needs " + format_size(need.total()) + " of device memory (image " + format_size(need.image) +
                   ", descriptors " + format_size(need.descriptors) + ", scene " + format_size(need.scene) + ", other " +
                   format_size(need.other) + "), more than the device's global memory (" + format_size(rt.global_mem()) +
-                  (rt.memory_limit() ? ", as lowered by OPSILA_DEVICE_MEMORY_LIMIT" : ", CL_DEVICE_GLOBAL_MEM_SIZE") +
+                  ", " + rt.global_mem_source() +
                   "): use a smaller --size, fewer --pes, a smaller --bank-capacity" +
                   (ranks.built_with_mpi() ? " or more MPI ranks (mpirun -np R)" : ""));
   return bank;

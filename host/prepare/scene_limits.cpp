@@ -54,7 +54,7 @@ void check_device_room(const Scene& scene, const std::string& path, Ranks& ranks
                 (n > 1 ? " (this rank's share of " + std::to_string(all) + ")" : std::string()) + " need about " +
                 format_size(need) + " of device memory at " + std::to_string(kDeviceBytesPerTriangle) +
                 " bytes a triangle, more than the device's global memory (" + format_size(room) +
-                (runtime.memory_limit() ? ", as lowered by OPSILA_DEVICE_MEMORY_LIMIT" : ", CL_DEVICE_GLOBAL_MEM_SIZE") +
+                ", " + runtime.global_mem_source() +
                 ")" + hint);
 }
 

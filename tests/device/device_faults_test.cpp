@@ -183,6 +183,31 @@ TEST(DeviceMemory, EnvironmentLimitEndToEnd) {
   EXPECT_FALSE(test::file_exists(dir.file("out.pfm")));
 }
 
+// A CPU device maps its buffers into the process: under an address-space
+// limit (ulimit -v) the plan is held to what the limit leaves. A render past
+// it made PoCL fail an assertion (exit 134); now it is refused like any
+// device memory shortfall, and a small render under the same limit runs.
+TEST(DeviceMemory, AnAddressSpaceLimitBoundsACpuDevice) {
+#if defined(__SANITIZE_ADDRESS__)
+  GTEST_SKIP() << "AddressSanitizer reserves terabytes of addresses: no run fits under ulimit -v";
+#endif
+  if (*test_device_spec() && std::string(test_device_spec()) != "pocl")
+    GTEST_SKIP() << "checked on PoCL, whose CPU device the limit caps (" << test_device_spec() << " here)";
+  TempDir dir;
+  const auto capped = [&](const std::string& size) {
+    std::vector<std::string> args = {"-c", "ulimit -v 1000000 && exec \"$0\" \"$@\"", OPSILA_BINARY};
+    for (const std::string& a : render_args(dir.file("out.pfm"))) args.push_back(a);
+    *(std::find(args.begin(), args.end(), "--size") + 1) = size;
+    return test::run_program("/bin/sh", args);
+  };
+  const RunResult big = capped("4096x4096");
+  expect_one_error(big, 3, "device memory");
+  EXPECT_TRUE(contains(big.err, "ulimit -v")) << big.err;
+  EXPECT_FALSE(test::file_exists(dir.file("out.pfm")));
+  const RunResult small = capped("40x30");
+  EXPECT_EQ(small.exit_code, 0) << small.err;
+}
+
 // OPSILA_WAITING_LIMIT: a whole number, or one clear error before anything
 // is written.
 TEST(WaitingLimit, ABadValueIsAnInputError) {

@@ -1,8 +1,11 @@
 // opsila: command-line entry point. Every failure ends here as one
 // "opsila: error: ..." line and an exit code (see cli.h); nothing escapes.
+#include <unistd.h>
+
 #include <cerrno>
 #include <csignal>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <exception>
 #include <string>
@@ -26,13 +29,31 @@ int checked_stdout(int code) {
   return code == opsila::kExitOk ? opsila::kExitUsage : code;
 }
 
-}  // namespace
+// A library that ends the process itself (LLVM inside an OpenCL driver
+// calls exit(1) on a failed write while it compiles) leaves its own line;
+// this says what it was and turns the status into a device error's.
+volatile std::sig_atomic_t g_main_returned = 0;
 
-int main(int argc, char** argv) {
+extern "C" void driver_ended_the_process() {
+  if (g_main_returned) return;
+  static const char kLine[] =
+      "opsila: error: the OpenCL driver ended the process (its message is above; a full disk or a file-size "
+      "limit where it caches kernels, or too little memory, are the usual causes)\n";
+  if (::write(STDERR_FILENO, kLine, sizeof kLine - 1) < 0) {
+  }
+  ::_exit(opsila::kExitDevice);
+}
+
+int run(int argc, char** argv) {
   opsila::return_large_frees_to_system();
   // A closed pipe on stdout or stderr is a write error (stdout's is
   // reported: checked_stdout), not a death by SIGPIPE.
   std::signal(SIGPIPE, SIG_IGN);
+  // Past a file-size limit (ulimit -f) a write fails with EFBIG and is
+  // reported, as a full disk is, rather than killing the process: also the
+  // driver's own writes (PoCL's kernel cache) while it builds.
+  std::signal(SIGXFSZ, SIG_IGN);
+  std::atexit(driver_ended_the_process);
   // The one read of the run's process group: every command is handed it.
   opsila::Ranks& world = opsila::Ranks::world();
   try {
@@ -47,4 +68,12 @@ int main(int argc, char** argv) {
   } catch (...) {
     return opsila::report_rank_failure(std::current_exception(), world);
   }
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const int code = run(argc, argv);
+  g_main_returned = 1;
+  return code;
 }

@@ -57,5 +57,29 @@ TEST(FirstRun, KernelCompileIsSaidAndKeptOutOfTheRenderTime) {
   EXPECT_EQ(silent.err, "");
 }
 
+// A file-size limit below the driver's kernel cache files (PoCL writes
+// over a megabyte of preprocessed source into POCL_CACHE_DIR while it
+// builds) killed the process with SIGXFSZ (exit 153, no message). The write
+// now fails as on a full disk: the build fails, or the driver's compiler
+// ends the process, with a line that says why (exit 3, nothing written);
+// or the driver goes on without its cache.
+TEST(FirstRun, AFileSizeLimitWhileTheDriverCachesIsReported) {
+  TempDir dir;
+  const std::string scene = dir.write("s.json", kScene);
+  const std::string cache = dir.file("pocl-cache");
+  ASSERT_EQ(::mkdir(cache.c_str(), 0777), 0);
+  std::vector<std::string> args = {"-c", "ulimit -f 1000 && exec \"$0\" \"$@\"", OPSILA_BINARY};
+  for (const std::string& a : render_args(dir, scene)) args.push_back(a);
+  const RunResult r = test::run_program("/bin/sh", args, {{"POCL_CACHE_DIR", cache}});
+  ASSERT_TRUE(r.exit_code == 0 || r.exit_code == 3) << "exit " << r.exit_code << "\n" << r.err;
+  if (r.exit_code == 3) {
+    // Said by opsila after a failed build, or after the driver's compiler
+    // ended the process itself (LLVM's "IO failure on output stream").
+    const bool said = r.err.find("file-size limit") != std::string::npos;
+    EXPECT_TRUE(said) << r.err;
+    EXPECT_FALSE(test::file_exists(dir.file("o.png")));
+  }
+}
+
 }  // namespace
 }  // namespace opsila

@@ -15,6 +15,7 @@
 #include <new>
 #include <set>
 #include <sstream>
+#include <system_error>
 #include <thread>
 
 #include "device/cl_runtime.h"
@@ -399,6 +400,15 @@ int describe_exception(std::exception_ptr error, std::string& message) {
     message = "out of host memory while preparing the render: the scene's meshes and texture maps with the "
               "frame's buffers do not fit (use a smaller --size, fewer --pes or smaller models and images)";
     code = kExitUsage;
+  } catch (const std::system_error& e) {
+    message = e.what();
+    // A host thread that cannot start (ulimit -v, -u): the host's limits,
+    // as running out of memory is, not a fault of opsila's.
+    if (e.code() == std::errc::resource_unavailable_try_again || e.code() == std::errc::not_enough_memory) {
+      message = std::string("cannot start a host thread (") + e.code().message() +
+                "): the process's memory or thread limit (ulimit -v, ulimit -u) is too low for this render";
+      code = kExitUsage;
+    }
   } catch (const std::exception& e) {
     message = e.what();
   } catch (...) {

@@ -387,7 +387,7 @@ ClRuntime::ClRuntime(const DeviceEntry& device, const ClRuntimeOptions& options)
   global_mem_ = device_.device.getInfo<CL_DEVICE_GLOBAL_MEM_SIZE>();
   // A CPU device maps its buffers into this process: past the address
   // space left under ulimit -v, PoCL fails an assertion, not an allocation.
-  const cl_ulong room = device_.is_gpu ? 0 : address_space_left(cl_ulong(128) << 20);
+  const cl_ulong room = device_.is_gpu ? 0 : address_space_left(cl_ulong(64) << 20);
   if (room > 0 && room < global_mem_ && (limit == 0 || room < limit)) limit = room;
   if (limit > 0)
     memory_source_ = limit == room ? "as the address-space limit (ulimit -v) leaves it" : "as lowered by OPSILA_DEVICE_MEMORY_LIMIT";

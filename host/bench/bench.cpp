@@ -10,7 +10,10 @@
 // One BenchReport holds the results; the writers format it as text, JSON, CSV.
 #include "bench/bench.h"
 
+#include <cerrno>
 #include <cstdio>
+#include <cstring>
+#include <string>
 
 #include "bench/compare.h"
 #include "bench/measure.h"
@@ -134,6 +137,16 @@ void write_outputs(const BenchOptions& o, const BenchReport& report, const nlohm
   outputs.commit();
 }
 
+// The report goes out before the files: one that cannot be written (a full
+// disk, a closed pipe) fails the run with nothing written. Written whole
+// (fwrite, not fputs): a saved run's strings may hold a NUL.
+void print_report(const std::string& text) {
+  errno = 0;
+  if (std::fwrite(text.data(), 1, text.size(), stdout) == text.size() && std::fflush(stdout) == 0) return;
+  throw InputError(std::string("standard output: write failed (") + (errno ? std::strerror(errno) : "stream error") +
+                   "); nothing written");
+}
+
 }  // namespace
 
 int run_bench(const std::vector<std::string>& args, Ranks& ranks) {
@@ -199,9 +212,8 @@ int run_bench(const std::vector<std::string>& args, Ranks& ranks) {
   const nlohmann::json results = bench_json(report);
   // Everything that reads the saved run is done before anything is written.
   const std::string compared = o.compare_path.empty() ? "" : compare_text(results, saved, o.compare_path);
+  print_report(bench_text(report) + compared);
   write_outputs(o, report, results, outputs);
-  std::fputs(bench_text(report).c_str(), stdout);
-  std::fputs(compared.c_str(), stdout);
   if (!o.json_path.empty()) progress("wrote %s", o.json_path.c_str());
   if (!o.csv_dir.empty()) progress("wrote CSV tables in %s", o.csv_dir.c_str());
   if (!o.rays_path.empty()) progress("wrote %s", o.rays_path.c_str());

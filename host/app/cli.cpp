@@ -76,7 +76,7 @@ std::string main_usage() {
          "\n"
          "Run 'opsila render --help' for the render options.\n"
          "Exit codes: 0 success, 1 unexpected failure, 2 bad input or flag, 3 OpenCL device or driver error,\n"
-         "130 / 143 interrupted by SIGINT / SIGTERM (nothing written).\n";
+         "128 + N ended by signal N: 130 SIGINT, 143 SIGTERM, 129 SIGHUP (nothing written).\n";
 }
 
 std::string render_usage() {

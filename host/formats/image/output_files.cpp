@@ -58,14 +58,22 @@ void release_slot(int& slot) {
   throw InputError(path + ": cannot write (" + reason + ")");
 }
 
+// The signals that end a run by default and leave it time to clean up: an
+// interrupt, a kill, a closed terminal (SIGHUP), a timer or a CPU limit.
+constexpr int kEndingSignals[] = {SIGINT, SIGTERM, SIGHUP, SIGQUIT, SIGALRM, SIGXCPU};
+
+sigset_t ending_signals() {
+  sigset_t set;
+  sigemptyset(&set);
+  for (int sig : kEndingSignals) sigaddset(&set, sig);
+  return set;
+}
+
 // Signals held back while the outputs are renamed into place.
 class HoldSignals {
  public:
   HoldSignals() {
-    sigset_t set;
-    sigemptyset(&set);
-    sigaddset(&set, SIGINT);
-    sigaddset(&set, SIGTERM);
+    const sigset_t set = ending_signals();
     pthread_sigmask(SIG_BLOCK, &set, &old_);
   }
   ~HoldSignals() { pthread_sigmask(SIG_SETMASK, &old_, nullptr); }
@@ -79,11 +87,14 @@ class HoldSignals {
 void install_interrupt_cleanup() {
   struct sigaction action {};
   action.sa_handler = remove_temporaries_and_exit;
-  sigemptyset(&action.sa_mask);
-  sigaddset(&action.sa_mask, SIGINT);
-  sigaddset(&action.sa_mask, SIGTERM);
-  ::sigaction(SIGINT, &action, nullptr);
-  ::sigaction(SIGTERM, &action, nullptr);
+  action.sa_mask = ending_signals();
+  for (int sig : kEndingSignals) {
+    // A signal the caller ignores stays ignored (nohup's SIGHUP, a
+    // background job's SIGINT).
+    struct sigaction now {};
+    if (::sigaction(sig, nullptr, &now) == 0 && now.sa_handler == SIG_IGN) continue;
+    ::sigaction(sig, &action, nullptr);
+  }
 }
 
 bool same_file(const std::string& a, const std::string& b) {

@@ -206,9 +206,10 @@ TEST(Outputs, BenchCreatesNothingBeforeItsInputIsRead) {
   EXPECT_TRUE(dir.entries().empty()) << dir.entries().front();
 }
 
-// In a child process: two outputs, the first written, then a signal.
+// In a child process: two outputs, the first written, then a signal (a
+// closed terminal's SIGHUP, or a timer's, left a temporary file before).
 TEST(Outputs, ASignalRemovesTemporaryFilesAndExitsWith128PlusIt) {
-  for (const int sig : {SIGINT, SIGTERM}) {
+  for (const int sig : {SIGINT, SIGTERM, SIGHUP, SIGALRM, SIGQUIT}) {
     TempDir dir;
     const pid_t pid = ::fork();
     ASSERT_GE(pid, 0);
@@ -228,6 +229,28 @@ TEST(Outputs, ASignalRemovesTemporaryFilesAndExitsWith128PlusIt) {
     EXPECT_EQ(WEXITSTATUS(status), 128 + sig);
     EXPECT_TRUE(dir.entries().empty()) << dir.entries().front();
   }
+}
+
+// A signal the caller ignores (nohup's SIGHUP) stays ignored: the run goes on.
+TEST(Outputs, AnIgnoredHangUpStaysIgnored) {
+  TempDir dir;
+  const pid_t pid = ::fork();
+  ASSERT_GE(pid, 0);
+  if (pid == 0) {
+    ::signal(SIGHUP, SIG_IGN);
+    install_interrupt_cleanup();
+    OutputFiles outputs;
+    outputs.declare("-o", dir.file("a.pfm"));
+    outputs.write(dir.file("a.pfm"), "bytes");
+    ::raise(SIGHUP);
+    outputs.commit();
+    ::_exit(7);
+  }
+  int status = 0;
+  ASSERT_EQ(::waitpid(pid, &status, 0), pid);
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 7);
+  EXPECT_EQ(dir.entries(), (Names{"a.pfm"}));
 }
 
 // An endless render (two facing mirrors, depth 31: 2^31 rays a pixel is

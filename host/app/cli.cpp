@@ -357,12 +357,15 @@ int run_cli(const std::vector<std::string>& args, Ranks& ranks) {
 int report_exception(std::exception_ptr error, const Ranks& ranks) {
   std::string message;
   const int code = describe_exception(error, message);
-  // One error line; a multi-line message (a kernel build log) follows it indented.
-  std::istringstream lines(message);
-  std::string line;
-  std::getline(lines, line);
-  print_line("error", ranks.label() + (line.empty() ? "unknown failure" : line));
-  while (std::getline(lines, line)) std::fprintf(stderr, "    %s\n", shown_text(line).c_str());
+  // One error line; a kernel build log, the one message of several lines,
+  // follows it indented. Any other line break is a name's or a value's own
+  // and is shown escaped on the line (shown_text).
+  const std::size_t log = message.find("build log:\n");
+  const std::size_t head = log == std::string::npos ? message.size() : log + 10;
+  print_line("error", ranks.label() + (message.empty() ? "unknown failure" : message.substr(0, head)));
+  std::istringstream lines(message.substr(std::min(message.size(), head + 1)));
+  for (std::string line; log != std::string::npos && std::getline(lines, line);)
+    std::fprintf(stderr, "    %s\n", shown_text(line).c_str());
   std::fflush(stderr);
   return code;
 }

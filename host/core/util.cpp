@@ -71,7 +71,9 @@ std::string shown_text(const std::string& text) {
   out.reserve(text.size());
   for (const char c : text) {
     const unsigned char u = static_cast<unsigned char>(c);
-    if ((u < 0x20 && c != '\n') || u == 0x7f) {
+    if (c == '\n') {
+      out += "\\n";  // a line break in a name or value stays on its line
+    } else if (u < 0x20 || u == 0x7f) {
       static const char kHex[] = "0123456789abcdef";
       out += {'\\', 'x', kHex[u >> 4], kHex[u & 15]};
     } else {

@@ -30,9 +30,9 @@ Spread spread_of(const std::vector<double>& v);
 
 double seconds_since(std::chrono::steady_clock::time_point t0);
 
-// `text` as a terminal line shows it: control bytes but newlines (a
-// carriage return, an escape sequence from a file's name) written as \xNN,
-// so that a message cannot rewrite what the terminal shows.
+// `text` as a terminal line shows it: control bytes (a carriage return, an
+// escape sequence from a file's name) written as \xNN and a line break as
+// \n, so that a message stays one line and cannot rewrite the terminal.
 std::string shown_text(const std::string& text);
 
 // "12.3 MiB": the largest binary unit (KiB, MiB, GiB) not above `bytes`,

@@ -166,6 +166,13 @@ TEST_F(CliFixture, ControlBytesInAMessageAreShownNotSent) {
   const RunResult r = test::run_opsila({"render", "a\rFAKE\x1b[2J.json", "-o", out("x.png")});
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_EQ(r.err, "opsila: error: a\\x0dFAKE\\x1b[2J.json: cannot open scene (No such file or directory)\n");
+  // A line break in a name or a flag's value stays on the one error line.
+  const RunResult broken = test::run_opsila({"render", "no\nsuch.json", "-o", out("x.png")});
+  EXPECT_EQ(broken.err, "opsila: error: no\\nsuch.json: cannot open scene (No such file or directory)\n");
+  const RunResult device = test::run_opsila({"render", scene, "-o", out("x.png"), "--device", "foo\nbar"});
+  EXPECT_EQ(device.exit_code, 2);
+  EXPECT_EQ(device.error_lines().size(), 1u) << device.err;
+  EXPECT_EQ(device.err.find("foo\nbar"), std::string::npos) << device.err;
 }
 
 // A standard output whose reader has gone (`opsila render --help | head

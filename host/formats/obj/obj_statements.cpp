@@ -303,7 +303,12 @@ void ObjParser::mtllib(std::string_view rest) {
                           quote(path) + "); faces using its materials get the default material");
       continue;
     }
-    const std::string text = read_text_file(path);
+    std::string text;
+    try {
+      text = read_text_file(path);
+    } catch (const InputError& e) {  // there, but unreadable or too large: named from the line that asks for it
+      throw InputError(at(name_, line_) + "mtllib " + quote(f) + ": " + e.what());
+    }
     input_files_.push_back(path);
     for (MaterialDesc& m : parse_mtl(text, path, warnings_)) {
       if (lib_index_.count(m.name)) {

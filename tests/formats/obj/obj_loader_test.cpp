@@ -407,6 +407,17 @@ TEST(ObjErrors, UnreadableFile) {
   fs::remove(p);
 }
 
+// An MTL file that is there but cannot be read (too large, binary,
+// unreadable) is named from the OBJ line that asks for it.
+TEST(ObjErrors, AnUnreadableMaterialLibraryIsNamedFromItsLine) {
+  const fs::path dir = fs::temp_directory_path() / "opsila_binary_mtl";
+  fs::create_directories(dir);
+  { std::ofstream(dir / "t.obj") << "v 0 0 0\nv 1 0 0\nv 0 1 0\nmtllib bin.mtl\nf 1 2 3\n"; }
+  { std::ofstream(dir / "bin.mtl", std::ios::binary) << std::string("newmtl a\n\0\1", 11); }
+  expect_error([&] { load_obj((dir / "t.obj").string()); }, {"t.obj:4: mtllib 'bin.mtl': ", "bin.mtl:2: NUL byte"});
+  fs::remove_all(dir);
+}
+
 // ------------------------------------------------------ real-world files --
 
 fs::path assimp_obj_dir() {

@@ -341,6 +341,9 @@ int run_cli(const std::vector<std::string>& args, Ranks& ranks) {
   if (args.empty()) throw InputError("no command (see 'opsila --help')");
   const std::string& command = args[0];
   const std::vector<std::string> rest(args.begin() + 1, args.end());
+  const bool bare = command == "--help" || command == "-h" || command == "help" || command == "--version" ||
+                    command == "-V";
+  if (bare && !rest.empty()) throw InputError(command + ": takes no argument, not '" + rest[0] + "'");
   if (command == "--help" || command == "-h" || command == "help") {
     std::fputs(main_usage().c_str(), stdout);
     return kExitOk;

@@ -1,6 +1,7 @@
 #include "core/util.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -81,6 +82,12 @@ std::string shown_text(const std::string& text) {
     }
   }
   return out;
+}
+
+std::string trim_blanks(std::string s) {
+  const auto blank = [](char c) { return c == '\0' || std::isspace(static_cast<unsigned char>(c)); };
+  while (!s.empty() && blank(s.back())) s.pop_back();
+  return s.erase(0, std::find_if_not(s.begin(), s.end(), blank) - s.begin());
 }
 
 std::string folder_of(const std::string& path) {

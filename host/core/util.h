@@ -34,6 +34,8 @@ double seconds_since(std::chrono::steady_clock::time_point t0);
 // escape sequence from a file's name) written as \xNN and a line break as
 // \n, so that a message stays one line and cannot rewrite the terminal.
 std::string shown_text(const std::string& text);
+// `text` without the blanks (and NULs) at either end.
+std::string trim_blanks(std::string text);
 
 // "12.3 MiB": the largest binary unit (KiB, MiB, GiB) not above `bytes`,
 // never below `smallest` (1 = KiB, 2 = MiB), with `decimals` digits.

@@ -107,11 +107,6 @@ void cl_check(cl_int code, const char* what) {
 
 namespace {
 
-std::string trim(std::string s) {
-  while (!s.empty() && (s.back() == '\0' || std::isspace(static_cast<unsigned char>(s.back())))) s.pop_back();
-  return s;
-}
-
 bool all_digits(const std::string& s) {
   return !s.empty() && s.size() < 9 &&
          std::all_of(s.begin(), s.end(), [](unsigned char c) { return std::isdigit(c); });
@@ -140,7 +135,7 @@ std::vector<cl::Device> platform_devices(const cl::Platform& platform) {
 std::vector<std::string> platforms_without_devices() {
   std::vector<std::string> out;
   for (const cl::Platform& p : all_platforms())
-    if (platform_devices(p).empty()) out.push_back(trim(p.getInfo<CL_PLATFORM_NAME>()));
+    if (platform_devices(p).empty()) out.push_back(trim_blanks(p.getInfo<CL_PLATFORM_NAME>()));
   return out;
 }
 
@@ -161,11 +156,11 @@ std::vector<DeviceEntry> list_devices() {
       e.flat_index = static_cast<int>(out.size());
       e.platform = platforms[p];
       e.device = devices[d];
-      e.platform_name = trim(platforms[p].getInfo<CL_PLATFORM_NAME>());
-      e.device_name = trim(devices[d].getInfo<CL_DEVICE_NAME>());
-      e.vendor = trim(devices[d].getInfo<CL_DEVICE_VENDOR>());
-      e.version = trim(devices[d].getInfo<CL_DEVICE_VERSION>());
-      e.driver_version = trim(devices[d].getInfo<CL_DRIVER_VERSION>());
+      e.platform_name = trim_blanks(platforms[p].getInfo<CL_PLATFORM_NAME>());
+      e.device_name = trim_blanks(devices[d].getInfo<CL_DEVICE_NAME>());
+      e.vendor = trim_blanks(devices[d].getInfo<CL_DEVICE_VENDOR>());
+      e.version = trim_blanks(devices[d].getInfo<CL_DEVICE_VERSION>());
+      e.driver_version = trim_blanks(devices[d].getInfo<CL_DRIVER_VERSION>());
       e.is_gpu = (devices[d].getInfo<CL_DEVICE_TYPE>() & CL_DEVICE_TYPE_GPU) != 0;
       out.push_back(e);
     }
@@ -174,7 +169,7 @@ std::vector<DeviceEntry> list_devices() {
     // Say which platforms are there, and why one may list nothing.
     std::string names, hint;
     for (const cl::Platform& p : platforms) {
-      const std::string name = trim(p.getInfo<CL_PLATFORM_NAME>());
+      const std::string name = trim_blanks(p.getInfo<CL_PLATFORM_NAME>());
       names += (names.empty() ? "" : ", ") + name;
       if (hint.empty()) hint = no_devices_hint(name);
     }
@@ -184,7 +179,9 @@ std::vector<DeviceEntry> list_devices() {
   return out;
 }
 
-DeviceEntry choose_device(const std::string& spec) {
+DeviceEntry choose_device(const std::string& given) {
+  const std::string spec = trim_blanks(given);  // blanks are no part of an index or a name (all names hold one)
+  if (spec.empty() && !given.empty()) throw InputError("--device '" + given + "': blank (see 'opsila devices')");
   std::vector<DeviceEntry> all = list_devices();
   if (spec.empty()) {
     for (auto& e : all)
@@ -254,11 +251,11 @@ bool has_word(const std::string& list, const std::string& word) {
 
 DeviceCapabilities query_capabilities(const cl::Device& d) {
   DeviceCapabilities c;
-  c.name = trim(d.getInfo<CL_DEVICE_NAME>());
-  c.version = trim(d.getInfo<CL_DEVICE_VERSION>());
-  c.opencl_c_version = trim(d.getInfo<CL_DEVICE_OPENCL_C_VERSION>());
-  c.profile = trim(d.getInfo<CL_DEVICE_PROFILE>());
-  c.extensions = trim(d.getInfo<CL_DEVICE_EXTENSIONS>());
+  c.name = trim_blanks(d.getInfo<CL_DEVICE_NAME>());
+  c.version = trim_blanks(d.getInfo<CL_DEVICE_VERSION>());
+  c.opencl_c_version = trim_blanks(d.getInfo<CL_DEVICE_OPENCL_C_VERSION>());
+  c.profile = trim_blanks(d.getInfo<CL_DEVICE_PROFILE>());
+  c.extensions = trim_blanks(d.getInfo<CL_DEVICE_EXTENSIONS>());
   c.available = d.getInfo<CL_DEVICE_AVAILABLE>() != CL_FALSE;
   c.compiler_available = d.getInfo<CL_DEVICE_COMPILER_AVAILABLE>() != CL_FALSE;
   c.local_mem_size = d.getInfo<CL_DEVICE_LOCAL_MEM_SIZE>();
@@ -430,7 +427,7 @@ cl::Program& ClRuntime::program(KernelProgram which) {
   if (err != CL_SUCCESS) {
     std::string log;
     program.getBuildInfo(device_.device, CL_PROGRAM_BUILD_LOG, &log);
-    log = trim(log);
+    log = trim_blanks(log);
     // No diagnostic from the compiler: the build failed around it (PoCL
     // writes its kernel cache while it builds).
     if (log.find("error") == std::string::npos)

@@ -101,6 +101,11 @@ TEST_F(CliFixture, UnknownDeviceIsRejected) {
   ASSERT_EQ(r.error_lines().size(), 1u) << r.err;
   if (r.exit_code == 2) EXPECT_NE(r.err.find("nosuchdevice"), std::string::npos) << r.err;
   EXPECT_EQ(dir.entries(), before);
+  // A blank name would match any device as a substring: refused.
+  const RunResult blank = run_opsila({"render", scene, "-o", out("x.png"), "--device", " "});
+  EXPECT_EQ(blank.exit_code, 2) << blank.err;
+  EXPECT_NE(blank.err.find("--device ' ': blank"), std::string::npos) << blank.err;
+  EXPECT_EQ(dir.entries(), before);
 }
 
 // A scene that fails to read gets its error line alone on stderr: the
@@ -229,6 +234,9 @@ TEST(Cli, HelpAndVersionExitZero) {
   r = run_opsila({"--version"});
   EXPECT_EQ(r.exit_code, 0);
   EXPECT_NE(r.out.find(OPSILA_VERSION), std::string::npos);
+  r = run_opsila({"--version", "x"});  // not ignored: a mistyped command line
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_EQ(r.err, "opsila: error: --version: takes no argument, not 'x'\n");
 }
 
 // Each command's help lists each of its flags once (a flag described twice

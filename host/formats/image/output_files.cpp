@@ -123,7 +123,8 @@ void OutputFiles::declare_folder(const std::string& flag, const std::string& fol
   struct stat st;
   if (::stat(folder.c_str(), &st) == 0) {
     if (!S_ISDIR(st.st_mode)) throw InputError(flag + " " + folder + ": exists and is not a folder");
-    check_output_path(folder + "/x");
+    if (::access(folder.c_str(), W_OK | X_OK) != 0)
+      throw InputError(flag + " " + folder + ": cannot write in it (" + std::strerror(errno) + ")");
   } else {
     check_output_path(folder);  // its parent exists and is writable
   }

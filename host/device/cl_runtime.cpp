@@ -380,19 +380,22 @@ ClRuntime::ClRuntime(const DeviceEntry& device, const ClRuntimeOptions& options)
   cl_check(err, "clCreateContext");
   queue_ = cl::CommandQueue(context_, device_.device, CL_QUEUE_PROFILING_ENABLE, &err);
   cl_check(err, "clCreateCommandQueue");
+  set_memory(limit);
+}
+
+// The memory plans are held to: the device's, or what a limit leaves.
+void ClRuntime::set_memory(cl_ulong limit) {
   max_alloc_ = device_.device.getInfo<CL_DEVICE_MAX_MEM_ALLOC_SIZE>();
   global_mem_ = device_.device.getInfo<CL_DEVICE_GLOBAL_MEM_SIZE>();
   // A CPU device maps its buffers into this process: past the address
   // space left under ulimit -v, PoCL fails an assertion, not an allocation.
   const cl_ulong room = device_.is_gpu ? 0 : address_space_left(cl_ulong(64) << 20);
   if (room > 0 && room < global_mem_ && (limit == 0 || room < limit)) limit = room;
-  if (limit > 0)
-    memory_source_ = limit == room ? "as the address-space limit (ulimit -v) leaves it" : "as lowered by OPSILA_DEVICE_MEMORY_LIMIT";
   limit_ = limit;
-  if (limit > 0) {
-    max_alloc_ = std::min(max_alloc_, limit);
-    global_mem_ = std::min(global_mem_, limit);
-  }
+  if (limit == 0) return;
+  memory_source_ = limit == room ? "as the address-space limit (ulimit -v) leaves it" : "as lowered by OPSILA_DEVICE_MEMORY_LIMIT";
+  max_alloc_ = std::min(max_alloc_, limit);
+  global_mem_ = std::min(global_mem_, limit);
 }
 
 std::string ClRuntime::description() const {

@@ -175,6 +175,7 @@ class ClRuntime {
   bool facet_lanes_ = false;  // -DOPSILA_FACET_LANES: a leaf's facets in vector lanes
   bool exact_divide_ = false;
   bool doubles_ = false;
+  void set_memory(cl_ulong limit);  // 0: the device's own
   cl_ulong max_alloc_ = 0, global_mem_ = 0, limit_ = 0;
   std::string memory_source_ = "CL_DEVICE_GLOBAL_MEM_SIZE";
   std::uint64_t allocated_ = 0;

@@ -235,6 +235,10 @@ int run_render(const std::vector<std::string>& args, Ranks& ranks) {
     if (!o.stats_path.empty()) outputs.declare("--stats", o.stats_path);
   }
   check_scene_file(o.scene_path);
+  // Each rank's own checks end here (rank 0's outputs, this rank's copy of
+  // the scene): a rank that failed one meets the others in this agreement
+  // from its error handler, before any other collective.
+  ranks.checkpoint();
   check_started_alike(ranks, args, o.scene_path);
   outputs.refuse_inputs({o.scene_path});
   outputs.refuse_inputs(env_hook_inputs());

@@ -157,7 +157,6 @@ int run_bench(const std::vector<std::string>& args, Ranks& ranks) {
   // scatter curve need one process: with several ranks they are left out
   // (kSingleProcessOnly says why in the report).
   if (launched_by_mpi()) ranks.start();
-  check_started_alike(ranks, args, o.scene_path);
   const bool writer = ranks.rank() == 0;
   install_interrupt_cleanup();
   OutputFiles outputs;
@@ -167,6 +166,10 @@ int run_bench(const std::vector<std::string>& args, Ranks& ranks) {
     outputs.refuse_inputs({o.compare_path});
     saved = read_saved_bench(o.compare_path);
   }
+  // As render does: each rank's own checks, then one agreement, then the
+  // first collective.
+  ranks.checkpoint();
+  check_started_alike(ranks, args, o.scene_path);
   const BenchProgress progress{o.quiet || !writer};
 
   ClRuntime rt(choose_device_flag(o.device_spec, ranks));

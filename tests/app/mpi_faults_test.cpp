@@ -42,6 +42,26 @@ TEST_F(MpiFixture, MoreRanksThanPesAreRefused) {
   EXPECT_TRUE(dir.entries().empty()) << "an output file was left behind";
 }
 
+// An output only rank 0 writes, in a folder that is not there: rank 0
+// fails alone before any collective; the others met it in the wrong one
+// (MPI_ERR_TRUNCATE, exit 15, no opsila line). Render and bench alike.
+TEST_F(MpiFixture, AnOutputOnlyRankZeroCannotWriteIsOneLine) {
+  for (const char* command : {"render", "bench"}) {
+    SCOPED_TRACE(command);
+    const std::string missing = dir.file("no-such-folder/x.json");
+    std::vector<std::string> a = launch(3);
+    a.insert(a.end(), {OPSILA_BINARY, command, scene("whitted.json"), "--size", "16x12"});
+    if (std::string(command) == "bench") a.insert(a.end(), {"--quick", "--json", missing});
+    else a.insert(a.end(), {"-o", dir.file("x.png"), "--stats", missing});
+    const RunResult r = test::run_program("/usr/bin/timeout", a, env);
+    EXPECT_EQ(r.exit_code, 2) << r.err;
+    const auto errors = r.error_lines();
+    ASSERT_EQ(errors.size(), 1u) << r.err;
+    EXPECT_EQ(errors[0].rfind("opsila: error: rank 0: " + missing + ": cannot write", 0), 0u) << errors[0];
+    EXPECT_TRUE(dir.entries().empty()) << "an output file was left behind";
+  }
+}
+
 // A broken file among many, which the ranks of its share read and the
 // others do not: one error line naming the file, every rank ended, no
 // output left behind.

@@ -10,6 +10,7 @@
 #include <cmath>
 #include <exception>
 #include <stdexcept>
+#include <system_error>
 #include <thread>
 
 #include "core/fixed_point.h"
@@ -130,17 +131,23 @@ void ReferenceTracer::render_image(ImageResult& image, int threads, Progress* pr
   std::atomic<int> rows_done{0};
   std::atomic<std::uint64_t> rays_done{0};
   if (progress) progress->start();
+  const auto bands = [&](int w) {
+    for (int y = w * kBand; y < scene.height; y += threads * kBand) {
+      const std::uint64_t before = counts[w].total();
+      render_rows(y, y + kBand, image, counts[w]);
+      rays_done += counts[w].total() - before;
+      rows_done += std::min(kBand, scene.height - y);
+    }
+  };
   std::vector<std::thread> workers;
-  for (int w = 0; w < threads; ++w) {
-    workers.emplace_back([&, w] {
-      for (int y = w * kBand; y < scene.height; y += threads * kBand) {
-        const std::uint64_t before = counts[w].total();
-        render_rows(y, y + kBand, image, counts[w]);
-        rays_done += counts[w].total() - before;
-        rows_done += std::min(kBand, scene.height - y);
-      }
-    });
+  int started = 0;
+  try {
+    for (; started < threads; ++started) workers.emplace_back(bands, started);
+  } catch (const std::system_error&) {
+    // A thread the system will not start (ulimit -u, -v): this thread
+    // renders the bands of those that did not.
   }
+  for (int w = started; w < threads; ++w) bands(w);
   // The calling thread only watches: rows finished out of all rows.
   while (progress && rows_done.load() < scene.height) {
     if (progress->due()) progress->report(double(rows_done.load()) / scene.height, rays_done.load());

@@ -116,7 +116,10 @@ class EmbreeQueries : public FacetQueries {
  public:
   explicit EmbreeQueries(const Scene& s) {
     es_.device = rtcNewDevice(nullptr);
-    if (!es_.device) throw std::runtime_error("rtcNewDevice failed");
+    if (!es_.device)  // Embree's threads and arenas: the host's limits (ulimit -v, -u) as a rule
+      throw InputError("Embree, the bench's baseline, could not start (rtcNewDevice failed, error " +
+                       std::to_string(int(rtcGetDeviceError(nullptr))) +
+                       "): the process's memory or thread limit (ulimit -v, ulimit -u) is too low");
     es_.scene = rtcNewScene(es_.device);
     facet_of_ = facets_with_area(s.triangles);
     if (!facet_of_.empty()) attach_triangles(es_.device, es_.scene, s.triangles, facet_of_);

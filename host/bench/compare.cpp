@@ -6,6 +6,7 @@
 
 #include "bench/report.h"
 #include "core/input_file.h"
+#include "core/util.h"
 #include "formats/common/json_text.h"
 #include "scene/scene.h"
 
@@ -127,15 +128,17 @@ json read_saved_bench(const std::string& path) {
 }
 
 std::string compare_text(const json& now, const json& saved, const std::string& saved_path) {
-  std::string out = "\ncompared with " + saved_path;
+  // The saved file's strings are shown as a terminal line shows them (a NUL
+  // or an escape sequence in a saved string is no part of the report).
+  std::string out = "\ncompared with " + shown_text(saved_path);
   if (saved.contains("context") && saved["context"].is_object())
-    out += " (" + saved["context"].value("date", std::string("undated")) + ", " +
-           saved["context"].value("host_name", std::string("?")) + ")";
+    out += " (" + shown_text(saved["context"].value("date", std::string("undated"))) + ", " +
+           shown_text(saved["context"].value("host_name", std::string("?"))) + ")";
   out += ":\n";
   if (settings_of(now) != settings_of(saved))
-    out += "  note: the runs differ: this one " + settings_of(now) + "; saved " + settings_of(saved) + "\n";
+    out += "  note: the runs differ: this one " + settings_of(now) + "; saved " + shown_text(settings_of(saved)) + "\n";
   if (now.value("device", std::string()) != saved.value("device", std::string()))
-    out += "  note: the saved run was on " + saved.value("device", std::string("another device")) + "\n";
+    out += "  note: the saved run was on " + shown_text(saved.value("device", std::string("another device"))) + "\n";
   char line[256];
   std::snprintf(line, sizeof line, "  %-40s %12s %12s %8s\n", "figure", "this run", "saved", "ratio");
   out += line;

@@ -564,6 +564,11 @@ TEST(BenchCompare, RatiosOfTheFiguresBothRunsHave) {
   EXPECT_EQ(text.find("embree"), std::string::npos) << text;
   EXPECT_EQ(text.find("note:"), std::string::npos) << text;
   EXPECT_NE(compare_text(saved_result(1, 1, 4), saved, "old.json").find("note: the runs differ"), std::string::npos);
+  // A saved string's control bytes are shown, not sent (a NUL cut the report).
+  saved["device"] = std::string("x\0y\x1b[2J", 8);
+  const std::string odd = compare_text(now, saved, "old.json");
+  EXPECT_EQ(odd.find('\0'), std::string::npos);
+  EXPECT_NE(odd.find("saved run was on x\\x00y\\x1b[2J"), std::string::npos) << odd;
 }
 
 TEST(BenchCompare, ASavedRunMustBeABenchResult) {

@@ -219,9 +219,10 @@ void run_with_stack(std::size_t stack_bytes, const std::function<void()>& work) 
   int rc = pthread_attr_setstacksize(&attr, stack_bytes);
   if (rc == 0) rc = pthread_create(&thread, &attr, &run_job, &job);
   pthread_attr_destroy(&attr);
-  if (rc != 0)
-    throw std::runtime_error(std::string("cannot start the import thread with a ") +
-                             std::to_string(stack_bytes >> 20) + " MiB stack: " + std::strerror(rc));
+  if (rc != 0)  // the host's limits (ulimit -v, -u), as running out of memory is: bad input's exit
+    throw InputError(std::string("cannot start the model importer's thread with a ") +
+                     std::to_string(stack_bytes >> 20) + " MiB stack (" + std::strerror(rc) +
+                     "): the process's memory or thread limit (ulimit -v, ulimit -u) is too low");
   pthread_join(thread, nullptr);
   if (job.error) std::rethrow_exception(job.error);
 }

@@ -329,6 +329,7 @@ void check_started_alike(Ranks& ranks, const std::vector<std::string>& args, con
 }
 
 DeviceEntry choose_device_flag(const std::string& spec, const Ranks& ranks) {
+  check_pocl_cache_variable();
   try {
     return choose_rank_device(spec, ranks.local_rank());
   } catch (const InputError& e) {

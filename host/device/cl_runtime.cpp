@@ -309,6 +309,7 @@ std::size_t checked_group_size(const std::string& text, const std::string& origi
 }  // namespace
 
 ClRuntime::ClRuntime(const DeviceEntry& device, const ClRuntimeOptions& options) : device_(device) {
+  if (!device_.is_gpu) check_cpu_driver_environment();
   const DeviceCapabilities caps = query_capabilities(device_.device);
   const std::vector<std::string> missing = missing_capabilities(caps);
   if (!missing.empty()) {

@@ -208,6 +208,29 @@ TEST(DeviceMemory, AnAddressSpaceLimitBoundsACpuDevice) {
   EXPECT_EQ(small.exit_code, 0) << small.err;
 }
 
+// What PoCL's CPU device needs of the process, said before it crashes: a
+// stack of 1 MiB for its threads (at ulimit -s 96 a render died of SIGSEGV,
+// exit 139), and a POCL_CACHE_DIR that is not empty (an assertion, exit 134).
+TEST(DeviceFaults, DriverLimitsAreNamedBeforeTheDriverFails) {
+#if defined(__SANITIZE_ADDRESS__)
+  GTEST_SKIP() << "AddressSanitizer's frames are larger: a 200 KiB stack is not what a user's build runs on";
+#endif
+  if (*test_device_spec() && std::string(test_device_spec()) != "pocl")
+    GTEST_SKIP() << "PoCL's needs, checked on PoCL (" << test_device_spec() << " here)";
+  TempDir dir;
+  const auto small_stack = [&](const std::vector<std::string>& extra) {
+    std::vector<std::string> args = {"-c", "ulimit -s 200 && exec \"$0\" \"$@\"", OPSILA_BINARY};
+    for (const std::string& a : render_args(dir.file("out.pfm"), extra)) args.push_back(a);
+    return test::run_program("/bin/sh", args);
+  };
+  expect_one_error(small_stack({}), 2, "the stack limit (ulimit -s) is 200 KiB");
+  EXPECT_FALSE(test::file_exists(dir.file("out.pfm")));
+  const RunResult reference = small_stack({"--reference"});
+  EXPECT_EQ(reference.exit_code, 0) << reference.err;
+  expect_one_error(opsila(render_args(dir.file("cache.pfm")), {{"POCL_CACHE_DIR", ""}}), 2, "POCL_CACHE_DIR is set but empty");
+  EXPECT_FALSE(test::file_exists(dir.file("cache.pfm")));
+}
+
 // OPSILA_WAITING_LIMIT: a whole number, or one clear error before anything
 // is written.
 TEST(WaitingLimit, ABadValueIsAnInputError) {

@@ -1,5 +1,6 @@
 // opsila: command-line entry point. Every failure ends here as one
 // "opsila: error: ..." line and an exit code (see cli.h); nothing escapes.
+#include <sys/resource.h>
 #include <unistd.h>
 
 #include <cerrno>
@@ -54,6 +55,15 @@ int run(int argc, char** argv) {
   // driver's own writes (PoCL's kernel cache) while it builds.
   std::signal(SIGXFSZ, SIG_IGN);
   std::atexit(driver_ended_the_process);
+  // A CPU-time limit whose soft and hard values are one (a shell's plain
+  // `ulimit -t`) ends the run with SIGKILL, which leaves temporary files:
+  // a second less of soft limit brings SIGXCPU first, which removes them.
+  struct rlimit cpu {};
+  if (::getrlimit(RLIMIT_CPU, &cpu) == 0 && cpu.rlim_cur == cpu.rlim_max && cpu.rlim_max != RLIM_INFINITY &&
+      cpu.rlim_max >= 2) {
+    cpu.rlim_cur = cpu.rlim_max - 1;
+    ::setrlimit(RLIMIT_CPU, &cpu);
+  }
   // The one read of the run's process group: every command is handed it.
   opsila::Ranks& world = opsila::Ranks::world();
   try {

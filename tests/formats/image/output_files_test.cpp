@@ -254,13 +254,29 @@ TEST(Outputs, AnIgnoredHangUpStaysIgnored) {
 }
 
 // An endless render (two facing mirrors, depth 31: 2^31 rays a pixel is
-// beyond patience), interrupted once it has started rendering.
-TEST(Outputs, AnInterruptedRenderLeavesNothingAndExits130Or143) {
-  const char* slabs = R"({"image": {"size": [64, 48]}, "depth": 31,
+// beyond patience).
+const char* kSlabs = R"({"image": {"size": [64, 48]}, "depth": 31,
     "camera": {"eye": [0, 0, 0.5], "look_at": [0, 0, -1]},
     "materials": {"glass": {"kr": 0.9, "kt": 0.9, "Ni": 1.5}},
     "objects": [{"type": "box", "min": [-50, -50, -1.1], "max": [50, 50, -1], "material": "glass"},
                 {"type": "box", "min": [-50, -50, 1], "max": [50, 50, 1.1], "material": "glass"}]})";
+
+// A shell's plain `ulimit -t` sets the soft and hard CPU limits alike: the
+// kernel then sent SIGKILL (exit 137), which leaves temporary files. The
+// run lowers its soft limit a second: SIGXCPU comes first (128 + 24).
+TEST(Outputs, ACpuTimeLimitEndsTheRunAsASignalDoes) {
+  TempDir dir;
+  const std::string scene = dir.write("slabs.json", kSlabs);
+  const RunResult r = test::run_program(
+      "/bin/sh", {"-c", "ulimit -t 2 && exec \"$0\" \"$@\"", OPSILA_BINARY, "render", scene, "-o",
+                  dir.file("o.pfm"), "--reference", "-q"});
+  EXPECT_EQ(r.exit_code, 128 + SIGXCPU) << r.err;
+  EXPECT_EQ(dir.entries(), (Names{"slabs.json"}));
+}
+
+// The endless render, interrupted once it has started rendering.
+TEST(Outputs, AnInterruptedRenderLeavesNothingAndExits130Or143) {
+  const char* slabs = kSlabs;
   for (const int sig : {SIGINT, SIGTERM}) {
     TempDir dir;
     const std::string scene = dir.write("slabs.json", slabs);

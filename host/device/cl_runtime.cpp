@@ -390,7 +390,7 @@ void ClRuntime::set_memory(cl_ulong limit) {
   global_mem_ = device_.device.getInfo<CL_DEVICE_GLOBAL_MEM_SIZE>();
   // A CPU device maps its buffers into this process: past the address
   // space left under ulimit -v, PoCL fails an assertion, not an allocation.
-  const cl_ulong room = device_.is_gpu ? 0 : address_space_left(cl_ulong(64) << 20);
+  const cl_ulong room = device_.is_gpu ? 0 : address_space_left(kDriverReserve);
   if (room > 0 && room < global_mem_ && (limit == 0 || room < limit)) limit = room;
   limit_ = limit;
   if (limit == 0) return;

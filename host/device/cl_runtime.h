@@ -11,6 +11,8 @@
 #include <string>
 #include <vector>
 
+#include "core/host_memory.h"
+
 namespace opsila {
 
 // A failed OpenCL call or driver fault: what() names the call and the error.
@@ -150,6 +152,19 @@ class ClRuntime {
   cl_ulong memory_limit() const { return limit_; }  // 0, or the limit that lowered the two above
   // What set global_mem(): "CL_DEVICE_GLOBAL_MEM_SIZE", or the limit that lowered it.
   const std::string& global_mem_source() const { return memory_source_; }
+  // global_mem(), or what the address space ulimit -v leaves a CPU device
+  // now, where that is less (the host's buffers made since count): what a
+  // plan is held to just before it is allocated. Its source, likewise.
+  cl_ulong memory_now() const {
+    const cl_ulong room = device_.is_gpu ? 0 : address_space_left(kDriverReserve);
+    return room > 0 && room < global_mem_ ? room : global_mem_;
+  }
+  std::string memory_now_source() const {
+    return memory_now() < global_mem_ ? "as the address-space limit (ulimit -v) leaves it" : memory_source_;
+  }
+  // Address space kept for the driver's own mappings (its compiler, the
+  // kernels it loads) when ulimit -v bounds a CPU device.
+  static constexpr cl_ulong kDriverReserve = cl_ulong(64) << 20;
   std::string description() const;  // "device (platform, driver)"
   // "embedded kernels", or where the replacement source of the render
   // program came from (the baselines are always the embedded ones).

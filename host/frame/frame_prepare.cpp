@@ -150,12 +150,12 @@ int Renderer::Machine::choose_bank_capacity(const BankedScene& bs, const RenderS
                      " PEs and " + std::to_string(S - 2) + " lights");
   auto plan = [&](int b) { return plan_of(buffer_table(bs, FlightPlan(G, b, spmd_wg, S))); };
   if (settings.bank_capacity <= 0)
-    while (bank > 1 && plan(bank).total() > rt.global_mem()) bank /= 2;
-  if (const DevicePlan need = plan(bank); need.total() > rt.global_mem())
+    while (bank > 1 && plan(bank).total() > rt.memory_now()) bank /= 2;
+  if (const DevicePlan need = plan(bank); need.total() > rt.memory_now())
     throw ClError("the render needs " + format_size(need.total()) + " of device memory (image " + format_size(need.image) +
                   ", descriptors " + format_size(need.descriptors) + ", scene " + format_size(need.scene) + ", other " +
-                  format_size(need.other) + "), more than the device's global memory (" + format_size(rt.global_mem()) +
-                  ", " + rt.global_mem_source() +
+                  format_size(need.other) + "), more than the device's global memory (" + format_size(rt.memory_now()) +
+                  ", " + rt.memory_now_source() +
                   "): use a smaller --size, fewer --pes, a smaller --bank-capacity" +
                   (ranks.built_with_mpi() ? " or more MPI ranks (mpirun -np R)" : ""));
   return bank;

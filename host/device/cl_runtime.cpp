@@ -116,7 +116,8 @@ std::vector<cl::Platform> all_platforms() {
   std::vector<cl::Platform> platforms;
   cl_int err = cl::Platform::get(&platforms);
   if (err == -1001 || (err == CL_SUCCESS && platforms.empty()))
-    throw ClError("no OpenCL platform found (clGetPlatformIDs): install an OpenCL driver, e.g. pocl-opencl-icd");
+    throw ClError("no OpenCL platform found (clGetPlatformIDs): install an OpenCL driver, e.g. pocl-opencl-icd, or "
+                  "raise the limits (ulimit -n, ulimit -v) that kept one from loading");
   cl_check(err, "clGetPlatformIDs");
   return platforms;
 }
@@ -388,8 +389,7 @@ ClRuntime::ClRuntime(const DeviceEntry& device, const ClRuntimeOptions& options)
 void ClRuntime::set_memory(cl_ulong limit) {
   max_alloc_ = device_.device.getInfo<CL_DEVICE_MAX_MEM_ALLOC_SIZE>();
   global_mem_ = device_.device.getInfo<CL_DEVICE_GLOBAL_MEM_SIZE>();
-  // A CPU device maps its buffers into this process: past the address
-  // space left under ulimit -v, PoCL fails an assertion, not an allocation.
+  // A CPU device maps its buffers here: past ulimit -v, PoCL fails an assertion.
   const cl_ulong room = device_.is_gpu ? 0 : address_space_left(kDriverReserve);
   if (room > 0 && room < global_mem_ && (limit == 0 || room < limit)) limit = room;
   limit_ = limit;

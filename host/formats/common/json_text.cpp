@@ -1,5 +1,6 @@
 #include "formats/common/json_text.h"
 
+#include <cctype>
 #include <cstdio>
 #include <string_view>
 #include <unordered_set>
@@ -106,17 +107,60 @@ void JsonLines::ws() {
   }
 }
 
+namespace {
+
+// The four hex digits of a \u escape at s[at], or -1.
+long hex4(const std::string& s, std::size_t at) {
+  if (at + 4 > s.size()) return -1;
+  long v = 0;
+  for (std::size_t k = at; k < at + 4; ++k) {
+    const int d = std::isdigit(static_cast<unsigned char>(s[k])) ? s[k] - '0'
+                  : std::isxdigit(static_cast<unsigned char>(s[k])) ? (std::tolower(s[k]) - 'a' + 10) : -1;
+    if (d < 0) return -1;
+    v = v * 16 + d;
+  }
+  return v;
+}
+
+void append_utf8(std::string& out, long c) {
+  if (c < 0x80) {
+    out += char(c);
+  } else if (c < 0x800) {
+    out += {char(0xC0 | (c >> 6)), char(0x80 | (c & 0x3F))};
+  } else if (c < 0x10000) {
+    out += {char(0xE0 | (c >> 12)), char(0x80 | ((c >> 6) & 0x3F)), char(0x80 | (c & 0x3F))};
+  } else {
+    out += {char(0xF0 | (c >> 18)), char(0x80 | ((c >> 12) & 0x3F)), char(0x80 | ((c >> 6) & 0x3F)),
+            char(0x80 | (c & 0x3F))};
+  }
+}
+
+}  // namespace
+
+// Decoded as the JSON library decodes it (keys must compare alike: a key
+// spelt with \u escapes is the same key, given twice or looked up).
 std::string JsonLines::string() {
   std::string out;
   ++i_;  // opening quote
   while (i_ < s_.size() && s_[i_] != '"') {
-    if (s_[i_] == '\\' && i_ + 1 < s_.size()) {
-      const char e = s_[i_ + 1];
-      out += e == 'n' ? '\n' : e == 't' ? '\t' : e == 'u' ? '?' : e;
-      i_ += 2;
+    if (s_[i_] != '\\' || i_ + 1 >= s_.size()) {
+      out += s_[i_++];
       continue;
     }
-    out += s_[i_++];
+    const char e = s_[i_ + 1];
+    i_ += 2;
+    if (e != 'u') {
+      out += e == 'n' ? '\n' : e == 't' ? '\t' : e == 'r' ? '\r' : e == 'b' ? '\b' : e == 'f' ? '\f' : e;
+      continue;
+    }
+    long c = hex4(s_, i_);
+    i_ += c < 0 ? 0 : 4;
+    const long low = c >= 0xD800 && c < 0xDC00 && s_.compare(i_, 2, "\\u") == 0 ? hex4(s_, i_ + 2) : -1;
+    if (low >= 0xDC00 && low < 0xE000) {
+      c = 0x10000 + ((c - 0xD800) << 10) + (low - 0xDC00);
+      i_ += 6;
+    }
+    append_utf8(out, c < 0 ? '?' : c);
   }
   ++i_;  // closing quote
   return out;

@@ -432,6 +432,11 @@ TEST(SceneFormat, WarningsForUnknownAndDuplicateKeys) {
   EXPECT_TRUE(has_warning(s, "s.json:7:", "depth: key given twice"));
   EXPECT_TRUE(has_warning(s, "s.json:8:", "lihgts"));
   EXPECT_EQ(s.max_depth, 3);
+  // A key spelt with escapes is the same key (it went unwarned, the last
+  // value winning silently).
+  const Scene escaped = json("{\"objects\": [{\"type\": \"sphere\", \"center\": [0,0,0],\n"
+                             "\"radius\": 1, \"r\\u0061dius\": 2}]}");
+  EXPECT_TRUE(has_warning(escaped, "s.json:2:", "objects[0].radius: key given twice"));
 }
 
 struct JsonCase {

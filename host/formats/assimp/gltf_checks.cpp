@@ -292,7 +292,7 @@ std::vector<Accessor> check_accessors(const Gltf& g, const std::vector<View>& vi
 // A node's placement as glTF writes it: a matrix of 16 numbers, or a
 // translation and scale of 3 and a rotation of 4, a unit quaternion (the
 // importer takes any array and any quaternion: the zero one placed the
-// mesh as a point).
+// mesh as a point), or a projective matrix (placed as if affine).
 void check_node_transform(const Entry& n) {
   static const std::pair<const char*, std::size_t> kKeys[] = {
       {"matrix", 16}, {"translation", 3}, {"rotation", 4}, {"scale", 3}};
@@ -308,8 +308,9 @@ void check_node_transform(const Entry& n) {
     if (!numbers)
       throw InputError(n.where + ": '" + key + "' is not " + std::to_string(size) + " finite numbers");
     if (size == 4 && std::fabs(norm - 1.0) > 1e-2)
-      throw InputError(n.where + ": 'rotation' is not a unit quaternion (its length is " +
-                       std::to_string(std::sqrt(norm)) + ")");
+      throw InputError(n.where + ": 'rotation' is not a unit quaternion (its length is " + std::to_string(std::sqrt(norm)) + ")");
+    if (size == 16 && ((*it)[3] != 0 || (*it)[7] != 0 || (*it)[11] != 0 || (*it)[15] != 1))  // the importer took w as 1
+      throw InputError(n.where + ": 'matrix' is not affine (its last row, elements 3, 7, 11, 15, is not 0 0 0 1)");
   }
 }
 

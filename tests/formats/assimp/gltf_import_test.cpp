@@ -112,6 +112,10 @@ TEST(GltfImport, MalformedPlacementsAndMaterialsAreNamed) {
   };
   const std::string four = with("four.gltf", R"({"mesh": 0})", R"({"mesh": 0, "matrix": [1, 0, 0, 0]})");
   EXPECT_EQ(error_loading(four), four + ": nodes[0]: 'matrix' is not 16 finite numbers");
+  const std::string projective = with("projective.gltf", R"({"mesh": 0})",
+                                      R"({"mesh": 0, "matrix": [1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, -1, 0, 0, 0, 0]})");
+  EXPECT_EQ(error_loading(projective),
+            projective + ": nodes[0]: 'matrix' is not affine (its last row, elements 3, 7, 11, 15, is not 0 0 0 1)");
   const std::string zero = with("zero.gltf", R"({"mesh": 0})", R"({"mesh": 0, "rotation": [0, 0, 0, 0]})");
   EXPECT_EQ(error_loading(zero), zero + ": nodes[0]: 'rotation' is not a unit quaternion (its length is 0.000000)");
   const std::string turned = with("turned.gltf", R"({"mesh": 0})", R"({"mesh": 0, "rotation": [0, 0.7071068, 0, 0.7071068]})");

@@ -183,6 +183,13 @@ TEST(DeviceMemory, EnvironmentLimitEndToEnd) {
   EXPECT_FALSE(test::file_exists(dir.file("out.pfm")));
 }
 
+// `opsila ARGS` under a shell's `ulimit LIMIT` (set in the child only).
+RunResult under_ulimit(const std::string& limit, const std::vector<std::string>& args) {
+  std::vector<std::string> a = {"-c", "ulimit " + limit + " && exec \"$0\" \"$@\"", OPSILA_BINARY};
+  a.insert(a.end(), args.begin(), args.end());
+  return test::run_program("/bin/sh", a);
+}
+
 // A CPU device maps its buffers into the process: under an address-space
 // limit (ulimit -v) the plan is held to what the limit leaves. A render past
 // it made PoCL fail an assertion (exit 134); now it is refused like any
@@ -195,10 +202,9 @@ TEST(DeviceMemory, AnAddressSpaceLimitBoundsACpuDevice) {
     GTEST_SKIP() << "checked on PoCL, whose CPU device the limit caps (" << test_device_spec() << " here)";
   TempDir dir;
   const auto capped = [&](const std::string& size) {
-    std::vector<std::string> args = {"-c", "ulimit -v 1000000 && exec \"$0\" \"$@\"", OPSILA_BINARY};
-    for (const std::string& a : render_args(dir.file("out.pfm"))) args.push_back(a);
+    std::vector<std::string> args = render_args(dir.file("out.pfm"));
     *(std::find(args.begin(), args.end(), "--size") + 1) = size;
-    return test::run_program("/bin/sh", args);
+    return under_ulimit("-v 1000000", args);
   };
   const RunResult big = capped("4096x4096");
   expect_one_error(big, 3, "device memory");
@@ -219,9 +225,7 @@ TEST(DeviceFaults, DriverLimitsAreNamedBeforeTheDriverFails) {
     GTEST_SKIP() << "PoCL's needs, checked on PoCL (" << test_device_spec() << " here)";
   TempDir dir;
   const auto small_stack = [&](const std::vector<std::string>& extra) {
-    std::vector<std::string> args = {"-c", "ulimit -s 200 && exec \"$0\" \"$@\"", OPSILA_BINARY};
-    for (const std::string& a : render_args(dir.file("out.pfm"), extra)) args.push_back(a);
-    return test::run_program("/bin/sh", args);
+    return under_ulimit("-s 200", render_args(dir.file("out.pfm"), extra));
   };
   expect_one_error(small_stack({}), 2, "the stack limit (ulimit -s) is 200 KiB");
   EXPECT_FALSE(test::file_exists(dir.file("out.pfm")));

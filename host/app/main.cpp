@@ -36,7 +36,9 @@ int checked_stdout(int code) {
 volatile std::sig_atomic_t g_main_returned = 0;
 
 extern "C" void driver_ended_the_process() {
-  if (g_main_returned) return;
+  // Under an MPI launcher the library may end a rank on purpose (MPICH's
+  // MPI_Abort calls exit): the job's own line has been said.
+  if (g_main_returned || opsila::launched_by_mpi()) return;
   static const char kLine[] =
       "opsila: error: the OpenCL driver ended the process (its message is above; a full disk or a file-size "
       "limit where it caches kernels, or too little memory, are the usual causes)\n";

@@ -13,6 +13,7 @@
 #include <sstream>
 
 #include "scene/camera.h"
+#include "core/driver_limits.h"
 #include "core/host_memory.h"
 #include "core/util.h"
 #include "formats/json/scene_file.h"
@@ -329,7 +330,7 @@ void check_started_alike(Ranks& ranks, const std::vector<std::string>& args, con
 }
 
 DeviceEntry choose_device_flag(const std::string& spec, const Ranks& ranks) {
-  check_pocl_cache_variable();
+  check_driver_preconditions();
   try {
     return choose_rank_device(spec, ranks.local_rank());
   } catch (const InputError& e) {

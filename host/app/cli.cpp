@@ -21,7 +21,7 @@
 #include "device/cl_runtime.h"
 #include "formats/image/image_io.h"
 #include "core/env_hooks.h"
-#include "core/host_memory.h"
+#include "core/driver_limits.h"
 #include "core/progress.h"
 #include "core/stage_clock.h"
 #include "formats/image/output_files.h"
@@ -299,7 +299,7 @@ int run_devices(const std::vector<std::string>& args) {
     }
     throw InputError("devices: unexpected argument '" + a + "'");
   }
-  check_pocl_cache_variable();
+  check_driver_preconditions();
   const std::vector<DeviceEntry> devices = list_devices();
   int default_index = -1;
   try {

@@ -28,20 +28,6 @@ std::uint64_t address_space_left(std::uint64_t reserve) {
   return rl.rlim_cur > used + reserve ? rl.rlim_cur - used - reserve : 1;
 }
 
-void check_cpu_driver_environment() {
-  struct rlimit rl {};
-  constexpr std::uint64_t kStack = std::uint64_t(1) << 20;  // PoCL's kernels overflowed 256 KiB (instances)
-  if (::getrlimit(RLIMIT_STACK, &rl) == 0 && rl.rlim_cur != RLIM_INFINITY && rl.rlim_cur < kStack)
-    throw InputError("the stack limit (ulimit -s) is " + std::to_string(rl.rlim_cur >> 10) +
-                     " KiB: the OpenCL driver's threads run the kernels on stacks of that size and need " +
-                     std::to_string(kStack >> 10) + " KiB (--reference needs less)");
-}
-
-void check_pocl_cache_variable() {
-  if (const char* cache = std::getenv("POCL_CACHE_DIR"); cache && !*cache)
-    throw InputError("POCL_CACHE_DIR is set but empty: name a folder for PoCL's kernel cache, or unset it");
-}
-
 std::uint64_t available_host_memory() {
   std::ifstream in("/proc/meminfo");
   std::string line;

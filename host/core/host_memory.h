@@ -18,14 +18,6 @@ std::uint64_t physical_memory();
 // (ulimit -v), less `reserve` for what others (a driver) still map, at
 // least 1; 0 when there is no limit.
 std::uint64_t address_space_left(std::uint64_t reserve);
-// What a CPU OpenCL driver (PoCL) needs of the process and would otherwise
-// crash without: a stack of at least 1 MiB for its threads (ulimit -s).
-// Throws InputError naming the limit.
-void check_cpu_driver_environment();
-// Before any OpenCL call: PoCL fails an assertion on a POCL_CACHE_DIR that
-// is set but empty. Throws InputError naming the variable.
-void check_pocl_cache_variable();
-
 // A positive size: a number (a fraction allowed) with an optional binary
 // unit K, M, G or T (1K = 1024; "B" or "iB" may follow), else plain bytes.
 // Nothing for anything else, for 0, or beyond 2^60 bytes.

@@ -2,10 +2,13 @@
 // capabilities, memory beyond the device, each one clear message and a
 // non-zero exit, never a hang or a garbage image.
 #include <gtest/gtest.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cstdlib>
 #include <cstring>
+#include <fstream>
 #include <map>
 #include <optional>
 #include <random>
@@ -233,6 +236,43 @@ TEST(DeviceFaults, DriverLimitsAreNamedBeforeTheDriverFails) {
   EXPECT_EQ(reference.exit_code, 0) << reference.err;
   expect_one_error(opsila(render_args(dir.file("cache.pfm")), {{"POCL_CACHE_DIR", ""}}), 2, "POCL_CACHE_DIR is set but empty");
   EXPECT_FALSE(test::file_exists(dir.file("cache.pfm")));
+}
+
+// Open files and threads, which PoCL needs before it runs a kernel: a hard
+// open-files limit of 10 aborted its compiler (exit 134), a soft one is
+// raised; a thread limit it cannot start its workers under aborted it too.
+TEST(DeviceFaults, OpenFileAndThreadLimitsAreNamedBeforeTheDriverFails) {
+  TempDir dir;
+  const std::vector<std::string> args = render_args(dir.file("out.pfm"));
+  expect_one_error(under_ulimit("-n 10", args), 2, "the open-files limit (ulimit -n) is 10");
+  EXPECT_FALSE(test::file_exists(dir.file("out.pfm")));
+  const RunResult soft = under_ulimit("-Sn 10", args);
+  EXPECT_EQ(soft.exit_code, 0) << soft.err;
+  std::remove(dir.file("out.pfm").c_str());
+  // RLIMIT_NPROC binds a user without privileges: as root, the check runs as nobody.
+  if (::geteuid() != 0) GTEST_SKIP() << "the thread limit is checked by root running opsila as nobody";
+  const std::vector<std::string> as_nobody = {"--reuid=nobody", "--regid=nogroup", "--clear-groups",
+                                              "prlimit",       "--nproc=1",       OPSILA_BINARY};
+  std::vector<std::string> limited = as_nobody;
+  limited.insert(limited.end(), args.begin(), args.end());
+  if (test::run_program("/usr/bin/setpriv", {"--reuid=nobody", "--regid=nogroup", "--clear-groups", OPSILA_BINARY,
+                                             "--version"})
+          .exit_code != 0)
+    GTEST_SKIP() << "nobody cannot run " << OPSILA_BINARY << " (setpriv, or the folders' rights)";
+  ASSERT_EQ(::chmod(dir.path().c_str(), 0777), 0);  // nobody's output folder
+  expect_one_error(test::run_program("/usr/bin/setpriv", limited), 2, "the thread limit (ulimit -u) is 1");
+  EXPECT_FALSE(test::file_exists(dir.file("out.pfm")));
+}
+
+// PoCL lists no device when it cannot make its kernel cache: the error says so.
+TEST(DeviceFaults, AnUnusablePoclCacheIsNamed) {
+  if (*test_device_spec() && std::string(test_device_spec()) != "pocl")
+    GTEST_SKIP() << "PoCL's cache, checked on PoCL (" << test_device_spec() << " here)";
+  TempDir dir;
+  std::ofstream(dir.file("file")) << "not a folder";
+  const RunResult r = opsila({"devices"}, {{"POCL_CACHE_DIR", dir.file("file") + "/cache"}});
+  expect_one_error(r, 3, "PoCL lists no device when it cannot create its kernel cache");
+  EXPECT_TRUE(contains(r.err, dir.file("file") + "/cache")) << r.err;
 }
 
 // OPSILA_WAITING_LIMIT: a whole number, or one clear error before anything

@@ -1,7 +1,9 @@
 #include "formats/image/image_io.h"
 
 #include <fcntl.h>
+#include <linux/fs.h>
 #include <signal.h>
+#include <sys/ioctl.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -112,6 +114,18 @@ void check_output_path(const std::string& path) {
   if (!S_ISDIR(st.st_mode)) cannot_write(path, folder + " is not a folder");
   if (::access(folder.c_str(), W_OK | X_OK) != 0)
     cannot_write(path, "folder " + folder + ": " + std::strerror(errno));
+  if (folder_keeps_its_names(folder))
+    cannot_write(path, "folder " + folder + " is append-only or immutable: an output is written beside its name, then "
+                       "renamed, which such a folder refuses");
+}
+
+bool folder_keeps_its_names(const std::string& folder) {
+  const int fd = ::open(folder.c_str(), O_RDONLY | O_DIRECTORY | O_NONBLOCK | O_CLOEXEC);
+  if (fd < 0) return false;
+  int flags = 0;  // where the file system keeps no such flags the ioctl fails: nothing to refuse
+  const bool kept = ::ioctl(fd, FS_IOC_GETFLAGS, &flags) == 0 && (flags & (FS_APPEND_FL | FS_IMMUTABLE_FL)) != 0;
+  ::close(fd);
+  return kept;
 }
 
 int write_all(int fd, const void* data, std::size_t size) {

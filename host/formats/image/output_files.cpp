@@ -125,6 +125,9 @@ void OutputFiles::declare_folder(const std::string& flag, const std::string& fol
     if (!S_ISDIR(st.st_mode)) throw InputError(flag + " " + folder + ": exists and is not a folder");
     if (::access(folder.c_str(), W_OK | X_OK) != 0)
       throw InputError(flag + " " + folder + ": cannot write in it (" + std::strerror(errno) + ")");
+    if (folder_keeps_its_names(folder))
+      throw InputError(flag + " " + folder + ": the folder is append-only or immutable (its files could not be put "
+                                             "in place)");
   } else {
     check_output_path(folder);  // its parent exists and is writable
   }

@@ -106,6 +106,26 @@ TEST(Outputs, TheLongestFileNamesAreWritten) {
   EXPECT_EQ(TempDir::list(dir.path()).size(), 3u) << "a temporary file was left behind";
 }
 
+// An append-only folder (chattr +a) takes new files but renames and removes
+// none: the render wrote its temporary file there and could not take it
+// back. Now the folder is refused before anything is written.
+TEST(Outputs, AnAppendOnlyFolderIsRefusedBeforeAnythingIsWritten) {
+  TempDir dir;
+  const std::string scene = dir.write("s.json", kScene), out = dir.file("out");
+  ASSERT_EQ(::mkdir(out.c_str(), 0755), 0);
+  if (test::run_program("/usr/bin/chattr", {"+a", out}).exit_code != 0)
+    GTEST_SKIP() << "chattr +a is refused here (it needs root and a file system that keeps the flag)";
+  const RunResult r = run_opsila({"render", scene, "-o", out + "/o.png", "--reference", "-q"});
+  const RunResult tables = run_opsila({"bench", scene, "--csv", out, "--quick", "-q"});
+  test::run_program("/usr/bin/chattr", {"-a", out});  // so that the folder can be removed
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_EQ(r.error_lines().size(), 1u) << r.err;
+  EXPECT_NE(r.err.find("o.png: cannot write (folder " + out + " is append-only"), std::string::npos) << r.err;
+  EXPECT_EQ(tables.exit_code, 2) << tables.err;
+  EXPECT_NE(tables.err.find("--csv " + out + ": the folder is append-only"), std::string::npos) << tables.err;
+  EXPECT_TRUE(TempDir::list(out).empty()) << "a file was left in the folder";
+}
+
 // A file size limit makes the second output's write fail (EFBIG) as a full
 // disk would, while the first (a small PNG) fits.
 TEST(Outputs, AFailedWriteLeavesNoOutputAtAll) {

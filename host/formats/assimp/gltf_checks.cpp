@@ -14,6 +14,7 @@
 #include <nlohmann/json.hpp>
 
 #include "formats/common/json_text.h"
+#include "formats/assimp/glb_container.h"
 #include "formats/assimp/gltf_still.h"
 #include "formats/assimp/model_checks.h"
 #include "formats/obj/obj_loader.h"
@@ -24,57 +25,6 @@ namespace {
 
 using Json = nlohmann::json;
 using u64 = std::uint64_t;
-
-std::uint32_t le32(const std::string& b, std::size_t at) {
-  std::uint32_t v = 0;
-  for (int k = 3; k >= 0; --k) v = v << 8 | static_cast<unsigned char>(b[at + k]);
-  return v;
-}
-
-// The JSON text of a GLB (binary glTF) and the length of its binary chunk,
-// every length checked against the bytes that are there.
-struct GltfParts {
-  std::string json;
-  u64 bin_bytes = 0;
-};
-
-GltfParts split_glb(const std::string& b, const std::string& name) {
-  const u64 size = b.size();
-  if (size < 20) throw InputError(name + ": GLB file shorter than its header (truncated file)");
-  const std::uint32_t version = le32(b, 4), length = le32(b, 8);
-  // The importer reads the first chunk's header whatever the length says,
-  // and allocates what that chunk claims (found by fuzz_model).
-  if (length < 20)
-    throw InputError(name + ": GLB header says " + std::to_string(length) +
-                     " bytes, fewer than its header and first chunk's (20)");
-  if (length > size)
-    throw InputError(name + ": GLB header says " + std::to_string(length) + " bytes; the file holds " +
-                     std::to_string(size) + " (truncated file)");
-  GltfParts parts;
-  if (version == 1) {  // 20-byte header, then the JSON content, then the binary body
-    const u64 content = le32(b, 12);
-    if (content > u64(length) - 20)
-      throw InputError(name + ": GLB content length " + std::to_string(content) + " runs past the file's " +
-                       std::to_string(length) + " bytes");
-    parts.json = b.substr(20, content);
-    parts.bin_bytes = length - 20 - content;
-    return parts;
-  }
-  if (version != 2) throw InputError(name + ": GLB version " + std::to_string(version) + " (1 or 2 are read)");
-  u64 at = 12;
-  for (int chunk = 0; at < length; ++chunk) {
-    if (u64(length) - at < 8) throw InputError(name + ": GLB chunk " + std::to_string(chunk) + ": header cut off");
-    const u64 bytes = le32(b, at), type = le32(b, at + 4);
-    if (bytes > u64(length) - at - 8)
-      throw InputError(name + ": GLB chunk " + std::to_string(chunk) + " claims " + std::to_string(bytes) +
-                       " bytes; " + std::to_string(u64(length) - at - 8) + " follow it in the file");
-    if (chunk == 0 && type != 0x4E4F534Au) throw InputError(name + ": GLB's first chunk is not JSON");
-    if (chunk == 0) parts.json = b.substr(at + 8, bytes);
-    if (chunk == 1 && type == 0x004E4942u) parts.bin_bytes = bytes;
-    at += 8 + bytes;
-  }
-  return parts;
-}
 
 // A count, offset, length or index: a whole number >= 0 (2^64 and beyond
 // read as the largest u64, which no range holds).
@@ -473,8 +423,10 @@ std::uint64_t check_gltf(ModelFiles& files, const std::string& bytes, const std:
   GltfParts parts;
   if (bytes.compare(0, 4, "glTF") == 0) parts = split_glb(bytes, path);
   else parts.json = bytes;
-  // The importer's JSON reader recurses once per level of nesting.
+  // The importer's JSON reader recurses once per level of nesting, and cuts
+  // a name (a buffer's or an image's uri) at a NUL.
   check_json_shape(parts.json, path, 64, 1 << 24);
+  check_json_nul_escapes(parts.json, path);
   // Not a JSON object: no glTF reader takes it (and no other is asked).
   const std::size_t first = parts.json.find_first_not_of(" \t\r\n");
   if (first == std::string::npos || parts.json[first] != '{') return 0;

@@ -2,15 +2,11 @@
 
 #include <cstdint>
 
+#include "formats/assimp/glb_container.h"
+
 namespace opsila {
 
 namespace {
-
-std::uint32_t get32(const std::string& b, std::size_t at) {
-  std::uint32_t v = 0;
-  for (int k = 3; k >= 0; --k) v = v << 8 | static_cast<unsigned char>(b[at + std::size_t(k)]);
-  return v;
-}
 
 std::string le32(std::size_t v) {
   std::string s(4, '\0');
@@ -43,14 +39,14 @@ std::optional<std::string> gltf_without_motion(const nlohmann::json& root, const
   // GLB: the binary data after the JSON starts 4-byte aligned, so the JSON
   // is padded with spaces (both versions).
   text.resize((text.size() + 3) / 4 * 4, ' ');
-  const std::size_t length = get32(bytes, 8);
-  if (get32(bytes, 4) == 1) {  // 20-byte header: magic, version, length, content length, format
-    const std::size_t content = get32(bytes, 12);
+  const std::size_t length = glb_le32(bytes, 8);
+  if (glb_le32(bytes, 4) == 1) {  // 20-byte header: magic, version, length, content length, format
+    const std::size_t content = glb_le32(bytes, 12);
     std::string out = bytes.substr(0, 8) + le32(20 + text.size() + (length - 20 - content)) + le32(text.size()) +
                       bytes.substr(16, 4) + text + bytes.substr(20 + content, length - 20 - content);
     return out;
   }
-  const std::size_t json = get32(bytes, 12);  // the first chunk's length; its type is JSON
+  const std::size_t json = glb_le32(bytes, 12);  // the first chunk's length; its type is JSON
   return bytes.substr(0, 8) + le32(20 + text.size() + (length - 20 - json)) + le32(text.size()) +
          bytes.substr(16, 4) + text + bytes.substr(20 + json, length - 20 - json);
 }

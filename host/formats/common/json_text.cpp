@@ -89,6 +89,24 @@ void check_json_shape(const std::string& text, const std::string& name, int max_
   }
 }
 
+void check_json_nul_escapes(const std::string& text, const std::string& name) {
+  int line = 1;
+  bool in_string = false;
+  for (std::size_t k = 0; k < text.size(); ++k) {
+    const char c = text[k];
+    if (c == '\n') ++line;
+    if (!in_string) {
+      in_string = c == '"';
+    } else if (c == '"') {
+      in_string = false;
+    } else if (c == '\\') {
+      if (text.compare(k + 1, 5, "u0000") == 0)
+        throw InputError(name + ":" + std::to_string(line) + ": a string may not hold \\u0000 (a NUL)");
+      ++k;  // the escaped character, a quote or a backslash among them
+    }
+  }
+}
+
 // ----------------------------------------------------------- JsonLines ---
 
 JsonLines::JsonLines(const std::string& text, const std::string& name,

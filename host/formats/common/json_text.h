@@ -35,6 +35,12 @@ void check_json_bytes(const char* data, std::size_t size, std::size_t offset, in
 void check_json_shape(const std::string& text, const std::string& name, int max_depth,
                       int max_keys);
 
+// Throws InputError("NAME:LINE: ...") at the first string or key whose
+// text holds the escape \u0000: a reader that keeps names as C strings cuts
+// one there, and would open another file than the one written (a glTF's
+// "uri": "a.bin\u0000x" read a.bin).
+void check_json_nul_escapes(const std::string& text, const std::string& name);
+
 // Line of every key path in syntactically valid JSON text (keys as written;
 // a key with escapes may miss, and then its parent's line is used). Memory is
 // a few bytes per value and each key is stored once, whatever the depth.

@@ -99,6 +99,19 @@ TEST(GltfImport, ADataUriThatIsNotBase64IsNamed) {
   EXPECT_NE(error_loading(cut).find("its length is not a multiple of 4"), std::string::npos) << error_loading(cut);
 }
 
+// A name holding \u0000 was cut there by the importer: "tri.bin\u0000x"
+// read tri.bin, a file the glTF does not name. Refused, with its line (the
+// buffers are on line 2).
+TEST(GltfImport, ANulInAUriIsRefused) {
+  TempDir dir;
+  dir.write("tri.bin", triangle_bytes());
+  const std::string cut = dir.write("cut.gltf", gltf("tri.bin\\u0000x"));
+  EXPECT_EQ(error_loading(cut), cut + ":2: a string may not hold \\u0000 (a NUL)");
+  // An escaped backslash before "u0000" is no escape of a NUL.
+  const std::string slash = dir.write("slash.gltf", gltf("tri.bin\\\\u0000x"));
+  EXPECT_EQ(error_loading(slash).find("a string may not hold"), std::string::npos) << error_loading(slash);
+}
+
 // Placements and references the importer takes as they come: a matrix of
 // 4 numbers, the zero quaternion (the mesh placed as a point), a material
 // index past the end (its message was 'Missing section "materials"').

@@ -1,6 +1,7 @@
 #include "scene/camera.h"
 
 #include <cmath>
+#include <limits>
 #include <sstream>
 
 namespace opsila {
@@ -76,22 +77,24 @@ void check_camera(const CameraDesc& c, const std::string& eye_source, const std:
   if (!(f_len > 0) || !std::isfinite(f_len))
     throw InputError(eye_source + ": eye and look-at are the same point (" + format_vec(c.eye) + ")");
   if (!(u_len > 0) || !std::isfinite(u_len)) throw InputError(up_source + ": up vector is zero");
-  const double cross[3] = {f[1] * u[2] - f[2] * u[1], f[2] * u[0] - f[0] * u[2], f[0] * u[1] - f[1] * u[0]};
-  const double sine = std::sqrt(cross[0] * cross[0] + cross[1] * cross[1] + cross[2] * cross[2]) / (f_len * u_len);
+  const double fu[3] = {f[1] * u[2] - f[2] * u[1], f[2] * u[0] - f[0] * u[2], f[0] * u[1] - f[1] * u[0]};
+  const double sine = std::sqrt(fu[0] * fu[0] + fu[1] * fu[1] + fu[2] * fu[2]) / (f_len * u_len);
   if (sine < 1e-4)  // nearly parallel: the float basis would be noise
     throw InputError(up_source + " (" + format_vec(c.up) + ") is parallel to the view direction (from eye " +
                      format_vec(c.eye) + " to look-at " + format_vec(c.look_at) + ")");
-  // The basis is made in float (camera_frame): a view direction or up
-  // vector whose squared length underflows or overflows float gives no
-  // unit vector, and every camera ray would be NaN.
-  // The forward vector depends on the eye and look-at alone; the others,
-  // made from it, fail only through the up vector: that source is named.
-  const CameraFrame frame = camera_frame(c, 1, 1);
-  const auto unit_like = [](const Vec3& v) {  // an overflowed length gives zeros, an underflowed one inf or NaN
-    return std::isfinite(v[0]) && std::isfinite(v[1]) && std::isfinite(v[2]) && (v[0] != 0 || v[1] != 0 || v[2] != 0);
+  // The basis is made in float (camera_frame): a vector whose squared
+  // length is not a normal float (below about 1e-19 or above 1.8e19) gives
+  // no unit vector, or one rounded off unit, and other camera rays.
+  // The forward vector depends on the eye and look-at alone; the right one,
+  // made from it and the up vector, fails only through the latter: that
+  // source is named.
+  const auto normal_square = [](const Vec3& v) {
+    const float square = dot(v, v);
+    return square >= std::numeric_limits<float>::min() && square <= std::numeric_limits<float>::max();
   };
-  const bool forward = unit_like(frame.forward);
-  if (!forward || !unit_like(frame.right) || !unit_like(frame.up))
+  const Vec3 view = c.look_at - c.eye;
+  const bool forward = normal_square(view);
+  if (!forward || !normal_square(c.up) || !normal_square(cross(camera_frame(c, 1, 1).forward, c.up)))
     throw InputError((forward ? up_source : eye_source) + ": the view from eye " + format_vec(c.eye) + " to look-at " +
                      format_vec(c.look_at) + " with up " + format_vec(c.up) + " has no unit vectors in float (" +
                      (forward ? "an up vector too small or too large)" : "a distance too small or too large)"));

@@ -145,6 +145,16 @@ TEST_F(CliFixture, DegenerateCameraIsRejected) {
   expect_rejected({scene, "-o", out("x.png"), "--eye", "0,0,1e-25", "--look-at", "0,0,0"}, "--eye");
   expect_rejected({scene, "-o", out("x.png"), "--eye", "0,0,5", "--look-at", "0,0,0", "--up", "0,1e-30,0"},
                   "no unit vectors");
+  // Squares that are subnormal floats (distances below about 1e-19) gave
+  // unit vectors rounded off unit, hence other camera rays, exit 0; those
+  // whose squares float holds are taken.
+  expect_rejected({scene, "-o", out("x.png"), "--eye", "0,0,3e-23", "--look-at", "0,0,0"}, "--eye");
+  expect_rejected({scene, "-o", out("x.png"), "--eye", "0,0,5", "--look-at", "0,0,0", "--up", "0,1e-20,0"}, "--up");
+  EXPECT_EQ(run_opsila({"render", scene, "-o", out("near.png"), "--reference", "-q", "--eye", "0,0,2e-19",
+                        "--look-at", "0,0,0", "--up", "0,2e-19,0"})
+                .exit_code,
+            0);
+  std::remove(out("near.png").c_str());
   // The scene's camera is sound; only the flag's up vector is too small for float.
   expect_rejected({scene, "-o", out("x.png"), "--reference", "-q", "--up", "1e-38,1e-38,0"}, "opsila: error: --up:");
   // A scene too small to frame (an instance scaled by 1e-25).

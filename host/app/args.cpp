@@ -27,9 +27,10 @@ namespace opsila {
 
 namespace {
 
-// Strict number parsing: the whole text, no spaces, finite.
+// Strict number parsing: the whole text, decimal (no hexadecimal, which
+// strtod takes and the scene and model files do not), finite.
 bool parse_float(const std::string& text, float& out) {
-  if (text.empty() || std::isspace(static_cast<unsigned char>(text[0]))) return false;
+  if (text.empty() || text.find_first_not_of("0123456789+-.eE") != std::string::npos) return false;
   errno = 0;
   char* end = nullptr;
   const double value = std::strtod(text.c_str(), &end);

@@ -132,6 +132,9 @@ TEST_F(CliFixture, MalformedVectorsAreRejected) {
   expect_rejected({scene, "-o", out("x.png"), "--light", "1,2,3,4"}, "--light");
   expect_rejected({scene, "-o", out("x.png"), "--eye", "1,2,inf"}, "--eye");
   expect_rejected({scene, "-o", out("x.png"), "--ambient", "a,b,c"}, "--ambient");
+  // Hexadecimal, which strtod reads (0x10 as 16) and no scene or model file takes.
+  expect_rejected({scene, "-o", out("x.png"), "--fov", "0x10"}, "--fov");
+  expect_rejected({scene, "-o", out("x.png"), "--eye", "0x1,0,5"}, "--eye");
 }
 
 TEST_F(CliFixture, DegenerateCameraIsRejected) {

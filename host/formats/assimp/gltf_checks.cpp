@@ -378,6 +378,9 @@ void use_meshes(const Gltf& g, ImportCost& cost) {
       if (!p.is_object()) continue;
       cost.add(ImportCost::kRecordBytes, where);
       g.ref(p, "material", "materials", where);  // the importer: 'Missing section "materials"'
+      // The importer drew a mode of 4294967296 as triangles.
+      if (const u64 mode = whole(p, "mode", 4, where); mode > 6)
+        throw InputError(where + ": mode " + std::to_string(mode) + " (a glTF primitive's mode is 0 to 6)");
       const auto indices = p.find("indices"), attributes = p.find("attributes"), targets = p.find("targets");
       if (indices != p.end()) cost.use(*indices, ImportCost::kIndexBytes, where + ".indices");
       if (attributes != p.end()) use_attributes(cost, *attributes, where + ".attributes", indices == p.end());
@@ -417,6 +420,18 @@ void check_required_extensions(const Json& root, const std::string& name) {
                          "without mesh compression");
 }
 
+// A key given twice in one object: the importer reads the first, these
+// checks (nlohmann) the last, so a bad value placed first passed them all
+// (a matrix that is not affine, a bufferView whose offset wraps 2^64).
+void refuse_repeated_keys(const std::string& json, const std::string& path) {
+  std::vector<std::string> repeated;
+  const JsonLines lines(json, path, repeated);
+  if (repeated.empty()) return;
+  std::string first = repeated.front();
+  first.resize(first.rfind("; the last one is used"));
+  throw InputError(first + " (the model importer reads the first, these checks the last: give each key once)");
+}
+
 }  // namespace
 
 std::uint64_t check_gltf(ModelFiles& files, const std::string& bytes, const std::string& path) {
@@ -438,6 +453,7 @@ std::uint64_t check_gltf(ModelFiles& files, const std::string& bytes, const std:
     throw InputError(path + ": not glTF JSON (" + why.substr(why.find(']') + 2) + ")");
   }
   if (!root.is_object()) throw InputError(path + ": not glTF JSON (not an object)");
+  refuse_repeated_keys(parts.json, path);
   check_required_extensions(root, path);
   const Gltf g(root, path);
   u64 external = 0;

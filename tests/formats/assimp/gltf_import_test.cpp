@@ -112,6 +112,26 @@ TEST(GltfImport, ANulInAUriIsRefused) {
   EXPECT_EQ(error_loading(slash).find("a string may not hold"), std::string::npos) << error_loading(slash);
 }
 
+// A key given twice: the importer read the first, the checks the last, so a
+// bad first value passed them (a bufferView offset near 2^64 made the
+// importer read before its buffer); the later one's line is named. And a
+// mode past 6, drawn as triangles.
+TEST(GltfImport, ARepeatedKeyAndAnUnknownModeAreRefused) {
+  TempDir dir;
+  dir.write("tri.bin", triangle_bytes());
+  const std::string once = gltf("tri.bin");
+  EXPECT_EQ(error_loading(dir.write("once.gltf", once)), "<no error>");
+  const std::string wrap = R"({"bufferViews": [{"buffer": 0, "byteOffset": 18446744073709551608, "byteLength": 36}],)";
+  const std::string twice = dir.write("twice.gltf", wrap + once.substr(1));
+  EXPECT_EQ(error_loading(twice), twice + ":3: bufferViews: key given twice (the model importer reads the first, "
+                                          "these checks the last: give each key once)");
+  std::string moded = once;
+  const std::string attributes = R"("POSITION": 0}})";
+  moded.replace(moded.find(attributes), attributes.size(), R"("POSITION": 0}, "mode": 4294967296})");
+  const std::string mode = dir.write("mode.gltf", moded);
+  EXPECT_EQ(error_loading(mode), mode + ": meshes[0].primitives[0]: mode 4294967296 (a glTF primitive's mode is 0 to 6)");
+}
+
 // Placements and references the importer takes as they come: a matrix of
 // 4 numbers, the zero quaternion (the mesh placed as a point), a material
 // index past the end (its message was 'Missing section "materials"').

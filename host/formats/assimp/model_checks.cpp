@@ -13,6 +13,8 @@
 #include "core/input_file.h"
 #include "core/util.h"
 #include "formats/ply/ply_format.h"
+#include "formats/ply/ply_reader.h"
+#include "scene/triangle_limit.h"
 #include "formats/stl/stl_format.h"
 
 namespace opsila {
@@ -89,8 +91,10 @@ std::uint64_t check_model_file_shape(ModelFiles& files, const std::string& path,
     return size;
   }
   const std::string bytes = files.head(path, kMaxInputFileBytes);
-  if (e == "ply") ply::check_ply(bytes, path);
-  else if (e == "stl") stl::check_stl(bytes, path);
+  if (e == "ply") {
+    ply::check_ply(bytes, path);
+    check_ply_text(path, kMaxTriangles, &bytes);  // as ranks read it
+  } else if (e == "stl") stl::check_stl(bytes, path);
   else if (e == "gltf" || e == "glb") return size + check_gltf(files, bytes, path);
   else check_nesting(bytes, path);
   return size;

@@ -5,6 +5,7 @@
 #include <stdio.h>  // fmemopen
 
 #include <cerrno>
+#include <cstdlib>
 #include <cstring>
 #include <stdexcept>
 
@@ -132,6 +133,9 @@ Value Body::next(Type t, const Element& e, std::uint64_t i) {
     } else if (w.size() <= 11 && w.find_first_of("0123456789") != std::string::npos) {
       if (is_signed(t)) v.i = Assimp::strtol10(w.c_str(), &end);
       else v.i = Assimp::strtoul10(w.c_str(), &end);
+      // The importer's readers wrap past 32 bits (99999999999 read as
+      // 1215752191): such a word is no number of the type.
+      if (std::strtoll(w.c_str(), nullptr, 10) != v.i) end = w.c_str();
     }
   } catch (const std::runtime_error&) {
     end = w.c_str();

@@ -29,6 +29,14 @@ std::string ply_stream_refusal(const std::string& path);
 // importer path then judges it). `bytes`: the file in memory, if given.
 bool ply_has_strips(const std::string& path, const std::string* bytes = nullptr);
 
+// A text PLY the stream reads, read through once and checked as the ranks
+// check it, keeping nothing, before one process hands it to the importer:
+// the importer takes "0abc" as 0, 2.9 as an index 2 and ignores the rest
+// of a line, which ranks refuse (one process must read what they read).
+// Throws the stream's error; nothing for a binary file or one the stream
+// leaves to the importer.
+void check_ply_text(const std::string& path, std::size_t max_triangles, const std::string* bytes = nullptr);
+
 // The whole file as one process reads it, by the stream (from `bytes`, if given).
 Scene load_ply_whole(const std::string& path, std::size_t max_triangles, const std::string* bytes = nullptr);
 

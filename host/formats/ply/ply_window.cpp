@@ -223,6 +223,19 @@ Scene load_ply_whole(const std::string& path, std::size_t max_triangles, const s
   return scene;
 }
 
+void check_ply_text(const std::string& path, std::size_t max_triangles, const std::string* bytes) {
+  ply::Header h;
+  try {
+    h = ply::read_header(path, bytes);
+  } catch (const InputError&) {  // a header only the importer reads: it judges the file
+    return;
+  }
+  if (h.format != ply::Format::ascii || !ply::stream_refusal(h).empty()) return;
+  ModelWindow counting;  // no face kept: every value read and checked
+  std::uint64_t fans = 0;
+  PlyWindowReader(path, max_triangles, counting, std::size_t(32) << 20, bytes).run(fans);
+}
+
 std::vector<std::string> ply_unread_elements(const std::string& path) {
   std::vector<std::string> out;
   try {
@@ -249,6 +262,7 @@ Scene load_ply_window(const std::string& path, std::size_t, const ModelWindow&, 
 }
 
 bool ply_has_strips(const std::string&, const std::string*) { return false; }
+void check_ply_text(const std::string&, std::size_t, const std::string*) {}
 Scene load_ply_whole(const std::string& path, std::size_t, const std::string*) {
   std::uint64_t fans = 0;
   return load_ply_window(path, 0, ModelWindow{}, fans);

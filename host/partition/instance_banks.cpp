@@ -98,8 +98,7 @@ void append_nodes(BankArray<BankNode>& out, const BankNode* first, const BankNod
 Cluster instance_cluster(const Box& b, int i, int pe, const Box& sbox) {
   Cluster cl{};
   for (int a = 0; a < 3; ++a) cl.center[a] = b.center(a), cl.bmin[a] = b.lo[a], cl.bmax[a] = b.hi[a];
-  // Padded as fill_banks pads the spheres of the scene's own clusters.
-  cl.radius = 0.5f * b.diagonal() * 1.0001f + 1e-5f * sbox.diagonal();
+  cl.radius = partition_steps::routing_sphere_radius(0.5 * b.diagonal(), cl, sbox);
   cl.pe = pe;
   cl.root = -2 - i;
   return cl;

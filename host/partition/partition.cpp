@@ -28,6 +28,13 @@ void put3(float* dst, const Vec3& v) {
 
 }  // namespace
 
+float routing_sphere_radius(double radius, const Cluster& cl, const Box& sbox) {
+  float magnitude = 0;
+  for (int a = 0; a < 3; ++a) magnitude = std::max({magnitude, std::fabs(cl.bmin[a]), std::fabs(cl.bmax[a])});
+  // 2e-5 of the magnitude: the boxes' 1e-5 on each axis, across a diagonal.
+  return static_cast<float>(radius) * 1.0001f + 1e-5f * sbox.diagonal() + 2e-5f * magnitude;
+}
+
 // The routing tables every PE knows: for each PE, a BVH over its clusters'
 // boxes, padded (like the spheres' radii) so that float rounding in the slab
 // test never leaves a facet's hit point outside its cluster's box.
@@ -214,12 +221,11 @@ void fill_banks(const Scene& scene, const Box& sbox, std::vector<ClusterBuild>& 
     if (!consume) cb[c].tris = std::vector<int>();
     Cluster& cl = bs.clusters[c];
     put3(cl.center, ctr);
-    // Padded so that float rounding in the sphere test never culls a facet.
-    cl.radius = static_cast<float>(std::sqrt(r2)) * 1.0001f + 1e-5f * sbox.diagonal();
     for (int a = 0; a < 3; ++a) {
       cl.bmin[a] = cb[c].box.lo[a];
       cl.bmax[a] = cb[c].box.hi[a];
     }
+    cl.radius = routing_sphere_radius(std::sqrt(r2), cl, sbox);
     cl.pe = cb[c].pe;
     cl.root = -1;
   };

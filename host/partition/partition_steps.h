@@ -119,6 +119,14 @@ std::uint64_t bank_attributes(const Scene& scene, const std::vector<int>& attrib
                               std::vector<char>* used_out);
 std::uint64_t texture_once(const Scene& scene, const std::vector<char>& used);
 // 4. What every PE knows.
+// A cluster's sphere radius for routing, from `radius` (the farthest vertex
+// from cl.center, cl's box set): padded, as build_routing pads the cluster
+// boxes, by 1e-5 of the scene's diagonal and of the coordinates' magnitude,
+// so that float rounding in the sphere test never leaves a facet's hit
+// outside it (at 1e6 a hit point is rounded by some 0.06, whatever the
+// scene's size: a pad of the diagonal alone let --routing spheres skip a
+// PE that held the winner, and the image changed with the PE count).
+float routing_sphere_radius(double radius, const Cluster& cl, const Box& sbox);
 void build_routing(BankedScene& bs, const Box& sbox);
 void global_tables(const Scene& scene, BankedScene& bs);
 void scene_bytes(BankedScene& bs, std::uint64_t texture_once);

@@ -9,6 +9,7 @@
 #include <cstring>
 #include <string>
 
+#include "formats/json/scene_file.h"
 #include "prepare/prepare_banks.h"
 #include "frame/renderer.h"
 #include "reference/reference.h"
@@ -66,6 +67,31 @@ TEST(HitOrderRender, AGrazingViewIsTheSameBytesOnAnyPeCount) {
   s.camera.look_at = {0.0f, 0.2f, -4.0f};
   const RenderResult one = render_tie_scene(s, 1);
   for (int pes : {3, 64, 256}) expect_same_bytes(one, render_tie_scene(s, pes), std::to_string(pes) + " PEs");
+}
+
+// Far from the origin a hit point is rounded by some 0.06 (at 1e6), far
+// more than the cluster spheres were padded (1e-5 of the scene's size):
+// --routing spheres skipped PEs that held the winner, and mirrors showed
+// other pixels at 3, 16 and 64 PEs. The spheres are padded by the
+// coordinates' magnitude now, as the routing boxes are.
+TEST(HitOrderRender, AFarSceneIsTheSameBytesWithEitherRoutingOnAnyPeCount) {
+  // A mirror box holding a red sphere, about (1e6, -2e6, 5e5).
+  test::TempDir dir;
+  const std::string far = dir.write("far.json", R"({"depth": 8, "image": {"width": 64, "height": 48},
+    "camera": {"eye": [1000000, -1999999, 500000], "look_at": [1000001, -1999998.95, 500000.08]},
+    "materials": {"mirror": {"Kd": 0.05, "kr": 0.9, "Ns": 50}, "red": {"Kd": [0.9, 0.1, 0.1]}},
+    "lights": [{"position": [1000000, -1999998.2, 500000.5]}],
+    "objects": [{"type": "box", "min": [999998, -2000000, 499997], "max": [1000002, -1999998, 500003],
+                 "material": "mirror"},
+                {"type": "sphere", "center": [1000000.5, -1999999.5, 500001], "radius": 0.4, "material": "red"}]})");
+  const Scene s = load_scene(far);
+  const RenderResult boxes = render_tie_scene(s, 16);
+  for (int pes : {1, 3, 16, 64}) {
+    RenderSettings rs;
+    rs.num_pes = pes;
+    rs.routing = OPSILA_ROUTING_SPHERES;
+    expect_same_bytes(boxes, render(s, rs, test::shared_runtime()), std::to_string(pes) + " PEs, spheres");
+  }
 }
 
 // Coincident facets show the lower object's: never the upper copy of a quad

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <map>
 #include <optional>
@@ -254,15 +255,28 @@ TEST(DeviceFaults, OpenFileAndThreadLimitsAreNamedBeforeTheDriverFails) {
 #if defined(__SANITIZE_ADDRESS__)
   GTEST_SKIP() << "LeakSanitizer's check at exit starts a thread, which the thread limit refuses";
 #endif
-  const std::vector<std::string> as_nobody = {"--reuid=nobody", "--regid=nogroup", "--clear-groups",
-                                              "prlimit",       "--nproc=1",       OPSILA_BINARY};
-  std::vector<std::string> limited = as_nobody;
-  limited.insert(limited.end(), args.begin(), args.end());
-  if (test::run_program("/usr/bin/setpriv", {"--reuid=nobody", "--regid=nogroup", "--clear-groups", OPSILA_BINARY,
-                                             "--version"})
-          .exit_code != 0)
-    GTEST_SKIP() << "nobody cannot run " << OPSILA_BINARY << " (setpriv, or the folders' rights)";
-  ASSERT_EQ(::chmod(dir.path().c_str(), 0777), 0);  // nobody's output folder
+  // nobody runs a copy of the program, its libraries and the scene, so that
+  // the rights on the checkout's folders do not matter.
+  ASSERT_EQ(::chmod(dir.path().c_str(), 0777), 0);
+  namespace fs = std::filesystem;
+  const fs::path program(OPSILA_BINARY), scene_dir = fs::path(OPSILA_SOURCE_DIR) / "tests" / "oclgrind";
+  for (const fs::directory_entry& e : fs::directory_iterator(program.parent_path())) {
+    const std::string name = e.path().filename().string();
+    if (e.path() == program || (name.rfind("lib", 0) == 0 && e.path().extension() == ".so"))
+      fs::copy_file(e.path(), dir.file(name));
+  }
+  for (const char* name : {"tiny.obj", "tiny.mtl"}) fs::copy_file(scene_dir / name, dir.file(name));
+  std::vector<std::string> limited = {"--reuid=nobody", "--regid=nogroup", "--clear-groups",
+                                      "env", "LD_LIBRARY_PATH=" + dir.path(), "POCL_CACHE_DIR=" + dir.file("cache"),
+                                      "prlimit", "--nproc=1",
+                                      dir.file(program.filename().string())};
+  std::vector<std::string> copied_args = args;
+  std::replace(copied_args.begin(), copied_args.end(), args[1], dir.file("tiny.obj"));
+  limited.insert(limited.end(), copied_args.begin(), copied_args.end());
+  std::vector<std::string> version(limited.begin(), limited.end() - std::ptrdiff_t(copied_args.size()));
+  version.push_back("--version");
+  if (test::run_program("/usr/bin/setpriv", version).exit_code != 0)
+    GTEST_SKIP() << "nobody cannot run a copy of " << OPSILA_BINARY << " (setpriv or prlimit missing?)";
   expect_one_error(test::run_program("/usr/bin/setpriv", limited), 2, "the thread limit (ulimit -u) is 1");
   EXPECT_FALSE(test::file_exists(dir.file("out.pfm")));
 }

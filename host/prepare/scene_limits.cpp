@@ -13,27 +13,35 @@ namespace {
 
 // One rank's figures as they travel between ranks.
 struct MemoryRecord {
-  std::uint64_t bytes, available;
+  std::uint64_t bytes, available, address_space;
   std::int32_t from_flag, local_ranks;
 };
+
+// What a process's address space must keep beyond the scene: the OpenCL
+// driver's compiler and buffers (a CPU device's plan has its own check).
+constexpr std::uint64_t kAddressSpaceReserve = std::uint64_t(256) << 20;
 
 }  // namespace
 
 HostMemory agree_host_memory(Ranks& ranks, const HostMemory& mine) {
   const std::vector<MemoryRecord> all = records_of<MemoryRecord>(ranks.all_gather(bytes_of(std::vector<MemoryRecord>{
-      {mine.bytes, mine.available, mine.from_flag ? 1 : 0, mine.local_ranks}})));
+      {mine.bytes, mine.available, mine.address_space, mine.from_flag ? 1 : 0, mine.local_ranks}})));
   const MemoryRecord* least = &all.front();
   for (const MemoryRecord& r : all)
     if (r.bytes < least->bytes) least = &r;  // the first of equals: every rank picks the same
   HostMemory m;
-  m.bytes = least->bytes, m.available = least->available;
+  m.bytes = least->bytes, m.available = least->available, m.address_space = least->address_space;
   m.from_flag = least->from_flag != 0, m.local_ranks = least->local_ranks;
   return m;
 }
 
 TriangleLimit host_triangle_limit(Ranks& ranks, std::uint64_t flag_bytes) {
   const std::uint64_t available = flag_bytes ? 0 : available_host_memory();
-  const HostMemory mine = host_memory_of(flag_bytes, available, ranks.local_size());
+  // What is mapped now (the program, the driver) is already taken off, so
+  // the limit's fixed base for the program is given back.
+  const std::uint64_t left = flag_bytes ? 0 : address_space_left(kAddressSpaceReserve);
+  const std::uint64_t address_space = left ? left + kPrepareHostBaseBytes : 0;
+  const HostMemory mine = host_memory_of(flag_bytes, available, ranks.local_size(), address_space);
   // A rank that failed before (its device, its flags) waits in the failure
   // agreement: meet it there first, not in a collective it never joins.
   ranks.checkpoint();

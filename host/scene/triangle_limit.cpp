@@ -15,7 +15,8 @@ std::uint64_t memory_for_triangles(std::size_t triangles) {
   return kPrepareHostBaseBytes + std::uint64_t(triangles) * kPrepareHostBytesPerTriangle;
 }
 
-HostMemory host_memory_of(std::uint64_t flag_bytes, std::uint64_t available, int local_ranks) {
+HostMemory host_memory_of(std::uint64_t flag_bytes, std::uint64_t available, int local_ranks,
+                          std::uint64_t address_space) {
   HostMemory m;
   m.local_ranks = std::max(local_ranks, 1);
   if (flag_bytes > 0) {
@@ -23,6 +24,7 @@ HostMemory host_memory_of(std::uint64_t flag_bytes, std::uint64_t available, int
   } else {
     m.available = available;
     m.bytes = available / std::uint64_t(m.local_ranks);
+    if (address_space > 0 && address_space < m.bytes) m.bytes = m.address_space = address_space;
   }
   return m;
 }
@@ -56,9 +58,11 @@ std::size_t per_rank(std::size_t triangles, int ranks) {
   return triangles / r + (triangles % r != 0);
 }
 
-// "(--host-memory)", "(31.20 GiB available on this host, shared by 4 ranks)".
+// "(--host-memory)", "(31.20 GiB available on this host, shared by 4 ranks)",
+// "(the address space ulimit -v leaves this process)".
 std::string memory_source(const HostMemory& m) {
   if (m.from_flag) return "(--host-memory)";
+  if (m.address_space > 0) return "(the address space ulimit -v leaves this process)";
   return "(" + gib(m.available) + " available on this host" +
          (m.local_ranks > 1 ? ", shared by " + std::to_string(m.local_ranks) + " ranks" : std::string()) + ")";
 }
@@ -91,7 +95,8 @@ std::string TriangleLimit::objects_beyond(std::size_t n, std::size_t objects, st
          gib(need) +
          " while preparing at " + std::to_string(kPrepareHostBytesPerObject) + " bytes an object and " +
          std::to_string(kPrepareHostBytesPerTriangle) + " a triangle, and this process may use " + gib(memory.bytes) +
-         " " + memory_source(memory) + "; --host-memory " + std::to_string((need + mib - 1) / mib) + "M would do";
+         " " + memory_source(memory) + "; " + (memory.address_space > 0 ? "a ulimit -v above " : "--host-memory ") +
+         std::to_string((need + mib - 1) / mib) + "M would do";
 }
 
 std::string TriangleLimit::memory_hint(std::size_t n, int ranks) const {
@@ -99,6 +104,8 @@ std::string TriangleLimit::memory_hint(std::size_t n, int ranks) const {
   if (why != Why::memory || share > kMaxTriangles) return "";
   const std::uint64_t mib = std::uint64_t(1) << 20;
   const std::uint64_t need = (memory_for_triangles(share) + mib - 1) / mib;
+  // Under ulimit -v the flag would promise what the process cannot map.
+  if (memory.address_space > 0) return "a ulimit -v above " + std::to_string(need) + "M";
   return "--host-memory " + std::to_string(need) + "M";
 }
 

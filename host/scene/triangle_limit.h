@@ -38,10 +38,13 @@ struct HostMemory {
   bool from_flag = false;        // --host-memory; else `available` shared by the local ranks
   std::uint64_t available = 0;   // the memory available on the host (without the flag)
   int local_ranks = 1;           // the ranks that run on that host
+  std::uint64_t address_space = 0;  // the address space ulimit -v leaves, when it is the smaller; else 0
 };
 // `flag_bytes` (--host-memory) when nonzero, else `available` divided
-// among the `local_ranks` on this host.
-HostMemory host_memory_of(std::uint64_t flag_bytes, std::uint64_t available, int local_ranks);
+// among the `local_ranks` on this host, or `address_space` (what ulimit -v
+// leaves this process; 0: no limit) where that is less.
+HostMemory host_memory_of(std::uint64_t flag_bytes, std::uint64_t available, int local_ranks,
+                          std::uint64_t address_space = 0);
 
 // One rank's triangle limit and why it is what it is.
 struct TriangleLimit {

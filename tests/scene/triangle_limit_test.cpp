@@ -45,6 +45,23 @@ TEST(TriangleLimit, TheFlagIsThisProcesssTheAvailableMemoryIsSharedByTheHostsRan
   EXPECT_EQ(limit.why, TriangleLimit::Why::memory);
 }
 
+// An address-space limit (ulimit -v) below the host's share bounds the
+// process too: scenes within the available memory had been built until the
+// process ran out, with no key named (found by a hostile battery).
+TEST(TriangleLimit, AnAddressSpaceLimitBelowTheShareBoundsTheProcess) {
+  const HostMemory capped = host_memory_of(0, 64 * kGiB, 4, 3 * kGiB);
+  EXPECT_EQ(capped.bytes, 3 * kGiB);
+  EXPECT_EQ(capped.address_space, 3 * kGiB);
+  const TriangleLimit limit = TriangleLimit::of_memory(capped);
+  EXPECT_EQ(limit.triangles, triangles_for_memory(3 * kGiB));
+  EXPECT_NE(limit.why_not(40000000, 1).find("(the address space ulimit -v leaves this process)"), std::string::npos);
+  EXPECT_EQ(limit.memory_hint(40000000, 1).rfind("a ulimit -v above ", 0), 0u) << "--host-memory would not help";
+  const HostMemory roomy = host_memory_of(0, 64 * kGiB, 4, 32 * kGiB);
+  EXPECT_EQ(roomy.bytes, 16 * kGiB) << "the share is the smaller";
+  EXPECT_EQ(roomy.address_space, 0u);
+  EXPECT_EQ(host_memory_of(8 * kGiB, 0, 1, 1 * kGiB).bytes, 8 * kGiB) << "--host-memory is taken as given";
+}
+
 TEST(TriangleLimit, ARefusalSaysWhatDoesNotFitAndWhatThisProcessMayUse) {
   const TriangleLimit flag = TriangleLimit::of_memory(host_memory_of(300 * kMiB, 0, 1));
   EXPECT_EQ(flag.why_not(1000000, 1),

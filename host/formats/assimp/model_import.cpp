@@ -358,6 +358,10 @@ Scene convert(Assimp::Importer& importer, const aiScene* ai, const std::string& 
     std::string why = importer.GetErrorString();
     std::replace(why.begin(), why.end(), '\n', ' ');
     if (why.empty()) why = "cannot read the model";
+    // The importer catches its own allocation failure and says only this.
+    if (why.find("bad_alloc") != std::string::npos)
+      why = "the model importer ran out of memory reading it (a count in the file asks for more than this process may "
+            "use)";
     throw InputError(name + ": " + why + (files.refusal().empty() ? "" : " (" + files.refusal() + ")"));
   }
   if (!ai->mRootNode || ai->mNumMeshes == 0)

@@ -450,5 +450,33 @@ TEST(HostileModel, OffFacesTheImporterWouldMisreadAreRefused) {
          ":13: OFF face 1 of 1 has 10 vertices; the model importer reads faces of 1 to 9");
 }
 
+// A COLLADA array counting 4e9 floats that holds 9: under an address-space
+// limit the importer's allocation fails, which it reports only as
+// "std::bad_alloc"; the message says what that means.
+TEST(HostileModel, AnAllocationTheImporterCannotMakeIsNamed) {
+#if defined(__SANITIZE_ADDRESS__)
+  GTEST_SKIP() << "AddressSanitizer reserves terabytes of addresses: no run fits under ulimit -v";
+#endif
+  TempDir dir;
+  const std::string dae = dir.write("huge.dae", R"(<?xml version="1.0"?>
+<COLLADA xmlns="http://www.collada.org/2005/11/COLLADASchema" version="1.4.1">
+<library_geometries><geometry id="g"><mesh>
+<source id="s"><float_array id="fa" count="4000000000">0 0 0 1 0 0 0 1 0</float_array>
+<technique_common><accessor source="#fa" count="3" stride="3"><param name="X" type="float"/>
+<param name="Y" type="float"/><param name="Z" type="float"/></accessor></technique_common></source>
+<vertices id="v"><input semantic="POSITION" source="#s"/></vertices>
+<triangles count="1"><input semantic="VERTEX" source="#v" offset="0"/><p>0 1 2</p></triangles>
+</mesh></geometry></library_geometries>
+<library_visual_scenes><visual_scene id="vs"><node id="n0"><instance_geometry url="#g"/></node></visual_scene>
+</library_visual_scenes><scene><instance_visual_scene url="#vs"/></scene></COLLADA>)");
+  const RunResult r = test::run_program("/bin/sh", {"-c", "ulimit -v 4000000 && exec \"$0\" \"$@\"", OPSILA_BINARY,
+                                                     "render", dae, "-o", dir.file("x.png"), "--size", "8x8",
+                                                     "--reference"});
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  ASSERT_EQ(r.error_lines().size(), 1u) << r.err;
+  EXPECT_NE(r.err.find(dae + ": the model importer ran out of memory reading it"), std::string::npos) << r.err;
+  EXPECT_FALSE(test::file_exists(dir.file("x.png")));
+}
+
 }  // namespace
 }  // namespace opsila

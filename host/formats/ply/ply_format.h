@@ -40,7 +40,8 @@ enum class Format { ascii, little_endian, big_endian };
 
 struct Header {
   Format format = Format::ascii;
-  std::string format_name;            // as the last 'format' line gives it
+  std::string format_name;            // as the first 'format' line gives it
+  std::string format_version;         // its version (PLY knows only 1.0)
   std::vector<Element> elements;
   std::vector<std::string> comments;  // 'comment' and 'obj_info' lines
   std::uint64_t body = 0;             // byte offset of the body
@@ -55,7 +56,8 @@ struct Header {
 // - importer: as the importer reads it (lines it does not know are let
 //   be), refusing what it misreads: a header without an 'end_header' line
 //   of its own, an element declared twice, a property before any element,
-//   more elements than the file can hold, unknown types or formats.
+//   more elements than the file can hold, unknown types or formats, a
+//   format version other than 1.0.
 // Each error is one InputError naming `path` (and, for the stream, the line).
 enum class Reading { stream, importer };
 

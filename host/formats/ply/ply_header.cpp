@@ -110,6 +110,7 @@ struct HeaderLines {
     // allocation inside the importer).
     if (format_seen) return;
     h.format_name = f;
+    h.format_version = version;
     if (f == "ascii") h.format = Format::ascii;
     else if (f == "binary_little_endian") h.format = Format::little_endian;
     else if (f == "binary_big_endian") h.format = Format::big_endian;
@@ -168,6 +169,9 @@ void judge_types_for_importer(const Header& h, const std::string& path) {
   if (h.format_name != "ascii" && h.format_name != "binary_little_endian" && h.format_name != "binary_big_endian")
     throw InputError(path + ": PLY format '" + h.format_name.substr(0, 20) +
                      "' (ascii, binary_little_endian or binary_big_endian)");
+  // The only version there is: another may lay its body out otherwise.
+  if (h.format_version != "1.0")
+    throw InputError(path + ": PLY format version '" + h.format_version.substr(0, 20) + "' (1.0 expected)");
 }
 
 // Where the importer's header ends: the start of the first line that

@@ -39,7 +39,8 @@ std::string no_devices_hint(const std::string& platform_name);
 
 // CONTRACT: empty -> first GPU, else first CPU, else first device. Otherwise an
 // index ("2"), "platform:device" ("0:1") or a case-insensitive substring of
-// platform/device/vendor name ("pocl", "nvidia"). Throws InputError if none.
+// platform/device/vendor name ("pocl", "nvidia"); digits and colons alone
+// that are neither index form ("0:", ":") are refused. Throws InputError if none.
 DeviceEntry choose_device(const std::string& spec);
 // For one of several MPI ranks: a given spec applies as above; without one,
 // the ranks on a machine take its GPUs in turn (local rank modulo the GPU

@@ -130,6 +130,11 @@ DeviceEntry choose_device(const std::string& given) {
     throw InputError("--device " + spec + ": no device with index " + spec + " (" + std::to_string(all.size()) +
                      " found; see 'opsila devices')");
   }
+  // Digits and colons alone are an index that is not well formed, not a
+  // name: ":" would otherwise match the colon of a version string.
+  if (spec.find_first_not_of("0123456789:") == std::string::npos)
+    throw InputError("--device " + spec +
+                     ": expected an index, PLATFORM:DEVICE (two indices) or a name (see 'opsila devices')");
   std::string needle = lower(spec);
   for (auto& e : all) {
     std::string hay = lower(e.platform_name + " " + e.platform.getInfo<CL_PLATFORM_VERSION>() + " " + e.device_name +

@@ -106,6 +106,16 @@ TEST_F(CliFixture, UnknownDeviceIsRejected) {
   EXPECT_EQ(blank.exit_code, 2) << blank.err;
   EXPECT_NE(blank.err.find("--device ' ': blank"), std::string::npos) << blank.err;
   EXPECT_EQ(dir.entries(), before);
+  // An index half given is no name: ":" had matched a version string's colon.
+  for (const char* spec : {":", "0:", ":0", "0::1"}) {
+    const RunResult half = run_opsila({"render", scene, "-o", out("x.png"), "--device", spec});
+    EXPECT_EQ(half.exit_code, 2) << spec << ": " << half.err;
+    ASSERT_EQ(half.error_lines().size(), 1u) << half.err;
+    EXPECT_NE(half.err.find(std::string("--device ") + spec + ": expected an index, PLATFORM:DEVICE"),
+              std::string::npos)
+        << half.err;
+  }
+  EXPECT_EQ(dir.entries(), before);
 }
 
 // A scene that fails to read gets its error line alone on stderr: the

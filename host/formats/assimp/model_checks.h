@@ -41,6 +41,10 @@ std::uint64_t check_model_file_shape(ModelFiles& files, const std::string& path,
 void check_off(const std::string& text, std::size_t file_bytes, const std::string& name);
 // Other text formats: XML elements or braces nested at most kMaxNesting deep.
 void check_nesting(const std::string& bytes, const std::string& name);
+// FBX text: every embedded file (`Content` strings) base64, in whole groups
+// of four, before the importer's decoder (which overruns its buffer on
+// anything else) reads it.
+void check_fbx_text(const std::string& bytes, const std::string& name);
 // glTF (text) and GLB: chunk lengths within the file; buffers, buffer views
 // and accessors within one another, in 64-bit arithmetic; external buffers
 // within the file limit and as long as declared; node graph a forest of at

@@ -35,6 +35,7 @@
 #include "formats/assimp/model_checks.h"
 #include "formats/common/model_fan.h"
 #include "formats/common/model_files.h"
+#include "formats/common/model_words.h"
 #include "formats/obj/obj_loader.h"
 #include "formats/assimp/model_materials.h"
 #include "formats/assimp/model_window.h"
@@ -355,8 +356,7 @@ bool validated_by_us(const std::string& ext) { return lower(ext) == ".stl"; }
 Scene convert(Assimp::Importer& importer, const aiScene* ai, const std::string& name, const std::string& base_dir,
               const ModelFiles& files, MapImages images, std::size_t max_triangles) {
   if (!ai) {
-    std::string why = importer.GetErrorString();
-    std::replace(why.begin(), why.end(), '\n', ' ');
+    std::string why = model_words::one_line(importer.GetErrorString(), 200);
     if (why.empty()) why = "cannot read the model";
     // The importer catches its own allocation failure and says only this.
     if (why.find("bad_alloc") != std::string::npos)

@@ -163,7 +163,7 @@ class OffCheck {
         if (!next_word(l_, w_at, w))
           throw InputError(where() + vertex + " needs " + std::to_string(numbers) + " numbers; the line has " +
                            std::to_string(k));
-        if (!number_start(w)) throw InputError(where() + vertex + ": " + obj_text::quote(w) + " is not a number");
+        if (!whole_number(w)) throw InputError(where() + vertex + ": " + obj_text::quote(w) + " is not a number");
         if (homogeneous_ && k <= dims_) c[k] = float_of(w);
         else if (k < dims_) finite = finite && finite_in_float(w);
       }

@@ -28,29 +28,60 @@ bool finite_in_float(std::string_view w) {
   return std::isfinite(float_of(w));
 }
 
-bool number_start(std::string_view w) {
-  std::size_t i = w.size() > 0 && (w[0] == '-' || w[0] == '+') ? 1 : 0;
-  const auto digit = [&](std::size_t k) { return k < w.size() && w[k] >= '0' && w[k] <= '9'; };
-  if (digit(i) || (i < w.size() && w[i] == '.' && digit(i + 1))) return true;
-  const std::string rest = lower(std::string(w.substr(i, 3)));
-  return rest == "nan" || rest == "inf";
+bool whole_number(std::string_view w) {
+  const std::size_t n = w.size();
+  std::size_t i = n > 0 && (w[0] == '-' || w[0] == '+') ? 1 : 0;
+  const std::string rest = lower(std::string(w.substr(i, 9)));
+  if (rest == "nan" || rest == "inf" || rest == "infinity") return i + rest.size() == n;
+  const auto digits = [&] {
+    const std::size_t from = i;
+    while (i < n && w[i] >= '0' && w[i] <= '9') ++i;
+    return i - from;
+  };
+  std::size_t mantissa = digits();
+  if (i < n && w[i] == '.') ++i, mantissa += digits();
+  if (mantissa == 0) return false;
+  if (i < n && (w[i] == 'e' || w[i] == 'E')) {
+    ++i;
+    if (i < n && (w[i] == '-' || w[i] == '+')) ++i;
+    if (digits() == 0) return false;
+  }
+  return i == n;
 }
+
+namespace {
+
+// One byte as a message shows it: printable ASCII as it is, others \xNN.
+void show_byte(std::string& out, unsigned char c) {
+  if (c >= 0x20 && c < 0x7f) {
+    out += static_cast<char>(c);
+    return;
+  }
+  char buf[8];
+  std::snprintf(buf, sizeof buf, "\\x%02x", c);
+  out += buf;
+}
+
+}  // namespace
 
 std::string quote(std::string_view tok) {
   std::string out = "'";
   const std::size_t limit = 40;
-  for (std::size_t i = 0; i < tok.size() && i < limit; ++i) {
-    const unsigned char c = static_cast<unsigned char>(tok[i]);
-    if (c < 0x20 || c >= 0x7f) {
-      char buf[8];
-      std::snprintf(buf, sizeof buf, "\\x%02x", c);
-      out += buf;
-    } else {
-      out += static_cast<char>(c);
-    }
-  }
+  for (std::size_t i = 0; i < tok.size() && i < limit; ++i) show_byte(out, static_cast<unsigned char>(tok[i]));
   if (tok.size() > limit) out += "...";
   return out + "'";
+}
+
+std::string one_line(std::string_view text, std::size_t most) {
+  std::string out;
+  std::size_t i = 0;
+  for (; i < text.size() && out.size() < most; ++i) {
+    const char c = text[i];
+    if (c == '\n' || c == '\r' || c == '\t') out += ' ';
+    else show_byte(out, static_cast<unsigned char>(c));
+  }
+  if (i < text.size()) out += "...";
+  return out;
 }
 
 }  // namespace opsila::model_words

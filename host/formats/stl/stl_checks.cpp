@@ -53,7 +53,7 @@ void check_text(const std::string& bytes, const std::string& name) {
       if (key == "vertex" && ++corners > 3) corners_wrong("has a 4th 'vertex'");
       for (int k = 0; k < 3; ++k) {
         if (!next_word(bytes, at, w)) break;  // the end of the data: said below
-        if (number_start(w)) {
+        if (whole_number(w)) {
           // Every vertex of a text STL is a facet's.
           if (key == "vertex" && !finite_in_float(w))
             throw InputError(name + ":" + std::to_string(line_at(at - w.size())) + ": STL 'vertex': " + quote(w) +

@@ -3,7 +3,9 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <filesystem>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "scene/scene.h"
@@ -17,6 +19,7 @@ namespace {
 using test::RunResult;
 using test::TempDir;
 using test::run_opsila;
+namespace fs = std::filesystem;
 
 std::string error_of(const std::string& text, std::size_t max_triangles = kMaxTriangles) {
   try {
@@ -94,6 +97,25 @@ TEST(HardInput, BytesAfterTheDocumentAreAnError) {
   EXPECT_NE(nul.find("NUL"), std::string::npos) << nul;
   EXPECT_EQ(error_of(scene + "\n{}").rfind("s.json:2:", 0), 0u);
   EXPECT_EQ(error_of(scene + " x").rfind("s.json:1:", 0), 0u);
+}
+
+// A file of a format the importer does not read (VRML, JT) went to the JSON
+// reader, which named its first byte; it is named as no scene and no model.
+// A scene under any other name still reads.
+TEST(HardInput, AFileThatIsNoSceneAndNoModelFormatIsNamedSo) {
+  TempDir dir;
+  const std::string scene = "\xEF\xBB\xBF \n{\"objects\": [" + std::string(kSphere) + "]}";
+  EXPECT_EQ(load_scene(dir.write("s.scene", scene)).num_facets, load_scene(dir.write("s.json", scene)).num_facets);
+  EXPECT_GT(load_scene(dir.write("noext", scene)).num_facets, 0);
+  const std::pair<const char*, std::string> cases[] = {
+      {"m.wrl", "#VRML V2.0 utf8\n"}, {"m.jt", std::string("Version 8.1 JT\0\0", 17)}, {"m", "solid\n"}};
+  for (const auto& [name, bytes] : cases) {
+    const std::string e = test::error_of([&] { load_scene(dir.write(name, bytes)); });
+    const std::string ext = fs::path(name).extension().string();
+    EXPECT_EQ(e, dir.file(name) + ": not a JSON scene (it does not start with '{'), and " +
+                     (ext.empty() ? "without an extension it is no model" : "'" + ext + "' is no model format") +
+                     " the importer reads (see scenes/FORMAT.md)");
+  }
 }
 
 TEST(HardInput, OversizedFilesAreRefusedBeforeTheyAreRead) {

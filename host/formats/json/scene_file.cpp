@@ -7,6 +7,7 @@
 #include "formats/json/scene_file.h"
 
 #include <algorithm>
+#include <cctype>
 #include <chrono>
 #include <cstdlib>
 #include <filesystem>
@@ -176,6 +177,19 @@ std::size_t windowed_limit(const TriangleLimit& rank, const SceneShare& share) {
   return std::min(rank.triangles * std::size_t(share.ranks), kMaxTriangles);
 }
 
+// A file named neither .json nor a model format the importer reads is read
+// as a scene, which is a JSON object: one that does not start as one (a
+// VRML or JT model, say) is named as what it is not, not by the JSON
+// reader's complaint about its first byte.
+void check_scene_start(std::string_view head, const std::string& path, const std::string& ext) {
+  std::size_t at = head.compare(0, 3, "\xEF\xBB\xBF") == 0 ? 3 : 0;
+  while (at < head.size() && std::isspace(static_cast<unsigned char>(head[at]))) ++at;
+  if (at < head.size() && head[at] == '{') return;
+  throw InputError(path + ": not a JSON scene (it does not start with '{'), and " +
+                   (ext.empty() ? std::string("without an extension it is no model") : "'" + ext + "' is no model format") +
+                   " the importer reads (see scenes/FORMAT.md)");
+}
+
 Scene read_scene_file(const std::string& path, const SceneShare& share, const TriangleLimit& rank) {
   const auto start = std::chrono::steady_clock::now();
   const std::string ext = lower(fs::path(path).extension().string());
@@ -200,6 +214,7 @@ Scene read_scene_file(const std::string& path, const SceneShare& share, const Tr
   int line = 1;
   const std::string text = read_input_file(
       path, kMaxSceneFileBytes, [&](const char* data, std::size_t n, std::size_t offset) {
+        if (offset == 0 && ext != ".json") check_scene_start(std::string_view(data, n), path, ext);
         check_json_bytes(data, n, offset, line, path);
       });
   std::string dir = fs::path(path).parent_path().string();

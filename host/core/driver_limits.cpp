@@ -1,6 +1,7 @@
 #include "core/driver_limits.h"
 
 #include <sys/resource.h>
+#include <sys/stat.h>
 
 #include <algorithm>
 #include <condition_variable>
@@ -63,13 +64,36 @@ std::string try_threads(unsigned count) {
   return failure;
 }
 
-void check_threads() {
+// POCL_MAX_PTHREAD_COUNT: the threads PoCL starts (0 or unset: one a
+// core), read by atoi. A negative value, or one past the int range, made it
+// crash in its first call (SIGSEGV); 65536 made it abort when the threads
+// would not start. Refused beyond kMaxPoclThreads, so it never sees them.
+constexpr long kMaxPoclThreads = 4096;
+unsigned pocl_thread_count() {
+  const char* text = std::getenv("POCL_MAX_PTHREAD_COUNT");
+  if (!text || !*text) return 0;
+  const std::string value = text;
+  std::size_t at = value.find_first_not_of(" \t");
+  if (at == std::string::npos) return 0;
+  if (value[at] == '+') ++at;
+  const bool negative = value[at] == '-';
+  std::size_t digits = negative ? at + 1 : at;
+  while (digits < value.size() && value[digits] >= '0' && value[digits] <= '9') ++digits;
+  const std::string number = value.substr(negative ? at + 1 : at, digits - (negative ? at + 1 : at));
+  if (number.empty()) return 0;  // atoi's 0: PoCL's default
+  const bool zero = number.find_first_not_of('0') == std::string::npos;
+  if ((negative && !zero) || number.size() > 9 || std::stol(number) > kMaxPoclThreads)
+    throw InputError("POCL_MAX_PTHREAD_COUNT=" + value.substr(0, 20) + ": PoCL's thread count must be 1 to " +
+                     std::to_string(kMaxPoclThreads) + " (0 or unset: one a core)");
+  return unsigned(std::stol(number));
+}
+
+void check_threads(unsigned pocl) {
   struct rlimit rl {};
   if (::getrlimit(RLIMIT_NPROC, &rl) != 0 || rl.rlim_cur == RLIM_INFINITY) return;
   // PoCL's workers, one a core (POCL_MAX_PTHREAD_COUNT where set), and one more.
   unsigned count = std::max(1u, std::thread::hardware_concurrency());
-  if (const char* max = std::getenv("POCL_MAX_PTHREAD_COUNT"); max && std::atoi(max) > 0)
-    count = std::min(count, unsigned(std::atoi(max)));
+  if (pocl > 0) count = pocl;
   const std::string failure = try_threads(count + 1);
   if (!failure.empty())
     throw InputError("the thread limit (ulimit -u) is " + std::to_string(rl.rlim_cur) + ": the OpenCL driver starts " +
@@ -80,10 +104,14 @@ void check_threads() {
 }  // namespace
 
 void check_driver_preconditions() {
-  if (const char* cache = std::getenv("POCL_CACHE_DIR"); cache && !*cache)
+  if (const char* cache = std::getenv("POCL_CACHE_DIR"); cache && !*cache) {
     throw InputError("POCL_CACHE_DIR is set but empty: name a folder for PoCL's kernel cache, or unset it");
+  } else if (struct stat st {}; cache && ::stat(cache, &st) == 0 && !S_ISDIR(st.st_mode)) {
+    // PoCL failed every kernel build there, its own lines on stderr first.
+    throw InputError(std::string("POCL_CACHE_DIR=") + cache + ": not a folder (PoCL keeps its compiled kernels in it)");
+  }
   check_open_files();
-  check_threads();
+  check_threads(pocl_thread_count());
 }
 
 void check_cpu_driver_environment() {

@@ -290,6 +290,29 @@ TEST(DeviceFaults, AnUnusablePoclCacheIsNamed) {
   const RunResult r = opsila({"devices"}, {{"POCL_CACHE_DIR", dir.file("file") + "/cache"}});
   expect_one_error(r, 3, "PoCL lists no device when it cannot create its kernel cache");
   EXPECT_TRUE(contains(r.err, dir.file("file") + "/cache")) << r.err;
+  // A file, not a folder: PoCL failed every build, its own lines first.
+  for (const std::string& cache : {dir.file("file"), std::string("/dev/null")}) {
+    const RunResult f = opsila(render_args(dir.file("out.pfm")), {{"POCL_CACHE_DIR", cache}});
+    expect_one_error(f, 2, "POCL_CACHE_DIR=" + cache + ": not a folder");
+    EXPECT_FALSE(test::file_exists(dir.file("out.pfm")));
+  }
+}
+
+// PoCL's thread count, which it reads with atoi: a negative value or one
+// past the int range crashed its first call (SIGSEGV), a value too large to
+// start aborted it. Refused before any driver call; 0 is PoCL's default.
+TEST(DeviceFaults, APoclThreadCountPoclCannotTakeIsRefused) {
+  TempDir dir;
+  for (const char* bad : {"-1", "-2", "65536", "4294967295", "99999999999"}) {
+    SCOPED_TRACE(bad);
+    const RunResult r = opsila({"devices"}, {{"POCL_MAX_PTHREAD_COUNT", bad}});
+    expect_one_error(r, 2, std::string("POCL_MAX_PTHREAD_COUNT=") + bad + ": PoCL's thread count must be 1 to 4096");
+  }
+  for (const char* good : {"0", "1", "2"}) {
+    SCOPED_TRACE(good);
+    const RunResult r = opsila(render_args(dir.file("out.pfm")), {{"POCL_MAX_PTHREAD_COUNT", good}});
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+  }
 }
 
 // OPSILA_WAITING_LIMIT: a whole number, or one clear error before anything

@@ -14,6 +14,7 @@
 #include <nlohmann/json.hpp>
 
 #include "formats/common/json_text.h"
+#include "formats/common/model_words.h"
 #include "formats/assimp/glb_container.h"
 #include "formats/assimp/gltf_still.h"
 #include "formats/assimp/model_checks.h"
@@ -449,8 +450,10 @@ std::uint64_t check_gltf(ModelFiles& files, const std::string& bytes, const std:
   try {
     root = Json::parse(parts.json);
   } catch (const Json::exception& e) {
-    const std::string why = e.what();  // "[json.exception.parse_error.101] parse error at ..."
-    throw InputError(path + ": not glTF JSON (" + why.substr(why.find(']') + 2) + ")");
+    // "[json.exception.parse_error.101] parse error at ...; last read: '...'", where
+    // what was last read may be a whole data URI: shown cut short.
+    const std::string why = e.what();
+    throw InputError(path + ": not glTF JSON (" + model_words::one_line(why.substr(why.find(']') + 2), 200) + ")");
   }
   if (!root.is_object()) throw InputError(path + ": not glTF JSON (not an object)");
   refuse_repeated_keys(parts.json, path);

@@ -99,5 +99,17 @@ TEST(ImporterWords, TheImportersRefusalIsOneShortLine) {
   EXPECT_EQ(e.substr(e.size() - 3), "...") << e;
 }
 
+// A glTF cut inside a data URI: the JSON reader's message quoted all it had
+// read of the string (16 kB here).
+TEST(ImporterWords, AJsonErrorInGltfQuotesAShortPrefix) {
+  TempDir dir;
+  const std::string text = "{\"asset\": {\"version\": \"2.0\"},\n\"buffers\": [{\"uri\": "
+                           "\"data:application/octet-stream;base64," + std::string(20000, 'A');
+  const std::string e = error_loading(dir.write("cut.gltf", text));
+  EXPECT_EQ(e.rfind(dir.file("cut.gltf") + ": not glTF JSON (parse error at line 2", 0), 0u) << e.substr(0, 400);
+  EXPECT_LT(e.size(), dir.file("cut.gltf").size() + 300) << e.substr(0, 400);
+  EXPECT_EQ(e.substr(e.size() - 4), "...)") << e.substr(0, 400);
+}
+
 }  // namespace
 }  // namespace opsila

@@ -23,8 +23,10 @@ namespace {
 // the narrower the view: where the scene's own framing fails only for its
 // narrow field of view (framed at 90 degrees it would pass), that is named.
 void check_view_camera(const Scene& scene, const ViewOptions& o, const std::string& file, bool framed) {
-  const std::string eye_source = (o.eye || o.look_at) ? "--eye/--look-at" : file + ": camera";
-  const std::string up_source = o.up ? "--up" : file + ": camera up";
+  const std::string camera = scene.camera_where.empty() ? file + ": camera" : scene.camera_where;
+  const std::string eye_source = (o.eye || o.look_at) ? "--eye/--look-at" : camera;
+  const std::string up_source =
+      o.up ? "--up" : scene.camera_up_where.empty() ? file + ": camera up" : scene.camera_up_where;
   try {
     check_camera(scene.camera, eye_source, up_source);
   } catch (const InputError&) {

@@ -218,6 +218,9 @@ struct Scene {
   int num_facets = 0;   // facet ids are 0 .. num_facets-1
   // What the loader set explicitly (so a bare .obj can frame itself).
   bool has_camera = false;
+  // Where a scene file gave the camera and its up vector ("FILE:LINE: camera",
+  // "FILE:LINE: camera.up"), for a basis that float cannot hold (check_camera).
+  std::string camera_where, camera_up_where;
   bool has_lights = false;
   std::vector<std::string> warnings;  // printed once each by the CLI
   // MapImages::later: the maps whose warnings wait for their images' check,

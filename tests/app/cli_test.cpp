@@ -175,6 +175,13 @@ TEST_F(CliFixture, DegenerateCameraIsRejected) {
     "model": {"type": "sphere", "center": [0, 0, 0], "radius": 1}, "transforms": [{"scale": 1e-25}]}]})");
   before = dir.entries();
   expect_rejected({tiny, "-o", out("x.png")}, "tiny.json: camera");
+  // A scene file's camera that float cannot hold is named with its line and key.
+  const std::string far = dir.write("far.json", "{\"objects\": [{\"type\": \"sphere\", \"center\": [0, 0, 0], "
+                                                "\"radius\": 1}],\n\"camera\": {\"eye\": [1e30, 0, 5], \"look_at\": [0, 0, 0],\n"
+                                                "  \"up\": [0, 1e-40, 0]}}");
+  before = dir.entries();
+  expect_rejected({far, "-o", out("x.png")}, "far.json:2: camera: the view from eye 1e+30,0,5");
+  expect_rejected({far, "-o", out("x.png"), "--eye", "0,0,5"}, "far.json:3: camera.up: the view from eye 0,0,5");
 }
 
 // A listing that could not be written is a failure, said on stderr.

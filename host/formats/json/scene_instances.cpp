@@ -111,14 +111,36 @@ std::function<void()> ObjectReader::instances(const Json& v, const std::string& 
   }
   std::string name = mkey;  // for messages: the model's file, if it has one
   if (const Json* f = v_.find(m, "file"); f && f->is_string()) name = f->get<std::string>();
-  return [this, make, placed, mkey, name, placements, index] {
+  const std::string where = place(v_, path);
+  const std::size_t listed = list ? list->size() : 0;
+  return [this, make, placed, mkey, name, placements, index, where, listed] {
     scene_.prototypes.push_back(prototype(make, placed, mkey));
     scene_.prototypes.back().name = name;
     if (static_cast<int>(scene_.prototypes.size()) != index + 1) throw std::logic_error("instances: prototypes out of order");
+    const std::size_t first = scene_.instances.size();
     scene_.instances.insert(scene_.instances.end(), placements->begin(), placements->end());
     placements->clear();
     placements->shrink_to_fit();
+    check_placed_extent(first, where, listed);
   };
+}
+
+// The instances from `first` on, each placed box added to the scene's so
+// far: the placement that takes it past the renderer's extent is named
+// (a transform's index, or the grid's item), not only the file.
+void ObjectReader::check_placed_extent(std::size_t first, const std::string& where, std::size_t listed) {
+  for (std::size_t i = first; i < scene_.instances.size(); ++i) {
+    Vec3 lo, hi;
+    instance_box(scene_, scene_.instances[i], lo, hi);
+    building_.lo = min(building_.lo, lo);
+    building_.hi = max(building_.hi, hi);
+    const std::string beyond = scene_extent_beyond(building_.lo, building_.hi);
+    if (beyond.empty()) continue;
+    const std::size_t k = i - first;
+    throw InputError(where + (k < listed ? ".transforms[" + std::to_string(k) + "]"
+                                         : ".grid: placement " + std::to_string(k - listed + 1)) +
+                     ": with the model placed there, " + beyond);
+  }
 }
 
 // The model built in its own frame (its transform applied there), ids from

@@ -41,6 +41,7 @@ class ObjectReader {
   // build returned makes its prototype and instances.
   std::function<void()> instances(const Json& v, const std::string& path);
   Prototype prototype(const Make& make, const std::optional<Transform>& placed, const std::string& path);
+  void check_placed_extent(std::size_t first, const std::string& where, std::size_t listed);
   Make solid(const Json& v, const std::string& path, const std::string& type);
   Make plane(const Json& v, const std::string& path, bool checker);
   Make terrain(const Json& v, const std::string& path);

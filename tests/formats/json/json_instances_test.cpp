@@ -195,6 +195,11 @@ TEST(JsonInstances, ErrorsNameFileLineAndKey) {
       // Scales 1e-20 and 1e20: the determinant is 1, the inverse not of use.
       {entry(cube + ", \"transforms\": [{\"scale\": [1e-20, 1, 1e20]}]"),
        {"objects[1].transforms[0]", "singular or nearly so (determinant 1 for a largest entry of 1e+20"}},
+      // A placement past the renderer's extent: named, not only the file.
+      {entry(cube + ", \"transforms\": [{}, {\"scale\": 1e30}]"),
+       {"s.json:3:", "objects[1].transforms[1]: with the model placed there, scene extent too large"}},
+      {entry(cube + ", \"transforms\": [{}], \"grid\": {\"counts\": [2, 1, 1], \"min\": [0,0,0], \"max\": [2e30,0,0]}"),
+       {"s.json:3:", "objects[1].grid: placement 2: with the model placed there, scene extent too large"}},
   };
   for (const auto& c : cases) {
     SCOPED_TRACE(c.text);

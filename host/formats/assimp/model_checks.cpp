@@ -98,6 +98,7 @@ std::uint64_t check_model_file_shape(ModelFiles& files, const std::string& path,
   else if (e == "gltf" || e == "glb") return size + check_gltf(files, bytes, path);
   else check_nesting(bytes, path);
   if (e == "fbx") check_fbx_text(bytes, path);
+  if (e == "md5mesh") check_md5_mesh(bytes, path);
   return size;
 }
 

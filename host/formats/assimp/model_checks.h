@@ -45,6 +45,11 @@ void check_nesting(const std::string& bytes, const std::string& name);
 // of four, before the importer's decoder (which overruns its buffer on
 // anything else) reads it.
 void check_fbx_text(const std::string& bytes, const std::string& name);
+// MD5 meshes: numJoints the joints listed, each joint's parent an earlier
+// joint or -1; in each mesh every vert, tri and weight index below its
+// count, a vert's weights within the weights, a weight's joint within the
+// joints, a tri's vertices within the vertices.
+void check_md5_mesh(const std::string& text, const std::string& name);
 // glTF (text) and GLB: chunk lengths within the file; buffers, buffer views
 // and accessors within one another, in 64-bit arithmetic; external buffers
 // within the file limit and as long as declared; node graph a forest of at

@@ -111,5 +111,41 @@ TEST(ImporterWords, AJsonErrorInGltfQuotesAShortPrefix) {
   EXPECT_EQ(e.substr(e.size() - 4), "...)") << e.substr(0, 400);
 }
 
+// The MD5 reader trusts every index: a weight's joint past the joints (a
+// joint line missing, or one number changed) freed memory it did not own and
+// killed the process. Every count and index is checked first.
+TEST(ImporterWords, Md5IndicesTheReaderWouldTrustAreChecked) {
+  const std::string cube = "/usr/share/assimp/models/MD5/SimpleCube.md5mesh";
+  if (!std::filesystem::exists(cube)) GTEST_SKIP() << "Debian package assimp-testmodels is not installed";
+  TempDir dir;
+  const std::string file = test::read_file(cube);
+  const auto changed = [&](const std::string& from, const std::string& to) {
+    const std::size_t at = file.find(from);
+    EXPECT_NE(at, std::string::npos) << from;
+    return file.substr(0, at) + to + file.substr(at + from.size());
+  };
+  const std::string joint1 = file.substr(file.find("\"joint1\""), file.find('\n', file.find("\"joint1\"")) + 1 -
+                                                                   file.find("\"joint1\""));
+  const struct {
+    std::string bytes, what;
+  } cases[] = {
+      {changed(joint1, ""), ":58: MD5 weight's joint 2 out of range (2 joints)"},
+      {changed("weight 0 1 ", "weight 0 3 "), ":58: MD5 weight's joint 3 out of range (3 joints)"},
+      {changed("\"root\" 0 ", "\"root\" 1 "), ":9: MD5 joint parent 1 out of range (1)"},
+      {changed("vert 0 ( 0.1875 -0.25 ) 0 2", "vert 0 ( 0.1875 -0.25 ) 15 2"),
+       ":18: MD5 vert's weights 15 + 2 run past the mesh's 16 weights"},
+      {changed("vert 0 (", "vert 24 ("), ":18: MD5 vert index 24 out of range (24)"},
+      {changed("vert 0 ( 0.1875 -0.25 ) 0 2", "vert 0 ( 0.1875 -0.25 ) -1 2"),
+       ":18: MD5 vert's first weight '-1' is not a whole number"},
+      {changed("tri 0 ", "tri 0 24 "), ":44: MD5 tri's vertex 24 out of range (24 vertices)"},
+  };
+  for (const auto& c : cases) {
+    SCOPED_TRACE(c.what);
+    const std::string e = error_loading(dir.write("cube.md5mesh", c.bytes));
+    EXPECT_NE(e.find(dir.file("cube.md5mesh") + c.what), std::string::npos) << e;
+  }
+  EXPECT_GT(load_scene(dir.write("cube.md5mesh", file)).num_facets, 0);
+}
+
 }  // namespace
 }  // namespace opsila

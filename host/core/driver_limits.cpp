@@ -4,6 +4,7 @@
 #include <sys/stat.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <condition_variable>
 #include <cstdint>
 #include <cstdlib>
@@ -71,21 +72,15 @@ std::string try_threads(unsigned count) {
 constexpr long kMaxPoclThreads = 4096;
 unsigned pocl_thread_count() {
   const char* text = std::getenv("POCL_MAX_PTHREAD_COUNT");
-  if (!text || !*text) return 0;
-  const std::string value = text;
-  std::size_t at = value.find_first_not_of(" \t");
-  if (at == std::string::npos) return 0;
-  if (value[at] == '+') ++at;
-  const bool negative = value[at] == '-';
-  std::size_t digits = negative ? at + 1 : at;
-  while (digits < value.size() && value[digits] >= '0' && value[digits] <= '9') ++digits;
-  const std::string number = value.substr(negative ? at + 1 : at, digits - (negative ? at + 1 : at));
-  if (number.empty()) return 0;  // atoi's 0: PoCL's default
-  const bool zero = number.find_first_not_of('0') == std::string::npos;
-  if ((negative && !zero) || number.size() > 9 || std::stol(number) > kMaxPoclThreads)
-    throw InputError("POCL_MAX_PTHREAD_COUNT=" + value.substr(0, 20) + ": PoCL's thread count must be 1 to " +
-                     std::to_string(kMaxPoclThreads) + " (0 or unset: one a core)");
-  return unsigned(std::stol(number));
+  if (!text) return 0;
+  errno = 0;
+  char* end = nullptr;
+  const long long n = std::strtoll(text, &end, 10);  // what atoi reads, its overflow seen
+  if (end == text) return 0;                         // no number: atoi's 0, PoCL's default
+  if (n < 0 || n > kMaxPoclThreads || errno == ERANGE)
+    throw InputError("POCL_MAX_PTHREAD_COUNT=" + std::string(text).substr(0, 20) +
+                     ": PoCL's thread count must be 1 to " + std::to_string(kMaxPoclThreads) + " (0 or unset: one a core)");
+  return unsigned(n);
 }
 
 void check_threads(unsigned pocl) {

@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <cstring>
 #include <exception>
+#include <filesystem>
 #include <memory>
 #include <stdexcept>
 
@@ -162,10 +163,8 @@ class ModelIOSystem : public Assimp::IOSystem {
     // A still has no motion: the animation and camera files the MD5 reader
     // loads beside a mesh, which nothing checks, are not opened (the reader
     // goes on without them).
-    const std::string name = lower(path);
-    for (const std::string motion : {".md5anim", ".md5camera"})
-      if (name.size() > motion.size() && name.compare(name.size() - motion.size(), motion.size(), motion) == 0)
-        return nullptr;
+    const std::string ext = lower(std::filesystem::path(path).extension().string());
+    if (ext == ".md5anim" || ext == ".md5camera") return nullptr;
     files_.record(path);
     if (!mode || mode[0] != 'r') {
       files_.refusal_ = std::string(path) + ": the model importer asked to write it (refused)";

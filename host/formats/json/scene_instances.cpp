@@ -58,12 +58,6 @@ std::array<double, 12> grid_placement(const PlacementGrid& g, long long n, Pcg32
   return transform_matrix(centre, turn, scale);
 }
 
-// "FILE:LINE: PATH" for make_instance's messages.
-std::string place(const SceneValues& values, const std::string& path) {
-  std::string w = values.where(path);
-  w.resize(w.size() - 2);  // its ": "
-  return w;
-}
 
 }  // namespace
 
@@ -102,16 +96,16 @@ std::function<void()> ObjectReader::instances(const Json& v, const std::string& 
   placements->reserve(count);
   for (std::size_t k = 0; list && k < list->size(); ++k) {
     const std::string tkey = join_index(join_key(path, "transforms"), k);
-    placements->push_back(make_instance(index, sections_.transform((*list)[k], tkey).matrix(), place(v_, tkey)));
+    placements->push_back(make_instance(index, sections_.transform((*list)[k], tkey).matrix(), v_.place(tkey)));
   }
   if (grid) {
-    const std::string where = place(v_, join_key(path, "grid"));
+    const std::string where = v_.place(join_key(path, "grid"));
     Pcg32 rng(g.seed);
     for (long long n = 0; n < g.items; ++n) placements->push_back(make_instance(index, grid_placement(g, n, rng), where));
   }
   std::string name = mkey;  // for messages: the model's file, if it has one
   if (const Json* f = v_.find(m, "file"); f && f->is_string()) name = f->get<std::string>();
-  const std::string where = place(v_, path);
+  const std::string where = v_.place(path);
   const std::size_t listed = list ? list->size() : 0;
   return [this, make, placed, mkey, name, placements, index, where, listed] {
     scene_.prototypes.push_back(prototype(make, placed, mkey));

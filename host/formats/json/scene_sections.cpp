@@ -58,13 +58,8 @@ void SceneSections::camera(const Json& v, const std::string& path) {
     v_.fail(join_key(path, "up"), "is zero or parallel to the viewing direction");
   scene_.camera = cam;
   scene_.has_camera = true;
-  const auto place = [&](const std::string& key) {
-    std::string w = v_.where(key);
-    w.resize(w.size() - 2);  // its ": "
-    return w;
-  };
-  scene_.camera_where = place(path);
-  scene_.camera_up_where = place(v_.find(v, "up") ? join_key(path, "up") : path);
+  scene_.camera_where = v_.place(path);
+  scene_.camera_up_where = v_.place(v_.find(v, "up") ? join_key(path, "up") : path);
 }
 
 void SceneSections::lights(const Json& v, const std::string& path) {

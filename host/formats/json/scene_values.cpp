@@ -95,6 +95,12 @@ std::string SceneValues::where(const std::string& path) const {
   return name_ + ":" + std::to_string(line) + ": " + (path.empty() ? "" : shown_path(path) + ": ");
 }
 
+std::string SceneValues::place(const std::string& path) const {
+  std::string w = where(path);
+  w.resize(w.size() - 2);  // its ": "
+  return w;
+}
+
 [[noreturn]] void SceneValues::fail(const std::string& path, const std::string& what) const {
   throw InputError(where(path) + what);
 }

@@ -60,6 +60,8 @@ class SceneValues {
 
   // "FILE:LINE: PATH: ", the start of a message about `path`.
   std::string where(const std::string& path) const;
+  // where() without its closing ": " ("FILE:LINE: PATH"), for a message built later.
+  std::string place(const std::string& path) const;
   [[noreturn]] void fail(const std::string& path, const std::string& what) const;
   void warn(const std::string& path, const std::string& what);
 

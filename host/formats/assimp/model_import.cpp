@@ -62,6 +62,21 @@ namespace {
 // recursion; a hierarchy deeper than kMaxNodeDepth is refused (the glTF
 // checks refuse one before the importer builds it). The importer may add
 // one root above the file's own.
+// The importer draws a skeleton that has no surfaces (BVH, CSM, an MD5
+// animation alone) as stand-in shapes around its bones, in one material it
+// names so and gives no colour: a black shape no file holds.
+bool bones_only(const aiScene& ai) {
+  if (ai.mNumMeshes == 0) return false;
+  for (unsigned m = 0; m < ai.mNumMeshes; ++m) {
+    const unsigned k = ai.mMeshes[m]->mMaterialIndex;
+    aiString name;
+    if (k >= ai.mNumMaterials || ai.mMaterials[k]->Get(AI_MATKEY_NAME, name) != AI_SUCCESS ||
+        std::string(name.C_Str()) != "SkeletonMaterial")
+      return false;
+  }
+  return true;
+}
+
 void collect_placements(const aiNode* root, unsigned num_meshes, std::vector<std::vector<aiMatrix4x4>>& out,
                         const std::string& name) {
   struct Pending {
@@ -91,6 +106,9 @@ class ModelReader {
       : ai_(ai), name_(name), base_dir_(base_dir), images_(images), max_triangles_(max_triangles) {}
 
   Scene run() {
+    if (bones_only(ai_))
+      throw InputError(name_ + ": a skeleton (motion capture), no surfaces: nothing to draw; the importer's stand-in "
+                               "shapes for its bones are not drawn");
     scene_.has_camera = false;
     scene_.has_lights = false;
     scene_.materials.push_back(MaterialDesc::default_material());

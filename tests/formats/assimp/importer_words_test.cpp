@@ -147,5 +147,19 @@ TEST(ImporterWords, Md5IndicesTheReaderWouldTrustAreChecked) {
   EXPECT_GT(load_scene(dir.write("cube.md5mesh", file)).num_facets, 0);
 }
 
+// A motion-capture file holds bones and no surfaces; the importer draws
+// stand-in shapes for them in a colourless material, which rendered as a
+// black image with exit 0.
+TEST(ImporterWords, ASkeletonWithoutSurfacesIsNamedSo) {
+  TempDir dir;
+  const std::string bvh =
+      "HIERARCHY\nROOT Hips\n{\n  OFFSET 0 0 0\n  CHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation "
+      "Yrotation\n  JOINT Chest\n  {\n    OFFSET 0 5 0\n    CHANNELS 3 Zrotation Xrotation Yrotation\n"
+      "    End Site\n    {\n      OFFSET 0 5 0\n    }\n  }\n}\nMOTION\nFrames: 1\nFrame Time: 0.033\n"
+      "0 0 0 0 0 0 0 0 0\n";
+  const std::string e = error_loading(dir.write("walk.bvh", bvh));
+  EXPECT_NE(e.find(dir.file("walk.bvh") + ": a skeleton (motion capture), no surfaces"), std::string::npos) << e;
+}
+
 }  // namespace
 }  // namespace opsila

@@ -82,11 +82,12 @@ check render-spp-all-checks "${all_checks[@]}" -- \
   "${view[@]}"
 
 # 2b'. A GPU's paths on a device that shares host memory: launches without
-#      events but the long ones (OPSILA_LAUNCH_EVENTS=0) and the image
-#      resolved on the device (kernels/resolve.cl), every check; its image
-#      is render-all-checks' to the byte.
+#      events but the long ones (OPSILA_LAUNCH_EVENTS=0), the image
+#      resolved on the device (kernels/resolve.cl) and the bank walks on
+#      quantised nodes (OPSILA_QUANT_NODES=1), every check; its image is
+#      render-all-checks' to the byte.
 check render-gpu-paths-all-checks "${all_checks[@]}" -- \
-  env OPSILA_LAUNCH_EVENTS=0 OPSILA_DEVICE_RESOLVE=1 "$build/opsila" render "$scene" -o "$work/resolved.pfm" \
+  env OPSILA_LAUNCH_EVENTS=0 OPSILA_DEVICE_RESOLVE=1 OPSILA_QUANT_NODES=1 "$build/opsila" render "$scene" -o "$work/resolved.pfm" \
   --size 8x6 --depth 3 --pes 4 --device oclgrind -q "${view[@]}" --stats "$work/resolved.json"
 if ! grep -q '"resolve_image"' "$work/resolved.json" 2>/dev/null || ! cmp -s "$work/render.pfm" "$work/resolved.pfm"; then
   echo "FAIL  render-gpu-paths: no resolve_image launch, or not render-all-checks' image"
@@ -115,12 +116,12 @@ check render-measured-balance-optimised "${optimised_checks[@]}" -- \
 # 2e. Instances (-DOPSILA_INSTANCES=1): walks into a model's BVH in its
 #     frame, instance hits in the item buffer's keys and the descriptors,
 #     a model copy shared by the banks; with every check, then optimised
-#     with one descriptor slot per bank.
+#     with one descriptor slot per bank, on quantised nodes.
 check render-instances-all-checks "${all_checks[@]}" -- \
   "$build/opsila" render "$root/tests/oclgrind/instances.json" -o "$work/instances.pfm" --size 8x6 --depth 3 \
   --pes 4 --device oclgrind -q "${view[@]}"
 check render-instances-optimised "${optimised_checks[@]}" -- \
-  "$build/opsila" render "$root/tests/oclgrind/instances.json" -o "$work/instances-banks.pfm" --size 8x6 --depth 4 \
+  env OPSILA_QUANT_NODES=1 "$build/opsila" render "$root/tests/oclgrind/instances.json" -o "$work/instances-banks.pfm" --size 8x6 --depth 4 \
   --pes 4 --bank-capacity 1 --device oclgrind -q "${view[@]}"
 
 # 3. The scatter on its own: SPMD output slots with holes and unused slots,

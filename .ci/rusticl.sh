@@ -3,8 +3,9 @@
 # llvmpipe device (Debian's mesa-opencl-icd). Rusticl compiles OpenCL C
 # through Mesa's NIR, the path Mesa's GPU drivers take, where PoCL compiles
 # through LLVM alone. Runs the test groups that render on the device
-# (Renderer, Spp, SurfaceRender, HitOrderRender, Instances, HugeValues, and the hit
-# order's and the arithmetic's own kernels) there, then checks that a
+# (Renderer, Spp, SurfaceRender, HitOrderRender, Instances, HugeValues, the
+# bank walks on both node layouts, and the hit order's and the arithmetic's
+# own kernels) there, then checks that a
 # gallery scene gives PoCL's PNG, byte for byte.
 #
 #   .ci/rusticl.sh BUILD_DIR
@@ -28,7 +29,7 @@ start=$(date +%s)
 
 echo "-- tests on Rusticl"
 OPSILA_TEST_DEVICE=rusticl "$build/opsila_tests" --gtest_brief=1 \
-  --gtest_filter='Renderer.*:Spp*:SurfaceRender*:HitOrderRender*:HitOrderKernel*:Instances.*:HugeValues.*:DeviceArithmetic.*:Determinism.PrimaryDescriptorsBuiltAhead*:Determinism.LaunchesWithoutEvents*:DeviceResolve.*' >"$work/tests.log" 2>&1 || failed=1
+  --gtest_filter='Renderer.*:Spp*:SurfaceRender*:HitOrderRender*:HitOrderKernel*:Instances.*:HugeValues.*:DeviceArithmetic.*:Determinism.PrimaryDescriptorsBuiltAhead*:Determinism.LaunchesWithoutEvents*:DeviceResolve.*:QuantisedNodes.*:BankBvhWalk.*' >"$work/tests.log" 2>&1 || failed=1
 grep -E '^\[  (PASSED|FAILED|SKIPPED) |^\[  FAILED  \]|tests? ran' "$work/tests.log" | sed 's/^/    /'
 [ $failed -eq 0 ] || tail -n 60 "$work/tests.log"
 

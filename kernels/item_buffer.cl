@@ -61,7 +61,7 @@ inline int2 item_pair(__global const BankTriangle *tris, __global const Instance
 __kernel void item_buffer(FrameParams fp, __global const Cluster *clusters, __global const float *cluster_near,
                           __global const int4 *cluster_rects,
                           int4 listed_rect, __global const int *bin_first, __global const int *bin_list,
-                          int bin_side, int bins_x, __global const BankNode *nodes, __global const BankTriangle *tris,
+                          int bin_side, int bins_x, __global const WalkNode *nodes, __global const BankTriangle *tris,
                           __global const Instance *insts,
                           int tile_w, int2 tile_origin, int tiles_x, int tile_begin, float ox, float oy, int mode,
                           __global int2 *items,

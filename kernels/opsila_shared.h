@@ -15,11 +15,13 @@
 #ifdef __OPENCL_C_VERSION__
 typedef int opsila_i32;
 typedef uint opsila_u32;
+typedef uchar opsila_u8;
 #else
 #include <cstddef>
 #include <cstdint>
 typedef std::int32_t opsila_i32;
 typedef std::uint32_t opsila_u32;
+typedef std::uint8_t opsila_u8;
 #endif
 
 /* Largest supported PE count (bounds per-PE scratch arrays). */
@@ -263,6 +265,29 @@ typedef struct {
   opsila_i32 count[OPSILA_BVH_WIDTH];
 } BankNode;
 
+/* The bank BVH's nodes on a device that reads them quantised
+ * (OPSILA_QUANT_NODES, chosen by host/device/cl_runtime.cpp; built from
+ * BankNode by host/partition/bank_qnode.cpp): 128 bytes instead of 256.
+ * Each axis has a grid origin[a] + q * step, q = 0..255, step = 2^(e - 127)
+ * with e = exponent[a]; the origin is a multiple of the step and every grid
+ * point lies within 2^24 steps of 0, so each is a float and its decoding
+ * (q * step + origin) is exact. A child's lo and hi are its BankNode box
+ * rounded outwards to the grid: the walks test a box that holds the float
+ * one, with the same slab arithmetic (kernels/lib/walk.cl). An empty slot
+ * is inverted on every axis (lo 255, hi 0). child and count as BankNode's. */
+typedef struct {
+  float origin[3];
+  opsila_u8 exponent[4]; /* [3] unused */
+  opsila_u8 lo_x[OPSILA_BVH_WIDTH];
+  opsila_u8 hi_x[OPSILA_BVH_WIDTH];
+  opsila_u8 lo_y[OPSILA_BVH_WIDTH];
+  opsila_u8 hi_y[OPSILA_BVH_WIDTH];
+  opsila_u8 lo_z[OPSILA_BVH_WIDTH];
+  opsila_u8 hi_z[OPSILA_BVH_WIDTH];
+  opsila_i32 child[OPSILA_BVH_WIDTH];
+  opsila_i32 count[OPSILA_BVH_WIDTH];
+} BankQNode;
+
 /* Destination choice: bounding spheres (the paper's scheme) or cluster boxes
  * through each PE's routing BVH. Same destinations rule, same image. */
 #define OPSILA_ROUTING_SPHERES 0
@@ -398,6 +423,9 @@ static_assert(offsetof(BankNode, hi_x) == 4 * OPSILA_BVH_WIDTH, "BankNode layout
 static_assert(offsetof(BankNode, lo_z) == 16 * OPSILA_BVH_WIDTH, "BankNode layout");
 static_assert(offsetof(BankNode, child) == 24 * OPSILA_BVH_WIDTH, "BankNode layout");
 static_assert(offsetof(BankNode, count) == 28 * OPSILA_BVH_WIDTH, "BankNode layout");
+static_assert(sizeof(BankQNode) == 16 + 14 * OPSILA_BVH_WIDTH, "BankQNode layout");
+static_assert(offsetof(BankQNode, lo_x) == 16 && offsetof(BankQNode, child) == 16 + 6 * OPSILA_BVH_WIDTH,
+              "BankQNode layout");
 static_assert(sizeof(Cluster) == 48, "Cluster layout");
 static_assert(offsetof(Cluster, pe) == 28, "Cluster layout");
 static_assert(offsetof(Cluster, root) == 44, "Cluster layout");

@@ -64,7 +64,7 @@ inline void emit(Outputs *o, Descriptor d) {
 
 /* This PE's bank, which only it reads. */
 typedef struct {
-  __global const BankNode *nodes;
+  __global const WalkNode *nodes;
   __global const BankTriangle *tris;
   __global const Instance *insts; /* the instance table, global */
   int pe, root;
@@ -295,7 +295,7 @@ inline void process(FrameParams fp, const Routing *rt, const Bank *bank, __globa
 
 /* PE pe's bank, on this device (its facets: fp.tri_base on); through a
  * pointer, as desc_load (a returned struct: descriptor.cl). */
-inline void own_bank(FrameParams fp, __global const PeInfo *pes, __global const BankNode *nodes,
+inline void own_bank(FrameParams fp, __global const PeInfo *pes, __global const WalkNode *nodes,
                      __global const BankTriangle *tris, __global const Instance *insts, int pe, Bank *bank) {
   int tri_end = pes[fp.group_end - 1].tri_end;
   Bank b = {nodes, tris, insts, pe, pes[pe].node_begin, pes[pe].instance_root,
@@ -316,7 +316,7 @@ inline void flush_group_counts(__local const uint *lstats, __local const uint *l
 }
 
 __kernel void spmd_phase(FrameParams fp, __global const PeInfo *pes, __global const Cluster *clusters,
-                         __global const BankNode *route, int routing, __global const BankNode *nodes,
+                         __global const BankNode *route, int routing, __global const WalkNode *nodes,
                          __global const BankTriangle *tris, __global const Instance *insts,
                          __global const Material *materials, __global const Light *lights, SURFACE_PARAMS,
                          DESC_PARAMS(b), __global const int *group_pe, __global const int *group_first,

@@ -24,7 +24,7 @@
 #       3. `opsila bench` on hundreds at 800x600 and 1920x1080 (the Debian
 #          build, Embree beside it on the host's threads), and renders at
 #          1920x1080 with and without OPSILA_PRIMARY_AHEAD,
-#          OPSILA_LAUNCH_EVENTS and OPSILA_DEVICE_RESOLVE.
+#          OPSILA_LAUNCH_EVENTS, OPSILA_DEVICE_RESOLVE and OPSILA_QUANT_NODES.
 #       Everything runs within 8 minutes.
 #
 # KIT defaults to ./gpu-kit. Results: KIT/results (log, PFMs, bench JSON and
@@ -253,17 +253,19 @@ run() {
       failed=1
     fi
   done
-  # Three levers, each on and off: the next round's primary descriptors
+  # Four levers, each on and off: the next round's primary descriptors
   # built by the SPMD launch (the default) or by a launch of their own
   # (OPSILA_PRIMARY_AHEAD=0); launches without events but the long ones
   # (OPSILA_LAUNCH_EVENTS=0, a plain render's way on a GPU) or every launch
   # timed (1); the image resolved on the GPU (OPSILA_DEVICE_RESOLVE=1, the
-  # default there) or decoded on the host. Five renders each at 1920x1080,
-  # interleaved; each run's frame seconds, and whether the images are the
-  # same bytes.
+  # default there) or decoded on the host; the bank walks on quantised
+  # nodes (OPSILA_QUANT_NODES=1, the default there) or float ones. Five
+  # renders each at 1920x1080, interleaved; each run's frame seconds, and
+  # whether the images are the same bytes.
   on_and_off OPSILA_PRIMARY_AHEAD
   on_and_off OPSILA_LAUNCH_EVENTS
   on_and_off OPSILA_DEVICE_RESOLVE
+  on_and_off OPSILA_QUANT_NODES
   echo "gpu-check: $([ $failed -eq 0 ] && echo passed || echo FAILED) in $((SECONDS - start)) s; results in $out"
   return $failed
 }

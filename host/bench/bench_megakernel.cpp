@@ -13,6 +13,7 @@
 #include "core/parallel.h"
 #include "opsila_shared.h"
 #include "partition/bank_bvh.h"
+#include "partition/bank_qnode.h"
 #include "partition/partition.h"
 #include "bench/bench_kernels.h"
 #include "bench/ray_file.h"
@@ -64,7 +65,8 @@ MegaBuffers mega_buffers(ClRuntime& rt, const Scene& scene, const BankedScene& b
   const std::size_t npix = std::size_t(scene.width) * scene.height;
   MegaBuffers b;
   b.geometry.tris.buffer = upload(rt, bs.triangles, "facets");
-  b.geometry.nodes.buffer = upload(rt, bs.nodes, "BVH nodes");
+  b.geometry.nodes.buffer =
+      rt.quantised_nodes() ? upload(rt, quantise_nodes(bs.nodes), "BVH nodes") : upload(rt, bs.nodes, "BVH nodes");
   b.geometry.insts.buffer = upload(rt, bs.instances.empty() ? std::vector<Instance>(1) : bs.instances, "instances");
   b.shading.materials.buffer = upload(rt, bs.materials, "materials");
   std::vector<Light> lights = bs.lights;

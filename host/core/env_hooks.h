@@ -40,7 +40,9 @@ namespace opsila {
   /* 1: every launch keeps its event and time; 0: only the long ones (default: RenderSettings::launch_records) */ \
   X(launch_events, "OPSILA_LAUNCH_EVENTS")                                                                         \
   /* 1: the image resolved on the device where it has doubles; 0: decoded on the host (default: on a GPU) */     \
-  X(device_resolve, "OPSILA_DEVICE_RESOLVE")
+  X(device_resolve, "OPSILA_DEVICE_RESOLVE")                                                                       \
+  /* 1: the bank walks read quantised nodes (half the bytes); 0: float ones (default: quantised on a GPU) */      \
+  X(quant_nodes, "OPSILA_QUANT_NODES")
 
 enum class EnvHook {
 #define OPSILA_ENV_ENUM(id, name) id,

@@ -229,6 +229,12 @@ ClRuntime::ClRuntime(const DeviceEntry& device, const ClRuntimeOptions& options)
   cl_check(device_.device.getInfo(CL_DEVICE_NATIVE_VECTOR_WIDTH_FLOAT, &native_float),
            "clGetDeviceInfo(CL_DEVICE_NATIVE_VECTOR_WIDTH_FLOAT)");
   facet_lanes_ = native_float >= 4;
+  // The bank walks' nodes quantised (BankQNode, half the bytes) on a GPU,
+  // whose walks wait on memory; a CPU's caches hold the float nodes and its
+  // walks pay for the decoding (docs/BENCHMARKS.md, Levers).
+  quant_nodes_ = options.node_layout == ClRuntimeOptions::NodeLayout::automatic
+                     ? device_.is_gpu
+                     : options.node_layout == ClRuntimeOptions::NodeLayout::quantised;
 
   source_ = options.kernel_source;
   source_origin_ = source_.empty() ? "embedded kernels"
@@ -248,6 +254,8 @@ ClRuntime::ClRuntime(const DeviceEntry& device, const ClRuntimeOptions& options)
       if (source_.empty()) throw InputError(std::string("OPSILA_KERNEL_SOURCE=") + path + ": the file is empty");
       source_origin_ = std::string("OPSILA_KERNEL_SOURCE=") + path;
     }
+    const auto q = env_hook_number(EnvHook::quant_nodes, 0, 1, "0 or 1");
+    if (q && options.node_layout == ClRuntimeOptions::NodeLayout::automatic) quant_nodes_ = *q == 1;
     // OPSILA_DEVICE_MEMORY_LIMIT=bytes: plan as if the device had no more.
     if (limit == 0)
       limit = env_hook_number(EnvHook::device_memory_limit, 1, UINT64_MAX, "a positive number of bytes").value_or(0);
@@ -303,6 +311,7 @@ cl::Program& ClRuntime::program(KernelProgram which) {
   if (instances_) options += " -DOPSILA_INSTANCES=1";
   if (exact_divide_) options += " -cl-fp32-correctly-rounded-divide-sqrt";
   if (facet_lanes_) options += " -DOPSILA_FACET_LANES=1";
+  if (quant_nodes_) options += " -DOPSILA_QUANT_NODES=1";
   err = build(program, options);
   if (err != CL_SUCCESS) {
     std::string log;

@@ -78,6 +78,11 @@ struct ClRuntimeOptions {
   // (ClError) by a device without doubles.
   enum class SpecularPow { automatic, fp32, fp64 };
   SpecularPow specular_pow = SpecularPow::automatic;
+  // The bank walks' node layout (BankQNode or BankNode, quantised_nodes()):
+  // automatic takes the quantised one on a GPU, unless OPSILA_QUANT_NODES
+  // says otherwise.
+  enum class NodeLayout { automatic, floats, quantised };
+  NodeLayout node_layout = NodeLayout::automatic;
   // Honour OPSILA_KERNEL_SOURCE=path (a file replacing the embedded kernels),
   // OPSILA_DEVICE_MEMORY_LIMIT=bytes and OPSILA_GROUP_SIZE=N, read when the
   // runtime is created.
@@ -139,6 +144,9 @@ class ClRuntime {
   // Whether the device has doubles (cl_khr_fp64): the kernels are built with
   // OPSILA_FP64=1 and the image can be resolved on the device (kernels/resolve.cl).
   bool doubles() const { return doubles_; }
+  // Whether the bank walks read BankQNode (walk_nodes, partition/bank_qnode.h)
+  // rather than BankNode (ClRuntimeOptions::node_layout).
+  bool quantised_nodes() const { return quant_nodes_; }
   cl_ulong max_alloc() const { return max_alloc_; }
   // Device bytes asked for through device_buffer (device/descriptors.h)
   // since the runtime was made: what the memory plan is checked against.
@@ -189,6 +197,7 @@ class ClRuntime {
   std::size_t group_size_ = 64;
   bool pow_fp64_ = false;
   bool facet_lanes_ = false;  // -DOPSILA_FACET_LANES: a leaf's facets in vector lanes
+  bool quant_nodes_ = false;  // -DOPSILA_QUANT_NODES: the bank walks' nodes quantised
   bool exact_divide_ = false;
   bool doubles_ = false;
   void set_memory(cl_ulong limit);  // 0: the device's own

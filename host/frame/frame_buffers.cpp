@@ -9,6 +9,7 @@
 #include "scene/camera.h"
 #include "scene/texture.h"
 #include "device/counters.h"
+#include "partition/bank_qnode.h"
 
 namespace opsila {
 
@@ -170,7 +171,12 @@ void Renderer::Machine::host_tables(const Scene& scene, BankedScene& bs) {
   const HostSharing sharing = host_sharing(rt);
   const std::size_t align = sharing.in_place ? sharing.alignment : 1;
   host_tris = HostArray::adopt(std::move(bs.triangles), align);
-  host_nodes = HostArray::adopt(std::move(bs.nodes), align);
+  if (rt.quantised_nodes()) {
+    host_nodes = HostArray::adopt(quantise_nodes(bs.nodes), align);
+    BankArray<BankNode>().swap(bs.nodes);
+  } else {
+    host_nodes = HostArray::adopt(std::move(bs.nodes), align);
+  }
   host_attributes = HostArray::adopt(std::move(bs.attributes), align);
   host_texels = HostArray::adopt(std::move(bs.texels), align);
 }

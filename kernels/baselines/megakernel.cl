@@ -39,7 +39,7 @@
 /* The whole scene as one bank, the tests counted over the pixel's rays,
  * and the pixel's ray log (MEGA_LOG). */
 typedef struct {
-  __global const BankNode *nodes;
+  __global const WalkNode *nodes;
   __global const BankTriangle *tris;
   __global const Instance *insts;
   int root, inst_root; /* the scene's own facets' BVH, its instances' (-1: none) */
@@ -189,7 +189,7 @@ inline void mega_pixel(FrameParams fp, MegaScene *ms, __global const Material *m
   if (write_items) items[pixel] = item;
 }
 
-__kernel void megakernel(FrameParams fp, __global const BankNode *nodes, __global const BankTriangle *tris,
+__kernel void megakernel(FrameParams fp, __global const WalkNode *nodes, __global const BankTriangle *tris,
                          __global const Instance *insts, __global const Material *materials, __global const Light *lights, SURFACE_PARAMS, int root,
                          float4 root_lo, float4 root_hi, int inst_root, int spp_k, __global const float *offsets, int pixel_begin,
                          int pixel_count, __global long *accum, __global uint4 *ray_counts, int write_items,
@@ -204,7 +204,7 @@ __kernel void megakernel(FrameParams fp, __global const BankNode *nodes, __globa
 /* The same frame, every ray also written to ray_log from ray_log[2 *
  * log_first[pixel]] on (the prefix sums of the rays counted by a megakernel
  * run), for the bench's traversal-alone figure (baselines/traversal.cl). */
-__kernel void megakernel_rays(FrameParams fp, __global const BankNode *nodes, __global const BankTriangle *tris,
+__kernel void megakernel_rays(FrameParams fp, __global const WalkNode *nodes, __global const BankTriangle *tris,
                               __global const Instance *insts, __global const Material *materials, __global const Light *lights, SURFACE_PARAMS,
                               int root, float4 root_lo, float4 root_hi, int inst_root, int spp_k, __global const float *offsets,
                               int pixel_begin, int pixel_count, __global long *accum, __global uint4 *ray_counts,
@@ -222,7 +222,7 @@ __kernel void megakernel_rays(FrameParams fp, __global const BankNode *nodes, __
 /* The megakernel with its stage clocks (the bench's breakdown frame): the
  * same frame; every work-item's cycles per stage are added to
  * stage_cycles (OPSILA_STAGE_COUNT counters of OPSILA_COUNTER_WORDS words). */
-__kernel void megakernel_stages(FrameParams fp, __global const BankNode *nodes, __global const BankTriangle *tris,
+__kernel void megakernel_stages(FrameParams fp, __global const WalkNode *nodes, __global const BankTriangle *tris,
                                 __global const Instance *insts, __global const Material *materials, __global const Light *lights, SURFACE_PARAMS,
                                 int root, float4 root_lo, float4 root_hi, int inst_root, int spp_k, __global const float *offsets,
                                 int pixel_begin, int pixel_count, __global long *accum, __global uint4 *ray_counts,

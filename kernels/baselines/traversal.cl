@@ -9,7 +9,7 @@
 #include "../lib/bvh.cl"
 
 /* Nearest hit: the winning facet, -1 for none. */
-__kernel void traversal_nearest(__global const BankNode *nodes, __global const BankTriangle *tris,
+__kernel void traversal_nearest(__global const WalkNode *nodes, __global const BankTriangle *tris,
                                 __global const Instance *insts, int root,
                                 float4 root_lo, float4 root_hi, int inst_root, float slack, __global const float4 *rays, int count,
                                 __global int *hit) {
@@ -29,7 +29,7 @@ __kernel void traversal_nearest(__global const BankNode *nodes, __global const B
 }
 
 /* Any hit in (tmin, tmax): 1 when the segment is blocked. */
-__kernel void traversal_any(__global const BankNode *nodes, __global const BankTriangle *tris,
+__kernel void traversal_any(__global const WalkNode *nodes, __global const BankTriangle *tris,
                             __global const Instance *insts, int root, float4 root_lo,
                             float4 root_hi, int inst_root, float slack, __global const float4 *rays, int count, __global int *hit) {
   int i = get_global_id(0);

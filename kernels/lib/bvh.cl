@@ -59,10 +59,10 @@ inline CostProbe no_cost_probe(void) {
  * box's exit below tmin, by more than any relative slack. Culling such a box
  * would change which facet wins with the bank's shape, hence with the PE
  * count. Returns the mask; *enter gets the clamped entry distances. */
-OPSILA_INLINE intW node_hits(const RayPre *r, __global const BankNode *nd, float tmin, float tmax, float slack,
+OPSILA_INLINE intW node_hits(const RayPre *r, __global const WalkNode *nd, float tmin, float tmax, float slack,
                              floatW *enter) {
   floatW lo, hi;
-  node_spans(r, nd, tmin, tmax, &lo, &hi);
+  walk_node_spans(r, nd, tmin, tmax, &lo, &hi);
   hi = hi + fabs(hi) * OPSILA_CULL_SLACK + slack; /* cull_exit, lane-wise */
   *enter = lo;
   /* An empty slot's inverted box gives lo = +inf and hi = -inf, then NaN
@@ -75,7 +75,7 @@ OPSILA_INLINE intW node_hits(const RayPre *r, __global const BankNode *nd, float
 typedef struct {
   const RayPre *r; /* in the frame of what is walked: the world's, or an instance's model's */
   __global const BankTriangle *tris;
-  __global const BankNode *nodes;
+  __global const WalkNode *nodes;
   __global const Instance *insts; /* the instance table (OPSILA_INSTANCES) */
   int inst;                       /* the instance being walked, -1: the scene's own facets */
   float tmin, tmax, slack; /* nearest hit: tmax is the best hit's limit, set at each pop */
@@ -99,11 +99,11 @@ OPSILA_INLINE void nearest_bounds(BankWalk *w) {
  * load of the counts here would make the compiler take the walk's count[k]
  * from it, through a store to the stack and a load of one lane, for every
  * child met, a load that waits for the store (docs/BENCHMARKS.md, Levers). */
-OPSILA_INLINE uint bank_node(BankWalk *w, __global const BankNode *nd, float *te) {
+OPSILA_INLINE uint bank_node(BankWalk *w, __global const WalkNode *nd, float *te) {
   floatW enter;
   intW hit = node_hits(w->r, nd, w->tmin, w->tmax, w->slack, &enter);
   vstoreW(enter, 0, te);
-  if (OPSILA_COUNT_WORK) *w->box_tests += popcount(lane_mask(vloadW(0, nd->lo_x) <= vloadW(0, nd->hi_x)));
+  if (OPSILA_COUNT_WORK) *w->box_tests += popcount(WALK_NODE_SLOTS(nd));
 #ifdef OPSILA_MEASURE_COST
   for (int k = 0; k < OPSILA_BVH_WIDTH; ++k)
     if (nd->count[k] >= 0) COST_CHILD(w->probe, nd, k);
@@ -111,7 +111,7 @@ OPSILA_INLINE uint bank_node(BankWalk *w, __global const BankNode *nd, float *te
   return lane_mask(hit);
 }
 
-OPSILA_INLINE bool bank_child(BankWalk *w, __global const BankNode *nd, int k, int cnt, float entry) { return true; }
+OPSILA_INLINE bool bank_child(BankWalk *w, __global const WalkNode *nd, int k, int cnt, float entry) { return true; }
 
 /* A popped entry beyond the limit of the best hit found since it was
  * pushed cannot hold a winner; the limit bounds the node's test too. */
@@ -205,8 +205,8 @@ OPSILA_INLINE bool model_any_leaf(BankWalk *w, int first, int count, float entry
   return any_facets(w, first, count);
 }
 /* The walks of a model's BVH, in its frame (instances are not nested). */
-OPSILA_DEFINE_WALK(walk_model_nearest, BankWalk, bank_node, bank_child, model_nearest_leaf, nearest_pop, 1)
-OPSILA_DEFINE_WALK(walk_model_any, BankWalk, bank_node, bank_child, model_any_leaf, WALK_NO_POP, 0)
+OPSILA_DEFINE_WALK(walk_model_nearest, BankWalk, WalkNode, bank_node, bank_child, model_nearest_leaf, nearest_pop, 1)
+OPSILA_DEFINE_WALK(walk_model_any, BankWalk, WalkNode, bank_node, bank_child, model_any_leaf, WALK_NO_POP, 0)
 
 /* Instance i met by the walk: its model's BVH with the ray in its frame. */
 OPSILA_INLINE bool instance_walk(BankWalk *w, int i, bool any) {
@@ -245,14 +245,14 @@ OPSILA_INLINE bool any_leaf(BankWalk *w, int first, int count, float entry) {
   return any_facets(w, first, count);
 }
 
-OPSILA_DEFINE_WALK(walk_nearest, BankWalk, bank_node, bank_child, nearest_leaf, nearest_pop, 1)
-OPSILA_DEFINE_WALK(walk_any, BankWalk, bank_node, bank_child, any_leaf, WALK_NO_POP, 0)
+OPSILA_DEFINE_WALK(walk_nearest, BankWalk, WalkNode, bank_node, bank_child, nearest_leaf, nearest_pop, 1)
+OPSILA_DEFINE_WALK(walk_any, BankWalk, WalkNode, bank_node, bank_child, any_leaf, WALK_NO_POP, 0)
 
 /* Nearest hit below `root` (a bank, one cluster of it, or a whole scene),
  * after the best one so far (*best and *best_tri, updated: the least in
  * hit_order.h's order, whoever found the others); slack:
  * FrameParams.box_slack (node_hits). */
-OPSILA_INLINE void traverse_nearest(const RayPre *r, __global const BankNode *nodes,
+OPSILA_INLINE void traverse_nearest(const RayPre *r, __global const WalkNode *nodes,
                                     __global const BankTriangle *tris, __global const Instance *insts, int root,
                                     float tmin, float slack, HitKey *best, int *best_tri, uint *tri_tests,
                                     uint *box_tests, const CostProbe *probe) {
@@ -266,7 +266,7 @@ OPSILA_INLINE void traverse_nearest(const RayPre *r, __global const BankNode *no
 
 /* Nearest hit from a cluster's root (Cluster.root): a node, or for an
  * instance's cluster -2 - the instance (its model's BVH in its frame). */
-OPSILA_INLINE void cluster_nearest(const RayPre *r, __global const BankNode *nodes, __global const BankTriangle *tris,
+OPSILA_INLINE void cluster_nearest(const RayPre *r, __global const WalkNode *nodes, __global const BankTriangle *tris,
                                    __global const Instance *insts, int root, float tmin, float slack, HitKey *best,
                                    int *best_tri, uint *tri_tests, uint *box_tests, const CostProbe *probe) {
 #if OPSILA_INSTANCES
@@ -284,7 +284,7 @@ OPSILA_INLINE void cluster_nearest(const RayPre *r, __global const BankNode *nod
 }
 
 /* Any hit in (tmin, tmax): shadow rays. */
-OPSILA_INLINE bool traverse_any(const RayPre *r, __global const BankNode *nodes, __global const BankTriangle *tris,
+OPSILA_INLINE bool traverse_any(const RayPre *r, __global const WalkNode *nodes, __global const BankTriangle *tris,
                                 __global const Instance *insts, int root, float tmin, float tmax, float slack,
                                 uint *tri_tests, uint *box_tests, const CostProbe *probe) {
   BankWalk w = {r, tris, nodes, insts, -1, tmin, tmax, slack, hit_none(), -1, tri_tests, box_tests, probe, 0.0f, 0.0f};
@@ -298,7 +298,7 @@ OPSILA_INLINE bool traverse_any(const RayPre *r, __global const BankNode *nodes,
  * misses every child; the root's tests are then counted as the walk counts
  * them (one per slot in use), so the work counters do not see the shortcut.
  * tmax: the root's bound. Returns whether the root must be walked. */
-OPSILA_INLINE bool root_box_met(const RayPre *r, __global const BankNode *nodes, int root, float3 lo, float3 hi,
+OPSILA_INLINE bool root_box_met(const RayPre *r, __global const WalkNode *nodes, int root, float3 lo, float3 hi,
                                 float tmin, float tmax, float slack, uint *box_tests, const CostProbe *probe) {
   float3 near = (float3)(r->neg.x ? hi.x : lo.x, r->neg.y ? hi.y : lo.y, r->neg.z ? hi.z : lo.z);
   float3 far = (float3)(r->neg.x ? lo.x : hi.x, r->neg.y ? lo.y : hi.y, r->neg.z ? lo.z : hi.z);
@@ -307,7 +307,7 @@ OPSILA_INLINE bool root_box_met(const RayPre *r, __global const BankNode *nodes,
   float leave = fmin(fmin(fmin(tf.x, tf.y), tf.z), tmax);
   leave = cull_exit(leave, slack);
   if (enter <= leave) return true;
-  __global const BankNode *nd = &nodes[root];
+  __global const WalkNode *nd = &nodes[root];
   for (int k = 0; k < OPSILA_BVH_WIDTH; ++k) {
     if (nd->count[k] < 0) continue;
     COUNT_TEST(box_tests);
@@ -322,14 +322,14 @@ OPSILA_INLINE bool root_box_met(const RayPre *r, __global const BankNode *nodes,
  * the SPMD phase's rays reach a bank because they meet one of its cluster
  * boxes, and the item buffer tests a cluster only inside its projected
  * rectangle. */
-OPSILA_INLINE void scene_nearest(const RayPre *r, __global const BankNode *nodes, __global const BankTriangle *tris,
+OPSILA_INLINE void scene_nearest(const RayPre *r, __global const WalkNode *nodes, __global const BankTriangle *tris,
                                  __global const Instance *insts, int root, float3 lo, float3 hi, float tmin, float slack, HitKey *best, int *best_tri,
                                  uint *tri_tests, uint *box_tests, const CostProbe *probe) {
   if (root_box_met(r, nodes, root, lo, hi, tmin, hit_limit(best->t), slack, box_tests, probe))
     traverse_nearest(r, nodes, tris, insts, root, tmin, slack, best, best_tri, tri_tests, box_tests, probe);
 }
 
-OPSILA_INLINE bool scene_any(const RayPre *r, __global const BankNode *nodes, __global const BankTriangle *tris,
+OPSILA_INLINE bool scene_any(const RayPre *r, __global const WalkNode *nodes, __global const BankTriangle *tris,
                              __global const Instance *insts, int root, float3 lo, float3 hi, float tmin, float tmax, float slack, uint *tri_tests,
                              uint *box_tests, const CostProbe *probe) {
   return root_box_met(r, nodes, root, lo, hi, tmin, tmax, slack, box_tests, probe) &&

@@ -141,8 +141,8 @@ OPSILA_INLINE bool segment_child(RouteWalk *w, __global const BankNode *nd, int 
 /* Any cluster box met by the segment: the shadow ray goes to this PE. */
 OPSILA_INLINE bool segment_leaf(RouteWalk *w, int first, int count, float entry) { return true; }
 
-OPSILA_DEFINE_WALK(walk_route_entry, RouteWalk, route_node, entry_child, entry_leaf, WALK_NO_POP, 0)
-OPSILA_DEFINE_WALK(walk_route_segment, RouteWalk, route_node, segment_child, segment_leaf, WALK_NO_POP, 0)
+OPSILA_DEFINE_WALK(walk_route_entry, RouteWalk, BankNode, route_node, entry_child, entry_leaf, WALK_NO_POP, 0)
+OPSILA_DEFINE_WALK(walk_route_segment, RouteWalk, BankNode, route_node, segment_child, segment_leaf, WALK_NO_POP, 0)
 
 /* next_destination_spheres with cluster boxes: the entry of PE q is the
  * smallest entry over its boxes that meet (tmin, tmax). Only an entry below

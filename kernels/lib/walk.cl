@@ -17,6 +17,11 @@
  *              empty_node in host/partition/bank_bvh.h), which no ray meets:
  *              the node tests never read the counts.
  * A root has no box of its own: a walk starts by testing its children.
+ * The bank walks may read the same nodes quantised (BankQNode, 128 bytes:
+ * boxes on an 8-bit grid per node and axis, decoded exactly, rounded
+ * outwards); there an empty slot's inverted box is finite, and a ray far
+ * from a tiny node may round its two planes together and meet it: the
+ * walk drops a met slot whose count is negative.
  *
  * PoCL does not vectorise these loops across work-items (divergent control
  * flow), so the width is used inside one work-item: the W child boxes of a
@@ -37,11 +42,15 @@
 typedef float8 floatW;
 typedef int8 intW;
 #define vloadW vload8
+#define convert_floatW convert_float8
+#define convert_intW convert_int8
 #define vstoreW vstore8
 #else
 typedef float4 floatW;
 typedef int4 intW;
 #define vloadW vload4
+#define convert_floatW convert_float4
+#define convert_intW convert_int4
 #define vstoreW vstore4
 #endif
 
@@ -76,15 +85,13 @@ OPSILA_INLINE int lowest_bit(uint mask) { return 31 - clz(mask & (0u - mask)); }
  * the values are those of fmax and fmin (a maximum rounds nothing), only a
  * zero's sign may differ, which no comparison sees. -INFINITY and INFINITY
  * leave the distances unclamped (routing). */
-OPSILA_INLINE void node_spans(const RayPre *r, __global const BankNode *nd, float tmin, float tmax, floatW *enter,
-                              floatW *leave) {
-  __global const float *nx = r->neg.x ? nd->hi_x : nd->lo_x, *fx = r->neg.x ? nd->lo_x : nd->hi_x;
-  __global const float *ny = r->neg.y ? nd->hi_y : nd->lo_y, *fy = r->neg.y ? nd->lo_y : nd->hi_y;
-  __global const float *nz = r->neg.z ? nd->hi_z : nd->lo_z, *fz = r->neg.z ? nd->lo_z : nd->hi_z;
+/* The spans of the W boxes whose near and far planes are given, per axis. */
+OPSILA_INLINE void plane_spans(const RayPre *r, floatW nx, floatW fx, floatW ny, floatW fy, floatW nz, floatW fz,
+                               float tmin, float tmax, floatW *enter, floatW *leave) {
   floatW ox = (floatW)(r->org.x), oy = (floatW)(r->org.y), oz = (floatW)(r->org.z);
   floatW ix = (floatW)(r->inv_dir.x), iy = (floatW)(r->inv_dir.y), iz = (floatW)(r->inv_dir.z);
-  floatW tnx = (vloadW(0, nx) - ox) * ix, tny = (vloadW(0, ny) - oy) * iy, tnz = (vloadW(0, nz) - oz) * iz;
-  floatW tfx = (vloadW(0, fx) - ox) * ix, tfy = (vloadW(0, fy) - oy) * iy, tfz = (vloadW(0, fz) - oz) * iz;
+  floatW tnx = (nx - ox) * ix, tny = (ny - oy) * iy, tnz = (nz - oz) * iz;
+  floatW tfx = (fx - ox) * ix, tfy = (fy - oy) * iy, tfz = (fz - oz) * iz;
   floatW e = (floatW)(tmin), l = (floatW)(tmax);
   e = MAX_A_OR_B(tnx, e);
   e = MAX_A_OR_B(tny, e);
@@ -94,8 +101,52 @@ OPSILA_INLINE void node_spans(const RayPre *r, __global const BankNode *nd, floa
   *leave = MIN_A_OR_B(tfz, l);
 }
 
-/* OPSILA_DEFINE_WALK(name, State, NODE, CHILD, LEAF, POP, ORDERED) defines
- *   bool name(State *w, __global const BankNode *nodes, int root)
+OPSILA_INLINE void node_spans(const RayPre *r, __global const BankNode *nd, float tmin, float tmax, floatW *enter,
+                              floatW *leave) {
+  __global const float *nx = r->neg.x ? nd->hi_x : nd->lo_x, *fx = r->neg.x ? nd->lo_x : nd->hi_x;
+  __global const float *ny = r->neg.y ? nd->hi_y : nd->lo_y, *fy = r->neg.y ? nd->lo_y : nd->hi_y;
+  __global const float *nz = r->neg.z ? nd->hi_z : nd->lo_z, *fz = r->neg.z ? nd->lo_z : nd->hi_z;
+  plane_spans(r, vloadW(0, nx), vloadW(0, fx), vloadW(0, ny), vloadW(0, fy), vloadW(0, nz), vloadW(0, fz), tmin,
+              tmax, enter, leave);
+}
+
+/* A quantised node's planes (BankQNode): q * step + origin, exact, so the
+ * spans are node_spans' on the boxes rounded outwards to the grid. */
+OPSILA_INLINE floatW grid_plane(__global const opsila_u8 *q, float step, float origin) {
+  return convert_floatW(vloadW(0, q)) * (floatW)(step) + (floatW)(origin);
+}
+
+OPSILA_INLINE void qnode_spans(const RayPre *r, __global const BankQNode *nd, float tmin, float tmax, floatW *enter,
+                               floatW *leave) {
+  float sx = as_float((uint)nd->exponent[0] << 23), sy = as_float((uint)nd->exponent[1] << 23),
+        sz = as_float((uint)nd->exponent[2] << 23);
+  float ox = nd->origin[0], oy = nd->origin[1], oz = nd->origin[2];
+  __global const opsila_u8 *nx = r->neg.x ? nd->hi_x : nd->lo_x, *fx = r->neg.x ? nd->lo_x : nd->hi_x;
+  __global const opsila_u8 *ny = r->neg.y ? nd->hi_y : nd->lo_y, *fy = r->neg.y ? nd->lo_y : nd->hi_y;
+  __global const opsila_u8 *nz = r->neg.z ? nd->hi_z : nd->lo_z, *fz = r->neg.z ? nd->lo_z : nd->hi_z;
+  plane_spans(r, grid_plane(nx, sx, ox), grid_plane(fx, sx, ox), grid_plane(ny, sy, oy), grid_plane(fy, sy, oy),
+              grid_plane(nz, sz, oz), grid_plane(fz, sz, oz), tmin, tmax, enter, leave);
+}
+
+/* The nodes the bank walks read (the routing walks read BankNode): the
+ * device's layout, and the mask of a node's slots in use (for the work
+ * counters; an empty slot's box is inverted in both). */
+#ifndef OPSILA_QUANT_NODES
+#define OPSILA_QUANT_NODES 0
+#endif
+#if OPSILA_QUANT_NODES
+typedef BankQNode WalkNode;
+#define walk_node_spans qnode_spans
+#define WALK_NODE_SLOTS(nd) lane_mask(convert_intW(vloadW(0, (nd)->lo_x)) <= convert_intW(vloadW(0, (nd)->hi_x)))
+#else
+typedef BankNode WalkNode;
+#define walk_node_spans node_spans
+#define WALK_NODE_SLOTS(nd) lane_mask(vloadW(0, (nd)->lo_x) <= vloadW(0, (nd)->hi_x))
+#endif
+
+/* OPSILA_DEFINE_WALK(name, State, Node, NODE, CHILD, LEAF, POP, ORDERED)
+ * defines
+ *   bool name(State *w, __global const Node *nodes, int root)
  * a depth-first walk below `root` (OpenCL C has no templates: the hooks are
  * functions named here, inlined into the walk):
  *   NODE(w, nd, float te[W]) -> uint: the node test; per child, its entry
@@ -120,8 +171,8 @@ OPSILA_INLINE void node_spans(const RayPre *r, __global const BankNode *nd, floa
  * bound of the builder holds with one entry to spare). A child that would
  * overflow the stack is dropped (the builder's bound makes that never
  * happen). */
-#define OPSILA_DEFINE_WALK(name, State, NODE, CHILD, LEAF, POP, ORDERED)           \
-  OPSILA_INLINE bool name(State *w, __global const BankNode *nodes, int root) {  \
+#define OPSILA_DEFINE_WALK(name, State, Node, NODE, CHILD, LEAF, POP, ORDERED)     \
+  OPSILA_INLINE bool name(State *w, __global const Node *nodes, int root) {      \
     int s_node[OPSILA_BVH_STACK], s_count[OPSILA_BVH_STACK];                      \
     float s_t[OPSILA_BVH_STACK];                                                  \
     int sp = 0;                                                                   \
@@ -143,7 +194,7 @@ OPSILA_INLINE void node_spans(const RayPre *r, __global const BankNode *nd, floa
         if (LEAF(w, c_node, c_count, c_t)) return true;                           \
         continue;                                                                 \
       }                                                                           \
-      __global const BankNode *nd = &nodes[c_node];                               \
+      __global const Node *nd = &nodes[c_node];                                   \
       float te[OPSILA_BVH_WIDTH];                                                 \
       uint met = NODE(w, nd, te);                                                 \
       int base = sp;                                                              \
@@ -151,8 +202,9 @@ OPSILA_INLINE void node_spans(const RayPre *r, __global const BankNode *nd, floa
         int k = lowest_bit(met);                                                  \
         met &= met - 1u;                                                          \
         int cnt = nd->count[k];                                                   \
-        /* An empty slot is met only by a NaN ray (it meets every box): taken \
-         * as node child[k] it would start the walk again, without end. */     \
+        /* An empty slot is met only by a NaN ray (it meets every box), or   \
+         * a quantised one by rounding: taken as node child[k] it would start \
+         * the walk again, without end. */                                     \
         if (cnt < 0 || !CHILD(w, nd, k, cnt, te[k])) continue;                    \
         int node = nd->child[k];                                                  \
         if (ORDERED) {                                                            \

@@ -21,19 +21,22 @@ const std::string& test_kernel_source();  // generated from tests/kernels/*_test
 
 namespace opsila::test {
 
-inline std::unique_ptr<ClRuntime>& batch_slot() {
-  static std::unique_ptr<ClRuntime> rt;
-  return rt;
+inline std::unique_ptr<ClRuntime>& batch_slot(bool quantised = false) {
+  static std::unique_ptr<ClRuntime> rt[2];
+  return rt[quantised ? 1 : 0];
 }
 
-// The device with the batch kernels as its program (released when the tests end).
-inline ClRuntime& batch_runtime() {
-  std::unique_ptr<ClRuntime>& rt = batch_slot();
+// The device with the batch kernels as its program (released when the
+// tests end); `quantised`: its bank walks read BankQNode whatever the
+// device (partition/bank_qnode.h), otherwise the device's own layout.
+inline ClRuntime& batch_runtime(bool quantised = false) {
+  std::unique_ptr<ClRuntime>& rt = batch_slot(quantised);
   if (!rt) {
     ClRuntimeOptions o;
     o.kernel_source = test_kernel_source();
     o.kernel_source_origin = "test batch kernels";
     o.read_environment = false;
+    if (quantised) o.node_layout = ClRuntimeOptions::NodeLayout::quantised;
     rt = std::make_unique<ClRuntime>(test_device(), o);
   }
   return *rt;
@@ -41,7 +44,10 @@ inline ClRuntime& batch_runtime() {
 
 class BatchRelease : public ::testing::Environment {
  public:
-  void TearDown() override { batch_slot().reset(); }
+  void TearDown() override {
+    batch_slot(false).reset();
+    batch_slot(true).reset();
+  }
 };
 inline ::testing::Environment* const kBatchRelease = ::testing::AddGlobalTestEnvironment(new BatchRelease);
 

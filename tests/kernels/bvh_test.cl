@@ -6,7 +6,7 @@
 
 /* traverse_nearest from `root`: the winning facet (-1: none), its distance,
  * and the (ray-facet, ray-box) tests the walk made. */
-__kernel void nearest_batch(__global const BankNode *nodes, __global const BankTriangle *tris, int root, float slack,
+__kernel void nearest_batch(__global const WalkNode *nodes, __global const BankTriangle *tris, int root, float slack,
                             __global const float4 *org, __global const float4 *dir, int count,
                             __global int *hit_tri, __global float *hit_t, __global uint2 *tests) {
   int i = get_global_id(0);
@@ -23,7 +23,7 @@ __kernel void nearest_batch(__global const BankNode *nodes, __global const BankT
 }
 
 /* traverse_any over the segment: 1 when some facet is hit inside it. */
-__kernel void any_batch(__global const BankNode *nodes, __global const BankTriangle *tris, int root, float slack,
+__kernel void any_batch(__global const WalkNode *nodes, __global const BankTriangle *tris, int root, float slack,
                         __global const float4 *org, __global const float4 *dir, int count, __global int *blocked,
                         __global uint2 *tests) {
   int i = get_global_id(0);

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "batch.h"
+#include "partition/bank_qnode.h"
 #include "partition/partition.h"
 #include "hit_order.h"
 #include "opsila_shared.h"
@@ -66,6 +67,7 @@ struct Bank {
   Scene scene;
   BankedScene bs;
   float slack = 0;
+  bool quantised = false;  // the walks read BankQNode (test::batch_runtime)
 };
 
 Bank make_bank(int pes) {
@@ -84,9 +86,11 @@ struct Walks {
 
 // Runs `kernel` (nearest_batch or any_batch) from PE p's bank root.
 Walks run_walk(const Bank& b, int p, const test::RayBatch& rays, const char* kernel) {
-  ClRuntime& rt = test::batch_runtime();
+  ClRuntime& rt = test::batch_runtime(b.quantised);
   const std::size_t n = rays.size();
-  cl::Buffer nodes = test::to_device(rt, b.bs.nodes), tris = test::to_device(rt, b.bs.triangles);
+  cl::Buffer nodes = rt.quantised_nodes() ? test::to_device(rt, quantise_nodes(b.bs.nodes))
+                                          : test::to_device(rt, b.bs.nodes);
+  cl::Buffer tris = test::to_device(rt, b.bs.triangles);
   cl::Buffer org = test::to_device(rt, rays.org), dir = test::to_device(rt, rays.dir);
   cl::Buffer out_a = test::to_device(rt, std::vector<cl_int>(n)), out_t = test::to_device(rt, std::vector<float>(n));
   cl::Buffer tests = test::to_device(rt, std::vector<cl_uint2>(n));
@@ -128,8 +132,9 @@ void for_each_bank(const Bank& b, const test::RayBatch& rays, const char* kernel
 // is the brute-force search's under the one hit order, facet for facet;
 // and the walk tests far fewer facets than the search.
 TEST(BankBvhWalk, NearestHitIsTheBruteForceNearestOnRandomRays) {
-  for (int pes : {1, 16}) {
-    const Bank b = make_bank(pes);
+  for (int pes : {1, 16, -16}) {  // -16: 16 PEs, quantised nodes
+    Bank b = make_bank(std::abs(pes));
+    b.quantised = pes < 0;
     const test::RayBatch rays = test::random_rays(2000, 17 + pes, 0.0f, kInf, kInf);
     std::size_t hits = 0, walk_tests = 0, brute_tests = 0;
     for_each_bank(b, rays, "nearest_batch", [&](const PeInfo& pe, const Walks& w, std::size_t i, const HostRay& r) {
@@ -144,8 +149,8 @@ TEST(BankBvhWalk, NearestHitIsTheBruteForceNearestOnRandomRays) {
         }
       }
       const float best_t = key.t;
-      const std::string at = std::to_string(pes) + " PEs, facets from " + std::to_string(pe.tri_begin) + ", ray " +
-                             std::to_string(i);
+      const std::string at = std::to_string(std::abs(pes)) + (b.quantised ? " PEs, quantised" : " PEs") +
+                             ", facets from " + std::to_string(pe.tri_begin) + ", ray " + std::to_string(i);
       EXPECT_EQ(w.tri[i] >= 0, best >= 0) << at;
       walk_tests += w.tests[i].s[0];
       brute_tests += static_cast<std::size_t>(pe.tri_end - pe.tri_begin);
@@ -168,17 +173,21 @@ TEST(BankBvhWalk, NearestHitIsTheBruteForceNearestOnRandomRays) {
 // Shadow segments: the any-hit walk is blocked exactly when some facet of
 // the bank is hit inside the segment.
 TEST(BankBvhWalk, AnyHitMatchesTheBruteForceOnRandomSegments) {
-  const Bank b = make_bank(8);
-  const test::RayBatch rays = test::random_rays(2000, 5, 1e-3f, 0.5f, 12.0f);
-  std::size_t blocked = 0;
-  for_each_bank(b, rays, "any_batch", [&](const PeInfo& pe, const Walks& w, std::size_t i, const HostRay& r) {
-    bool hit = false;
-    for (int f = pe.tri_begin; f < pe.tri_end && !hit; ++f)
-      hit = host_intersect(r, b.bs.triangles[f], rays.org[i].s[3], rays.dir[i].s[3]) < kInf;
-    EXPECT_EQ(w.blocked[i] != 0, hit) << "facets from " << pe.tri_begin << ", ray " << i;
-    blocked += hit;
-  });
-  EXPECT_GT(blocked, 100u) << "too few segments blocked to test the walk";
+  for (bool quantised : {false, true}) {
+    Bank b = make_bank(8);
+    b.quantised = quantised;
+    const test::RayBatch rays = test::random_rays(2000, 5, 1e-3f, 0.5f, 12.0f);
+    std::size_t blocked = 0;
+    for_each_bank(b, rays, "any_batch", [&](const PeInfo& pe, const Walks& w, std::size_t i, const HostRay& r) {
+      bool hit = false;
+      for (int f = pe.tri_begin; f < pe.tri_end && !hit; ++f)
+        hit = host_intersect(r, b.bs.triangles[f], rays.org[i].s[3], rays.dir[i].s[3]) < kInf;
+      EXPECT_EQ(w.blocked[i] != 0, hit) << (quantised ? "quantised, " : "") << "facets from " << pe.tri_begin
+                                        << ", ray " << i;
+      blocked += hit;
+    });
+    EXPECT_GT(blocked, 100u) << "too few segments blocked to test the walk";
+  }
 }
 
 // A ray from a random point above facet t to the point at w along its edge
@@ -239,6 +248,7 @@ TEST(BankBvhWalk, OneWinnerWhateverTheBanksAndTheVisitOrder) {
     b.scene = tie;
     if (shuffle > 0) std::shuffle(b.scene.triangles.begin(), b.scene.triangles.end(), gen);
     for (int pes : {1, 3, 16}) {
+      b.quantised = pes == 3;  // another layout: other boxes, another visit order
       b.bs = partition_scene(b.scene, pes);
       b.slack = frame_params(b.scene, b.bs, 1).box_slack;
       std::vector<int> order(std::size_t(b.bs.num_pes));

@@ -66,15 +66,12 @@ namespace {
 // animation alone) as stand-in shapes around its bones, in one material it
 // names so and gives no colour: a black shape no file holds.
 bool bones_only(const aiScene& ai) {
-  if (ai.mNumMeshes == 0) return false;
-  for (unsigned m = 0; m < ai.mNumMeshes; ++m) {
-    const unsigned k = ai.mMeshes[m]->mMaterialIndex;
-    aiString name;
-    if (k >= ai.mNumMaterials || ai.mMaterials[k]->Get(AI_MATKEY_NAME, name) != AI_SUCCESS ||
-        std::string(name.C_Str()) != "SkeletonMaterial")
+  aiString name;
+  for (unsigned m = 0, k = 0; m < ai.mNumMeshes; ++m)
+    if ((k = ai.mMeshes[m]->mMaterialIndex) >= ai.mNumMaterials ||
+        ai.mMaterials[k]->Get(AI_MATKEY_NAME, name) != AI_SUCCESS || std::string(name.C_Str()) != "SkeletonMaterial")
       return false;
-  }
-  return true;
+  return ai.mNumMeshes > 0;
 }
 
 void collect_placements(const aiNode* root, unsigned num_meshes, std::vector<std::vector<aiMatrix4x4>>& out,

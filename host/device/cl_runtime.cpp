@@ -185,17 +185,8 @@ std::size_t checked_group_size(const std::string& text, const std::string& origi
 
 }  // namespace
 
-ClRuntime::ClRuntime(const DeviceEntry& device, const ClRuntimeOptions& options) : device_(device) {
-  if (!device_.is_gpu) check_cpu_driver_environment();
-  const DeviceCapabilities caps = query_capabilities(device_.device);
-  const std::vector<std::string> missing = missing_capabilities(caps);
-  if (!missing.empty()) {
-    std::string message =
-        "device " + device_.device_name + " (" + device_.platform_name + ") cannot run opsila: it lacks ";
-    for (std::size_t i = 0; i < missing.size(); ++i) message += (i ? "; " : "") + missing[i];
-    throw ClError(message);
-  }
-
+// The kernels' arithmetic and layouts for this device (build options).
+void ClRuntime::choose_paths(const DeviceCapabilities& caps, const ClRuntimeOptions& options) {
   // The specular power: PoCL's float pow costs about 80 ns a call on this
   // project's CPUs and is 1 ulp off in about 9% of calls on [0.5, 1];
   // exp2(Ns log2 x) in doubles takes about 16 ns and rounds correctly
@@ -232,9 +223,25 @@ ClRuntime::ClRuntime(const DeviceEntry& device, const ClRuntimeOptions& options)
   // The bank walks' nodes quantised (BankQNode, half the bytes) on a GPU,
   // whose walks wait on memory; a CPU's caches hold the float nodes and its
   // walks pay for the decoding (docs/BENCHMARKS.md, Levers).
-  quant_nodes_ = options.node_layout == ClRuntimeOptions::NodeLayout::automatic
-                     ? device_.is_gpu
-                     : options.node_layout == ClRuntimeOptions::NodeLayout::quantised;
+  using NodeLayout = ClRuntimeOptions::NodeLayout;
+  quant_nodes_ = options.node_layout == NodeLayout::automatic ? device_.is_gpu
+                                                               : options.node_layout == NodeLayout::quantised;
+  const auto q = options.read_environment ? env_hook_number(EnvHook::quant_nodes, 0, 1, "0 or 1") : std::nullopt;
+  if (q && options.node_layout == NodeLayout::automatic) quant_nodes_ = *q == 1;
+}
+
+ClRuntime::ClRuntime(const DeviceEntry& device, const ClRuntimeOptions& options) : device_(device) {
+  if (!device_.is_gpu) check_cpu_driver_environment();
+  const DeviceCapabilities caps = query_capabilities(device_.device);
+  const std::vector<std::string> missing = missing_capabilities(caps);
+  if (!missing.empty()) {
+    std::string message =
+        "device " + device_.device_name + " (" + device_.platform_name + ") cannot run opsila: it lacks ";
+    for (std::size_t i = 0; i < missing.size(); ++i) message += (i ? "; " : "") + missing[i];
+    throw ClError(message);
+  }
+
+  choose_paths(caps, options);
 
   source_ = options.kernel_source;
   source_origin_ = source_.empty() ? "embedded kernels"
@@ -254,8 +261,6 @@ ClRuntime::ClRuntime(const DeviceEntry& device, const ClRuntimeOptions& options)
       if (source_.empty()) throw InputError(std::string("OPSILA_KERNEL_SOURCE=") + path + ": the file is empty");
       source_origin_ = std::string("OPSILA_KERNEL_SOURCE=") + path;
     }
-    const auto q = env_hook_number(EnvHook::quant_nodes, 0, 1, "0 or 1");
-    if (q && options.node_layout == ClRuntimeOptions::NodeLayout::automatic) quant_nodes_ = *q == 1;
     // OPSILA_DEVICE_MEMORY_LIMIT=bytes: plan as if the device had no more.
     if (limit == 0)
       limit = env_hook_number(EnvHook::device_memory_limit, 1, UINT64_MAX, "a positive number of bytes").value_or(0);

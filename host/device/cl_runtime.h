@@ -200,6 +200,7 @@ class ClRuntime {
   bool quant_nodes_ = false;  // -DOPSILA_QUANT_NODES: the bank walks' nodes quantised
   bool exact_divide_ = false;
   bool doubles_ = false;
+  void choose_paths(const DeviceCapabilities& caps, const ClRuntimeOptions& options);
   void set_memory(cl_ulong limit);  // 0: the device's own
   cl_ulong max_alloc_ = 0, global_mem_ = 0, limit_ = 0;
   std::string memory_source_ = "CL_DEVICE_GLOBAL_MEM_SIZE";

@@ -70,6 +70,7 @@ json header_json(const BenchReport& r) {
   j["pilot_warm_up_seconds"] = r.stats().pilot_warm_up_seconds;
   j["bank_capacity"] = st.bank_capacity;
   j["work_group_size"] = st.work_group_size;
+  j["bvh_nodes"] = st.quantised_nodes ? "quantised" : "float";
   j["settings"] = {{"repeats", r.repeats}, {"warmup", r.warmup}, {"host_repeats", r.host_repeats},
                    {"quick", r.quick},     {"scatter_max_log2", r.scatter_max_log2}};
   j["compile_seconds"] = r.compile_seconds;

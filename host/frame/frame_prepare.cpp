@@ -185,6 +185,7 @@ void Renderer::Machine::choose_work_groups() {
   if (multiple > 0 && spmd_wg >= multiple) spmd_wg = spmd_wg / multiple * multiple;
   spmd_wg = std::max<std::size_t>(1, spmd_wg);
   prepared.work_group_size = spmd_wg;
+  prepared.quantised_nodes = rt.quantised_nodes();
 
   tile_w = OPSILA_ITEM_TILE_SIDE;
   while (tile_w > 1 && std::size_t(tile_w) * tile_w > item_allowed) tile_w /= 2;

@@ -160,6 +160,7 @@ nlohmann::json stats_json(const RenderResult& result, const Scene& scene,
   j["balance"] = balance_name(s.balance);
   if (s.balance == Balance::measured) j["pilot"] = {{"frames", s.pilot_frames}, {"seconds", s.pilot_seconds}};
   j["work_group_size"] = s.work_group_size;
+  j["bvh_nodes"] = s.quantised_nodes ? "quantised" : "float";
   j["rounds"] = s.rounds;
   j["scene"] = {{"triangles", scene.total_triangles()},
                 {"facets", scene.num_facets},

@@ -14,7 +14,7 @@
 namespace opsila {
 
 // Keys: version, device, width, height, depth, pes, bank_capacity, clusters,
-// work_group_size, rounds, scene {triangles, facets, objects, lights},
+// work_group_size, bvh_nodes ("float" or "quantised"), rounds, scene {triangles, facets, objects, lights},
 // rays {primary, primary_hits, secondary, shadow, total}, render_seconds,
 // readback_seconds (of it, the image read back and decoded),
 // prepare {read_seconds, parse_seconds, partition_seconds, bank_build_seconds,

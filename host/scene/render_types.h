@@ -177,6 +177,7 @@ struct RenderStats {
   double pilot_warm_up_seconds = 0;   // RenderSettings::pilot_warm_up: the untimed frame before them
   PrepareTimes prepare;               // the preparation's stages (core/stage_clock.h)
   std::size_t work_group_size = 0;
+  bool quantised_nodes = false;   // the bank walks read BankQNode (ClRuntime::quantised_nodes)
   std::vector<RankReport> ranks;  // several MPI ranks: one report each (rank 0's result only)
 };
 

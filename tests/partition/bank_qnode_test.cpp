@@ -135,6 +135,8 @@ TEST(QuantisedNodes, GiveTheFloatLayoutsFrames) {
       ASSERT_EQ(a.rgb.size(), b.rgb.size());
       EXPECT_EQ(0, std::memcmp(a.rgb.data(), b.rgb.data(), a.rgb.size() * sizeof(float)));
       EXPECT_EQ(a.item_buffer, b.item_buffer);
+      EXPECT_FALSE(a.stats.quantised_nodes);
+      EXPECT_TRUE(b.stats.quantised_nodes) << "--stats names the layout the walks read";
     }
 }
 

@@ -21,6 +21,7 @@
 #include "device/cl_runtime.h"
 #include "formats/image/image_io.h"
 #include "core/env_hooks.h"
+#include "core/host_memory.h"
 #include "core/driver_limits.h"
 #include "core/progress.h"
 #include "core/stage_clock.h"
@@ -250,7 +251,17 @@ int run_render(const std::vector<std::string>& args, Ranks& ranks) {
   if (!o.reference) {
     runtime.emplace(choose_device_flag(o.device_spec, ranks));
     if (!o.quiet && writer) runtime->on_slow_build([](const std::string& note) { print_line("note", note); });
-  } else if (!o.quiet) {
+  }
+  // --host-memory is taken as given; past the machine's memory a scene it
+  // admits can still run out while it loads.
+  if (!o.quiet && writer && o.host_memory > physical_memory() && physical_memory() > 0) {
+    char text[160];
+    std::snprintf(text, sizeof text, "--host-memory %.1f GiB is more than this machine's %.1f GiB: a scene it "
+                  "admits may run out of memory while loading", double(o.host_memory) / (1 << 30),
+                  double(physical_memory()) / (1 << 30));
+    print_line("warning", text);
+  }
+  if (o.reference && !o.quiet) {
     if (!o.device_spec.empty()) print_line("warning", "--device is ignored with --reference");
     if (o.balance) print_line("warning", "--balance is ignored with --reference (one processor, no banks)");
   }

@@ -4,10 +4,12 @@
 // flag's, never this machine's.
 #include <gtest/gtest.h>
 
+#include <cstdint>
 #include <sstream>
 #include <string>
 #include <vector>
 
+#include "core/host_memory.h"
 #include "test_util.h"
 
 namespace opsila {
@@ -55,6 +57,22 @@ TEST(SceneLimitsCli, TheSameSceneRendersWithMoreHostMemory) {
                   dir.file("x.png")});
   EXPECT_EQ(r.exit_code, 0) << r.err;
   EXPECT_TRUE(test::file_exists(dir.file("x.png")));
+}
+
+// More than the machine has is taken as given (the flag decides which
+// scenes are admitted), with a warning that loading may still run out.
+TEST(SceneLimitsCli, MoreHostMemoryThanTheMachineHasIsWarnedOf) {
+  TempDir dir;
+  const std::string whitted = std::string(OPSILA_SOURCE_DIR) + "/scenes/whitted.json";
+  const std::uint64_t machine = physical_memory();
+  if (machine == 0) GTEST_SKIP() << "the system does not say how much memory it has";
+  for (const std::uint64_t bytes : {2 * machine, machine / 2}) {
+    const RunResult r = run_opsila({"render", whitted, "--host-memory", std::to_string(bytes), "--size", "16x12",
+                                    "-o", dir.file("x.png")});
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_EQ(has(r.err, "opsila: warning: --host-memory "), bytes > machine) << r.err;
+    EXPECT_EQ(has(r.err, "GiB is more than this machine's "), bytes > machine) << r.err;
+  }
 }
 
 TEST(SceneLimitsCli, BadSizesNameTheFlag) {

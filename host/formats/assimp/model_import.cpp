@@ -10,9 +10,7 @@
 #include <unistd.h>
 
 #include <algorithm>
-#include <cctype>
 #include <chrono>
-#include <cmath>
 #include <condition_variable>
 #include <cstdio>
 #include <cstdlib>
@@ -20,7 +18,6 @@
 #include <exception>
 #include <filesystem>
 #include <fstream>
-#include <limits>
 #include <mutex>
 #include <new>
 #include <sstream>
@@ -32,6 +29,7 @@
 #include "core/host_memory.h"
 #include "core/last_words.h"
 #include "core/util.h"
+#include "formats/assimp/import_warnings.h"
 #include "formats/assimp/model_checks.h"
 #include "formats/common/model_fan.h"
 #include "formats/common/model_files.h"
@@ -426,6 +424,7 @@ Scene import_model(ModelFiles& files, const std::string& path, const std::string
     importer.SetIOHandler(files.io_system());  // the importer owns it
     keep_readers_for(importer, ext);
     const aiScene* ai = nullptr;
+    const ImportWarnings warnings;  // before the importer: it may drop faces and go on
     const bool our_checks = validated_by_us(ext);
     const unsigned flags = our_checks ? 0u : kImportFlags;
     if (watched) {
@@ -437,6 +436,7 @@ Scene import_model(ModelFiles& files, const std::string& path, const std::string
       ai = importer.ReadFile(path, flags);
     }
     if (!ai && !base_dir.empty()) explain_with_stream(path);  // a file on disk (not a model in memory)
+    warnings.refuse_dropped(path, ai ? "" : importer.GetErrorString());
     if (ai && our_checks) stl::check_imported_scene(*ai, path);
     scene = convert(importer, ai, path, base_dir, files, images, max_triangles);
   });

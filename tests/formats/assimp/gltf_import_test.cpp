@@ -6,6 +6,7 @@
 
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "formats/json/scene_file.h"
 #include "gltf_test_files.h"
@@ -257,6 +258,41 @@ TEST(GltfImport, SkinsAndAnimationsAreNotReadAndTheMeshRendersAsStored) {
                                         {{"OPSILA_IMPORT_MEMORY", std::to_string(64 << 20)}});
   EXPECT_EQ(r.exit_code, 0) << r.err;
   EXPECT_LT(r.max_rss_kb, first.max_rss_kb + 100 * 1024) << "the animation's keys were read";
+}
+
+// One triangle's positions and `indices` (16-bit) after them in tri.bin.
+std::string indexed_gltf(TempDir& dir, const std::vector<std::uint16_t>& indices, const std::string& name) {
+  std::string bin = triangle_bytes();
+  for (std::uint16_t i : indices) bin += std::string{char(i & 0xff), char(i >> 8)};
+  dir.write(name + ".bin", bin);
+  const std::string n = std::to_string(indices.size()), bytes = std::to_string(2 * indices.size());
+  return dir.write(name + ".gltf", R"({"asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0]}],
+  "nodes": [{"mesh": 0}], "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1}]}],
+  "buffers": [{"uri": ")" + name + R"(.bin", "byteLength": )" + std::to_string(bin.size()) + R"(}],
+  "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 36},
+                  {"buffer": 0, "byteOffset": 36, "byteLength": )" + bytes + R"(}],
+  "accessors": [{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3", "min": [0, 0, 0],
+                 "max": [1, 1, 0]},
+                {"bufferView": 1, "componentType": 5123, "count": )" + n + R"(, "type": "SCALAR"}]})");
+}
+
+// The importer drops a face whose indices run past the vertices, and the
+// vertices left over from a count that is no multiple of 3, and goes on:
+// the render showed less than the file held, with exit 0. Refused; a
+// mesh with no face left also says what the importer said.
+TEST(GltfImport, IndicesPastTheVerticesAndLeftOverIndicesAreRefused) {
+  TempDir dir;
+  EXPECT_EQ(error_loading(indexed_gltf(dir, {0, 1, 2, 2, 1, 0}, "ok")), "<no error>");
+  const std::string past = indexed_gltf(dir, {0, 1, 2, 0, 1, 9}, "past");
+  EXPECT_EQ(error_loading(past), past + ": a mesh primitive's indices name vertices past the end of its attributes "
+                                        "(the importer would drop those faces): every index must be below the "
+                                        "POSITION accessor's count");
+  const std::string all = indexed_gltf(dir, {0, 1, 7}, "all");
+  EXPECT_NE(error_loading(all).find("; the importer: Mesh \"meshes[0]\" has no faces"), std::string::npos)
+      << error_loading(all);
+  const std::string left = indexed_gltf(dir, {0, 1, 2, 0}, "left");
+  EXPECT_EQ(error_loading(left), left + ": a triangles primitive's vertex or index count is not a multiple of 3 "
+                                        "(the importer would drop the rest)");
 }
 
 }  // namespace

@@ -308,19 +308,21 @@ BankedScene share_tables(const Scene& share, const Box& sbox, const Placement& p
     for (std::size_t p = 0; p < loc.pes.size(); ++p)
       loc.bank_bytes[p] += std::uint64_t(loc.pes[p].tri_end - loc.pes[p].tri_begin) * sizeof(BankAttributes);
   }
-  std::vector<std::uint64_t> v(2 * P + T, 0);  // bank bytes, texture bytes, textures used
+  std::vector<std::uint64_t> v(3 * P + T, 0);  // bank bytes, texture bytes, bank nodes, textures used
   for (int p = group.begin; p < group.end; ++p) {
     v[std::size_t(p)] = loc.bank_bytes[std::size_t(p - group.begin)];
     v[P + std::size_t(p)] = loc.texture_bytes[std::size_t(p - group.begin)];
+    v[2 * P + std::size_t(p)] = loc.bank_nodes[std::size_t(p - group.begin)];
   }
-  for (std::size_t t = 0; t < T && t < used.size(); ++t) v[2 * P + t] = used[t];
+  for (std::size_t t = 0; t < T && t < used.size(); ++t) v[3 * P + t] = used[t];
   ranks.max(v);
 
   BankedScene bs;
   bs.num_pes = num_pes;
   bs.bank_bytes.assign(v.begin(), v.begin() + std::ptrdiff_t(P));
   bs.texture_bytes.assign(v.begin() + std::ptrdiff_t(P), v.begin() + std::ptrdiff_t(2 * P));
-  const std::vector<char> used_anywhere(v.begin() + std::ptrdiff_t(2 * P), v.end());
+  bs.bank_nodes.assign(v.begin() + std::ptrdiff_t(2 * P), v.begin() + std::ptrdiff_t(3 * P));
+  const std::vector<char> used_anywhere(v.begin() + std::ptrdiff_t(3 * P), v.end());
   bs.triangles = std::move(loc.triangles);
   bs.nodes = std::move(loc.nodes);
   bs.attributes = std::move(loc.attributes);

@@ -125,6 +125,9 @@ void Renderer::Machine::describe_prepared(const PreparedBanks& banks) {
   prepared.pilot_seconds = banks.pilot_seconds;
   prepared.pilot_warm_up_seconds = banks.pilot_warm_up_seconds;
   prepared.bank_bytes = bs.bank_bytes;
+  if (rt.quantised_nodes())  // the walks read BankQNode, half a BankNode
+    for (std::size_t p = 0; p < prepared.bank_bytes.size() && p < bs.bank_nodes.size(); ++p)
+      prepared.bank_bytes[p] -= bs.bank_nodes[p] * (sizeof(BankNode) - sizeof(BankQNode));
   prepared.global_bytes = bs.global_bytes;
   prepared.replicated_bytes = bs.replicated_bytes;
   prepared.texture_bytes = bs.texture_bytes;

@@ -123,13 +123,13 @@ std::uint64_t model_bytes(const ModelTree& m) {
 // PE p's bank (bs.pes[p], its instances `insts` under `tree`) appended to `out`, and
 // bs.pes[p] set to its new ranges; a model the device holds no copy of
 // yet is copied into it. Returns the bank's bytes (each model it places
-// counted, as a texture is).
+// counted, as a texture is); `nodes` gets the nodes among them.
 std::uint64_t lay_out_bank(const Scene& scene, const std::vector<ModelTree>& models, const std::vector<int>& insts,
                            const BankArray<BankNode>& tree, const Box& sbox, BankedScene& bs, std::size_t p,
-                           const std::vector<int>& attributes, Layout& out) {
+                           const std::vector<int>& attributes, Layout& out, std::uint64_t& nodes) {
   PeInfo& pe = bs.pes[p];
-  std::uint64_t bytes = std::uint64_t(pe.tri_end - pe.tri_begin) * sizeof(BankTriangle) +
-                        std::uint64_t(pe.node_end - pe.node_begin) * sizeof(BankNode);
+  nodes = std::uint64_t(pe.node_end - pe.node_begin);
+  std::uint64_t bytes = std::uint64_t(pe.tri_end - pe.tri_begin) * sizeof(BankTriangle) + nodes * sizeof(BankNode);
   const int tri0 = static_cast<int>(out.tris.size()), node0 = static_cast<int>(out.nodes.size());
   const int t_delta = tri0 - pe.tri_begin, n_delta = node0 - pe.node_begin;
   out.tris.insert(out.tris.end(), bs.triangles.begin() + pe.tri_begin, bs.triangles.begin() + pe.tri_end);
@@ -149,6 +149,7 @@ std::uint64_t lay_out_bank(const Scene& scene, const std::vector<ModelTree>& mod
     pe.instance_root = static_cast<int>(out.nodes.size());
     append_nodes(out.nodes, tree.data(), tree.data() + tree.size(), pe.instance_root, 0);
     bytes += tree.size() * sizeof(BankNode);
+    nodes += tree.size();
     std::vector<char> placed(models.size(), 0);
     for (int i : insts) {
       const int m = scene.instances[std::size_t(i)].prototype;
@@ -166,7 +167,7 @@ std::uint64_t lay_out_bank(const Scene& scene, const std::vector<ModelTree>& mod
       out.clusters.push_back(instance_cluster(out.boxes[std::size_t(i)], i, -1, sbox));  // its PE: set by the caller
     }
     for (std::size_t m = 0; m < models.size(); ++m)
-      if (placed[m]) bytes += model_bytes(models[m]);
+      if (placed[m]) bytes += model_bytes(models[m]), nodes += models[m].nodes.size();
   }
   pe.cluster_begin = c0;
   pe.cluster_end = static_cast<int>(out.clusters.size());
@@ -265,9 +266,10 @@ void add_instance_banks(const Scene& scene, const std::vector<int>& pe_of, int p
   for (std::size_t p = 0; p < G; ++p) {
     const int device = device_of.empty() ? 0 : device_of[p];
     if (device != out.device) out.device = device, out.copy_root.assign(models.size(), -1);
-    const std::uint64_t bytes = lay_out_bank(scene, models, by_pe[p], trees[p], sbox, bs, p, attributes, out);
+    std::uint64_t nodes = 0;
+    const std::uint64_t bytes = lay_out_bank(scene, models, by_pe[p], trees[p], sbox, bs, p, attributes, out, nodes);
     BankArray<BankNode>().swap(trees[p]);
-    if (p < bs.bank_bytes.size()) bs.bank_bytes[p] = bytes;
+    if (p < bs.bank_bytes.size()) bs.bank_bytes[p] = bytes, bs.bank_nodes[p] = nodes;
   }
   for (std::size_t p = 0; p < G; ++p)
     for (int c = bs.pes[p].cluster_begin; c < bs.pes[p].cluster_end; ++c)

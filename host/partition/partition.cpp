@@ -287,6 +287,7 @@ void describe_pes(const std::vector<ClusterBuild>& cb, const std::vector<std::pa
     std::uint64_t bytes = std::uint64_t(pe.tri_end - pe.tri_begin) * sizeof(BankTriangle) +
                           std::uint64_t(pe.node_end - pe.node_begin) * sizeof(BankNode);
     bs.bank_bytes.push_back(bytes);
+    bs.bank_nodes.push_back(std::uint64_t(pe.node_end - pe.node_begin));
   }
 }
 

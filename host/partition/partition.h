@@ -46,6 +46,7 @@ struct BankedScene {
   BankArray<std::uint32_t> texels;     // their texels, packed sRGB
   std::vector<std::uint64_t> bank_bytes;  // facets + BVH nodes + attributes + textures of each bank
   std::vector<std::uint64_t> texture_bytes;  // texture copies of each bank (part of bank_bytes)
+  std::vector<std::uint64_t> bank_nodes;  // BVH nodes of each bank (part of bank_bytes, as BankNode)
   std::uint64_t texture_replicated_bytes = 0;  // every texture the facets use, once
   std::uint64_t global_bytes = 0;         // what every PE knows: spheres, routing boxes, PE boxes, materials, lights
   std::uint64_t replicated_bytes = 0;     // one full copy of the scene (what each PE would hold if duplicated)

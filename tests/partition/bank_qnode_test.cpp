@@ -114,6 +114,23 @@ TEST(QuantisedNodes, EveryBankNodeOfAScene) {
   }
 }
 
+// --stats' bank bytes count the nodes the walks read: each bank's shrink by
+// 128 bytes a node (none in an empty bank), and without instances (whose
+// models a device holds once for several banks) by as much in all as the
+// device's bytes.
+void expect_half_node_bytes(const RenderStats& floats, const RenderStats& quantised, bool no_instances) {
+  ASSERT_EQ(floats.bank_bytes.size(), quantised.bank_bytes.size());
+  std::uint64_t saved = 0;
+  for (std::size_t p = 0; p < floats.bank_bytes.size(); ++p) {
+    ASSERT_GE(floats.bank_bytes[p], quantised.bank_bytes[p]) << "bank " << p;
+    const std::uint64_t d = floats.bank_bytes[p] - quantised.bank_bytes[p];
+    EXPECT_EQ(d % (sizeof(BankNode) - sizeof(BankQNode)), 0u) << "bank " << p;
+    saved += d;
+  }
+  EXPECT_GT(saved, 0u);
+  if (no_instances) EXPECT_EQ(saved, floats.device_bytes - quantised.device_bytes);
+}
+
 // The image and the item buffer do not depend on the layout: the hit order
 // decides, whatever boxes the walks visit (kernels/hit_order.h).
 TEST(QuantisedNodes, GiveTheFloatLayoutsFrames) {
@@ -137,6 +154,7 @@ TEST(QuantisedNodes, GiveTheFloatLayoutsFrames) {
       EXPECT_EQ(a.item_buffer, b.item_buffer);
       EXPECT_FALSE(a.stats.quantised_nodes);
       EXPECT_TRUE(b.stats.quantised_nodes) << "--stats names the layout the walks read";
+      expect_half_node_bytes(a.stats, b.stats, s.instances.empty());
     }
 }
 

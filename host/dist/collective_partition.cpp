@@ -316,7 +316,6 @@ BankedScene share_tables(const Scene& share, const Box& sbox, const Placement& p
   }
   for (std::size_t t = 0; t < T && t < used.size(); ++t) v[3 * P + t] = used[t];
   ranks.max(v);
-
   BankedScene bs;
   bs.num_pes = num_pes;
   bs.bank_bytes.assign(v.begin(), v.begin() + std::ptrdiff_t(P));

@@ -261,6 +261,8 @@ int run_render(const std::vector<std::string>& args, Ranks& ranks) {
                   double(physical_memory()) / (1 << 30));
     print_line("warning", text);
   }
+  if (!o.quiet && writer)
+    for (const std::string& w : unknown_env_hooks()) print_line("warning", w);
   if (o.reference && !o.quiet) {
     if (!o.device_spec.empty()) print_line("warning", "--device is ignored with --reference");
     if (o.balance) print_line("warning", "--balance is ignored with --reference (one processor, no banks)");

@@ -187,6 +187,7 @@ int run_bench(const std::vector<std::string>& args, Ranks& ranks) {
   } else {
     progress("device: %s", device.c_str());
   }
+  for (const std::string& w : unknown_env_hooks()) progress("warning: %s", w.c_str());
   // Pilot frames measure the scene's own facets only: an instanced scene's
   // banks are balanced by the frame's sampled rays unless --balance says.
   if (!scene.instances.empty() && !o.balance) request.balance = Balance::work;

@@ -58,6 +58,12 @@ const char* env_hook(EnvHook hook);
 std::optional<std::uint64_t> env_hook_number(EnvHook hook, std::uint64_t lo, std::uint64_t hi,
                                              const char* expected);
 
+// A warning for each OPSILA_* variable set that no part of opsila reads
+// (a misspelt hook would otherwise change nothing, without a word), with
+// the hook it is nearest to. OPSILA_TEST_DEVICE (the tests') and
+// OPSILA_NO_APT (tools/setup.sh's) are known too.
+std::vector<std::string> unknown_env_hooks();
+
 // The files the variables name that a run reads (OPSILA_KERNEL_SOURCE):
 // inputs, which no output may replace.
 std::vector<std::string> env_hook_inputs();

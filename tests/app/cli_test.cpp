@@ -374,6 +374,24 @@ TEST_F(CliFixture, SkippedFaceWarnsOnceUnlessQuiet) {
   EXPECT_EQ(r.err.find("warning"), std::string::npos) << r.err;
 }
 
+// A misspelt hook changed nothing without a word: now a warning names it
+// and the hook it is nearest to; a hook spelt right, none; -q, none.
+TEST_F(CliFixture, AnUnknownOpsilaVariableIsWarnedOfUnlessQuiet) {
+  const test::EnvChanges env = {{"OPSILA_QUANT_NODE", "1"}, {"OPSILA_THREADS", "2"}};
+  RunResult r = test::run_program(OPSILA_BINARY, {"render", scene, "-o", out("x.png"), "--reference", "--size", "8x8"},
+                                  env);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("opsila: warning: OPSILA_QUANT_NODE is set but opsila reads no such variable (did you mean "
+                       "OPSILA_QUANT_NODES?)"),
+            std::string::npos)
+      << r.err;
+  EXPECT_EQ(r.err.find("OPSILA_THREADS"), std::string::npos) << r.err;
+  r = test::run_program(OPSILA_BINARY, {"render", scene, "-o", out("y.png"), "--reference", "--size", "8x8", "-q"},
+                        env);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r.err, "");
+}
+
 // The OpenCL path on the default device, compared with the reference. Fails
 // until the OpenCL renderer is complete.
 TEST_F(CliFixture, OpenClRenderMatchesReference) {

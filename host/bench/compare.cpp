@@ -3,6 +3,8 @@
 #include <climits>
 #include <cstdio>
 #include <sstream>
+#include <string>
+#include <vector>
 
 #include "bench/report.h"
 #include "core/input_file.h"
@@ -121,6 +123,15 @@ json read_saved_bench(const std::string& path) {
   check_json_shape(text, "--compare " + path, 16, 4096);
   json j = json::parse(text, nullptr, false);
   if (j.is_discarded()) throw InputError("--compare " + path + ": not JSON");
+  // A key given twice (an edited file): the parse keeps the last, so a
+  // figure compared could be either; opsila writes each once.
+  std::vector<std::string> repeated;
+  (void)JsonLines(text, "--compare " + path, repeated);
+  if (!repeated.empty()) {
+    std::string first = repeated.front();
+    first.resize(first.rfind("; the last one is used"));
+    throw InputError(first + " (a saved bench result holds each key once)");
+  }
   if (!j.is_object() || !j.contains("render") || !j["render"].is_object())
     throw InputError("--compare " + path + ": not an opsila bench result (no \"render\" block)");
   check_saved_settings(j, path);

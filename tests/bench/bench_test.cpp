@@ -580,6 +580,11 @@ TEST(BenchCompare, ASavedRunMustBeABenchResult) {
   // Its shape is checked before the parse (40 MiB of '[' took 3.1 GB there).
   test::expect_error([&] { read_saved_bench(dir.write("deep.json", std::string(1 << 23, '['))); },
                      {"deep.json:1: nesting deeper than 16 levels"});
+  // A key given twice (an edited file): the parse kept the last; refused.
+  std::string twice = saved_result(1, 1, 1).dump();
+  twice.insert(1, "\"depth\": 99, ");
+  test::expect_error([&] { read_saved_bench(dir.write("twice.json", twice)); },
+                     {"twice.json:1: depth: key given twice (a saved bench result holds each key once)"});
   const test::RunResult r = test::run_opsila({"bench", "scene.json", "--compare", dir.file("none.json")});
   EXPECT_EQ(r.exit_code, 2);
   ASSERT_EQ(r.error_lines().size(), 1u) << r.err;

@@ -22,6 +22,7 @@
 #include <stb/stb_image.h>
 
 #include "core/input_file.h"
+#include "formats/image/image_checks.h"
 
 namespace opsila {
 
@@ -29,36 +30,9 @@ namespace fs = std::filesystem;
 
 namespace {
 
-std::uint32_t le(const unsigned char* data, std::size_t at, int bytes) {
-  std::uint32_t v = 0;
-  for (int k = bytes - 1; k >= 0; --k) v = v << 8 | data[at + std::size_t(k)];
-  return v;
-}
-
-// Where an uncompressed BMP, or a TGA, is shorter than its header says:
-// stb decodes the missing pixels as zeros, so a file of a few bytes would
-// become a black image of the size it claims. "" when it is long enough (or
-// not one of these; stb then judges it). A TGA's run-length packets hold at
-// most 128 pixels each, in at least one byte more than a pixel.
-std::string short_bmp_or_tga(const unsigned char* data, std::size_t size, long long w, long long h) {
-  const unsigned long long pixels = static_cast<unsigned long long>(w) * static_cast<unsigned long long>(h);
-  unsigned long long need = 0;
-  const char* format = "";
-  if (size >= 34 && data[0] == 'B' && data[1] == 'M') {
-    const bool os2 = le(data, 14, 4) == 12;  // the old 12-byte header: no compression field
-    const std::uint32_t compression = os2 ? 0 : le(data, 30, 4), bits = le(data, os2 ? 24 : 28, 2);
-    if (compression != 0 && compression != 3) return "";
-    format = "BMP";
-    need = le(data, 10, 4) + (static_cast<unsigned long long>(w) * bits + 31) / 32 * 4 * static_cast<unsigned long long>(h);
-  } else if (size >= 18 && (data[2] & 7) != 0 && (data[2] & ~0xBu) == 0 && (data[1] == 0 || data[1] == 1)) {
-    const unsigned long long pixel_bytes = (data[16] + 7u) / 8u;
-    const unsigned long long palette = data[1] ? le(data, 5, 2) * ((data[7] + 7u) / 8u) : 0;
-    format = "TGA";
-    need = 18 + data[0] + palette + ((data[2] & 8) ? (pixels + 127) / 128 * (1 + pixel_bytes) : pixels * pixel_bytes);
-  }
-  if (need <= size) return "";
-  return std::string("truncated ") + format + ": " + std::to_string(w) + "x" + std::to_string(h) + " needs at least " +
-         std::to_string(need) + " bytes, the file has " + std::to_string(size);
+// Texel i of stb's 8-bit RGB pixels, packed as Texture holds it.
+std::uint32_t texel_at(const unsigned char* rgb, std::size_t i) {
+  return std::uint32_t(rgb[3 * i]) | std::uint32_t(rgb[3 * i + 1]) << 8 | std::uint32_t(rgb[3 * i + 2]) << 16;
 }
 
 }  // namespace
@@ -71,21 +45,10 @@ bool decode_texture_memory(const unsigned char* data, std::size_t size, const st
   }
   const int len = static_cast<int>(size);
   int w = 0, h = 0, channels = 0;
-  // A PNG's size is in its first chunk (IHDR, big-endian width and height):
-  // stb refuses one past its limit, then tries the other formats, and its
-  // last reason ("unknown type") would hide why.
-  static const unsigned char kPngSignature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
-  const bool png = size >= 8 && std::equal(kPngSignature, kPngSignature + 8, data);
-  if (png && size >= 24) {
-    const auto be32 = [&](std::size_t at) {
-      return std::uint32_t(data[at]) << 24 | std::uint32_t(data[at + 1]) << 16 | std::uint32_t(data[at + 2]) << 8 |
-             std::uint32_t(data[at + 3]);
-    };
-    const std::uint32_t pw = be32(16), ph = be32(20);
-    if (pw > std::uint32_t(kMaxTextureSide) || ph > std::uint32_t(kMaxTextureSide)) {
-      problem = "image too large (" + std::to_string(pw) + "x" + std::to_string(ph) + ")";
-      return false;
-    }
+  const bool png = is_png(data, size);
+  if (std::string why = png_side_problem(data, size, kMaxTextureSide); !why.empty()) {
+    problem = why;
+    return false;
   }
   if (!stbi_info_from_memory(data, len, &w, &h, &channels)) {
     const char* why = stbi_failure_reason();
@@ -103,15 +66,23 @@ bool decode_texture_memory(const unsigned char* data, std::size_t size, const st
     problem = "image too large (" + std::to_string(aw) + "x" + std::to_string(ah) + ")";
     return false;
   }
-  if (std::string why = short_bmp_or_tga(data, size, aw, ah); !why.empty()) {
-    problem = "cannot decode the image (" + why + ")";
+  std::string why = short_bmp_or_tga(data, size, aw, ah);
+  if (why.empty()) why = jpeg_problem(data, size, aw, ah);
+  PaddedPalette palette;
+  if (why.empty() && png) why = pad_png_palette(data, size, palette);
+  if (!why.empty() || palette.bytes.size() > static_cast<std::size_t>(std::numeric_limits<int>::max())) {
+    problem = "cannot decode the image (" + (why.empty() ? std::string("image file too large") : why) + ")";
     return false;
   }
   if (stbi_is_16_bit_from_memory(data, len)) {
     problem = "16-bit images are not supported (8 bits per channel)";
     return false;
   }
-  unsigned char* pixels = stbi_load_from_memory(data, len, &w, &h, &channels, 3);
+  const bool padded = !palette.bytes.empty();
+  unsigned char* pixels =
+      padded ? stbi_load_from_memory(reinterpret_cast<const unsigned char*>(palette.bytes.data()),
+                                     static_cast<int>(palette.bytes.size()), &w, &h, &channels, 3)
+             : stbi_load_from_memory(data, len, &w, &h, &channels, 3);
   if (!pixels) {
     const char* why = stbi_failure_reason();
     problem = std::string("cannot decode the image") + (why ? std::string(" (") + why + ")" : "");
@@ -121,13 +92,19 @@ bool decode_texture_memory(const unsigned char* data, std::size_t size, const st
       problem = "cannot decode the image (truncated PNG: it ends before its IEND chunk)";
     return false;
   }
+  const std::size_t texels = static_cast<std::size_t>(w) * static_cast<std::size_t>(h);
+  std::size_t past = padded ? 0 : texels;
+  while (past < texels && texel_at(pixels, past) != palette.sentinel) ++past;
+  if (past < texels) {
+    stbi_image_free(pixels);
+    problem = "cannot decode the image (a pixel indexes past the PNG palette of " + std::to_string(palette.entries) + ")";
+    return false;
+  }
   out.path = name;
   out.width = w;
   out.height = h;
-  out.texels.resize(static_cast<std::size_t>(w) * h);
-  for (std::size_t i = 0; i < out.texels.size(); ++i)
-    out.texels[i] = std::uint32_t(pixels[3 * i]) | std::uint32_t(pixels[3 * i + 1]) << 8 |
-                    std::uint32_t(pixels[3 * i + 2]) << 16;
+  out.texels.resize(texels);
+  for (std::size_t i = 0; i < texels; ++i) out.texels[i] = texel_at(pixels, i);
   stbi_image_free(pixels);
   return true;
 }

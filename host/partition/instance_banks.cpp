@@ -62,10 +62,10 @@ ModelTree build_model(const Scene& scene, const Prototype& p) {
   return m;  // its root is node 0, the bank root
 }
 
-// Every instance's world box (instance_box), made once for the partition.
+// Every instance's world box (instance_holding_box), made once for the partition.
 std::vector<Box> instance_boxes(const Scene& scene) {
   std::vector<Box> boxes(scene.instances.size());
-  parallel_for(boxes.size(), [&](std::size_t i) { instance_box(scene, scene.instances[i], boxes[i].lo, boxes[i].hi); });
+  parallel_for(boxes.size(), [&](std::size_t i) { instance_holding_box(scene, scene.instances[i], boxes[i].lo, boxes[i].hi); });
   return boxes;
 }
 

@@ -62,7 +62,7 @@ void ReferenceTracer::build_instances(int build_threads, float pad) {
   std::vector<Vec3> lo_of(n), hi_of(n);
   impl_->inst_boxes.resize(n);
   for (std::size_t i = 0; i < n; ++i) {
-    instance_box(scene, scene.instances[i], lo_of[i], hi_of[i]);
+    instance_holding_box(scene, scene.instances[i], lo_of[i], hi_of[i]);
     impl_->inst_boxes[i] = {lo_of[i] - splat(pad), hi_of[i] + splat(pad)};
   }
   impl_->inst_bvh = reference::build_bvh(lo_of, hi_of, std::vector<bool>(n, true), pad, build_threads);

@@ -35,7 +35,7 @@ struct ReferenceTracer::Impl {
   std::vector<Tri> tris;
   Bvh bvh;
   std::vector<Model> models;   // per Scene::prototypes
-  std::vector<Box> inst_boxes; // per Scene::instances: instance_box, padded
+  std::vector<Box> inst_boxes; // per Scene::instances: instance_holding_box, padded
   Bvh inst_bvh;                // over inst_boxes: leaves name instances
   CameraFrame frame;
   float epsilon = 0;

@@ -66,9 +66,12 @@ Vec3 instance_normal(const std::array<float, 12>& m, const Vec3& n) {
           m[2] * n[0] + m[6] * n[1] + m[10] * n[2]};
 }
 
-void instance_box(const Scene& scene, const InstanceDesc& in, Vec3& lo, Vec3& hi) {
+namespace {
+
+// The model's box through to_world, every corner in double: l, u per axis.
+void placed_corners(const Scene& scene, const InstanceDesc& in, double l[3], double u[3]) {
   const Prototype& p = scene.prototypes[std::size_t(in.prototype)];
-  double l[3] = {INFINITY, INFINITY, INFINITY}, u[3] = {-INFINITY, -INFINITY, -INFINITY};
+  for (int r = 0; r < 3; ++r) l[r] = INFINITY, u[r] = -INFINITY;
   for (int corner = 0; corner < 8; ++corner) {
     const double x[3] = {(corner & 1) ? p.hi[0] : p.lo[0], (corner & 2) ? p.hi[1] : p.lo[1],
                          (corner & 4) ? p.hi[2] : p.lo[2]};
@@ -79,6 +82,19 @@ void instance_box(const Scene& scene, const InstanceDesc& in, Vec3& lo, Vec3& hi
       u[r] = std::max(u[r], y);
     }
   }
+}
+
+}  // namespace
+
+void instance_box(const Scene& scene, const InstanceDesc& in, Vec3& lo, Vec3& hi) {
+  double l[3], u[3];
+  placed_corners(scene, in, l, u);
+  for (int r = 0; r < 3; ++r) lo[std::size_t(r)] = static_cast<float>(l[r]), hi[std::size_t(r)] = static_cast<float>(u[r]);
+}
+
+void instance_holding_box(const Scene& scene, const InstanceDesc& in, Vec3& lo, Vec3& hi) {
+  double l[3], u[3];
+  placed_corners(scene, in, l, u);
   double size = 0, magnitude = 0;
   for (int r = 0; r < 3; ++r) {
     size = std::max(size, u[r] - l[r]);

@@ -38,11 +38,18 @@ Vec3 apply_vector(const std::array<float, 12>& m, const Vec3& v);
 // not normalised (kernels/lib/shading.cl instance_normal).
 Vec3 instance_normal(const std::array<float, 12>& to_object, const Vec3& n);
 
-// The world box of an instance: its prototype's box through to_world (every
-// corner, in double), widened by a relative 2^-16 of its size and of its
-// magnitude, so that the box holds every point a ray meets in the model's
-// frame through the float inverse.
+// The world box of an instance's facets as the scene's bounds count them
+// (the framing, epsilon: CONTRACT "Shading"): its prototype's box through
+// to_world, every corner in double, each bound rounded to the nearest
+// float. For a translation or a scale, the box of the same facets placed
+// without an instance; under a rotation, the box of the turned model box.
 void instance_box(const Scene& scene, const InstanceDesc& in, Vec3& lo, Vec3& hi);
+// The box the walks test for it: the same widened by a relative 2^-16 of
+// its size and of its magnitude, so that it holds every point a ray meets
+// in the model's frame through the float inverse. Not the scene's bounds:
+// at 1e6 from the origin the widening is some 15 units, which had framed
+// and sized epsilon for a box far larger than the facets.
+void instance_holding_box(const Scene& scene, const InstanceDesc& in, Vec3& lo, Vec3& hi);
 
 // The triangles the instances stand for (each its prototype's).
 std::uint64_t instanced_triangles(const Scene& scene);

@@ -165,6 +165,32 @@ TEST(JsonInstances, EveryRankOfAShareKeepsEveryInstanceInItsBounds) {
   }
 }
 
+// CONTRACT: the framing and epsilon follow the drawn facets' box; an
+// instance's counts as the same facets placed without one. Its walks' box
+// is wider (instance_holding_box): at 1e6 from the origin, some 15 units,
+// which had framed the sphere out of the picture.
+TEST(JsonInstances, BoundsFramingAndEpsilonAreThoseOfTheFacetsPlaced) {
+  for (const char* at : {"0", "1e4", "1e6"}) {
+    SCOPED_TRACE(at);
+    const std::string sphere = "{\"type\": \"sphere\", \"center\": [0, 0, 0], \"radius\": 1, \"subdivisions\": 1}";
+    const Scene placed = json("{\"objects\": [{\"type\": \"instances\", \"model\": " + sphere +
+                              ", \"transforms\": [{\"translate\": [" + at + ", 0, 0]}]}]}");
+    const Scene plain = json("{\"objects\": [{\"type\": \"sphere\", \"center\": [" + std::string(at) +
+                             ", 0, 0], \"radius\": 1, \"subdivisions\": 1}]}");
+    Vec3 lo, hi, l, h;
+    placed.bounds(lo, hi);
+    plain.bounds(l, h);
+    EXPECT_EQ(lo, l);
+    EXPECT_EQ(hi, h);
+    EXPECT_EQ(placed.epsilon(), plain.epsilon());
+    EXPECT_EQ(placed.camera.eye, plain.camera.eye);
+    EXPECT_EQ(placed.camera.look_at, plain.camera.look_at);
+    instance_holding_box(placed, placed.instances[0], l, h);
+    EXPECT_TRUE(min(lo, l) == l && max(hi, h) == h) << "the walks' box holds the facets";
+    EXPECT_LT(l[0], lo[0]);
+  }
+}
+
 TEST(JsonInstances, ErrorsNameFileLineAndKey) {
   const auto entry = [](const std::string& body) { return scene_with("{\"type\": \"instances\", " + body + "}"); };
   const std::string cube = "\"model\": {\"type\": \"model\", \"file\": \"cube.obj\"}";

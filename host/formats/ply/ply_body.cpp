@@ -158,6 +158,18 @@ void Body::end_of_instance(const Element& e, std::uint64_t i) {
   ++line_;
 }
 
+void Body::end_of_data(const Element& last) {
+  for (;;) {
+    if (at_ == end_ && !fill(1)) return;
+    const char c = buf_[at_];
+    if (format_ != Format::ascii || !(blank(c) || c == '\n')) break;
+    if (c == '\n') ++line_;
+    ++at_;
+  }
+  data_past_elements(path_, last, format_ == Format::ascii,
+                     format_ == Format::ascii ? std::uint64_t(line_ + 1) : consumed_ + at_);
+}
+
 }  // namespace ply
 }  // namespace opsila
 #endif

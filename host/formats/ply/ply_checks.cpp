@@ -27,6 +27,15 @@ namespace {
                    std::to_string(e.count) + " is missing or incomplete (truncated file)");
 }
 
+// Whether the importer reads every element the header counts, so that
+// data past them is no element's (an element it does not know leaves its
+// lines to the end: those are warned of as not read).
+bool every_count_read(const Header& h) {
+  for (const Element& e : h.elements)
+    if (!importer_knows(e.name)) return false;
+  return !h.elements.empty();
+}
+
 // The importer's next line (its stream buffer's): a line ends at '\r',
 // '\n', NUL or '\f' (so a NUL splits a line in two); one that starts at
 // such a byte first skips past the next '\n' (a "\r\n" ending, or one
@@ -101,6 +110,11 @@ void check_text(std::string_view data, std::uint64_t first_line, const Header& h
         }
       }
     }
+  const std::size_t rest = data.find_first_not_of(" \t\r\n", std::min(at, data.size()));
+  if (rest != std::string_view::npos && every_count_read(h))
+    data_past_elements(name, h.elements.back(), true,
+                       next + std::uint64_t(std::count(data.begin() + std::ptrdiff_t(std::min(at, data.size())),
+                                                       data.begin() + std::ptrdiff_t(rest), '\n')));
 }
 
 // The binary data: fixed sizes, lists read for their counts.
@@ -138,9 +152,17 @@ void check_binary(std::string_view data, const Header& h, const std::string& nam
         at += n * std::uint64_t(item_bytes);
       }
   }
+  if (at < size && every_count_read(h)) data_past_elements(name, h.elements.back(), false, h.body + at);
 }
 
 }  // namespace
+
+void data_past_elements(const std::string& name, const Element& last, bool text, std::uint64_t where) {
+  const std::string what = "data goes on past the " + std::to_string(last.count) + " '" + last.name +
+                           "' element(s) the header counts, the last it declares";
+  if (text) throw InputError(name + ":" + std::to_string(where) + ": PLY " + what);
+  throw InputError(name + ": PLY " + what + " (from byte " + std::to_string(where) + ")");
+}
 
 // The importer's PLY reader does not stop on a header that never ends (found
 // by fuzz_model), allocates what the element counts ask for before reading

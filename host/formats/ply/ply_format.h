@@ -75,6 +75,15 @@ Header read_header(const std::string& path, const std::string* bytes = nullptr);
 // and faces at all.
 void check_ply(const std::string& bytes, const std::string& name);
 
+// Whether the importer reads an element of this name by its header count:
+// it takes another's count from its name ("range_grid" is 0 of them).
+bool importer_knows(const std::string& element);
+
+// The error for data past the last element `last` of a PLY file: at
+// `line` (a text file) or at `byte` of the file (a binary one). Both readers
+// had dropped a face past the header's count without a word.
+[[noreturn]] void data_past_elements(const std::string& name, const Element& last, bool text, std::uint64_t where);
+
 // Whether the header declares a 'tristrips' element.
 bool has_strips(const Header& h);
 
@@ -105,6 +114,9 @@ class Body {
   Value next(Type t, const Element& e, std::uint64_t i);
   // Ascii: the end of an element's line (nothing else may follow on it).
   void end_of_instance(const Element& e, std::uint64_t i);
+  // After the last element `last`: nothing but blank lines (binary:
+  // nothing at all), or one error naming where the rest starts.
+  void end_of_data(const Element& last);
   // Where the reading is, for messages: "line N" or "byte N".
   std::string where() const;
   // One error naming the file, the element and where it is read.

@@ -65,10 +65,7 @@ struct HeaderLines {
       // name it does not know it reads the count from the name itself
       // ("element 5555555 x" is 5,555,555 elements, which it read for
       // ever; also found by fuzz_model), and a texture file has none.
-      static const char* const kKnown[] = {"vertex", "face", "tristrips", "edge", "material"};
-      bool known = false;
-      for (const char* k : kKnown) known = known || name == k;
-      if (!known) count = name == "TextureFile" ? "" : name;
+      if (!importer_knows(name)) count = name == "TextureFile" ? "" : name;
       const std::string digits = count.substr(0, count.find_first_not_of("0123456789"));
       const std::uint64_t n = digits.empty()        ? 0
                               : digits.size() <= 19 ? std::stoull(digits)
@@ -252,6 +249,13 @@ Header parse_header(const std::string& bytes, std::uint64_t file_bytes, const st
     if (!lines.format_seen) lines.fail("no format line");
     h.lines = lines.line;
   }
+  // Both readers would take a face's corner 3.99 as vertex 3.
+  for (const Element& e : h.elements)
+    for (const Property& p : e.properties)
+      if (p.list && (p.type == Type::float32 || p.type == Type::float64) && e.name == "face" &&
+          (p.name == "vertex_indices" || p.name == "vertex_index"))
+        throw InputError(path + ": PLY 'face' element: the list '" + p.name +
+                         "' holds floating-point values, where vertex indices are integers");
   h.body = at;
   return h;
 }
@@ -261,6 +265,13 @@ Header read_header(const std::string& path, const std::string* bytes) {
   ModelFiles files;
   const std::uint64_t size = files.size(path);
   return parse_header(files.head(path, kMaxHeaderBytes), size, path, Reading::stream);
+}
+
+bool importer_knows(const std::string& element) {
+  static const char* const kKnown[] = {"vertex", "face", "tristrips", "edge", "material"};
+  for (const char* k : kKnown)
+    if (element == k) return true;
+  return false;
 }
 
 bool has_strips(const Header& h) {

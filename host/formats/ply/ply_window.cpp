@@ -98,6 +98,7 @@ class PlyWindowReader {
         if (h.elements[k].name == "face") read_faces(body, h.elements[k], not_finite, fan);
         else read_strips(body, h.elements[k], not_finite, fan);
       }
+      body.end_of_data(h.elements.back());
       fan.finish(fans);
       return scene;
     } catch (const std::bad_alloc&) {

@@ -110,7 +110,7 @@ TEST_F(PlyWindow, WindowsTogetherAreTheImportersTriangles) {
 }
 
 // Files the importer path reads, odd but not wrong: faces of 0, 1 and 300
-// corners, data after the last face, properties in another order.
+// corners, properties in another order.
 TEST_F(PlyWindow, OddFilesAreTheImportersToo) {
   const PlyFile p = ply_grid(6, 5, 0);
   PlyFile empty = p;
@@ -122,9 +122,6 @@ TEST_F(PlyWindow, OddFilesAreTheImportersToo) {
   large.faces.insert(large.faces.begin(), std::vector<long long>(300, 7));
   large.faces[0][1] = 8, large.faces[0][2] = 14;
   expect_same(large, "a_face_of_300_corners");
-  PlyFile trailing = p;
-  trailing.face_count = p.faces.size() - 1;
-  expect_same(trailing, "data_after_the_last_face");
   PlyFile order = p;
   order.format = "binary_big_endian";
   order.props = {{"float", "z"}, {"ushort", "confidence"}, {"float", "x"}, {"float", "y"}};
@@ -159,6 +156,12 @@ TEST_F(PlyWindow, BadFilesGiveOneErrorOnEveryRank) {
   q.format = "ascii";
   q.faces.back() = {0, 1, 20};
   expect_error(q, "ascii_index_out_of_range", "", {".ply:" + std::to_string(10 + 20 + p.faces.size()) + ": PLY " + last});
+  q = p;
+  q.face_count = p.faces.size() - 1;  // both readers had dropped the last face
+  expect_error(q, "data_after_the_last_face", "",
+               {"PLY data goes on past the " + std::to_string(p.faces.size() - 1) + " 'face' element(s)", "(from byte "});
+  q.format = "ascii";
+  expect_error(q, "ascii_data_after_the_last_face", "", {".ply:" + std::to_string(10 + 20 + p.faces.size()) + ": PLY data goes on past"});
   q = p;
   q.face_count = std::uint64_t(1) << 40;
   expect_error(q, "a_trillion_faces", "", {"of 1099511627776 at byte ", "the file ends early (truncated)"});
@@ -204,7 +207,17 @@ TEST_F(PlyWindow, ListCountsOutsideTheirTypeAreNamed) {
   EXPECT_NE(one_process(real).find("the list 'vertex_indices' has a count type that is not an integer type"),
             std::string::npos)
       << one_process(real);
+  // Both readers had taken a corner 3.99 as vertex 3.
   p.count_type = "uchar";
+  p.index_type = "float";
+  p.face_count = p.faces.size();
+  for (const char* format : {"ascii", "binary_little_endian"}) {
+    p.format = format;
+    const std::string floats = file(p, std::string("float_indices_") + format + ".ply");
+    EXPECT_EQ(one_process(floats), "error " + floats + ": PLY 'face' element: the list 'vertex_indices' holds "
+                                   "floating-point values, where vertex indices are integers\n");
+  }
+  p.index_type = "int";
   p.format = "ascii";
   p.faces.back().assign(300, 0);
   const std::string wide = file(p, "wide_count.ply");

@@ -44,6 +44,7 @@ class OffCheck {
     header();
     vertices();
     faces();
+    rest();
   }
 
  private:
@@ -189,6 +190,14 @@ class OffCheck {
       const int n = std::stoi(std::string(w));
       for (int k = 0; k < n; ++k) face_index(face, n, k, w_at);
     }
+  }
+  // Past the faces, blank and comment lines only: the importer stops at
+  // the header's count, and dropped a face past it without a word.
+  void rest() {
+    while (next_line())
+      if (l_.find_first_not_of(" \t\v") != std::string_view::npos && !comment_line())
+        throw InputError(where() + "OFF data goes on past the " + std::to_string(counts_[1]) +
+                         " faces the header counts");
   }
   // Index k of an n-vertex face: digits, within the vertices, finite.
   void face_index(const std::string& face, int n, int k, std::size_t& w_at) {

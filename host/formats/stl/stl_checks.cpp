@@ -39,7 +39,13 @@ void check_text(const std::string& bytes, const std::string& name) {
     throw InputError(name + ":" + std::to_string(line_at(at - w.size())) + ": STL facet " + std::to_string(facets) +
                      " " + what + " (a facet is a triangle: 3 'vertex' lines)");
   };
+  const auto misplaced = [&](const std::string& what) {
+    throw InputError(name + ":" + std::to_string(line_at(at - w.size())) + ": STL " + quote(w) + " " + what +
+                     " (the importer dropped it without a word)");
+  };
   while (next_word(bytes, at, w)) {
+    if (!in_solid && w != "solid") misplaced("after 'endsolid', outside any solid");
+    if (w == "vertex" && !in_facet) misplaced("outside a facet");
     if (w == "solid" || w == "endsolid") {
       in_solid = w == "solid";
       at = std::min(bytes.find('\n', at), bytes.size());

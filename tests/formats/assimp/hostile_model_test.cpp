@@ -433,6 +433,13 @@ TEST(HostileModel, OffFacesTheImporterWouldMisreadAreRefused) {
          ":2: OFF dimension '4' (1, 2 or 3 coordinates a vertex)");
   expect("truncated.off", "OFF\n3 2 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n",
          ": OFF data ends before face 2 of 2 (truncated file)");
+  const std::string facet = "facet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 1 0\nendloop\nendfacet\n";
+  expect("after.stl", "solid t\n" + facet + "endsolid t\n" + facet,
+         ":10: STL 'facet' after 'endsolid', outside any solid (the importer dropped it without a word)");
+  expect("loose.stl", "solid t\nvertex 0 0 0\n" + facet + "endsolid t\n",
+         ":2: STL 'vertex' outside a facet (the importer dropped it without a word)");
+  expect("more.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n\n# the end\n3 0 2 1\n",
+         ":9: OFF data goes on past the 1 faces the header counts");
   expect("long.off", "OFF\n3 1 0\n0 0 0" + std::string(5000, ' ') + "\n1 0 0\n0 1 0\n3 0 1 2\n",
          ":3: OFF line of 5005 characters (the model importer reads at most 4095)");
   // Read as written: comments and blank lines in the header, a quad, a

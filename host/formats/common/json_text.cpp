@@ -45,11 +45,17 @@ std::string shown_path(const std::string& path) {
   return out + quoted_prefix(segment);
 }
 
+std::string lone_cr_as_lf(std::string text) {
+  for (std::size_t k = 0; k < text.size(); ++k)
+    if (text[k] == '\r' && (k + 1 == text.size() || text[k + 1] != '\n')) text[k] = '\n';
+  return text;
+}
+
 void check_json_bytes(const char* data, std::size_t size, std::size_t offset, int& line,
                       const std::string& name) {
   for (std::size_t k = 0; k < size; ++k) {
     const unsigned char c = static_cast<unsigned char>(data[k]);
-    if (c == '\n') ++line;
+    if (c == '\n' || (c == '\r' && k + 1 < size && data[k + 1] != '\n')) ++line;
     if (!is_control(c) || c == '\n' || c == '\r' || c == '\t') continue;
     char code[8];
     std::snprintf(code, sizeof code, "0x%02x", c);

@@ -23,6 +23,12 @@ std::string quoted_prefix(const std::string& text);
 // quoted_prefix.
 std::string shown_path(const std::string& path);
 
+// The text with each carriage return that no line feed follows (a file
+// with the classic Mac OS line ends) made a line feed, byte for byte in
+// place: JSON reads both as blank space (a raw one in a string is an error
+// either way), and the line of every message counts line feeds.
+std::string lone_cr_as_lf(std::string text);
+
 // Throws InputError("NAME:LINE: ...") at the first byte that no JSON text may
 // hold (a NUL or another control character outside strings and whitespace
 // alike), so that text after a NUL is never silently ignored.

@@ -55,10 +55,12 @@ std::string TriangleBudget::beyond(const InputError& e) const {
 // What would take the triangles counted so far: as many MPI ranks, when
 // this entry can be spread over them (at most one per PE, 1024, and only in
 // a build with MPI), or as much --host-memory, when memory is what limits.
-// An entry every rank builds whole needs the memory on every rank.
+// An entry every rank builds whole needs the memory on every rank. Past
+// kMaxTriangles nothing takes it.
 std::string TriangleBudget::hint(std::size_t triangles, bool windowed) const {
   const bool whole = triangles > entry_limit_ && !windowed;
   const std::size_t all = planned_triangles_ + everywhere_ + triangles;
+  if (all > kMaxTriangles) return "";  // ids are 32-bit: no ranks or memory take more
   std::string ranks;
 #ifdef OPSILA_HAVE_MPI
   const double r = std::ceil(double(all) / double(std::max<std::size_t>(entry_limit_, 1)));

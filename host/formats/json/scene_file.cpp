@@ -113,7 +113,7 @@ Scene load_scene_from_string(const std::string& text, const std::string& name,
                        " bytes; the limit is " + std::to_string(kMaxSceneFileBytes) + ")");
     int line = 1;
     check_json_bytes(text.data(), text.size(), 0, line, name);
-    return scene_json::read_scene(text, name, base_dir, limit, share);
+    return scene_json::read_scene(lone_cr_as_lf(text), name, base_dir, limit, share);
   } catch (const Json::exception&) {
     // Never the library's text: the reader checks every value's type first,
     // so this is a reader bug, reported without a misleading detail.

@@ -67,6 +67,7 @@ std::function<void()> ObjectReader::instances(const Json& v, const std::string& 
   const Json& m = v_.require(v, path, "model");
   v_.expect_object(m, mkey);
   const std::string type = v_.string(v_.require(m, mkey, "type"), join_key(mkey, "type"));
+  if (const Json* name = v_.find(m, "name")) v_.string(*name, join_key(mkey, "name"));
   if (type == "instances") v_.fail(join_key(mkey, "type"), "instances do not nest: the model must be a shape or a model file");
   if (type == "grid" || type == "scatter")
     v_.fail(join_key(mkey, "type"), "a generator cannot be a model: it makes many objects (use a shape or a model file)");

@@ -33,6 +33,7 @@ void ObjectReader::object(const Json& v, const std::string& path) {
   v_.expect_object(v, path);
   const std::size_t planned_before = budget_.planned();  // where this entry's triangles start in the plan
   const std::string type = v_.string(v_.require(v, path, "type"), join_key(path, "type"));
+  if (const Json* name = v_.find(v, "name")) v_.string(*name, join_key(path, "name"));  // a label, but a string
   if (type == "instances") {
     builds_.push_back(instances(v, path));
     return;

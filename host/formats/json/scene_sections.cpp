@@ -83,6 +83,7 @@ void SceneSections::lights(const Json& v, const std::string& path) {
 void SceneSections::materials(const Json& v, const std::string& path) {
   v_.expect_object(v, path);
   for (auto it = v.begin(); it != v.end(); ++it) {
+    if (it.key() == "comment") continue;  // as in every object (scenes/FORMAT.md): not a material's name
     const std::string p = join_key(path, it.key());
     if (it.key().empty()) v_.fail(p, "a material needs a non-empty name");
     check_material_count(scene_.materials.size() + 1, v_.where(p));

@@ -115,7 +115,8 @@ void measure_all(BenchReport& report, Scene& scene, const RenderSettings& settin
 // rays file needs the traversal alone, which one process measures.
 void declare_outputs(const BenchOptions& o, bool writer, Ranks& ranks, OutputFiles& outputs) {
   if (writer && !o.json_path.empty()) outputs.declare("--json", o.json_path);
-  if (writer && !o.csv_dir.empty()) outputs.declare_folder("--csv", o.csv_dir);
+  if (writer && !o.csv_dir.empty())
+    outputs.declare_folder("--csv", o.csv_dir, bench_csv_tables(o.quick, ranks.size()));
   if (!o.rays_path.empty()) {
     if (ranks.size() > 1)
       bad_flag("--rays-out", o.rays_path, "the traversal alone runs in one process, not under several ranks");

@@ -206,5 +206,7 @@ std::string bench_text(const BenchReport& report);
 nlohmann::json bench_json(const BenchReport& report);  // the --json file (docs/BENCHMARKS.md)
 // Into `outputs` (declared folder `dir`), renamed into place with the rest.
 void write_bench_csv(const BenchReport& report, const std::string& dir, OutputFiles& outputs);
+// The names of the tables it may write, for checking them before the run.
+std::vector<std::string> bench_csv_tables(bool quick, int ranks);
 
 }  // namespace opsila

@@ -140,6 +140,15 @@ std::string rank_traffic_csv(const BenchReport& r) {
 
 }  // namespace
 
+std::vector<std::string> bench_csv_tables(bool quick, int ranks) {
+  std::vector<std::string> names;
+  if (ranks == 1) names.push_back("scatter.csv");
+  if (ranks == 1 && !quick) names.push_back("scatter_pes.csv");
+  for (const char* n : {"phases.csv", "levels.csv", "occupancy.csv", "traffic.csv", "baselines.csv"}) names.push_back(n);
+  if (ranks > 1) names.insert(names.end(), {"ranks.csv", "rank_traffic.csv"});
+  return names;
+}
+
 void write_bench_csv(const BenchReport& r, const std::string& dir, OutputFiles& outputs) {
   const auto write = [&](const char* name, const std::string& text) { outputs.write(dir + "/" + name, text); };
   if (!r.curve.empty()) write("scatter.csv", scatter_csv(r.curve));

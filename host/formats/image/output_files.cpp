@@ -119,10 +119,14 @@ void OutputFiles::declare(const std::string& flag, const std::string& path) {
   entries_.push_back(Entry{flag, path, "", -1, false});
 }
 
-void OutputFiles::declare_folder(const std::string& flag, const std::string& folder) {
+void OutputFiles::declare_folder(const std::string& flag, const std::string& folder,
+                                 const std::vector<std::string>& names) {
   struct stat st;
   if (::stat(folder.c_str(), &st) == 0) {
     if (!S_ISDIR(st.st_mode)) throw InputError(flag + " " + folder + ": exists and is not a folder");
+    for (const std::string& n : names)
+      if (::stat((folder + "/" + n).c_str(), &st) == 0 && S_ISDIR(st.st_mode))
+        throw InputError(flag + " " + folder + "/" + n + ": a folder stands where the table goes");
     if (::access(folder.c_str(), W_OK | X_OK) != 0)
       throw InputError(flag + " " + folder + ": cannot write in it (" + std::strerror(errno) + ")");
     if (folder_keeps_its_names(folder))
@@ -135,6 +139,7 @@ void OutputFiles::declare_folder(const std::string& flag, const std::string& fol
     if (same_file(e.path, folder)) throw InputError(flag + " " + folder + ": same file as " + e.flag);
   folder_flag_ = flag;
   folder_ = folder;
+  folder_names_ = names;
 }
 
 void OutputFiles::refuse_inputs(const std::vector<std::string>& inputs) {
@@ -145,6 +150,10 @@ void OutputFiles::refuse_inputs(const std::vector<std::string>& inputs) {
                          "); choose another output file");
     if (!folder_.empty() && same_file(folder_, in))
       throw InputError(folder_flag_ + " " + folder_ + ": is an input of this run");
+    for (const std::string& n : folder_names_)
+      if (same_file(folder_ + "/" + n, in))
+        throw InputError(folder_flag_ + " " + folder_ + "/" + n + ": is an input of this run (" + in +
+                         "); choose another folder");
     inputs_.push_back(in);
   }
 }

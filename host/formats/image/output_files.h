@@ -31,8 +31,10 @@ class OutputFiles {
   // declared. Nothing is created.
   void declare(const std::string& flag, const std::string& path);
   // A folder that holds outputs (bench --csv): checked now, created only by
-  // write(), and removed again if the run fails after creating it.
-  void declare_folder(const std::string& flag, const std::string& folder);
+  // write(), and removed again if the run fails after creating it. The
+  // `names` it will hold are checked now too: no folder in their place, and
+  // (refuse_inputs) no input.
+  void declare_folder(const std::string& flag, const std::string& folder, const std::vector<std::string>& names = {});
   // Throws InputError if a declared output is one of `inputs` (the scene,
   // its models, material libraries, textures); outputs written later into a
   // declared folder are checked against them too.
@@ -61,6 +63,7 @@ class OutputFiles {
   std::vector<Entry> entries_;
   std::vector<std::string> inputs_;
   std::string folder_flag_, folder_;
+  std::vector<std::string> folder_names_;
   bool folder_created_ = false;
 };
 

@@ -166,6 +166,25 @@ TEST(Outputs, AFailedWriteLeavesNoOutputAtAll) {
 }
 
 // A rename that fails once others have succeeded (a table's name held by a
+// A folder's tables are checked when it is declared (the bench's --csv):
+// an input or a folder where one goes had been found after the whole run.
+TEST(Outputs, AFoldersTablesAreCheckedBeforeTheRun) {
+  TempDir dir;
+  ASSERT_EQ(::mkdir(dir.file("tables").c_str(), 0755), 0);
+  const std::string scene = dir.write("tables/phases.csv", "{}");
+  ASSERT_EQ(::mkdir(dir.file("tables/levels.csv").c_str(), 0755), 0);
+  {
+    OutputFiles out;
+    test::expect_error([&] { out.declare_folder("--csv", dir.file("tables"), {"levels.csv"}); },
+                       {"--csv " + dir.file("tables/levels.csv") + ": a folder stands where the table goes"});
+  }
+  OutputFiles out;
+  out.declare_folder("--csv", dir.file("tables"), {"phases.csv"});
+  test::expect_error([&] { out.refuse_inputs({scene}); },
+                     {"--csv " + dir.file("tables/phases.csv") + ": is an input of this run"});
+  EXPECT_EQ(test::read_file(scene), "{}");
+}
+
 // folder; a busy mount point) put the new files in place of the old, then
 // removed them: the user's earlier files of those names were lost. The old
 // files now stay as they were.

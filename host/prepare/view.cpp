@@ -23,17 +23,25 @@ namespace {
 // the narrower the view: where the scene's own framing fails only for its
 // narrow field of view (framed at 90 degrees it would pass), that is named.
 void check_view_camera(const Scene& scene, const ViewOptions& o, const std::string& file, bool framed) {
-  const std::string camera = scene.camera_where.empty() ? file + ": camera" : scene.camera_where;
-  const std::string eye_source = (o.eye || o.look_at) ? "--eye/--look-at" : camera;
-  const std::string up_source =
-      o.up ? "--up" : scene.camera_up_where.empty() ? file + ": camera up" : scene.camera_up_where;
+  // Each part named where it came from: a flag, the file's key, or the
+  // framing (a scene without a camera) and the default up.
+  const std::string camera = !scene.camera_where.empty() ? scene.camera_where
+                             : framed                    ? file + ": the camera framing the scene (it has none)"
+                                                         : file + ": camera";
+  const bool view_flags = o.eye || o.look_at;
+  const std::string eye_source = view_flags ? "--eye/--look-at" : camera;
+  const std::string up_source = o.up                             ? "--up"
+                                : !scene.camera_up_where.empty() ? scene.camera_up_where
+                                                                 : camera + ": its default up";
+  const std::string parallel = !o.up && view_flags ? "--eye/--look-at: the camera up" : up_source;
   try {
-    check_camera(scene.camera, eye_source, up_source);
+    check_camera(scene.camera, eye_source, up_source, parallel);
   } catch (const InputError&) {
     if (!framed || o.eye || o.look_at || o.up) throw;
     Vec3 lo, hi;
     scene.bounds(lo, hi);
-    check_camera(frame_bounds(lo, hi, 90.0f, static_cast<float>(scene.width) / scene.height), eye_source, up_source);
+    check_camera(frame_bounds(lo, hi, 90.0f, static_cast<float>(scene.width) / scene.height), eye_source, up_source,
+                 parallel);
     char fov[32];
     std::snprintf(fov, sizeof fov, "%g", double(scene.camera.fov_deg));
     throw InputError((o.fov ? "--fov " : file + ": field of view ") + std::string(fov) +

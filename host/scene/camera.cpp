@@ -66,7 +66,8 @@ bool project_to_pixels(const CameraFrame& frame, int width, int height, const Ve
   return true;
 }
 
-void check_camera(const CameraDesc& c, const std::string& eye_source, const std::string& up_source) {
+void check_camera(const CameraDesc& c, const std::string& eye_source, const std::string& up_source,
+                  const std::string& parallel_source) {
   double f[3], u[3];
   for (int i = 0; i < 3; ++i) {
     f[i] = static_cast<double>(c.look_at[i]) - c.eye[i];
@@ -80,7 +81,8 @@ void check_camera(const CameraDesc& c, const std::string& eye_source, const std:
   const double fu[3] = {f[1] * u[2] - f[2] * u[1], f[2] * u[0] - f[0] * u[2], f[0] * u[1] - f[1] * u[0]};
   const double sine = std::sqrt(fu[0] * fu[0] + fu[1] * fu[1] + fu[2] * fu[2]) / (f_len * u_len);
   if (sine < 1e-4)  // nearly parallel: the float basis would be noise
-    throw InputError(up_source + " (" + format_vec(c.up) + ") is parallel to the view direction (from eye " +
+    throw InputError((parallel_source.empty() ? up_source : parallel_source) + " (" + format_vec(c.up) +
+                     ") is parallel to the view direction (from eye " +
                      format_vec(c.eye) + " to look-at " + format_vec(c.look_at) + ")");
   // The basis is made in float (camera_frame): a vector whose squared
   // length is not a normal float (below about 1e-19 or above 1.8e19) gives

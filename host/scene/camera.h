@@ -45,6 +45,9 @@ std::string format_vec(const Vec3& v);
 // Throws InputError unless the basis exists: eye != look-at, up non-zero and
 // not parallel to the view direction. The sources name the flags or the file
 // in the message.
-void check_camera(const CameraDesc& camera, const std::string& eye_source, const std::string& up_source);
+// `parallel_source` names an up parallel to the view ("" : up_source): where
+// the eye or look-at of a flag made it so, the flag.
+void check_camera(const CameraDesc& camera, const std::string& eye_source, const std::string& up_source,
+                  const std::string& parallel_source = "");
 
 }  // namespace opsila

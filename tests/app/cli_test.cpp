@@ -174,7 +174,16 @@ TEST_F(CliFixture, DegenerateCameraIsRejected) {
   const std::string tiny = dir.write("tiny.json", R"({"objects": [{"type": "instances",
     "model": {"type": "sphere", "center": [0, 0, 0], "radius": 1}, "transforms": [{"scale": 1e-25}]}]})");
   before = dir.entries();
-  expect_rejected({tiny, "-o", out("x.png")}, "tiny.json: camera");
+  expect_rejected({tiny, "-o", out("x.png")}, "tiny.json: the camera framing the scene (it has none): the view");
+  // An up parallel to the view that --eye or --look-at made so names them,
+  // not the scene file (whose camera may have no up, or be framed).
+  const std::string ahead = dir.write("ahead.json", R"({"objects": [{"type": "sphere", "center": [0, 0, 0],
+    "radius": 1}], "camera": {"eye": [0, 0, 5], "look_at": [0, 0, 0]}})");
+  before = dir.entries();
+  expect_rejected({ahead, "-o", out("x.png"), "--eye", "0,5,0"},
+                  "--eye/--look-at: the camera up (0,1,0) is parallel to the view direction");
+  expect_rejected({tiny, "-o", out("x.png"), "--eye", "0,5,0", "--look-at", "0,0,0"},
+                  "--eye/--look-at: the camera up (0,1,0) is parallel");
   // A scene file's camera that float cannot hold is named with its line and key.
   const std::string far = dir.write("far.json", "{\"objects\": [{\"type\": \"sphere\", \"center\": [0, 0, 0], "
                                                 "\"radius\": 1}],\n\"camera\": {\"eye\": [1e30, 0, 5], \"look_at\": [0, 0, 0],\n"

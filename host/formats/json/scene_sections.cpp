@@ -59,7 +59,7 @@ void SceneSections::camera(const Json& v, const std::string& path) {
   scene_.camera = cam;
   scene_.has_camera = true;
   scene_.camera_where = v_.place(path);
-  scene_.camera_up_where = v_.place(v_.find(v, "up") ? join_key(path, "up") : path);
+  scene_.camera_up_where = v_.find(v, "up") ? v_.place(join_key(path, "up")) : "";  // "": the default up
 }
 
 void SceneSections::lights(const Json& v, const std::string& path) {

@@ -1,6 +1,7 @@
 #include "bench/compare.h"
 
 #include <climits>
+#include <cmath>
 #include <cstdio>
 #include <sstream>
 #include <string>
@@ -18,17 +19,23 @@ namespace {
 
 using nlohmann::json;
 
-// The number at `key` of `j`, when there is one.
-bool number_at(const json& j, const char* key, double& out) {
-  if (!j.is_object() || !j.contains(key) || !j[key].is_number()) return false;
-  out = j[key].get<double>();
-  return true;
-}
+// The figures of a run; `saved` names the file of a saved one, whose
+// figures are checked: each a finite number >= 0 where present (an edited
+// -1 had printed a negative ratio, a string had dropped its row unsaid).
+struct Figures {
+  std::vector<BenchFigure> out;
+  const std::string* saved = nullptr;
 
-void add(std::vector<BenchFigure>& out, const std::string& name, const json& j, const char* key, bool higher) {
-  double v;
-  if (number_at(j, key, v)) out.push_back({name, v, higher});
-}
+  void add(const std::string& name, const json& j, const char* key, bool higher) {
+    if (!j.is_object() || !j.contains(key)) return;
+    const json& v = j[key];
+    const bool sound = v.is_number() && std::isfinite(v.get<double>()) && v.get<double>() >= 0;
+    if (sound) out.push_back({name, v.get<double>(), higher});
+    else if (saved)
+      throw InputError("--compare " + *saved + ": " + name + " ('" + key + "'): expected a number >= 0, not " +
+                       quoted_prefix(v.dump()));
+  }
+};
 
 std::string number(double v) {
   char s[32];
@@ -50,36 +57,39 @@ std::string settings_of(const json& j) {
 
 }  // namespace
 
-std::vector<BenchFigure> bench_figures(const json& j) {
-  std::vector<BenchFigure> out;
-  add(out, "compile seconds", j, "compile_seconds", false);
+std::vector<BenchFigure> bench_figures(const json& j, const std::string* saved) {
+  Figures f{{}, saved};
+  const auto add = [&](const std::string& name, const json& in, const char* key, bool higher) {
+    f.add(name, in, key, higher);
+  };
+  add("compile seconds", j, "compile_seconds", false);
   if (j.contains("render")) {
     const json& r = j["render"];
-    add(out, "render seconds", r, "seconds", false);
-    add(out, "render Mrays/s", r, "mrays_per_s", true);
-    add(out, "render kernel seconds", r, "kernel_seconds", false);
-    add(out, "render exchange share", r, "exchange_share", false);
-    add(out, "render launch overhead share", r, "overhead_share", false);
-    add(out, "render occupancy", r, "occupancy", true);
+    add("render seconds", r, "seconds", false);
+    add("render Mrays/s", r, "mrays_per_s", true);
+    add("render kernel seconds", r, "kernel_seconds", false);
+    add("render exchange share", r, "exchange_share", false);
+    add("render launch overhead share", r, "overhead_share", false);
+    add("render occupancy", r, "occupancy", true);
   }
   if (j.contains("baselines") && j["baselines"].is_object())
     for (const auto& [name, b] : j["baselines"].items()) {
-      add(out, name + " seconds", b, "seconds", false);
-      add(out, name + " Mrays/s", b, "mrays_per_s", true);
+      add(name + " seconds", b, "seconds", false);
+      add(name + " Mrays/s", b, "mrays_per_s", true);
     }
   if (j.contains("scatter") && j["scatter"].is_array())
     for (const json& p : j["scatter"]) {
       if (!p.contains("length") || !p["length"].is_number_integer() || p["length"].get<std::int64_t>() < 0) continue;
       const std::string at = "scatter " + length_label(p["length"].get<std::uint64_t>());
-      add(out, at + " kernel seconds", p, "kernel_seconds", false);
-      add(out, at + " GB/s", p, "gbytes_per_s", true);
-      add(out, at + " speed-up", p, "speedup", true);
-      add(out, at + " copy GB/s", p, "copy_kernel_gbytes_per_s", true);
-      add(out, at + " six-vector scatter GB/s", p, "six_vectors_gbytes_per_s", true);
-      add(out, at + " one-record scatter GB/s", p, "one_record_gbytes_per_s", true);
+      add(at + " kernel seconds", p, "kernel_seconds", false);
+      add(at + " GB/s", p, "gbytes_per_s", true);
+      add(at + " speed-up", p, "speedup", true);
+      add(at + " copy GB/s", p, "copy_kernel_gbytes_per_s", true);
+      add(at + " six-vector scatter GB/s", p, "six_vectors_gbytes_per_s", true);
+      add(at + " one-record scatter GB/s", p, "one_record_gbytes_per_s", true);
     }
-  add(out, "copy ceiling GB/s", j, "copy_gbytes_per_s", true);
-  return out;
+  add("copy ceiling GB/s", j, "copy_gbytes_per_s", true);
+  return f.out;
 }
 
 namespace {
@@ -135,6 +145,7 @@ json read_saved_bench(const std::string& path) {
   if (!j.is_object() || !j.contains("render") || !j["render"].is_object())
     throw InputError("--compare " + path + ": not an opsila bench result (no \"render\" block)");
   check_saved_settings(j, path);
+  (void)bench_figures(j, &path);
   return j;
 }
 

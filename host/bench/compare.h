@@ -18,7 +18,9 @@ struct BenchFigure {
 
 // The figures a bench JSON holds (render, baselines, scatter curve, copy
 // ceiling), in report order; figures a run lacks are left out.
-std::vector<BenchFigure> bench_figures(const nlohmann::json& results);
+// `saved`: the file of a saved run, whose figures are checked (InputError
+// naming it and the figure); nullptr for this run's.
+std::vector<BenchFigure> bench_figures(const nlohmann::json& results, const std::string* saved = nullptr);
 
 // A saved bench JSON; throws InputError("--compare FILE: problem").
 nlohmann::json read_saved_bench(const std::string& path);

@@ -585,6 +585,18 @@ TEST(BenchCompare, ASavedRunMustBeABenchResult) {
   twice.insert(1, "\"depth\": 99, ");
   test::expect_error([&] { read_saved_bench(dir.write("twice.json", twice)); },
                      {"twice.json:1: depth: key given twice (a saved bench result holds each key once)"});
+  // A figure that is no number >= 0 (an edited file): refused, named; it
+  // had printed a negative ratio, or dropped its row unsaid.
+  for (const nlohmann::json& bad : {nlohmann::json(-1.0), nlohmann::json("fast"), nlohmann::json(nullptr)}) {
+    nlohmann::json edited = saved_result(1, 1, 1);
+    edited["render"]["seconds"] = bad;
+    test::expect_error([&] { read_saved_bench(dir.write("edited.json", edited.dump())); },
+                       {"edited.json: render seconds ('seconds'): expected a number >= 0, not " + bad.dump()});
+  }
+  nlohmann::json scatter = saved_result(1, 1, 1);
+  scatter["scatter"][0]["gbytes_per_s"] = -2;
+  test::expect_error([&] { read_saved_bench(dir.write("scatter.json", scatter.dump())); },
+                     {"scatter 2^10 GB/s ('gbytes_per_s'): expected a number >= 0, not -2"});
   const test::RunResult r = test::run_opsila({"bench", "scene.json", "--compare", dir.file("none.json")});
   EXPECT_EQ(r.exit_code, 2);
   ASSERT_EQ(r.error_lines().size(), 1u) << r.err;

@@ -218,6 +218,18 @@ void write_render_outputs(const RenderOptions& o, OutputFiles& outputs, const Re
                 result.stats.render_seconds, compile);
   std::fprintf(stderr, "opsila: wrote %s\n", line);
 }
+// The machine's flags, which the sequential reference has no use for:
+// each named, as the image is the same without them.
+void warn_reference_ignores(const RenderOptions& o) {
+  if (!o.device_spec.empty()) print_line("warning", "--device is ignored with --reference");
+  const char* machine = " is ignored with --reference (one processor, no banks)";
+  if (o.balance) print_line("warning", std::string("--balance") + machine);
+  if (o.pes) print_line("warning", std::string("--pes") + machine);
+  if (o.bank_capacity != 0) print_line("warning", std::string("--bank-capacity") + machine);
+  if (o.work_groups_per_pe != 0) print_line("warning", std::string("--work-groups-per-pe") + machine);
+  if (o.routing) print_line("warning", std::string("--routing") + machine);
+}
+
 
 }  // namespace
 
@@ -263,10 +275,7 @@ int run_render(const std::vector<std::string>& args, Ranks& ranks) {
   }
   if (!o.quiet && writer)
     for (const std::string& w : unknown_env_hooks()) print_line("warning", w);
-  if (o.reference && !o.quiet) {
-    if (!o.device_spec.empty()) print_line("warning", "--device is ignored with --reference");
-    if (o.balance) print_line("warning", "--balance is ignored with --reference (one processor, no banks)");
-  }
+  if (o.reference && !o.quiet) warn_reference_ignores(o);
 
   Progress progress("render", !o.quiet && writer);
   PrepareRequest request;

@@ -401,6 +401,25 @@ TEST_F(CliFixture, AnUnknownOpsilaVariableIsWarnedOfUnlessQuiet) {
   EXPECT_EQ(r.err, "");
 }
 
+// The machine's flags do nothing for the sequential reference: each is
+// named (some had been ignored without a word), and -q keeps them quiet.
+TEST_F(CliFixture, TheMachinesFlagsAreNamedAsIgnoredByTheReference) {
+  const std::vector<std::string> flags = {"--pes", "7", "--bank-capacity", "5", "--work-groups-per-pe", "3",
+                                          "--routing", "spheres", "--balance", "work"};
+  std::vector<std::string> args = {"render", scene, "-o", out("x.png"), "--reference", "--size", "8x8"};
+  args.insert(args.end(), flags.begin(), flags.end());
+  RunResult r = run_opsila(args);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  for (std::size_t k = 0; k < flags.size(); k += 2)
+    EXPECT_NE(r.err.find("opsila: warning: " + flags[k] + " is ignored with --reference"), std::string::npos)
+        << flags[k] << ": " << r.err;
+  args[3] = out("y.png");
+  args.push_back("-q");
+  r = run_opsila(args);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r.err, "");
+}
+
 // The OpenCL path on the default device, compared with the reference. Fails
 // until the OpenCL renderer is complete.
 TEST_F(CliFixture, OpenClRenderMatchesReference) {

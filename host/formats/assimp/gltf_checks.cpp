@@ -458,6 +458,7 @@ std::uint64_t check_gltf(ModelFiles& files, const std::string& bytes, const std:
   if (!root.is_object()) throw InputError(path + ": not glTF JSON (not an object)");
   refuse_repeated_keys(parts.json, path);
   check_required_extensions(root, path);
+  check_gltf_meanings(root, path);
   const Gltf g(root, path);
   u64 external = 0;
   const std::vector<u64> buffers = buffer_lengths(g, files, parts, path, external);

@@ -5,6 +5,8 @@
 // InputError("FILE: ...") naming the element at fault.
 #pragma once
 
+#include <nlohmann/json_fwd.hpp>
+
 #include <cstddef>
 #include <cstdint>
 #include <string>
@@ -57,5 +59,10 @@ void check_md5_mesh(const std::string& text, const std::string& name);
 // import_memory_budget; skins and animations left out of what the importer
 // reads (gltf_still.h). Returns the bytes of the external buffers.
 std::uint64_t check_gltf(ModelFiles& files, const std::string& bytes, const std::string& path);
+// What a glTF 2 states that the importer would ignore or misread, refused
+// naming the key (gltf_meanings.cpp): a version it has, extensions it
+// requires that the importer reads, float VEC3 positions and normals,
+// base colours of 4 numbers in [0, 1], texture transforms of numbers.
+void check_gltf_meanings(const nlohmann::json& root, const std::string& path);
 
 }  // namespace opsila

@@ -1,0 +1,86 @@
+// What a glTF 2 states that the importer would ignore or misread
+// (gltf_meanings.cpp): refused before the import, naming the key. Each had
+// rendered something else than the file says, with exit 0, or failed in
+// the importer's words.
+#include <gtest/gtest.h>
+
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "formats/json/scene_file.h"
+#include "gltf_test_files.h"
+#include "test_util.h"
+
+namespace opsila {
+namespace {
+
+using namespace test;
+using Json = nlohmann::json;
+
+// One triangle (tri.bin), a material with a base colour, and a second
+// accessor (the triangle's normals' place) for the attribute checks.
+Json triangle() {
+  return Json::parse(R"({"asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0]}],
+    "nodes": [{"mesh": 0}], "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "material": 0}]}],
+    "materials": [{"pbrMetallicRoughness": {"baseColorFactor": [1, 0.5, 0, 1]}}],
+    "buffers": [{"uri": "tri.bin", "byteLength": 36}],
+    "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 36}],
+    "accessors": [{"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3", "min": [0, 0, 0],
+                   "max": [1, 1, 0]}]})");
+}
+
+class GltfMeanings : public ::testing::Test {
+ protected:
+  void SetUp() override { dir.write("tri.bin", triangle_bytes()); }
+  // The error loading `g` ("<no error>" when it loads).
+  std::string error(const Json& g) {
+    const std::string path = dir.write("m.gltf", g.dump());
+    const std::string e = error_of([&] { load_scene(path); });
+    return e.rfind(path + ": ", 0) == 0 ? e.substr(path.size() + 2) : e;
+  }
+  TempDir dir;
+};
+
+TEST_F(GltfMeanings, ASoundFileLoads) { EXPECT_EQ(error(triangle()), "<no error>"); }
+
+TEST_F(GltfMeanings, ARequiredExtensionTheImporterDoesNotReadIsRefused) {
+  Json g = triangle();
+  g["extensionsRequired"] = {"KHR_materials_emissive_strength", "KHR_draco_mesh_compression", "EXT_mesh_gpu_instancing"};
+  EXPECT_EQ(error(g), "extensionsRequired[2]: 'EXT_mesh_gpu_instancing' is required, and the model importer does "
+                      "not read it (what it changes would be lost)");
+  g["extensionsRequired"] = {"KHR_materials_emissive_strength", "KHR_texture_transform"};
+  EXPECT_EQ(error(g), "<no error>") << "shading extensions and what the importer reads";
+  g["asset"]["version"] = "3.0";
+  EXPECT_EQ(error(g), "asset.version: '3.0' (glTF 1.x and 2.x are read)");
+}
+
+TEST_F(GltfMeanings, PositionsAndNormalsAreFloatTriples) {
+  Json g = triangle();
+  g["accessors"][0]["type"] = "VEC2";
+  EXPECT_NE(error(g).find("meshes[0].primitives[0].attributes.POSITION: accessor 0 is \"VEC2\" of componentType "
+                          "5126; the model importer reads positions and normals as float VEC3"),
+            std::string::npos)
+      << error(g);
+  g = triangle();
+  g["accessors"][0]["componentType"] = 5122;  // KHR_mesh_quantization's shorts
+  EXPECT_NE(error(g).find("is \"VEC3\" of componentType 5122"), std::string::npos) << error(g);
+}
+
+TEST_F(GltfMeanings, BaseColoursAndTextureTransformsHoldTheirNumbers) {
+  for (const Json& bad : {Json::parse("[-1, 0, 0, 1]"), Json::parse("[1, 0, 0]"), Json::parse("[1e39, 0, 0, 1]"),
+                          Json("red")}) {
+    Json g = triangle();
+    g["materials"][0]["pbrMetallicRoughness"]["baseColorFactor"] = bad;
+    EXPECT_EQ(error(g), "materials[0].pbrMetallicRoughness.baseColorFactor: expected 4 numbers from 0 to 1, not " +
+                            bad.dump());
+  }
+  Json g = triangle();
+  g["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"] = {
+      {"index", 0}, {"extensions", {{"KHR_texture_transform", {{"offset", {0.5}}}}}}};
+  EXPECT_EQ(error(g), "materials[0].pbrMetallicRoughness.baseColorTexture.extensions.KHR_texture_transform.offset: "
+                      "expected 2 numbers, not [0.5]");
+}
+
+}  // namespace
+}  // namespace opsila

@@ -59,8 +59,14 @@ class MaterialReader {
 
   std::vector<int> run() {
     std::vector<int> index(ai_.mNumMaterials, 0);
+    // glTF 2: the importer appends its stand-in, unnamed, after the file's
+    // own materials, which are used as given (an unnamed black one had been
+    // taken for the stand-in and drawn in the default grey).
+    aiString format;
+    const bool gltf2 = ai_.mMetaData && ai_.mMetaData->Get("SourceAsset_Format", format) &&
+                       std::string(format.C_Str()) == "glTF2 Importer";
     for (unsigned i = 0; i < ai_.mNumMaterials; ++i) {
-      if (is_placeholder(*ai_.mMaterials[i])) continue;  // stays 0
+      if (gltf2 ? i + 1 == ai_.mNumMaterials : is_placeholder(*ai_.mMaterials[i])) continue;  // stays 0
       check_material_count(scene_.materials.size() + 1, name_ + ": material " + std::to_string(i) + ": ");
       index[i] = static_cast<int>(scene_.materials.size());
       scene_.materials.push_back(material(*ai_.mMaterials[i], i));

@@ -186,6 +186,14 @@ void check_ply(const std::string& bytes, const std::string& name) {
   const std::string_view body = std::string_view(bytes).substr(h.body);
   if (h.format == Format::ascii) check_text(body, 1 + std::uint64_t(h.lines), h, name);
   else check_binary(body, h, name);
+  // The importer reads a position without z as one at z = 0 (the stream
+  // leaves such a file to it).
+  for (const Element& e : h.elements) {
+    if (e.name != "vertex") continue;
+    for (const char* axis : {"x", "y", "z"})
+      if (std::none_of(e.properties.begin(), e.properties.end(), [&](const Property& p) { return p.name == axis; }))
+        throw InputError(name + ": PLY 'vertex' element: no '" + axis + "' property (a position is x, y and z)");
+  }
   // Points only: the importer's validation would refuse its empty mesh
   // ("Mesh contains no faces"). Its readers take faces from these elements.
   bool faces = false;

@@ -113,11 +113,20 @@ std::string stream_refusal(const Shape& s) {
 
 void check_stl(const std::string& bytes, const std::string& name) {
   const Shape s = shape_of(bytes, bytes.size());
-  if (s.text()) return check_text(bytes, name);
+  // UTF-16 text had been read as a binary STL of two million facets.
+  const std::string_view start = std::string_view(bytes).substr(0, 10);
+  if (start.rfind("\xff\xfe", 0) == 0 || start.rfind("\xfe\xff", 0) == 0 ||
+      start == std::string_view("s\0o\0l\0i\0d\0", 10) || start == std::string_view("\0s\0o\0l\0i\0d", 10))
+    throw InputError(name + ": UTF-16 text: a text STL is ASCII (save it as such)");
+  const std::string sizes = "its size, " + std::to_string(s.size) + " bytes, is not 84 + 50 x the " +
+                            std::to_string(s.facets) + " facets its header counts";
+  // Text never holds a NUL; a binary header may start with "solid".
+  if (s.text() && bytes.find('\0') == std::string::npos) return check_text(bytes, name);
   if (s.size < kHeaderBytes) throw InputError(name + ": binary STL shorter than its 84-byte header (truncated file)");
   if (kHeaderBytes + kRecordBytes * s.facets > s.size)
     throw InputError(name + ": binary STL header counts " + std::to_string(s.facets) + " facets; the file holds " +
                      std::to_string((s.size - kHeaderBytes) / kRecordBytes) + " (truncated file)");
+  if (!s.exact) throw InputError(name + ": binary STL: " + sizes + " (data past its facets)");
 }
 
 #ifdef OPSILA_HAVE_ASSIMP

@@ -82,5 +82,26 @@ TEST_F(GltfMeanings, BaseColoursAndTextureTransformsHoldTheirNumbers) {
                       "expected 2 numbers, not [0.5]");
 }
 
+// The importer appends its stand-in for "no material" after a glTF 2's
+// own, unnamed like them: the file's are used as given, black included
+// (which had been taken for the stand-in and drawn in the default grey).
+TEST_F(GltfMeanings, TheFilesOwnUnnamedMaterialsAreUsedWhateverTheirColour) {
+  for (double grey : {0.0, 0.1, 1.0}) {
+    SCOPED_TRACE(grey);
+    Json g = triangle();
+    g["materials"][0]["pbrMetallicRoughness"]["baseColorFactor"] = {grey, grey, grey, 1};
+    const Scene s = load_scene(dir.write("grey.gltf", g.dump()));
+    ASSERT_EQ(s.triangles.size(), 1u);
+    const MaterialDesc& m = s.materials.at(std::size_t(s.triangles[0].material));
+    EXPECT_NE(s.triangles[0].material, 0);
+    EXPECT_FLOAT_EQ(m.kd[0], static_cast<float>(grey));
+  }
+  Json none = triangle();
+  none.erase("materials");
+  none["meshes"][0]["primitives"][0].erase("material");
+  const Scene s = load_scene(dir.write("none.gltf", none.dump()));
+  EXPECT_EQ(s.triangles.at(0).material, 0) << "a primitive without a material takes the default";
+}
+
 }  // namespace
 }  // namespace opsila

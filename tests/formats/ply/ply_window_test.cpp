@@ -218,6 +218,11 @@ TEST_F(PlyWindow, ListCountsOutsideTheirTypeAreNamed) {
                                    "floating-point values, where vertex indices are integers\n");
   }
   p.index_type = "int";
+  PlyFile flat = p;  // both readers had put every vertex at z = 0
+  flat.props = {{"float", "x"}, {"float", "y"}};
+  for (auto& v : flat.vertices) v.resize(2);
+  const std::string no_z = file(flat, "no_z.ply");
+  EXPECT_EQ(one_process(no_z), "error " + no_z + ": PLY 'vertex' element: no 'z' property (a position is x, y and z)\n");
   p.format = "ascii";
   p.faces.back().assign(300, 0);
   const std::string wide = file(p, "wide_count.ply");

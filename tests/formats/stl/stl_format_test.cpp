@@ -53,6 +53,24 @@ TEST(StlFormat, OtherSizesAreTextOrATruncatedBinary) {
   EXPECT_EQ(check_error("no"), "f.stl: binary STL shorter than its 84-byte header (truncated file)");
 }
 
+// What the importer misread or named in its own words: data past a binary
+// file's facets ("Failed to determine STL storage representation"), a
+// binary header starting with "solid" read as text, UTF-16 text read as a
+// binary of two million facets.
+TEST(StlFormat, WhatTheImporterWouldMisreadIsNamed) {
+  EXPECT_EQ(check_error(binary("made by a test", 1, 2)),
+            "f.stl: binary STL: its size, 184 bytes, is not 84 + 50 x the 1 facets its header counts (data past its "
+            "facets)");
+  EXPECT_EQ(check_error(binary("solid but binary", 1, 2)),
+            "f.stl: binary STL: its size, 184 bytes, is not 84 + 50 x the 1 facets its header counts (data past its "
+            "facets)");
+  EXPECT_EQ(check_error(binary("solid but binary", 3, 2)),
+            "f.stl: binary STL header counts 3 facets; the file holds 2 (truncated file)");
+  const std::string utf16 = std::string("\xff\xfes\0o\0l\0i\0d\0 \0t\0\n\0", 18);
+  EXPECT_EQ(check_error(utf16), "f.stl: UTF-16 text: a text STL is ASCII (save it as such)");
+  EXPECT_EQ(check_error(utf16.substr(2)), "f.stl: UTF-16 text: a text STL is ASCII (save it as such)");
+}
+
 TEST(StlFormat, HeaderColoursAndEmptyFilesAreTheImportersToRead) {
   const std::string empty = binary("made by a test", 0, 0);
   EXPECT_EQ(stl::stream_refusal(stl::shape_of(empty, empty.size())), "its header counts no facets");

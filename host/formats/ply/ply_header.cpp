@@ -249,6 +249,14 @@ Header parse_header(const std::string& bytes, std::uint64_t file_bytes, const st
     if (!lines.format_seen) lines.fail("no format line");
     h.lines = lines.line;
   }
+  // A property named twice: the importer reads one of them, and says
+  // "no facets" when it is the face list.
+  for (const Element& e : h.elements)
+    for (std::size_t k = 0; k < e.properties.size(); ++k)
+      for (std::size_t j = 0; j < k; ++j)
+        if (e.properties[j].name == e.properties[k].name)
+          throw InputError(path + ": PLY '" + e.name.substr(0, 20) + "' element: the property '" +
+                           e.properties[k].name.substr(0, 20) + "' is declared twice");
   // Both readers would take a face's corner 3.99 as vertex 3.
   for (const Element& e : h.elements)
     for (const Property& p : e.properties)

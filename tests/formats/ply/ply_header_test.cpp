@@ -92,6 +92,10 @@ TEST(PlyHeader, EachReadingRefusesInItsOwnWords) {
       {with("end_header", "end"), "f.ply:10: PLY header: unknown line 'end'",
        "f.ply: PLY header without an 'end_header' line (truncated or not PLY)"},
       {with("end_header\n", "end_header x\n"), "", "f.ply: PLY 'end_header' not followed by a line break"},
+      // The importer read one of the two; both readings refuse it now.
+      {with("property float y\n", "property float y\nproperty float x\n"),
+       "f.ply: PLY 'vertex' element: the property 'x' is declared twice",
+       "f.ply: PLY 'vertex' element: the property 'x' is declared twice"},
   };
   for (const Case& c : cases) {
     SCOPED_TRACE(c.header);

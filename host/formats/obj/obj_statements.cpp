@@ -303,6 +303,11 @@ void ObjParser::mtllib(std::string_view rest) {
                           quote(path) + "); faces using its materials get the default material");
       continue;
     }
+    if (fs::equivalent(path, name_, ec)) {  // an OBJ read as its own materials, without a word
+      warnings_.push_back(at(name_, line_) + "material library " + quote(f) +
+                          " is this OBJ file itself (ignored); faces using its materials get the default material");
+      continue;
+    }
     std::string text;
     try {
       text = read_text_file(path);

@@ -295,6 +295,9 @@ TEST(ObjMaterials, MissingMtlIsAWarningNotAnError) {
   EXPECT_TRUE(has_warning(f, "folder.obj:1:", "material library 'lib.mtl' is a folder, not a file"));
   const Scene d = load_obj(dir.write("device.obj", "mtllib /dev/null\n" + std::string(kTriVerts) + "f 1 2 3\n"));
   EXPECT_TRUE(has_warning(d, "device.obj:1:", "material library '/dev/null' is not a regular file"));
+  // The OBJ itself had been read as its own material library, unsaid.
+  const Scene self = load_obj(dir.write("self.obj", "mtllib ./self.obj\n" + std::string(kTriVerts) + "f 1 2 3\n"));
+  EXPECT_TRUE(has_warning(self, "self.obj:1:", "material library './self.obj' is this OBJ file itself (ignored)"));
 }
 
 TEST(ObjMaterials, FromMemoryWithoutAFolderReadsNoMtl) {

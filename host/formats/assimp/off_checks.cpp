@@ -82,6 +82,11 @@ class OffCheck {
     const bool dimension = prefix("n"), keyword = prefix("OFF");
     next_token();
     if (!keyword && digits_at(at_) == 0) throw InputError(where() + "not OFF (no 'OFF' keyword and no vertex count)");
+    // Without the keyword the importer still takes a leading 4 for the
+    // "4OFF" prefix, and reads the counts one place late.
+    if (!keyword && homogeneous_)
+      throw InputError(where() + "OFF without its 'OFF' keyword, and its vertex count starts with 4, which the "
+                                 "model importer reads as the '4OFF' prefix: start the file with a line 'OFF'");
     if (!keyword) homogeneous_ = false;  // the importer's reading without the keyword
     const std::size_t d = digits_at(at_);
     if (dimension) {

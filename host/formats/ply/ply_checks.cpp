@@ -92,8 +92,8 @@ void check_text(std::string_view data, std::uint64_t first_line, const Header& h
         }
         std::uint64_t n = 0;
         if (w.size() > 19 || w.find_first_not_of("0123456789") != std::string_view::npos)
-          throw InputError(name + ": PLY '" + e.name + "' element " + std::to_string(i + 1) + ": list length '" +
-                           std::string(w.substr(0, 20)) + "' is not a count");
+          throw InputError(name + ":" + std::to_string(line) + ": PLY '" + e.name + "' element " +
+                           std::to_string(i + 1) + ": list length '" + std::string(w.substr(0, 20)) + "' is not a count");
         for (char c : w) n = n * 10 + unsigned(c - '0');
         if (!fits_type(static_cast<std::int64_t>(n), p.count))
           bad_count(name, e, i, "list length " + std::string(w) + " does not fit its count type");

@@ -318,7 +318,7 @@ TEST(HostileModel, TruncatedDataIsRefusedInEveryFormat) {
   const std::string lines = dir.write("lines.ply", "ply\nformat ascii 1.0\nelement vertex 3\npropeloat y\n"
                                                    "element face 1\nproperty list uchar int vertex_indices\n"
                                                    "end_header\n3 0 1 2\n0\n0\n55555555555555555555 0\n");
-  EXPECT_NE(error_loading(lines).find(lines + ": PLY 'face' element 1: list length '55555555555555555555' is not"),
+  EXPECT_NE(error_loading(lines).find(lines + ":11: PLY 'face' element 1: list length '55555555555555555555' is not"),
             std::string::npos)
       << error_loading(lines);
   // A NUL ends a line for the importer too: the first line is two.
@@ -326,7 +326,7 @@ TEST(HostileModel, TruncatedDataIsRefusedInEveryFormat) {
                     "property list uchar int vertex_indices\nend_header\n3 0 1 2\n0\n0\n55555555555555555555 0\n";
   nul.insert(nul.find("3 0 1 2") + 7, std::string("\0\x01", 2));
   const std::string split = dir.write("split.ply", nul);
-  EXPECT_NE(error_loading(split).find(split + ": PLY 'face' element 1: list length '55555555555555555555' is not"),
+  EXPECT_NE(error_loading(split).find(split + ":11: PLY 'face' element 1: list length '55555555555555555555' is not"),
             std::string::npos)
       << error_loading(split);
   std::string stl(80, ' ');

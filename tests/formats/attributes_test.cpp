@@ -118,15 +118,18 @@ TEST(MtlMaps, OptionsAreSkippedAndWindowsPathsResolved) {
             "newmtl c\nmap_Kd missing.png\n"
             "newmtl d\nmap_Kd m.mtl\n");
   dir.write("e.tga", tga(1, 1, {{1, 2, 3}}));
-  dir.write("e.mtl", "newmtl e\nmap_Kd e.tga\n");
+  dir.write("-dash.tga", tga(1, 1, {{4, 5, 6}}));  // a name, not an option: MTL defines none such
+  dir.write("e.mtl", "newmtl e\nmap_Kd e.tga\nnewmtl f\nmap_Kd -clamp on -dash.tga\n");
   const std::string obj = dir.write("m.obj", "mtllib m.mtl e.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\n"
                                               "usemtl a\nf 1/1 2/1 3/1\nusemtl b\nf 1/1 2/1 3/1\n"
                                               "usemtl c\nf 1/1 2/1 3/1\nusemtl d\nf 1/1 2/1 3/1\n"
-                                              "usemtl e\nf 1 2 3\n");
+                                              "usemtl e\nf 1 2 3\nusemtl f\nf 1/1 2/1 3/1\n");
   const Scene s = load_obj(obj);
-  ASSERT_EQ(s.materials.size(), 6u);
+  ASSERT_EQ(s.materials.size(), 7u);
+  ASSERT_GE(s.materials[6].map_kd, 0);
+  EXPECT_EQ(s.textures.at(std::size_t(s.materials[6].map_kd)).texels[0], 0x060504u);
   EXPECT_EQ(s.materials[5].map_kd, -1);  // only faces without coordinates: never read
-  ASSERT_EQ(s.textures.size(), 2u);
+  ASSERT_EQ(s.textures.size(), 3u);
   EXPECT_EQ(s.materials[1].map_kd, 0);
   EXPECT_EQ(s.textures[0].texels[0], 0x0000ffu);
   EXPECT_EQ(s.materials[2].map_ka, 1);  // found beside the MTL by its base name

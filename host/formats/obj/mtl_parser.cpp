@@ -3,6 +3,8 @@
 #include "formats/obj/obj_loader.h"
 
 #include <array>
+#include <algorithm>
+#include <iterator>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -68,6 +70,11 @@ std::string map_file(std::string_view rest, std::string_view key, const std::str
     if (tok.size() < 2 || tok[0] != '-') break;
     float number;
     if (parse_float(tok, number) == Num::ok) break;  // "-1.png" is a name
+    // Only the options MTL defines are options: "-tex.png" is a name (it had
+    // been skipped as an option, and the map lost).
+    static const char* const kOptions[] = {"-blendu", "-blendv", "-boost", "-mm",  "-o",    "-s",   "-t",
+                                           "-texres", "-clamp",  "-bm",    "-imfchan", "-type", "-cc"};
+    if (std::none_of(std::begin(kOptions), std::end(kOptions), [&](const char* o) { return tok == o; })) break;
     rest = probe;
     const std::string opt(tok);
     int min_args = 1, max_args = 1;

@@ -69,6 +69,11 @@ void check_text(const std::string& bytes, const std::string& name) {
         throw InputError(name + ":" + std::to_string(line_at(at - w.size())) + ": STL '" + key +
                          "' needs 3 numbers; " + quote(w) + " is not one");
       }
+      // A 4th number was ignored by the importer, unsaid.
+      std::size_t past = at;
+      if (next_word(bytes, past, w) && whole_number(w))
+        throw InputError(name + ":" + std::to_string(line_at(past - w.size())) + ": STL '" + key +
+                         "' holds more than 3 numbers (" + quote(w) + " is a 4th)");
     }
   }
   if (in_facet)

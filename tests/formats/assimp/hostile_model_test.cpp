@@ -440,6 +440,8 @@ TEST(HostileModel, OffFacesTheImporterWouldMisreadAreRefused) {
          ":2: STL 'vertex' outside a facet (the importer dropped it without a word)");
   expect("counts.off", "4 1 0\n0 0 0\n1 0 0\n0 1 0\n1 1 0\n3 0 1 2\n",
          ":1: OFF without its 'OFF' keyword, and its vertex count starts with 4");
+  expect("four.stl", "solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0 7\nvertex 0 1 0\nendloop\n"
+         "endfacet\nendsolid t\n", ":5: STL 'vertex' holds more than 3 numbers ('7' is a 4th)");
   expect("more.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n\n# the end\n3 0 2 1\n",
          ":9: OFF data goes on past the 1 faces the header counts");
   expect("long.off", "OFF\n3 1 0\n0 0 0" + std::string(5000, ' ') + "\n1 0 0\n0 1 0\n3 0 1 2\n",

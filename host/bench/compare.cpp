@@ -59,36 +59,33 @@ std::string settings_of(const json& j) {
 
 std::vector<BenchFigure> bench_figures(const json& j, const std::string* saved) {
   Figures f{{}, saved};
-  const auto add = [&](const std::string& name, const json& in, const char* key, bool higher) {
-    f.add(name, in, key, higher);
-  };
-  add("compile seconds", j, "compile_seconds", false);
+  f.add("compile seconds", j, "compile_seconds", false);
   if (j.contains("render")) {
     const json& r = j["render"];
-    add("render seconds", r, "seconds", false);
-    add("render Mrays/s", r, "mrays_per_s", true);
-    add("render kernel seconds", r, "kernel_seconds", false);
-    add("render exchange share", r, "exchange_share", false);
-    add("render launch overhead share", r, "overhead_share", false);
-    add("render occupancy", r, "occupancy", true);
+    f.add("render seconds", r, "seconds", false);
+    f.add("render Mrays/s", r, "mrays_per_s", true);
+    f.add("render kernel seconds", r, "kernel_seconds", false);
+    f.add("render exchange share", r, "exchange_share", false);
+    f.add("render launch overhead share", r, "overhead_share", false);
+    f.add("render occupancy", r, "occupancy", true);
   }
   if (j.contains("baselines") && j["baselines"].is_object())
     for (const auto& [name, b] : j["baselines"].items()) {
-      add(name + " seconds", b, "seconds", false);
-      add(name + " Mrays/s", b, "mrays_per_s", true);
+      f.add(name + " seconds", b, "seconds", false);
+      f.add(name + " Mrays/s", b, "mrays_per_s", true);
     }
   if (j.contains("scatter") && j["scatter"].is_array())
     for (const json& p : j["scatter"]) {
       if (!p.contains("length") || !p["length"].is_number_integer() || p["length"].get<std::int64_t>() < 0) continue;
       const std::string at = "scatter " + length_label(p["length"].get<std::uint64_t>());
-      add(at + " kernel seconds", p, "kernel_seconds", false);
-      add(at + " GB/s", p, "gbytes_per_s", true);
-      add(at + " speed-up", p, "speedup", true);
-      add(at + " copy GB/s", p, "copy_kernel_gbytes_per_s", true);
-      add(at + " six-vector scatter GB/s", p, "six_vectors_gbytes_per_s", true);
-      add(at + " one-record scatter GB/s", p, "one_record_gbytes_per_s", true);
+      f.add(at + " kernel seconds", p, "kernel_seconds", false);
+      f.add(at + " GB/s", p, "gbytes_per_s", true);
+      f.add(at + " speed-up", p, "speedup", true);
+      f.add(at + " copy GB/s", p, "copy_kernel_gbytes_per_s", true);
+      f.add(at + " six-vector scatter GB/s", p, "six_vectors_gbytes_per_s", true);
+      f.add(at + " one-record scatter GB/s", p, "one_record_gbytes_per_s", true);
     }
-  add("copy ceiling GB/s", j, "copy_gbytes_per_s", true);
+  f.add("copy ceiling GB/s", j, "copy_gbytes_per_s", true);
   return f.out;
 }
 

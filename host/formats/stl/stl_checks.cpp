@@ -84,6 +84,12 @@ void check_text(const std::string& bytes, const std::string& name) {
                      " without 'endsolid' (truncated file)");
 }
 
+// Why a binary STL's size does not match its header's facet count.
+std::string size_mismatch(const Shape& s) {
+  return "its size, " + std::to_string(s.size) + " bytes, is not 84 + 50 x the " + std::to_string(s.facets) +
+         " facets its header counts";
+}
+
 }  // namespace
 
 Shape shape_of(const std::string& head, std::uint64_t size) {
@@ -108,8 +114,7 @@ std::string stream_refusal(const Shape& s) {
   if (s.size < kHeaderBytes) return "it is shorter than a binary STL's 84-byte header";
   if (!s.exact) {
     if (s.solid) return "an ASCII STL";
-    return "its size, " + std::to_string(s.size) + " bytes, is not 84 + 50 x the " + std::to_string(s.facets) +
-           " facets its header counts";
+    return size_mismatch(s);
   }
   if (s.facets == 0) return "its header counts no facets";
   if (!s.colours.empty()) return "its header names Materialise colours (" + s.colours + ")";
@@ -123,15 +128,13 @@ void check_stl(const std::string& bytes, const std::string& name) {
   if (start.rfind("\xff\xfe", 0) == 0 || start.rfind("\xfe\xff", 0) == 0 ||
       start == std::string_view("s\0o\0l\0i\0d\0", 10) || start == std::string_view("\0s\0o\0l\0i\0d", 10))
     throw InputError(name + ": UTF-16 text: a text STL is ASCII (save it as such)");
-  const std::string sizes = "its size, " + std::to_string(s.size) + " bytes, is not 84 + 50 x the " +
-                            std::to_string(s.facets) + " facets its header counts";
   // Text never holds a NUL; a binary header may start with "solid".
   if (s.text() && bytes.find('\0') == std::string::npos) return check_text(bytes, name);
   if (s.size < kHeaderBytes) throw InputError(name + ": binary STL shorter than its 84-byte header (truncated file)");
   if (kHeaderBytes + kRecordBytes * s.facets > s.size)
     throw InputError(name + ": binary STL header counts " + std::to_string(s.facets) + " facets; the file holds " +
                      std::to_string((s.size - kHeaderBytes) / kRecordBytes) + " (truncated file)");
-  if (!s.exact) throw InputError(name + ": binary STL: " + sizes + " (data past its facets)");
+  if (!s.exact) throw InputError(name + ": binary STL: " + size_mismatch(s) + " (data past its facets)");
 }
 
 #ifdef OPSILA_HAVE_ASSIMP

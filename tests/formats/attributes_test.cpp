@@ -20,6 +20,7 @@
 #include "formats/image/texture_file.h"
 #include "partition/partition.h"
 #include "test_scenes.h"
+#include "png_crc.h"
 #include "test_util.h"
 
 namespace opsila {
@@ -207,6 +208,7 @@ TEST(Textures, PngTooLargeOrTruncatedSaysWhy) {
       << problem;
   std::string large = ok;
   large.replace(16, 8, std::string("\x00\x00\xea\x60\x00\x00\x00\x04", 8));  // IHDR width 60000
+  reseal_png_chunk(large, 8);
   EXPECT_EQ(problem_of(large), "image too large (60000x4)");
   const std::string truncated = problem_of(ok.substr(0, 45));
   EXPECT_EQ(truncated, "cannot decode the image (truncated PNG: it ends before its IEND chunk)");

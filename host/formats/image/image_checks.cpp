@@ -2,6 +2,7 @@
 #include "formats/image/image_checks.h"
 
 #include <algorithm>
+#include <array>
 #include <cstring>
 
 namespace opsila {
@@ -20,14 +21,24 @@ std::uint32_t be(const unsigned char* data, std::size_t at, int bytes) {
   return v;
 }
 
-// PNG's chunk checksum (ISO 3309 CRC-32 of the type and data).
-std::uint32_t png_crc(const std::string& type_and_data) {
+// PNG's chunk checksum (ISO 3309 CRC-32 of the type and data), a byte at a
+// time through the table of the polynomial's remainders.
+std::uint32_t png_crc(const unsigned char* data, std::size_t size) {
+  static const auto table = [] {
+    std::array<std::uint32_t, 256> t{};
+    for (std::uint32_t b = 0; b < 256; ++b) {
+      std::uint32_t c = b;
+      for (int k = 0; k < 8; ++k) c = (c >> 1) ^ (0xEDB88320u & (0u - (c & 1u)));
+      t[b] = c;
+    }
+    return t;
+  }();
   std::uint32_t c = 0xFFFFFFFFu;
-  for (unsigned char b : type_and_data) {
-    c ^= b;
-    for (int k = 0; k < 8; ++k) c = (c >> 1) ^ (0xEDB88320u & (0u - (c & 1u)));
-  }
+  for (std::size_t i = 0; i < size; ++i) c = table[(c ^ data[i]) & 0xFFu] ^ (c >> 8);
   return c ^ 0xFFFFFFFFu;
+}
+std::uint32_t png_crc(const std::string& type_and_data) {
+  return png_crc(reinterpret_cast<const unsigned char*>(type_and_data.data()), type_and_data.size());
 }
 
 void put_be32(std::string& out, std::uint32_t v) {
@@ -116,6 +127,24 @@ std::string jpeg_problem(const unsigned char* d, std::size_t n, long long w, lon
   if (coded >= need) return "";
   return "JPEG data ends early: " + std::to_string(w) + "x" + std::to_string(h) + " needs at least " +
          std::to_string(need) + " bytes of coded data, the file has " + std::to_string(coded);
+}
+
+std::string png_crc_problem(const unsigned char* d, std::size_t n) {
+  if (!is_png(d, n)) return "";
+  std::size_t at = 8;
+  while (n - at >= 12) {
+    const std::size_t len = be(d, at, 4);
+    if (len > n - at - 12) return "";  // a truncated chunk: the decoder names it
+    const unsigned char* type = d + at + 4;
+    // Critical chunks (the type's first letter upper case) are the image;
+    // an ancillary chunk's damage is ignored, as libpng ignores it.
+    if ((type[0] & 0x20) == 0 && png_crc(type, len + 4) != be(d, at + 8 + len, 4))
+      return "damaged PNG: its " + std::string(reinterpret_cast<const char*>(type), 4) + " chunk at byte " +
+             std::to_string(at) + " fails its CRC check";
+    if (std::memcmp(type, "IEND", 4) == 0) break;
+    at += 12 + len;
+  }
+  return "";
 }
 
 std::string pad_png_palette(const unsigned char* d, std::size_t n, PaddedPalette& out) {

@@ -29,6 +29,11 @@ std::string short_bmp_or_tga(const unsigned char* data, std::size_t size, long l
 std::string jpeg_problem(const unsigned char* data, std::size_t size, long long w, long long h);
 constexpr int kMaxJpegScans = 64;
 
+// A PNG one of whose critical chunks (IHDR, PLTE, IDAT, IEND) fails its
+// CRC: stb never checks them, and a damaged file decoded to other pixels
+// or another size. "" when sound, or not a PNG.
+std::string png_crc_problem(const unsigned char* data, std::size_t size);
+
 // A palette PNG whose palette has fewer entries than its bit depth can
 // index: stb reads an index past the palette from memory it never filled.
 // Where there is something to guard, `padded.bytes` is the file with its

@@ -46,6 +46,10 @@ bool decode_texture_memory(const unsigned char* data, std::size_t size, const st
   const int len = static_cast<int>(size);
   int w = 0, h = 0, channels = 0;
   const bool png = is_png(data, size);
+  if (std::string why = png_crc_problem(data, size); !why.empty()) {
+    problem = why;
+    return false;
+  }
   if (std::string why = png_side_problem(data, size, kMaxTextureSide); !why.empty()) {
     problem = why;
     return false;

@@ -5,8 +5,11 @@
 #include <gtest/gtest.h>
 
 #include <string>
+#include <vector>
 
 #include "formats/image/texture_file.h"
+#include "formats/image/image_io.h"
+#include "png_crc.h"
 
 namespace opsila {
 namespace {
@@ -15,12 +18,12 @@ void put_be(std::string& s, std::uint32_t v, int bytes) {
   for (int k = bytes - 1; k >= 0; --k) s.push_back(static_cast<char>((v >> (8 * k)) & 0xFFu));
 }
 
-// A PNG chunk; its checksum is left zero (stb reads none).
+// A PNG chunk with its checksum.
 std::string chunk(const std::string& type, const std::string& data) {
   std::string c;
   put_be(c, static_cast<std::uint32_t>(data.size()), 4);
   c += type + data;
-  put_be(c, 0, 4);
+  put_be(c, png_crc_bitwise(type + data), 4);
   return c;
 }
 
@@ -100,6 +103,28 @@ TEST(ImageChecks, APaletteIndexPastThePaletteIsRefusedNotReadFromMemory) {
   const std::size_t idat = twice.find("IDAT") - 4;
   twice.insert(idat, chunk("PLTE", two));
   EXPECT_EQ(decode_problem(twice), "cannot decode the image (PNG with 2 PLTE chunks, where a PNG has one palette)");
+}
+
+// A damaged image chunk is refused, naming it (stb reads no checksum: a
+// changed byte had become other pixels); a damaged ancillary chunk is
+// ignored, as other PNG readers ignore it.
+TEST(ImageChecks, APngWhoseImageChunkFailsItsChecksumIsRefused) {
+  const std::string png = encode_png(4, 4, std::vector<float>(4 * 4 * 3, 0.5f));
+  ASSERT_EQ(decode_problem(png), "");
+  std::string idat = png;
+  const std::size_t at = idat.find("IDAT") - 4;
+  idat[at + 10] = static_cast<char>(idat[at + 10] ^ 0x01);
+  EXPECT_EQ(decode_problem(idat), "damaged PNG: its IDAT chunk at byte " + std::to_string(at) + " fails its CRC check");
+  std::string text = png;
+  text.insert(at, chunk("tEXt", std::string("Comment\0ok", 10)));
+  EXPECT_EQ(decode_problem(text), "");
+  text[at + 9] = 'O';
+  EXPECT_EQ(decode_problem(text), "");
+  std::string ihdr = png;
+  ihdr[19] = static_cast<char>(ihdr[19] ^ 0x02);  // width 4 -> 6
+  EXPECT_EQ(decode_problem(ihdr), "damaged PNG: its IHDR chunk at byte 8 fails its CRC check");
+  reseal_png_chunk(ihdr, 8);
+  EXPECT_NE(decode_problem(ihdr), "damaged PNG: its IHDR chunk at byte 8 fails its CRC check");
 }
 
 TEST(ImageChecks, AJpegWithoutItsCodedDataOrWithEndlessScansIsRefused) {

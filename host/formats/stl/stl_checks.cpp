@@ -19,6 +19,19 @@ using namespace model_words;
 
 namespace {
 
+// The text keywords, which the importer reads in lower case only.
+constexpr std::string_view kKeywords[] = {"solid", "facet", "normal", "outer", "loop", "vertex",
+                                          "endloop", "endfacet", "endsolid"};
+
+// w in lower case where it is a keyword in any case, else "".
+std::string lower_keyword(std::string_view w) {
+  std::string low(w);
+  for (char& c : low) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  for (std::string_view k : kKeywords)
+    if (low == k) return low;
+  return "";
+}
+
 // A text file: every facet ends ("endfacet") and so does the last solid;
 // the three values after 'vertex' and after 'normal' are numbers as the
 // importer reads them (its own message names no line). A solid's name, the
@@ -44,6 +57,9 @@ void check_text(const std::string& bytes, const std::string& name) {
                      " (the importer dropped it without a word)");
   };
   while (next_word(bytes, at, w)) {
+    if (const std::string low = lower_keyword(w); !low.empty() && low != w)
+      throw InputError(name + ":" + std::to_string(line_at(at - w.size())) + ": STL keyword " + quote(w) +
+                       " is not in lower case: the importer reads '" + low + "' only");
     if (!in_solid && w != "solid") misplaced("after 'endsolid', outside any solid");
     if (w == "vertex" && !in_facet) misplaced("outside a facet");
     if (w == "solid" || w == "endsolid") {
@@ -101,6 +117,7 @@ Shape shape_of(const std::string& head, std::uint64_t size) {
   std::size_t start = 0;
   while (start < head.size() && std::isspace(static_cast<unsigned char>(head[start]))) ++start;
   s.solid = head.compare(start, 5, "solid") == 0;
+  s.solid_cased = !s.solid && head.size() >= start + 5 && lower_keyword(std::string_view(head).substr(start, 5)) == "solid";
   // A name is looked for wherever it starts in the 80 bytes.
   const std::string_view header = std::string_view(head).substr(0, kShapeBytes);
   for (const char* colours : {"COLOR=", "MATERIAL="}) {
@@ -129,7 +146,8 @@ void check_stl(const std::string& bytes, const std::string& name) {
       start == std::string_view("s\0o\0l\0i\0d\0", 10) || start == std::string_view("\0s\0o\0l\0i\0d", 10))
     throw InputError(name + ": UTF-16 text: a text STL is ASCII (save it as such)");
   // Text never holds a NUL; a binary header may start with "solid".
-  if (s.text() && bytes.find('\0') == std::string::npos) return check_text(bytes, name);
+  if ((s.text() || (s.solid_cased && !s.exact)) && bytes.find('\0') == std::string::npos)
+    return check_text(bytes, name);
   if (s.size < kHeaderBytes) throw InputError(name + ": binary STL shorter than its 84-byte header (truncated file)");
   if (kHeaderBytes + kRecordBytes * s.facets > s.size)
     throw InputError(name + ": binary STL header counts " + std::to_string(s.facets) + " facets; the file holds " +

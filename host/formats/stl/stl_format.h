@@ -31,6 +31,7 @@ struct Shape {
   std::uint64_t facets = 0;  // the binary header's count (0 for a file shorter than the header)
   bool exact = false;        // size is 84 + 50 x facets
   bool solid = false;        // starts with "solid"
+  bool solid_cased = false;  // starts with "solid" in another case ("SOLID"): text the importer does not read
   std::string colours;       // "COLOR=" or "MATERIAL=", where the header names it; else ""
   bool text() const { return solid && !exact; }
 };

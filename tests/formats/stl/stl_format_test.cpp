@@ -3,6 +3,7 @@
 // checks before the importer and for the stream's refusals.
 #include <gtest/gtest.h>
 
+#include <cctype>
 #include <cstdint>
 #include <string>
 
@@ -69,6 +70,26 @@ TEST(StlFormat, WhatTheImporterWouldMisreadIsNamed) {
   const std::string utf16 = std::string("\xff\xfes\0o\0l\0i\0d\0 \0t\0\n\0", 18);
   EXPECT_EQ(check_error(utf16), "f.stl: UTF-16 text: a text STL is ASCII (save it as such)");
   EXPECT_EQ(check_error(utf16.substr(2)), "f.stl: UTF-16 text: a text STL is ASCII (save it as such)");
+}
+
+// Keywords in upper case (some old exporters write them): the importer
+// reads lower case only, and had taken "SOLID" for a binary header of a
+// billion facets, or dropped upper-case facets and said "no facets".
+TEST(StlFormat, UpperCaseKeywordsAreNamedWithTheirLine) {
+  const std::string lower =
+      "solid t\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 0 1 0\nendloop\nendfacet\n"
+      "endsolid t\n";
+  EXPECT_EQ(check_error(lower), "");
+  std::string upper = lower;
+  for (char& c : upper) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+  EXPECT_EQ(check_error(upper), "f.stl:1: STL keyword 'SOLID' is not in lower case: the importer reads 'solid' only");
+  EXPECT_EQ(check_error("solid t\nFacet normal 0 0 1\n" + lower.substr(27)),
+            "f.stl:2: STL keyword 'Facet' is not in lower case: the importer reads 'facet' only");
+  EXPECT_EQ(check_error(lower.substr(0, lower.size() - 11) + "ENDSOLID t\n"),
+            "f.stl:9: STL keyword 'ENDSOLID' is not in lower case: the importer reads 'endsolid' only");
+  // A solid's name is any text; a binary header in capitals is a binary's.
+  EXPECT_EQ(check_error("solid VERTEX\n" + lower.substr(8)), "");
+  EXPECT_EQ(check_error(binary("SOLID made by a test", 1, 1)), "");
 }
 
 TEST(StlFormat, HeaderColoursAndEmptyFilesAreTheImportersToRead) {

@@ -29,6 +29,33 @@ using namespace obj_text;
 
 namespace obj_parse {
 
+namespace {
+
+// Faces that name texture coordinates (or normals) on some corners only:
+// the OBJ specification gives every corner of a face one form, and such a
+// face is drawn without them; one warning for each kind says so.
+void warn_mixed_corners(const std::vector<Polygon>& polys, const std::vector<std::uint32_t>& uv,
+                        const std::vector<std::uint32_t>& normals, const std::string& name,
+                        std::vector<std::string>& warnings) {
+  for (const bool of_uv : {true, false}) {
+    const std::vector<std::uint32_t>& index = of_uv ? uv : normals;
+    std::size_t count = 0;
+    int line = 0;
+    for (const Polygon& p : polys) {
+      if (of_uv ? p.has_uv : p.has_normals) continue;
+      bool some = false;
+      for (std::uint32_t c = 0; c < p.count && !some; ++c) some = index[p.first + c] != kNoIndex;
+      if (some && count++ == 0) line = p.line;
+    }
+    if (count > 0)
+      warnings.push_back(at(name, line) + std::to_string(count) + " face(s) name " +
+                         (of_uv ? "texture coordinates" : "normals") +
+                         " on some corners only (first on this line): they are drawn without them");
+  }
+}
+
+}  // namespace
+
 // A positive index past the end of its list: name the first face (in file
 // order) that has one.
 void ObjParser::check_range(IndexedList& list, const std::vector<std::uint32_t>& index, const char* plural) {
@@ -244,6 +271,7 @@ Scene ObjParser::finish() {
     warnings_.push_back(at(name_, unknown_line_) + "ignored " +
                         std::to_string(unknown_count_) + " line(s) with unknown statements "
                         "(first: " + quote(unknown_first_) + ")");
+  warn_mixed_corners(polys_, uv_index_, normal_index_, name_, warnings_);
 
   // A window's extent is the whole file's, which every rank has counted.
   Vec3 lo = fig.lo, hi = fig.hi;

@@ -214,6 +214,27 @@ TEST(ObjParse, UnknownStatementsAreOneWarning) {
   EXPECT_TRUE(has_warning(s, "t.obj:5:", "ignored 2 line(s) with unknown statements"));
 }
 
+// A face naming texture coordinates or normals on some corners only is
+// drawn without them, and one warning for each kind says so (it had gone
+// unsaid); faces of one form each are not warned of.
+TEST(ObjParse, FacesMixingCornerFormsAreOneWarningEach) {
+  const std::string head = std::string(kTriVerts) + "vt 0 0\nvt 1 0\nvt 1 1\nvn 0 0 1\n";
+  const Scene s = from_text(head + "f 1/1 2/2 3/3\nf 1/1 3/3 4\nf 1//1 2 3\nf 1/2 3/3 4/1\nf 2//1 3//1 4//1\n");
+  EXPECT_TRUE(has_warning(s, "t.obj:10:", "1 face(s) name texture coordinates on some corners only"));
+  EXPECT_TRUE(has_warning(s, "t.obj:11:", "1 face(s) name normals on some corners only"));
+  ASSERT_EQ(s.triangles.size(), 5u);
+  int with_uv = 0, with_normals = 0;
+  for (const Triangle& t : s.triangles) {
+    if (t.attributes < 0) continue;
+    with_uv += s.attributes[std::size_t(t.attributes)].has_uv;
+    with_normals += s.attributes[std::size_t(t.attributes)].has_normals;
+  }
+  EXPECT_EQ(with_uv, 2);  // faces 1 and 4
+  EXPECT_EQ(with_normals, 1);  // face 5
+  const Scene plain = from_text(head + "f 1/1 2/2 3/3\nf 1 3 4\nf 1//1 2//1 3//1\n");
+  EXPECT_FALSE(has_warning(plain, "on some corners only"));
+}
+
 TEST(ObjParse, BareObjFramesItselfAndAsksForNoLightsOrCamera) {
   const Scene s = from_text(std::string(kTriVerts) + "f 1 2 3\n");
   EXPECT_FALSE(s.has_camera);

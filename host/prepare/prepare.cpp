@@ -20,6 +20,7 @@ namespace {
 Scene read_view_scene(const PrepareRequest& r, Ranks& ranks) {
   const SceneShare share = scene_share_for(ranks);
   const TriangleLimit limit = host_triangle_limit(ranks, r.view.host_memory);
+  if (const std::string why = limit.no_room(); !why.empty()) throw InputError(why);
   show_prepare_progress(!r.quiet);
   Scene scene = load_scene_or_explain(r.view.scene_path, r.quiet, ranks, share, limit);
   if (r.outputs) r.outputs->refuse_inputs(scene.input_files);

@@ -99,6 +99,20 @@ std::string TriangleLimit::objects_beyond(std::size_t n, std::size_t objects, st
          std::to_string((need + mib - 1) / mib) + "M would do";
 }
 
+std::string TriangleLimit::no_room() const {
+  if (why != Why::memory || triangles > 0) return "";
+  // Under ulimit -v the limit is what is left past the program and its
+  // driver, plus the base: no triangle fits only when nothing is left, by
+  // a deficit not known here.
+  if (memory.address_space > 0)
+    return "not enough address space to prepare a scene: ulimit -v leaves this process no room beyond the program "
+           "and its OpenCL driver, and preparing takes " + std::to_string(kPrepareHostBaseBytes >> 20) +
+           " MiB more before its first triangle; raise ulimit -v";
+  return "not enough host memory to prepare a scene: this process may use " + gib(memory.bytes) + " " +
+         memory_source(memory) + ", less than the " + gib(kPrepareHostBaseBytes) +
+         " preparing takes before its first triangle; " + memory_hint(1, 1) + " would do for a small scene";
+}
+
 std::string TriangleLimit::memory_hint(std::size_t n, int ranks) const {
   const std::size_t share = per_rank(n, ranks);
   if (why != Why::memory || share > kMaxTriangles) return "";

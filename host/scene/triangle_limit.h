@@ -74,6 +74,10 @@ struct TriangleLimit {
   // --host-memory 2476M would do"); "" when they fit or memory is not what
   // limits.
   std::string objects_beyond(std::size_t triangles, std::size_t objects, std::uint64_t map_bytes = 0) const;
+  // Why no triangle at all fits (the memory is below what preparing takes
+  // before the first): "this process may use 0.10 GiB (--host-memory),
+  // less than the 0.25 GiB ...; --host-memory 257M would do"; "" otherwise.
+  std::string no_room() const;
   // "--host-memory 371M" when that much memory a rank would take
   // `triangles` on `ranks` ranks; "" when memory is not what limits.
   std::string memory_hint(std::size_t triangles, int ranks) const;

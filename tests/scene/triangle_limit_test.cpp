@@ -62,6 +62,20 @@ TEST(TriangleLimit, AnAddressSpaceLimitBelowTheShareBoundsTheProcess) {
   EXPECT_EQ(host_memory_of(8 * kGiB, 0, 1, 1 * kGiB).bytes, 8 * kGiB) << "--host-memory is taken as given";
 }
 
+// Memory below what preparing takes before the first triangle is said so
+// at once: it had been "too many triangles (more than 0)" on the first
+// face of an OBJ under ulimit -v.
+TEST(TriangleLimit, NoRoomForAnyTriangleIsSaidOnItsOwn) {
+  EXPECT_EQ(TriangleLimit::of_memory(host_memory_of(300 * kMiB, 0, 1)).no_room(), "");
+  EXPECT_EQ(TriangleLimit::of_memory(host_memory_of(100 * kMiB, 0, 1)).no_room(),
+            "not enough host memory to prepare a scene: this process may use 0.10 GiB (--host-memory), less than "
+            "the 0.25 GiB preparing takes before its first triangle; --host-memory 257M would do for a small scene");
+  const std::string ulimit = TriangleLimit::of_memory(host_memory_of(0, 64 * kGiB, 1, kPrepareHostBaseBytes + 1)).no_room();
+  EXPECT_EQ(ulimit.rfind("not enough address space to prepare a scene: ulimit -v leaves this process no room", 0), 0u)
+      << ulimit;
+  EXPECT_EQ(TriangleLimit(0).no_room(), "") << "a bare number has no memory to speak of";
+}
+
 TEST(TriangleLimit, ARefusalSaysWhatDoesNotFitAndWhatThisProcessMayUse) {
   const TriangleLimit flag = TriangleLimit::of_memory(host_memory_of(300 * kMiB, 0, 1));
   EXPECT_EQ(flag.why_not(1000000, 1),

@@ -129,7 +129,11 @@ std::vector<u64> buffer_lengths(const Gltf& g, ModelFiles& files, const GltfPart
         // Where the importer looks: the model's folder and the uri as written.
         const std::string dir = std::filesystem::path(path).parent_path().string();
         source = dir.empty() ? u : dir + "/" + u;
-        available = files.size(source);
+        try {
+          available = files.size(source);
+        } catch (const InputError& x) {  // the file's own words, after the key that names it
+          throw InputError(e.where + ": uri " + model_words::quote(u) + ": " + x.what());
+        }
         external += available;
       }
     }

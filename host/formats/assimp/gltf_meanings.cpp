@@ -130,6 +130,19 @@ void check_attributes(const Json& root, const std::string& path) {
   }
 }
 
+// The scene to show: the importer said only "No scene" of an index past
+// the list, or of a file without scenes.
+void check_scene_index(const Json& root, const std::string& path) {
+  const auto scenes = root.find("scenes");
+  const std::size_t n = scenes != root.end() && scenes->is_array() ? scenes->size() : 0;
+  if (n == 0) refuse(path, "scenes", "none: nothing places a mesh (a glTF shows the nodes of a scene)");
+  const auto scene = root.find("scene");
+  if (scene == root.end()) return;
+  if (!scene->is_number_integer() || scene->get<long long>() < 0 || std::size_t(scene->get<long long>()) >= n)
+    refuse(path, "scene", "'" + quoted_prefix(scene->dump()) + "' is not the index of one of its " +
+                              std::to_string(n) + " scene(s)");
+}
+
 }  // namespace
 
 void check_gltf_meanings(const Json& root, const std::string& path) {
@@ -137,6 +150,7 @@ void check_gltf_meanings(const Json& root, const std::string& path) {
   check_version(root, path, two);
   if (!two) return;  // glTF 1 keys its collections by id: the importer's own checks
   check_required(root, path);
+  check_scene_index(root, path);
   check_attributes(root, path);
   const auto materials = root.find("materials");
   if (materials == root.end() || !materials->is_array()) return;

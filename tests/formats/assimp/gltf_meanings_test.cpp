@@ -67,6 +67,23 @@ TEST_F(GltfMeanings, PositionsAndNormalsAreFloatTriples) {
   EXPECT_NE(error(g).find("is \"VEC3\" of componentType 5122"), std::string::npos) << error(g);
 }
 
+// The scene to show and the buffers' files are named by their keys: the
+// importer had said "No scene", and a missing buffer file was named alone.
+TEST_F(GltfMeanings, TheSceneAndTheBufferFilesAreNamedByTheirKeys) {
+  Json g = triangle();
+  g["scene"] = 1;
+  EXPECT_EQ(error(g), "scene: '1' is not the index of one of its 1 scene(s)");
+  g["scene"] = "one";
+  EXPECT_EQ(error(g), "scene: '\"one\"' is not the index of one of its 1 scene(s)");
+  g.erase("scene");
+  EXPECT_EQ(error(g), "<no error>") << "without 'scene', the first";
+  g["scenes"] = Json::array();
+  EXPECT_EQ(error(g), "scenes: none: nothing places a mesh (a glTF shows the nodes of a scene)");
+  g = triangle();
+  g["buffers"][0]["uri"] = "gone.bin";
+  EXPECT_EQ(error(g), "buffers[0]: uri 'gone.bin': " + dir.path() + "/gone.bin: cannot open: No such file or directory");
+}
+
 TEST_F(GltfMeanings, BaseColoursAndTextureTransformsHoldTheirNumbers) {
   for (const Json& bad : {Json::parse("[-1, 0, 0, 1]"), Json::parse("[1, 0, 0]"), Json::parse("[1e39, 0, 0, 1]"),
                           Json("red")}) {

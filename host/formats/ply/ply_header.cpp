@@ -231,6 +231,8 @@ Header parse_header(const std::string& bytes, std::uint64_t file_bytes, const st
   // The 'ply' line (the importer would take "PLY" in any case, so it comes first).
   std::string text;
   const bool first = next_line(text);
+  if (head.rfind("ply\r", 0) == 0 && (!first || text != "ply"))
+    throw InputError(path + ": its lines end with a lone CR (old Mac text): PLY lines end with LF or CR LF");
   if (!first && !importer) no_end(path);
   if (!first || text != "ply") throw InputError(path + ": not PLY (a PLY file starts with the line 'ply')");
   const std::size_t end = importer ? importer_end(head, path) : std::string::npos;

@@ -111,5 +111,20 @@ TEST(PlyHeader, AFileOfOneUnendedLine) {
   EXPECT_EQ(error_of("ply", Reading::importer), "f.ply: not PLY (a PLY file starts with the line 'ply')");
 }
 
+// Lines that end with a lone CR (old Mac text) are named as such by both
+// readings: the file had been "not PLY", or without an 'end_header'.
+TEST(PlyHeader, LinesEndingInALoneCrAreNamed) {
+  std::string cr = kHeader + kBody;
+  for (char& c : cr)
+    if (c == '\n') c = '\r';
+  const std::string why = "f.ply: its lines end with a lone CR (old Mac text): PLY lines end with LF or CR LF";
+  EXPECT_EQ(error_of(cr, Reading::stream), why);
+  EXPECT_EQ(error_of(cr, Reading::importer), why);
+  std::string crlf;
+  for (char c : kHeader) crlf += c == '\n' ? std::string("\r\n") : std::string(1, c);
+  EXPECT_EQ(refusal(crlf, Reading::stream), "");
+  EXPECT_EQ(refusal(crlf, Reading::importer), "");
+}
+
 }  // namespace
 }  // namespace opsila

@@ -98,6 +98,8 @@ class OffCheck {
       next_token();
     }
     if (!keyword) dims_ = 3;
+    if (keyword && prefix("BINARY"))
+      throw InputError(where() + "binary OFF ('OFF BINARY'): the model importer reads text OFF only");
     counts();
   }
 

@@ -415,6 +415,8 @@ TEST(HostileModel, OffFacesTheImporterWouldMisreadAreRefused) {
   expect("few.off", "OFF\n3 1 0\n0 0 0\n1 0\n0 1 0\n3 0 1 2\n", ":4: OFF vertex 2 needs 3 numbers; the line has 2");
   expect("edges.off", "OFF\n3 1\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n",
          ":2: OFF header has vertex and face counts but no edge count ('vertices faces edges')");
+  // A binary OFF had been "the vertex count 'BINARY' is not a number".
+  expect("binary.off", "OFF BINARY\n\x03\x00\x00\x00", ":1: binary OFF ('OFF BINARY'): the model importer reads text OFF only");
   // A vertex that is not finite in floats is named where a face uses it;
   // one that no face uses is harmless.
   expect("nan.off", "OFF\n4 1 0\n0 0 0\n1 0 0\n0 nan 0\n0 1 0\n3 0 2 1\n",

@@ -78,9 +78,14 @@ void check_text(std::string_view data, std::uint64_t first_line, const Header& h
       std::size_t in = 0;
       const auto value = [&] {
         if (next_word(text, in, w)) return;
-        if (at >= data.size()) truncated(name, e, i);  // the file's last line, cut short
-        throw InputError(name + ":" + std::to_string(line) + ": PLY '" + e.name + "' element " +
-                         std::to_string(i + 1) + " of " + std::to_string(e.count) +
+        const std::string element = "'" + e.name + "' element " + std::to_string(i + 1) + " of " +
+                                    std::to_string(e.count);
+        // The file's last line: cut short, or a count too large; its line either way.
+        if (at >= data.size())
+          throw InputError(name + ":" + std::to_string(line) + ": PLY data ends early: " + element +
+                           " stops short on the file's last line (fewer values than the header's properties ask "
+                           "for: a truncated file, or a list longer than its numbers)");
+        throw InputError(name + ":" + std::to_string(line) + ": PLY " + element +
                          ": the line holds fewer values than the header's properties ask for");
       };
       for (const Property& p : e.properties) {

@@ -117,7 +117,8 @@ Shape shape_of(const std::string& head, std::uint64_t size) {
   std::size_t start = 0;
   while (start < head.size() && std::isspace(static_cast<unsigned char>(head[start]))) ++start;
   s.solid = head.compare(start, 5, "solid") == 0;
-  s.solid_cased = !s.solid && head.size() >= start + 5 && lower_keyword(std::string_view(head).substr(start, 5)) == "solid";
+  s.solid_cased =
+      !s.solid && head.size() >= start + 5 && lower_keyword(std::string_view(head).substr(start, 5)) == "solid";
   // A name is looked for wherever it starts in the 80 bytes.
   const std::string_view header = std::string_view(head).substr(0, kShapeBytes);
   for (const char* colours : {"COLOR=", "MATERIAL="}) {

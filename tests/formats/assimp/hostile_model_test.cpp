@@ -266,8 +266,11 @@ TEST(HostileModel, TruncatedDataIsRefusedInEveryFormat) {
   };
   expect("few.ply", std::string(kPlyHeader) + "0 0 0\n1 0 0\n1 1 0\n",
          "PLY data ends early: 'vertex' element 4 of 4 is missing or incomplete (truncated file)");
-  expect("face.ply", std::string(kPlyHeader) + "0 0 0\n1 0 0\n1 1 0\n0 1 0\n3 0 1 2\n3 0 2",
-         "PLY data ends early: 'face' element 2 of 2");
+  expect_refused(dir, "face.ply", std::string(kPlyHeader) + "0 0 0\n1 0 0\n1 1 0\n0 1 0\n3 0 1 2\n3 0 2",
+                 ":15: PLY data ends early: 'face' element 2 of 2 stops short on the file's last line");
+  // A last line whose list counts more numbers than it holds: named with its line.
+  expect_refused(dir, "count.ply", std::string(kPlyHeader) + "0 0 0\n1 0 0\n1 1 0\n0 1 0\n3 0 1 2\n4 0 2 3\n",
+                 ":15: PLY data ends early: 'face' element 2 of 2 stops short on the file's last line");
   std::string binary = "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
                        "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n";
   binary += triangle_bytes() + '\x03' + le32(0) + le32(1);

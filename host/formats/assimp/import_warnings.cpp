@@ -24,6 +24,8 @@ constexpr Dropped kDropped[] = {
                              "would drop those faces): every index must be below the POSITION accessor's count"},
     {"not compatible with the TRIANGLES mode", "a triangles primitive's vertex or index count is not a multiple of 3 "
                                                "(the importer would drop the rest)"},
+    {"3DS: Vertex index overflow", "a 3DS face names a vertex past its mesh's vertex list (the importer would put "
+                                   "the mesh's last vertex in its place)"},
 };
 
 }  // namespace

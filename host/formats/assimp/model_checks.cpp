@@ -99,6 +99,9 @@ std::uint64_t check_model_file_shape(ModelFiles& files, const std::string& path,
   else check_nesting(bytes, path);
   if (e == "fbx") check_fbx_text(bytes, path);
   if (e == "md5mesh") check_md5_mesh(bytes, path);
+  if (e == "ase" || e == "ask") check_ase(bytes, path);
+  if (e == "ac" || e == "acc" || e == "ac3d") check_ac3d(bytes, path);
+  if (e == "x") check_x_text(bytes, path);
   return size;
 }
 

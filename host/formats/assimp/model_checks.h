@@ -52,6 +52,14 @@ void check_fbx_text(const std::string& bytes, const std::string& name);
 // count, a vert's weights within the weights, a weight's joint within the
 // joints, a tri's vertices within the vertices.
 void check_md5_mesh(const std::string& text, const std::string& name);
+// Faces indexing a vertex list, each index checked, naming its line
+// (index_checks.cpp): ASE's *MESH_FACE corners below *MESH_NUMVERTEX;
+// AC3D's surface references below their OBJECT's numvert, a surface's mat
+// below the MATERIAL lines; text DirectX .x Mesh faces below the Mesh's
+// vertex count.
+void check_ase(const std::string& text, const std::string& name);
+void check_ac3d(const std::string& text, const std::string& name);
+void check_x_text(const std::string& text, const std::string& name);
 // glTF (text) and GLB: chunk lengths within the file; buffers, buffer views
 // and accessors within one another, in 64-bit arithmetic; external buffers
 // within the file limit and as long as declared; node graph a forest of at

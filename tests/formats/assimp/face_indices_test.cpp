@@ -1,0 +1,94 @@
+// Faces that name a vertex past their mesh's list, in formats whose readers
+// trust the index: ASE and DirectX .x dropped the face or made it a line,
+// AC3D dropped the surface, 3DS put the last vertex in its place, each with
+// exit 0 and a changed model. Each is refused, naming the line where the
+// format has lines. No OpenCL needed.
+#include <gtest/gtest.h>
+
+#include <cstdint>
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include "core/errors.h"
+#include "formats/json/scene_file.h"
+#include "test_util.h"
+
+namespace opsila {
+namespace {
+
+using test::TempDir;
+
+std::string error_loading(const std::string& path) {
+  return test::error_of([&] { load_scene(path); });
+}
+
+// Two triangles over four vertices; the second's last corner is `index`.
+std::string ase(const std::string& index) {
+  return "*3DSMAX_ASCIIEXPORT 200\n*GEOMOBJECT {\n *NODE_NAME \"t\"\n *MESH {\n  *MESH_NUMVERTEX 4\n"
+         "  *MESH_NUMFACES 2\n  *MESH_VERTEX_LIST {\n   *MESH_VERTEX 0 0.0 0.0 0.0\n"
+         "   *MESH_VERTEX 1 1.0 0.0 0.0\n   *MESH_VERTEX 2 0.0 1.0 0.0\n   *MESH_VERTEX 3 1.0 1.0 0.0\n  }\n"
+         "  *MESH_FACE_LIST {\n   *MESH_FACE 0: A: 0 B: 1 C: 2\n   *MESH_FACE 1: A: 1 B: 3 C: " + index +
+         "\n  }\n }\n}\n";
+}
+
+std::string ac3d(const std::string& index, const std::string& mat) {
+  return "AC3Db\nMATERIAL \"m\" rgb 1 1 1  amb 0.2 0.2 0.2  emis 0 0 0  spec 0 0 0  shi 10  trans 0\n"
+         "OBJECT world\nkids 1\nOBJECT poly\nname \"t\"\nnumvert 4\n0 0 0\n1 0 0\n0 1 0\n1 1 0\nnumsurf 2\n"
+         "SURF 0x10\nmat 0\nrefs 3\n0 0 0\n1 0 0\n2 0 0\nSURF 0x10\nmat " + mat + "\nrefs 3\n1 0 0\n3 0 0\n" +
+         index + " 0 0\nkids 0\n";
+}
+
+std::string x_text(const std::string& index) {
+  return "xof 0303txt 0032\n// two faces\nMesh m {\n 4;\n 0.0;0.0;0.0;,\n 1.0;0.0;0.0;,\n 0.0;1.0;0.0;,\n"
+         " 1.0;1.0;0.0;;\n 2;\n 3;0,1,2;,\n 3;1,3," + index + ";;\n}\n";
+}
+
+// A 3DS file of one mesh: its vertices, then faces of three indices (and
+// flags), chunk by chunk (id, then length including the 6-byte header).
+std::string chunk(std::uint16_t id, const std::string& body) {
+  std::string c(6, '\0');
+  const std::uint32_t length = std::uint32_t(6 + body.size());
+  std::memcpy(&c[0], &id, 2);
+  std::memcpy(&c[2], &length, 4);
+  return c + body;
+}
+
+std::string three_ds(std::uint16_t index) {
+  const float vertices[4][3] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 0}};
+  const std::uint16_t faces[2][4] = {{0, 1, 2, 0}, {1, 3, index, 0}};
+  std::string v(2, '\0'), f(2, '\0');
+  const std::uint16_t nv = 4, nf = 2;
+  std::memcpy(&v[0], &nv, 2);
+  std::memcpy(&f[0], &nf, 2);
+  v.append(reinterpret_cast<const char*>(vertices), sizeof vertices);
+  f.append(reinterpret_cast<const char*>(faces), sizeof faces);
+  const std::string version = chunk(0x0002, std::string("\x03\0\0\0", 4));
+  const std::string mesh = chunk(0x4100, chunk(0x4110, v) + chunk(0x4120, f));
+  return chunk(0x4D4D, version + chunk(0x3D3D, chunk(0x4000, std::string("t\0", 2) + mesh)));
+}
+
+TEST(FaceIndices, AFacePastItsVerticesIsNamedWithItsLine) {
+  TempDir dir;
+  struct Case {
+    std::string file, good, bad, what;
+  };
+  const Case cases[] = {
+      {"t.ase", ase("2"), ase("9"), ":15: ASE *MESH_FACE 1: corner C names vertex '9', past *MESH_NUMVERTEX 4"},
+      {"t.ac", ac3d("2", "0"), ac3d("9", "0"), ":24: AC3D surface reference names vertex '9', past its OBJECT's "
+                                               "numvert 4 (indices 0 to 3)"},
+      {"t.ac", ac3d("2", "0"), ac3d("2", "7"), ":20: AC3D surface's mat names material '7', past the 1 MATERIAL"},
+      {"t.x", x_text("2"), x_text("9"), ":11: DirectX Mesh face 2 of 2 names vertex '9', past the Mesh's 4 vertices"},
+      {"t.x", x_text("2"), x_text("-1"), ":11: DirectX Mesh face 2 of 2 names vertex '-1', which is not an index"},
+      {"t.3ds", three_ds(2), three_ds(9), ": a 3DS face names a vertex past its mesh's vertex list"},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.what);
+    EXPECT_EQ(load_scene(dir.write(c.file, c.good)).num_facets, 2);
+    const std::string e = error_loading(dir.write(c.file, c.bad));
+    EXPECT_NE(e.find(dir.file(c.file) + c.what), std::string::npos) << e;
+  }
+}
+
+}  // namespace
+}  // namespace opsila

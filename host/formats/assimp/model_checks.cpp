@@ -102,6 +102,7 @@ std::uint64_t check_model_file_shape(ModelFiles& files, const std::string& path,
   if (e == "ase" || e == "ask") check_ase(bytes, path);
   if (e == "ac" || e == "acc" || e == "ac3d") check_ac3d(bytes, path);
   if (e == "x") check_x_text(bytes, path);
+  if (e == "dae") check_collada(bytes, path);
   return size;
 }
 

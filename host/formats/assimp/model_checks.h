@@ -60,6 +60,9 @@ void check_md5_mesh(const std::string& text, const std::string& name);
 void check_ase(const std::string& text, const std::string& name);
 void check_ac3d(const std::string& text, const std::string& name);
 void check_x_text(const std::string& text, const std::string& name);
+// COLLADA: count attributes whole numbers of at most 32 bits, <p>
+// indices below 2^31, no <skew> (collada_checks.cpp), naming the line.
+void check_collada(const std::string& text, const std::string& name);
 // glTF (text) and GLB: chunk lengths within the file; buffers, buffer views
 // and accessors within one another, in 64-bit arithmetic; external buffers
 // within the file limit and as long as declared; node graph a forest of at

@@ -1,8 +1,9 @@
 // Faces that name a vertex past their mesh's list, in formats whose readers
 // trust the index: ASE and DirectX .x dropped the face or made it a line,
 // AC3D dropped the surface, 3DS put the last vertex in its place, each with
-// exit 0 and a changed model. Each is refused, naming the line where the
-// format has lines. No OpenCL needed.
+// exit 0 and a changed model; COLLADA's reader faulted, grew past 1 GiB or
+// wrapped on words that are no count or index. Each is refused, naming the
+// line where the format has lines. No OpenCL needed.
 #include <gtest/gtest.h>
 
 #include <cstdint>
@@ -66,6 +67,39 @@ std::string three_ds(std::uint16_t index) {
   const std::string version = chunk(0x0002, std::string("\x03\0\0\0", 4));
   const std::string mesh = chunk(0x4100, chunk(0x4110, v) + chunk(0x4120, f));
   return chunk(0x4D4D, version + chunk(0x3D3D, chunk(0x4000, std::string("t\0", 2) + mesh)));
+}
+
+// One triangle; `transform` is placed in its node.
+std::string dae(const std::string& count, const std::string& p, const std::string& transform) {
+  return "<?xml version=\"1.0\"?>\n<COLLADA xmlns=\"http://www.collada.org/2005/11/COLLADASchema\" "
+         "version=\"1.4.1\">\n<library_geometries><geometry id=\"g\"><mesh>\n<source id=\"p\">"
+         "<float_array id=\"pa\" count=\"" + count + "\">0 0 0 1 0 0 0 1 0</float_array>\n<technique_common>"
+         "<accessor source=\"#pa\" count=\"3\" stride=\"3\"><param name=\"X\" type=\"float\"/><param "
+         "name=\"Y\" type=\"float\"/><param name=\"Z\" type=\"float\"/></accessor></technique_common>"
+         "</source>\n<vertices id=\"v\"><input semantic=\"POSITION\" source=\"#p\"/></vertices>\n"
+         "<triangles count=\"1\"><input semantic=\"VERTEX\" source=\"#v\" offset=\"0\"/><p>" + p +
+         "</p></triangles>\n</mesh></geometry></library_geometries>\n<library_visual_scenes><visual_scene "
+         "id=\"s\"><node id=\"n\">" + transform + "<instance_geometry url=\"#g\"/></node></visual_scene>"
+         "</library_visual_scenes>\n<scene><instance_visual_scene url=\"#s\"/></scene></COLLADA>\n";
+}
+
+TEST(FaceIndices, ColladaCountsAndIndicesAreWholeNumbers) {
+  TempDir dir;
+  EXPECT_EQ(load_scene(dir.write("t.dae", dae("9", "0 1 2", "<!-- <skew> --> "))).num_facets, 1);
+  const struct {
+    std::string bytes, what;
+  } cases[] = {
+      {dae("-1", "0 1 2", ""), ":4: COLLADA count='-1' is not a count"},
+      {dae("9", "0 1 1.5", ""), ":7: COLLADA <p> index '1.5' is not an index"},
+      {dae("9", "0 -1 2", ""), ":7: COLLADA <p> index '-1' is not an index"},
+      {dae("9", "0 1 4294967297", ""), ":7: COLLADA <p> index '4294967297' is not an index"},
+      {dae("9", "0 1 2", "<skew>45 0 1 0 1 0 0</skew>"), ":9: COLLADA <skew> (a shear) is a transform the importer"},
+  };
+  for (const auto& c : cases) {
+    SCOPED_TRACE(c.what);
+    const std::string e = error_loading(dir.write("t.dae", c.bytes));
+    EXPECT_NE(e.find(dir.file("t.dae") + c.what), std::string::npos) << e;
+  }
 }
 
 TEST(FaceIndices, AFacePastItsVerticesIsNamedWithItsLine) {

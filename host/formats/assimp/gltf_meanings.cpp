@@ -153,14 +153,14 @@ void check_gltf_meanings(const Json& root, const std::string& path) {
   check_scene_index(root, path);
   check_attributes(root, path);
   const auto materials = root.find("materials");
-  if (materials == root.end() || !materials->is_array()) return;
-  for (std::size_t k = 0; k < materials->size(); ++k) {
+  for (std::size_t k = 0; materials != root.end() && materials->is_array() && k < materials->size(); ++k) {
     const Json& m = (*materials)[k];
     const std::string at = "materials[" + std::to_string(k) + "]";
     if (m.is_object() && m.contains("pbrMetallicRoughness"))
       check_numbers(m["pbrMetallicRoughness"], "baseColorFactor", 4, 0, 1, path, at + ".pbrMetallicRoughness");
     check_transforms(m, path, at);
   }
+  check_gltf_references(root, path);
 }
 
 }  // namespace opsila

@@ -75,5 +75,9 @@ std::uint64_t check_gltf(ModelFiles& files, const std::string& bytes, const std:
 // requires that the importer reads, float VEC3 positions and normals,
 // base colours of 4 numbers in [0, 1], texture transforms of numbers.
 void check_gltf_meanings(const nlohmann::json& root, const std::string& path);
+// glTF 2: a scene's nodes, a node's mesh, camera and skin, a material's
+// textures, a texture's image and sampler, each the index of an entry
+// (gltf_references.cpp), refused naming the key.
+void check_gltf_references(const nlohmann::json& root, const std::string& path);
 
 }  // namespace opsila

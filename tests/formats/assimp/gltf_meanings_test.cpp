@@ -120,5 +120,36 @@ TEST_F(GltfMeanings, TheFilesOwnUnnamedMaterialsAreUsedWhateverTheirColour) {
   EXPECT_EQ(s.triangles.at(0).material, 0) << "a primitive without a material takes the default";
 }
 
+// A reference past its collection, or no index at all: the importer named
+// only the collection ("Array index 1 is out of bounds (1) for "meshes"")
+// or a missing section.
+TEST_F(GltfMeanings, AReferenceIsTheIndexOfAnEntryNamedByItsKey) {
+  const auto with = [](const char* pointer, const Json& value) {
+    Json g = triangle();
+    g["textures"] = Json::parse(R"([{"source": 0}])");
+    g["images"] = Json::parse(R"([{"uri": "missing.png"}])");
+    g[Json::json_pointer(pointer)] = value;
+    return g;
+  };
+  const struct {
+    const char* pointer;
+    Json value;
+    std::string what;
+  } cases[] = {
+      {"/nodes/0/mesh", 1, "nodes[0].mesh: '1' is not the index of one of its 1 'meshes' entries"},
+      {"/nodes/0/mesh", -1, "nodes[0].mesh: '-1' is not the index of one of its 1 'meshes' entries"},
+      {"/scenes/0/nodes", Json::array({5}), "scenes[0].nodes[0]: '5' is not the index of one of its 1 'nodes'"},
+      {"/materials/0/pbrMetallicRoughness/baseColorTexture", Json::parse(R"({"index": 3})"),
+       "materials[0].pbrMetallicRoughness.baseColorTexture.index: '3' is not the index of one of its 1 'textures'"},
+      {"/textures/0/source", 5, "textures[0].source: '5' is not the index of one of its 1 'images' entries"},
+      {"/textures/0/sampler", 0, "textures[0].sampler: '0' is not the index of one of its 0 'samplers' entries"},
+      {"/nodes/0/camera", "a", "nodes[0].camera: '\"a\"' is not the index of one of its 0 'cameras' entries"},
+  };
+  for (const auto& c : cases) {
+    SCOPED_TRACE(c.what);
+    EXPECT_EQ(error(with(c.pointer, c.value)).substr(0, c.what.size()), c.what);
+  }
+}
+
 }  // namespace
 }  // namespace opsila

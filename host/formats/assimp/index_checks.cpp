@@ -78,6 +78,15 @@ void check_index(const std::string& name, long line, const std::string& format, 
                                (count > 0 ? " (indices 0 to " + std::to_string(count - 1) + ")" : ""));
 }
 
+// A count of items each written in at least `each` bytes: one the file
+// cannot hold is refused (the importer allocated for it first, past 1 GiB).
+void check_room(const std::string& name, long line, const std::string& format, const std::string& key,
+                std::int64_t count, std::size_t file_bytes, std::size_t each) {
+  if (count < 0 || std::uint64_t(count) <= file_bytes / each) return;
+  fail(name, line, format, key + " " + std::to_string(count) + " is more than a file of " +
+                               std::to_string(file_bytes) + " bytes can hold");
+}
+
 }  // namespace
 
 // ASE: *MESH_NUMVERTEX N, then *MESH_FACE k: A: a B: b C: c, each of a, b,
@@ -87,8 +96,11 @@ void check_ase(const std::string& text, const std::string& name) {
   std::string_view w;
   std::int64_t vertices = -1;
   while (words.next(w)) {
-    if (w == "*MESH_NUMVERTEX") {
-      vertices = words.next(w) ? index_of(w) : -1;
+    if (w == "*MESH_NUMVERTEX" || w == "*MESH_NUMFACES") {
+      const std::string key(w);
+      const std::int64_t n = words.next(w) ? index_of(w) : -1;
+      check_room(name, words.line(), "ASE", key, n, text.size(), 16);  // "*MESH_VERTEX 0 0 0 0"
+      if (key == "*MESH_NUMVERTEX") vertices = n;
     } else if (w == "*MESH_FACE" && vertices >= 0) {
       const long line = words.line();
       std::string_view face;
@@ -127,10 +139,14 @@ void check_ac3d(const std::string& text, const std::string& name) {
                   "its OBJECT's numvert " + std::to_string(vertices));
       continue;
     }
+    // Each vertex, reference or kid takes a line of at least 2 bytes.
+    const std::int64_t n = has_value ? index_of(value) : -1;
+    if (key == "numvert" || key == "numsurf" || key == "refs" || key == "kids")
+      check_room(name, line, "AC3D", std::string(key), n, text.size(), 2);
     if (key == "MATERIAL") ++materials;
     else if (key == "OBJECT") vertices = 0;
-    else if (key == "numvert" && has_value) vertices = std::max<std::int64_t>(index_of(value), 0);
-    else if (key == "refs" && has_value) refs_left = std::max<std::int64_t>(index_of(value), 0);
+    else if (key == "numvert") vertices = std::max<std::int64_t>(n, 0);
+    else if (key == "refs") refs_left = std::max<std::int64_t>(n, 0);
     else if (key == "mat" && has_value)
       check_index(name, line, "AC3D", value, materials, "surface's mat names material",
                   "the " + std::to_string(materials) + " MATERIAL line(s) before it");
@@ -155,10 +171,12 @@ void check_x_text(const std::string& text, const std::string& name) {
     if (!words.next(w)) return;
     const std::int64_t vertices = index_of(w);
     if (vertices < 0) continue;
+    check_room(name, words.line(), "DirectX", "Mesh vertex count", vertices, text.size(), 6);  // "0;0;0;"
     for (std::int64_t v = 0; v < 3 * vertices; ++v)
       if (!words.next(w)) return;
     if (!words.next(w)) return;
     const std::int64_t faces = index_of(w);
+    check_room(name, words.line(), "DirectX", "Mesh face count", faces, text.size(), 4);  // "1;0;"
     for (std::int64_t f = 0; f < faces; ++f) {
       if (!words.next(w)) return;
       const std::int64_t corners = index_of(w);

@@ -124,5 +124,29 @@ TEST(FaceIndices, AFacePastItsVerticesIsNamedWithItsLine) {
   }
 }
 
+// Counts the importer allocated for before reading a value (past 1 GiB, or
+// out of memory): one the file cannot hold is named with its line.
+TEST(FaceIndices, CountsTheFileCannotHoldAreNamed) {
+  TempDir dir;
+  std::string big_ase = ase("2");
+  big_ase.replace(big_ase.find("*MESH_NUMVERTEX 4"), 17, "*MESH_NUMVERTEX 400000000");
+  std::string big_ac = ac3d("2", "0");
+  big_ac.replace(big_ac.find("kids 1"), 6, "kids 1000000000");
+  std::string big_x = x_text("2");
+  big_x.replace(big_x.find(" 2;\n"), 4, " 400000000;\n");
+  const struct {
+    std::string file, bytes, what;
+  } cases[] = {
+      {"t.ase", big_ase, ":5: ASE *MESH_NUMVERTEX 400000000 is more than a file of "},
+      {"t.ac", big_ac, ":4: AC3D kids 1000000000 is more than a file of "},
+      {"t.x", big_x, ":9: DirectX Mesh face count 400000000 is more than a file of "},
+  };
+  for (const auto& c : cases) {
+    SCOPED_TRACE(c.what);
+    const std::string e = error_loading(dir.write(c.file, c.bytes));
+    EXPECT_NE(e.find(dir.file(c.file) + c.what), std::string::npos) << e;
+  }
+}
+
 }  // namespace
 }  // namespace opsila

@@ -91,6 +91,11 @@ std::uint64_t check_model_file_shape(ModelFiles& files, const std::string& path,
     return size;
   }
   const std::string bytes = files.head(path, kMaxInputFileBytes);
+  // The importer's text readers take bytes, not UTF-16: an ASE read a
+  // fraction of its meshes, an AC3D or COLLADA nothing, in their own words.
+  // STL's check says it in STL's terms (a binary STL's header is any bytes).
+  if (e != "stl" && (bytes.rfind("\xff\xfe", 0) == 0 || bytes.rfind("\xfe\xff", 0) == 0))
+    throw InputError(path + ":1: UTF-16 text is not supported (save the file as UTF-8 or ASCII)");
   if (e == "ply") {
     ply::check_ply(bytes, path);
     check_ply_text(path, kMaxTriangles, &bytes);  // as ranks read it

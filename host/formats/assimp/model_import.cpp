@@ -379,10 +379,16 @@ Scene convert(Assimp::Importer& importer, const aiScene* ai, const std::string& 
   }
   if (!ai->mRootNode || ai->mNumMeshes == 0)
     throw InputError(name + ": no facets (the model has no meshes)");
-  // Meshes, but the reader says it did not read the whole file (a UTF-16
-  // ASE, a COLLADA of cameras or lights only): nothing of it is trusted.
+  // The reader found no mesh (a COLLADA of cameras or lights only, a
+  // motion-capture CSM): the importer marks the scene incomplete and
+  // fills it with stand-in shapes, one a node, which are no part of the file.
   if (ai->mFlags & AI_SCENE_FLAGS_INCOMPLETE)
-    throw InputError(name + ": the model importer read only part of the file (an incomplete scene)");
+    throw InputError(name + ": no facets: the model importer found no surfaces in it (" +
+                     (ai->mNumCameras + ai->mNumLights > 0
+                          ? std::to_string(ai->mNumCameras) + " camera(s) and " + std::to_string(ai->mNumLights) +
+                                " light(s) only"
+                          : std::string("nodes or bones only")) +
+                     "); its stand-in shapes for the nodes are not drawn");
   try {
     return ModelReader(*ai, name, base_dir, images, max_triangles).run();
   } catch (const std::bad_alloc&) {

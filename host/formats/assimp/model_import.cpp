@@ -55,11 +55,6 @@ namespace fs = std::filesystem;
 #ifdef OPSILA_HAVE_ASSIMP
 namespace {
 
-// Every placement of every mesh: the product of the node transforms from the
-// root down to each node that lists the mesh, in depth-first order. Without
-// recursion; a hierarchy deeper than kMaxNodeDepth is refused (the glTF
-// checks refuse one before the importer builds it). The importer may add
-// one root above the file's own.
 // The importer draws a skeleton that has no surfaces (BVH, CSM, an MD5
 // animation alone) as stand-in shapes around its bones, in one material it
 // names so and gives no colour: a black shape no file holds.
@@ -72,6 +67,11 @@ bool bones_only(const aiScene& ai) {
   return ai.mNumMeshes > 0;
 }
 
+// Every placement of every mesh: the product of the node transforms from the
+// root down to each node that lists the mesh, in depth-first order. Without
+// recursion; a hierarchy deeper than kMaxNodeDepth is refused (the glTF
+// checks refuse one before the importer builds it). The importer may add
+// one root above the file's own.
 void collect_placements(const aiNode* root, unsigned num_meshes, std::vector<std::vector<aiMatrix4x4>>& out,
                         const std::string& name) {
   struct Pending {
@@ -379,15 +379,12 @@ Scene convert(Assimp::Importer& importer, const aiScene* ai, const std::string& 
   }
   if (!ai->mRootNode || ai->mNumMeshes == 0)
     throw InputError(name + ": no facets (the model has no meshes)");
-  // The reader found no mesh (a COLLADA of cameras or lights only, a
-  // motion-capture CSM): the importer marks the scene incomplete and
-  // fills it with stand-in shapes, one a node, which are no part of the file.
+  // No mesh read (cameras or lights only, a motion capture): the importer
+  // marks the scene incomplete and adds stand-in shapes, one a node.
+  const std::string only = std::to_string(ai->mNumCameras) + " camera(s) and " + std::to_string(ai->mNumLights);
   if (ai->mFlags & AI_SCENE_FLAGS_INCOMPLETE)
     throw InputError(name + ": no facets: the model importer found no surfaces in it (" +
-                     (ai->mNumCameras + ai->mNumLights > 0
-                          ? std::to_string(ai->mNumCameras) + " camera(s) and " + std::to_string(ai->mNumLights) +
-                                " light(s) only"
-                          : std::string("nodes or bones only")) +
+                     (ai->mNumCameras + ai->mNumLights > 0 ? only + " light(s) only" : "nodes or bones only") +
                      "); its stand-in shapes for the nodes are not drawn");
   try {
     return ModelReader(*ai, name, base_dir, images, max_triangles).run();
@@ -398,12 +395,10 @@ Scene convert(Assimp::Importer& importer, const aiScene* ai, const std::string& 
   }
 }
 
-// When the importer refuses a PLY or STL file that the project's own stream
-// reads (formats/assimp/model_window.h), the stream's counting read names the line
-// and the key of the first problem, the message a rank reading its share
-// gives; the importer's own text stays where the stream finds nothing
-// wrong. Only on the way to an error: a file the importer reads is never
-// read twice.
+// A PLY or STL file the importer refuses and the project's own stream reads
+// (model_window.h): the stream's counting read names the line and key of
+// the first problem, as a rank reading its share would; else the importer's
+// text stays. Only on the way to an error: no file is read twice.
 void explain_with_stream(const std::string& path) {
   if (!is_streamed_model(path) || !model_stream_refusal(path).empty()) return;
   std::uint64_t fans = 0;

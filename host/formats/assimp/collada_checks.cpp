@@ -1,11 +1,13 @@
 // COLLADA (.dae) words the importer's reader trusts, checked first, naming
 // the line (found by hand, Debian's assimp 5.2):
 //   - a `count` attribute that is not a whole number: a negative one
-//     (`<float_array count="-1">`) faulted inside the reader;
+//     (`<float_array count="-1">`) faulted inside the reader; an `offset`
+//     of -1 was taken as 0, a `stride` of 0 left "no facets";
 //   - a primitive's `<p>` indices: a fraction (`1.5`) made the reader grow
 //     past 1 GiB, a negative index left "no facets", one past 32 bits
 //     wrapped into another index (indices from 2^31 are refused too);
 //   - `<skew>`, which the reader fails on, valid as it is.
+#include <cctype>
 #include <cstdint>
 #include <string>
 #include <string_view>
@@ -62,18 +64,24 @@ class ColladaCheck {
     throw InputError(name_ + ":" + std::to_string(line_of(at)) + ": COLLADA " + what);
   }
 
-  // The `count="..."` attributes of the tag at `at`, each a whole number.
+  // The count, offset, stride and set attributes of the tag at `at`, each
+  // a whole number (a stride at least 1: 0 left "no facets").
   void counts(std::size_t at) {
     const std::size_t end = text_.find('>', at);
     if (end == std::string::npos) return;
     const std::string_view tag = std::string_view(text_).substr(at, end - at);
-    for (std::size_t k = tag.find(" count="); k != std::string_view::npos; k = tag.find(" count=", k + 7)) {
-      const char q = k + 7 < tag.size() ? tag[k + 7] : '\0';
-      const std::size_t close = q == '"' || q == '\'' ? tag.find(q, k + 8) : std::string_view::npos;
-      if (close == std::string_view::npos) continue;
-      const std::string_view v = tag.substr(k + 8, close - k - 8);
-      if (!whole_number(v, 0xFFFFFFFFull)) fail(at + k + 1, "count=" + quote(v) + " is not a count (a whole number of at most 32 bits)");
-    }
+    for (const std::string_view key : {"count=", "offset=", "stride=", "set="})
+      for (std::size_t k = tag.find(key); k != std::string_view::npos; k = tag.find(key, k + key.size())) {
+        const std::size_t open = k + key.size();
+        if (!std::isspace(static_cast<unsigned char>(tag[k - 1])) || open >= tag.size()) continue;
+        const std::size_t close = tag[open] == '"' || tag[open] == '\'' ? tag.find(tag[open], open + 1)
+                                                                         : std::string_view::npos;
+        if (close == std::string_view::npos) continue;
+        const std::string_view v = tag.substr(open + 1, close - open - 1);
+        if (!whole_number(v, 0xFFFFFFFFull) || (key == "stride=" && std::stoull(std::string(v)) == 0))
+          fail(at + k, std::string(key) + quote(v) + " is not a whole number" +
+                           (key == "stride=" ? " of at least 1" : " of at most 32 bits"));
+      }
   }
 
   // The words of a <p> from `at` to its </p>: whole numbers below 2^32.

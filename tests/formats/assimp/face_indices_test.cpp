@@ -89,7 +89,17 @@ TEST(FaceIndices, ColladaCountsAndIndicesAreWholeNumbers) {
   const struct {
     std::string bytes, what;
   } cases[] = {
-      {dae("-1", "0 1 2", ""), ":4: COLLADA count='-1' is not a count"},
+      {dae("-1", "0 1 2", ""), ":4: COLLADA count='-1' is not a whole number of at most 32 bits"},
+      {[] {
+         std::string d = dae("9", "0 1 2", "");
+         return d.replace(d.find("offset=\"0\""), 10, "offset=\"-1\"");
+       }(),
+       ":7: COLLADA offset='-1' is not a whole number"},
+      {[] {
+         std::string d = dae("9", "0 1 2", "");
+         return d.replace(d.find("stride=\"3\""), 10, "stride=\"0\"");
+       }(),
+       ":5: COLLADA stride='0' is not a whole number of at least 1"},
       {dae("9", "0 1 1.5", ""), ":7: COLLADA <p> index '1.5' is not an index"},
       {dae("9", "0 -1 2", ""), ":7: COLLADA <p> index '-1' is not an index"},
       {dae("9", "0 1 4294967297", ""), ":7: COLLADA <p> index '4294967297' is not an index"},

@@ -1,8 +1,9 @@
-// The importer's warnings that mean it dropped part of the file and went
-// on: a glTF primitive whose indices name vertices past its attributes
-// loses those faces, a triangles primitive whose vertex count is no multiple
-// of 3 loses the rest, and the render would show less than the file holds, with
-// exit 0. Heard while one import runs (the importer speaks through a
+// The importer's warnings (and errors) that mean it dropped part of the file
+// and went on: a glTF primitive whose indices name vertices past its
+// attributes loses those faces, a triangles primitive whose vertex count is
+// no multiple of 3 loses the rest, a 3DS face past its vertices takes the
+// last one, a binary FBX object it cannot read is left out with its mesh,
+// and the render would show other than the file holds, with exit 0. Heard while one import runs (the importer speaks through a
 // logger of its own, process-wide: imports run one at a time), and turned
 // into one InputError naming the file.
 #pragma once

@@ -8,6 +8,7 @@
 
 #include <cstdint>
 #include <cstring>
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -132,6 +133,33 @@ TEST(FaceIndices, AFacePastItsVerticesIsNamedWithItsLine) {
     const std::string e = error_loading(dir.write(c.file, c.bad));
     EXPECT_NE(e.find(dir.file(c.file) + c.what), std::string::npos) << e;
   }
+}
+
+// A binary FBX object the importer cannot read (an index past the
+// vertices, an array that does not inflate) was left out with its mesh,
+// exit 0 where another mesh remained; its error is heard and the file
+// refused, quoting the object's byte.
+TEST(FaceIndices, FbxObjectsTheImporterCannotReadAreRefused) {
+  const std::string box = "/usr/share/assimp/models/FBX/box.fbx", cube = "/usr/share/assimp/models/FBX/phong_cube.fbx";
+  if (!std::filesystem::exists(box) || !std::filesystem::exists(cube))
+    GTEST_SKIP() << "Debian package assimp-testmodels is not installed";
+  TempDir dir;
+  // box.fbx stores its indices plainly: 'i', count, encoding 0, bytes, values.
+  std::string index = test::read_file(box);
+  const std::size_t at = index.find("PolygonVertexIndex") + 18 + 1 + 12;
+  const std::int32_t past = 100000;
+  std::memcpy(&index[at], &past, 4);
+  // phong_cube.fbx deflates its vertices: 'd', count, encoding 1, bytes, zlib.
+  std::string deflated = test::read_file(cube);
+  const std::size_t z = deflated.find("Vertices") + 8 + 1 + 12;
+  for (std::size_t k = 10; k < 20; ++k) deflated[z + k] = char(~deflated[z + k]);
+  EXPECT_GT(load_scene(dir.write("box.fbx", test::read_file(box))).num_facets, 0);
+  std::string e = error_loading(dir.write("box.fbx", index));
+  EXPECT_NE(e.find(dir.file("box.fbx") + ": an FBX object the importer cannot read (it would leave it and the mesh "
+                                         "that uses it out) (the importer: FBX-DOM (TOK_KEY, offset 0x"),
+            std::string::npos) << e;
+  e = error_loading(dir.write("cube.fbx", deflated));
+  EXPECT_NE(e.find(dir.file("cube.fbx") + ": an FBX array that does not inflate"), std::string::npos) << e;
 }
 
 // Counts the importer allocated for before reading a value (past 1 GiB, or

@@ -23,6 +23,7 @@ GltfParts split_glb(const std::string& b, const std::string& name) {
     throw InputError(name + ": GLB header says " + std::to_string(length) + " bytes; the file holds " +
                      std::to_string(size) + " (truncated file)");
   GltfParts parts;
+  parts.glb_version = int(version);
   if (version == 1) {  // 20-byte header, then the JSON content, then the binary body
     const std::uint64_t content = glb_le32(b, 12);
     if (content > std::uint64_t(length) - 20)
@@ -43,6 +44,10 @@ GltfParts split_glb(const std::string& b, const std::string& name) {
     if (chunk == 0 && type != 0x4E4F534Au) throw InputError(name + ": GLB's first chunk is not JSON");
     if (chunk == 0) parts.json = b.substr(at + 8, bytes);
     if (chunk == 1 && type == 0x004E4942u) parts.bin_bytes = bytes;
+    // The importer reads chunk 1's and ignores the rest.
+    if (chunk > 1 && type == 0x004E4942u)
+      throw InputError(name + ": GLB chunk " + std::to_string(chunk) + ": a BIN chunk past chunk 1 (a GLB holds at "
+                       "most one, as its second chunk)");
     at += 8 + bytes;
   }
   return parts;

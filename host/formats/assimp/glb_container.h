@@ -16,6 +16,7 @@ std::uint32_t glb_le32(const std::string& b, std::size_t at);
 struct GltfParts {
   std::string json;
   std::uint64_t bin_bytes = 0;
+  int glb_version = 0;  // 0: a text glTF
 };
 
 // A GLB's parts. Throws InputError naming `name` where a length runs past

@@ -120,6 +120,11 @@ std::vector<u64> buffer_lengths(const Gltf& g, ModelFiles& files, const GltfPart
     u64 available = parts.bin_bytes;  // no uri: the GLB's binary chunk
     std::string source = "the GLB binary chunk";
     const auto uri = e.value->find("uri");
+    // In a GLB 2 the importer reads buffer 0 from the BIN chunk whatever
+    // its uri says (a file's bytes were drawn from a chunk of zeros).
+    if (parts.glb_version == 2 && lengths.empty() && uri != e.value->end())
+      throw InputError(e.where + ": a uri in a GLB file (the importer reads buffer 0 from the GLB's BIN chunk "
+                                 "whatever the uri names): give it no uri, or write the model as .gltf");
     if (uri != e.value->end() && uri->is_string() && e.key != "binary_glTF") {
       const std::string& u = uri->get_ref<const std::string&>();
       if (u.compare(0, 5, "data:") == 0) {
@@ -157,6 +162,8 @@ std::vector<View> buffer_views(const Gltf& g, const std::vector<u64>& buffers) {
     if (b < 0) throw InputError(e.where + ": no 'buffer'");
     const u64 offset = whole(*e.value, "byteOffset", 0, e.where);
     const u64 length = whole(*e.value, "byteLength", 0, e.where);
+    // An image in a view of no bytes was dropped without a word.
+    if (length == 0) throw InputError(e.where + ": byteLength 0 or none (a buffer view holds at least 1 byte)");
     if (offset > buffers[b] || length > buffers[b] - offset)
       throw InputError(e.where + ": byteOffset " + std::to_string(offset) + " + byteLength " + std::to_string(length) +
                        " runs past the end of its buffer (" + std::to_string(buffers[b]) + " bytes)");

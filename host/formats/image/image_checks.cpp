@@ -122,7 +122,8 @@ std::string jpeg_problem(const unsigned char* d, std::size_t n, long long w, lon
       return "JPEG with more than " + std::to_string(kMaxJpegScans) + " scans, more than encoders write";
     coded += jpeg_coded_bytes(d, n, at);
   }
-  if (scans == 0) return "";
+  // No scan at all: stb decoded a frame header alone into invented texels.
+  if (scans == 0) return "JPEG without image data: its markers end before any scan";
   const unsigned long long need = ((static_cast<unsigned long long>(w) + 15) / 16 * ((h + 15) / 16) + 7) / 8;
   if (coded >= need) return "";
   return "JPEG data ends early: " + std::to_string(w) + "x" + std::to_string(h) + " needs at least " +

@@ -80,6 +80,37 @@ TEST(GltfImport, ElementsTheFileDoesNotHoldAreBoundedBeforeTheImport) {
             0);
 }
 
+// The importer reads buffer 0 of a GLB from its BIN chunk whatever the
+// buffer's uri says (a file's bytes were drawn from a chunk of zeros), reads
+// chunk 1's BIN and ignores any later one, and dropped an image in a view
+// of no bytes without a word: each is refused.
+TEST(GltfImport, AGlbHoldsBufferZeroInItsOneBinChunk) {
+  TempDir dir;
+  dir.write("tri.bin", triangle_bytes());
+  std::string json = gltf("");
+  json.erase(json.find(R"("uri": "", )"), 11);
+  json.resize((json.size() + 3) / 4 * 4, ' ');
+  EXPECT_EQ(load_scene(dir.write("ok.glb", glb(json, std::uint32_t(json.size()), triangle_bytes()))).num_facets, 1);
+  std::string uri = gltf("tri.bin");
+  uri.resize((uri.size() + 3) / 4 * 4, ' ');
+  const std::string zeros = std::string(36, '\0');
+  EXPECT_NE(error_loading(dir.write("uri.glb", glb(uri, std::uint32_t(uri.size()), zeros)))
+                .find("uri.glb: buffers[0]: a uri in a GLB file (the importer reads buffer 0 from the GLB's BIN "
+                      "chunk whatever the uri names)"),
+            std::string::npos);
+  const std::string two = glb(json, std::uint32_t(json.size()), zeros) + le32(36) + std::string("BIN\0", 4) +
+                          triangle_bytes();
+  std::string fixed = two;
+  fixed.replace(8, 4, le32(std::uint32_t(two.size())));
+  EXPECT_NE(error_loading(dir.write("two.glb", fixed)).find("two.glb: GLB chunk 2: a BIN chunk past chunk 1"),
+            std::string::npos)
+      << error_loading(dir.file("two.glb"));
+  std::string empty = gltf("tri.bin", R"("byteOffset": 0, "byteLength": 0)");
+  EXPECT_NE(error_loading(dir.write("empty.gltf", empty))
+                .find("empty.gltf: bufferViews[0]: byteLength 0 or none (a buffer view holds at least 1 byte)"),
+            std::string::npos);
+}
+
 // A triangle bound to a skin of one joint, whose translation an animation
 // moves; `uri` is its buffer (empty: a GLB's binary chunk). glTF 2 makes
 // inverseBindMatrices optional (identity matrices); Debian's assimp 5.2

@@ -134,6 +134,9 @@ TEST(ImageChecks, AJpegWithoutItsCodedDataOrWithEndlessScansIsRefused) {
   EXPECT_EQ(decode_problem(jpeg_head(4096, 4096, 0xC0) + jpeg_scan("") + eoi),
             "cannot decode the image (JPEG data ends early: 4096x4096 needs at least 8192 bytes of coded data, the "
             "file has 0)");
+  // A frame header and no scan: stb had decoded it into invented texels.
+  EXPECT_EQ(decode_problem(jpeg_head(4, 4, 0xC0) + eoi),
+            "cannot decode the image (JPEG without image data: its markers end before any scan)");
   std::string scans = jpeg_head(64, 64, 0xC2);
   for (int s = 0; s < kMaxJpegScans + 1; ++s) scans += jpeg_scan(std::string(16, '\0'));
   EXPECT_EQ(decode_problem(scans + eoi), "cannot decode the image (JPEG with more than 64 scans, more than encoders write)");

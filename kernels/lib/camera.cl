@@ -10,7 +10,7 @@
 inline float3 primary_direction_at(FrameParams fp, float px, float py) {
   float sx = (2.0f * px / (float)fp.width - 1.0f) * fp.tan_half_fov * fp.aspect;
   float sy = (1.0f - 2.0f * py / (float)fp.height) * fp.tan_half_fov;
-  return normalize(load3(fp.forward) + sx * load3(fp.right) + sy * load3(fp.up));
+  return unit3(load3(fp.forward) + sx * load3(fp.right) + sy * load3(fp.up));
 }
 
 /* Primary (centre) ray direction of pixel (x, y). */

@@ -14,6 +14,34 @@
 #define OPSILA_INLINE inline __attribute__((always_inline))
 
 
+/* The host's vector arithmetic (host/core/vec.h), operation for operation:
+ * the built-ins may round otherwise on another OpenCL implementation. */
+inline float dot3(float3 a, float3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+inline float3 cross3(float3 a, float3 b) {
+  return (float3)(a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x);
+}
+/* Where v.v leaves the float range (a cross product of edges 2^40 long) or
+ * its normal range, v is first scaled by a power of two, exactly, so that
+ * its largest component lies in [1, 2), as the built-ins do; elsewhere the
+ * plain formula. *e gets the power (0 unscaled). */
+inline float3 in_range3(float3 a, int *e) {
+  float d = dot3(a, a), m = fmax(fmax(fabs(a.x), fabs(a.y)), fabs(a.z));
+  *e = 0;
+  if ((d < INFINITY && d >= FLT_MIN) || !(m > 0.0f) || isinf(m)) return a;
+  *e = ilogb(m);
+  return ldexp(a, -*e);
+}
+inline float len3(float3 a) {
+  int e;
+  float3 s = in_range3(a, &e);
+  return e == 0 ? sqrt(dot3(s, s)) : ldexp(sqrt(dot3(s, s)), e);
+}
+inline float3 unit3(float3 a) {
+  int e;
+  float3 s = in_range3(a, &e);
+  return s * (1.0f / sqrt(dot3(s, s)));
+}
+
 inline float3 load3(const float a[3]) { return (float3)(a[0], a[1], a[2]); }
 inline float3 load3g(__global const float *a) { return (float3)(a[0], a[1], a[2]); }
 
@@ -193,8 +221,8 @@ inline bool ray_box_span(const RayPre *r, float3 bmin, float3 bmax, float tmin, 
  * sphere does not meet (tmin, tmax). */
 inline float sphere_entry(const RayPre *r, __global const Cluster *cl, float tmin, float tmax) {
   float3 oc = r->org - load3g(cl->center);
-  float b = dot(oc, r->dir);
-  float c = dot(oc, oc) - cl->radius * cl->radius;
+  float b = dot3(oc, r->dir);
+  float c = dot3(oc, oc) - cl->radius * cl->radius;
   float disc = b * b - c;
   if (disc < 0.0f) return OPSILA_INF;
   float s = sqrt(disc);

@@ -39,11 +39,11 @@ inline SurfacePoint surface_point(FrameParams fp, __global const BankTriangle *t
                                   float3 d, float t) {
   __global const BankTriangle *tri = &tris[tri_index];
   float3 v0 = load3g(tri->v0), v1 = load3g(tri->v1), v2 = load3g(tri->v2);
-  float3 ng = normalize(cross(v1 - v0, v2 - v0));
-  if (OPSILA_INSTANCES && inst >= 0) ng = normalize(WORLD_VECTOR(insts, inst, ng));
+  float3 ng = unit3(cross3(v1 - v0, v2 - v0));
+  if (OPSILA_INSTANCES && inst >= 0) ng = unit3(WORLD_VECTOR(insts, inst, ng));
   SurfacePoint sp;
   sp.p = org + t * d;
-  sp.entering = dot(ng, d) < 0.0f;
+  sp.entering = dot3(ng, d) < 0.0f;
   sp.n = sp.entering ? ng : -ng;
   sp.ka = load3g(m->ka);
   sp.kd = load3g(m->kd);
@@ -59,11 +59,11 @@ inline SurfacePoint surface_point(FrameParams fp, __global const BankTriangle *t
   if (at->flags & OPSILA_ATTR_NORMALS) {
     float3 ns = b0 * load3g(at->n0) + b.x * load3g(at->n1) + b.y * load3g(at->n2);
     ns = WORLD_VECTOR(insts, inst, ns);
-    float len = length(ns);
+    float len = len3(ns);
     /* Normals that cancel out leave the facet normal. */
     if (len > 0.0f && isfinite(len)) {
       ns = ns / len;
-      sp.n = dot(ns, sp.n) < 0.0f ? -ns : ns;
+      sp.n = dot3(ns, sp.n) < 0.0f ? -ns : ns;
     }
   }
   if (at->flags & OPSILA_ATTR_UV) {
@@ -100,12 +100,12 @@ inline float specular_pow(float x, float y) {
 inline float3 light_term(__global const Material *m, __global const Light *light, SurfacePoint sp, float3 d,
                          float3 weight, float3 *lv, float *dist) {
   float3 to_light = load3g(light->position) - sp.p;
-  *dist = length(to_light);
+  *dist = len3(to_light);
   *lv = to_light / *dist;
-  float ndl = dot(sp.n, *lv);
+  float ndl = dot3(sp.n, *lv);
   if (!(ndl > 0.0f)) return (float3)(0.0f);
   float3 rl = 2.0f * ndl * sp.n - *lv;
-  float spec = fmax(0.0f, dot(rl, -d));
+  float spec = fmax(0.0f, dot3(rl, -d));
   /* pow (a log and an exp) only where Ks is not zero and spec is: spec^Ns
    * is finite (spec in [0, 1]), so the term is exactly zero without it,
    * and pow(+0, Ns) is exactly +0 for Ns > 0 (C99 F.9.4.4; the light
@@ -116,14 +116,14 @@ inline float3 light_term(__global const Material *m, __global const Light *light
   return weight * load3g(light->intensity) * term;
 }
 
-inline float3 reflected_direction(SurfacePoint sp, float3 d) { return normalize(d - 2.0f * dot(d, sp.n) * sp.n); }
+inline float3 reflected_direction(SurfacePoint sp, float3 d) { return unit3(d - 2.0f * dot3(d, sp.n) * sp.n); }
 
 /* Refracted direction; false on total internal reflection. */
 inline bool transmitted_direction(__global const Material *m, SurfacePoint sp, float3 d, float3 *out) {
   float eta = sp.entering ? 1.0f / m->ni : m->ni;
-  float c = -dot(sp.n, d);
+  float c = -dot3(sp.n, d);
   float k = 1.0f - eta * eta * (1.0f - c * c);
   if (k < 0.0f) return false;
-  *out = normalize(eta * d + (eta * c - sqrt(k)) * sp.n);
+  *out = unit3(eta * d + (eta * c - sqrt(k)) * sp.n);
   return true;
 }

@@ -17,6 +17,7 @@
 #include "formats/common/model_words.h"
 #include "formats/assimp/glb_container.h"
 #include "formats/assimp/gltf_still.h"
+#include "formats/assimp/gltf_uris.h"
 #include "formats/assimp/model_checks.h"
 #include "formats/obj/obj_loader.h"
 
@@ -470,13 +471,16 @@ std::uint64_t check_gltf(ModelFiles& files, const std::string& bytes, const std:
   refuse_repeated_keys(parts.json, path);
   check_required_extensions(root, path);
   check_gltf_meanings(root, path);
+  // Percent-encoded names: checked, and handed to the importer, decoded.
+  const std::string dir = std::filesystem::path(path).parent_path().string();
+  const bool decoded = decode_gltf_uris(root, dir, [&](const std::string& p) { return files.exists(p); });
   const Gltf g(root, path);
   u64 external = 0;
   const std::vector<u64> buffers = buffer_lengths(g, files, parts, path, external);
   const std::vector<Accessor> accessors = check_accessors(g, buffer_views(g, buffers));
   check_nodes(g, path);
   check_import_memory(g, accessors, import_memory_budget(files.size(path) + external));
-  if (const auto still = gltf_without_motion(root, bytes)) files.substitute(path, *still);
+  if (const auto still = gltf_without_motion(root, bytes, decoded)) files.substitute(path, *still);
   return external;
 }
 

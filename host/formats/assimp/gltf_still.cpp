@@ -25,8 +25,9 @@ bool has_motion(const nlohmann::json& root) {
 
 }  // namespace
 
-std::optional<std::string> gltf_without_motion(const nlohmann::json& root, const std::string& bytes) {
-  if (!has_motion(root)) return std::nullopt;
+std::optional<std::string> gltf_without_motion(const nlohmann::json& root, const std::string& bytes,
+                                               bool rewritten) {
+  if (!rewritten && !has_motion(root)) return std::nullopt;
   nlohmann::json still = root;
   still.erase("skins");
   still.erase("animations");

@@ -16,7 +16,9 @@ namespace opsila {
 
 // `bytes`, a glTF's text or a GLB whose lengths the checks have read, with
 // JSON `root`: the same without skins, animations and the nodes' skin
-// references; nothing when there are none.
-std::optional<std::string> gltf_without_motion(const nlohmann::json& root, const std::string& bytes);
+// references; nothing when there are none and `rewritten` is false (set it
+// when `root` differs from the JSON in `bytes`).
+std::optional<std::string> gltf_without_motion(const nlohmann::json& root, const std::string& bytes,
+                                               bool rewritten = false);
 
 }  // namespace opsila

@@ -81,6 +81,12 @@ std::uint64_t ModelFiles::size(const std::string& path) {
   return bytes;
 }
 
+bool ModelFiles::exists(const std::string& path) const {
+  if (memory_) return in_memory(path) != nullptr;
+  struct stat st {};
+  return ::stat(path.c_str(), &st) == 0;
+}
+
 std::string ModelFiles::head(const std::string& path, std::size_t max_bytes) {
   record(path);
   if (memory_) {
@@ -153,11 +159,7 @@ class MemoryStream : public Assimp::IOStream {
 class ModelIOSystem : public Assimp::IOSystem {
  public:
   explicit ModelIOSystem(ModelFiles& files) : files_(files) {}
-  bool Exists(const char* path) const override {
-    if (files_.memory_) return files_.in_memory(path) != nullptr;
-    struct stat st {};
-    return ::stat(path, &st) == 0;
-  }
+  bool Exists(const char* path) const override { return files_.exists(path); }
   char getOsSeparator() const override { return '/'; }
   Assimp::IOStream* Open(const char* path, const char* mode) override {
     // A still has no motion: the animation and camera files the MD5 reader

@@ -30,6 +30,8 @@ class ModelFiles {
   // Size of a file after the checks (regular, within the limit); records it.
   // Throws InputError("PATH: ...") when it cannot be read.
   std::uint64_t size(const std::string& path);
+  // Whether something is at `path` (no checks, nothing recorded).
+  bool exists(const std::string& path) const;
   // Up to `max_bytes` from the start of a file (the same checks).
   std::string head(const std::string& path, std::size_t max_bytes);
 

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cfloat>
 #include <cmath>
 
 namespace opsila {
@@ -27,10 +28,30 @@ inline float dot(const Vec3& a, const Vec3& b) { return a[0] * b[0] + a[1] * b[1
 inline Vec3 cross(const Vec3& a, const Vec3& b) {
   return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
 }
-inline float length(const Vec3& a) { return std::sqrt(dot(a, a)); }
+// Where a.a leaves the float range (a cross product of edges 2^40 long) or
+// its normal range, `a` is first scaled by a power of two, exactly, so that
+// its largest component lies in [1, 2); elsewhere it is as it is. `e` gets
+// the power (0 unscaled). The kernels' in_range3 (kernels/lib/geometry.cl),
+// step for step, so that lengths and unit vectors agree to the bit.
+inline Vec3 in_range(const Vec3& a, int& e) {
+  const float d = dot(a, a), m = std::fmax(std::fmax(std::fabs(a[0]), std::fabs(a[1])), std::fabs(a[2]));
+  e = 0;
+  if ((d < INFINITY && d >= FLT_MIN) || !(m > 0.0f) || std::isinf(m)) return a;
+  e = std::ilogb(m);
+  return {std::ldexp(a[0], -e), std::ldexp(a[1], -e), std::ldexp(a[2], -e)};
+}
+inline float length(const Vec3& a) {
+  int e;
+  const Vec3 s = in_range(a, e);
+  return e == 0 ? std::sqrt(dot(s, s)) : std::ldexp(std::sqrt(dot(s, s)), e);
+}
 // Times the inverse length (one division, three products): the reference's
 // ray directions and the camera's primary rays.
-inline Vec3 normalize(const Vec3& a) { return a * (1.0f / std::sqrt(dot(a, a))); }
+inline Vec3 normalize(const Vec3& a) {
+  int e;
+  const Vec3 s = in_range(a, e);
+  return s * (1.0f / std::sqrt(dot(s, s)));
+}
 inline Vec3 min(const Vec3& a, const Vec3& b) {
   return {std::min(a[0], b[0]), std::min(a[1], b[1]), std::min(a[2], b[2])};
 }

@@ -11,3 +11,12 @@ __kernel void divide_batch(__global const float *x, __global const float *y, int
   inverse[i] = 1.0f / y[i];
   root[i] = sqrt(x[i]);
 }
+
+/* Lengths and unit vectors (len3, unit3), against the host's vec.h. */
+__kernel void unit_batch(__global const float *v, int count, __global float *len, __global float *unit) {
+  int i = get_global_id(0);
+  if (i >= count) return;
+  float3 a = vload3(i, v);
+  len[i] = len3(a);
+  vstore3(unit3(a), i, unit);
+}

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "batch.h"
+#include "core/vec.h"
 
 namespace opsila {
 namespace {
@@ -65,6 +66,43 @@ TEST(DeviceArithmetic, DivisionAndSquareRootAreTheHostsWhereTheDeviceOffersIt) {
   }
   if (!offered)
     GTEST_SKIP() << "the device does not report CL_FP_CORRECTLY_ROUNDED_DIVIDE_SQRT: held to OpenCL's bounds only";
+}
+
+// Lengths and unit vectors: the host's and the kernels' scale a vector
+// whose square leaves the float range by the same power of two, so they
+// agree to the bit where division and square root do, far beyond the
+// square's range too (components near 2^100 and 2^-100).
+TEST(DeviceArithmetic, LengthsAndUnitVectorsAreTheHosts) {
+  ClRuntime& rt = test::batch_runtime();
+  std::mt19937 rng(1987);
+  std::uniform_real_distribution<float> mantissa(1.0f, 2.0f);
+  std::uniform_int_distribution<int> binade(-8, 8), scale(-110, 110), sign(0, 1);
+  std::vector<float> v;
+  for (int i = 0; i < 1 << 14; ++i) {
+    const int s = scale(rng);
+    for (int c = 0; c < 3; ++c) v.push_back((sign(rng) ? -1.0f : 1.0f) * std::ldexp(mantissa(rng), s + binade(rng)));
+  }
+  const std::size_t n = v.size() / 3;
+  cl::Buffer bv = test::to_device(rt, v), len = test::to_device(rt, std::vector<float>(n)),
+             unit = test::to_device(rt, std::vector<float>(3 * n));
+  cl::Kernel k = rt.kernel("unit_batch");
+  k.setArg(0, bv);
+  k.setArg(1, cl_int(n));
+  k.setArg(2, len);
+  k.setArg(3, unit);
+  test::run_batch(rt, k, n);
+  const std::vector<float> got_len = test::from_device<float>(rt, len, n),
+                           got_unit = test::from_device<float>(rt, unit, 3 * n);
+  const std::int64_t allowed = rt.exact_divide() ? 0 : 6;  // two roundings of OpenCL's bounds where not exact
+  for (std::size_t i = 0; i < n; ++i) {
+    const Vec3 a{v[3 * i], v[3 * i + 1], v[3 * i + 2]};
+    const Vec3 u = normalize(a);
+    const std::string at = std::to_string(a[0]) + ", " + std::to_string(a[1]) + ", " + std::to_string(a[2]);
+    ASSERT_TRUE(std::isfinite(length(a)) && length(a) > 0.0f) << at;
+    ASSERT_LE(ulps(got_len[i], length(a)), allowed) << at << ": length " << got_len[i] << " against " << length(a);
+    for (int c = 0; c < 3; ++c)
+      ASSERT_LE(ulps(got_unit[3 * i + c], u[c]), allowed) << at << ": unit[" << c << "] " << got_unit[3 * i + c];
+  }
 }
 
 }  // namespace

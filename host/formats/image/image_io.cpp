@@ -14,6 +14,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <limits>
 #include <stdexcept>
 
@@ -119,6 +120,19 @@ void check_output_path(const std::string& path) {
                        "renamed, which such a folder refuses");
 }
 
+std::string output_destination(const std::string& path) {
+  std::string at = path;
+  for (int hops = 0; hops < 40; ++hops) {  // Linux's own limit on a path's links
+    struct stat st;
+    if (::lstat(at.c_str(), &st) != 0 || !S_ISLNK(st.st_mode)) return at;
+    std::error_code ec;
+    const std::filesystem::path to = std::filesystem::read_symlink(at, ec);
+    if (ec) cannot_write(path, "symbolic link " + at + ": " + ec.message());
+    at = to.is_absolute() ? to.string() : (std::filesystem::path(at).parent_path() / to).string();
+  }
+  cannot_write(path, std::strerror(ELOOP));
+}
+
 bool folder_keeps_its_names(const std::string& folder) {
   const int fd = ::open(folder.c_str(), O_RDONLY | O_DIRECTORY | O_NONBLOCK | O_CLOEXEC);
   if (fd < 0) return false;
@@ -142,7 +156,8 @@ int write_all(int fd, const void* data, std::size_t size) {
   return 0;
 }
 
-void write_file_atomic(const std::string& path, const void* data, std::size_t size) {
+void write_file_atomic(const std::string& name, const void* data, std::size_t size) {
+  const std::string path = output_destination(name);
   check_output_path(path);
   // The temporary file lives next to the target so that rename() is atomic;
   // open() with mode 0666 lets the umask decide the final permissions.

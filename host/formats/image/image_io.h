@@ -23,6 +23,10 @@ std::vector<std::uint8_t> to_srgb8(const std::vector<float>& linear);
 // created: its folder exists and is writable, and PATH is not a folder.
 // Lets the command line fail before any rendering is done.
 void check_output_path(const std::string& path);
+// Where an output named `path` lands: a symbolic link's target, followed to
+// its end (as a shell's redirection or cp writes through a link), else
+// `path` itself. The file is replaced there, and the link stays.
+std::string output_destination(const std::string& path);
 // Whether `folder` is append-only or immutable (chattr +a, +i): files can
 // be added to it, or nothing at all, but none renamed or removed, so an
 // output written beside its name could not be put in place or taken away.

@@ -111,12 +111,13 @@ bool same_file(const std::string& a, const std::string& b) {
 OutputFiles::~OutputFiles() { discard(); }
 
 void OutputFiles::declare(const std::string& flag, const std::string& path) {
-  check_output_path(path);
+  const std::string dest = output_destination(path);
+  check_output_path(dest);
   for (const Entry& e : entries_)
     if (same_file(e.path, path)) throw InputError(flag + " " + path + ": same file as " + e.flag);
   if (!folder_.empty() && same_file(path, folder_))
     throw InputError(flag + " " + path + ": same as the folder of " + folder_flag_);
-  entries_.push_back(Entry{flag, path, "", -1, false});
+  entries_.push_back(Entry{flag, path, "", -1, false, dest});
 }
 
 void OutputFiles::declare_folder(const std::string& flag, const std::string& folder,
@@ -168,7 +169,7 @@ OutputFiles::Entry& OutputFiles::entry_for(const std::string& path) {
       discard();
       throw InputError(folder_flag_ + " " + path + ": is an input of this run (" + in + ")");
     }
-  entries_.push_back(Entry{folder_flag_, path, "", -1, true});
+  entries_.push_back(Entry{folder_flag_, path, "", -1, true, path});
   return entries_.back();
 }
 
@@ -192,7 +193,7 @@ void OutputFiles::write(const std::string& path, const std::string& bytes) {
   int fd = -1;
   for (int attempt = 0; attempt < 100 && fd < 0; ++attempt) {
     // The name cut to 200 bytes: a name of up to 255 (NAME_MAX) stays writable.
-    e.temp = folder_of(path) + "/." + name_of(path).substr(0, 200) + ".tmp-" + std::to_string(::getpid()) + "-" +
+    e.temp = folder_of(e.dest) + "/." + name_of(e.dest).substr(0, 200) + ".tmp-" + std::to_string(::getpid()) + "-" +
              std::to_string(counter++);
     e.slot = claim_slot(e.temp);  // before the file exists: a signal may come any time
     if (e.slot < 0) {
@@ -234,19 +235,19 @@ void OutputFiles::commit() {
     Entry& e = entries_[k];
     if (e.temp.empty()) continue;  // declared, but this run has nothing for it
     struct stat st;
-    if (::lstat(e.path.c_str(), &st) == 0) {
+    if (::lstat(e.dest.c_str(), &st) == 0) {
       if (S_ISDIR(st.st_mode)) fail_commit(kept, order, 0, e.path, std::strerror(EISDIR));
       kept[k] = e.temp + ".old";
-      if (::link(e.path.c_str(), kept[k].c_str()) != 0) kept[k].clear();
+      if (::link(e.dest.c_str(), kept[k].c_str()) != 0) kept[k].clear();
     }
     order.push_back(k);
   }
   std::stable_partition(order.begin(), order.end(), [&](std::size_t k) {
-    return !kept[k].empty() || ::access(entries_[k].path.c_str(), F_OK) != 0;
+    return !kept[k].empty() || ::access(entries_[k].dest.c_str(), F_OK) != 0;
   });
   for (std::size_t n = 0; n < order.size(); ++n) {
     Entry& e = entries_[order[n]];
-    if (::rename(e.temp.c_str(), e.path.c_str()) != 0) fail_commit(kept, order, n, e.path, std::strerror(errno));
+    if (::rename(e.temp.c_str(), e.dest.c_str()) != 0) fail_commit(kept, order, n, e.path, std::strerror(errno));
   }
   for (std::size_t k = 0; k < entries_.size(); ++k) {
     if (!kept[k].empty()) ::unlink(kept[k].c_str());
@@ -264,7 +265,7 @@ void OutputFiles::fail_commit(const std::vector<std::string>& kept, const std::v
   for (std::size_t n = 0; n < done; ++n) {
     Entry& e = entries_[order[n]];
     const std::string& old = kept[order[n]];
-    if (old.empty() || ::rename(old.c_str(), e.path.c_str()) != 0) ::unlink(e.path.c_str());
+    if (old.empty() || ::rename(old.c_str(), e.dest.c_str()) != 0) ::unlink(e.dest.c_str());
     e.temp.clear();
   }
   for (const std::string& old : kept)

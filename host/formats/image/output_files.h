@@ -54,6 +54,7 @@ class OutputFiles {
     std::string flag, path, temp;
     int slot = -1;  // in the signal handler's table while temp exists
     bool in_folder = false;
+    std::string dest;  // where it lands: `path`, or the file a link there names (output_destination)
   };
   void discard() noexcept;
   [[noreturn]] void fail_commit(const std::vector<std::string>& kept, const std::vector<std::size_t>& order,

@@ -94,6 +94,36 @@ TEST(Outputs, NoOutputMayNameAnotherOutput) {
   EXPECT_EQ(test::read_file(image), "old");
 }
 
+// An output named by a symbolic link is written through it, as a shell's
+// redirection or cp writes: the file it names is replaced, the link stays.
+TEST(Outputs, AnOutputThatIsALinkIsWrittenThroughIt) {
+  TempDir dir;
+  const std::string scene = dir.write("s.json", kScene);
+  ASSERT_EQ(::mkdir(dir.file("renders").c_str(), 0777), 0);
+  dir.write("renders/x.png", "old");
+  ASSERT_EQ(::symlink("renders/x.png", dir.file("link.png").c_str()), 0);  // relative to the link's folder
+  ASSERT_EQ(::symlink(dir.file("renders/new.npy").c_str(), dir.file("items.npy").c_str()), 0);  // not there yet
+  const RunResult r =
+      run_opsila({"render", scene, "-o", dir.file("link.png"), "--item-buffer", dir.file("items.npy"), "--reference"});
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  for (const char* link : {"link.png", "items.npy"}) {
+    struct stat st;
+    ASSERT_EQ(::lstat(dir.file(link).c_str(), &st), 0) << link;
+    EXPECT_TRUE(S_ISLNK(st.st_mode)) << link;
+  }
+  EXPECT_EQ(test::read_file(dir.file("renders/x.png")).substr(1, 3), "PNG");
+  EXPECT_EQ(test::read_file(dir.file("renders/new.npy")).substr(1, 5), "NUMPY");
+  // A loop of links: one error naming the file, nothing written.
+  ASSERT_EQ(::symlink("b.png", dir.file("a.png").c_str()), 0);
+  ASSERT_EQ(::symlink("a.png", dir.file("b.png").c_str()), 0);
+  const RunResult loop =
+      run_opsila({"render", scene, "-o", dir.file("a.png"), "--item-buffer", dir.file("i.npy"), "--reference"});
+  EXPECT_EQ(loop.exit_code, 2) << loop.err;
+  ASSERT_EQ(loop.error_lines().size(), 1u) << loop.err;
+  EXPECT_NE(loop.error_lines()[0].find(dir.file("a.png")), std::string::npos) << loop.err;
+  EXPECT_FALSE(test::file_exists(dir.file("i.npy")));
+}
+
 // Names as long as a folder allows (255 bytes) are written: their
 // temporary files, beside them, take a shorter name.
 TEST(Outputs, TheLongestFileNamesAreWritten) {

@@ -10,7 +10,7 @@ cd "$(dirname "$0")/.."
 PACKAGES=(
   build-essential cmake pkg-config
   ocl-icd-opencl-dev opencl-headers opencl-clhpp-headers pocl-opencl-icd clinfo
-  libstb-dev libtinyobjloader-dev nlohmann-json3-dev libassimp-dev libopenexr-dev
+  libstb-dev libtinyobjloader-dev nlohmann-json3-dev libassimp-dev zlib1g-dev libopenexr-dev
   libgtest-dev googletest
   libopenmpi-dev openmpi-bin
   libembree-dev mesa-opencl-icd

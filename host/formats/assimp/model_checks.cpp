@@ -102,7 +102,10 @@ std::uint64_t check_model_file_shape(ModelFiles& files, const std::string& path,
   } else if (e == "stl") stl::check_stl(bytes, path);
   else if (e == "gltf" || e == "glb") return size + check_gltf(files, bytes, path);
   else check_nesting(bytes, path);
-  if (e == "fbx") check_fbx_text(bytes, path);
+  if (e == "fbx") {
+    check_fbx_text(bytes, path);
+    check_fbx_binary(bytes, path);
+  }
   if (e == "md5mesh") check_md5_mesh(bytes, path);
   if (e == "ase" || e == "ask") check_ase(bytes, path);
   if (e == "ac" || e == "acc" || e == "ac3d") check_ac3d(bytes, path);

@@ -47,6 +47,10 @@ void check_nesting(const std::string& bytes, const std::string& name);
 // of four, before the importer's decoder (which overruns its buffer on
 // anything else) reads it.
 void check_fbx_text(const std::string& bytes, const std::string& name);
+// Binary FBX: every zlib-compressed array inflates to its count times its
+// element's size (the importer would keep zeros for what a short stream
+// lacks), naming the array and its byte offset.
+void check_fbx_binary(const std::string& bytes, const std::string& name);
 // MD5 meshes: numJoints the joints listed, each joint's parent an earlier
 // joint or -1; in each mesh every vert, tri and weight index below its
 // count, a vert's weights within the weights, a weight's joint within the

@@ -162,6 +162,35 @@ TEST(FaceIndices, FbxObjectsTheImporterCannotReadAreRefused) {
   EXPECT_NE(e.find(dir.file("cube.fbx") + ": an FBX array that does not inflate"), std::string::npos) << e;
 }
 
+// A compressed array whose count says more than its stream holds was read
+// with zeros for the rest (vertices at the origin), exit 0; one that says
+// less, refused in words naming no array. Both name the array and its byte.
+TEST(FaceIndices, FbxArraysInflateToWhatTheirCountsSay) {
+  const std::string cube = "/usr/share/assimp/models/FBX/phong_cube.fbx";
+  if (!std::filesystem::exists(cube)) GTEST_SKIP() << "Debian package assimp-testmodels is not installed";
+  TempDir dir;
+  const std::string good = test::read_file(cube);
+  const std::size_t type = good.find("Vertices") + 8;  // 'd', count, encoding 1, bytes, zlib
+  ASSERT_EQ(good[type], 'd');
+  std::int32_t count;
+  std::memcpy(&count, &good[type + 1], 4);
+  const auto with_count = [&](std::int32_t n) {
+    std::string bytes = good;
+    std::memcpy(&bytes[type + 1], &n, 4);
+    return bytes;
+  };
+  EXPECT_GT(load_scene(dir.write("cube.fbx", good)).num_facets, 0);
+  const std::string at = ": FBX array Vertices at byte " + std::to_string(type) + ": its compressed data inflates to ";
+  const std::string all = std::to_string(8 * count);
+  std::string e = error_loading(dir.write("more.fbx", with_count(count + 3)));
+  EXPECT_NE(e.find(dir.file("more.fbx") + at + all + " of the " + std::to_string(8 * (count + 3)) +
+                   " bytes its count gives (damaged or cut short: the model importer would read zeros for the rest)"),
+            std::string::npos) << e;
+  e = error_loading(dir.write("less.fbx", with_count(count - 3)));
+  EXPECT_NE(e.find(dir.file("less.fbx") + at + "more than the " + std::to_string(8 * (count - 3)) + " bytes"),
+            std::string::npos) << e;
+}
+
 // Counts the importer allocated for before reading a value (past 1 GiB, or
 // out of memory): one the file cannot hold is named with its line.
 TEST(FaceIndices, CountsTheFileCannotHoldAreNamed) {

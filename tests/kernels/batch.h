@@ -61,6 +61,13 @@ cl::Buffer to_device(ClRuntime& rt, const std::vector<T, A>& v) {
   return b;
 }
 
+// The kernel's arguments, in order.
+template <typename... Args>
+void set_args(cl::Kernel& k, const Args&... args) {
+  cl_uint at = 0;
+  (cl_check(k.setArg(at++, args), "clSetKernelArg"), ...);
+}
+
 inline void run_batch(ClRuntime& rt, cl::Kernel& k, std::size_t count) {
   cl_check(rt.queue().enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(count), cl::NullRange),
            "clEnqueueNDRangeKernel");

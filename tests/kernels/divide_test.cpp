@@ -86,10 +86,7 @@ TEST(DeviceArithmetic, LengthsAndUnitVectorsAreTheHosts) {
   cl::Buffer bv = test::to_device(rt, v), len = test::to_device(rt, std::vector<float>(n)),
              unit = test::to_device(rt, std::vector<float>(3 * n));
   cl::Kernel k = rt.kernel("unit_batch");
-  k.setArg(0, bv);
-  k.setArg(1, cl_int(n));
-  k.setArg(2, len);
-  k.setArg(3, unit);
+  test::set_args(k, bv, cl_int(n), len, unit);
   test::run_batch(rt, k, n);
   const std::vector<float> got_len = test::from_device<float>(rt, len, n),
                            got_unit = test::from_device<float>(rt, unit, 3 * n);

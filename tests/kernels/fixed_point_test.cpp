@@ -44,10 +44,7 @@ TEST(DeviceArithmetic, FixedPointIsTheHostsAndOpenCLsSaturatingRoundToEven) {
   cl::Buffer bx = test::to_device(rt, x);
   cl::Buffer fixed = test::to_device(rt, std::vector<cl_long>(3 * n)), builtin = test::to_device(rt, std::vector<cl_long>(3 * n));
   cl::Kernel k = rt.kernel("fixed_point_batch");
-  k.setArg(0, bx);
-  k.setArg(1, cl_int(n));
-  k.setArg(2, fixed);
-  k.setArg(3, builtin);
+  test::set_args(k, bx, cl_int(n), fixed, builtin);
   test::run_batch(rt, k, n);
   const std::vector<cl_long> got = test::from_device<cl_long>(rt, fixed, 3 * n),
                              want_cl = test::from_device<cl_long>(rt, builtin, 3 * n);

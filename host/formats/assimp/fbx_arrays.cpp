@@ -69,7 +69,7 @@ class FbxArrays {
   u64 node(u64 at, int depth) {
     const int w = wide_ ? 8 : 4;
     const u64 end = number(at, w), props = number(at + w, w), head = 3 * u64(w) + 1;
-    if (end == 0 || end > b_.size() || end <= at || depth > 64 || props > b_.size()) return 0;
+    if (end == 0 || end > b_.size() || end <= at || end - at < head || depth > 64 || props > b_.size()) return 0;
     const u64 name_length = number(at + 3 * w, 1);
     if (name_length > end - at - head) return 0;
     const std::string node_name = b_.substr(at + head, name_length);

@@ -26,24 +26,33 @@ namespace {
 
 using u64 = std::uint64_t;
 
-// The bytes a zlib stream inflates to, counting no further than `limit` + 1;
-// ~0 for a stream that is damaged or cut short (the importer refuses those).
-u64 inflated_bytes(const unsigned char* data, u64 length, u64 limit) {
+// What a zlib stream inflates to: its bytes, counting no further than
+// `limit` + 1, or why it cannot be inflated (damaged, or cut short).
+struct Inflated {
+  u64 bytes = 0;
+  std::string damage;
+};
+
+Inflated inflated_bytes(const unsigned char* data, u64 length, u64 limit) {
   z_stream z{};
-  if (inflateInit(&z) != Z_OK) return ~u64(0);
+  if (inflateInit(&z) != Z_OK) return {0, "the inflater could not start"};
   z.next_in = const_cast<unsigned char*>(data);
   z.avail_in = static_cast<uInt>(length);
   unsigned char out[1 << 16];
-  u64 total = 0;
+  Inflated r;
   int ret = Z_OK;
-  while (ret == Z_OK && total <= limit) {
+  while (ret == Z_OK && r.bytes <= limit) {
     z.next_out = out;
     z.avail_out = sizeof out;
     ret = inflate(&z, Z_NO_FLUSH);
-    total += sizeof out - z.avail_out;
+    r.bytes += sizeof out - z.avail_out;
   }
+  if (ret != Z_STREAM_END && r.bytes <= limit)
+    r.damage = ret == Z_BUF_ERROR || (ret == Z_OK && z.avail_in == 0) ? "ends before its zlib stream does"
+                                                                        : std::string("is not a valid zlib stream (") +
+                                                                              (z.msg ? z.msg : "zlib error") + ")";
   inflateEnd(&z);
-  return ret == Z_STREAM_END || total > limit ? total : ~u64(0);
+  return r;
 }
 
 class FbxArrays {
@@ -111,11 +120,13 @@ class FbxArrays {
     // Beyond the importer's memory budget its own watch refuses the file;
     // past four budgets inflated the rest is left unchecked (a bound on the time).
     if (expected > budget_ || inflated_ > 4 * budget_) return;
-    const u64 got = inflated_bytes(reinterpret_cast<const unsigned char*>(b_.data()) + p + 13, length, expected);
-    if (got == ~u64(0)) return;
+    const Inflated z = inflated_bytes(reinterpret_cast<const unsigned char*>(b_.data()) + p + 13, length, expected);
+    const std::string at = name_ + ": FBX array " + node_name + " at byte " + std::to_string(p);
+    if (!z.damage.empty()) throw InputError(at + ": its compressed data " + z.damage);
+    const u64 got = z.bytes;
     inflated_ += got;
     if (got == expected) return;
-    throw InputError(name_ + ": FBX array " + node_name + " at byte " + std::to_string(p) + ": its compressed data " +
+    throw InputError(at + ": its compressed data " +
                      (got > expected ? "inflates to more than " : "inflates to " + std::to_string(got) + " of ") +
                      "the " + std::to_string(expected) + " bytes its count gives (damaged or cut short: the model "
                      "importer would read " + (got > expected ? "none of it)" : "zeros for the rest)"));

@@ -138,7 +138,8 @@ TEST(FaceIndices, AFacePastItsVerticesIsNamedWithItsLine) {
 // A binary FBX object the importer cannot read (an index past the
 // vertices, an array that does not inflate) was left out with its mesh,
 // exit 0 where another mesh remained; its error is heard and the file
-// refused, quoting the object's byte.
+// refused, quoting the object's byte. A damaged array is named before the
+// import, with its node and byte.
 TEST(FaceIndices, FbxObjectsTheImporterCannotReadAreRefused) {
   const std::string box = "/usr/share/assimp/models/FBX/box.fbx", cube = "/usr/share/assimp/models/FBX/phong_cube.fbx";
   if (!std::filesystem::exists(box) || !std::filesystem::exists(cube))
@@ -159,7 +160,10 @@ TEST(FaceIndices, FbxObjectsTheImporterCannotReadAreRefused) {
                                          "that uses it out) (the importer: FBX-DOM (TOK_KEY, offset 0x"),
             std::string::npos) << e;
   e = error_loading(dir.write("cube.fbx", deflated));
-  EXPECT_NE(e.find(dir.file("cube.fbx") + ": an FBX array that does not inflate"), std::string::npos) << e;
+  EXPECT_NE(e.find(dir.file("cube.fbx") + ": FBX array Vertices at byte " + std::to_string(z - 13) +
+                   ": its compressed data is not a valid zlib stream ("),
+            std::string::npos)
+      << e;
 }
 
 // A compressed array whose count says more than its stream holds was read
@@ -189,6 +193,19 @@ TEST(FaceIndices, FbxArraysInflateToWhatTheirCountsSay) {
   e = error_loading(dir.write("less.fbx", with_count(count - 3)));
   EXPECT_NE(e.find(dir.file("less.fbx") + at + "more than the " + std::to_string(8 * (count - 3)) + " bytes"),
             std::string::npos) << e;
+  // A stream that is not zlib's, and one whose byte length cuts it short.
+  const std::string array = ": FBX array Vertices at byte " + std::to_string(type) + ": its compressed data ";
+  std::string bad = good;
+  bad[type + 13] = 0;  // the zlib header's first byte
+  e = error_loading(dir.write("bad.fbx", bad));
+  EXPECT_NE(e.find(dir.file("bad.fbx") + array + "is not a valid zlib stream ("), std::string::npos) << e;
+  std::string cut = good;
+  std::int32_t length;
+  std::memcpy(&length, &cut[type + 9], 4);
+  length /= 2;
+  std::memcpy(&cut[type + 9], &length, 4);
+  e = error_loading(dir.write("cut.fbx", cut));
+  EXPECT_NE(e.find(dir.file("cut.fbx") + array + "ends before its zlib stream does"), std::string::npos) << e;
 }
 
 // Counts the importer allocated for before reading a value (past 1 GiB, or

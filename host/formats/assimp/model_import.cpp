@@ -369,10 +369,10 @@ bool validated_by_us(const std::string& ext) { return lower(ext) == ".stl"; }
 Scene convert(Assimp::Importer& importer, const aiScene* ai, const std::string& name, const std::string& base_dir,
               const ModelFiles& files, MapImages images, std::size_t max_triangles) {
   if (!ai) {
-    std::string why = model_words::one_line(importer.GetErrorString(), 200);
-    if (why.empty()) why = "cannot read the model";
+    const std::string said = model_words::one_line(importer.GetErrorString(), 200);
+    std::string why = "the model importer cannot read it" + (said.empty() ? "" : ": " + said);
     // The importer catches its own allocation failure and says only this.
-    if (why.find("bad_alloc") != std::string::npos)
+    if (said.find("bad_alloc") != std::string::npos)
       why = "the model importer ran out of memory reading it (a count in the file asks for more than this process may "
             "use)";
     throw InputError(name + ": " + why + (files.refusal().empty() ? "" : " (" + files.refusal() + ")"));

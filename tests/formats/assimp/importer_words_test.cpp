@@ -92,7 +92,7 @@ TEST(ImporterWords, TheImportersRefusalIsOneShortLine) {
   ASSERT_NE(array, std::string::npos);
   file.insert(array, "b");
   const std::string e = error_loading(dir.write("duck.dae", file));
-  EXPECT_EQ(e.rfind(dir.file("duck.dae") + ": ", 0), 0u) << e;
+  EXPECT_EQ(e.rfind(dir.file("duck.dae") + ": the model importer cannot read it: ", 0), 0u) << e;
   EXPECT_NE(e.find("b"), std::string::npos) << e;
   EXPECT_EQ(e.find('\n'), std::string::npos) << e;
   EXPECT_LT(e.size(), dir.file("duck.dae").size() + 300) << e;
@@ -159,6 +159,15 @@ TEST(ImporterWords, ASkeletonWithoutSurfacesIsNamedSo) {
       "0 0 0 0 0 0 0 0 0\n";
   const std::string e = error_loading(dir.write("walk.bvh", bvh));
   EXPECT_NE(e.find(dir.file("walk.bvh") + ": a skeleton (motion capture), no surfaces"), std::string::npos) << e;
+}
+
+// The importer's own refusal was shown bare ("file: XFile is too small."),
+// as if opsila had said it: it is now told as the importer's.
+TEST(ImporterWords, TheImportersOwnRefusalIsToldAsItsOwn) {
+  TempDir dir;
+  const std::string e = error_loading(dir.write("tiny.x", "xof 0303txt"));
+  EXPECT_EQ(e.rfind(dir.file("tiny.x") + ": the model importer cannot read it: ", 0), 0u) << e;
+  EXPECT_EQ(e.find('\n'), std::string::npos) << e;
 }
 
 }  // namespace

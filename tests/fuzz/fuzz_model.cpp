@@ -1,6 +1,6 @@
 // libFuzzer target: bytes -> the Open Asset Import Library -> CONTRACT's scene
 // (load_model_from_memory). The first byte picks the format the importer is
-// told to expect (STL, OFF, glTF, GLB or PLY); bytes after the first
+// told to expect (STL, OFF, glTF, GLB, PLY or FBX); bytes after the first
 // "#EXTERNAL#" are every other file the importer opens (a glTF's external
 // buffers), so crafted buffers take the path files on disk take. The checks
 // before the importer (formats/assimp/model_checks.h) and the conversion layer must
@@ -18,8 +18,8 @@
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   if (size < 1) return 0;
-  static const char* const kHints[] = {"stl", "off", "gltf", "glb", "ply"};
-  const char* hint = kHints[data[0] % 5];
+  static const char* const kHints[] = {"stl", "off", "gltf", "glb", "ply", "fbx"};
+  const char* hint = kHints[data[0] % 6];
   std::string bytes(reinterpret_cast<const char*>(data + 1), size - 1), other;
   const std::size_t cut = bytes.find("#EXTERNAL#");
   if (cut != std::string::npos) {

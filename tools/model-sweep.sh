@@ -5,7 +5,11 @@
 # work with the paper's bounding spheres for routing; each image must be the
 # first one's bytes (docs/RELIABILITY.md, "Deterministic images"). With
 # RANKS set (e.g. RANKS="2 3"), each model is also rendered on that many MPI
-# ranks at 16 PEs. A model opsila refuses is listed with its error, not
+# ranks at 16 PEs. MODES replaces the three modes (flag sets separated by
+# ';'), and FLAGS is added to every render, the first one's too, e.g.
+#   FLAGS="--spp 4 --depth 7" MODES="--pes 5 --bank-capacity 4;--pes 33 --work-groups-per-pe 1" \
+#     tools/model-sweep.sh
+# A model opsila refuses is listed with its error, not
 # counted as a failure: the sweep is about the images of the models that
 # load.
 #
@@ -25,9 +29,12 @@ work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 
 modes=("--pes 16" "--pes 64 --balance work" "--pes 7 --balance measured --routing spheres")
+if [ -n "${MODES:-}" ]; then IFS=';' read -r -a modes <<<"$MODES"; fi
+read -r -a common <<<"${FLAGS:-}"
+
 ok=0 bad=0 refused=0
 while IFS= read -r -d '' model; do
-  if ! timeout 300 "$opsila" render "$model" -o "$work/one.pfm" --size "$size" --pes 1 -q 2>"$work/err" </dev/null; then
+  if ! timeout 300 "$opsila" render "$model" -o "$work/one.pfm" --size "$size" --pes 1 "${common[@]}" -q 2>"$work/err" </dev/null; then
     echo "REFUSED $model: $(head -c 200 "$work/err" | tr '\n' ' ')"
     refused=$((refused + 1))
     continue
@@ -43,7 +50,7 @@ while IFS= read -r -d '' model; do
       read -r -a flags <<<"$run"
       cmd=("$opsila" render "$model" "${flags[@]}")
     fi
-    timeout 600 "${cmd[@]}" -o "$work/other.pfm" --size "$size" -q 2>"$work/err" </dev/null
+    timeout 600 "${cmd[@]}" -o "$work/other.pfm" --size "$size" "${common[@]}" -q 2>"$work/err" </dev/null
     rc=$?
     if [ $rc -ne 0 ]; then
       echo "FAIL ($rc) [$run] $model: $(head -c 200 "$work/err" | tr '\n' ' ')"
